@@ -1,0 +1,111 @@
+"""Units, frames, sign conventions and column names: declared once, here.
+
+Every quantity inside gyrodrift is in these units; readers convert on the way in.
+
+=====================  ========  ==============================================
+quantity               unit      convention
+=====================  ========  ==============================================
+time ``t``             s         strictly increasing
+rates ``gyro_*``       deg/s     body frame FRD (x forward, y right, z down)
+``gyro_z`` sign        --        positive = heading increases (clockwise seen
+                                 from above), as the NED z axis points down
+temperature ``temp``   degC      gyro die temperature
+heading                deg       clockwise from magnetic north, in [0, 360)
+``mag_*``              any       one unit for all three axes (only ratios used)
+``acc_*``              g or m/s² specific force: a level, still unit reads
+                                 ``acc_z`` ≈ −1 g
+drift model a          deg/s/degC
+drift model b          deg       (deg/s per degC/s)
+drift model c          deg/s
+=====================  ========  ==============================================
+
+The gyro measurement model is eq. (1) of Feng et al. (2015)::
+
+    gyro_z = true_rate + drift + noise,   drift = a*T + b*T' + c   (eq. 2)
+
+so the compensated rate is ``rate_z = gyro_z - bias_z``.
+
+Frames other than NED/FRD (ROS ENU/FLU) are converted by the readers:
+``heading_ned = 90 - yaw_enu`` and ``gyro_z_frd = -gyro_z_flu``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "T",
+    "GYRO_Z",
+    "GYRO_X",
+    "GYRO_Y",
+    "TEMP",
+    "HEADING",
+    "MAG_COLS",
+    "ACC_COLS",
+    "REF_HEADING",
+    "TRUE_BIAS_Z",
+    "REQUIRED_COLS",
+    "OUTPUT_COLS",
+    "GYRO_UNITS",
+    "FRAMES",
+    "TEMP_RANGE_C",
+    "wrap_360",
+    "wrap_180",
+]
+
+# Input contract column names.
+T = "t"
+GYRO_Z = "gyro_z"
+GYRO_X = "gyro_x"
+GYRO_Y = "gyro_y"
+TEMP = "temp"
+HEADING = "heading"
+MAG_COLS = ("mag_x", "mag_y", "mag_z")
+ACC_COLS = ("acc_x", "acc_y", "acc_z")
+REF_HEADING = "ref_heading"
+TRUE_BIAS_Z = "true_bias_z"
+
+REQUIRED_COLS = (T, GYRO_Z, TEMP)
+
+#: Output contract of ``gyrodrift compensate`` (extra input columns follow).
+OUTPUT_COLS = (
+    "t",
+    "rate_z",
+    "bias_z",
+    "heading",
+    "a",
+    "b",
+    "c",
+    "update",
+    "gated",
+    "gate_reason",
+)
+
+#: Multiplier from each accepted gyro unit to deg/s.
+GYRO_UNITS = {"deg/s": 1.0, "dps": 1.0, "rad/s": float(np.degrees(1.0))}
+
+#: Accepted body/world frame conventions of input logs.
+FRAMES = ("ned", "enu")
+
+#: Physically plausible gyro temperature range, degC (outside = bad input).
+TEMP_RANGE_C = (-60.0, 150.0)
+
+
+def wrap_360(angle_deg):
+    """Wrap an angle (deg) to [0, 360).
+
+    >>> float(wrap_360(-90.0))
+    270.0
+    """
+    out = np.mod(angle_deg, 360.0)
+    # np.mod(-1e-17, 360.0) rounds to 360.0 exactly; keep the range half-open.
+    return np.where(out >= 360.0, out - 360.0, out)
+
+
+def wrap_180(angle_deg):
+    """Wrap an angle (deg) to [-180, 180).
+
+    >>> float(wrap_180(270.0))
+    -90.0
+    """
+    return wrap_360(np.asarray(angle_deg) + 180.0) - 180.0
