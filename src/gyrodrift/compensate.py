@@ -1,0 +1,738 @@
+"""The adaptive drift compensator: per sample (:class:`Compensator`) or per log (:func:`compensate`).
+
+Method (Feng, Li, Zhang 2015, Sections 2–3)
+-------------------------------------------
+Every sample: ``bias_z = a*T + b*T' + c`` (eq. 2/5) with the parameters in force,
+``rate_z = gyro_z - bias_z``, and the heading integrated from ``rate_z`` by the
+trapezoid rule, starting at the first compass heading.
+
+Every update interval (``update_interval_s``, 10 s) the change of
+(gyro heading − compass heading) over the interval measures the drift:
+
+    m = z̄ + Δ(A_gyro − A_compass)/Δt                      (eqs. 4 and 6)
+
+where ``z̄`` is the mean drift the compensator subtracted over the interval. With
+``gyro = true rate + drift`` (eq. 1), the compensated gyro heading gains
+``(drift − z̄)Δt`` against the compass, so this sign makes ``m`` the mean drift
+over the interval. The paper prints eq. (6) as Δ(A_compass − A_gyro); with eq. (1)
+that would give ``2 z̄ − drift``, so gyrodrift uses the sign that measures the drift
+(tested: a constant bias on a static log drives c to that bias). Algebraically
+``m = (∫gyro_z dt − ΔA_compass)/Δt``: it does not depend on the compensation.
+The matching row of H is the interval mean of ``[T, T', 1]`` (the paper takes the
+values at the interval end); the last ``stack_depth`` accepted measurements are
+stacked into y and H (eq. 3, ``y = [m_{k+1}, m_k, m_{k-1}]``) and the estimator
+(STKF by default, eq. 10) is updated. Measurement noise:
+``R = 2 σ_compass²/Δt² + N_gyro²/Δt`` per measurement.
+
+Refused intervals (see :mod:`gyrodrift.gating`) do not update the parameters, which
+keep compensating through the outage (eq. 5), the paper's key property.
+
+Initialisation
+--------------
+The first ``init_s`` seconds (30 s: the paper's y1..y3) are split into
+``stack_depth`` sub-windows, each giving one drift measurement: the mean gyro rate
+when the sub-window is motionless (gyro std and compass change below the
+``still_*`` thresholds), as the paper does, otherwise the compass-aided measurement
+above. They are the first stacked measurement (update at the end of the init
+window) from the prior ``x0, P0``. Rows of the init window are emitted when it
+ends, compensated with the parameters it produced.
+
+Missing values: an empty gyro or temperature cell holds the previous value and
+refuses that interval (``gap``); an empty compass cell is "no compass sample here".
+
+Causality: every output row depends only on earlier rows, except init rows, which
+depend on the whole init window; :class:`Compensator` and :func:`compensate` give
+identical numbers on the same data.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift import gating
+from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+from gyrodrift.conventions import (
+    ACC_COLS,
+    GYRO_Z,
+    HEADING,
+    MAG_COLS,
+    OUTPUT_COLS,
+    TEMP,
+    T,
+    wrap_180,
+    wrap_360,
+)
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
+from gyrodrift.estimators import KalmanConfig, Observation, make_estimator
+from gyrodrift.gating import GateConfig
+from gyrodrift.model import TempRateConfig, TempRateTracker, temp_rate
+
+__all__ = ["CompensatorConfig", "CompensatedSample", "Compensator", "compensate", "compensate_arrays"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class CompensatorConfig:
+    """All settings of the compensator, with the paper's structure as defaults.
+
+    Attributes
+    ----------
+    update_interval_s : float
+        Δt between filter updates, s (paper: 10 s).
+    init_s : float
+        Length of the initialisation window at the start of the log, s.
+    stack_depth : int
+        Number of measurements stacked in y (paper: 3).
+    compass_sigma_deg : float
+        Standard deviation of the compass heading noise, deg.
+    gyro_noise_dps_rthz : float
+        Gyro white-noise density, deg/s/√Hz (ADXRS623: 0.04).
+    estimator : str
+        Name of the drift estimator (``stkf`` or ``kf``).
+    kalman : KalmanConfig
+        Fading factor s, x0, P0 and Q of the Kalman estimators.
+    temp_rate : TempRateConfig
+        How T' is computed (see :mod:`gyrodrift.model`).
+    gate : GateConfig
+        Thresholds of the aiding gates (see :mod:`gyrodrift.gating`).
+    """
+
+    update_interval_s: float = 10.0
+    init_s: float = 30.0
+    stack_depth: int = 3
+    compass_sigma_deg: float = 0.5
+    gyro_noise_dps_rthz: float = 0.04
+    estimator: str = "stkf"
+    kalman: KalmanConfig = field(default_factory=KalmanConfig)
+    temp_rate: TempRateConfig = field(default_factory=TempRateConfig)
+    gate: GateConfig = field(default_factory=GateConfig)
+
+    def __post_init__(self):
+        for name in ("update_interval_s", "init_s", "compass_sigma_deg", "gyro_noise_dps_rthz"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ConfigError(f"{name} must be a positive number, got {v!r}")
+        if not (isinstance(self.stack_depth, int) and self.stack_depth >= 1):
+            raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
+        if self.init_s < self.stack_depth * 0.1:
+            raise ConfigError(f"init_s={self.init_s} s is too short for {self.stack_depth} sub-windows")
+        make_estimator(self.estimator, config=self.kalman)  # validates the name
+
+
+@dataclass(frozen=True)
+class CompensatedSample:
+    """One output row (the output contract of ``gyrodrift compensate``)."""
+
+    t: float
+    rate_z: float
+    bias_z: float
+    heading: float
+    a: float
+    b: float
+    c: float
+    update: int
+    gated: int
+    gate_reason: str
+    temp_rate: float
+    compass_heading: float
+
+
+# --------------------------------------------------------------------------- rows
+
+
+@dataclass
+class _Carry:
+    """Values of the previous row that the next rows continue from."""
+
+    t: float
+    g: float
+    T: float
+    Tp: float
+    bias: float
+    rate: float
+    I_raw: float = 0.0
+    I_T: float = 0.0
+    I_Tp: float = 0.0
+    I_bias: float = 0.0
+    I_rate: float = 0.0
+
+
+def _continue_integral(start: float, x, x_prev: float, dt):
+    """Trapezoid integral continued from ``start``, summed sequentially."""
+    inc = 0.5 * (x + np.r_[x_prev, x[:-1]]) * dt
+    return np.cumsum(np.r_[start, inc])[1:]
+
+
+def _rows(carry: _Carry | None, t, g, T, Tp, params):
+    """Compensate a run of rows with fixed parameters (eq. 5); return columns and new carry.
+
+    Called on a whole interval by :func:`compensate_arrays` and on one row by
+    :class:`Compensator`: the arithmetic is element-wise or sequential, so both give
+    the same bits.
+    """
+    a, b, c = (float(v) for v in params)
+    bias = a * T + b * Tp + c
+    rate = g - bias
+    if carry is None:
+        carry = _Carry(float(t[0]), float(g[0]), float(T[0]), float(Tp[0]), float(bias[0]), float(rate[0]))
+    dt = t - np.r_[carry.t, t[:-1]]
+    I_raw = _continue_integral(carry.I_raw, g, carry.g, dt)
+    I_T = _continue_integral(carry.I_T, T, carry.T, dt)
+    I_Tp = _continue_integral(carry.I_Tp, Tp, carry.Tp, dt)
+    I_bias = _continue_integral(carry.I_bias, bias, carry.bias, dt)
+    I_rate = _continue_integral(carry.I_rate, rate, carry.rate, dt)
+    new = _Carry(
+        float(t[-1]), float(g[-1]), float(T[-1]), float(Tp[-1]), float(bias[-1]), float(rate[-1]),
+        float(I_raw[-1]), float(I_T[-1]), float(I_Tp[-1]), float(I_bias[-1]), float(I_rate[-1]),
+    )
+    return bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, new
+
+
+# ------------------------------------------------------------------ measurements
+
+
+@dataclass(frozen=True)
+class _Snap:
+    """State at a compass sample: the ends of a drift measurement."""
+
+    t: float
+    heading: float
+    I_raw: float
+    I_T: float
+    I_Tp: float
+    I_bias: float
+
+
+@dataclass(frozen=True)
+class _Meas:
+    m: float  # drift measurement, deg/s
+    h: np.ndarray  # (3,) interval means of [T, T', 1]
+    r: float  # variance, (deg/s)^2
+    residual_deg: float  # compass vs compensated gyro disagreement
+
+
+def _compass_measurement(s0: _Snap, s1: _Snap, cfg: CompensatorConfig) -> _Meas:
+    """Eqs. (4)–(6) between two compass samples (sign: see module notes)."""
+    dt = s1.t - s0.t
+    d_diff = float(wrap_180((s1.I_raw - s1.heading) - (s0.I_raw - s0.heading)))
+    m = d_diff / dt
+    h = np.array([(s1.I_T - s0.I_T) / dt, (s1.I_Tp - s0.I_Tp) / dt, 1.0])
+    r = 2.0 * cfg.compass_sigma_deg**2 / dt**2 + cfg.gyro_noise_dps_rthz**2 / dt
+    return _Meas(m, h, r, d_diff - (s1.I_bias - s0.I_bias))
+
+
+class _Aiding:
+    """Per-interval aiding decisions and the estimator: shared by streaming and batch."""
+
+    def __init__(self, cfg: CompensatorConfig, estimator):
+        self.cfg = cfg
+        self.estimator = estimator
+        self.stack: deque[_Meas] = deque(maxlen=cfg.stack_depth)
+        self.start: _Snap | None = None
+        self.sticky: str | None = None
+        self.after_interference = False
+        self.field_ref: tuple[float, float] | None = None
+
+    def valid(self, snap: _Snap | None, t_end: float) -> _Snap | None:
+        if snap is None or t_end - snap.t > self.cfg.gate.compass_max_age_s:
+            return None
+        return snap
+
+    def begin(self, snap: _Snap | None, t_boundary: float) -> None:
+        """Open the next interval at a boundary row."""
+        self.start = self.valid(snap, t_boundary)
+        self.sticky = gating.NO_COMPASS if self.start is None else None
+
+    def display(self) -> str:
+        if self.sticky is not None:
+            return self.sticky
+        return gating.INTERFERENCE if self.after_interference else ""
+
+    def close(self, snap: _Snap | None, t_boundary: float) -> tuple[int, str]:
+        """Decide the interval ending at a boundary row; return (update, reason)."""
+        reason = self.sticky
+        end = self.valid(snap, t_boundary)
+        meas = None
+        if reason is None:
+            if end is None or end.t - self.start.t < 0.5 * self.cfg.update_interval_s:
+                reason = gating.NO_COMPASS
+            else:
+                meas = _compass_measurement(self.start, end, self.cfg)
+                if abs(meas.residual_deg) > self.cfg.gate.interference_deg:
+                    reason = gating.INTERFERENCE
+        if reason is None:
+            self.stack.appendleft(meas)
+            self.estimator.update(self._observation(t_boundary))
+            self.after_interference = False
+        else:
+            self.estimator.hold()
+            self.after_interference = reason == gating.INTERFERENCE
+        self.begin(snap, t_boundary)
+        return (1, "") if reason is None else (0, reason)
+
+    def _observation(self, t: float) -> Observation:
+        return Observation(
+            t=t,
+            y=np.array([e.m for e in self.stack]),
+            H=np.array([e.h for e in self.stack]),
+            R=np.diag([e.r for e in self.stack]),
+        )
+
+
+def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float, source: str):
+    """Initialisation from the first window (module notes); returns the anchor row."""
+    cfg = aid.cfg
+    n = cfg.stack_depth
+    t0 = float(t[0])
+    edges = [0] + [int(np.searchsorted(t, t0 + j * cfg.init_s / n, "left")) for j in range(1, n)]
+    edges.append(t.size - 1)
+    has_compass = np.isfinite(heading)
+    for r0, r1 in zip(edges[:-1], edges[1:]):
+        if r1 <= r0:
+            continue
+        dt = float(t[r1] - t[r0])
+        rows = np.flatnonzero(has_compass[r0 : r1 + 1]) + r0
+        turned = 0.0
+        if rows.size >= 2:
+            turned = float(np.max(np.abs(wrap_180(heading[rows] - heading[rows[0]]))))
+        still = (
+            float(np.std(g[r0 : r1 + 1])) <= cfg.gate.still_std_dps
+            and turned <= cfg.gate.still_heading_deg
+        )
+        if still:
+            h = np.array([(I_T[r1] - I_T[r0]) / dt, (I_Tp[r1] - I_Tp[r0]) / dt, 1.0])
+            meas = _Meas((I_raw[r1] - I_raw[r0]) / dt, h, cfg.gyro_noise_dps_rthz**2 / dt, 0.0)
+        elif rows.size >= 2 and t[rows[-1]] - t[rows[0]] >= 0.5 * dt:
+            s0, s1 = (
+                _Snap(float(t[i]), float(heading[i]), float(I_raw[i]), float(I_T[i]), float(I_Tp[i]), 0.0)
+                for i in (rows[0], rows[-1])
+            )
+            meas = _compass_measurement(s0, s1, cfg)
+        else:
+            continue
+        aid.stack.appendleft(meas)
+    if not aid.stack:
+        raise GyroDriftError(
+            f"{source}: cannot initialise: the first {cfg.init_s:g} s are neither motionless "
+            f"(gyro std <= {cfg.gate.still_std_dps:g} deg/s) nor covered by compass samples; "
+            "start the log while the unit is still, or change --init-s"
+        )
+    first_compass = np.flatnonzero(has_compass)
+    if first_compass.size == 0:
+        raise GyroDriftError(
+            f"{source}: no compass heading in the first {cfg.init_s:g} s (init window), "
+            "so the heading cannot be anchored; check the heading/mag columns or raise --init-s"
+        )
+    aid.estimator.update(aid._observation(init_end_s))
+    return int(first_compass[0])
+
+
+def _interval_index(t_s, t_start_s: float, interval_s: float):
+    """Update-interval number of each time; -1 during initialisation."""
+    return np.floor((np.asarray(t_s, dtype=float) - t_start_s) / interval_s)
+
+
+# ----------------------------------------------------------------------- streaming
+
+
+class Compensator:
+    """Streaming compensator: feed samples in time order, get compensated rows back.
+
+    :meth:`push` returns a list of :class:`CompensatedSample`: empty while the
+    initialisation window fills, all its rows at once when it ends, then one row per
+    sample. Gives the same numbers as :func:`compensate` on the same data.
+
+    Examples
+    --------
+    >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
+    >>> out = []
+    >>> for i in range(500):
+    ...     out += comp.push(i * 0.01, gyro_z_dps=0.2, temp_c=30.0, heading_deg=90.0)
+    >>> round(out[-1].bias_z, 3), round(out[-1].heading, 3)
+    (0.2, 90.0)
+    """
+
+    def __init__(self, config: CompensatorConfig | None = None, *, source: str = "stream"):
+        self.config = config or CompensatorConfig()
+        self.source = source
+        est = make_estimator(self.config.estimator, config=self.config.kalman)
+        self._aid = _Aiding(self.config, est)
+        self._trate = TempRateTracker(self.config.temp_rate)
+        self._buf: list[tuple] = []
+        self._carry: _Carry | None = None
+        self._prev: tuple[float, float, float] | None = None  # t, gyro, temp
+        self._k = -1.0
+        self._snap: _Snap | None = None
+        self._anchor = 0.0  # heading = anchor + I_rate
+        self._lookback: deque[tuple[float, float]] = deque()
+        self._t_start: float | None = None
+
+    # -- public state
+    @property
+    def initialised(self) -> bool:
+        return self._carry is not None
+
+    @property
+    def params(self) -> np.ndarray:
+        """[a (deg/s/degC), b (deg), c (deg/s)] now in force."""
+        return self._aid.estimator.params
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Covariance of :attr:`params`."""
+        return self._aid.estimator.cov
+
+    def push(self, t_s, gyro_z_dps, temp_c, heading_deg=math.nan, mag=None, acc=None):
+        """Add one sample; return the rows that became available.
+
+        Parameters
+        ----------
+        t_s : float
+            Sample time, s (strictly increasing).
+        gyro_z_dps : float
+            Raw heading-axis rate, deg/s (NED: positive = heading increases).
+            NaN: hold the previous value (the interval is refused as ``gap``).
+        temp_c : float
+            Gyro temperature, degC (NaN: hold the previous value).
+        heading_deg : float, optional
+            Compass heading, deg clockwise from magnetic north; NaN = no sample.
+        mag, acc : 3-sequences, optional
+            Raw FRD magnetometer and accelerometer (used when ``heading_deg`` is NaN
+            to compute a tilt-compensated heading, and to detect field anomalies).
+        """
+        t_s, g, T = float(t_s), float(gyro_z_dps), float(temp_c)
+        held = False
+        if self._prev is None:
+            if not (math.isfinite(g) and math.isfinite(T)):
+                raise GyroDriftError(f"{self.source}: the first sample needs gyro_z and temp values")
+            self._t_start = t_s + self.config.init_s
+        else:
+            if not t_s > self._prev[0]:
+                raise GyroDriftError(
+                    f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}"
+                )
+            if not math.isfinite(g):
+                g, held = self._prev[1], True
+            if not math.isfinite(T):
+                T, held = self._prev[2], True
+        gap = held or (self._prev is not None and t_s - self._prev[0] > self.config.gate.max_gap_s)
+        self._prev = (t_s, g, T)
+        heading, norm, dip = _compass_values(heading_deg, mag, acc)
+        Tp = self._trate.push(t_s, T)
+        row = (t_s, g, T, Tp, heading, norm, dip, gap)
+        if self._carry is None:
+            self._buf.append(row)
+            if t_s < self._t_start:
+                return []
+            return self._finish_init()
+        return [self._step(row)]
+
+    def _finish_init(self) -> list[CompensatedSample]:
+        cols = [np.array(c) for c in zip(*self._buf)]
+        self._buf = []
+        t, g, T, Tp, heading, norm, dip, _gap = cols
+        _, _, I_raw, I_T, I_Tp, _, _, _ = _rows(None, t, g, T, Tp, (0.0, 0.0, 0.0))
+        anchor_row = _initialise(self._aid, t, g, heading, I_raw, I_T, I_Tp, float(t[-1]), self.source)
+        self._aid.field_ref = _field_reference(norm, dip)
+        bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
+            None, t, g, T, Tp, self._aid.estimator.params
+        )
+        self._anchor = float(heading[anchor_row] - I_rate[anchor_row])
+        for i in np.flatnonzero(np.isfinite(heading)):
+            self._snap = _Snap(float(t[i]), float(heading[i]), float(I_raw[i]), float(I_T[i]), float(I_Tp[i]), float(I_bias[i]))
+        for ti, Ii in zip(t, I_rate):
+            self._lookback.append((float(ti), float(Ii)))
+        self._k = float(_interval_index(t[-1], self._t_start, self.config.update_interval_s))
+        self._aid.begin(self._snap, float(t[-1]))
+        params = self._aid.estimator.params
+        n = t.size
+        update = np.zeros(n, dtype=int)
+        update[-1] = 1
+        reason = np.full(n, gating.INIT, dtype=object)
+        reason[-1] = ""
+        return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading)
+
+    def _step(self, row) -> CompensatedSample:
+        t_s, g, T, Tp, heading, norm, dip, gap = row
+        params = self._aid.estimator.params
+        arr = np.array
+        bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
+            self._carry, arr([t_s]), arr([g]), arr([T]), arr([Tp]), params
+        )
+        if math.isfinite(heading):
+            self._snap = _Snap(t_s, heading, float(I_raw[0]), float(I_T[0]), float(I_Tp[0]), float(I_bias[0]))
+        # 1-s mean compensated rate, from the oldest row inside the window.
+        lb = self._lookback
+        window_start = t_s - self.config.gate.turn_window_s
+        while len(lb) > 1 and lb[0][0] < window_start:
+            lb.popleft()
+        mean_rate = (float(I_rate[0]) - lb[0][1]) / (t_s - lb[0][0])
+        lb.append((t_s, float(I_rate[0])))
+        field_bad = bool(gating.field_anomaly(norm, dip, *self._aid.field_ref, self.config.gate)) if self._aid.field_ref else False
+        aid = self._aid
+        if aid.sticky is None:
+            code = gating.row_conditions([gap], [field_bad], [mean_rate], self.config.gate)[0]
+            aid.sticky = code or None
+        k = float(_interval_index(t_s, self._t_start, self.config.update_interval_s))
+        update, reason = 0, aid.display()
+        if k > self._k:
+            self._k = k
+            update, reason = aid.close(self._snap, t_s)
+        return _samples(
+            arr([t_s]), rate, bias, self._anchor + I_rate, params, arr([update]),
+            np.array([reason], dtype=object), arr([Tp]), arr([heading]),
+        )[0]
+
+
+def _compass_values(heading_deg, mag, acc):
+    """Heading (deg) and field norm/dip for one sample (NaN where absent)."""
+    heading = float(heading_deg) if heading_deg is not None else math.nan
+    norm = dip = math.nan
+    if mag is not None and acc is not None:
+        mag = [float(v) for v in mag]
+        acc = [float(v) for v in acc]
+        if all(math.isfinite(v) for v in mag + acc):
+            norm, dip = (float(v) for v in field_norm_dip(*mag, *acc))
+            if not math.isfinite(heading):
+                heading = float(tilt_compensated_heading(*mag, *acc))
+    if math.isfinite(heading):
+        heading = float(wrap_360(heading))
+    return heading, norm, dip
+
+
+def _field_reference(norm, dip) -> tuple[float, float] | None:
+    ok = np.isfinite(norm) & np.isfinite(dip)
+    if not ok.any():
+        return None
+    return float(np.median(norm[ok])), float(np.median(dip[ok]))
+
+
+def _samples(t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass) -> list[CompensatedSample]:
+    a, b, c = (float(v) for v in params)
+    heading = wrap_360(heading_unwrapped)
+    return [
+        CompensatedSample(
+            float(t[i]), float(rate[i]), float(bias[i]), float(heading[i]), a, b, c,
+            int(update[i]), int(reason[i] != ""), str(reason[i]), float(Tp[i]), float(compass[i]),
+        )
+        for i in range(len(t))
+    ]
+
+
+# --------------------------------------------------------------------------- batch
+
+
+def compensate_arrays(
+    t_s,
+    gyro_z_dps,
+    temp_c,
+    heading_deg=None,
+    mag=None,
+    acc=None,
+    config: CompensatorConfig | None = None,
+    *,
+    source: str = "arrays",
+) -> pd.DataFrame:
+    """Compensate a whole log given as arrays; see :func:`compensate` for the output.
+
+    Parameters
+    ----------
+    t_s, gyro_z_dps, temp_c : (N,) array_like
+        Time (s, strictly increasing), raw heading-axis rate (deg/s), temperature (degC).
+        NaN in gyro or temperature holds the previous value (``gap``).
+    heading_deg : (N,) array_like, optional
+        Compass heading, deg clockwise from north; NaN = no sample.
+    mag, acc : (N, 3) array_like, optional
+        Raw FRD magnetometer and accelerometer (compass when ``heading_deg`` is
+        None or NaN; field-anomaly gate).
+    config : CompensatorConfig, optional
+    source : str
+        Name used in error messages (the file name).
+    """
+    cfg = config or CompensatorConfig()
+    t = np.asarray(t_s, dtype=float)
+    n = t.size
+    g_in = np.asarray(gyro_z_dps, dtype=float)
+    T_in = np.asarray(temp_c, dtype=float)
+    if n == 0:
+        raise LogFormatError(f"{source}: the log has no samples")
+    if not (np.isfinite(g_in[0]) and np.isfinite(T_in[0])):
+        raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
+    if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise LogFormatError(f"{source}: time must be finite and strictly increasing")
+    t_start = float(t[0]) + cfg.init_s
+    need = cfg.init_s + cfg.update_interval_s
+    if t[-1] - t[0] < need:
+        raise GyroDriftError(
+            f"{source}: the log is {t[-1] - t[0]:.1f} s long; initialisation needs at least "
+            f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
+        )
+    held = ~(np.isfinite(g_in) & np.isfinite(T_in))
+    g = pd.Series(g_in).ffill().to_numpy()
+    T = pd.Series(T_in).ffill().to_numpy()
+    gap = held | (np.r_[0.0, np.diff(t)] > cfg.gate.max_gap_s)
+    heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
+    Tp = temp_rate(t, T, cfg.temp_rate)
+
+    est = make_estimator(cfg.estimator, config=cfg.kalman)
+    aid = _Aiding(cfg, est)
+    k = _interval_index(t, t_start, cfg.update_interval_s)
+    e = int(np.flatnonzero(k >= 0)[0])  # last row of the init window
+    boundaries = np.flatnonzero(np.r_[False, k[1:] > k[:-1]])
+    boundaries = boundaries[boundaries > e]
+
+    out_bias = np.empty(n)
+    out_rate = np.empty(n)
+    out_I_rate = np.empty(n)
+    I_raw_all = np.empty(n)
+    I_T_all = np.empty(n)
+    I_Tp_all = np.empty(n)
+    I_bias_all = np.empty(n)
+    out_params = np.empty((n, 3))
+    update = np.zeros(n, dtype=int)
+    reason = np.full(n, "", dtype=object)
+
+    sl = slice(0, e + 1)
+    _, _, I_raw0, I_T0, I_Tp0, _, _, _ = _rows(None, t[sl], g[sl], T[sl], Tp[sl], (0.0, 0.0, 0.0))
+    anchor_row = _initialise(aid, t[sl], g[sl], heading[sl], I_raw0, I_T0, I_Tp0, float(t[e]), source)
+    aid.field_ref = _field_reference(norm[sl], dip[sl])
+    field_bad = (
+        gating.field_anomaly(norm, dip, *aid.field_ref, cfg.gate) if aid.field_ref else np.zeros(n, bool)
+    )
+    compass_rows = np.flatnonzero(np.isfinite(heading))
+    carry = None
+
+    def run(rows: slice, params):
+        nonlocal carry
+        cols = _rows(carry, t[rows], g[rows], T[rows], Tp[rows], params)
+        (out_bias[rows], out_rate[rows], I_raw_all[rows], I_T_all[rows], I_Tp_all[rows],
+         I_bias_all[rows], out_I_rate[rows], carry) = cols
+        out_params[rows] = params
+
+    def snap_at(row: int) -> _Snap | None:
+        j = np.searchsorted(compass_rows, row, "right") - 1
+        if j < 0:
+            return None
+        i = compass_rows[j]
+        return _Snap(float(t[i]), float(heading[i]), float(I_raw_all[i]), float(I_T_all[i]), float(I_Tp_all[i]), float(I_bias_all[i]))
+
+    run(sl, est.params)
+    reason[: e] = gating.INIT
+    update[e] = 1
+    aid.begin(snap_at(e), float(t[e]))
+    anchor = float(heading[anchor_row] - out_I_rate[anchor_row])
+
+    starts = np.r_[e + 1, boundaries + 1]
+    ends = np.r_[boundaries, n - 1]
+    is_boundary = np.zeros(n, dtype=bool)
+    is_boundary[boundaries] = True
+    for s, b in zip(starts, ends):
+        if s > b:
+            continue
+        rows = slice(s, b + 1)
+        run(rows, est.params)
+        # 1-s mean compensated rate, from the oldest row inside the window (at least one step back).
+        idx = np.arange(s, b + 1)
+        j = np.searchsorted(t, t[idx] - cfg.gate.turn_window_s, "left")
+        j = np.minimum(j, idx - 1)
+        mean_rate = (out_I_rate[idx] - out_I_rate[j]) / (t[idx] - t[j])
+        codes = gating.row_conditions(gap[idx], field_bad[idx], mean_rate, cfg.gate)
+        seg_reason = np.full(idx.size, aid.display(), dtype=object)
+        if aid.sticky is None:
+            hit = np.flatnonzero(codes != "")
+            if hit.size:
+                aid.sticky = codes[hit[0]]
+                seg_reason[hit[0]:] = aid.sticky
+        reason[rows] = seg_reason
+        if is_boundary[b]:
+            update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
+
+    return _output_frame(t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading)
+
+
+def _compass_arrays(n: int, heading_deg, mag, acc):
+    """Compass heading (deg, NaN = no sample) and field norm/dip for every row."""
+    heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float).copy()
+    norm = np.full(n, np.nan)
+    dip = np.full(n, np.nan)
+    if mag is not None and acc is not None:
+        mag = np.asarray(mag, dtype=float)
+        acc = np.asarray(acc, dtype=float)
+        with np.errstate(invalid="ignore"):
+            norm, dip = field_norm_dip(*mag.T, *acc.T)
+            from_mag = tilt_compensated_heading(*mag.T, *acc.T)
+        heading = np.where(np.isfinite(heading), heading, from_mag)
+    with np.errstate(invalid="ignore"):
+        heading = np.where(np.isfinite(heading), wrap_360(heading), np.nan)
+    return heading, norm, dip
+
+
+def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass) -> pd.DataFrame:
+    return pd.DataFrame(
+        {
+            "t": t,
+            "rate_z": rate,
+            "bias_z": bias,
+            "heading": heading,
+            "a": params[:, 0],
+            "b": params[:, 1],
+            "c": params[:, 2],
+            "update": update,
+            "gated": (reason != "").astype(int),
+            "gate_reason": reason.astype(str),
+            "temp_rate": Tp,
+            "compass_heading": compass,
+        }
+    )
+
+
+def compensate(log: pd.DataFrame, config: CompensatorConfig | None = None, *, source: str | None = None) -> pd.DataFrame:
+    """Compensate a log in the input contract; return the output table.
+
+    Parameters
+    ----------
+    log : DataFrame
+        Columns ``t`` (s), ``gyro_z`` (deg/s), ``temp`` (degC) and a compass:
+        ``heading`` (deg) or ``mag_x..z`` + ``acc_x..z`` (see
+        :mod:`gyrodrift.conventions`). As returned by :func:`gyrodrift.io.read_log`.
+    config : CompensatorConfig, optional
+    source : str, optional
+        Name for error messages; defaults to ``log.attrs["source"]``.
+
+    Returns
+    -------
+    DataFrame
+        ``t, rate_z, bias_z, heading, a, b, c, update, gated, gate_reason`` (the output
+        contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
+        compass used; empty where there was no sample) and every other input column
+        (the input ``heading`` is ``compass_heading``).
+    """
+    source = source or log.attrs.get("source", "log")
+    missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
+    if missing:
+        raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
+    has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
+    if HEADING not in log.columns and not has_mag:
+        raise LogFormatError(
+            f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
+        )
+    out = compensate_arrays(
+        log[T].to_numpy(float),
+        log[GYRO_Z].to_numpy(float),
+        log[TEMP].to_numpy(float),
+        heading_deg=log[HEADING].to_numpy(float) if HEADING in log.columns else None,
+        mag=log[list(MAG_COLS)].to_numpy(float) if has_mag else None,
+        acc=log[list(ACC_COLS)].to_numpy(float) if has_mag else None,
+        config=config,
+        source=source,
+    )
+    for col in log.columns:
+        if col in (T, HEADING):
+            continue
+        name = col if col not in out.columns else f"in_{col}"
+        out[name] = log[col].to_numpy()
+    return out

@@ -1,0 +1,81 @@
+"""Pure Kalman-filter kernels shared by every Kalman drift estimator.
+
+Eq. (10) of Feng et al. (2015) with Φ = Γ = I: the strong tracking (fading-memory)
+filter differs from the plain Kalman filter only in the prediction ``P- = s*P + Q``;
+``s = 1`` is the plain filter. This is filterpy's ``alpha`` with ``s = alpha**2``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["predict", "correct", "cap_covariance"]
+
+
+def predict(P: np.ndarray, Q: np.ndarray, fading: float = 1.0) -> np.ndarray:
+    """Covariance prediction of eq. (10) with Φ = I: ``P- = s*P + Q``.
+
+    The state prediction is the identity (parameters modelled as constant).
+
+    Parameters
+    ----------
+    P : (n, n) ndarray
+        Posterior covariance.
+    Q : (n, n) ndarray
+        Process noise covariance.
+    fading : float
+        Fading factor s >= 1 (s = 1: plain Kalman filter).
+    """
+    if not fading >= 1.0:
+        raise ValueError(f"fading factor s must be >= 1, got {fading!r}")
+    return fading * P + Q
+
+
+def correct(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.ndarray):
+    """Measurement update of eq. (10), in Joseph form.
+
+    Parameters
+    ----------
+    x : (n,) ndarray
+        Predicted state.
+    P : (n, n) ndarray
+        Predicted covariance.
+    y : (m,) ndarray
+        Measurement.
+    H : (m, n) ndarray
+        Measurement matrix.
+    R : (m, m) ndarray
+        Measurement noise covariance.
+
+    Returns
+    -------
+    x_post : (n,) ndarray
+    P_post : (n, n) ndarray
+        ``(I - K H) P (I - K H)^T + K R K^T``, symmetrised.
+    innovation : (m,) ndarray
+        ``y - H x``.
+    S : (m, m) ndarray
+        Innovation covariance ``H P H^T + R``.
+    """
+    S = H @ P @ H.T + R
+    K = np.linalg.solve(S, H @ P).T  # P H^T S^-1, as P and S are symmetric
+    innovation = y - H @ x
+    A = np.eye(x.size) - K @ H
+    P_post = A @ P @ A.T + K @ R @ K.T
+    return x + K @ innovation, 0.5 * (P_post + P_post.T), innovation, S
+
+
+def cap_covariance(P: np.ndarray, max_var: np.ndarray) -> np.ndarray:
+    """Scale P so that no variance exceeds ``max_var``; keeps P symmetric positive definite.
+
+    Rows and columns whose variance is above the cap are multiplied by
+    ``sqrt(max_var/var)`` (a congruence ``D P D`` with positive diagonal D), so
+    correlations are kept and only the excess uncertainty is removed.
+    """
+    var = np.diag(P)
+    scale = np.ones_like(var)
+    over = var > max_var
+    if not over.any():
+        return P
+    scale[over] = np.sqrt(max_var[over] / var[over])
+    return P * np.outer(scale, scale)

@@ -1,0 +1,96 @@
+"""The one interface every drift estimator implements, and the registry of estimators.
+
+An estimator owns the drift-model parameters ``x = [a, b, c]`` (eq. 2) and nothing else.
+The compensator (:mod:`gyrodrift.compensate`) turns compass aiding into
+:class:`Observation` objects, linear in x, and tells the estimator about every
+update interval: :meth:`DriftEstimator.update` when the aiding was accepted,
+:meth:`DriftEstimator.hold` when it was refused (outage).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+
+__all__ = ["Observation", "DriftEstimator", "ESTIMATORS", "register", "make_estimator"]
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One aiding epoch: drift measurements ``y = H x + v``, ``v ~ N(0, R)``.
+
+    Attributes
+    ----------
+    t : float
+        Time of the epoch, s.
+    y : (m,) ndarray
+        Drift measurements m (deg/s), eq. (4); newest first.
+    H : (m, 3) ndarray
+        Rows ``[T (degC), T' (degC/s), 1]``, eq. (3).
+    R : (m, m) ndarray
+        Measurement noise covariance, (deg/s)².
+    """
+
+    t: float
+    y: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+
+    def __post_init__(self):
+        m = self.y.shape[0]
+        if self.y.shape != (m,) or self.H.shape != (m, 3) or self.R.shape != (m, m):
+            raise ValueError(
+                f"inconsistent observation shapes y{self.y.shape} H{self.H.shape} R{self.R.shape}"
+            )
+
+
+@runtime_checkable
+class DriftEstimator(Protocol):
+    """Estimates the drift parameters [a, b, c] from observations."""
+
+    name: ClassVar[str]
+    causal: ClassVar[bool]
+
+    @property
+    def params(self) -> np.ndarray:
+        """(3,) ndarray: a (deg/s/degC), b (deg), c (deg/s) now in force."""
+
+    @property
+    def cov(self) -> np.ndarray:
+        """(3, 3) ndarray: covariance of :attr:`params`."""
+
+    def update(self, obs: Observation) -> np.ndarray:
+        """Take one accepted observation; return the new parameters."""
+
+    def hold(self) -> np.ndarray:
+        """One update interval without accepted aiding; return the parameters."""
+
+
+ESTIMATORS: dict[str, type] = {}
+
+
+def register(cls):
+    """Class decorator: add an estimator to :data:`ESTIMATORS` under ``cls.name``."""
+    ESTIMATORS[cls.name] = cls
+    return cls
+
+
+def make_estimator(name: str, **settings) -> DriftEstimator:
+    """Build a registered estimator by name.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown name; the message lists the valid names.
+    """
+    try:
+        cls = ESTIMATORS[name]
+    except KeyError:
+        raise ConfigError(
+            f"unknown estimator {name!r}; choose one of: {', '.join(sorted(ESTIMATORS))}"
+        ) from None
+    return cls(**settings)

@@ -1,0 +1,131 @@
+"""The strong tracking Kalman filter of Feng et al. (2015), and its s = 1 twin (plain KF).
+
+States ``x = [a, b, c]`` of the drift model (eq. 2), modelled as constant between
+updates (Φ = Γ = I, Section 3.2). At every accepted update interval:
+``P- = s*P + Q`` then a Joseph-form correction (eq. 10).
+
+Bounded covariance
+------------------
+Two things would make P grow without limit, and both are stopped:
+
+* during an outage (no accepted aiding) the filter does not fade: fading discounts
+  old *measurements*, and there are none; only Q is added (``P <- P + Q``);
+* a direction the measurements do not see (T' ≡ 0 leaves b unobservable; a flat
+  temperature confounds a with c) grows as ``s**N`` under fading. Every variance is
+  therefore capped at its prior value ``p0_sd**2``: we are never less sure of a
+  parameter than before the first measurement. The cap scales rows and columns
+  (``D P D``), so P stays symmetric positive definite.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import ClassVar
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators._kalman import cap_covariance, correct, predict
+from gyrodrift.estimators.base import Observation, register
+
+__all__ = ["KalmanConfig", "KalmanDrift", "PlainKalmanDrift"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class KalmanConfig:
+    """Settings of the Kalman drift estimators.
+
+    Attributes
+    ----------
+    fading : float
+        Fading factor s >= 1 of eq. (10); memory is about ``1/(1 - 1/s)`` updates
+        (s = 1.02: about 50 updates, 500 s at the 10-s interval). Ignored by ``kf``.
+    x0 : tuple of 3 floats
+        Prior mean of [a (deg/s/degC), b (deg), c (deg/s)].
+    p0_sd : tuple of 3 floats
+        Prior standard deviations of [a, b, c] (same units); P0 = diag(p0_sd²).
+        Also the cap on each standard deviation (see module notes).
+    q_sd : tuple of 3 floats
+        Process-noise standard deviations of [a, b, c] per update interval;
+        Q = diag(q_sd²).
+    """
+
+    fading: float = 1.02
+    x0: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    p0_sd: tuple[float, float, float] = (0.1, 20.0, 5.0)
+    q_sd: tuple[float, float, float] = (1e-4, 0.05, 1e-3)
+
+    def __post_init__(self):
+        if not (math.isfinite(self.fading) and self.fading >= 1.0):
+            raise ConfigError(f"fading factor s must be a number >= 1, got {self.fading!r}")
+        for name in ("x0", "p0_sd", "q_sd"):
+            v = getattr(self, name)
+            if len(v) != 3 or not all(math.isfinite(float(e)) for e in v):
+                raise ConfigError(f"{name} must be three finite numbers (a, b, c), got {v!r}")
+        if not all(float(e) > 0 for e in self.p0_sd):
+            raise ConfigError(f"p0_sd must be positive, got {self.p0_sd!r}")
+        if not all(float(e) >= 0 for e in self.q_sd):
+            raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
+
+
+@register
+class KalmanDrift:
+    """Strong tracking Kalman filter over [a, b, c] (``stkf``), eqs. (3)–(10).
+
+    Examples
+    --------
+    >>> from gyrodrift.estimators.base import Observation
+    >>> est = KalmanDrift(KalmanConfig(fading=1.0))
+    >>> obs = Observation(t=10.0, y=np.array([0.5]), H=np.array([[0.0, 0.0, 1.0]]),
+    ...                   R=np.array([[1e-6]]))
+    >>> round(float(est.update(obs)[2]), 4)
+    0.5
+    """
+
+    name: ClassVar[str] = "stkf"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
+        self.config = config
+        self._x = np.array(config.x0, dtype=float)
+        self._max_var = np.square(np.array(config.p0_sd, dtype=float))
+        self._P = np.diag(self._max_var)
+        self._Q = np.diag(np.square(np.array(config.q_sd, dtype=float)))
+        #: Innovation and its covariance of the last update (diagnostics).
+        self.last_innovation: np.ndarray | None = None
+        self.last_S: np.ndarray | None = None
+
+    @property
+    def fading(self) -> float:
+        return self.config.fading
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    @property
+    def cov(self) -> np.ndarray:
+        return self._P.copy()
+
+    def update(self, obs: Observation) -> np.ndarray:
+        P_prior = cap_covariance(predict(self._P, self._Q, self.fading), self._max_var)
+        self._x, P_post, self.last_innovation, self.last_S = correct(
+            self._x, P_prior, obs.y, obs.H, obs.R
+        )
+        self._P = cap_covariance(P_post, self._max_var)
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
+        return self.params
+
+
+@register
+class PlainKalmanDrift(KalmanDrift):
+    """The same filter with s = 1: the paper's plain KF baseline (``kf``)."""
+
+    name: ClassVar[str] = "kf"
+
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
+        super().__init__(replace(config, fading=1.0))

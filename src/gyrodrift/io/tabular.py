@@ -1,0 +1,862 @@
+"""Read input logs (CSV or Parquet) in the gyrodrift input contract; write result tables.
+
+:func:`read_log` turns a user's log into a validated :class:`pandas.DataFrame` in the
+units and frames of :mod:`gyrodrift.conventions`. Every problem a user can fix raises
+:class:`~gyrodrift.errors.LogFormatError` (or :class:`~gyrodrift.errors.ConfigError` for a
+bad option) with a one-line message of the form::
+
+    <file>: <location>: <problem>; <what to do>
+
+where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the header
+is line 1) or ``data row N`` for Parquet (1-based, the first data row is ``data row 1``),
+optionally followed by ``, column 'name'``. Parts that do not apply are left out.
+
+:func:`write_table` writes a DataFrame as CSV or Parquet atomically, and
+:func:`check_output_path` refuses an output path that is the input log.
+"""
+
+from __future__ import annotations
+
+import gzip
+import os
+import secrets
+import zlib
+from pathlib import Path
+from typing import Callable, Mapping, NamedTuple
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.csv as pa_csv
+import pyarrow.parquet as pa_pq
+
+from gyrodrift.conventions import (
+    ACC_COLS,
+    FRAMES,
+    GYRO_UNITS,
+    GYRO_X,
+    GYRO_Y,
+    GYRO_Z,
+    HEADING,
+    MAG_COLS,
+    REF_HEADING,
+    REQUIRED_COLS,
+    T,
+    TEMP,
+    TEMP_RANGE_C,
+    TRUE_BIAS_Z,
+    wrap_360,
+)
+from gyrodrift.errors import ConfigError, LogFormatError
+
+__all__ = ["read_log", "write_table", "check_output_path"]
+
+#: File-name endings (lower case) and the table format each one means.
+_READ_SUFFIXES = {
+    ".csv": "csv",
+    ".csv.gz": "csv",
+    ".txt": "csv",
+    ".txt.gz": "csv",
+    ".parquet": "parquet",
+    ".pq": "parquet",
+}
+_WRITE_SUFFIXES = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet"}
+_FORMATS = ("csv", "parquet")
+
+#: Contract columns that must hold numbers (in file order of checking).
+_GYRO_COLS = (GYRO_X, GYRO_Y, GYRO_Z)
+_NUMERIC_COLS = (
+    (T, GYRO_Z, GYRO_X, GYRO_Y, TEMP, HEADING)
+    + MAG_COLS
+    + ACC_COLS
+    + (REF_HEADING, TRUE_BIAS_Z)
+)
+_MAG_FORM_COLS = MAG_COLS + ACC_COLS
+#: Columns whose sign flips from ROS FLU body axes to FRD (180 deg rotation about x).
+_FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
+#: Columns holding a heading (deg, clockwise from north in NED).
+_HEADING_COLS = (HEADING, REF_HEADING)
+#: Text that means "no value" in a numeric column stored as text.
+_NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"})
+_GZIP_MAGIC = b"\x1f\x8b"
+_MAX_NAMES_SHOWN = 30
+_MAX_TEXT_SHOWN = 40
+
+
+class _Source(NamedTuple):
+    """Where a table came from: enough to name rows the way a user sees them."""
+
+    name: str  #: the path as the user gave it
+    fmt: str  #: "csv" or "parquet"
+    text: bytes | None  #: CSV bytes (decompressed), to count physical lines on error
+
+
+# ---------------------------------------------------------------------------
+# message helpers
+# ---------------------------------------------------------------------------
+
+
+def _one_line(text: str) -> str:
+    """Collapse any line breaks so a message stays on one line."""
+    return " ".join(str(text).split())
+
+
+def _message(name: str, problem: str, advice: str, where: str = "") -> str:
+    """Build ``<file>: [<where>: ]<problem>; <advice>`` on one line."""
+    head = f"{name}: {where}: " if where else f"{name}: "
+    return _one_line(f"{head}{problem}; {advice}")
+
+
+def _format_error(src: _Source, problem: str, advice: str, where: str = "") -> LogFormatError:
+    """Return a :class:`LogFormatError` for ``src`` with a one-line message."""
+    return LogFormatError(_message(src.name, problem, advice, where))
+
+
+def _show_text(value: object) -> str:
+    """Quote a cell's text for a message, shortened and without line breaks."""
+    text = str(value)
+    if len(text) > _MAX_TEXT_SHOWN:
+        text = text[: _MAX_TEXT_SHOWN - 3] + "..."
+    return repr(text)
+
+
+def _show_names(names) -> str:
+    """List column names for a message (at most ``_MAX_NAMES_SHOWN`` of them)."""
+    names = [repr(str(n)) for n in names]
+    if not names:
+        return "(none)"
+    if len(names) > _MAX_NAMES_SHOWN:
+        extra = len(names) - _MAX_NAMES_SHOWN
+        names = names[:_MAX_NAMES_SHOWN] + [f"... ({extra} more)"]
+    return ", ".join(names)
+
+
+def _physical_line(text: bytes, nonempty_index: int) -> int:
+    """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
+
+    pyarrow skips empty lines, so its row counts are counts of non-empty lines
+    (1-based, header included); this maps one back to what an editor shows.
+    """
+    count = 0
+    for line_no, line in enumerate(text.splitlines(), start=1):
+        if line:
+            count += 1
+            if count == nonempty_index:
+                return line_no
+    return nonempty_index
+
+
+def _row_label(src: _Source, row: int) -> str:
+    """Name data row ``row`` (0-based) as the user sees it: ``line N`` or ``data row N``."""
+    if src.fmt == "csv" and src.text is not None:
+        # header is non-empty line 1, data row 0 is non-empty line 2
+        return f"line {_physical_line(src.text, row + 2)}"
+    return f"data row {row + 1}"
+
+
+def _cell_label(src: _Source, row: int, column: str) -> str:
+    """Name one cell: ``line N, column 'x'``."""
+    return f"{_row_label(src, row)}, column {column!r}"
+
+
+# ---------------------------------------------------------------------------
+# option checks
+# ---------------------------------------------------------------------------
+
+
+def _table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> str:
+    """Return "csv" or "parquet" from ``fmt`` or else from the file-name ending."""
+    if fmt is not None:
+        key = str(fmt).strip().lower()
+        if key not in _FORMATS:
+            raise ConfigError(
+                _one_line(f"unknown table format {fmt!r}; use one of: {', '.join(_FORMATS)}")
+            )
+        return key
+    name = path.name.lower()
+    for suffix in sorted(suffixes, key=len, reverse=True):
+        if name.endswith(suffix):
+            return suffixes[suffix]
+    accepted = ", ".join(sorted(suffixes))
+    raise ConfigError(
+        _message(
+            str(path),
+            f"cannot tell the table format from the file name (accepted endings: {accepted})",
+            "rename the file or give the format explicitly (csv or parquet)",
+        )
+    )
+
+
+def _gyro_scale(gyro_unit: str) -> tuple[str, float]:
+    """Return the canonical gyro unit name and its multiplier to deg/s."""
+    key = str(gyro_unit).strip().lower()
+    if key not in GYRO_UNITS:
+        raise ConfigError(
+            _one_line(f"unknown gyro unit {gyro_unit!r}; use one of: {', '.join(GYRO_UNITS)}")
+        )
+    return key, GYRO_UNITS[key]
+
+
+def _frame_name(frame: str) -> str:
+    """Return the canonical frame name, or raise :class:`ConfigError`."""
+    key = str(frame).strip().lower()
+    if key not in FRAMES:
+        raise ConfigError(_one_line(f"unknown frame {frame!r}; use one of: {', '.join(FRAMES)}"))
+    return key
+
+
+def _check_column_map(column_map: Mapping[str, str] | None) -> dict[str, str]:
+    """Return ``column_map`` as a plain NEW -> OLD dict of strings."""
+    if column_map is None:
+        return {}
+    if not isinstance(column_map, Mapping):
+        raise ConfigError(
+            f"column map must be a mapping NEW -> OLD, got {type(column_map).__name__}"
+        )
+    out = {}
+    for new, old in column_map.items():
+        if not isinstance(new, str) or not isinstance(old, str) or not new or not old:
+            raise ConfigError(
+                _one_line(f"column map entry {new!r}={old!r} is invalid; use NEW=OLD column names")
+            )
+        out[new.strip()] = old.strip()
+    olds = list(out.values())
+    dup = sorted({o for o in olds if olds.count(o) > 1})
+    if dup:
+        raise ConfigError(
+            _one_line(f"column map renames column {dup[0]!r} twice; map each input column once")
+        )
+    return out
+
+
+# ---------------------------------------------------------------------------
+# raw readers
+# ---------------------------------------------------------------------------
+
+
+def _check_input_path(path: Path) -> None:
+    """Raise :class:`LogFormatError` if ``path`` is not an existing regular file."""
+    if path.is_dir():
+        raise LogFormatError(
+            _message(str(path), "is a directory, not a log file", "give the path of a .csv or .parquet log")
+        )
+    if not path.exists():
+        raise LogFormatError(
+            _message(str(path), "input file does not exist", "check the path and the current directory")
+        )
+
+
+def _read_bytes(path: Path) -> bytes:
+    """Read the whole file, turning OS errors into one-line :class:`LogFormatError`."""
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise LogFormatError(
+            _message(str(path), f"cannot read the input file ({reason})", "check that it is a readable file")
+        ) from exc
+
+
+def _empty_file_error(name: str) -> LogFormatError:
+    """The error for a file with no content at all."""
+    return LogFormatError(
+        _message(name, "file is empty", "give a log with a header row and at least one data row")
+    )
+
+
+def _decompress_if_gzip(data: bytes, name: str) -> bytes:
+    """Return ``data`` decompressed when it starts with the gzip magic bytes."""
+    if not data.startswith(_GZIP_MAGIC):
+        return data
+    try:
+        return gzip.decompress(data)
+    except (OSError, EOFError, zlib.error) as exc:
+        raise LogFormatError(
+            _message(
+                name,
+                f"is not a valid gzip file ({_one_line(str(exc))})",
+                "re-compress the CSV with gzip or give the uncompressed .csv",
+            )
+        ) from exc
+
+
+def _check_csv_text(data: bytes, name: str) -> None:
+    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text."""
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        line = data.count(b"\n", 0, nul) + 1
+        raise LogFormatError(
+            _message(
+                name,
+                "contains NUL bytes, so it is a binary file, not a CSV text file",
+                "export the log as comma-separated text with a header row (or give a .parquet file)",
+                where=f"line {line}",
+            )
+        )
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise LogFormatError(
+            _message(
+                name,
+                f"byte 0x{data[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
+                "export or re-save the log as UTF-8 comma-separated text",
+                where=f"line {line}",
+            )
+        ) from exc
+
+
+def _read_csv_table(path: Path) -> tuple[pa.Table, _Source]:
+    """Read a CSV (optionally gzip-compressed) into a pyarrow table, strictly."""
+    name = str(path)
+    data = _decompress_if_gzip(_read_bytes(path), name)
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]  # UTF-8 byte-order mark written by some spreadsheet programs
+    if not data.strip():
+        raise _empty_file_error(name)
+    _check_csv_text(data, name)
+    src = _Source(name, "csv", data)
+
+    ragged = []
+
+    def on_invalid_row(row) -> str:
+        ragged.append(row)
+        return "error"
+
+    try:
+        table = pa_csv.read_csv(
+            pa.BufferReader(data),
+            read_options=pa_csv.ReadOptions(use_threads=False),
+            parse_options=pa_csv.ParseOptions(invalid_row_handler=on_invalid_row),
+            convert_options=pa_csv.ConvertOptions(strings_can_be_null=True),
+        )
+    except (pa.ArrowException, ValueError) as exc:
+        if ragged:
+            row = ragged[0]
+            line = _physical_line(data, row.number) if row.number else "?"
+            raise _format_error(
+                src,
+                f"row has {row.actual_columns} field(s) but the header has {row.expected_columns}",
+                "every row needs one value per header column (leave a cell empty, do not drop it)",
+                where=f"line {line}",
+            ) from exc
+        raise _format_error(
+            src,
+            f"cannot be parsed as CSV ({_one_line(str(exc))})",
+            "give a comma-separated text file with a header row",
+        ) from exc
+    if table.num_rows == 0:
+        raise _format_error(
+            src, "has a header row but no data rows", "give a log with at least one data row"
+        )
+    return table, src
+
+
+def _read_parquet_table(path: Path) -> tuple[pa.Table, _Source]:
+    """Read a Parquet file into a pyarrow table."""
+    name = str(path)
+    src = _Source(name, "parquet", None)
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise LogFormatError(
+            _message(name, f"cannot read the input file ({exc.strerror})", "check that it is a readable file")
+        ) from exc
+    if size == 0:
+        raise _empty_file_error(name)
+    try:
+        table = pa_pq.read_table(path)
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        raise _format_error(
+            src,
+            f"is not a readable Parquet file ({_one_line(str(exc))})",
+            "check the file, or read it as CSV if it is a text file",
+        ) from exc
+    if table.num_rows == 0:
+        raise _format_error(src, "has no data rows", "give a log with at least one data row")
+    return table, src
+
+
+def _table_to_frame(table: pa.Table, src: _Source) -> pd.DataFrame:
+    """Convert to pandas, with column names stripped of spaces and checked for duplicates."""
+    names = [str(n).strip() for n in table.column_names]
+    seen = set()
+    for col in names:
+        if col in seen:
+            where = "line 1" if src.fmt == "csv" else ""
+            raise _format_error(
+                src,
+                f"column {col!r} appears more than once in the header",
+                "rename or remove the duplicate column",
+                where=where,
+            )
+        seen.add(col)
+    frame = table.rename_columns(names).to_pandas(ignore_metadata=True)
+    return frame.reset_index(drop=True)
+
+
+# ---------------------------------------------------------------------------
+# column checks (each takes the frame and the source, returns nothing or a new frame)
+# ---------------------------------------------------------------------------
+
+
+def _apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: _Source) -> pd.DataFrame:
+    """Rename OLD -> NEW columns, refusing missing OLD names and duplicate results."""
+    if not column_map:
+        return frame
+    found = list(frame.columns)
+    for new, old in column_map.items():
+        if old not in frame.columns:
+            raise ConfigError(
+                _message(
+                    src.name,
+                    f"column map {new}={old}: there is no column {old!r}; columns found: {_show_names(found)}",
+                    "fix the --map NEW=OLD option",
+                )
+            )
+    renamed = [next((n for n, o in column_map.items() if o == c), c) for c in found]
+    for col in set(renamed):
+        if renamed.count(col) > 1:
+            raise ConfigError(
+                _message(
+                    src.name,
+                    f"column map would give two columns named {col!r}",
+                    "map each contract name from one input column only, or drop the other column",
+                )
+            )
+    return frame.set_axis(renamed, axis=1)
+
+
+def _check_required_columns(frame: pd.DataFrame, src: _Source) -> None:
+    """Raise if any of t, gyro_z, temp is missing."""
+    missing = [c for c in REQUIRED_COLS if c not in frame.columns]
+    if missing:
+        raise _format_error(
+            src,
+            f"missing required column(s) {_show_names(missing)}; columns found: {_show_names(frame.columns)}",
+            "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz)",
+        )
+
+
+def _check_compass_columns(frame: pd.DataFrame, src: _Source) -> None:
+    """Raise unless ``heading`` or the full mag_* + acc_* set is present."""
+    if HEADING in frame.columns:
+        return
+    missing = [c for c in _MAG_FORM_COLS if c not in frame.columns]
+    if not missing:
+        return
+    partial = len(missing) < len(_MAG_FORM_COLS)
+    detail = f" (missing: {', '.join(missing)})" if partial else ""
+    raise _format_error(
+        src,
+        f"no compass data: need a {HEADING!r} column or all of {', '.join(_MAG_FORM_COLS)}{detail};"
+        f" columns found: {_show_names(frame.columns)}",
+        "add the compass columns or rename them with --map NEW=OLD",
+    )
+
+
+def _is_plain_numeric(series: pd.Series) -> bool:
+    """True for integer/float (not boolean) dtypes, which convert to float64 safely."""
+    return pd.api.types.is_numeric_dtype(series.dtype) and not pd.api.types.is_bool_dtype(series.dtype)
+
+
+def _first_non_number(values: pd.Series) -> int | None:
+    """Return the position of the first cell that holds text which is not a number."""
+    text = values.astype(object)
+    for pos, cell in enumerate(text):
+        if cell is None or (isinstance(cell, float) and np.isnan(cell)):
+            continue
+        if isinstance(cell, (int, float, np.integer, np.floating)) and not isinstance(cell, (bool, np.bool_)):
+            continue
+        s = str(cell).strip()
+        if s.lower() in _NAN_TEXT:
+            continue
+        try:
+            float(s)
+        except ValueError:
+            return pos
+    return None
+
+
+def _numeric_column(series: pd.Series, col: str, src: _Source) -> np.ndarray:
+    """Return a contract column as float64, or raise naming the first non-number."""
+    if _is_plain_numeric(series):
+        return series.to_numpy(dtype=np.float64, na_value=np.nan)
+    if series.isna().all():
+        return np.full(len(series), np.nan)
+    if pd.api.types.is_string_dtype(series.dtype) or series.dtype == object:
+        text = series.astype(object).map(
+            lambda v: v.strip() if isinstance(v, str) else v
+        )
+        blank = text.map(lambda v: isinstance(v, str) and v.lower() in _NAN_TEXT)
+        try:
+            values = pd.to_numeric(text.mask(blank), errors="coerce")
+        except (TypeError, ValueError):
+            values = None
+        if values is not None:
+            bad = values.isna() & ~text.isna() & ~blank
+            if not bad.any():
+                return values.to_numpy(dtype=np.float64, na_value=np.nan)
+            pos = int(np.flatnonzero(bad.to_numpy())[0])
+        else:
+            found = _first_non_number(series)
+            pos = 0 if found is None else found
+    else:
+        # booleans, dates, timestamps, nested values: report the first non-empty cell
+        pos = int(np.flatnonzero(series.notna().to_numpy())[0])
+    raise _format_error(
+        src,
+        f"{_show_text(series.iloc[pos])} is not a number",
+        f"column {col!r} must hold numbers only: fix the value or leave the cell empty",
+        where=_cell_label(src, pos, col),
+    )
+
+
+def _convert_numeric(frame: pd.DataFrame, src: _Source) -> pd.DataFrame:
+    """Convert every numeric contract column to float64 and reject inf values."""
+    out = frame.copy()
+    for col in _NUMERIC_COLS:
+        if col not in out.columns:
+            continue
+        values = _numeric_column(out[col], col, src)
+        infinite = np.flatnonzero(np.isinf(values))
+        if infinite.size:
+            pos = int(infinite[0])
+            raise _format_error(
+                src,
+                f"value {values[pos]!r} is not finite",
+                "replace it with a number or leave the cell empty",
+                where=_cell_label(src, pos, col),
+            )
+        out[col] = values
+    return out
+
+
+def _first_value_pos(values: np.ndarray) -> int | None:
+    """Position of the first non-NaN value, or None if all are NaN."""
+    idx = np.flatnonzero(~np.isnan(values))
+    return int(idx[0]) if idx.size else None
+
+
+def _check_required_values(frame: pd.DataFrame, src: _Source) -> None:
+    """Reject entirely empty required columns and leading empty gyro_z/temp cells."""
+    for col in REQUIRED_COLS:
+        if _first_value_pos(frame[col].to_numpy()) is None:
+            raise _format_error(
+                src,
+                f"required column {col!r} is empty in every row",
+                "check the file, or map the right input column with --map NEW=OLD",
+            )
+    for col in (GYRO_Z, TEMP):
+        first = _first_value_pos(frame[col].to_numpy())
+        if first is not None and first > 0:
+            raise _format_error(
+                src,
+                f"the first data row has no {col} value (the first one is on {_row_label(src, first)})",
+                f"drop the leading rows without {col} data",
+                where=_cell_label(src, 0, col),
+            )
+
+
+def _check_time(frame: pd.DataFrame, src: _Source) -> None:
+    """Reject empty time stamps and times that do not strictly increase."""
+    t = frame[T].to_numpy()
+    empty = np.flatnonzero(np.isnan(t))
+    if empty.size:
+        pos = int(empty[0])
+        raise _format_error(
+            src,
+            "time is empty",
+            "every row needs a time stamp in seconds: fill in t or drop the row",
+            where=_cell_label(src, pos, T),
+        )
+    bad = np.flatnonzero(~(np.diff(t) > 0.0))
+    if bad.size:
+        pos = int(bad[0]) + 1
+        raise _format_error(
+            src,
+            f"time is not strictly increasing: t={t[pos]!r} follows t={t[pos - 1]!r}"
+            f" on {_row_label(src, pos - 1)}",
+            "sort the log by time and remove duplicate samples",
+            where=_cell_label(src, pos, T),
+        )
+
+
+def _check_temperature(frame: pd.DataFrame, src: _Source) -> None:
+    """Reject temperatures outside :data:`TEMP_RANGE_C`."""
+    lo, hi = TEMP_RANGE_C
+    temp_c = frame[TEMP].to_numpy()
+    with np.errstate(invalid="ignore"):
+        outside = np.flatnonzero((temp_c < lo) | (temp_c > hi))
+    if outside.size:
+        pos = int(outside[0])
+        raise _format_error(
+            src,
+            f"temperature {temp_c[pos]!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
+            "check the unit and the column (Kelvin? raw sensor counts?) and map the right one with --map NEW=OLD",
+            where=_cell_label(src, pos, TEMP),
+        )
+
+
+def _has_values(frame: pd.DataFrame, cols) -> bool:
+    """True if every column in ``cols`` exists and holds at least one value."""
+    return all(c in frame.columns and frame[c].notna().any() for c in cols)
+
+
+def _compass_form(frame: pd.DataFrame, src: _Source) -> str:
+    """Return "heading", "mag" or "both": the compass forms that hold data."""
+    heading = _has_values(frame, (HEADING,))
+    mag = _has_values(frame, _MAG_FORM_COLS)
+    if heading and mag:
+        return "both"
+    if heading:
+        return "heading"
+    if mag:
+        return "mag"
+    present = [c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns]
+    empty = [c for c in present if not frame[c].notna().any()]
+    raise _format_error(
+        src,
+        f"the compass column(s) hold no values (empty in every row: {', '.join(empty)})",
+        "give a log with compass samples, or map the right columns with --map NEW=OLD",
+    )
+
+
+# ---------------------------------------------------------------------------
+# unit and frame conversion (pure: frame in, new frame out)
+# ---------------------------------------------------------------------------
+
+
+def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
+    """Multiply the gyro rate columns (and ``true_bias_z``) by ``scale``."""
+    if scale == 1.0:
+        return frame
+    out = frame.copy()
+    for col in _GYRO_COLS + (TRUE_BIAS_Z,):
+        if col in out.columns:
+            out[col] = out[col] * scale
+    return out
+
+
+def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
+    """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
+    out = frame.copy()
+    for col in _HEADING_COLS:
+        if col in out.columns:
+            out[col] = wrap_360(90.0 - out[col].to_numpy())
+    for col in _FLU_TO_FRD_FLIP:
+        if col in out.columns:
+            out[col] = -out[col]
+    return out
+
+
+def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
+    """Wrap ``heading`` and ``ref_heading`` to [0, 360) deg (NaN stays NaN)."""
+    out = frame.copy()
+    for col in _HEADING_COLS:
+        if col in out.columns:
+            out[col] = wrap_360(out[col].to_numpy())
+    return out
+
+
+# ---------------------------------------------------------------------------
+# public API
+# ---------------------------------------------------------------------------
+
+
+def read_log(
+    path,
+    *,
+    fmt: str | None = None,
+    gyro_unit: str = "deg/s",
+    frame: str = "ned",
+    column_map: Mapping[str, str] | None = None,
+) -> pd.DataFrame:
+    """Read and validate an input log; return it in contract units and frames.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV (``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz``) with a header row, or
+        Parquet (``.parquet``, ``.pq``). Gzip-compressed CSV is recognised by content.
+    fmt : {"csv", "parquet"}, optional
+        Table format; overrides the file-name ending.
+    gyro_unit : {"deg/s", "dps", "rad/s"}, default "deg/s"
+        Unit of the gyro columns ``gyro_x``, ``gyro_y``, ``gyro_z`` in the file (and of
+        ``true_bias_z``, the bias of ``gyro_z``). Output is always deg/s.
+    frame : {"ned", "enu"}, default "ned"
+        Axis convention of the file. ``"enu"`` (ROS REP-103, body FLU) is converted to
+        NED/FRD: ``heading`` and ``ref_heading`` become ``wrap_360(90 - value)``; the y
+        and z components (``gyro_y``, ``gyro_z``, ``true_bias_z``, ``mag_y``, ``mag_z``,
+        ``acc_y``, ``acc_z``) change sign.
+    column_map : mapping of str to str, optional
+        ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
+
+    Returns
+    -------
+    pandas.DataFrame
+        All input columns in file order (renamed per ``column_map``, names stripped of
+        surrounding spaces). Numeric contract columns (``t``, ``gyro_*``, ``temp``,
+        ``heading``, ``mag_*``, ``acc_*``, ``ref_heading``, ``true_bias_z``) are float64,
+        with empty cells as NaN; headings are wrapped to [0, 360). Other columns pass
+        through as read. ``df.attrs`` holds ``source``, ``format``, ``gyro_unit``,
+        ``frame`` and ``compass`` (``"heading"``, ``"mag"`` or ``"both"``: the compass
+        forms with data).
+
+    Raises
+    ------
+    LogFormatError
+        The file is missing, empty, not a table, ragged, lacks required or compass
+        columns, or holds bad values (non-numbers, inf, empty or non-increasing ``t``,
+        implausible ``temp``, a required column with no value, or a first row without
+        ``gyro_z``/``temp``). Empty cells in ``gyro_z``/``temp`` after the first row
+        are allowed and stay NaN.
+    ConfigError
+        An unknown ``fmt``, ``gyro_unit`` or ``frame``, an undecidable file-name ending,
+        or a ``column_map`` naming a column the file lacks.
+
+    Notes
+    -----
+    Messages are one line: ``<file>: line N, column 'c': <problem>; <what to do>``
+    for CSV (line numbers as an editor shows them, header = line 1) and
+    ``data row N`` (1-based) for Parquet.
+    """
+    path = Path(path)
+    unit_name, scale = _gyro_scale(gyro_unit)
+    frame_name = _frame_name(frame)
+    renames = _check_column_map(column_map)
+    _check_input_path(path)
+    table_fmt = _table_format(path, fmt, _READ_SUFFIXES)
+    if table_fmt == "csv":
+        table, src = _read_csv_table(path)
+    else:
+        table, src = _read_parquet_table(path)
+
+    df = _apply_column_map(_table_to_frame(table, src), renames, src)
+    _check_required_columns(df, src)
+    _check_compass_columns(df, src)
+    df = _convert_numeric(df, src)
+    _check_required_values(df, src)
+    _check_time(df, src)
+    _check_temperature(df, src)
+    compass = _compass_form(df, src)
+
+    df = _to_deg_per_s(df, scale)
+    if frame_name == "enu":
+        df = _enu_to_ned(df)
+    df = _wrap_headings(df)
+    df.attrs = {
+        "source": str(path),
+        "format": table_fmt,
+        "gyro_unit": unit_name,
+        "frame": frame_name,
+        "compass": compass,
+    }
+    return df
+
+
+def _open_temp_beside(path: Path) -> tuple[int, Path]:
+    """Create a new, empty hidden file next to ``path``; return its fd and path."""
+    while True:
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
+        try:
+            # mode 0o666 lets the process umask decide, as for any newly created file
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+        except FileExistsError:
+            continue
+        return fd, tmp
+
+
+def _write_csv(df: pd.DataFrame, fd: int) -> None:
+    """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats) to ``fd``."""
+    with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+        df.to_csv(fh, index=False, lineterminator="\n")
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def _write_parquet(df: pd.DataFrame, fd: int) -> None:
+    """Write ``df`` as Parquet (no index) to ``fd``."""
+    with os.fdopen(fd, "wb") as fh:
+        pa_pq.write_table(pa.Table.from_pandas(df, preserve_index=False), fh)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
+    """Write a DataFrame as CSV or Parquet, atomically.
+
+    The table goes to a hidden temporary file in the destination directory, which then
+    replaces ``path`` in one step (:func:`os.replace`): readers never see a partial file,
+    and an existing ``path`` is left untouched if writing fails.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Table to write; the index is not written.
+    path : str or os.PathLike
+        Destination; its ending (``.csv``, ``.parquet``, ``.pq``) picks the format.
+    fmt : {"csv", "parquet"}, optional
+        Table format; overrides the file-name ending.
+
+    Raises
+    ------
+    ConfigError
+        Unknown format or file-name ending, missing destination directory, a
+        destination that is a directory, or an OS error while writing.
+    """
+    path = Path(path)
+    table_fmt = _table_format(path, fmt, _WRITE_SUFFIXES)
+    parent = path.parent
+    if not parent.is_dir():
+        raise ConfigError(
+            _message(str(path), f"output directory {str(parent)!r} does not exist", "create it first or choose another -o")
+        )
+    if path.is_dir():
+        raise ConfigError(_message(str(path), "output path is a directory", "give a file name such as out.csv"))
+    writer: Callable[[pd.DataFrame, int], None] = _write_csv if table_fmt == "csv" else _write_parquet
+    try:
+        fd, tmp = _open_temp_beside(path)
+    except OSError as exc:
+        raise ConfigError(
+            _message(str(path), f"cannot write in {str(parent)!r} ({exc.strerror})", "choose another -o")
+        ) from exc
+    try:
+        writer(df, fd)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ConfigError(
+            _message(str(path), f"writing the output failed ({exc.strerror or exc})", "check disk space and permissions")
+        ) from exc
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def check_output_path(in_path, out_path) -> None:
+    """Refuse an output path that is the input log itself.
+
+    Parameters
+    ----------
+    in_path, out_path : str or os.PathLike
+        Input log and planned output file.
+
+    Raises
+    ------
+    ConfigError
+        If both resolve to the same file (same real path, or the same file through a
+        hard link when both exist).
+    """
+    same = os.path.realpath(in_path) == os.path.realpath(out_path)
+    if not same and os.path.exists(in_path) and os.path.exists(out_path):
+        same = os.path.samefile(in_path, out_path)
+    if same:
+        raise ConfigError(
+            _message(
+                str(out_path),
+                f"output file is the input log {str(in_path)!r}",
+                "the input is never overwritten: choose another -o",
+            )
+        )
