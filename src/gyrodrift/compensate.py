@@ -30,11 +30,11 @@ keep compensating through the outage (eq. 5), the paper's key property.
 Initialisation
 --------------
 The first ``init_s`` seconds (30 s: the paper's y1..y3) are split into
-``stack_depth`` sub-windows, each giving one drift measurement: the mean gyro rate
-when the sub-window is motionless (gyro std and compass change below the
-``still_*`` thresholds), as the paper does, otherwise the compass-aided measurement
-above. They are the first stacked measurement (update at the end of the init
-window) from the prior ``x0, P0``. Rows of the init window are emitted when it
+``stack_depth`` sub-windows; each motionless one (gyro std and compass change below
+the ``still_*`` thresholds) gives one drift measurement, its mean gyro rate, as the
+paper does. They form the first stacked measurement (update at the end of the
+init window) from the prior ``x0, P0``. A log that starts in motion gets no init
+measurement: the filter starts from its prior and learns from the compass. Rows of the init window are emitted when it
 ends, compensated with the parameters it produced.
 
 Missing values: an empty gyro or temperature cell holds the previous value and
@@ -284,7 +284,12 @@ class _Aiding:
 
 
 def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float, source: str):
-    """Initialisation from the first window (module notes); returns the anchor row."""
+    """Initialisation from the first window (module notes); returns the anchor row.
+
+    Each motionless sub-window gives one drift measurement, the mean gyro rate (the
+    paper's y1..y3). Sub-windows with motion give none: the filter then starts from
+    its prior and learns from the compass once aiding is accepted.
+    """
     cfg = aid.cfg
     n = cfg.stack_depth
     t0 = float(t[0])
@@ -295,39 +300,23 @@ def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float
         if r1 <= r0:
             continue
         dt = float(t[r1] - t[r0])
-        rows = np.flatnonzero(has_compass[r0 : r1 + 1]) + r0
+        compass = heading[r0 : r1 + 1][has_compass[r0 : r1 + 1]]
         turned = 0.0
-        if rows.size >= 2:
-            turned = float(np.max(np.abs(wrap_180(heading[rows] - heading[rows[0]]))))
-        still = (
-            float(np.std(g[r0 : r1 + 1])) <= cfg.gate.still_std_dps
-            and turned <= cfg.gate.still_heading_deg
-        )
-        if still:
+        if compass.size >= 3:  # median heading of the last third against the first third
+            third = compass.size // 3
+            rel = wrap_180(compass - compass[0])
+            turned = abs(float(np.median(rel[-third:]) - np.median(rel[:third])))
+        if float(np.std(g[r0 : r1 + 1])) <= cfg.gate.still_std_dps and turned <= cfg.gate.still_heading_deg:
             h = np.array([(I_T[r1] - I_T[r0]) / dt, (I_Tp[r1] - I_Tp[r0]) / dt, 1.0])
-            meas = _Meas((I_raw[r1] - I_raw[r0]) / dt, h, cfg.gyro_noise_dps_rthz**2 / dt, 0.0)
-        elif rows.size >= 2 and t[rows[-1]] - t[rows[0]] >= 0.5 * dt:
-            s0, s1 = (
-                _Snap(float(t[i]), float(heading[i]), float(I_raw[i]), float(I_T[i]), float(I_Tp[i]), 0.0)
-                for i in (rows[0], rows[-1])
-            )
-            meas = _compass_measurement(s0, s1, cfg)
-        else:
-            continue
-        aid.stack.appendleft(meas)
-    if not aid.stack:
-        raise GyroDriftError(
-            f"{source}: cannot initialise: the first {cfg.init_s:g} s are neither motionless "
-            f"(gyro std <= {cfg.gate.still_std_dps:g} deg/s) nor covered by compass samples; "
-            "start the log while the unit is still, or change --init-s"
-        )
+            aid.stack.appendleft(_Meas((I_raw[r1] - I_raw[r0]) / dt, h, cfg.gyro_noise_dps_rthz**2 / dt, 0.0))
     first_compass = np.flatnonzero(has_compass)
     if first_compass.size == 0:
         raise GyroDriftError(
             f"{source}: no compass heading in the first {cfg.init_s:g} s (init window), "
             "so the heading cannot be anchored; check the heading/mag columns or raise --init-s"
         )
-    aid.estimator.update(aid._observation(init_end_s))
+    if aid.stack:
+        aid.estimator.update(aid._observation(init_end_s))
     return int(first_compass[0])
 
 

@@ -12,8 +12,8 @@ Two things would make P grow without limit, and both are stopped:
   old *measurements*, and there are none; only Q is added (``P <- P + Q``);
 * a direction the measurements do not see (T' ≡ 0 leaves b unobservable; a flat
   temperature confounds a with c) grows as ``s**N`` under fading. Every variance is
-  therefore capped at its prior value ``p0_sd**2``: we are never less sure of a
-  parameter than before the first measurement. The cap scales rows and columns
+  therefore capped, by default at its prior value ``p0_sd**2``: we are never less
+  sure of a parameter than before the first measurement. The cap scales rows and columns
   (``D P D``), so P stays symmetric positive definite.
 """
 
@@ -45,26 +45,36 @@ class KalmanConfig:
         Prior mean of [a (deg/s/degC), b (deg), c (deg/s)].
     p0_sd : tuple of 3 floats
         Prior standard deviations of [a, b, c] (same units); P0 = diag(p0_sd²).
-        Also the cap on each standard deviation (see module notes).
     q_sd : tuple of 3 floats
         Process-noise standard deviations of [a, b, c] per update interval;
         Q = diag(q_sd²).
+    max_sd : tuple of 3 floats, optional
+        Cap on each standard deviation (see module notes); default ``p0_sd``.
     """
 
     fading: float = 1.02
     x0: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    p0_sd: tuple[float, float, float] = (0.1, 20.0, 5.0)
+    p0_sd: tuple[float, float, float] = (0.05, 5.0, 5.0)
     q_sd: tuple[float, float, float] = (1e-4, 0.05, 1e-3)
+    max_sd: tuple[float, float, float] | None = None
 
     def __post_init__(self):
-        if not (math.isfinite(self.fading) and self.fading >= 1.0):
+        if not (isinstance(self.fading, (int, float)) and math.isfinite(self.fading) and self.fading >= 1.0):
             raise ConfigError(f"fading factor s must be a number >= 1, got {self.fading!r}")
-        for name in ("x0", "p0_sd", "q_sd"):
+        for name in ("x0", "p0_sd", "q_sd", "max_sd"):
             v = getattr(self, name)
-            if len(v) != 3 or not all(math.isfinite(float(e)) for e in v):
+            if v is None and name == "max_sd":
+                continue
+            try:
+                ok = len(v) == 3 and all(math.isfinite(float(e)) for e in v)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
                 raise ConfigError(f"{name} must be three finite numbers (a, b, c), got {v!r}")
-        if not all(float(e) > 0 for e in self.p0_sd):
-            raise ConfigError(f"p0_sd must be positive, got {self.p0_sd!r}")
+        for name in ("p0_sd", "max_sd"):
+            v = getattr(self, name)
+            if v is not None and not all(float(e) > 0 for e in v):
+                raise ConfigError(f"{name} must be positive, got {v!r}")
         if not all(float(e) >= 0 for e in self.q_sd):
             raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
 
@@ -89,8 +99,8 @@ class KalmanDrift:
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
         self._x = np.array(config.x0, dtype=float)
-        self._max_var = np.square(np.array(config.p0_sd, dtype=float))
-        self._P = np.diag(self._max_var)
+        self._P = np.diag(np.square(np.array(config.p0_sd, dtype=float)))
+        self._max_var = np.square(np.array(config.max_sd or config.p0_sd, dtype=float))
         self._Q = np.diag(np.square(np.array(config.q_sd, dtype=float)))
         #: Innovation and its covariance of the last update (diagnostics).
         self.last_innovation: np.ndarray | None = None

@@ -257,11 +257,9 @@ def _read_bytes(path: Path) -> bytes:
         ) from exc
 
 
-def _empty_file_error(name: str) -> LogFormatError:
+def _empty_file_error(name: str, advice: str) -> LogFormatError:
     """The error for a file with no content at all."""
-    return LogFormatError(
-        _message(name, "file is empty", "give a log with a header row and at least one data row")
-    )
+    return LogFormatError(_message(name, "file is empty", advice))
 
 
 def _decompress_if_gzip(data: bytes, name: str) -> bytes:
@@ -314,7 +312,7 @@ def _read_csv_table(path: Path) -> tuple[pa.Table, _Source]:
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]  # UTF-8 byte-order mark written by some spreadsheet programs
     if not data.strip():
-        raise _empty_file_error(name)
+        raise _empty_file_error(name, "give a CSV log with a header row and at least one data row")
     _check_csv_text(data, name)
     src = _Source(name, "csv", data)
 
@@ -361,10 +359,12 @@ def _read_parquet_table(path: Path) -> tuple[pa.Table, _Source]:
         size = path.stat().st_size
     except OSError as exc:
         raise LogFormatError(
-            _message(name, f"cannot read the input file ({exc.strerror})", "check that it is a readable file")
+            _message(
+                name, f"cannot read the input file ({exc.strerror})", "check that it is a readable file"
+            )
         ) from exc
     if size == 0:
-        raise _empty_file_error(name)
+        raise _empty_file_error(name, "give a Parquet log with at least one data row")
     try:
         table = pa_pq.read_table(path)
     except (pa.ArrowException, OSError, ValueError) as exc:
@@ -411,7 +411,8 @@ def _apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: _Sou
             raise ConfigError(
                 _message(
                     src.name,
-                    f"column map {new}={old}: there is no column {old!r}; columns found: {_show_names(found)}",
+                    f"column map {new}={old}: there is no column {old!r};"
+                    f" columns found: {_show_names(found)}",
                     "fix the --map NEW=OLD option",
                 )
             )
@@ -434,7 +435,8 @@ def _check_required_columns(frame: pd.DataFrame, src: _Source) -> None:
     if missing:
         raise _format_error(
             src,
-            f"missing required column(s) {_show_names(missing)}; columns found: {_show_names(frame.columns)}",
+            f"missing required column(s) {_show_names(missing)};"
+            f" columns found: {_show_names(frame.columns)}",
             "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz)",
         )
 
@@ -467,7 +469,8 @@ def _first_non_number(values: pd.Series) -> int | None:
     for pos, cell in enumerate(text):
         if cell is None or (isinstance(cell, float) and np.isnan(cell)):
             continue
-        if isinstance(cell, (int, float, np.integer, np.floating)) and not isinstance(cell, (bool, np.bool_)):
+        is_number = isinstance(cell, (int, float, np.integer, np.floating))
+        if is_number and not isinstance(cell, (bool, np.bool_)):
             continue
         s = str(cell).strip()
         if s.lower() in _NAN_TEXT:
@@ -481,6 +484,8 @@ def _first_non_number(values: pd.Series) -> int | None:
 
 def _numeric_column(series: pd.Series, col: str, src: _Source) -> np.ndarray:
     """Return a contract column as float64, or raise naming the first non-number."""
+    if isinstance(series.dtype, pd.CategoricalDtype):  # dictionary-encoded Parquet column
+        series = series.astype(object)
     if _is_plain_numeric(series):
         return series.to_numpy(dtype=np.float64, na_value=np.nan)
     if series.isna().all():
@@ -525,7 +530,7 @@ def _convert_numeric(frame: pd.DataFrame, src: _Source) -> pd.DataFrame:
             pos = int(infinite[0])
             raise _format_error(
                 src,
-                f"value {values[pos]!r} is not finite",
+                f"value {float(values[pos])!r} is not finite",
                 "replace it with a number or leave the cell empty",
                 where=_cell_label(src, pos, col),
             )
@@ -576,7 +581,7 @@ def _check_time(frame: pd.DataFrame, src: _Source) -> None:
         pos = int(bad[0]) + 1
         raise _format_error(
             src,
-            f"time is not strictly increasing: t={t[pos]!r} follows t={t[pos - 1]!r}"
+            f"time is not strictly increasing: t={float(t[pos])!r} follows t={float(t[pos - 1])!r}"
             f" on {_row_label(src, pos - 1)}",
             "sort the log by time and remove duplicate samples",
             where=_cell_label(src, pos, T),
@@ -593,8 +598,9 @@ def _check_temperature(frame: pd.DataFrame, src: _Source) -> None:
         pos = int(outside[0])
         raise _format_error(
             src,
-            f"temperature {temp_c[pos]!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
-            "check the unit and the column (Kelvin? raw sensor counts?) and map the right one with --map NEW=OLD",
+            f"temperature {float(temp_c[pos])!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
+            "check the unit and the column (Kelvin? raw sensor counts?)"
+            " and map the right one with --map NEW=OLD",
             where=_cell_label(src, pos, TEMP),
         )
 
@@ -811,10 +817,16 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     parent = path.parent
     if not parent.is_dir():
         raise ConfigError(
-            _message(str(path), f"output directory {str(parent)!r} does not exist", "create it first or choose another -o")
+            _message(
+                str(path),
+                f"output directory {str(parent)!r} does not exist",
+                "create it first or choose another -o",
+            )
         )
     if path.is_dir():
-        raise ConfigError(_message(str(path), "output path is a directory", "give a file name such as out.csv"))
+        raise ConfigError(
+            _message(str(path), "output path is a directory", "give a file name such as out.csv")
+        )
     writer: Callable[[pd.DataFrame, int], None] = _write_csv if table_fmt == "csv" else _write_parquet
     try:
         fd, tmp = _open_temp_beside(path)
@@ -828,7 +840,11 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise ConfigError(
-            _message(str(path), f"writing the output failed ({exc.strerror or exc})", "check disk space and permissions")
+            _message(
+                str(path),
+                f"writing the output failed ({exc.strerror or exc})",
+                "check disk space and permissions",
+            )
         ) from exc
     except BaseException:
         tmp.unlink(missing_ok=True)

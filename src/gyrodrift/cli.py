@@ -1,0 +1,198 @@
+"""The ``gyrodrift`` command line: a thin shell over the library."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+from importlib import resources
+from pathlib import Path
+
+from gyrodrift import __version__
+from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.estimators import ESTIMATORS
+from gyrodrift.io import check_output_path, read_log, write_table
+from gyrodrift.metrics import accuracy
+
+__all__ = ["main"]
+
+CONVENTIONS = """\
+units and conventions (input contract, CSV with a header row or Parquet):
+  t            s, strictly increasing
+  gyro_z       deg/s; positive = heading increases (clockwise seen from above:
+               NED body frame, z down). --gyro-unit rad/s converts.
+  temp         degC, gyro temperature
+  compass      either 'heading' (deg clockwise from magnetic north; empty cell =
+               no sample) or raw FRD 'mag_x,mag_y,mag_z' (any unit) with
+               'acc_x,acc_y,acc_z' (g or m/s^2, specific force: level+still reads
+               acc_z = -1 g); the heading is then tilt-compensated
+  optional     gyro_x, gyro_y (deg/s), ref_heading (deg, evaluation only),
+               true_bias_z (deg/s, evaluation only); other columns pass through
+  --frame enu  ROS REP-103 logs (ENU world, FLU body): heading = 90 - yaw, and
+               gyro/mag/acc y and z axes change sign
+output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
+  (deg [0,360), integrated from rate_z from the first compass heading), a
+  (deg/s/degC), b (deg), c (deg/s) of the drift model a*T + b*T' + c, update
+  (1 = filter update), gated (1 = compass aiding refused) and gate_reason
+  (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
+  compass_heading, then the other input columns.
+"""
+
+
+def _parse_map(text: str | None) -> dict[str, str] | None:
+    if not text:
+        return None
+    mapping = {}
+    for item in text.split(","):
+        new, sep, old = item.partition("=")
+        if not sep or not new.strip() or not old.strip():
+            raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
+        mapping[new.strip()] = old.strip()
+    return mapping
+
+
+def _config(args) -> CompensatorConfig:
+    base = CompensatorConfig()
+    kalman = base.kalman
+    if args.fading is not None:
+        kalman = replace(kalman, fading=args.fading)
+    gate = base.gate
+    if args.turn_rate_dps is not None:
+        gate = replace(gate, turn_rate_dps=args.turn_rate_dps)
+    if args.interference_deg is not None:
+        gate = replace(gate, interference_deg=args.interference_deg)
+    changes = {
+        name: getattr(args, name)
+        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator")
+        if getattr(args, name) is not None
+    }
+    return replace(base, kalman=kalman, gate=gate, **changes)
+
+
+def _add_method_options(p: argparse.ArgumentParser) -> None:
+    d = CompensatorConfig()
+    g = p.add_argument_group("method (defaults follow the paper)")
+    g.add_argument("--estimator", choices=sorted(ESTIMATORS), help=f"drift estimator (default {d.estimator})")
+    g.add_argument("--fading", type=float, help=f"fading factor s >= 1 of the STKF (default {d.kalman.fading})")
+    g.add_argument("--update-interval-s", type=float, help=f"filter update interval, s (default {d.update_interval_s:g})")
+    g.add_argument("--init-s", type=float, help=f"initialisation window at the start, s (default {d.init_s:g})")
+    g.add_argument("--stack-depth", type=int, help=f"measurements stacked per update (default {d.stack_depth})")
+    g.add_argument("--compass-sigma-deg", type=float, help=f"compass noise, deg (default {d.compass_sigma_deg:g})")
+    g.add_argument("--turn-rate-dps", type=float, help=f"turning threshold, deg/s (default {d.gate.turn_rate_dps:g})")
+    g.add_argument(
+        "--interference-deg", type=float,
+        help=f"largest compass-vs-gyro disagreement per interval, deg (default {d.gate.interference_deg:g})",
+    )
+
+
+def _add_input_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("input")
+    g.add_argument("--format", choices=["csv", "parquet"], help="input format (default: by suffix)")
+    g.add_argument("--gyro-unit", default="deg/s", help="unit of gyro_* columns: deg/s (default) or rad/s")
+    g.add_argument("--frame", default="ned", help="ned (default) or enu (ROS REP-103)")
+    g.add_argument("--map", metavar="NEW=OLD,...", help="rename input columns to contract names, e.g. gyro_z=gz,temp=T")
+
+
+def _summary(out, log, path, out_path) -> list[str]:
+    dur = float(log["t"].iloc[-1] - log["t"].iloc[0])
+    rate = (len(log) - 1) / dur if dur > 0 else float("nan")
+    temp = log["temp"]
+    lines = [
+        f"read {path}: {len(log)} rows, {dur:.1f} s at {rate:.1f} Hz, "
+        f"temperature {temp.min():.2f} to {temp.max():.2f} degC, compass from {log.attrs.get('compass', '?')}",
+    ]
+    gated = out.loc[out["gated"] == 1, "gate_reason"].value_counts()
+    shares = ", ".join(f"{k} {100 * v / len(out):.1f} %" for k, v in gated.items()) or "never"
+    lines.append(f"{int(out['update'].sum())} filter updates; compass aiding refused: {shares} of rows")
+    a, b, c = out[["a", "b", "c"]].iloc[-1]
+    lines.append(f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s")
+    acc = accuracy(out)
+    if acc.bias_rms is not None:
+        lines.append(f"drift error RMS vs true_bias_z: raw {acc.bias_rms_raw:.4f} deg/s -> compensated {acc.bias_rms:.4f} deg/s")
+    if acc.heading_rms is not None:
+        lines.append(
+            f"heading error vs ref_heading: raw gyro RMS {acc.heading_rms_raw:.2f} deg (max {acc.heading_max_raw:.2f}) "
+            f"-> compensated RMS {acc.heading_rms:.2f} deg (max {acc.heading_max:.2f})"
+        )
+    lines.append(f"wrote {out_path}")
+    return lines
+
+
+def _cmd_compensate(args) -> int:
+    check_output_path(args.input, args.output)
+    cfg = _config(args)
+    log = read_log(
+        args.input, fmt=args.format, gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(args.map)
+    )
+    out = compensate(log, cfg, source=str(args.input))
+    write_table(out, args.output)
+    if not args.quiet:
+        print("\n".join(_summary(out, log, args.input, args.output)))
+    return 0
+
+
+def demo_log_path() -> Path:
+    """Path of the built-in example log (a simulated static heating run)."""
+    return Path(str(resources.files("gyrodrift") / "data" / "example_static.csv.gz"))
+
+
+def _cmd_demo(args) -> int:
+    path = demo_log_path()
+    check_output_path(path, args.output)
+    log = read_log(path)
+    print(
+        "gyrodrift demo: a simulated motionless gyro heated 23 -> 58 degC and cooled, with a "
+        "10 Hz compass and two magnetic-interference windows (see gyrodrift/data/README)."
+    )
+    out = compensate(log, _config(args), source=path.name)
+    write_table(out, args.output)
+    print("\n".join(_summary(out, log, path.name, args.output)))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="gyrodrift",
+        description="Remove the temperature drift of a MEMS gyroscope with compass aiding "
+        "(strong tracking Kalman filter of Feng, Li, Zhang, Sensors 2015).",
+        epilog=CONVENTIONS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--version", action="version", version=f"gyrodrift {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    c = sub.add_parser(
+        "compensate", help="compensate a log (CSV or Parquet)", epilog=CONVENTIONS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Compensate the heading-axis gyro of a log; write the output table atomically.",
+    )
+    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet)")
+    c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
+    c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    _add_input_options(c)
+    _add_method_options(c)
+    c.set_defaults(func=_cmd_compensate)
+
+    d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
+    d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
+    _add_method_options(d)
+    d.set_defaults(func=_cmd_demo)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit code (2 for bad input, with one line on stderr)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    try:
+        return args.func(args)
+    except GyroDriftError as err:
+        print(f"gyrodrift: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("gyrodrift: interrupted", file=sys.stderr)
+        return 130
