@@ -225,6 +225,15 @@ def _compass_measurement(s0: _Snap, s1: _Snap, cfg: CompensatorConfig) -> _Meas:
     return _Meas(m, h, r, d_diff - (s1.I_bias - s0.I_bias))
 
 
+def _residual_deg(start: _Snap | None, heading, I_raw, I_bias):
+    """Compass minus compensated-gyro heading change since ``start``, deg (NaN: no compass)."""
+    heading = np.asarray(heading, dtype=float)
+    if start is None:
+        return np.full(heading.shape, np.nan)
+    d = wrap_180((I_raw - heading) - (start.I_raw - start.heading))
+    return d - (I_bias - start.I_bias)
+
+
 class _Aiding:
     """Per-interval aiding decisions and the estimator: shared by streaming and batch."""
 
@@ -464,7 +473,8 @@ class Compensator:
         field_bad = bool(gating.field_anomaly(norm, dip, *self._aid.field_ref, self.config.gate)) if self._aid.field_ref else False
         aid = self._aid
         if aid.sticky is None:
-            code = gating.row_conditions([gap], [field_bad], [mean_rate], self.config.gate)[0]
+            resid = _residual_deg(aid.start, arr([heading]), I_raw, I_bias)
+            code = gating.row_conditions([gap], [field_bad], resid, [mean_rate], self.config.gate)[0]
             aid.sticky = code or None
         k = float(_interval_index(t_s, self._t_start, self.config.update_interval_s))
         update, reason = 0, aid.display()
@@ -629,9 +639,10 @@ def compensate_arrays(
         j = np.searchsorted(t, t[idx] - cfg.gate.turn_window_s, "left")
         j = np.minimum(j, idx - 1)
         mean_rate = (out_I_rate[idx] - out_I_rate[j]) / (t[idx] - t[j])
-        codes = gating.row_conditions(gap[idx], field_bad[idx], mean_rate, cfg.gate)
         seg_reason = np.full(idx.size, aid.display(), dtype=object)
         if aid.sticky is None:
+            resid = _residual_deg(aid.start, heading[idx], I_raw_all[idx], I_bias_all[idx])
+            codes = gating.row_conditions(gap[idx], field_bad[idx], resid, mean_rate, cfg.gate)
             hit = np.flatnonzero(codes != "")
             if hit.size:
                 aid.sticky = codes[hit[0]]

@@ -16,10 +16,10 @@ reason          meaning
 ``turning``     the 1-s mean compensated rate exceeded ``turn_rate_dps``; the
                 paper updates only during straight motion (Section 4.2)
 ``interference`` the compass and the compensated gyro disagree on the heading
-                change over the interval by more than ``interference_deg``; the gyro
-                does not feel magnetic fields (Section 4.1). Decided at the end of
-                the interval, and shown on the following rows until an interval
-                is accepted again.
+                change since the start of the interval by more than
+                ``interference_deg`` at some compass sample; the gyro does not feel
+                magnetic fields (Section 4.1). Also shown on the rows after a
+                refusal for interference until an interval is accepted again.
 ==============  ================================================================
 """
 
@@ -108,18 +108,23 @@ def field_anomaly(norm, dip_deg, ref_norm: float, ref_dip_deg: float, config: Ga
     return bad & np.isfinite(norm)
 
 
-def row_conditions(gap, field, mean_rate_dps, config: GateConfig) -> np.ndarray:
-    """Per-row refusal code ('' for none) in priority order gap > field > turning.
+def row_conditions(gap, field, residual_deg, mean_rate_dps, config: GateConfig) -> np.ndarray:
+    """Per-row refusal code ('' for none), priority gap > field > turning > interference.
 
     Parameters
     ----------
     gap, field : (N,) bool array_like
         Gap or held sample; magnetic field anomaly.
+    residual_deg : (N,) array_like
+        Compass minus compensated-gyro heading change since the interval start, deg
+        (NaN on rows without a compass sample).
     mean_rate_dps : (N,) array_like
         1-s mean compensated rate, deg/s.
     """
     gap = np.asarray(gap, dtype=bool)
     out = np.full(gap.shape, "", dtype=object)
+    with np.errstate(invalid="ignore"):
+        out[np.abs(np.asarray(residual_deg, dtype=float)) > config.interference_deg] = INTERFERENCE
     turning = np.abs(np.asarray(mean_rate_dps, dtype=float)) > config.turn_rate_dps
     out[turning] = TURNING
     out[np.asarray(field, dtype=bool)] = FIELD

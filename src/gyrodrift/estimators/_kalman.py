@@ -66,16 +66,18 @@ def correct(x: np.ndarray, P: np.ndarray, y: np.ndarray, H: np.ndarray, R: np.nd
 
 
 def cap_covariance(P: np.ndarray, max_var: np.ndarray) -> np.ndarray:
-    """Scale P so that no variance exceeds ``max_var``; keeps P symmetric positive definite.
+    """Limit P to at most ``diag(max_var)`` in every direction (``P <= P_max``).
 
-    Rows and columns whose variance is above the cap are multiplied by
-    ``sqrt(max_var/var)`` (a congruence ``D P D`` with positive diagonal D), so
-    correlations are kept and only the excess uncertainty is removed.
+    In coordinates where ``P_max`` is the identity, eigenvalues of P above 1 are
+    clipped to 1; directions already known better than the cap keep their variance.
+    (Clipping each variance on its own would not: with a and c strongly correlated
+    it would inflate the variance of the well-known combination ``a*T + c``.)
+    P stays symmetric positive definite.
     """
-    var = np.diag(P)
-    scale = np.ones_like(var)
-    over = var > max_var
-    if not over.any():
+    scale = np.sqrt(max_var)
+    M = P / np.outer(scale, scale)
+    lam, V = np.linalg.eigh(0.5 * (M + M.T))
+    if lam[-1] <= 1.0:
         return P
-    scale[over] = np.sqrt(max_var[over] / var[over])
-    return P * np.outer(scale, scale)
+    clipped = (V * np.minimum(lam, 1.0)) @ V.T
+    return clipped * np.outer(scale, scale)

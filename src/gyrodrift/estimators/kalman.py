@@ -11,10 +11,10 @@ Two things would make P grow without limit, and both are stopped:
 * during an outage (no accepted aiding) the filter does not fade: fading discounts
   old *measurements*, and there are none; only Q is added (``P <- P + Q``);
 * a direction the measurements do not see (T' ≡ 0 leaves b unobservable; a flat
-  temperature confounds a with c) grows as ``s**N`` under fading. Every variance is
-  therefore capped, by default at its prior value ``p0_sd**2``: we are never less
-  sure of a parameter than before the first measurement. The cap scales rows and columns
-  (``D P D``), so P stays symmetric positive definite.
+  temperature confounds a with c) grows as ``s**N`` under fading. P is therefore
+  capped, by default at the prior ``P0 = diag(p0_sd**2)``: in no direction of the
+  parameter space are we less sure than before the first measurement. Only the
+  directions above the cap shrink, and P stays symmetric positive definite.
 """
 
 from __future__ import annotations

@@ -1,0 +1,268 @@
+import math
+from dataclasses import asdict, replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import synthetic_log
+from gyrodrift.compensate import (
+    CompensatorConfig,
+    Compensator,
+    _compass_measurement,
+    _Snap,
+    compensate,
+)
+from gyrodrift.conventions import OUTPUT_COLS, wrap_180
+from gyrodrift.errors import GyroDriftError
+from gyrodrift.estimators import KalmanConfig
+from gyrodrift.gating import GateConfig
+from gyrodrift.io import read_log
+from gyrodrift.model import temp_rate
+
+
+def stream(log: pd.DataFrame, cfg: CompensatorConfig, raw_mag: bool = False) -> pd.DataFrame:
+    comp = Compensator(cfg)
+    rows = []
+    has_heading = "heading" in log.columns
+    for r in log.itertuples(index=False):
+        kw = {"heading_deg": r.heading if has_heading else math.nan}
+        if raw_mag:
+            kw["mag"] = (r.mag_x, r.mag_y, r.mag_z)
+            kw["acc"] = (r.acc_x, r.acc_y, r.acc_z)
+        rows += comp.push(r.t, r.gyro_z, r.temp, **kw)
+    return pd.DataFrame([asdict(s) for s in rows])
+
+
+def assert_same(batch: pd.DataFrame, streamed: pd.DataFrame):
+    assert len(batch) == len(streamed)
+    for col in streamed.columns:
+        a, b = batch[col].to_numpy(), streamed[col].to_numpy()
+        if a.dtype == object or b.dtype == object:
+            assert list(a) == list(b), col
+        else:
+            assert np.array_equal(a, b, equal_nan=True), col
+
+
+def test_output_contract_columns():
+    out = compensate(synthetic_log(duration_s=120.0))
+    assert tuple(out.columns[: len(OUTPUT_COLS)]) == OUTPUT_COLS
+    assert {"temp_rate", "compass_heading", "gyro_z", "temp", "ref_heading", "true_bias_z"} <= set(out.columns)
+    assert not out[list(OUTPUT_COLS[:-1])].isna().any().any()
+    assert out["heading"].between(0, 360, inclusive="left").all()
+
+
+def test_exact_recovery_of_linear_drift_from_noiseless_data():
+    """Drift exactly a*T + b*T' + c (T' by the model's own operator): a, b, c come back."""
+    a, b, c = 0.021, 6.5, -0.43
+    t = np.arange(0.0, 7200.0, 0.1)
+    temp = 30 + 8 * np.sin(2 * np.pi * t / 3000) + 3 * np.sin(2 * np.pi * t / 700)
+    tp = temp_rate(t, temp)
+    compass = np.full(t.size, 250.0)
+    compass[1::2] = np.nan
+    log = pd.DataFrame({"t": t, "gyro_z": a * temp + b * tp + c, "temp": temp, "heading": compass})
+    out = compensate(log)
+    assert out["update"].sum() > 600
+    final = out[["a", "b", "c"]].iloc[-1].to_numpy()
+    np.testing.assert_allclose(final, [a, b, c], rtol=1e-6)
+
+
+def test_eq6_sign_constant_bias_drives_c_to_the_bias():
+    """Bias 0 while initialising, then a constant 0.3 deg/s: the compass aiding must find +0.3."""
+    log = synthetic_log(
+        duration_s=1800.0,
+        temp_c=lambda t: np.full_like(t, 30.0),
+        drift_dps=lambda t, T: np.where(t < 40.0, 0.0, 0.3),
+        gyro_noise_dps=0.05,
+        compass_noise_deg=0.5,
+    )
+    out = compensate(log)
+    late = out["t"] > 900
+    assert out.loc[late, "bias_z"].mean() == pytest.approx(0.3, abs=0.01)
+    h = out.loc[late, "heading"].to_numpy()
+    assert float(np.max(np.abs(wrap_180(h - h[0])))) < 2.0  # the heading no longer walks
+
+
+def test_measurement_sign_by_hand():
+    """The gyro gained 3 deg on the compass in 10 s: the drift measurement is +0.3 deg/s."""
+    cfg = CompensatorConfig()
+    s0 = _Snap(t=0.0, heading=10.0, I_raw=0.0, I_T=0.0, I_Tp=0.0, I_bias=0.0)
+    s1 = _Snap(t=10.0, heading=15.0, I_raw=8.0, I_T=300.0, I_Tp=0.1, I_bias=1.0)
+    meas = _compass_measurement(s0, s1, cfg)
+    assert meas.m == pytest.approx(0.3)
+    np.testing.assert_allclose(meas.h, [30.0, 0.01, 1.0])
+    assert meas.residual_deg == pytest.approx(2.0)  # 3 deg minus the 1 deg already removed
+    assert meas.r == pytest.approx(2 * 0.5**2 / 100 + 0.04**2 / 10)
+    # Across north: 359 -> 1 is +2 deg of compass change.
+    s0w = replace(s0, heading=359.0)
+    s1w = replace(s1, heading=1.0, I_raw=2.0)
+    assert _compass_measurement(s0w, s1w, cfg).m == pytest.approx(0.0)
+
+
+def turning_heading(t):
+    """Straight legs with 90-degree turns of 6 s every 100 s."""
+    phase = np.mod(t, 100.0)
+    turns = np.floor(t / 100.0)
+    in_turn = np.clip((phase - 50.0) / 6.0, 0.0, 1.0)
+    return 30.0 + 90.0 * (turns + (3 * in_turn**2 - 2 * in_turn**3))
+
+
+def complex_log(raw_mag: bool = False) -> pd.DataFrame:
+    log = synthetic_log(
+        duration_s=900.0,
+        fs_hz=20.0,
+        drift_dps=lambda t, T: 0.02 * T - 0.3 + 0.002 * (T - 30) ** 2,
+        heading_deg=turning_heading,
+        gyro_noise_dps=0.1,
+        compass_noise_deg=0.5,
+        seed=5,
+    )
+    window = (log["t"] > 300) & (log["t"] < 420)
+    log.loc[window, "heading"] = np.mod(log.loc[window, "heading"] + 25.0, 360.0)  # interference
+    log.loc[(log["t"] > 600) & (log["t"] < 700), "heading"] = np.nan  # compass outage
+    log.loc[1234, "gyro_z"] = np.nan  # empty cells
+    log.loc[2345, "temp"] = np.nan
+    if raw_mag:
+        h = np.radians(log["heading"].to_numpy())
+        log["mag_x"] = 20 * np.cos(h)
+        log["mag_y"] = -20 * np.sin(h)
+        log["mag_z"] = 45.0
+        log.loc[(log["t"] > 500) & (log["t"] < 520), "mag_z"] = 80.0  # field anomaly
+        log["acc_x"], log["acc_y"], log["acc_z"] = 0.0, 0.0, -1.0
+        log = log.drop(columns="heading")
+    return log
+
+
+@pytest.mark.parametrize("raw_mag", [False, True])
+def test_streaming_equals_batch(raw_mag):
+    log = complex_log(raw_mag)
+    cfg = CompensatorConfig()
+    batch = compensate(log, cfg)
+    streamed = stream(log, cfg, raw_mag=raw_mag)
+    assert_same(batch, streamed)
+    reasons = set(batch["gate_reason"])
+    assert {"init", "turning", "no_compass", "gap"} <= reasons
+    assert ("field" in reasons) == raw_mag
+    assert not batch[list(OUTPUT_COLS[:-1])].isna().any().any()
+
+
+def test_interference_window_does_not_move_parameters():
+    """A disturbance that moves the compass (a metal object passing by) refuses every interval."""
+    log = synthetic_log(duration_s=1800.0, gyro_noise_dps=0.05, compass_noise_deg=0.5,
+                        drift_dps=lambda t, T: 0.02 * T - 0.4, seed=2)
+    t = log["t"]
+    window = (t >= 600.0) & (t <= 900.0)
+    offset = np.where(window, 25.0 * np.sin(2 * np.pi * (t - 600.0) / 60.0), 0.0)
+    log["heading"] = np.mod(log["heading"] + offset, 360.0)
+    out = compensate(log)
+    inside = (out["t"] > 610) & (out["t"] <= 900)
+    params = out.loc[inside, ["a", "b", "c"]].to_numpy()
+    assert np.all(params == params[0])
+    assert out.loc[inside, "update"].sum() == 0
+    assert (out.loc[inside, "gate_reason"] == "interference").mean() > 0.9
+    after = out["t"] > 940
+    assert out.loc[after, "update"].sum() > 50  # aiding resumes after the window
+    err = np.abs(out["bias_z"] - out["true_bias_z"])[out["t"] > 300]
+    assert err.max() < 0.05
+
+
+def test_constant_compass_offset_does_not_corrupt_the_drift():
+    """A step in the compass is refused; a constant offset after it changes no measurement."""
+    log = synthetic_log(duration_s=1200.0, gyro_noise_dps=0.05, compass_noise_deg=0.5, seed=3)
+    log.loc[log["t"] > 500, "heading"] = np.mod(log.loc[log["t"] > 500, "heading"] + 30.0, 360.0)
+    out = compensate(log)
+    step = out.loc[(out["t"] > 500) & (out["t"] <= 511)]
+    assert (step["gate_reason"] == "interference").any()
+    assert np.abs(out["bias_z"] - out["true_bias_z"])[out["t"] > 300].max() < 0.03
+
+
+def test_outage_keeps_compensating_with_learned_model():
+    """Compass lost for 900 s during a temperature ramp: the learned a, b, c keep tracking."""
+    a, c = 0.03, -0.8
+    log = synthetic_log(
+        duration_s=3600.0, gyro_noise_dps=0.05, compass_noise_deg=0.3, seed=4,
+        temp_c=lambda t: 25 + 15 * (1 - np.cos(np.pi * t / 3600.0)),
+        drift_dps=lambda t, T: a * T + c,
+    )
+    log.loc[(log["t"] > 2000) & (log["t"] < 2900), "heading"] = np.nan
+    out = compensate(log)
+    outage = (out["t"] > 2010) & (out["t"] < 2900)
+    assert (out.loc[outage, "gate_reason"] == "no_compass").all()
+    err = (out["bias_z"] - out["true_bias_z"])[outage]
+    drift_change = out.loc[outage, "true_bias_z"].max() - out.loc[outage, "true_bias_z"].min()
+    assert drift_change > 0.1  # the drift really moves during the outage
+    assert np.abs(err).max() < 0.03
+
+
+def test_turns_are_gated_and_straight_legs_update():
+    log = synthetic_log(duration_s=900.0, heading_deg=turning_heading, gyro_noise_dps=0.05, compass_noise_deg=0.3)
+    out = compensate(log)
+    phase = np.mod(out["t"], 100.0)
+    in_turn = (phase > 51) & (phase < 55) & (out["t"] > 40)
+    assert (out.loc[in_turn, "gate_reason"] == "turning").all()
+    assert out["update"].sum() >= 40
+    h_err = wrap_180(out["heading"] - out["ref_heading"])
+    assert np.abs(h_err).max() < 2.0
+
+
+def test_heading_starts_at_first_compass_sample():
+    log = synthetic_log(duration_s=120.0, compass_noise_deg=1.0, seed=9)
+    log.loc[:4, "heading"] = np.nan
+    out = compensate(log)
+    first = log["heading"].first_valid_index()
+    assert out.loc[first, "heading"] == pytest.approx(log.loc[first, "heading"])
+
+
+def test_empty_cells_are_held_and_refuse_the_interval():
+    log = synthetic_log(duration_s=200.0)
+    log.loc[1500, "gyro_z"] = np.nan
+    out = compensate(log)
+    assert out.loc[1500, "rate_z"] == out.loc[1499, "rate_z"] or np.isfinite(out.loc[1500, "rate_z"])
+    assert out.loc[1500, "gate_reason"] == "gap"
+    assert not out[["rate_z", "bias_z", "heading"]].isna().any().any()
+
+
+def test_too_short_and_no_compass_errors():
+    with pytest.raises(GyroDriftError, match="initialisation needs at least 40 s"):
+        compensate(synthetic_log(duration_s=35.0))
+    log = synthetic_log(duration_s=100.0)
+    log.loc[log["t"] < 31, "heading"] = np.nan
+    with pytest.raises(GyroDriftError, match="no compass heading in the first 30 s"):
+        compensate(log)
+
+
+def test_streaming_rejects_time_going_back():
+    comp = Compensator()
+    comp.push(0.0, 0.1, 30.0, 10.0)
+    with pytest.raises(GyroDriftError, match="time must increase"):
+        comp.push(0.0, 0.1, 30.0, 10.0)
+
+
+def test_config_validation():
+    with pytest.raises(GyroDriftError, match="update_interval_s"):
+        CompensatorConfig(update_interval_s=0.0)
+    with pytest.raises(GyroDriftError, match="unknown estimator"):
+        CompensatorConfig(estimator="magic")
+    with pytest.raises(GyroDriftError, match="turn_rate_dps"):
+        GateConfig(turn_rate_dps=-1.0)
+
+
+@pytest.mark.parametrize("name", ["contract.csv", "contract_heading.csv"])
+def test_real_log_two_ccw_turns(shared_data, name):
+    """mpu6050_rotate_z: about -720 deg from the compass and from the compensated gyro."""
+    log = read_log(shared_data / "mpu6050_rotate_z" / name)
+    out = compensate(log, CompensatorConfig(init_s=10.0))
+    gyro_total = float(np.sum(wrap_180(np.diff(out["heading"]))))
+    compass = out["compass_heading"].dropna().to_numpy()
+    compass_total = float(np.sum(wrap_180(np.diff(compass))))
+    assert compass_total == pytest.approx(-720.0, abs=5.0)
+    assert gyro_total == pytest.approx(-720.0, abs=20.0)
+
+
+def test_real_log_still_cooling_start(shared_data):
+    """actigraph: still and cooling at the start; bias about -0.108 deg/s."""
+    log = read_log(shared_data / "actigraph_gt9x_cooling" / "contract_heading.csv")
+    out = compensate(log)
+    still = out["t"] < 60
+    assert out.loc[still, "bias_z"].mean() == pytest.approx(-0.108, abs=0.03)
+    assert not out[list(OUTPUT_COLS[:-1])].isna().any().any()
