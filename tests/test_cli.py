@@ -1,0 +1,128 @@
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import synthetic_log
+from gyrodrift.cli import demo_log_path, main
+
+
+def run_module(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "gyrodrift", *args], capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.fixture
+def small_log(tmp_path):
+    path = tmp_path / "log.csv"
+    synthetic_log(duration_s=200.0, gyro_noise_dps=0.05, compass_noise_deg=0.5).to_csv(path, index=False)
+    return path
+
+
+def test_help_explains_units_and_conventions():
+    res = run_module("compensate", "--help")
+    assert res.returncode == 0
+    for word in ("deg/s", "degC", "clockwise", "NED", "rad/s", "enu", "gate_reason"):
+        assert word in res.stdout
+
+
+def test_compensate_csv_and_parquet(small_log, tmp_path, capsys):
+    out_csv = tmp_path / "out.csv"
+    out_pq = tmp_path / "out.parquet"
+    before = small_log.read_bytes()
+    assert main(["compensate", str(small_log), "-o", str(out_csv)]) == 0
+    assert main(["compensate", str(small_log), "-o", str(out_pq), "-q"]) == 0
+    assert small_log.read_bytes() == before  # input untouched
+    a, b = pd.read_csv(out_csv, keep_default_na=False, na_values=[""]), pd.read_parquet(out_pq)
+    np.testing.assert_array_equal(a["heading"], b["heading"])
+    printed = capsys.readouterr().out
+    assert "filter updates" in printed and "heading error vs ref_heading" in printed
+
+
+def test_gyro_unit_and_frame_options(tmp_path):
+    log = synthetic_log(duration_s=120.0, compass_noise_deg=0.3)
+    ned = tmp_path / "ned.csv"
+    enu = tmp_path / "enu_rad.csv"
+    log.to_csv(ned, index=False)
+    conv = log.copy()
+    conv["gyro_z"] = -np.radians(log["gyro_z"])
+    conv["heading"] = np.mod(90.0 - log["heading"], 360.0)
+    conv["true_bias_z"] = -np.radians(log["true_bias_z"])
+    conv["ref_heading"] = np.mod(90.0 - log["ref_heading"], 360.0)
+    conv = conv.rename(columns={"gyro_z": "gz"})
+    conv.to_csv(enu, index=False)
+    assert main(["compensate", str(ned), "-o", str(tmp_path / "a.csv"), "-q"]) == 0
+    assert main(["compensate", str(enu), "-o", str(tmp_path / "b.csv"), "-q",
+                 "--gyro-unit", "rad/s", "--frame", "enu", "--map", "gyro_z=gz"]) == 0
+    a = pd.read_csv(tmp_path / "a.csv")
+    b = pd.read_csv(tmp_path / "b.csv")
+    np.testing.assert_allclose(a["bias_z"], b["bias_z"], atol=1e-9)
+    np.testing.assert_allclose(np.unwrap(np.radians(a["heading"])), np.unwrap(np.radians(b["heading"])), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "make, args, fragment",
+    [
+        (None, ["compensate", "{d}/missing.csv", "-o", "{d}/o.csv"], "missing.csv"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/log.csv"], "input is never overwritten"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/o.csv", "--gyro-unit", "furlongs"], "furlongs"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/o.xlsx"], ".xlsx"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/nodir/o.csv"], "nodir"),
+        ("short", ["compensate", "{d}/log.csv", "-o", "{d}/o.csv"], "initialisation needs"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/o.csv", "--fading", "0.5"], "fading"),
+        ("log", ["compensate", "{d}/log.csv", "-o", "{d}/o.csv", "--map", "oops"], "--map"),
+    ],
+)
+def test_bad_input_gives_one_line_and_exit_2(tmp_path, make, args, fragment):
+    if make == "log":
+        synthetic_log(duration_s=100.0).to_csv(tmp_path / "log.csv", index=False)
+    elif make == "short":
+        synthetic_log(duration_s=20.0).to_csv(tmp_path / "log.csv", index=False)
+    before = (tmp_path / "log.csv").read_bytes() if make else None
+    res = run_module(*[a.format(d=tmp_path) for a in args])
+    assert res.returncode == 2, res.stderr
+    assert "Traceback" not in res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("gyrodrift: error:")
+    assert fragment in lines[0]
+    if make:
+        assert (tmp_path / "log.csv").read_bytes() == before
+    assert not (tmp_path / "o.csv").exists()
+
+
+BAD_FILES = {
+    "zero_byte": (b"", "empty"),
+    "header_only": (b"t,gyro_z,temp,heading\n", "no data"),
+    "ragged": (b"t,gyro_z,temp,heading\n0,0.1,30,10\n0.1,0.1,30\n", "line 3"),
+    "non_numeric": (b"t,gyro_z,temp,heading\n0,0.1,30,10\n0.1,abc,30,10\n", "gyro_z"),
+    "backwards": (b"t,gyro_z,temp,heading\n0,0.1,30,10\n0.2,0.1,30,10\n0.1,0.1,30,10\n", "line 4"),
+    "duplicate": (b"t,gyro_z,temp,heading\n0,0.1,30,10\n0,0.1,30,10\n", "line 3"),
+    "kelvin": (b"t,gyro_z,temp,heading\n0,0.1,303.15,10\n0.1,0.1,303.15,10\n", "temp"),
+    "no_gyro": (b"t,gz,temp,heading\n0,0.1,30,10\n", "gyro_z"),
+    "no_compass": (b"t,gyro_z,temp\n0,0.1,30\n", "compass"),
+    "binary": (bytes(range(256)) * 4, "log.csv"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_file_contents_give_one_line_and_exit_2(tmp_path, case):
+    content, fragment = BAD_FILES[case]
+    path = tmp_path / "log.csv"
+    path.write_bytes(content)
+    res = run_module("compensate", str(path), "-o", str(tmp_path / "o.csv"))
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in res.stderr
+    assert "log.csv" in lines[0] and fragment in lines[0], lines[0]
+    assert path.read_bytes() == content
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_demo_runs_on_the_built_in_log(tmp_path):
+    assert demo_log_path().is_file()
+    res = run_module("demo", "-o", str(tmp_path / "demo.csv"))
+    assert res.returncode == 0, res.stderr
+    assert "filter updates" in res.stdout and "drift error RMS" in res.stdout
+    out = pd.read_csv(tmp_path / "demo.csv")
+    assert {"interference", "init"} <= set(out["gate_reason"].dropna())

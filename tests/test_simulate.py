@@ -1,0 +1,338 @@
+"""Tests of gyrodrift.simulate: determinism, contract columns, truth consistency, error model."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.integrate import cumulative_trapezoid
+
+from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+from gyrodrift.conventions import ACC_COLS, MAG_COLS, wrap_180
+from gyrodrift.errors import ConfigError
+from gyrodrift.simulate import (
+    DEFAULT_DURATION_S,
+    SCENARIOS,
+    CompassModel,
+    DeviceModel,
+    interference_windows_static,
+    simulate,
+    static_temperature,
+)
+
+BASE_COLS = ["t", "gyro_z", "temp", "heading", "ref_heading", "true_bias_z"]
+EXACT_DEVICE = DeviceModel.noiseless(temp_quant_c=0.0)
+TRUE_COMPASS = CompassModel.noiseless(deviation_deg=0.0, deviation2_deg=0.0, kinematic_tilt=False)
+
+
+def _angle_err(a, b):
+    return np.abs(wrap_180(np.asarray(a, dtype=float) - np.asarray(b, dtype=float)))
+
+
+def _true_rate(df):
+    """True heading rate of a level run from a noiseless device: gyro minus true drift."""
+    return (df["gyro_z"] - df["true_bias_z"]).to_numpy()
+
+
+# ------------------------------------------------------------------ determinism
+
+
+@pytest.mark.parametrize("scenario", list(SCENARIOS))
+def test_same_seed_gives_identical_frame(scenario):
+    a = simulate(scenario, seed=7, duration_s=300.0, raw_mag=True)
+    b = simulate(scenario, seed=7, duration_s=300.0, raw_mag=True)
+    pd.testing.assert_frame_equal(a, b)
+    assert a.attrs == b.attrs
+
+
+def test_different_seeds_give_different_noise():
+    a = simulate("static", seed=1, duration_s=300.0)
+    b = simulate("static", seed=2, duration_s=300.0)
+    assert not np.allclose(a["gyro_z"], b["gyro_z"])
+    assert not np.allclose(a["heading"].dropna(), b["heading"].dropna())
+    # the truth that does not depend on noise is shared
+    np.testing.assert_array_equal(a["ref_heading"], b["ref_heading"])
+
+
+def test_attrs_are_plain_json():
+    df = simulate("static-outages", seed=3, duration_s=600.0)
+    assert df.attrs["scenario"] == "static-outages"
+    assert df.attrs["seed"] == 3
+    assert df.attrs["device"]["noise_density_dps_rthz"] == 0.04
+    # the scenario's interference windows are recorded in the effective compass model
+    assert len(df.attrs["compass"]["interference"]) == 3
+    json.dumps(df.attrs)
+
+
+# ------------------------------------------------------------------ columns, units, ranges
+
+
+def test_columns_units_and_compass_rate():
+    df = simulate("static", seed=0, duration_s=600.0)
+    assert list(df.columns) == BASE_COLS
+    assert len(df) == 600 * 50 + 1
+    np.testing.assert_allclose(np.diff(df["t"]), 0.02, rtol=0, atol=1e-12)
+    assert 22.5 < df["temp"].min() and df["temp"].max() < 58.5
+    assert df["temp"].max() > 57.5  # the scaled profile still reaches the top
+    np.testing.assert_allclose(df["temp"] / 0.0625, np.round(df["temp"] / 0.0625), atol=1e-9)
+    for col in ("heading", "ref_heading"):
+        h = df[col].dropna()
+        assert ((h >= 0) & (h < 360)).all()
+    # 10 Hz compass on a 50 Hz gyro: every 5th row, NaN elsewhere
+    has = df["heading"].notna().to_numpy()
+    np.testing.assert_array_equal(np.flatnonzero(has), np.arange(0, len(df), 5))
+    assert df["ref_heading"].notna().all() and df["true_bias_z"].notna().all()
+
+
+def test_first_minute_is_flat_and_still():
+    df = simulate("vehicle", seed=0, duration_s=900.0, device=EXACT_DEVICE)
+    first = df[df["t"] < 60.0]
+    assert first["temp"].nunique() == 1
+    np.testing.assert_allclose(_true_rate(first), 0.0, atol=1e-12)
+
+
+def test_non_integer_compass_ratio():
+    df = simulate("static", duration_s=60.0, fs_hz=50.0, compass=CompassModel(rate_hz=15.0))
+    n = int(df["heading"].notna().sum())
+    assert n == 15 * 60 + 1
+    gaps = np.diff(df.loc[df["heading"].notna(), "t"])
+    assert gaps.max() <= 0.08 + 1e-9
+
+
+def test_profiles_scale_with_duration():
+    t = np.array([0.25, 0.5, 0.75])
+    short, _ = static_temperature(60.0 + t * 1140.0, 1200.0)
+    long_, _ = static_temperature(60.0 + t * (DEFAULT_DURATION_S["static"] - 60.0), DEFAULT_DURATION_S["static"])
+    np.testing.assert_allclose(short, long_, atol=1e-9)
+
+
+# ------------------------------------------------------------------ truth consistency
+
+
+def test_vehicle_ref_heading_is_integral_of_true_rate():
+    df = simulate("vehicle", seed=4, duration_s=900.0, device=DeviceModel.noiseless())
+    rate = _true_rate(df)
+    ref = np.unwrap(np.radians(df["ref_heading"].to_numpy()))
+    ref = np.degrees(ref)
+    integ = ref[0] + cumulative_trapezoid(rate, df["t"].to_numpy(), initial=0.0)
+    np.testing.assert_allclose(integ, ref, rtol=0, atol=1e-6)
+    assert np.ptp(integ) > 180.0  # it really turned
+
+
+def test_vehicle_has_90_degree_turns_and_straight_legs():
+    df = simulate("vehicle", seed=5, duration_s=1500.0, device=DeviceModel.noiseless())
+    t = df["t"].to_numpy()
+    rate = _true_rate(df)
+    heading = df["ref_heading"].to_numpy()
+    turning = np.abs(rate) > 1.0
+    edges = np.flatnonzero(np.diff(turning.astype(np.int8))) + 1
+    segments = np.split(np.arange(t.size), edges)
+    turns = [s for s in segments if turning[s[0]]]
+    legs = [s for s in segments if not turning[s[0]] and s[0] > 0 and s[-1] < t.size - 1]
+    assert len(turns) >= 8
+    for s in turns:
+        dur = t[s[-1]] - t[s[0]]
+        assert 4.0 < dur < 8.0
+        assert 15.0 < np.abs(rate[s]).max() < 26.0
+    for before, after in zip(legs[:-1], legs[1:]):
+        change = wrap_180(heading[after[len(after) // 2]] - heading[before[len(before) // 2]])
+        assert abs(abs(change) - 90.0) < 4.0
+    for s in legs:
+        assert t[s[-1]] - t[s[0]] > 25.0
+        core = s[150:-150]  # away from the tails of the turns (3 s at 50 Hz)
+        assert np.abs(rate[core]).max() <= 0.3 + 1e-9  # yaw wander only
+    # a loop of four turns in one direction closes the rectangle
+    signs = [np.sign(rate[s].sum()) for s in turns]
+    i = next(k for k in range(len(signs) - 3) if len(set(signs[k : k + 4])) == 1)
+    loop = rate[turns[i][0] : turns[i + 3][-1] + 1]
+    assert abs(abs(np.trapezoid(loop, dx=1.0 / 50)) - 360.0) < 6.0
+
+
+def test_static_is_motionless_and_drift_changes_with_temperature():
+    df = simulate("static", seed=0, duration_s=1800.0, device=DeviceModel.noiseless())
+    np.testing.assert_allclose(_true_rate(df), 0.0, atol=1e-12)
+    np.testing.assert_allclose(df["ref_heading"], 40.0, atol=1e-12)
+    change = df["true_bias_z"].max() - df["true_bias_z"].min()
+    assert 0.5 < change < 1.5
+
+
+def test_drift_is_not_linear_in_temperature_and_rate():
+    dev = EXACT_DEVICE
+    df = simulate("static", seed=0, duration_s=3600.0, fs_hz=10.0, device=dev)
+    t, bias = df["t"].to_numpy(), df["true_bias_z"].to_numpy()
+    temp, rate = static_temperature(t, 3600.0)  # true T and exact T'
+    np.testing.assert_allclose(df["temp"], temp, atol=1e-12)
+    design = np.column_stack([temp, rate, np.ones_like(temp)])
+    coef, *_ = np.linalg.lstsq(design, bias, rcond=None)
+    resid = bias - design @ coef
+    assert np.sqrt(np.mean(resid**2)) > 0.01  # deg/s, far above rounding
+    # ... while the documented formula reproduces it exactly
+    np.testing.assert_allclose(dev.drift(temp, rate), bias, rtol=0, atol=1e-12)
+
+
+def test_drift_formula():
+    dev = DeviceModel(c0_dps=0.1, c1_dps_per_c=0.02, c2_dps_per_c2=1e-3, c3_dps_per_c3=-1e-5, t_ref_c=20.0,
+                      k_rate_dps_per_cps=4.0, hyst_dps=0.05, hyst_rate_cps=0.01)
+    x = 10.0
+    want = 0.1 + 0.02 * x + 1e-3 * x**2 - 1e-5 * x**3 + 4.0 * 0.01 + 0.05 * math.tanh(1.0)
+    assert float(dev.drift(30.0, 0.01)) == pytest.approx(want, rel=1e-12)
+
+
+# ------------------------------------------------------------------ compass
+
+
+def test_static_noiseless_compass_reads_true_heading():
+    df = simulate("static", seed=0, duration_s=300.0, compass=TRUE_COMPASS)
+    rows = df["heading"].notna()
+    assert _angle_err(df.loc[rows, "heading"], df.loc[rows, "ref_heading"]).max() < 1e-9
+    assert _angle_err(df.loc[rows, "heading"], 40.0).max() < 1e-9
+
+
+def test_compass_deviation_is_a_function_of_heading():
+    comp = CompassModel.noiseless(kinematic_tilt=False)
+    df = simulate("vehicle", seed=2, duration_s=600.0, compass=comp)
+    rows = df["heading"].notna()
+    ref = df.loc[rows, "ref_heading"].to_numpy()
+    want = ref + comp.deviation(ref)
+    assert _angle_err(df.loc[rows, "heading"], want).max() < 1e-9
+    assert np.ptp(comp.deviation(ref)) > 2.0  # matters once the vehicle turns
+
+
+def test_compass_noise_level():
+    comp = CompassModel(deviation_deg=0.0, deviation2_deg=0.0)
+    df = simulate("static", seed=9, duration_s=600.0, compass=comp)
+    err = wrap_180(df["heading"].dropna() - 40.0)
+    assert np.std(err) == pytest.approx(0.5, rel=0.08)
+
+
+def test_interference_windows_offset_the_compass_only_inside():
+    duration = 1800.0
+    df = simulate("static-outages", seed=0, duration_s=duration, compass=TRUE_COMPASS, raw_mag=True)
+    rows = df["heading"].notna().to_numpy()
+    t = df["t"].to_numpy()[rows]
+    diff = wrap_180(df["heading"].to_numpy()[rows] - df["ref_heading"].to_numpy()[rows])
+    norm, _ = field_norm_dip(*(df[c].to_numpy()[rows] for c in (*MAG_COLS, *ACC_COLS)))
+    windows = interference_windows_static(duration)
+    inside_any = np.zeros(t.size, dtype=bool)
+    for start, dur, off in windows:
+        inside_any |= (t >= start) & (t <= start + dur)
+        core = (t > start + dur / 4) & (t < start + dur * 3 / 4)
+        assert core.any()
+        np.testing.assert_allclose(diff[core], off, atol=1e-9)
+        assert np.all(np.abs(norm[core] / 50.0 - 1.0) > 0.02)  # field strength changes too
+    np.testing.assert_allclose(diff[~inside_any], 0.0, atol=1e-9)
+    np.testing.assert_allclose(norm[~inside_any], 50.0, rtol=1e-12)
+
+
+def test_user_interference_window():
+    comp = CompassModel.noiseless(deviation_deg=0.0, deviation2_deg=0.0, interference=[(100.0, 80.0, -25.0)])
+    df = simulate("static", duration_s=300.0, compass=comp)
+    mid = df["t"].between(130.0, 150.0) & df["heading"].notna()
+    np.testing.assert_allclose(wrap_180(df.loc[mid, "heading"] - 40.0), -25.0, atol=1e-9)
+    assert df.attrs["compass"]["interference"] == [[100.0, 80.0, -25.0]]
+
+
+@pytest.mark.parametrize("scenario", ["static", "vehicle"])
+def test_raw_mag_reproduces_heading(scenario):
+    df = simulate(scenario, seed=1, duration_s=600.0, compass=CompassModel.noiseless(), raw_mag=True)
+    assert list(df.columns) == BASE_COLS + list(MAG_COLS) + list(ACC_COLS)
+    rows = df["heading"].notna()
+    np.testing.assert_array_equal(df[list(MAG_COLS)].notna().all(axis=1), rows)
+    assert df[list(ACC_COLS)].notna().all().all()
+    got = tilt_compensated_heading(*(df.loc[rows, c] for c in (*MAG_COLS, *ACC_COLS)))
+    assert _angle_err(got, df.loc[rows, "heading"]).max() < 1e-9
+    norm, dip = field_norm_dip(*(df.loc[rows, c] for c in (*MAG_COLS, *ACC_COLS)))
+    if scenario == "static":  # still: gravity only, Earth field of 50 µT dipping 60°
+        np.testing.assert_allclose(np.hypot(np.hypot(df["acc_x"], df["acc_y"]), df["acc_z"]), 1.0, atol=1e-12)
+        assert (df["acc_z"] < -0.99).all()
+        np.testing.assert_allclose(norm, 50.0, rtol=1e-12)
+        np.testing.assert_allclose(dip, 60.0, atol=1e-9)
+
+
+def test_vehicle_kinematic_tilt_disturbs_compass_when_braking_or_turning():
+    real_compass = CompassModel.noiseless(deviation_deg=0.0, deviation2_deg=0.0)  # kinematic_tilt=True
+    real = simulate("vehicle", seed=1, duration_s=600.0, compass=real_compass, raw_mag=True)
+    assert np.abs(real["acc_y"]).max() > 0.1  # cornering, g
+    assert np.abs(real["acc_x"]).max() > 0.05  # braking / pulling away, g
+    rows = real["heading"].notna()
+    assert _angle_err(real.loc[rows, "heading"], real.loc[rows, "ref_heading"]).max() > 5.0
+    ideal = simulate("vehicle", seed=1, duration_s=600.0, compass=TRUE_COMPASS, raw_mag=True)
+    assert _angle_err(ideal.loc[rows, "heading"], ideal.loc[rows, "ref_heading"]).max() < 1e-9
+    np.testing.assert_array_equal(ideal[["acc_x", "acc_y"]], 0.0)
+
+
+# ------------------------------------------------------------------ device noise
+
+
+@pytest.mark.parametrize("fs_hz", [50.0, 100.0])
+def test_white_noise_level(fs_hz):
+    df = simulate("static", seed=11, duration_s=600.0, fs_hz=fs_hz)
+    white = df["gyro_z"] - df["true_bias_z"]  # true rate is 0
+    assert np.std(white) == pytest.approx(0.04 * math.sqrt(fs_hz), rel=0.05)
+
+
+def test_stochastic_bias_terms_are_small_and_switchable():
+    noisy = simulate("static", seed=3, duration_s=1200.0, device=DeviceModel(temp_quant_c=0.0))
+    clean = simulate("static", seed=3, duration_s=1200.0, device=EXACT_DEVICE)
+    extra = noisy["true_bias_z"] - clean["true_bias_z"]
+    assert 1e-4 < np.std(extra) < 0.01  # bias instability 0.002 deg/s + small RRW
+    temp_err = noisy["temp"] - clean["temp"]
+    assert np.std(temp_err) == pytest.approx(0.02, rel=0.1)
+
+
+def test_noiseless_and_scale_noise():
+    d = DeviceModel()
+    z = DeviceModel.noiseless()
+    assert z.noise_density_dps_rthz == z.bias_instability_dps == z.rate_random_walk_dps_rts == z.temp_noise_c == 0
+    assert z.temp_quant_c == d.temp_quant_c and z.c1_dps_per_c == d.c1_dps_per_c
+    assert d.scale_noise(2.0).noise_density_dps_rthz == pytest.approx(0.08)
+    assert d.scale_noise(0.0) == z
+    assert CompassModel().scale_noise(0.0) == CompassModel.noiseless()
+    df = simulate("static", duration_s=60.0, device=z, compass=CompassModel.noiseless())
+    np.testing.assert_allclose(df["gyro_z"], df["true_bias_z"], atol=1e-15)
+
+
+# ------------------------------------------------------------------ configuration errors
+
+
+def test_unknown_scenario_lists_valid_names():
+    with pytest.raises(ConfigError, match="static-outages") as exc:
+        simulate("bogus")
+    for name in SCENARIOS:
+        assert name in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    ("cls", "kwargs", "field"),
+    [
+        (DeviceModel, {"noise_density_dps_rthz": -1.0}, "noise_density_dps_rthz"),
+        (DeviceModel, {"bias_tau_s": 0.0}, "bias_tau_s"),
+        (DeviceModel, {"c1_dps_per_c": float("nan")}, "c1_dps_per_c"),
+        (CompassModel, {"rate_hz": 0.0}, "rate_hz"),
+        (CompassModel, {"noise_deg": -0.1}, "noise_deg"),
+        (CompassModel, {"interference": [(10.0, 5.0)]}, "interference"),
+        (CompassModel, {"interference": [(10.0, 5.0, 90.0)]}, "interference"),
+        (CompassModel, {"dip_deg": 95.0}, "dip_deg"),
+    ],
+)
+def test_invalid_models_name_the_field(cls, kwargs, field):
+    with pytest.raises(ConfigError, match=field):
+        cls(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"duration_s": -5.0}, "duration_s"),
+        ({"fs_hz": 0.0}, "fs_hz"),
+        ({"seed": -1}, "seed"),
+        ({"fs_hz": 5.0}, "rate_hz"),
+        ({"device": "adxrs623"}, "device"),
+    ],
+)
+def test_invalid_arguments(kwargs, field):
+    with pytest.raises(ConfigError, match=field):
+        simulate("static", **kwargs)
