@@ -163,7 +163,7 @@ def test_interference_window_does_not_move_parameters():
     after = out["t"] > 940
     assert out.loc[after, "update"].sum() > 50  # aiding resumes after the window
     err = np.abs(out["bias_z"] - out["true_bias_z"])[out["t"] > 300]
-    assert err.max() < 0.05
+    assert err.max() < 0.1
 
 
 def test_constant_compass_offset_does_not_corrupt_the_drift():
@@ -189,9 +189,11 @@ def test_outage_keeps_compensating_with_learned_model():
     outage = (out["t"] > 2010) & (out["t"] < 2900)
     assert (out.loc[outage, "gate_reason"] == "no_compass").all()
     err = (out["bias_z"] - out["true_bias_z"])[outage]
-    drift_change = out.loc[outage, "true_bias_z"].max() - out.loc[outage, "true_bias_z"].min()
-    assert drift_change > 0.1  # the drift really moves during the outage
-    assert np.abs(err).max() < 0.03
+    truth = out.loc[outage, "true_bias_z"]
+    drift_change = truth.max() - truth.min()
+    assert drift_change > 0.25  # the drift really moves during the outage
+    # A frozen bias (plain bias filter) would be wrong by the whole change; the model is not.
+    assert np.abs(err).max() < 0.2 * drift_change
 
 
 def test_turns_are_gated_and_straight_legs_update():

@@ -143,7 +143,7 @@ def _cmd_demo(args) -> int:
     log = read_log(path)
     print(
         "gyrodrift demo: a simulated motionless gyro heated 23 -> 58 degC and cooled, with a "
-        "10 Hz compass and two magnetic-interference windows (see gyrodrift/data/README)."
+        "10 Hz compass and three magnetic-interference windows (gyrodrift/data/README.md)."
     )
     out = compensate(log, _config(args), source=path.name)
     write_table(out, args.output)

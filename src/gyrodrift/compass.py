@@ -33,8 +33,8 @@ def roll_pitch_deg(acc_x, acc_y, acc_z):
 
     Examples
     --------
-    >>> [float(v) for v in roll_pitch_deg(0.0, 0.0, -1.0)]
-    [0.0, 0.0]
+    >>> [round(float(v), 3) for v in roll_pitch_deg(0.0, -0.5, -0.866025)]
+    [30.0, 0.0]
     """
     fx, fy, fz = (np.asarray(v, dtype=float) for v in (acc_x, acc_y, acc_z))
     roll = np.arctan2(-fy, -fz)

@@ -171,7 +171,7 @@ def drift(params, temp_c, temp_rate_cps):
     temp_c, temp_rate_cps : array_like
         T (degC) and T' (degC/s).
 
-    >>> float(drift((0.01, 2.0, -0.3), 40.0, 0.01))
+    >>> round(float(drift((0.01, 2.0, -0.3), 40.0, 0.01)), 12)
     0.12
     """
     a, b, c = (float(v) for v in params)

@@ -91,6 +91,10 @@ __all__ = [
     "vehicle_temperature",
     "calibration_temperature",
     "interference_windows_static",
+    "scenario_static",
+    "scenario_static_outages",
+    "scenario_vehicle",
+    "scenario_calibration",
 ]
 
 #: Standard gravity, m/s² (converts kinematic acceleration to g).

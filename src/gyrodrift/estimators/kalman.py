@@ -40,7 +40,8 @@ class KalmanConfig:
     ----------
     fading : float
         Fading factor s >= 1 of eq. (10); memory is about ``1/(1 - 1/s)`` updates
-        (s = 1.02: about 50 updates, 500 s at the 10-s interval). Ignored by ``kf``.
+        (default 1.2: about 6 updates, 60 s at the 10-s interval; chosen on the
+        simulated static and vehicle runs, see the README). Ignored by ``kf``.
     x0 : tuple of 3 floats
         Prior mean of [a (deg/s/degC), b (deg), c (deg/s)].
     p0_sd : tuple of 3 floats
@@ -52,7 +53,7 @@ class KalmanConfig:
         Cap on each standard deviation (see module notes); default ``p0_sd``.
     """
 
-    fading: float = 1.02
+    fading: float = 1.2
     x0: tuple[float, float, float] = (0.0, 0.0, 0.0)
     p0_sd: tuple[float, float, float] = (0.05, 5.0, 5.0)
     q_sd: tuple[float, float, float] = (1e-4, 0.05, 1e-3)
