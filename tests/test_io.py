@@ -14,11 +14,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from conftest import SHARED_DATA
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import check_output_path, read_log, write_table
 from gyrodrift.io import tabular
 
-DATA = Path("/work/shared/data")
+DATA = SHARED_DATA
 MPU = DATA / "mpu6050_rotate_z"
 ACTI = DATA / "actigraph_gt9x_cooling"
 
