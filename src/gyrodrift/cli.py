@@ -10,6 +10,7 @@ from pathlib import Path
 
 from gyrodrift import __version__
 from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.config import load_config
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import ESTIMATORS
 from gyrodrift.io import check_output_path, read_log, write_table
@@ -53,7 +54,7 @@ def _parse_map(text: str | None) -> dict[str, str] | None:
 
 
 def _config(args) -> CompensatorConfig:
-    base = CompensatorConfig()
+    base = load_config(args.config) if args.config else CompensatorConfig()
     kalman = base.kalman
     if args.fading is not None:
         kalman = replace(kalman, fading=args.fading)
@@ -73,6 +74,10 @@ def _config(args) -> CompensatorConfig:
 def _add_method_options(p: argparse.ArgumentParser) -> None:
     d = CompensatorConfig()
     g = p.add_argument_group("method (defaults follow the paper)")
+    g.add_argument(
+        "--config", type=Path, metavar="FILE.toml",
+        help="all settings from a TOML file (see gyrodrift.config); the options below override it",
+    )
     g.add_argument("--estimator", choices=sorted(ESTIMATORS), help=f"drift estimator (default {d.estimator})")
     g.add_argument("--fading", type=float, help=f"fading factor s >= 1 of the STKF (default {d.kalman.fading})")
     g.add_argument("--update-interval-s", type=float, help=f"filter update interval, s (default {d.update_interval_s:g})")

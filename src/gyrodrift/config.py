@@ -1,0 +1,76 @@
+"""Compensator settings from a TOML file (``gyrodrift compensate --config FILE``).
+
+Top-level keys are the fields of :class:`~gyrodrift.compensate.CompensatorConfig`;
+the tables ``[kalman]``, ``[gate]`` and ``[temp_rate]`` hold the fields of
+:class:`~gyrodrift.estimators.KalmanConfig`, :class:`~gyrodrift.gating.GateConfig`
+and :class:`~gyrodrift.model.TempRateConfig`. Anything left out keeps its default::
+
+    update_interval_s = 10.0
+    init_s = 30.0
+
+    [kalman]
+    fading = 1.2
+    p0_sd = [0.05, 5.0, 5.0]   # a deg/s/degC, b deg, c deg/s
+
+    [gate]
+    turn_rate_dps = 2.0
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import fields, replace
+from pathlib import Path
+
+from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.errors import ConfigError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["load_config", "config_from_dict"]
+
+_TABLES = ("kalman", "gate", "temp_rate")
+
+
+def _apply(obj, values: dict, where: str):
+    known = {f.name for f in fields(obj)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(f"{where}: unknown setting(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+    converted = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+    try:
+        return replace(obj, **converted)
+    except ConfigError as err:
+        raise ConfigError(f"{where}: {err}") from None
+    except (TypeError, ValueError) as err:
+        raise ConfigError(f"{where}: {err}") from None
+
+
+def config_from_dict(values: dict, *, where: str = "config", base: CompensatorConfig | None = None) -> CompensatorConfig:
+    """Build a :class:`CompensatorConfig` from nested plain values (as read from TOML)."""
+    base = base or CompensatorConfig()
+    top = {k: v for k, v in values.items() if k not in _TABLES}
+    nested = {}
+    for name in _TABLES:
+        if name in values:
+            if not isinstance(values[name], dict):
+                raise ConfigError(f"{where}: [{name}] must be a table of settings")
+            nested[name] = _apply(getattr(base, name), values[name], f"{where} [{name}]")
+    return _apply(base, {**top, **nested}, where)
+
+
+def load_config(path) -> CompensatorConfig:
+    """Read a TOML settings file; errors name the file and the setting."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read the settings file ({err.strerror})") from None
+    try:
+        values = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"{path}: not valid TOML: {err}") from None
+    return config_from_dict(values, where=str(path))

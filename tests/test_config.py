@@ -1,0 +1,42 @@
+import pytest
+
+from gyrodrift.cli import main
+from gyrodrift.config import config_from_dict, load_config
+from gyrodrift.errors import ConfigError
+
+
+def test_toml_settings_reach_every_level(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(
+        'init_s = 20.0\nestimator = "kf"\n[kalman]\nfading = 1.05\np0_sd = [0.1, 2.0, 3.0]\n'
+        "[gate]\nturn_rate_dps = 4.5\n[temp_rate]\nwindow_s = 120.0\n"
+    )
+    cfg = load_config(path)
+    assert cfg.init_s == 20.0 and cfg.estimator == "kf"
+    assert cfg.kalman.fading == 1.05 and cfg.kalman.p0_sd == (0.1, 2.0, 3.0)
+    assert cfg.gate.turn_rate_dps == 4.5 and cfg.temp_rate.window_s == 120.0
+    assert cfg.update_interval_s == 10.0  # untouched default
+
+
+@pytest.mark.parametrize(
+    "values, match",
+    [
+        ({"fadding": 1.1}, "unknown setting"),
+        ({"kalman": {"fading": 0.5}}, r"\[kalman\].*fading"),
+        ({"gate": {"turn_rate_dps": -1}}, r"\[gate\].*turn_rate_dps"),
+        ({"temp_rate": {"bin_s": 0}}, r"\[temp_rate\].*bin_s"),
+        ({"kalman": 3}, "must be a table"),
+    ],
+)
+def test_bad_settings_name_the_setting(values, match):
+    with pytest.raises(ConfigError, match=match):
+        config_from_dict(values)
+
+
+def test_bad_toml_file_names_the_file(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text("fading = = 2\n")
+    with pytest.raises(ConfigError, match="bad.toml: not valid TOML"):
+        load_config(path)
+    assert main(["demo", "--config", str(path), "-o", str(tmp_path / "o.csv")]) == 2
+    assert "bad.toml" in capsys.readouterr().err
