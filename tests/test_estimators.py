@@ -62,16 +62,29 @@ def test_s_equal_one_matches_filterpy():
             np.testing.assert_allclose(ours.cov, ref.P, rtol=1e-6, atol=1e-14)
 
 
-def test_kf_is_stkf_with_unit_fading():
-    cfg = KalmanConfig(fading=1.3)
-    kf = make_estimator("kf", config=cfg)
+def test_stkf_s1_is_stkf_with_unit_fading():
+    s1 = make_estimator("stkf-s1", config=KalmanConfig(fading=1.3))
     stkf1 = KalmanDrift(KalmanConfig(fading=1.0))
-    assert isinstance(kf, PlainKalmanDrift) and kf.fading == 1.0
+    assert isinstance(s1, PlainKalmanDrift) and s1.fading == 1.0
     rng = np.random.default_rng(1)
     for k in range(20):
         H = np.column_stack([30 + rng.random(3), rng.normal(0, 0.01, 3), np.ones(3)])
         obs = Observation(t=k, y=rng.normal(0, 0.1, 3), H=H, R=np.eye(3) * 0.01)
-        assert np.array_equal(kf.update(obs), stkf1.update(obs))
+        assert np.array_equal(s1.update(obs), stkf1.update(obs))
+
+
+def test_kf_baseline_is_a_bias_only_filter():
+    """The paper's KF: one state (the bias), so a and b stay 0; one step by hand."""
+    cfg = KalmanConfig(x0=(0.0, 0.0, 0.1), p0_sd=(0.05, 5.0, 0.5), q_sd=(0.0, 0.0, 0.01), max_sd=(1.0, 10.0, 10.0))
+    kf = make_estimator("kf", config=cfg)
+    H = np.array([[30.0, 0.01, 1.0], [29.0, 0.0, 1.0]])
+    y, r = np.array([0.4, 0.3]), 0.02
+    x = kf.update(Observation(t=10.0, y=y, H=H, R=np.eye(2) * r))
+    p = 0.5**2 + 0.01**2
+    # Two equal-variance measurements of c: the posterior mean weighs their sum.
+    c_hand = (0.1 / p + y.sum() / r) / (1 / p + 2 / r)
+    np.testing.assert_allclose(x, [0.0, 0.0, c_hand], rtol=1e-12)
+    assert kf.drift(np.array([50.0]), np.array([1.0]))[0] == pytest.approx(c_hand)
 
 
 def test_covariance_stays_bounded_and_positive_definite():
@@ -126,12 +139,12 @@ def test_kernels_reject_bad_fading_and_joseph_form_is_symmetric():
 
 
 def test_registry():
-    assert {"stkf", "kf"} <= set(ESTIMATORS)
-    for name in ESTIMATORS:
+    assert {"stkf", "kf", "stkf-s1", "lsm", "fixed", "poly3"} <= set(ESTIMATORS)
+    for name in ("stkf", "kf", "stkf-s1", "lsm", "fixed"):
         est = make_estimator(name)
         assert isinstance(est, DriftEstimator)
         assert est.params.shape == (3,) and est.cov.shape == (3, 3)
-    with pytest.raises(ConfigError, match="choose one of: kf, stkf"):
+    with pytest.raises(ConfigError, match="choose one of: fixed, kf, lsm, poly3, stkf, stkf-s1"):
         make_estimator("nope")
 
 

@@ -120,7 +120,13 @@ class CompensatorConfig:
             raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
         if self.init_s < self.stack_depth * 0.1:
             raise ConfigError(f"init_s={self.init_s} s is too short for {self.stack_depth} sub-windows")
-        make_estimator(self.estimator, config=self.kalman)  # validates the name
+        try:
+            make_estimator(self.estimator, config=self.kalman)  # validates the name
+        except TypeError:
+            raise ConfigError(
+                f"estimator {self.estimator!r} cannot be built from settings alone; "
+                "pass an instance as compensate(..., estimator=...)"
+            ) from None
 
 
 @dataclass(frozen=True)
@@ -167,15 +173,20 @@ def _continue_integral(start: float, x, x_prev: float, dt):
     return np.cumsum(np.r_[start, inc])[1:]
 
 
-def _rows(carry: _Carry | None, t, g, T, Tp, params):
-    """Compensate a run of rows with fixed parameters (eq. 5); return columns and new carry.
+def _zero_drift(temp_c, temp_rate_cps):
+    return np.zeros_like(temp_c)
+
+
+def _rows(carry: _Carry | None, t, g, T, Tp, drift):
+    """Compensate a run of rows with a fixed drift model (eq. 5); return columns and new carry.
+
+    ``drift(T, T')`` is the estimator's drift in force (deg/s).
 
     Called on a whole interval by :func:`compensate_arrays` and on one row by
     :class:`Compensator`: the arithmetic is element-wise or sequential, so both give
     the same bits.
     """
-    a, b, c = (float(v) for v in params)
-    bias = a * T + b * Tp + c
+    bias = drift(T, Tp)
     rate = g - bias
     if carry is None:
         carry = _Carry(float(t[0]), float(g[0]), float(T[0]), float(Tp[0]), float(bias[0]), float(rate[0]))
@@ -245,6 +256,8 @@ class _Aiding:
         self.sticky: str | None = None
         self.after_interference = False
         self.field_ref: tuple[float, float] | None = None
+        #: Every accepted measurement: (time s, _Meas), for diagnostics and offline fits.
+        self.accepted: list[tuple[float, _Meas]] = []
 
     def valid(self, snap: _Snap | None, t_end: float) -> _Snap | None:
         if snap is None or t_end - snap.t > self.cfg.gate.compass_max_age_s:
@@ -275,7 +288,8 @@ class _Aiding:
                     reason = gating.INTERFERENCE
         if reason is None:
             self.stack.appendleft(meas)
-            self.estimator.update(self._observation(t_boundary))
+            self.accepted.append((t_boundary, meas))
+            self.estimator.update(self._observation(t_boundary, n_new=1))
             self.after_interference = False
         else:
             self.estimator.hold()
@@ -283,12 +297,13 @@ class _Aiding:
         self.begin(snap, t_boundary)
         return (1, "") if reason is None else (0, reason)
 
-    def _observation(self, t: float) -> Observation:
+    def _observation(self, t: float, n_new: int) -> Observation:
         return Observation(
             t=t,
             y=np.array([e.m for e in self.stack]),
             H=np.array([e.h for e in self.stack]),
             R=np.diag([e.r for e in self.stack]),
+            n_new=n_new,
         )
 
 
@@ -325,7 +340,8 @@ def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float
             "so the heading cannot be anchored; check the heading/mag columns or raise --init-s"
         )
     if aid.stack:
-        aid.estimator.update(aid._observation(init_end_s))
+        aid.accepted.extend((init_end_s, m) for m in reversed(aid.stack))
+        aid.estimator.update(aid._observation(init_end_s, n_new=len(aid.stack)))
     return int(first_compass[0])
 
 
@@ -354,10 +370,10 @@ class Compensator:
     (0.2, 90.0)
     """
 
-    def __init__(self, config: CompensatorConfig | None = None, *, source: str = "stream"):
+    def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream"):
         self.config = config or CompensatorConfig()
         self.source = source
-        est = make_estimator(self.config.estimator, config=self.config.kalman)
+        est = estimator if estimator is not None else make_estimator(self.config.estimator, config=self.config.kalman)
         self._aid = _Aiding(self.config, est)
         self._trate = TempRateTracker(self.config.temp_rate)
         self._buf: list[tuple] = []
@@ -433,11 +449,11 @@ class Compensator:
         cols = [np.array(c) for c in zip(*self._buf)]
         self._buf = []
         t, g, T, Tp, heading, norm, dip, _gap = cols
-        _, _, I_raw, I_T, I_Tp, _, _, _ = _rows(None, t, g, T, Tp, (0.0, 0.0, 0.0))
+        _, _, I_raw, I_T, I_Tp, _, _, _ = _rows(None, t, g, T, Tp, _zero_drift)
         anchor_row = _initialise(self._aid, t, g, heading, I_raw, I_T, I_Tp, float(t[-1]), self.source)
         self._aid.field_ref = _field_reference(norm, dip)
         bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
-            None, t, g, T, Tp, self._aid.estimator.params
+            None, t, g, T, Tp, self._aid.estimator.drift
         )
         self._anchor = float(heading[anchor_row] - I_rate[anchor_row])
         for i in np.flatnonzero(np.isfinite(heading)):
@@ -459,7 +475,7 @@ class Compensator:
         params = self._aid.estimator.params
         arr = np.array
         bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
-            self._carry, arr([t_s]), arr([g]), arr([T]), arr([Tp]), params
+            self._carry, arr([t_s]), arr([g]), arr([T]), arr([Tp]), self._aid.estimator.drift
         )
         if math.isfinite(heading):
             self._snap = _Snap(t_s, heading, float(I_raw[0]), float(I_T[0]), float(I_Tp[0]), float(I_bias[0]))
@@ -534,6 +550,7 @@ def compensate_arrays(
     acc=None,
     config: CompensatorConfig | None = None,
     *,
+    estimator=None,
     source: str = "arrays",
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
@@ -549,6 +566,9 @@ def compensate_arrays(
         Raw FRD magnetometer and accelerometer (compass when ``heading_deg`` is
         None or NaN; field-anomaly gate).
     config : CompensatorConfig, optional
+    estimator : DriftEstimator, optional
+        A fresh estimator instance to use instead of ``config.estimator`` (for the
+        baselines that need more than settings, e.g. ``poly3``).
     source : str
         Name used in error messages (the file name).
     """
@@ -577,7 +597,7 @@ def compensate_arrays(
     heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
     Tp = temp_rate(t, T, cfg.temp_rate)
 
-    est = make_estimator(cfg.estimator, config=cfg.kalman)
+    est = estimator if estimator is not None else make_estimator(cfg.estimator, config=cfg.kalman)
     aid = _Aiding(cfg, est)
     k = _interval_index(t, t_start, cfg.update_interval_s)
     e = int(np.flatnonzero(k >= 0)[0])  # last row of the init window
@@ -596,7 +616,7 @@ def compensate_arrays(
     reason = np.full(n, "", dtype=object)
 
     sl = slice(0, e + 1)
-    _, _, I_raw0, I_T0, I_Tp0, _, _, _ = _rows(None, t[sl], g[sl], T[sl], Tp[sl], (0.0, 0.0, 0.0))
+    _, _, I_raw0, I_T0, I_Tp0, _, _, _ = _rows(None, t[sl], g[sl], T[sl], Tp[sl], _zero_drift)
     anchor_row = _initialise(aid, t[sl], g[sl], heading[sl], I_raw0, I_T0, I_Tp0, float(t[e]), source)
     aid.field_ref = _field_reference(norm[sl], dip[sl])
     field_bad = (
@@ -605,12 +625,12 @@ def compensate_arrays(
     compass_rows = np.flatnonzero(np.isfinite(heading))
     carry = None
 
-    def run(rows: slice, params):
+    def run(rows: slice):
         nonlocal carry
-        cols = _rows(carry, t[rows], g[rows], T[rows], Tp[rows], params)
+        cols = _rows(carry, t[rows], g[rows], T[rows], Tp[rows], est.drift)
         (out_bias[rows], out_rate[rows], I_raw_all[rows], I_T_all[rows], I_Tp_all[rows],
          I_bias_all[rows], out_I_rate[rows], carry) = cols
-        out_params[rows] = params
+        out_params[rows] = est.params
 
     def snap_at(row: int) -> _Snap | None:
         j = np.searchsorted(compass_rows, row, "right") - 1
@@ -619,7 +639,7 @@ def compensate_arrays(
         i = compass_rows[j]
         return _Snap(float(t[i]), float(heading[i]), float(I_raw_all[i]), float(I_T_all[i]), float(I_Tp_all[i]), float(I_bias_all[i]))
 
-    run(sl, est.params)
+    run(sl)
     reason[: e] = gating.INIT
     update[e] = 1
     aid.begin(snap_at(e), float(t[e]))
@@ -633,7 +653,7 @@ def compensate_arrays(
         if s > b:
             continue
         rows = slice(s, b + 1)
-        run(rows, est.params)
+        run(rows)
         # 1-s mean compensated rate, from the oldest row inside the window (at least one step back).
         idx = np.arange(s, b + 1)
         j = np.searchsorted(t, t[idx] - cfg.gate.turn_window_s, "left")
@@ -651,7 +671,23 @@ def compensate_arrays(
         if is_boundary[b]:
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
-    return _output_frame(t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading)
+    out = _output_frame(t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading)
+    out.attrs["measurements"] = _measurement_table(aid.accepted)
+    out.attrs["estimator"] = est.name
+    return out
+
+
+def _measurement_table(accepted) -> pd.DataFrame:
+    """The accepted drift measurements: time (s), m (deg/s), mean T, T', variance r."""
+    return pd.DataFrame(
+        {
+            "t": [t for t, _ in accepted],
+            "m": [e.m for _, e in accepted],
+            "temp": [e.h[0] for _, e in accepted],
+            "temp_rate": [e.h[1] for _, e in accepted],
+            "r": [e.r for _, e in accepted],
+        }
+    )
 
 
 def _compass_arrays(n: int, heading_deg, mag, acc):
@@ -690,7 +726,9 @@ def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass) -
     )
 
 
-def compensate(log: pd.DataFrame, config: CompensatorConfig | None = None, *, source: str | None = None) -> pd.DataFrame:
+def compensate(
+    log: pd.DataFrame, config: CompensatorConfig | None = None, *, estimator=None, source: str | None = None
+) -> pd.DataFrame:
     """Compensate a log in the input contract; return the output table.
 
     Parameters
@@ -700,6 +738,8 @@ def compensate(log: pd.DataFrame, config: CompensatorConfig | None = None, *, so
         ``heading`` (deg) or ``mag_x..z`` + ``acc_x..z`` (see
         :mod:`gyrodrift.conventions`). As returned by :func:`gyrodrift.io.read_log`.
     config : CompensatorConfig, optional
+    estimator : DriftEstimator, optional
+        A fresh estimator instance overriding ``config.estimator``.
     source : str, optional
         Name for error messages; defaults to ``log.attrs["source"]``.
 
@@ -728,6 +768,7 @@ def compensate(log: pd.DataFrame, config: CompensatorConfig | None = None, *, so
         mag=log[list(MAG_COLS)].to_numpy(float) if has_mag else None,
         acc=log[list(ACC_COLS)].to_numpy(float) if has_mag else None,
         config=config,
+        estimator=estimator,
         source=source,
     )
     for col in log.columns:

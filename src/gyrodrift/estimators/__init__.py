@@ -1,29 +1,44 @@
 """Drift estimators behind one interface (:class:`DriftEstimator`), by name.
 
-========  ==========================================================
-name      estimator
-========  ==========================================================
-``stkf``  strong tracking Kalman filter, eqs. (3)–(10) (default)
-``kf``    the same filter with s = 1 (plain Kalman filter)
-========  ==========================================================
+===========  ==================================================================
+name         estimator
+===========  ==================================================================
+``stkf``     strong tracking Kalman filter over [a, b, c], eqs. (3)–(10) (default)
+``stkf-s1``  the same filter with s = 1 (plain Kalman filter over [a, b, c])
+``kf``       the paper's KF baseline: plain Kalman filter on a constant bias only
+``lsm``      the paper's "modified LSM": a, b, c refitted over a sliding window
+``fixed``    fixed a, b, c (with a whole-log fit: the paper's MLR, non-causal)
+``poly3``    PX4-style cubic thermal calibration from a separate heating run
+===========  ==================================================================
 """
 
 from gyrodrift.estimators.base import (
     ESTIMATORS,
     DriftEstimator,
+    LinearDrift,
     Observation,
     make_estimator,
     register,
 )
-from gyrodrift.estimators.kalman import KalmanConfig, KalmanDrift, PlainKalmanDrift
+from gyrodrift.estimators.kalman import BiasKalman, KalmanConfig, KalmanDrift, PlainKalmanDrift
+from gyrodrift.estimators.lsq import FixedParams, WindowedLsm, fit_linear_drift
+from gyrodrift.estimators.poly import CubicCalibration, Poly3Calibration, fit_poly3
 
 __all__ = [
     "ESTIMATORS",
     "DriftEstimator",
+    "LinearDrift",
     "Observation",
     "make_estimator",
     "register",
     "KalmanConfig",
     "KalmanDrift",
     "PlainKalmanDrift",
+    "BiasKalman",
+    "WindowedLsm",
+    "FixedParams",
+    "fit_linear_drift",
+    "CubicCalibration",
+    "Poly3Calibration",
+    "fit_poly3",
 ]

@@ -16,7 +16,7 @@ import numpy as np
 
 from gyrodrift.errors import ConfigError
 
-__all__ = ["Observation", "DriftEstimator", "ESTIMATORS", "register", "make_estimator"]
+__all__ = ["Observation", "DriftEstimator", "LinearDrift", "ESTIMATORS", "register", "make_estimator"]
 
 
 @dataclass(frozen=True)
@@ -33,12 +33,16 @@ class Observation:
         Rows ``[T (degC), T' (degC/s), 1]``, eq. (3).
     R : (m, m) ndarray
         Measurement noise covariance, (deg/s)².
+    n_new : int
+        How many of the rows (from the top) are new at this epoch; the others are
+        repeats stacked as in eq. (3).
     """
 
     t: float
     y: np.ndarray
     H: np.ndarray
     R: np.ndarray
+    n_new: int = 1
 
     def __post_init__(self):
         m = self.y.shape[0]
@@ -69,6 +73,17 @@ class DriftEstimator(Protocol):
     def hold(self) -> np.ndarray:
         """One update interval without accepted aiding; return the parameters."""
 
+    def drift(self, temp_c: np.ndarray, temp_rate_cps: np.ndarray) -> np.ndarray:
+        """Drift (deg/s) now in force at temperatures T (degC) and rates T' (degC/s)."""
+
+
+class LinearDrift:
+    """Mixin: the drift of eq. (2)/(5), ``a*T + b*T' + c``, from :attr:`params`."""
+
+    def drift(self, temp_c, temp_rate_cps):
+        a, b, c = (float(v) for v in self.params)
+        return a * temp_c + b * temp_rate_cps + c
+
 
 ESTIMATORS: dict[str, type] = {}
 
@@ -80,7 +95,7 @@ def register(cls):
 
 
 def make_estimator(name: str, **settings) -> DriftEstimator:
-    """Build a registered estimator by name.
+    """Build a registered estimator by name; ``settings`` go to its constructor.
 
     Raises
     ------

@@ -27,9 +27,9 @@ import numpy as np
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators._kalman import cap_covariance, correct, predict
-from gyrodrift.estimators.base import Observation, register
+from gyrodrift.estimators.base import LinearDrift, Observation, register
 
-__all__ = ["KalmanConfig", "KalmanDrift", "PlainKalmanDrift"]
+__all__ = ["KalmanConfig", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -81,7 +81,7 @@ class KalmanConfig:
 
 
 @register
-class KalmanDrift:
+class KalmanDrift(LinearDrift):
     """Strong tracking Kalman filter over [a, b, c] (``stkf``), eqs. (3)–(10).
 
     Examples
@@ -134,9 +134,48 @@ class KalmanDrift:
 
 @register
 class PlainKalmanDrift(KalmanDrift):
-    """The same filter with s = 1: the paper's plain KF baseline (``kf``)."""
+    """The same filter with s = 1 (``stkf-s1``): a plain Kalman filter over [a, b, c]."""
 
-    name: ClassVar[str] = "kf"
+    name: ClassVar[str] = "stkf-s1"
 
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         super().__init__(replace(config, fading=1.0))
+
+
+@register
+class BiasKalman(LinearDrift):
+    """The paper's KF baseline (``kf``): a plain Kalman filter on a constant bias c alone.
+
+    Same kernels, one state, s = 1; a and b stay 0, so through an outage the last bias
+    is held and the temperature is ignored (Section 4, Figs. 4, 5 and 9).
+    """
+
+    name: ClassVar[str] = "kf"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
+        self.config = config
+        self._x = np.array([config.x0[2]], dtype=float)
+        self._P = np.array([[config.p0_sd[2] ** 2]])
+        self._Q = np.array([[config.q_sd[2] ** 2]])
+        self._max_var = np.array([(config.max_sd or config.p0_sd)[2] ** 2])
+
+    @property
+    def params(self) -> np.ndarray:
+        return np.array([0.0, 0.0, self._x[0]])
+
+    @property
+    def cov(self) -> np.ndarray:
+        P = np.zeros((3, 3))
+        P[2, 2] = self._P[0, 0]
+        return P
+
+    def update(self, obs: Observation) -> np.ndarray:
+        P_prior = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
+        self._x, P_post, _, _ = correct(self._x, P_prior, obs.y, obs.H[:, 2:3], obs.R)
+        self._P = cap_covariance(P_post, self._max_var)
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
+        return self.params

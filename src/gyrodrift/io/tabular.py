@@ -785,7 +785,9 @@ def _write_csv(df: pd.DataFrame, fd: int) -> None:
 def _write_parquet(df: pd.DataFrame, fd: int) -> None:
     """Write ``df`` as Parquet (no index) to ``fd``."""
     with os.fdopen(fd, "wb") as fh:
-        pa_pq.write_table(pa.Table.from_pandas(df, preserve_index=False), fh)
+        plain = df.copy(deep=False)
+        plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
+        pa_pq.write_table(pa.Table.from_pandas(plain, preserve_index=False), fh)
         fh.flush()
         os.fsync(fh.fileno())
 

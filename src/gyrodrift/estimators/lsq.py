@@ -1,0 +1,135 @@
+"""Least-squares baselines of the paper: MLR (whole log) and the "modified LSM" (sliding window).
+
+Both solve the weighted least-squares problem of eq. (2) over drift measurements m with
+rows ``h = [T, T', 1]``, regularised by the same prior as the Kalman filters
+(``x0``, ``P0``), so a flat temperature gives the prior's answer for a and b instead
+of a singular matrix::
+
+    min_x  sum_i (m_i - h_i x)^2 / r_i  +  (x - x0)^T P0^-1 (x - x0)
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import ClassVar
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.estimators.kalman import KalmanConfig
+
+__all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
+
+
+def fit_linear_drift(m, H, r, config: KalmanConfig = KalmanConfig()) -> np.ndarray:
+    """Regularised weighted least-squares [a, b, c] (module notes).
+
+    Parameters
+    ----------
+    m : (n,) array_like
+        Drift measurements, deg/s.
+    H : (n, 3) array_like
+        Rows [T (degC), T' (degC/s), 1].
+    r : (n,) array_like
+        Measurement variances, (deg/s)².
+    config : KalmanConfig
+        Prior mean ``x0`` and standard deviations ``p0_sd``.
+
+    Examples
+    --------
+    >>> H = np.array([[20.0, 0.0, 1.0], [30.0, 0.01, 1.0], [40.0, -0.01, 1.0], [35.0, 0.02, 1.0]])
+    >>> x = fit_linear_drift(H @ [0.02, 3.0, -0.4], H, np.full(4, 1e-12))
+    >>> np.round(x, 6).tolist()
+    [0.02, 3.0, -0.4]
+    """
+    m = np.asarray(m, dtype=float)
+    H = np.asarray(H, dtype=float).reshape(-1, 3)
+    w = 1.0 / np.asarray(r, dtype=float)
+    x0 = np.array(config.x0, dtype=float)
+    prior_info = np.diag(1.0 / np.square(np.array(config.p0_sd, dtype=float)))
+    A = H.T @ (H * w[:, None]) + prior_info
+    rhs = H.T @ (w * m) + prior_info @ x0
+    return np.linalg.solve(A, rhs)
+
+
+@register
+class WindowedLsm(LinearDrift):
+    """The paper's "modified LSM" (``lsm``): a, b, c refitted at every update over the
+    last ``window`` accepted measurements (default 30: 300 s at the 10-s interval).
+
+    Parameters
+    ----------
+    config : KalmanConfig
+        Only the prior (``x0``, ``p0_sd``) is used, as regularisation.
+    window : int
+        Number of measurements in the sliding window.
+    """
+
+    name: ClassVar[str] = "lsm"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, config: KalmanConfig = KalmanConfig(), window: int = 30):
+        if not (isinstance(window, int) and window >= 1):
+            raise ConfigError(f"lsm window must be a whole number >= 1, got {window!r}")
+        self.config = config
+        self._rows: deque[tuple[float, np.ndarray, float]] = deque(maxlen=window)
+        self._x = np.array(config.x0, dtype=float)
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    @property
+    def cov(self) -> np.ndarray:
+        m, H, r = self._arrays()
+        info = np.diag(1.0 / np.square(np.array(self.config.p0_sd, dtype=float)))
+        if len(m):
+            info = info + H.T @ (H / r[:, None])
+        return np.linalg.inv(info)
+
+    def _arrays(self):
+        if not self._rows:
+            return np.empty(0), np.empty((0, 3)), np.empty(0)
+        m, H, r = zip(*self._rows)
+        return np.array(m), np.array(H), np.array(r)
+
+    def update(self, obs: Observation) -> np.ndarray:
+        for i in reversed(range(obs.n_new)):  # oldest first
+            self._rows.append((float(obs.y[i]), obs.H[i].copy(), float(obs.R[i, i])))
+        self._x = fit_linear_drift(*self._arrays(), self.config)
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        return self.params
+
+
+@register
+class FixedParams(LinearDrift):
+    """Fixed a, b, c (``fixed``): ignores all observations.
+
+    With parameters fitted by :func:`fit_linear_drift` over every measurement of the
+    whole log this is the paper's MLR baseline, which is not causal.
+    """
+
+    name: ClassVar[str] = "fixed"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, params=(0.0, 0.0, 0.0)):
+        self._x = np.array(params, dtype=float)
+        if self._x.shape != (3,) or not np.all(np.isfinite(self._x)):
+            raise ConfigError(f"fixed parameters must be three finite numbers (a, b, c), got {params!r}")
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    @property
+    def cov(self) -> np.ndarray:
+        return np.zeros((3, 3))
+
+    def update(self, obs: Observation) -> np.ndarray:
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        return self.params

@@ -1,0 +1,105 @@
+"""PX4-style thermal calibration baseline (``poly3``): a cubic in temperature, fitted offline.
+
+What flight controllers do today (PX4 ``Tools/process_sensor_caldata.py``, see
+``shared/guide/field-notes.md``): a static heating run of the same device is recorded
+first; the gyro output, median-filtered, is fitted by a cubic in ``T - T_ref`` with
+``T_ref`` the middle of the calibrated range; in use the temperature is clamped to that
+range (no extrapolation). There is no T' term and no adaptation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators.base import Observation, register
+
+__all__ = ["Poly3Calibration", "fit_poly3", "CubicCalibration"]
+
+
+@dataclass(frozen=True)
+class Poly3Calibration:
+    """A fitted thermal calibration.
+
+    Attributes
+    ----------
+    coeffs : tuple of 4 floats
+        Highest power first (``numpy.polyval`` order), deg/s per degC^k.
+    temp_ref_c, temp_min_c, temp_max_c : float
+        Reference temperature and calibrated range, degC.
+    """
+
+    coeffs: tuple[float, float, float, float]
+    temp_ref_c: float
+    temp_min_c: float
+    temp_max_c: float
+
+    def drift(self, temp_c):
+        """Drift (deg/s) at temperatures clamped to the calibrated range."""
+        x = np.clip(np.asarray(temp_c, dtype=float), self.temp_min_c, self.temp_max_c) - self.temp_ref_c
+        return np.polyval(self.coeffs, x)
+
+
+def fit_poly3(temp_c, gyro_z_dps, *, median_window: int = 31, order: int = 3) -> Poly3Calibration:
+    """Fit the cubic on a motionless calibration run (the gyro reads only its drift).
+
+    Examples
+    --------
+    >>> T = np.linspace(-10, 60, 5000)
+    >>> cal = fit_poly3(T, 0.1 + 0.02 * (T - 25) + 1e-4 * (T - 25) ** 2)
+    >>> round(float(cal.drift(25.0)), 6), round(float(cal.drift(100.0) - cal.drift(60.0)), 6)
+    (0.1, 0.0)
+    """
+    temp_c = np.asarray(temp_c, dtype=float)
+    rate = np.asarray(gyro_z_dps, dtype=float)
+    ok = np.isfinite(temp_c) & np.isfinite(rate)
+    temp_c, rate = temp_c[ok], rate[ok]
+    if temp_c.size < 10 * (order + 1) or np.ptp(temp_c) < 1.0:
+        raise ConfigError(
+            "calibration run too short or too flat for a cubic fit: it needs a still heating run "
+            f"spanning several degC (got {temp_c.size} samples over {np.ptp(temp_c) if temp_c.size else 0:.2f} degC)"
+        )
+    rate = median_filter(rate, size=median_window, mode="nearest")
+    t_min, t_max = float(temp_c.min()), float(temp_c.max())
+    t_ref = 0.5 * (t_min + t_max)
+    coeffs = np.polyfit(temp_c - t_ref, rate, order)
+    return Poly3Calibration(tuple(float(c) for c in coeffs), t_ref, t_min, t_max)
+
+
+@register
+class CubicCalibration:
+    """Offline cubic thermal calibration (``poly3``); ignores compass observations.
+
+    :attr:`params` reports the cubic's tangent at ``T_ref`` as (a, b=0, c).
+    """
+
+    name: ClassVar[str] = "poly3"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, calibration: Poly3Calibration):
+        if not isinstance(calibration, Poly3Calibration):
+            raise ConfigError("poly3 needs a calibration fitted on a separate heating run (fit_poly3)")
+        self.calibration = calibration
+        slope = calibration.coeffs[-2]
+        self._x = np.array([slope, 0.0, calibration.coeffs[-1] - slope * calibration.temp_ref_c])
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    @property
+    def cov(self) -> np.ndarray:
+        return np.zeros((3, 3))
+
+    def drift(self, temp_c, temp_rate_cps):
+        return self.calibration.drift(temp_c)
+
+    def update(self, obs: Observation) -> np.ndarray:
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        return self.params
