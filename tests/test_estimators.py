@@ -75,8 +75,8 @@ def test_stkf_s1_is_stkf_with_unit_fading():
 
 def test_kf_baseline_is_a_bias_only_filter():
     """The paper's KF: one state (the bias), so a and b stay 0; one step by hand."""
-    cfg = KalmanConfig(x0=(0.0, 0.0, 0.1), p0_sd=(0.05, 5.0, 0.5), q_sd=(0.0, 0.0, 0.01), max_sd=(1.0, 10.0, 10.0))
-    kf = make_estimator("kf", config=cfg)
+    cfg = KalmanConfig(x0=(0.0, 0.0, 0.1), p0_sd=(0.05, 5.0, 0.5), max_sd=(1.0, 10.0, 10.0))
+    kf = make_estimator("kf", config=cfg, bias_q_sd=0.01)
     H = np.array([[30.0, 0.01, 1.0], [29.0, 0.0, 1.0]])
     y, r = np.array([0.4, 0.3]), 0.02
     x = kf.update(Observation(t=10.0, y=y, H=H, R=np.eye(2) * r))

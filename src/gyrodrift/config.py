@@ -30,12 +30,13 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["load_config", "config_from_dict"]
+__all__ = ["load_config", "config_from_dict", "load_toml", "apply_settings"]
 
 _TABLES = ("kalman", "gate", "temp_rate")
 
 
-def _apply(obj, values: dict, where: str):
+def apply_settings(obj, values: dict, where: str):
+    """Copy of a frozen settings dataclass with ``values`` replaced; errors name the setting."""
     known = {f.name for f in fields(obj)}
     unknown = sorted(set(values) - known)
     if unknown:
@@ -58,19 +59,23 @@ def config_from_dict(values: dict, *, where: str = "config", base: CompensatorCo
         if name in values:
             if not isinstance(values[name], dict):
                 raise ConfigError(f"{where}: [{name}] must be a table of settings")
-            nested[name] = _apply(getattr(base, name), values[name], f"{where} [{name}]")
-    return _apply(base, {**top, **nested}, where)
+            nested[name] = apply_settings(getattr(base, name), values[name], f"{where} [{name}]")
+    return apply_settings(base, {**top, **nested}, where)
 
 
-def load_config(path) -> CompensatorConfig:
-    """Read a TOML settings file; errors name the file and the setting."""
+def load_toml(path) -> dict:
+    """Read a TOML file; errors name the file."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
         raise ConfigError(f"{path}: cannot read the settings file ({err.strerror})") from None
     try:
-        values = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"{path}: not valid TOML: {err}") from None
-    return config_from_dict(values, where=str(path))
+
+
+def load_config(path) -> CompensatorConfig:
+    """Read a TOML settings file; errors name the file and the setting."""
+    return config_from_dict(load_toml(path), where=str(path))

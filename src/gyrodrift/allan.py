@@ -1,0 +1,529 @@
+"""Allan deviation of a gyro rate and the noise terms read from it.
+
+Two steps, each a small function on numpy arrays:
+
+1. :func:`allan_deviation` computes the (overlapping) Allan deviation of a rate
+   record with allantools and attaches a chi-squared confidence interval to every
+   point (NIST SP 1065, W. J. Riley 2008: overlapping Allan variance eq. (11),
+   Allan variance eq. (7), chi-squared interval eq. (45); equivalent degrees of
+   freedom after Greenhall & Riley 2004, as implemented by
+   ``allantools.edf_greenhall``).
+2. :func:`noise_terms` reads the angle random walk N, bias instability B, rate
+   random walk K and rate ramp R off the curve with the slope method of IEEE
+   Std 952-1997, Annex C (Allan-variance method of gyro noise analysis).
+
+The paper this package follows (Feng, Li, Zhang, Sensors 2015, Section 4.1,
+Figure 6) compares the Allan deviation of the uncompensated and compensated
+angular-rate error of a motionless gyro: temperature compensation should lower
+the rate random walk (+1/2 slope) and rate ramp (+1 slope) parts of the curve.
+
+allantools is an optional dependency: ``pip install 'gyrodrift[allan]'``.
+
+Examples
+--------
+>>> import numpy as np
+>>> rng = np.random.default_rng(0)
+>>> rate = rng.normal(0.0, 0.04 * np.sqrt(100.0), 200_000)  # N = 0.04 deg/√s at 100 Hz
+>>> terms = noise_terms(allan_deviation(rate, 100.0))
+>>> round(terms.arw.value, 3), terms.rate_ramp is None
+(0.04, True)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+
+__all__ = [
+    "ONE_SIGMA_CI",
+    "BIAS_INSTABILITY_FACTOR",
+    "SLOPE_TOLERANCE",
+    "MIN_POINTS",
+    "MIN_EDF",
+    "AllanResult",
+    "NoiseTerm",
+    "NoiseTerms",
+    "allan_deviation",
+    "noise_terms",
+]
+
+#: Probability content of the confidence intervals, erf(1/√2) ≈ 0.6827 (±1 sigma).
+ONE_SIGMA_CI = math.erf(1.0 / math.sqrt(2.0))
+
+#: Flicker (bias-instability) floor of the Allan deviation in units of B:
+#: σ = B·sqrt(2 ln 2 / π) ≈ 0.664 B (IEEE Std 952-1997, Annex C).
+BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+#: A point belongs to a noise region when its local log-log slope is within this
+#: distance of the region's theoretical slope (−1/2, 0, +1/2, +1).
+SLOPE_TOLERANCE = 0.15
+
+#: Fewest consecutive points that make a sloped region (N, K, R).
+MIN_POINTS = 2
+
+#: Points with fewer equivalent degrees of freedom than this (68 % interval wider
+#: than about −16 %/+33 %) are too uncertain to define a slope and are not used.
+MIN_EDF = 10.0
+
+_TAU_KEYWORDS = ("octave", "decade", "log10", "all")
+
+
+def _require_allantools():
+    """Import allantools or say how to install it."""
+    try:
+        import allantools
+    except ImportError as exc:  # pragma: no cover - exercised with a monkeypatched import
+        raise ConfigError(
+            "Allan-deviation analysis needs the optional package allantools: "
+            "pip install 'gyrodrift[allan]'"
+        ) from exc
+    return allantools
+
+
+# ---------------------------------------------------------------------- results
+
+
+@dataclass(frozen=True)
+class AllanResult:
+    """Allan deviation of a rate record, with a confidence interval per point.
+
+    Attributes
+    ----------
+    tau_s : (M,) ndarray
+        Averaging times actually used, s (integer multiples of the sample interval).
+    adev : (M,) ndarray
+        Allan deviation, in ``unit``.
+    adev_lo, adev_hi : (M,) ndarray
+        Bounds of the ``ci`` (default ≈ 68.27 %) chi-squared confidence interval of
+        each point, in ``unit`` (NIST SP 1065 eq. (45), from ``edf``).
+    n : (M,) ndarray of int
+        Number of terms (second differences of the integrated rate) averaged at
+        each tau: N − 2m overlapping, ⌊N/m⌋ − 1 non-overlapping.
+    unit : str
+        Unit of the input rate and of the deviations (``"deg/s"`` for gyro rates).
+    edf : (M,) ndarray
+        Equivalent degrees of freedom of each point (Greenhall & Riley 2004).
+    alpha : (M,) ndarray of int
+        Power-law noise exponent assumed for the EDF at each point (rate PSD ∝ f^α),
+        identified from the local slope of the curve (see :func:`allan_deviation`).
+    overlapping : bool
+        Overlapping (True) or non-overlapping Allan deviation.
+    ci : float
+        Probability content of ``adev_lo..adev_hi``.
+    """
+
+    tau_s: np.ndarray
+    adev: np.ndarray
+    adev_lo: np.ndarray
+    adev_hi: np.ndarray
+    n: np.ndarray
+    unit: str
+    edf: np.ndarray
+    alpha: np.ndarray
+    overlapping: bool = True
+    ci: float = ONE_SIGMA_CI
+
+
+@dataclass(frozen=True)
+class NoiseTerm:
+    """One noise coefficient read off an Allan-deviation curve.
+
+    Attributes
+    ----------
+    value : float
+        The coefficient, in ``unit``.
+    lo, hi : float
+        Its confidence interval (same probability as the curve's), in ``unit``.
+    unit : str
+    tau_s : float
+        Averaging time at which the coefficient was read, s: the standard tau of the
+        term (N: 1 s, K: 3 s, R: √2 s) on the fitted line, or the tau of the
+        minimum (B). The line may be extrapolated to it: see ``fit_tau_s``.
+    fit_tau_s : tuple of float
+        Smallest and largest tau of the points used, s.
+    n_points : int
+        Number of curve points used.
+    """
+
+    value: float
+    lo: float
+    hi: float
+    unit: str
+    tau_s: float
+    fit_tau_s: tuple[float, float]
+    n_points: int
+
+    def scaled(self, factor: float, unit: str) -> "NoiseTerm":
+        """The same term in another unit (value and interval multiplied by ``factor``)."""
+        return NoiseTerm(
+            self.value * factor, self.lo * factor, self.hi * factor, unit, self.tau_s, self.fit_tau_s, self.n_points
+        )
+
+
+@dataclass(frozen=True)
+class NoiseTerms:
+    """Noise coefficients of a gyro (IEEE Std 952-1997, Annex C); None = not seen.
+
+    Attributes
+    ----------
+    arw : NoiseTerm or None
+        Angle random walk N, unit·√s (deg/√s for a rate in deg/s); ADEV slope −1/2.
+    bias_instability : NoiseTerm or None
+        Bias instability B, unit (deg/s); ADEV slope 0.
+    rrw : NoiseTerm or None
+        Rate random walk K, unit/√s (deg/s/√s); ADEV slope +1/2.
+    rate_ramp : NoiseTerm or None
+        Rate ramp R, unit/s (deg/s²); ADEV slope +1.
+    unit : str
+        Unit of the rate the curve was computed from.
+    """
+
+    arw: NoiseTerm | None
+    bias_instability: NoiseTerm | None
+    rrw: NoiseTerm | None
+    rate_ramp: NoiseTerm | None
+    unit: str
+
+    def _need_deg_s(self) -> None:
+        if self.unit != "deg/s":
+            raise ConfigError(f"per-hour units need a curve of a rate in deg/s, this one is in {self.unit!r}")
+
+    @property
+    def arw_deg_rt_h(self) -> NoiseTerm | None:
+        """Angle random walk in deg/√h (deg/√s × 60)."""
+        self._need_deg_s()
+        return None if self.arw is None else self.arw.scaled(60.0, "deg/√h")
+
+    @property
+    def bias_instability_deg_h(self) -> NoiseTerm | None:
+        """Bias instability in deg/h (deg/s × 3600)."""
+        self._need_deg_s()
+        return None if self.bias_instability is None else self.bias_instability.scaled(3600.0, "deg/h")
+
+
+# --------------------------------------------------------------- Allan deviation
+
+
+def _local_slopes(tau_s: np.ndarray, dev: np.ndarray) -> np.ndarray:
+    """Local slope d(log σ)/d(log τ) at each point, NaN where it is not defined.
+
+    Interior points take the mean of the slopes of the two segments that meet
+    there; end points take their one segment.
+    """
+    tau_s = np.asarray(tau_s, dtype=float)
+    dev = np.asarray(dev, dtype=float)
+    out = np.full(tau_s.shape, np.nan)
+    if tau_s.size < 2:
+        return out
+    with np.errstate(divide="ignore", invalid="ignore"):
+        seg = np.diff(np.log(dev)) / np.diff(np.log(tau_s))
+    seg = np.where(np.isfinite(seg), seg, np.nan)
+    out[0], out[-1] = seg[0], seg[-1]
+    out[1:-1] = 0.5 * (seg[1:] + seg[:-1])
+    return out
+
+
+def _alpha_from_slope(slope: np.ndarray) -> np.ndarray:
+    """Power-law exponent α (rate PSD ∝ f^α) from the local ADEV slope μ.
+
+    ADEV ∝ τ^μ with μ = −(α + 1)/2 for −3 < α < 1 (NIST SP 1065, power-law
+    noise types); μ = −1 is white or flicker phase noise, which ADEV cannot
+    tell apart, taken as white (α = +2: quantization noise in IEEE 952 terms).
+    Thresholds halfway between the theoretical slopes; a drift (μ ≈ +1) gets
+    α = −2, the lowest exponent the Allan-variance EDF accepts. Undefined slopes
+    (one-point curves) are taken as white rate noise, α = 0.
+    """
+    s = np.asarray(slope, dtype=float)
+    alpha = np.select([s < -0.75, s < -0.25, s < 0.25, s >= 0.25], [2, 0, -1, -2], default=0)
+    return alpha.astype(int)
+
+
+def _edf(at, alpha: int, m: int, n_phase: int, overlapping: bool) -> float:
+    """Greenhall EDF of one Allan-deviation point (d = 2, unmodified).
+
+    allantools does not implement white phase noise (α = 2) when fewer than three
+    strides fit the record (Greenhall & Riley 2004, case 4 with r ≤ d); flicker
+    phase noise (α = 1), the other noise with ADEV slope −1, is used there.
+    """
+    try:
+        return float(at.edf_greenhall(alpha=alpha, d=2, m=m, N=n_phase, overlapping=overlapping, modified=False))
+    except NotImplementedError:
+        if alpha != 2:
+            raise
+        return float(at.edf_greenhall(alpha=1, d=2, m=m, N=n_phase, overlapping=overlapping, modified=False))
+
+
+def _tau_request(taus, fs_hz: float):
+    """Validate the ``taus`` argument: an allantools keyword or an array of seconds."""
+    if isinstance(taus, str):
+        if taus not in _TAU_KEYWORDS:
+            raise ConfigError(f"taus must be one of {', '.join(_TAU_KEYWORDS)} or an array of seconds, got {taus!r}")
+        return taus
+    arr = np.atleast_1d(np.asarray(taus, dtype=float))
+    if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ConfigError("taus must be positive finite averaging times in seconds")
+    if np.any(np.round(arr * fs_hz) < 1):
+        raise ConfigError(f"taus must be at least one sample interval ({1.0 / fs_hz:g} s)")
+    return arr
+
+
+def allan_deviation(
+    rate,
+    fs_hz: float,
+    *,
+    taus="octave",
+    overlapping: bool = True,
+    unit: str = "deg/s",
+    ci: float = ONE_SIGMA_CI,
+) -> AllanResult:
+    """Allan deviation of a rate record with a confidence interval per point.
+
+    Parameters
+    ----------
+    rate : (N,) array_like
+        Rate samples at a constant rate ``fs_hz``, in ``unit`` (deg/s for a gyro).
+        Treated as allantools "frequency" data: each sample is the mean rate over
+        its sample interval. NaN or inf is refused: fill or drop gaps first.
+    fs_hz : float
+        Sample rate, Hz.
+    taus : {"octave", "decade", "log10", "all"} or array_like
+        Averaging times: an allantools keyword (octave: 1, 2, 4, … samples) or
+        seconds, rounded to whole samples; duplicates and taus too long for the
+        record are dropped (allantools keeps taus with at least 2 terms).
+    overlapping : bool
+        Overlapping Allan deviation (``allantools.oadev``, NIST SP 1065 eq. (11);
+        the default, better confidence) or the plain one (``allantools.adev``,
+        SP 1065 eq. (7)).
+    unit : str
+        Unit of ``rate``, carried into the result.
+    ci : float
+        Probability content of the confidence interval (default erf(1/√2) ≈ 68.27 %).
+
+    Returns
+    -------
+    AllanResult
+
+    Notes
+    -----
+    Confidence interval: chi-squared, ``allantools.confidence_interval`` (NIST
+    SP 1065 eq. (45)) with the equivalent degrees of freedom of
+    ``allantools.edf_greenhall`` (Greenhall & Riley 2004; d = 2, m = τ·fs,
+    N + 1 phase points, overlapping or not). The EDF needs the noise type at each
+    tau; it is identified from the local log-log slope of the curve itself
+    (:func:`_alpha_from_slope`). allantools' own ``err`` output (σ/√n) is not used:
+    it ignores the correlation between overlapping terms and the noise type.
+
+    Raises
+    ------
+    ConfigError
+        Non-finite samples, a bad ``fs_hz``/``taus``, a record too short for any
+        tau, or allantools missing.
+
+    Examples
+    --------
+    The NBS14 10-point test data (NIST SP 1065, Section 12.4):
+
+    >>> r = allan_deviation([892, 809, 823, 798, 671, 644, 883, 903, 677], 1.0, taus=[1, 2], unit="")
+    >>> [round(float(v), 5) for v in r.adev]
+    [91.22945, 85.95287]
+    """
+    at = _require_allantools()
+    y = np.asarray(rate, dtype=float)
+    if y.ndim != 1:
+        raise ConfigError(f"rate must be a 1-D array of samples, got shape {y.shape}")
+    bad = ~np.isfinite(y)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise ConfigError(
+            f"rate has {int(bad.sum())} NaN/inf sample(s) (first at index {first}); "
+            "the Allan deviation needs evenly spaced finite samples: fill or drop them first"
+        )
+    if not (isinstance(fs_hz, (int, float, np.floating, np.integer)) and math.isfinite(fs_hz) and fs_hz > 0):
+        raise ConfigError(f"fs_hz must be a positive sample rate in Hz, got {fs_hz!r}")
+    if y.size < 3:
+        raise ConfigError(f"the Allan deviation needs at least 3 samples, got {y.size}")
+    if not 0.0 < ci < 1.0:
+        raise ConfigError(f"ci must be a probability in (0, 1), got {ci!r}")
+    fs_hz = float(fs_hz)
+    request = _tau_request(taus, fs_hz)
+    func = at.oadev if overlapping else at.adev
+    tau_s, dev, _err, n = func(y, rate=fs_hz, data_type="freq", taus=request)
+    tau_s, dev, n = (np.asarray(v, dtype=float) for v in (tau_s, dev, n))
+    if tau_s.size == 0:
+        raise ConfigError(f"no averaging time fits a record of {y.size} samples; use shorter taus")
+    alpha = _alpha_from_slope(_local_slopes(tau_s, dev))
+    m = np.rint(tau_s * fs_hz).astype(int)
+    edf = np.array([_edf(at, int(a), int(mi), y.size + 1, overlapping) for a, mi in zip(alpha, m)], dtype=float)
+    bounds = np.array([at.confidence_interval(float(d), float(e), ci) for d, e in zip(dev, edf)], dtype=float)
+    return AllanResult(
+        tau_s=tau_s,
+        adev=dev,
+        adev_lo=bounds[:, 0],
+        adev_hi=bounds[:, 1],
+        n=n.astype(int),
+        unit=unit,
+        edf=edf,
+        alpha=alpha,
+        overlapping=bool(overlapping),
+        ci=float(ci),
+    )
+
+
+# ------------------------------------------------------------------ noise terms
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int] | None:
+    """(start, stop) of the longest run of True in ``mask``, the earliest on ties."""
+    best = None
+    start = None
+    for i, v in enumerate(np.r_[np.asarray(mask, dtype=bool), False]):
+        if v and start is None:
+            start = i
+        elif not v and start is not None:
+            if best is None or i - start > best[1] - best[0]:
+                best = (start, i)
+            start = None
+    return best
+
+
+def _sloped_term(res: AllanResult, usable, local, slope: float, tau_ref: float, unit: str, tol, min_points):
+    """Fixed-slope least-squares line through the region of ``slope``, read at ``tau_ref``.
+
+    In log-log the line is log σ = slope·log τ + c; with the slope fixed the
+    least-squares c is the mean of log σᵢ − slope·log τᵢ. The interval comes from the
+    same fit through the points' interval bounds (no √n narrowing: overlapping
+    estimates at neighbouring taus are strongly correlated).
+    """
+    run = _longest_run(usable & (np.abs(local - slope) <= tol))
+    if run is None or run[1] - run[0] < min_points:
+        return None
+    sl = slice(*run)
+    log_tau = np.log(res.tau_s[sl])
+
+    def read(dev):
+        c = float(np.mean(np.log(dev[sl]) - slope * log_tau))
+        return math.exp(c + slope * math.log(tau_ref))
+
+    with np.errstate(divide="ignore"):
+        return NoiseTerm(
+            value=read(res.adev),
+            lo=read(res.adev_lo),
+            hi=read(res.adev_hi),
+            unit=unit,
+            tau_s=float(tau_ref),
+            fit_tau_s=(float(res.tau_s[sl][0]), float(res.tau_s[sl][-1])),
+            n_points=run[1] - run[0],
+        )
+
+
+def _units(unit: str) -> tuple[str, str, str, str]:
+    if unit == "deg/s":
+        return "deg/√s", "deg/s", "deg/s/√s", "deg/s²"
+    u = f"({unit})" if unit else "1"
+    return f"{u}·√s", unit, f"{u}/√s", f"{u}/s"
+
+
+def noise_terms(
+    result: AllanResult,
+    *,
+    tolerance: float = SLOPE_TOLERANCE,
+    min_points: int = MIN_POINTS,
+    min_edf: float = MIN_EDF,
+) -> NoiseTerms:
+    """Read N, B, K and R off an Allan-deviation curve (slope method).
+
+    Parameters
+    ----------
+    result : AllanResult
+        From :func:`allan_deviation`.
+    tolerance : float
+        Largest distance of a point's local log-log slope from a term's
+        theoretical slope for the point to count in that term's region.
+    min_points : int
+        Fewest consecutive points that make a sloped region (N, K, R).
+    min_edf : float
+        Points with fewer equivalent degrees of freedom are not used.
+
+    Returns
+    -------
+    NoiseTerms
+        Each term None when the curve has no region of its slope.
+
+    Notes
+    -----
+    The Allan variance of the IEEE Std 952-1997 gyro model (Annex C) is a sum of
+    power laws; each dominates the deviation somewhere with its own slope:
+
+    ===================  =====  ================  =========================
+    term                 slope  σ(τ)              read at
+    ===================  =====  ================  =========================
+    angle random walk N  −1/2   N/√τ              τ = 1 s: σ = N
+    bias instability B   0      B·sqrt(2 ln 2/π)  the minimum: B = σ/0.664
+    rate random walk K   +1/2   K·sqrt(τ/3)       τ = 3 s: σ = K
+    rate ramp R          +1     R·τ/√2            τ = √2 s: σ = R
+    ===================  =====  ================  =========================
+
+    Method, per term:
+
+    1. The local slope of each point is the mean of the log-log slopes of its two
+       neighbouring segments (one at the ends). Points with a non-positive
+       deviation or fewer than ``min_edf`` degrees of freedom are not used.
+    2. N, K, R: the region of a term is the longest run of consecutive usable points whose
+       local slope is within ±``tolerance`` (default 0.15) of the theoretical
+       slope; the earliest run wins a tie. No such run of at least ``min_points``
+       (default 2) points: the term is None. (The theoretical slopes are 1/2
+       apart, so a tolerance of 0.15 leaves the transitions between terms out.)
+    3. N, K, R: a line of the fixed theoretical slope is fitted by least squares
+       in log-log (the intercept is the mean of log σᵢ − slope·log τᵢ) and read at
+       the standard tau, extrapolating when the region does not reach it.
+    4. B: the minimum of the usable curve, divided by sqrt(2 ln 2/π) ≈ 0.664,
+       provided the local slope there is within ±``tolerance`` of 0 (the bottom
+       of the curve is the flat region; one point suffices). A curve whose
+       minimum is not flat (it still falls at its longest usable tau, or it rises
+       from its first one) has no B. ``fit_tau_s`` spans the flat run around the
+       minimum. Where ARW meets RRW with no flicker floor in between, the bottom
+       of the U still reads as B: then it is an upper bound.
+
+    Confidence intervals: N, K, R by the same fixed-slope fit through the points'
+    ``adev_lo`` and ``adev_hi``; B from the interval of the point it was read at,
+    divided by 0.664. Points next to a transition still carry some of the
+    neighbouring term, so the coefficients are slight over-estimates on a curve
+    with several terms; they are exact for a curve of one term.
+    """
+    if not 0.0 < tolerance < 0.25:
+        raise ConfigError(f"tolerance must be in (0, 0.25) so regions cannot overlap, got {tolerance!r}")
+    if not (isinstance(min_points, int) and min_points >= 1):
+        raise ConfigError(f"min_points must be a whole number >= 1, got {min_points!r}")
+    u_n, u_b, u_k, u_r = _units(result.unit)
+    local = _local_slopes(result.tau_s, result.adev)
+    usable = (result.adev > 0) & np.isfinite(local) & (result.edf >= min_edf)
+
+    arw = _sloped_term(result, usable, local, -0.5, 1.0, u_n, tolerance, min_points)
+    rrw = _sloped_term(result, usable, local, 0.5, 3.0, u_k, tolerance, min_points)
+    ramp = _sloped_term(result, usable, local, 1.0, math.sqrt(2.0), u_r, tolerance, min_points)
+
+    bias = None
+    flat = usable & (np.abs(local) <= tolerance)
+    if usable.any():
+        i = int(np.flatnonzero(usable)[np.argmin(result.adev[usable])])
+        if flat[i]:
+            lo, hi = i, i + 1
+            while lo > 0 and flat[lo - 1]:
+                lo -= 1
+            while hi < flat.size and flat[hi]:
+                hi += 1
+            f = BIAS_INSTABILITY_FACTOR
+            bias = NoiseTerm(
+                value=float(result.adev[i] / f),
+                lo=float(result.adev_lo[i] / f),
+                hi=float(result.adev_hi[i] / f),
+                unit=u_b,
+                tau_s=float(result.tau_s[i]),
+                fit_tau_s=(float(result.tau_s[lo]), float(result.tau_s[hi - 1])),
+                n_points=hi - lo,
+            )
+    return NoiseTerms(arw=arw, bias_instability=bias, rrw=rrw, rate_ramp=ramp, unit=result.unit)

@@ -1,0 +1,136 @@
+"""Run our method and the paper's baselines on the same log (``gyrodrift compare``).
+
+==========  ========================================================  ======
+method      what it is                                                causal
+==========  ========================================================  ======
+``stkf``    ours: the paper's strong tracking Kalman filter           yes
+``kf``      the paper's KF: plain Kalman filter on a constant bias    yes
+``stkf-s1`` the [a, b, c] filter with s = 1                           yes
+``lsm``     the paper's "modified LSM": a, b, c refitted every 10 s   yes
+            over a sliding window
+``mlr``     the paper's MLR: one a, b, c fitted by least squares      **no**
+            over every drift measurement of the whole log
+``poly3``   PX4-style cubic thermal calibration fitted on a separate  yes
+            static heating run of the same device
+``oracle``  subtracts the true drift (``true_bias_z``): the limit     --
+            set by sensor noise alone
+==========  ========================================================  ======
+
+Every method sees the same log, the same compass gates and the same integration;
+only the drift estimate differs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.conventions import TRUE_BIAS_Z, wrap_360
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators import CubicCalibration, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
+
+__all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log"]
+
+METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "poly3", "oracle")
+CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "poly3": True, "oracle": False}
+_FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
+
+
+def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
+    """Fit the ``poly3`` baseline on a motionless heating run (input contract columns)."""
+    return fit_poly3(log["temp"].to_numpy(float), log["gyro_z"].to_numpy(float))
+
+
+def _oracle(log: pd.DataFrame, config: CompensatorConfig) -> pd.DataFrame:
+    """Compensation with the true drift; heading from the same anchor as the others."""
+    if TRUE_BIAS_Z not in log.columns:
+        raise ConfigError("the oracle needs a true_bias_z column (simulated logs have one)")
+    out = compensate(log, config, estimator=FixedParams())  # same gates, columns and anchor row
+    truth = log[TRUE_BIAS_Z].to_numpy(float)
+    rate = log["gyro_z"].to_numpy(float) - truth
+    integral = np.r_[0.0, np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(out["t"].to_numpy()))]
+    compass = out["compass_heading"].to_numpy()
+    anchor = int(np.flatnonzero(np.isfinite(compass))[0])
+    out["rate_z"] = rate
+    out["bias_z"] = truth
+    out["heading"] = wrap_360(compass[anchor] + integral - integral[anchor])
+    out[["a", "b", "c"]] = np.nan
+    return out
+
+
+def run_method(
+    name: str,
+    log: pd.DataFrame,
+    config: CompensatorConfig | None = None,
+    *,
+    calibration: Poly3Calibration | pd.DataFrame | None = None,
+) -> pd.DataFrame:
+    """Compensate ``log`` with one method; return the output table of :func:`compensate`.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`METHODS`.
+    log : DataFrame
+        Input contract.
+    config : CompensatorConfig, optional
+        Shared settings (gates, interval, prior); ``config.estimator`` is replaced.
+    calibration : Poly3Calibration or DataFrame, optional
+        For ``poly3``: a fitted calibration, or the heating-run log to fit it on.
+    """
+    config = config or CompensatorConfig()
+    if name in _FILTERS:
+        return compensate(log, replace(config, estimator=name))
+    if name == "mlr":
+        first = compensate(log, config)
+        meas = first.attrs["measurements"]
+        H = np.column_stack([meas["temp"], meas["temp_rate"], np.ones(len(meas))])
+        params = fit_linear_drift(meas["m"], H, meas["r"], config.kalman)
+        out = compensate(log, config, estimator=FixedParams(params))
+        out.attrs["measurements"] = meas
+        return out
+    if name == "poly3":
+        if calibration is None:
+            raise ConfigError("poly3 needs a calibration run of the same device: give --calibration FILE")
+        if isinstance(calibration, pd.DataFrame):
+            calibration = calibration_from_log(calibration)
+        return compensate(log, config, estimator=CubicCalibration(calibration))
+    if name == "oracle":
+        return _oracle(log, config)
+    raise ConfigError(f"unknown method {name!r}; choose from: {', '.join(METHODS)}")
+
+
+def run_methods(
+    log: pd.DataFrame,
+    methods=METHODS,
+    config: CompensatorConfig | None = None,
+    *,
+    calibration=None,
+) -> tuple[dict[str, pd.DataFrame], dict[str, str]]:
+    """Run several methods; methods that cannot run on this log are skipped with a reason.
+
+    Returns
+    -------
+    outputs : dict
+        Method name → output table, in the order given.
+    skipped : dict
+        Method name → why it was not run (no truth column, no calibration run).
+    """
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {', '.join(METHODS)}")
+    if isinstance(calibration, pd.DataFrame):
+        calibration = calibration_from_log(calibration)
+    outputs, skipped = {}, {}
+    for name in methods:
+        if name == "oracle" and TRUE_BIAS_Z not in log.columns:
+            skipped[name] = "no true_bias_z column"
+            continue
+        if name == "poly3" and calibration is None:
+            skipped[name] = "no calibration run (--calibration)"
+            continue
+        outputs[name] = run_method(name, log, config, calibration=calibration)
+    return outputs, skipped
