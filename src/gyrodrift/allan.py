@@ -242,6 +242,18 @@ def _alpha_from_slope(slope: np.ndarray) -> np.ndarray:
     return alpha.astype(int)
 
 
+def _noise_alpha(tau_s: np.ndarray, dev: np.ndarray) -> np.ndarray:
+    """Noise exponent for the EDF at each tau: from the slope, never whiter than at shorter taus.
+
+    In the IEEE 952 gyro model longer averaging only brings out redder noise
+    (quantization → ARW → bias instability → RRW → ramp), so α is made
+    non-increasing in tau (cumulative minimum). This also keeps a single noisy
+    long-tau point from being given the many degrees of freedom of white noise;
+    a redder α gives fewer degrees of freedom, a wider (conservative) interval.
+    """
+    return np.minimum.accumulate(_alpha_from_slope(_local_slopes(tau_s, dev)))
+
+
 def _edf(at, alpha: int, m: int, n_phase: int, overlapping: bool) -> float:
     """Greenhall EDF of one Allan-deviation point (d = 2, unmodified).
 
@@ -313,8 +325,8 @@ def allan_deviation(
     SP 1065 eq. (45)) with the equivalent degrees of freedom of
     ``allantools.edf_greenhall`` (Greenhall & Riley 2004; d = 2, m = τ·fs,
     N + 1 phase points, overlapping or not). The EDF needs the noise type at each
-    tau; it is identified from the local log-log slope of the curve itself
-    (:func:`_alpha_from_slope`). allantools' own ``err`` output (σ/√n) is not used:
+    tau; it is identified from the local log-log slope of the curve itself and
+    kept from getting whiter as tau grows (:func:`_noise_alpha`). allantools' own ``err`` output (σ/√n) is not used:
     it ignores the correlation between overlapping terms and the noise type.
 
     Raises
@@ -355,7 +367,7 @@ def allan_deviation(
     tau_s, dev, n = (np.asarray(v, dtype=float) for v in (tau_s, dev, n))
     if tau_s.size == 0:
         raise ConfigError(f"no averaging time fits a record of {y.size} samples; use shorter taus")
-    alpha = _alpha_from_slope(_local_slopes(tau_s, dev))
+    alpha = _noise_alpha(tau_s, dev)
     m = np.rint(tau_s * fs_hz).astype(int)
     edf = np.array([_edf(at, int(a), int(mi), y.size + 1, overlapping) for a, mi in zip(alpha, m)], dtype=float)
     bounds = np.array([at.confidence_interval(float(d), float(e), ci) for d, e in zip(dev, edf)], dtype=float)
@@ -480,13 +492,12 @@ def noise_terms(
     3. N, K, R: a line of the fixed theoretical slope is fitted by least squares
        in log-log (the intercept is the mean of log σᵢ − slope·log τᵢ) and read at
        the standard tau, extrapolating when the region does not reach it.
-    4. B: the minimum of the usable curve, divided by sqrt(2 ln 2/π) ≈ 0.664,
-       provided the local slope there is within ±``tolerance`` of 0 (the bottom
-       of the curve is the flat region; one point suffices). A curve whose
-       minimum is not flat (it still falls at its longest usable tau, or it rises
-       from its first one) has no B. ``fit_tau_s`` spans the flat run around the
-       minimum. Where ARW meets RRW with no flicker floor in between, the bottom
-       of the U still reads as B: then it is an upper bound.
+    4. B: the flat region is the longest run of usable points with local slope
+       within ±``tolerance`` of 0; B is its minimum divided by
+       sqrt(2 ln 2/π) ≈ 0.664. The run needs ``min_points`` points, or one point
+       that is the minimum of the whole usable curve (the bottom of a U where
+       ARW meets RRW with no flicker floor between: B is then an upper bound).
+       ``tau_s`` is the tau of the minimum, ``fit_tau_s`` spans the run.
 
     Confidence intervals: N, K, R by the same fixed-slope fit through the points'
     ``adev_lo`` and ``adev_hi``; B from the interval of the point it was read at,
@@ -507,15 +518,12 @@ def noise_terms(
     ramp = _sloped_term(result, usable, local, 1.0, math.sqrt(2.0), u_r, tolerance, min_points)
 
     bias = None
-    flat = usable & (np.abs(local) <= tolerance)
-    if usable.any():
-        i = int(np.flatnonzero(usable)[np.argmin(result.adev[usable])])
-        if flat[i]:
-            lo, hi = i, i + 1
-            while lo > 0 and flat[lo - 1]:
-                lo -= 1
-            while hi < flat.size and flat[hi]:
-                hi += 1
+    run = _longest_run(usable & (np.abs(local) <= tolerance))
+    if run is not None:
+        idx = np.arange(*run)
+        i = int(idx[np.argmin(result.adev[idx])])
+        bottom = result.adev[i] <= np.min(result.adev[usable])
+        if idx.size >= min_points or bottom:
             f = BIAS_INSTABILITY_FACTOR
             bias = NoiseTerm(
                 value=float(result.adev[i] / f),
@@ -523,7 +531,7 @@ def noise_terms(
                 hi=float(result.adev_hi[i] / f),
                 unit=u_b,
                 tau_s=float(result.tau_s[i]),
-                fit_tau_s=(float(result.tau_s[lo]), float(result.tau_s[hi - 1])),
-                n_points=hi - lo,
+                fit_tau_s=(float(result.tau_s[idx[0]]), float(result.tau_s[idx[-1]])),
+                n_points=int(idx.size),
             )
     return NoiseTerms(arw=arw, bias_instability=bias, rrw=rrw, rate_ramp=ramp, unit=result.unit)

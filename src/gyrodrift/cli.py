@@ -125,15 +125,23 @@ def _summary(out, log, path, out_path) -> list[str]:
 
 
 def _cmd_compensate(args) -> int:
+    from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
+
     check_output_path(args.input, args.output)
     cfg = _config(args)
+    if args.profile:
+        cfg = warm_config(load_profile(args.profile), cfg)
     log = read_log(
         args.input, fmt=args.format, gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(args.map)
     )
     out = compensate(log, cfg, source=str(args.input))
     write_table(out, args.output)
+    if args.save_profile:
+        save_profile(profile_from_run(out), args.save_profile)
     if not args.quiet:
         print("\n".join(_summary(out, log, args.input, args.output)))
+        if args.save_profile:
+            print(f"saved device profile {args.save_profile}")
     return 0
 
 
@@ -205,6 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    c.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
+    c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
     _add_input_options(c)
     _add_method_options(c)
     c.set_defaults(func=_cmd_compensate)

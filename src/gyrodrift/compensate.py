@@ -674,6 +674,8 @@ def compensate_arrays(
     out = _output_frame(t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading)
     out.attrs["measurements"] = _measurement_table(aid.accepted)
     out.attrs["estimator"] = est.name
+    out.attrs["final_params"] = est.params
+    out.attrs["final_cov"] = est.cov
     return out
 
 

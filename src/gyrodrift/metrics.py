@@ -1,15 +1,48 @@
-"""Accuracy of a compensated log against a reference heading or the true drift."""
+"""Accuracy of a compensated log against a reference heading or the true drift.
+
+Besides the one-run summary :func:`accuracy`, this module computes the statistics
+of Table 2 of Feng, Li, Zhang (Sensors 2015, Section 4): the mean and variance of
+the bias drift error of a motionless gyro (static experiment, deg/s) and of the
+heading error against a reference (dynamic experiment, deg), per compensation
+method (:func:`table2`), next to the published numbers (:data:`PAPER_TABLE2`), and
+renders such tables as GitHub Markdown (:func:`markdown_table`).
+
+Statistics (:func:`error_stats`): mean, variance and standard deviation with
+``ddof=1`` (sample variance: the default of MATLAB's ``var``, which the paper's
+numbers most likely come from; on logs of thousands of rows the choice does not
+show in four digits), RMS and the largest absolute error.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping, NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_180
+from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, T, wrap_180
+from gyrodrift.errors import ConfigError, LogFormatError
 
-__all__ = ["heading_error_deg", "raw_heading_deg", "Accuracy", "accuracy"]
+__all__ = [
+    "heading_error_deg",
+    "raw_heading_deg",
+    "Accuracy",
+    "accuracy",
+    "bias_error",
+    "error_stats",
+    "heading_error_stats",
+    "TABLE2_STATS",
+    "TABLE2_KINDS",
+    "table2",
+    "MeanVariance",
+    "PAPER_TABLE2",
+    "PAPER_METHODS",
+    "paper_table2",
+    "markdown_table",
+]
 
 
 def heading_error_deg(heading_deg, ref_heading_deg) -> np.ndarray:
@@ -68,3 +101,308 @@ def accuracy(out: pd.DataFrame) -> Accuracy:
         b_rms_raw = _rms(truth)
         b_rms = _rms(out["bias_z"].to_numpy(float) - truth)
     return Accuracy(h_rms_raw, h_rms, h_max_raw, h_max, b_rms_raw, b_rms)
+
+
+# ----------------------------------------------------------------- Table 2 (paper)
+
+
+def _column(out: pd.DataFrame, name: str, what: str) -> np.ndarray:
+    if name not in out.columns:
+        raise LogFormatError(f"{what} needs a {name!r} column; the table has {', '.join(map(str, out.columns))}")
+    return out[name].to_numpy(dtype=float)
+
+
+def _window_means(t_s: np.ndarray, x: np.ndarray, window_s: float) -> np.ndarray:
+    """Means of ``x`` over consecutive non-overlapping windows of ``window_s`` seconds.
+
+    Windows start at the first time; window k holds t0 + k·w <= t < t0 + (k+1)·w.
+    Only windows the log covers completely (to within one median sample interval)
+    count; NaN samples are left out of a mean, and a window with no finite sample
+    is dropped.
+    """
+    t_s = np.asarray(t_s, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if t_s.size < 2:
+        raise ConfigError("averaging windows need at least two samples")
+    dt = float(np.median(np.diff(t_s)))
+    # Rounding keeps samples that sit on a window edge (t = k·w in floating point) in the right window.
+    k = np.floor(np.round((t_s - t_s[0]) / window_s, 9)).astype(np.int64)
+    n_complete = int(math.floor(round((t_s[-1] - t_s[0] + dt) / window_s, 9)))
+    if n_complete < 1:
+        raise ConfigError(
+            f"average_s={window_s:g} s is longer than the log ({t_s[-1] - t_s[0] + dt:g} s): no complete window"
+        )
+    keep = (k < n_complete) & np.isfinite(x)
+    sums = np.bincount(k[keep], weights=x[keep], minlength=n_complete)
+    counts = np.bincount(k[keep], minlength=n_complete)
+    return sums[counts > 0] / counts[counts > 0]
+
+
+def bias_error(out: pd.DataFrame, *, average_s: float | None = None) -> np.ndarray:
+    """Bias drift error of a compensated log, deg/s (the static rows of the paper's Table 2).
+
+    Parameters
+    ----------
+    out : DataFrame
+        Output table of :func:`gyrodrift.compensate.compensate`.
+    average_s : float, optional
+        Average the error over consecutive non-overlapping windows of this many
+        seconds, starting at the first row; only complete windows count.
+
+    Returns
+    -------
+    ndarray
+        One error per row (NaN where the truth is missing), or one per window
+        (window means; NaN rows left out) with ``average_s``.
+
+    Notes
+    -----
+    Which error:
+
+    * the table has ``true_bias_z`` (simulated logs): ``bias_z − true_bias_z``,
+      the estimated minus the true drift. This is the paper's quantity: its
+      Figure 2 compares the bias estimate with the "ideal bias" of the
+      motionless gyro.
+    * otherwise (a recorded log): the compensated rate ``rate_z`` itself, which
+      is the error only if the gyro did not move (true rate 0). It contains the
+      gyro's white noise as well as the drift error.
+
+    Why averaging: the paper's variances (Table 2, static, e.g. 6.7660e-5 (deg/s)²
+    for the adaptive algorithm) are far below the per-sample white noise of its
+    gyro. The ADXRS623's noise density is 0.04 deg/s/√Hz (Table 1), so even over
+    a 1 Hz bandwidth a single sample has a variance of about 1.6e-3 (deg/s)²,
+    24 times the table; a mean over τ seconds has N²/τ = 1.6e-3/τ, which reaches
+    6.8e-5 only for τ ≳ 24 s. The paper's error is therefore of smooth values
+    (bias estimate minus ideal bias, or averages). ``bias_z − true_bias_z`` has
+    no white-noise part, so it is used per row by default; for ``rate_z`` (no
+    truth column) pass ``average_s`` (for example 30 s, three of the paper's
+    10-s update intervals; Figure 6 of the paper shows the compensated rate
+    error still has structure at τ ≈ 10 s) to compare with the paper.
+    """
+    if TRUE_BIAS_Z in out.columns:
+        e = _column(out, "bias_z", "bias_error") - out[TRUE_BIAS_Z].to_numpy(dtype=float)
+    else:
+        e = _column(out, "rate_z", "bias_error")
+    if average_s is None:
+        return e
+    if not (isinstance(average_s, (int, float)) and math.isfinite(average_s) and average_s > 0):
+        raise ConfigError(f"average_s must be a positive number of seconds, got {average_s!r}")
+    return _window_means(_column(out, T, "bias_error with average_s"), e, float(average_s))
+
+
+def error_stats(errors) -> dict[str, float]:
+    """Summary statistics of an error series (NaN values left out).
+
+    Returns
+    -------
+    dict
+        ``mean``, ``variance`` (ddof=1), ``std`` (ddof=1), ``min``, ``max``,
+        ``rms``, ``max_abs`` in the unit of ``errors`` (squared for the
+        variance), and ``n`` (number of finite values). ``variance``/``std`` are
+        NaN for a single value.
+
+    Examples
+    --------
+    >>> error_stats([1.0, -1.0, 1.0, -1.0])["rms"]
+    1.0
+    """
+    e = np.asarray(errors, dtype=float).ravel()
+    e = e[np.isfinite(e)]
+    if e.size == 0:
+        raise LogFormatError("no finite error values to summarise")
+    var = float(np.var(e, ddof=1)) if e.size > 1 else math.nan
+    return {
+        "mean": float(np.mean(e)),
+        "variance": var,
+        "std": math.sqrt(var) if e.size > 1 else math.nan,
+        "min": float(np.min(e)),
+        "max": float(np.max(e)),
+        "rms": _rms(e),
+        "max_abs": float(np.max(np.abs(e))),
+        "n": int(e.size),
+    }
+
+
+def heading_error_stats(out: pd.DataFrame) -> dict[str, float]:
+    """Statistics of the heading error against ``ref_heading``, deg.
+
+    The error is ``heading − ref_heading`` wrapped to [−180, 180) (so 359° against
+    1° is −2°, not 358°); rows without a reference (NaN) are left out.
+
+    Returns
+    -------
+    dict
+        See :func:`error_stats`: ``mean``, ``variance`` (deg²), ``std``, ``min``,
+        ``max``, ``rms``, ``max_abs`` (deg) and ``n``.
+    """
+    ref = _column(out, REF_HEADING, "heading_error_stats")
+    e = heading_error_deg(_column(out, "heading", "heading_error_stats"), ref)
+    return error_stats(e[np.isfinite(ref)])
+
+
+#: Rows of :func:`table2`: the paper's mean and variance, then extra statistics.
+TABLE2_STATS = ("mean", "variance", "std", "rms", "max_abs")
+
+#: Kinds of :func:`table2` and the quantity each summarises.
+TABLE2_KINDS = MappingProxyType({"static": "bias drift error (deg/s)", "dynamic": "heading error (deg)"})
+
+
+def table2(
+    out_by_method: Mapping[str, pd.DataFrame],
+    *,
+    kind: str = "static",
+    average_s: float | None = None,
+) -> pd.DataFrame:
+    """Table 2 of the paper for your own runs: one column per compensation method.
+
+    Parameters
+    ----------
+    out_by_method : mapping of str to DataFrame
+        Output table of :func:`gyrodrift.compensate.compensate` per method name;
+        the columns keep this order.
+    kind : {"static", "dynamic"}
+        ``static``: bias drift error (deg/s, :func:`bias_error`) of motionless
+        logs; ``dynamic``: heading error (deg) against ``ref_heading``.
+    average_s : float, optional
+        Static only: averaging window passed to :func:`bias_error`.
+
+    Returns
+    -------
+    DataFrame
+        Index :data:`TABLE2_STATS` (mean, variance, std, rms, max_abs; variance in
+        the squared unit), named after the quantity and unit; columns = methods.
+        Compare with :func:`paper_table2`.
+    """
+    if kind not in TABLE2_KINDS:
+        raise ConfigError(f"kind must be one of {', '.join(TABLE2_KINDS)}, got {kind!r}")
+    if not out_by_method:
+        raise ConfigError("table2 needs at least one method")
+    if average_s is not None and kind != "static":
+        raise ConfigError("average_s applies to the static (bias drift error) table only")
+    cols = {}
+    for method, out in out_by_method.items():
+        stats = (
+            error_stats(bias_error(out, average_s=average_s)) if kind == "static" else heading_error_stats(out)
+        )
+        cols[method] = [stats[s] for s in TABLE2_STATS]
+    df = pd.DataFrame(cols, index=pd.Index(TABLE2_STATS, name=TABLE2_KINDS[kind]), columns=list(out_by_method))
+    return df
+
+
+class MeanVariance(NamedTuple):
+    """Mean and variance of one cell pair of the paper's Table 2."""
+
+    mean: float
+    variance: float
+
+
+#: Method columns of the paper's Table 2, in its order.
+PAPER_METHODS = ("MLR", "KF", "Modified LSM", "Adaptive Algorithm")
+
+
+def _paper_rows(means, variances):
+    return MappingProxyType({m: MeanVariance(a, v) for m, a, v in zip(PAPER_METHODS, means, variances)})
+
+
+#: Table 2 of Feng, Li, Zhang (Sensors 2015, 15, 11222–11238), transcribed:
+#: ``static`` = bias drift error in the static experiment without interference,
+#: ``static_interference`` = with interference (mean deg/s, variance (deg/s)²),
+#: ``dynamic`` = heading error in the dynamic experiment (mean deg, variance deg²).
+PAPER_TABLE2 = MappingProxyType(
+    {
+        "static": _paper_rows(
+            (0.002134, -1.1496e-4, -2.4515e-4, 2.1619e-5),
+            (5.5005e-4, 7.5105e-5, 1.1416e-4, 6.7660e-5),
+        ),
+        "static_interference": _paper_rows(
+            (0.002134, 0.003023, -2.0156e-4, 1.7511e-4),
+            (5.5005e-4, 3.4361e-4, 1.8643e-4, 9.3155e-5),
+        ),
+        "dynamic": _paper_rows(
+            (1.4882, -1.9085, -11.5318, 0.2743),
+            (46.9166, 9.8503, 34.7090, 0.9926),
+        ),
+    }
+)
+
+
+def paper_table2(kind: str = "static") -> pd.DataFrame:
+    """The paper's Table 2 numbers for one experiment, in the layout of :func:`table2`.
+
+    Parameters
+    ----------
+    kind : {"static", "static_interference", "dynamic"}
+
+    Returns
+    -------
+    DataFrame
+        Rows ``mean`` and ``variance``, columns :data:`PAPER_METHODS`.
+
+    Examples
+    --------
+    >>> float(paper_table2("dynamic").loc["mean", "Adaptive Algorithm"])
+    0.2743
+    """
+    if kind not in PAPER_TABLE2:
+        raise ConfigError(f"kind must be one of {', '.join(PAPER_TABLE2)}, got {kind!r}")
+    rows = PAPER_TABLE2[kind]
+    name = TABLE2_KINDS["dynamic" if kind == "dynamic" else "static"]
+    return pd.DataFrame(
+        {m: [rows[m].mean, rows[m].variance] for m in PAPER_METHODS},
+        index=pd.Index(["mean", "variance"], name=name),
+    )
+
+
+# ------------------------------------------------------------------------ Markdown
+
+
+def _cell(value, floatfmt: str) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, (float, np.floating)):
+        return "" if math.isnan(value) else format(float(value), floatfmt)
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+        return str(int(value))
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_table(df: pd.DataFrame, floatfmt: str = ".4g", *, index: bool = True) -> str:
+    """Render a table as GitHub-flavoured Markdown (no extra dependency).
+
+    Parameters
+    ----------
+    df : DataFrame
+    floatfmt : str
+        :func:`format` spec for floating-point cells (NaN renders empty).
+    index : bool
+        Include the index as the first column, headed by its name.
+
+    Returns
+    -------
+    str
+        Header, alignment row (numeric columns right-aligned) and one line per row,
+        joined by newlines, with no trailing newline. ``|`` in text is escaped.
+
+    Examples
+    --------
+    >>> df = pd.DataFrame({"KF": [0.5, 0.25]}, index=pd.Index(["mean", "variance"], name="stat"))
+    >>> print(markdown_table(df, ".2f"))
+    | stat | KF |
+    | :--- | ---: |
+    | mean | 0.50 |
+    | variance | 0.25 |
+    """
+    columns = [str(c) for c in df.columns]
+    right = [pd.api.types.is_numeric_dtype(df[c]) and not pd.api.types.is_bool_dtype(df[c]) for c in df.columns]
+    body = [[_cell(v, floatfmt) for v in row] for row in df.itertuples(index=False, name=None)]
+    if index:
+        columns = [str(df.index.name) if df.index.name is not None else ""] + columns
+        right = [False] + right
+        body = [[_cell(i, floatfmt)] + r for i, r in zip(df.index, body)]
+    columns = [_cell(c, floatfmt) for c in columns]
+    lines = [
+        "| " + " | ".join(columns) + " |",
+        "| " + " | ".join("---:" if r else ":---" for r in right) + " |",
+    ]
+    lines += ["| " + " | ".join(r) + " |" for r in body]
+    return "\n".join(lines)

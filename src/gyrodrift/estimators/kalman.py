@@ -51,6 +51,9 @@ class KalmanConfig:
         Q = diag(q_sd²).
     max_sd : tuple of 3 floats, optional
         Cap on each standard deviation (see module notes); default ``p0_sd``.
+    p0_cov : 3x3 nested tuple, optional
+        A full prior covariance replacing ``diag(p0_sd²)`` (a warm start from a device
+        profile keeps the strong a–c correlation); the cap stays ``max_sd``/``p0_sd``.
     """
 
     fading: float = 1.2
@@ -58,6 +61,7 @@ class KalmanConfig:
     p0_sd: tuple[float, float, float] = (0.05, 5.0, 5.0)
     q_sd: tuple[float, float, float] = (1e-4, 0.05, 1e-3)
     max_sd: tuple[float, float, float] | None = None
+    p0_cov: tuple[tuple[float, float, float], ...] | None = None
 
     def __post_init__(self):
         if not (isinstance(self.fading, (int, float)) and math.isfinite(self.fading) and self.fading >= 1.0):
@@ -76,6 +80,15 @@ class KalmanConfig:
             v = getattr(self, name)
             if v is not None and not all(float(e) > 0 for e in v):
                 raise ConfigError(f"{name} must be positive, got {v!r}")
+        if self.p0_cov is not None:
+            try:
+                P = np.array(self.p0_cov, dtype=float)
+                ok = P.shape == (3, 3) and np.all(np.isfinite(P)) and np.allclose(P, P.T)
+                ok = ok and bool(np.all(np.linalg.eigvalsh(P) > 0))
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ConfigError("p0_cov must be a symmetric positive definite 3x3 matrix")
         if not all(float(e) >= 0 for e in self.q_sd):
             raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
 
@@ -100,7 +113,10 @@ class KalmanDrift(LinearDrift):
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
         self._x = np.array(config.x0, dtype=float)
-        self._P = np.diag(np.square(np.array(config.p0_sd, dtype=float)))
+        if config.p0_cov is not None:
+            self._P = np.array(config.p0_cov, dtype=float)
+        else:
+            self._P = np.diag(np.square(np.array(config.p0_sd, dtype=float)))
         self._max_var = np.square(np.array(config.max_sd or config.p0_sd, dtype=float))
         self._Q = np.diag(np.square(np.array(config.q_sd, dtype=float)))
         #: Innovation and its covariance of the last update (diagnostics).
