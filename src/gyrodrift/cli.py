@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+
+import pandas as pd
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
@@ -99,19 +101,24 @@ def _add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--map", metavar="NEW=OLD,...", help="rename input columns to contract names, e.g. gyro_z=gz,temp=T")
 
 
-def _summary(out, log, path, out_path) -> list[str]:
+def _read_summary(log, path) -> str:
     dur = float(log["t"].iloc[-1] - log["t"].iloc[0])
     rate = (len(log) - 1) / dur if dur > 0 else float("nan")
     temp = log["temp"]
-    lines = [
+    return (
         f"read {path}: {len(log)} rows, {dur:.1f} s at {rate:.1f} Hz, "
-        f"temperature {temp.min():.2f} to {temp.max():.2f} degC, compass from {log.attrs.get('compass', '?')}",
-    ]
+        f"temperature {temp.min():.2f} to {temp.max():.2f} degC, compass from {log.attrs.get('compass', '?')}"
+    )
+
+
+def _result_lines(out) -> list[str]:
     gated = out.loc[out["gated"] == 1, "gate_reason"].value_counts()
     shares = ", ".join(f"{k} {100 * v / len(out):.1f} %" for k, v in gated.items()) or "never"
-    lines.append(f"{int(out['update'].sum())} filter updates; compass aiding refused: {shares} of rows")
     a, b, c = out[["a", "b", "c"]].iloc[-1]
-    lines.append(f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s")
+    lines = [
+        f"{int(out['update'].sum())} filter updates; compass aiding refused: {shares} of rows",
+        f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
+    ]
     acc = accuracy(out)
     if acc.bias_rms is not None:
         lines.append(f"drift error RMS vs true_bias_z: raw {acc.bias_rms_raw:.4f} deg/s -> compensated {acc.bias_rms:.4f} deg/s")
@@ -120,7 +127,6 @@ def _summary(out, log, path, out_path) -> list[str]:
             f"heading error vs ref_heading: raw gyro RMS {acc.heading_rms_raw:.2f} deg (max {acc.heading_max_raw:.2f}) "
             f"-> compensated RMS {acc.heading_rms:.2f} deg (max {acc.heading_max:.2f})"
         )
-    lines.append(f"wrote {out_path}")
     return lines
 
 
@@ -139,7 +145,7 @@ def _cmd_compensate(args) -> int:
     if args.save_profile:
         save_profile(profile_from_run(out), args.save_profile)
     if not args.quiet:
-        print("\n".join(_summary(out, log, args.input, args.output)))
+        print("\n".join([_read_summary(log, args.input), *_result_lines(out), f"wrote {args.output}"]))
         if args.save_profile:
             print(f"saved device profile {args.save_profile}")
     return 0
@@ -160,7 +166,7 @@ def _cmd_demo(args) -> int:
     )
     out = compensate(log, _config(args), source=path.name)
     write_table(out, args.output)
-    print("\n".join(_summary(out, log, path.name, args.output)))
+    print("\n".join([_read_summary(log, path.name), *_result_lines(out), f"wrote {args.output}"]))
     return 0
 
 
@@ -194,6 +200,42 @@ def _cmd_simulate(args) -> int:
     return 0
 
 
+def _cmd_compare(args) -> int:
+    import json
+
+    from gyrodrift.compare import METHODS, run_methods, summary_table
+    from gyrodrift.metrics import markdown_table
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(METHODS)
+    log = read_log(
+        args.input, fmt=args.format, gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(args.map)
+    )
+    if "ref_heading" not in log.columns and "true_bias_z" not in log.columns:
+        raise ConfigError(
+            f"{args.input}: compare needs a reference: a ref_heading column (e.g. a fibre-optic gyro) "
+            "or true_bias_z (simulated logs)"
+        )
+    calibration = read_log(args.calibration) if args.calibration else None
+    outputs, skipped = run_methods(log, methods, _config(args), calibration=calibration)
+    table = summary_table(outputs)
+    if args.json:
+        payload = {
+            "input": str(args.input),
+            "methods": {k: {c: (v.item() if hasattr(v, "item") else v) for c, v in row.items() if pd.notna(v)}
+                        for k, row in table.to_dict(orient="index").items()},
+            "skipped": skipped,
+        }
+        print(json.dumps(payload, indent=2))
+        return 0
+    print(_read_summary(log, args.input))
+    print(markdown_table(table, floatfmt=".4g"))
+    print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
+          "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")
+    for name, why in skipped.items():
+        print(f"skipped {name}: {why}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="gyrodrift",
@@ -218,6 +260,19 @@ def build_parser() -> argparse.ArgumentParser:
     _add_input_options(c)
     _add_method_options(c)
     c.set_defaults(func=_cmd_compensate)
+
+    cmp_ = sub.add_parser(
+        "compare", help="run ours and the paper's baselines on one log; print the Table-2 statistics",
+        description="Compensate one log with several methods (stkf = ours, kf, stkf-s1, lsm, mlr, poly3, "
+        "oracle) and compare them against ref_heading and/or true_bias_z.",
+    )
+    cmp_.add_argument("input", type=Path, help="log with ref_heading and/or true_bias_z")
+    cmp_.add_argument("--methods", help="comma-separated (default: all)")
+    cmp_.add_argument("--calibration", type=Path, help="a still heating run of the same device, for poly3")
+    cmp_.add_argument("--json", action="store_true", help="machine-readable output")
+    _add_input_options(cmp_)
+    _add_method_options(cmp_)
+    cmp_.set_defaults(func=_cmd_compare)
 
     sim = sub.add_parser(
         "simulate", help="write a simulated log (input contract + ref_heading, true_bias_z)",

@@ -28,11 +28,12 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compensate import CompensatorConfig, compensate
-from gyrodrift.conventions import TRUE_BIAS_Z, wrap_360
+from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import CubicCalibration, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
+from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
-__all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log"]
+__all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "poly3", "oracle")
 CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "poly3": True, "oracle": False}
@@ -58,6 +59,9 @@ def _oracle(log: pd.DataFrame, config: CompensatorConfig) -> pd.DataFrame:
     out["bias_z"] = truth
     out["heading"] = wrap_360(compass[anchor] + integral - integral[anchor])
     out[["a", "b", "c"]] = np.nan
+    out["update"] = 0  # no filter: gates do not apply
+    out["gated"] = 0
+    out["gate_reason"] = ""
     return out
 
 
@@ -88,7 +92,7 @@ def run_method(
         first = compensate(log, config)
         meas = first.attrs["measurements"]
         H = np.column_stack([meas["temp"], meas["temp_rate"], np.ones(len(meas))])
-        params = fit_linear_drift(meas["m"], H, meas["r"], config.kalman)
+        params = fit_linear_drift(meas["m"], H, meas["r"])
         out = compensate(log, config, estimator=FixedParams(params))
         out.attrs["measurements"] = meas
         return out
@@ -134,3 +138,31 @@ def run_methods(
             continue
         outputs[name] = run_method(name, log, config, calibration=calibration)
     return outputs, skipped
+
+
+def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
+    """One row per method: the paper's Table-2 statistics and more.
+
+    Columns (present when the log allows): ``causal``; ``updates`` (filter updates);
+    ``gated_pct`` (share of rows with compass aiding refused); bias drift error
+    (:func:`gyrodrift.metrics.bias_error`: against ``true_bias_z`` when present,
+    deg/s) ``bias_mean``, ``bias_var``, ``bias_rms``, ``bias_max_abs``; heading
+    error against ``ref_heading`` (deg) ``heading_mean``, ``heading_var``,
+    ``heading_rms``, ``heading_min``, ``heading_max``.
+    """
+    rows = {}
+    for name, out in outputs.items():
+        row = {"causal": CAUSAL[name], "updates": int(out["update"].sum()), "gated_pct": 100.0 * float(out["gated"].mean())}
+        if name == "oracle":
+            row.update(updates=np.nan, gated_pct=np.nan)
+        if TRUE_BIAS_Z in out.columns:
+            b = error_stats(bias_error(out))
+            row.update(bias_mean=b["mean"], bias_var=b["variance"], bias_rms=b["rms"], bias_max_abs=b["max_abs"])
+        if REF_HEADING in out.columns:
+            h = heading_error_stats(out)
+            row.update(
+                heading_mean=h["mean"], heading_var=h["variance"], heading_rms=h["rms"],
+                heading_min=h["min"], heading_max=h["max"],
+            )
+        rows[name] = row
+    return pd.DataFrame.from_dict(rows, orient="index")

@@ -1,11 +1,14 @@
 """Least-squares baselines of the paper: MLR (whole log) and the "modified LSM" (sliding window).
 
 Both solve the weighted least-squares problem of eq. (2) over drift measurements m with
-rows ``h = [T, T', 1]``, regularised by the same prior as the Kalman filters
-(``x0``, ``P0``), so a flat temperature gives the prior's answer for a and b instead
-of a singular matrix::
+rows ``h = [T, T', 1]``::
 
-    min_x  sum_i (m_i - h_i x)^2 / r_i  +  (x - x0)^T P0^-1 (x - x0)
+    min_x  sum_i (m_i - h_i x)^2 / r_i
+
+by SVD on scaled columns (:func:`numpy.linalg.lstsq`): a direction the data do not
+determine (T' ≡ 0 leaves b free; a flat temperature confounds a with c) gets the
+minimum-norm answer instead of a singular matrix, while every determined combination
+(such as ``a*T + c`` at a flat T) is fitted exactly.
 """
 
 from __future__ import annotations
@@ -21,9 +24,11 @@ from gyrodrift.estimators.kalman import KalmanConfig
 
 __all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
 
+_RCOND = 1e-9  # singular values below this fraction of the largest are treated as zero
 
-def fit_linear_drift(m, H, r, config: KalmanConfig = KalmanConfig()) -> np.ndarray:
-    """Regularised weighted least-squares [a, b, c] (module notes).
+
+def fit_linear_drift(m, H, r) -> np.ndarray:
+    """Weighted least-squares [a, b, c] (module notes).
 
     Parameters
     ----------
@@ -33,24 +38,24 @@ def fit_linear_drift(m, H, r, config: KalmanConfig = KalmanConfig()) -> np.ndarr
         Rows [T (degC), T' (degC/s), 1].
     r : (n,) array_like
         Measurement variances, (deg/s)².
-    config : KalmanConfig
-        Prior mean ``x0`` and standard deviations ``p0_sd``.
 
     Examples
     --------
     >>> H = np.array([[20.0, 0.0, 1.0], [30.0, 0.01, 1.0], [40.0, -0.01, 1.0], [35.0, 0.02, 1.0]])
-    >>> x = fit_linear_drift(H @ [0.02, 3.0, -0.4], H, np.full(4, 1e-12))
-    >>> np.round(x, 6).tolist()
+    >>> x = fit_linear_drift(H @ [0.02, 3.0, -0.4], H, np.full(4, 0.005))
+    >>> np.round(x, 9).tolist()
     [0.02, 3.0, -0.4]
     """
     m = np.asarray(m, dtype=float)
     H = np.asarray(H, dtype=float).reshape(-1, 3)
-    w = 1.0 / np.asarray(r, dtype=float)
-    x0 = np.array(config.x0, dtype=float)
-    prior_info = np.diag(1.0 / np.square(np.array(config.p0_sd, dtype=float)))
-    A = H.T @ (H * w[:, None]) + prior_info
-    rhs = H.T @ (w * m) + prior_info @ x0
-    return np.linalg.solve(A, rhs)
+    if m.size == 0:
+        return np.zeros(3)
+    w = 1.0 / np.sqrt(np.asarray(r, dtype=float))
+    A = H * w[:, None]
+    scale = np.linalg.norm(A, axis=0)
+    scale[scale == 0] = 1.0
+    x_scaled, *_ = np.linalg.lstsq(A / scale, m * w, rcond=_RCOND)
+    return x_scaled / scale
 
 
 @register
@@ -61,7 +66,7 @@ class WindowedLsm(LinearDrift):
     Parameters
     ----------
     config : KalmanConfig
-        Only the prior (``x0``, ``p0_sd``) is used, as regularisation.
+        Only ``x0`` is used: the parameters before the first fit.
     window : int
         Number of measurements in the sliding window.
     """
@@ -82,11 +87,11 @@ class WindowedLsm(LinearDrift):
 
     @property
     def cov(self) -> np.ndarray:
+        """Least-squares covariance ``(H^T R^-1 H)^+`` (pseudo-inverse: 0 where undetermined)."""
         m, H, r = self._arrays()
-        info = np.diag(1.0 / np.square(np.array(self.config.p0_sd, dtype=float)))
-        if len(m):
-            info = info + H.T @ (H / r[:, None])
-        return np.linalg.inv(info)
+        if not len(m):
+            return np.diag(np.square(np.array(self.config.p0_sd, dtype=float)))
+        return np.linalg.pinv(H.T @ (H / r[:, None]), rcond=_RCOND, hermitian=True)
 
     def _arrays(self):
         if not self._rows:
@@ -97,7 +102,7 @@ class WindowedLsm(LinearDrift):
     def update(self, obs: Observation) -> np.ndarray:
         for i in reversed(range(obs.n_new)):  # oldest first
             self._rows.append((float(obs.y[i]), obs.H[i].copy(), float(obs.R[i, i])))
-        self._x = fit_linear_drift(*self._arrays(), self.config)
+        self._x = fit_linear_drift(*self._arrays())
         return self.params
 
     def hold(self) -> np.ndarray:
