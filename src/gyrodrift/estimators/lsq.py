@@ -3,12 +3,15 @@
 Both solve the weighted least-squares problem of eq. (2) over drift measurements m with
 rows ``h = [T, T', 1]``::
 
-    min_x  sum_i (m_i - h_i x)^2 / r_i
+    min_x  sum_i (m_i - h_i x)^2 / r_i  [ + (x - x0)^T P0^-1 (x - x0) ]
 
-by SVD on scaled columns (:func:`numpy.linalg.lstsq`): a direction the data do not
-determine (T' ≡ 0 leaves b free; a flat temperature confounds a with c) gets the
-minimum-norm answer instead of a singular matrix, while every determined combination
-(such as ``a*T + c`` at a flat T) is fitted exactly.
+MLR fits a whole log, which spans the temperature range: plain least squares
+(SVD, :func:`numpy.linalg.lstsq`), exact on noiseless data. The modified LSM refits
+a short window, in which T barely moves and T' may be flat: a, b and c are then
+nearly collinear and plain least squares amplifies the compass noise without bound
+(tried: drift errors of tens of deg/s on the simulated static run). It is therefore
+regularised by the Kalman filters' prior (the bracketed term), which leaves every
+well-determined combination to the data.
 """
 
 from __future__ import annotations
@@ -24,10 +27,8 @@ from gyrodrift.estimators.kalman import KalmanConfig
 
 __all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
 
-_RCOND = 1e-9  # singular values below this fraction of the largest are treated as zero
 
-
-def fit_linear_drift(m, H, r) -> np.ndarray:
+def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
     """Weighted least-squares [a, b, c] (module notes).
 
     Parameters
@@ -38,6 +39,9 @@ def fit_linear_drift(m, H, r) -> np.ndarray:
         Rows [T (degC), T' (degC/s), 1].
     r : (n,) array_like
         Measurement variances, (deg/s)².
+    prior : KalmanConfig, optional
+        Regularise towards ``x0`` with covariance ``diag(p0_sd²)``; None: plain least
+        squares (minimum-norm where the data leave a direction undetermined).
 
     Examples
     --------
@@ -48,13 +52,17 @@ def fit_linear_drift(m, H, r) -> np.ndarray:
     """
     m = np.asarray(m, dtype=float)
     H = np.asarray(H, dtype=float).reshape(-1, 3)
+    w = 1.0 / np.asarray(r, dtype=float)
+    if prior is not None:
+        x0 = np.array(prior.x0, dtype=float)
+        info = np.diag(1.0 / np.square(np.array(prior.p0_sd, dtype=float)))
+        return np.linalg.solve(H.T @ (H * w[:, None]) + info, H.T @ (w * m) + info @ x0)
     if m.size == 0:
         return np.zeros(3)
-    w = 1.0 / np.sqrt(np.asarray(r, dtype=float))
-    A = H * w[:, None]
+    A = H * np.sqrt(w)[:, None]
     scale = np.linalg.norm(A, axis=0)
     scale[scale == 0] = 1.0
-    x_scaled, *_ = np.linalg.lstsq(A / scale, m * w, rcond=_RCOND)
+    x_scaled, *_ = np.linalg.lstsq(A / scale, m * np.sqrt(w), rcond=None)
     return x_scaled / scale
 
 
@@ -66,7 +74,7 @@ class WindowedLsm(LinearDrift):
     Parameters
     ----------
     config : KalmanConfig
-        Only ``x0`` is used: the parameters before the first fit.
+        The prior (``x0``, ``p0_sd``) that regularises each fit.
     window : int
         Number of measurements in the sliding window.
     """
@@ -87,11 +95,10 @@ class WindowedLsm(LinearDrift):
 
     @property
     def cov(self) -> np.ndarray:
-        """Least-squares covariance ``(H^T R^-1 H)^+`` (pseudo-inverse: 0 where undetermined)."""
+        """Covariance of the regularised fit, ``(H^T R^-1 H + P0^-1)^-1``."""
         m, H, r = self._arrays()
-        if not len(m):
-            return np.diag(np.square(np.array(self.config.p0_sd, dtype=float)))
-        return np.linalg.pinv(H.T @ (H / r[:, None]), rcond=_RCOND, hermitian=True)
+        info = np.diag(1.0 / np.square(np.array(self.config.p0_sd, dtype=float)))
+        return np.linalg.inv(info + H.T @ (H / r[:, None]))
 
     def _arrays(self):
         if not self._rows:
@@ -102,7 +109,7 @@ class WindowedLsm(LinearDrift):
     def update(self, obs: Observation) -> np.ndarray:
         for i in reversed(range(obs.n_new)):  # oldest first
             self._rows.append((float(obs.y[i]), obs.H[i].copy(), float(obs.R[i, i])))
-        self._x = fit_linear_drift(*self._arrays())
+        self._x = fit_linear_drift(*self._arrays(), prior=self.config)
         return self.params
 
     def hold(self) -> np.ndarray:
