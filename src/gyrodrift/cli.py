@@ -236,6 +236,27 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _cmd_paper(args) -> int:
+    import time
+
+    from gyrodrift.paper import PaperSettings, write_paper
+
+    args.output.mkdir(parents=True, exist_ok=True)
+    settings = PaperSettings(
+        seed=args.seed, fs_hz=args.fs_hz, duration_scale=0.1 if args.quick else 1.0, config=_config(args)
+    )
+    start = time.monotonic()
+
+    def progress(step: str) -> None:
+        if sys.stderr.isatty():
+            print(f"[{time.monotonic() - start:6.1f} s] {step}", file=sys.stderr)
+
+    written = write_paper(args.output, settings, progress=progress, figures=not args.no_figures)
+    print(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
+          f"{args.output / 'table2.md'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="gyrodrift",
@@ -274,6 +295,20 @@ def build_parser() -> argparse.ArgumentParser:
     _add_method_options(cmp_)
     cmp_.set_defaults(func=_cmd_compare)
 
+    pap = sub.add_parser(
+        "paper", help="regenerate every experiment of the paper: table2.md, results.json, figures",
+        description="Runs the paper's experiments on simulated data (static heating run, outages, vehicle, "
+        "Allan deviation) with every method, and writes Table 2 beside the paper's numbers, a check of "
+        "each claim, and PNG figures.",
+    )
+    pap.add_argument("-o", "--output", type=Path, required=True, help="output folder (created if missing)")
+    pap.add_argument("--seed", type=int, default=1, help="seed of the simulated runs (default 1)")
+    pap.add_argument("--fs-hz", type=float, default=10.0, help="gyro sample rate of the runs, Hz (default 10)")
+    pap.add_argument("--quick", action="store_true", help="every run 10x shorter (a smoke test, not the results)")
+    pap.add_argument("--no-figures", action="store_true", help="numbers only")
+    _add_method_options(pap)
+    pap.set_defaults(func=_cmd_paper)
+
     sim = sub.add_parser(
         "simulate", help="write a simulated log (input contract + ref_heading, true_bias_z)",
         description="Seeded, deterministic simulated logs (gyrodrift.simulate): scenarios static, "
@@ -289,6 +324,10 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--config", type=Path, metavar="FILE.toml", help="[device] and [compass] model overrides")
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
+
+    from gyrodrift.report import add_report_parser
+
+    add_report_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
-from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
+from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.metrics import heading_error_deg
 
@@ -94,13 +94,19 @@ _WIDTH_IN = 10.0
 # ----------------------------------------------------------------------- helpers
 
 
-def _figure(height_in: float, nrows: int = 1, *, sharex: bool = True):
-    """A new Agg figure with ``nrows`` stacked axes (no pyplot); returns (fig, axes list)."""
+def _require_matplotlib():
+    """The Figure class and the Agg canvas, or a ConfigError naming the extra to install."""
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError as exc:
         raise ConfigError("plots need the optional package matplotlib: pip install 'gyrodrift[plot]'") from exc
+    return Figure, FigureCanvasAgg
+
+
+def _figure(height_in: float, nrows: int = 1, *, sharex: bool = True):
+    """A new Agg figure with ``nrows`` stacked axes (no pyplot); returns (fig, axes list)."""
+    Figure, FigureCanvasAgg = _require_matplotlib()
     fig = Figure(figsize=(_WIDTH_IN, height_in), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(nrows, 1, sharex=sharex, squeeze=False)[:, 0]
@@ -368,7 +374,8 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
         _need(out, ("t", "bias_z"), f"fig_bias ({name})")
         bias = _column(out, "bias_z")
         core.append(bias)
-        _plot(ax, time_axis(_column(out, "t"))[0], bias, color=_method_color(name, i), lw=1.1, label=f"{name} bias_z", zorder=2)
+        xm = time_axis(_column(out, "t"))[0]
+        _plot(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{name} bias_z", zorder=2)
     limits = _robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
@@ -627,7 +634,9 @@ def _atomic_write(path: Path, data: bytes) -> None:
     """Write bytes to ``path`` through a temporary file beside it and :func:`os.replace`."""
     parent = path.parent
     if not parent.is_dir():
-        raise ConfigError(f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path")
+        raise ConfigError(
+            f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path"
+        )
     if path.is_dir():
         raise ConfigError(f"{path}: output path is a folder; give a file name")
     tmp = parent / f".{path.name}.{secrets.token_hex(6)}.tmp"

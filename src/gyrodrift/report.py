@@ -1,0 +1,786 @@
+"""A self-contained HTML report of one log compensated by several methods (``gyrodrift report``).
+
+The page holds everything inline: CSS in a ``<style>`` element, figures as base64
+PNG ``<img>`` elements (:mod:`gyrodrift.plots`), no JavaScript and no external
+resource; a Content-Security-Policy in the page forbids loading any. It can be
+mailed or archived as one file and opened offline.
+
+Contents, top to bottom:
+
+1. what was read: file, rows, duration, sample rate, temperature range, compass
+   form, evaluation columns, methods run and methods skipped with the reason;
+2. the summary table, one row per method (plus the raw gyro): bias error
+   (``bias_z − true_bias_z``, deg/s) when the log has ``true_bias_z``, heading
+   error (``heading − ref_heading`` wrapped, deg) when it has ``ref_heading``,
+   filter updates and the share of rows gated per reason;
+3. figures, each with a short "how to read this" note: temperature, raw vs
+   compensated rate, drift estimates, drift-model parameters with the gates,
+   headings, heading error, Allan deviation of the rate error with a table of
+   noise terms. A figure the log cannot support is replaced by a one-line note
+   saying which column is missing;
+4. the gyrodrift version and every setting used.
+
+The Allan deviation is of the angular-rate *error*: the rate minus the true rate.
+The true rate is 0 on a motionless log (one whose reference heading, or else whose
+1-s mean compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log
+with a reference, and unknown otherwise (the figure is then left out).
+
+matplotlib (``gyrodrift[plot]``) draws the figures and allantools
+(``gyrodrift[allan]``) computes the Allan deviation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import html as _html
+import math
+import sys
+from dataclasses import dataclass, fields, is_dataclass
+from pathlib import Path
+from typing import Callable, Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
+from gyrodrift.errors import ConfigError, GyroDriftError
+
+__all__ = ["ALLAN_METHODS", "build_report", "write_report", "report_command", "add_report_parser"]
+
+#: Methods whose compensated rate error gets an Allan-deviation curve (paper Fig. 6).
+ALLAN_METHODS = ("stkf", "kf", "mlr")
+
+_DPI = 100
+_NONE = "–"
+
+
+# ---------------------------------------------------------------------- progress
+
+
+def _progress(iterable: Iterable, total: int, desc: str, *, stream=None):
+    """Yield from ``iterable``, showing a progress bar on ``stream`` (stderr) if it is a terminal.
+
+    Uses tqdm when it is installed, else a one-line ``\\r`` bar that is erased at
+    the end. Shows nothing when the stream is not a terminal (a pipe, a file, CI).
+    """
+    stream = sys.stderr if stream is None else stream
+    try:
+        tty = bool(stream.isatty())
+    except (AttributeError, ValueError):
+        tty = False
+    if not tty:
+        yield from iterable
+        return
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        tqdm = None
+    if tqdm is not None:
+        yield from tqdm(iterable, total=total, desc=desc, file=stream, leave=False)
+        return
+    width = 0
+
+    def show(done: int) -> None:
+        nonlocal width
+        filled = int(24 * done / total) if total else 24
+        line = f"\r{desc} [{'#' * filled}{'.' * (24 - filled)}] {done}/{total}"
+        width = max(width, len(line))
+        stream.write(line)
+        stream.flush()
+
+    show(0)
+    try:
+        for done, item in enumerate(iterable, 1):
+            yield item
+            show(done)
+    finally:
+        stream.write("\r" + " " * width + "\r")
+        stream.flush()
+
+
+# ----------------------------------------------------------------------- helpers
+
+
+def _esc(value) -> str:
+    return _html.escape(str(value), quote=True)
+
+
+def _num(value, spec: str = ".4g") -> str:
+    """A number for a table cell; a dash for None/NaN."""
+    if value is None:
+        return _NONE
+    value = float(value)
+    return _NONE if not math.isfinite(value) else format(value, spec)
+
+
+def _duration_text(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "?"
+    if seconds < 600:
+        return f"{seconds:.1f} s"
+    h, rest = divmod(int(round(seconds)), 3600)
+    m, s = divmod(rest, 60)
+    return (f"{h} h {m:02d} min {s:02d} s" if h else f"{m} min {s:02d} s") + f" ({seconds:.0f} s)"
+
+
+def _table(header: list[str], rows: list[list[str]], *, cls: str = "") -> str:
+    """An HTML table; cells are already-escaped HTML."""
+    head = "".join(f"<th>{h}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    attr = f' class="{cls}"' if cls else ""
+    return f"<table{attr}><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _main_method(outputs: Mapping[str, pd.DataFrame]) -> str | None:
+    """``stkf`` if it ran, else the first method that ran."""
+    if "stkf" in outputs:
+        return "stkf"
+    return next(iter(outputs), None)
+
+
+def _causal(name: str) -> bool:
+    from gyrodrift.compare import CAUSAL
+
+    return CAUSAL.get(name, True)
+
+
+# ------------------------------------------------------------------ what was read
+
+
+def _compass_form(log: pd.DataFrame) -> str:
+    form = log.attrs.get("compass")  # read_log's compass form (simulate() puts its model here)
+    if isinstance(form, str) and form:
+        return {"heading": "heading column", "mag": "raw magnetometer + accelerometer (tilt-compensated)",
+                "both": "heading column and raw magnetometer"}.get(form, str(form))
+    if "heading" in log.columns:
+        return "heading column"
+    if all(c in log.columns for c in MAG_COLS):
+        return "raw magnetometer + accelerometer (tilt-compensated)"
+    return "none"
+
+
+def _compass_samples(log: pd.DataFrame) -> int:
+    if "heading" in log.columns:
+        return int(log["heading"].notna().sum())
+    if MAG_COLS[0] in log.columns:
+        return int(log[MAG_COLS[0]].notna().sum())
+    return 0
+
+
+def _read_section(log, outputs, skipped, source: str) -> str:
+    t = log["t"].to_numpy(float)
+    dur = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    fs = (t.size - 1) / dur if dur > 0 else float("nan")
+    temp = log["temp"]
+    n_compass = _compass_samples(log)
+    compass = _compass_form(log)
+    if n_compass and dur > 0:
+        compass += f", {n_compass} samples ({n_compass / dur:.3g} Hz mean)"
+    evaluation = [c for c in (REF_HEADING, TRUE_BIAS_Z) if c in log.columns]
+    units = []
+    if "gyro_unit" in log.attrs:
+        units.append(f"gyro unit in file {log.attrs['gyro_unit']}")
+    if "frame" in log.attrs:
+        units.append(f"frame {str(log.attrs['frame']).upper()}")
+    run = [f"{_esc(m)}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
+    rows = [
+        ("file", _esc(source)),
+        ("rows", f"{len(log)}"),
+        ("duration", _esc(_duration_text(dur))),
+        ("sample rate", f"{fs:.4g} Hz (mean)"),
+        ("temperature", f"{temp.min():.2f} to {temp.max():.2f} degC"),
+        ("compass", _esc(compass)),
+        ("evaluation columns", _esc(", ".join(evaluation)) if evaluation else "none (no error statistics)"),
+    ]
+    if units:
+        rows.append(("read as", _esc(", ".join(units))))
+    rows.append(("methods run", ", ".join(run) if run else "none"))
+    if skipped:
+        items = "".join(f"<li><b>{_esc(m)}</b>: {_esc(r)}</li>" for m, r in skipped.items())
+        rows.append(("methods skipped", f"<ul>{items}</ul>"))
+    body = "".join(f"<tr><th scope=row>{k}</th><td>{v}</td></tr>" for k, v in rows)
+    return f'<section id="read"><h2>What was read</h2><table class="facts">{body}</table></section>'
+
+
+# ------------------------------------------------------------------ summary table
+
+
+def _raw_errors(log_like: pd.DataFrame, start_heading: float):
+    """Bias error and heading error of the uncompensated gyro (None where no truth)."""
+    from gyrodrift.metrics import heading_error_deg, raw_heading_deg
+
+    bias = heading = None
+    if TRUE_BIAS_Z in log_like.columns:
+        bias = -log_like[TRUE_BIAS_Z].to_numpy(float)
+    if REF_HEADING in log_like.columns:
+        gyro = log_like["gyro_z"].ffill().to_numpy(float)
+        raw = raw_heading_deg(log_like["t"].to_numpy(float), gyro, start_heading)
+        heading = heading_error_deg(raw, log_like[REF_HEADING].to_numpy(float))
+    return bias, heading
+
+
+def _stats(errors) -> dict | None:
+    from gyrodrift.metrics import error_stats
+
+    if errors is None:
+        return None
+    e = np.asarray(errors, dtype=float)
+    if not np.isfinite(e).any():
+        return None
+    return error_stats(e)
+
+
+def _summary_section(log, outputs) -> str:
+    from gyrodrift.metrics import bias_error, heading_error_deg
+
+    if not outputs:
+        return '<section id="summary"><h2>Summary</h2><p class="note">No method ran: nothing to summarise.</p></section>'
+    has_truth = TRUE_BIAS_Z in log.columns
+    has_ref = REF_HEADING in log.columns
+    reasons = []
+    for out in outputs.values():
+        for r in out["gate_reason"].fillna("").astype(str).unique():
+            if r and r not in reasons:
+                reasons.append(r)
+    from gyrodrift.plots import GATE_COLORS
+
+    reasons.sort(key=lambda r: list(GATE_COLORS).index(r) if r in GATE_COLORS else len(GATE_COLORS))
+    header = ["method"]
+    if has_truth:
+        header += ["bias error mean (deg/s)", "bias error variance ((deg/s)²)", "bias error RMS (deg/s)"]
+    if has_ref:
+        header += ["heading error mean (deg)", "heading error variance (deg²)", "heading error RMS (deg)",
+                   "heading error max |·| (deg)"]
+    header += ["filter updates", "gated rows (all reasons)"] + [f"gated: {_esc(r)}" for r in reasons]
+
+    def error_cells(bias, heading):
+        cells = []
+        if has_truth:
+            s = _stats(bias)
+            cells += [_num(s and s["mean"]), _num(s and s["variance"]), _num(s and s["rms"])]
+        if has_ref:
+            s = _stats(heading)
+            cells += [_num(s and s["mean"]), _num(s and s["variance"]), _num(s and s["rms"]), _num(s and s["max_abs"])]
+        return cells
+
+    rows = []
+    first = next(iter(outputs.values()))
+    if has_truth or has_ref:
+        bias, heading = _raw_errors(first, float(first["heading"].iloc[0]))
+        rows.append(["raw gyro (no compensation)"] + error_cells(bias, heading) + [_NONE] * (2 + len(reasons)))
+    for name, out in outputs.items():
+        bias = bias_error(out) if has_truth and TRUE_BIAS_Z in out.columns else None
+        heading = (
+            heading_error_deg(out["heading"].to_numpy(float), out[REF_HEADING].to_numpy(float))
+            if has_ref and REF_HEADING in out.columns else None
+        )
+        reason = out["gate_reason"].fillna("").astype(str)
+        n = max(len(out), 1)
+        share = [f"{100.0 * float((reason == r).sum()) / n:.1f} %" for r in reasons]
+        label = _esc(name) + ("" if _causal(name) else " †")
+        rows.append(
+            [label] + error_cells(bias, heading)
+            + [str(int(pd.to_numeric(out["update"], errors="coerce").fillna(0).sum())),
+               f"{100.0 * float((reason != '').sum()) / n:.1f} %"] + share
+        )
+    notes = []
+    if has_truth:
+        notes.append("bias error = <code>bias_z − true_bias_z</code> on every row (deg/s); the raw gyro's is "
+                     "<code>−true_bias_z</code> (no drift removed)")
+    else:
+        notes.append("no true_bias_z: bias error not computed")
+    if has_ref:
+        notes.append("heading error = <code>heading − ref_heading</code> wrapped to ±180 deg on rows with a "
+                     "reference; the raw gyro's heading is integrated from the same start")
+    else:
+        notes.append("no ref_heading: heading error not computed")
+    notes.append("variance with ddof = 1; filter updates = accepted compass-aiding intervals; gated = share of "
+                 "rows where compass aiding was refused, by reason (see the parameter figure)")
+    notes.append("† non-causal: uses the whole log (mlr) or the true drift (oracle), not possible in real time")
+    note = "<ul class=how>" + "".join(f"<li>{n}</li>" for n in notes) + "</ul>"
+    return f'<section id="summary"><h2>Summary</h2>{_table(header, rows, cls="summary")}{note}</section>'
+
+
+# ------------------------------------------------------------------ Allan inputs
+
+
+@dataclass(frozen=True)
+class _AllanInput:
+    rates: dict  # label -> rate error array, deg/s
+    fs_hz: float
+    truth: str  # how the true rate was obtained
+    span: str  # which rows were used
+
+
+def _longest_even_stretch(t: np.ndarray) -> slice:
+    """Rows of the longest stretch without a time gap (a step > 1.5 median steps)."""
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    breaks = np.flatnonzero(dt > 1.5 * med)
+    edges = np.r_[0, breaks + 1, t.size]
+    k = int(np.argmax(np.diff(edges)))
+    return slice(int(edges[k]), int(edges[k + 1]))
+
+
+def _moving_by_rate(out: pd.DataFrame, config: CompensatorConfig) -> bool:
+    """True when the 1-s mean compensated rate exceeds the turning threshold anywhere."""
+    t = out["t"].to_numpy(float)
+    rate = out["rate_z"].ffill().to_numpy(float)
+    fs = (t.size - 1) / (t[-1] - t[0])
+    n = max(1, int(round(config.gate.turn_window_s * fs)))
+    if rate.size < n:
+        return False
+    mean = np.convolve(rate, np.ones(n) / n, mode="valid")
+    return bool(np.nanmax(np.abs(mean)) > config.gate.turn_rate_dps)
+
+
+def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
+    """Rate-error records for the Allan figure, or the reason it cannot be drawn."""
+    main = _main_method(outputs)
+    if main is None:
+        return "no method ran: Allan deviation not shown"
+    base = outputs[main]
+    t = base["t"].to_numpy(float)
+    if t.size < 3:
+        return "too few rows: Allan deviation not shown"
+    ref = base[REF_HEADING].to_numpy(float) if REF_HEADING in base.columns else None
+    true_rate = np.zeros(t.size)
+    usable = np.ones(t.size, dtype=bool)
+    if ref is not None and np.isfinite(ref).sum() >= 2:
+        ok = np.isfinite(ref)
+        unwrapped = np.interp(t, t[ok], np.unwrap(ref[ok], period=360.0))
+        if float(np.ptp(unwrapped[ok])) < 1.0:
+            truth = "0 (motionless: ref_heading changes by less than 1 deg)"
+        else:
+            true_rate = np.gradient(unwrapped, t)
+            usable = (t >= t[ok][0]) & (t <= t[ok][-1])
+            truth = "d(ref_heading)/dt (the log moves)"
+    elif _moving_by_rate(base, config):
+        return ("the log moves (1-s mean rate above the turning threshold) and has no ref_heading, so the true "
+                "rate is unknown: Allan deviation not shown")
+    else:
+        truth = "0 (motionless: the 1-s mean compensated rate never exceeds the turning threshold)"
+    stretch = _longest_even_stretch(t)
+    rows = np.flatnonzero(usable)
+    rows = rows[(rows >= stretch.start) & (rows < stretch.stop)]
+    if rows.size < 3:
+        return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
+    rows = slice(int(rows[0]), int(rows[-1]) + 1)
+    tt = t[rows]
+    fs = (tt.size - 1) / (tt[-1] - tt[0])
+    rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
+    chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
+    for name in chosen:
+        rates[f"{name} rate_z"] = outputs[name]["rate_z"].to_numpy(float)[rows] - true_rate[rows]
+    span = "all rows" if tt.size == t.size else f"rows {rows.start}–{rows.stop - 1} (longest stretch without a time gap)"
+    return _AllanInput(rates=rates, fs_hz=float(fs), truth=truth, span=span)
+
+
+# ------------------------------------------------------------------------ figures
+
+
+@dataclass
+class _Figure:
+    key: str
+    title: str
+    how: str
+    make: Callable[[], object] | None = None  # returns a Figure
+    missing: str | None = None  # one-line note when left out
+    extra: str = ""  # HTML after the figure (e.g. a table)
+
+
+_HOW = {
+    "temperature": "Top: the gyro temperature. Bottom: its rate of change T′ as the compensator computed it. "
+    "The drift model a·T + b·T′ + c uses both; a gyro drifts fastest where |T′| is large, while heating or "
+    "cooling (paper Fig. 1a and 7).",
+    "rates": "Grey: the raw gyro rate; red: the rate after subtracting the estimated drift. On a motionless log "
+    "the red line should stay centred on zero however the temperature changes (paper Fig. 3); on a moving log "
+    "both show the motion and differ by the drift estimate.",
+    "bias": "Each method's drift estimate bias_z. Black dashed: the true drift (simulated logs); grey: the raw "
+    "rate, which on a motionless log is the drift plus noise (paper Fig. 2). The closer a line follows the "
+    "truth, the smaller its bias error in the summary table. Steps happen at filter updates.",
+    "params": "The parameters of drift = a·T + b·T′ + c in force at each row. Dots: filter updates, one per "
+    "accepted interval. Shaded: rows where compass aiding was refused, coloured by reason (init, gap, "
+    "no_compass, field, turning, interference); there the parameters are held and keep compensating (paper "
+    "eq. 5). Long shaded stretches are where the filter could not learn.",
+    "heading": "Blue: the compass heading; red: the heading integrated from the compensated gyro, starting at "
+    "the first compass heading; green dashed: the reference. All unwrapped (no jump at 0/360 deg). Compass "
+    "disturbances show as blue bumps that the gyro heading does not follow (paper Fig. 8).",
+    "heading_error": "Heading minus reference, wrapped to ±180 deg. Solid lines: causal methods (possible in "
+    "real time); dashed: non-causal ones (mlr is fitted on the whole log; oracle removes the true drift and "
+    "shows the limit set by gyro noise alone). Growth during the shaded stretches of the parameter figure shows "
+    "how well a method holds its drift model through aiding outages (paper Figs. 4, 5, 9).",
+    "allan": "Allan deviation of the angular-rate error (rate minus the true rate) against averaging time τ, "
+    "with 68 % confidence bands. Slope −1/2: angle random walk N (read at τ = 1 s); flat bottom: bias "
+    "instability B; +1/2: rate random walk K (read at τ = 3 s); +1: rate ramp. Temperature compensation should "
+    "lower the long-τ (right-hand) part of the raw curve (paper Fig. 6).",
+}
+
+
+def _figure_plan(log, outputs, config) -> list[_Figure]:
+    from gyrodrift import plots
+
+    main = _main_method(outputs)
+    first = next(iter(outputs.values()), None)
+    temp_table = first if first is not None else log
+    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table))]
+    if main is None:
+        note = "no method ran: compensation figures not shown"
+        for key, title in (("rates", "Raw and compensated rate"), ("bias", "Drift estimates"),
+                           ("params", "Drift-model parameters"), ("heading", "Headings"),
+                           ("heading_error", "Heading error"), ("allan", "Allan deviation")):
+            plan.append(_Figure(key, title, _HOW[key], missing=note))
+        return plan
+    out = outputs[main]
+    plan.append(_Figure("rates", f"Raw and compensated rate ({main})", _HOW["rates"],
+                        make=lambda: plots.fig_rates(out, method=main)))
+    how = _HOW["bias"] if TRUE_BIAS_Z in log.columns else _HOW["bias"] + " No true_bias_z: the true drift is not drawn."
+    plan.append(_Figure("bias", "Drift estimates of every method", how, make=lambda: plots.fig_bias(outputs)))
+    if out[["a", "b", "c"]].notna().any().any():
+        plan.append(_Figure("params", f"Drift-model parameters and aiding gates ({main})", _HOW["params"],
+                            make=lambda: plots.fig_params(out, method=main)))
+    else:
+        plan.append(_Figure("params", "Drift-model parameters", _HOW["params"],
+                            missing=f"{main} has no a, b, c parameters: parameter figure not shown"))
+    plan.append(_Figure("heading", f"Headings ({main})", _HOW["heading"], make=lambda: plots.fig_heading(out, method=main)))
+    if REF_HEADING in log.columns:
+        plan.append(_Figure("heading_error", "Heading error of every method", _HOW["heading_error"],
+                            make=lambda: plots.fig_heading_error(outputs)))
+    else:
+        plan.append(_Figure("heading_error", "Heading error", _HOW["heading_error"],
+                            missing="no ref_heading: heading error not shown"))
+    plan.append(_allan_figure(outputs, config))
+    return plan
+
+
+def _allan_figure(outputs, config) -> _Figure:
+    """The Allan entry; the curves are computed when it is rendered (inside :func:`_progress`)."""
+    inputs = _allan_inputs(outputs, config)
+    if isinstance(inputs, str):
+        return _Figure("allan", "Allan deviation", _HOW["allan"], missing=inputs)
+    how = _HOW["allan"] + f" True rate: {inputs.truth}; {inputs.span}."
+    entry = _Figure("allan", "Allan deviation of the rate error", how)
+
+    def make():
+        from gyrodrift import plots
+        from gyrodrift.allan import allan_deviation, noise_terms
+
+        curves = {label: allan_deviation(r, inputs.fs_hz) for label, r in inputs.rates.items()}
+        terms = {label: noise_terms(c) for label, c in curves.items()}
+        entry.extra = _terms_table(terms)
+        return plots.fig_allan(curves, terms)
+
+    entry.make = make
+    return entry
+
+
+def _term_cell(term, per_hour=None, *, at_tau: bool = False) -> str:
+    if term is None:
+        return "not seen"
+    text = f"{term.value:.3g} [{term.lo:.3g}, {term.hi:.3g}] {_esc(term.unit)}"
+    if per_hour is not None:
+        text += f" = {per_hour.value:.3g} {_esc(per_hour.unit)}"
+    if at_tau:
+        text += f" at τ = {term.tau_s:.3g} s"
+    return text
+
+
+def _terms_table(terms: Mapping[str, object]) -> str:
+    rows = []
+    for label, t in terms.items():
+        per_h = t.unit == "deg/s"
+        rows.append([
+            _esc(label),
+            _term_cell(t.arw, t.arw_deg_rt_h if per_h else None),
+            _term_cell(t.bias_instability, t.bias_instability_deg_h if per_h else None, at_tau=True),
+            _term_cell(t.rrw),
+            _term_cell(t.rate_ramp),
+        ])
+    header = ["rate error", "angle random walk N", "bias instability B", "rate random walk K", "rate ramp R"]
+    note = ("<p class=how>Noise terms read off each curve by the slope method of IEEE Std 952 "
+            "(<code>gyrodrift.allan.noise_terms</code>), with 68 % intervals; “not seen”: the curve has no "
+            "region of that slope.</p>")
+    return _table(header, rows, cls="terms") + note
+
+
+def _render_figure(entry: _Figure) -> str:
+    from gyrodrift.plots import png_base64
+
+    head = f'<section class="figure" id="fig-{entry.key}"><h2>{_esc(entry.title)}</h2>'
+    if entry.make is None:
+        return head + f'<p class="missing">{_esc(entry.missing)}</p></section>'
+    fig = entry.make()
+    w, h = (int(round(v * _DPI)) for v in fig.get_size_inches())
+    data = png_base64(fig, dpi=_DPI)
+    img = (f'<img src="data:image/png;base64,{data}" width="{w}" height="{h}" '
+           f'alt="{_esc(entry.title)}">')
+    return head + img + f'<p class="how"><b>How to read this:</b> {_esc(entry.how)}</p>' + entry.extra + "</section>"
+
+
+# ----------------------------------------------------------------------- settings
+
+
+def _flatten(obj, prefix: str = ""):
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if is_dataclass(value):
+            yield from _flatten(value, f"{prefix}{f.name}.")
+        else:
+            yield f"{prefix}{f.name}", value
+
+
+def _versions() -> list[tuple[str, str]]:
+    from importlib import metadata
+
+    from gyrodrift import __version__
+
+    out = [("gyrodrift", __version__), ("Python", sys.version.split()[0])]
+    for dist in ("numpy", "pandas", "matplotlib", "allantools"):
+        try:
+            out.append((dist, metadata.version(dist)))
+        except metadata.PackageNotFoundError:
+            out.append((dist, "not installed"))
+    return out
+
+
+def _settings_section(config: CompensatorConfig, outputs) -> str:
+    versions = ", ".join(f"{_esc(k)} {_esc(v)}" for k, v in _versions())
+    rows = [[f"<code>{_esc(k)}</code>", f"<code>{_esc(v)}</code>"] for k, v in _flatten(config)]
+    estimators = [f"{_esc(m)}: {_esc(o.attrs.get('estimator', m))}" for m, o in outputs.items()]
+    text = f"<p>Software: {versions}.</p>"
+    if estimators:
+        text += (f"<p>Estimator of each method: {', '.join(estimators)} (every method sees the same gates and "
+                 "settings; only the drift estimate differs).</p>")
+    return (f'<section id="settings"><h2>Software and settings</h2>{text}'
+            f'{_table(["setting (CompensatorConfig)", "value"], rows, cls="settings")}</section>')
+
+
+# --------------------------------------------------------------------------- page
+
+
+_CSS = """
+body{font:15px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;color:#1d1d1f;
+background:#fff;margin:0 auto;max-width:1060px;padding:1.2em 1.5em 3em}
+h1{font-size:1.6em;margin:.2em 0 .1em}h2{font-size:1.2em;margin:1.6em 0 .5em;border-bottom:1px solid #ddd;
+padding-bottom:.2em}.sub{color:#555;margin:0 0 1em}
+table{border-collapse:collapse;font-size:.86em;margin:.4em 0}th,td{border:1px solid #d4d4d4;padding:.25em .5em;
+vertical-align:top}thead th{background:#f3f3f3;font-weight:600}
+table.summary td:not(:first-child),table.summary th:not(:first-child){text-align:right}
+table.facts th{text-align:left;background:#f7f7f7;white-space:nowrap}table.facts ul{margin:0;padding-left:1.2em}
+img{display:block;max-width:100%;height:auto;margin:.3em 0;border:1px solid #eee}
+.how{color:#333;font-size:.9em}.missing{color:#8a4b00;background:#fff6e5;border-left:4px solid #f0a030;
+padding:.4em .7em}.nc{color:#8a4b00}.note{color:#555}code{font-size:.92em}
+footer{margin-top:2.5em;color:#666;font-size:.85em}
+"""
+
+_CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
+
+
+def build_report(
+    log: pd.DataFrame,
+    outputs: Mapping[str, pd.DataFrame],
+    skipped: Mapping[str, str] | None = None,
+    *,
+    title: str,
+    source: str,
+    config: CompensatorConfig | None = None,
+) -> str:
+    """One self-contained HTML page reporting a log compensated by several methods.
+
+    Parameters
+    ----------
+    log : DataFrame
+        The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
+    outputs : mapping of str to DataFrame
+        Method name → output table, as returned by
+        :func:`gyrodrift.compare.run_methods`. ``stkf`` is the method of the
+        single-method figures; without it, the first one.
+    skipped : mapping of str to str, optional
+        Method name → why it did not run (listed in the header).
+    title : str
+        Page title and heading.
+    source : str
+        What was read (file name), shown in the header.
+    config : CompensatorConfig, optional
+        Settings the methods ran with (default: the defaults), listed at the end
+        and used for the motion test of the Allan figure.
+
+    Returns
+    -------
+    str
+        The HTML document (UTF-8 text): inline CSS, figures as base64 PNG, no
+        script and no external resource.
+
+    Raises
+    ------
+    ConfigError
+        matplotlib is not installed (``pip install 'gyrodrift[plot]'``).
+    """
+    config = config or CompensatorConfig()
+    skipped = dict(skipped or {})
+    outputs = dict(outputs)
+    from gyrodrift import __version__
+
+    from gyrodrift.plots import _require_matplotlib
+
+    _require_matplotlib()
+    plan = _figure_plan(log, outputs, config)
+    parts = []
+    for entry in _progress(plan, len(plan), "report figures"):
+        try:
+            parts.append(_render_figure(entry))
+        except GyroDriftError as err:  # e.g. allantools missing: leave this figure out, say why
+            entry.make, entry.missing = None, f"{entry.title} not shown: {err}"
+            parts.append(_render_figure(entry))
+    omitted = [e for e in plan if e.make is None and e.missing]
+    toc = "".join(
+        f'<li><a href="#fig-{e.key}">{_esc(e.title)}</a>' + (" (not shown)" if e.make is None else "") + "</li>"
+        for e in plan
+    )
+    body = [
+        f"<header><h1>{_esc(title)}</h1>",
+        f'<p class="sub">Temperature-drift compensation of a MEMS gyro with compass aiding (gyrodrift '
+        f"{_esc(__version__)}, after Feng, Li, Zhang, Sensors 2015, doi:10.3390/s150511222).</p></header>",
+        _read_section(log, outputs, skipped, source),
+        _summary_section(log, outputs),
+        f'<nav><h2>Figures</h2><ul><li><a href="#summary">Summary table</a></li>{toc}'
+        f'<li><a href="#settings">Software and settings</a></li></ul></nav>',
+        *parts,
+        _settings_section(config, outputs),
+        f"<footer>Generated by gyrodrift {_esc(__version__)}. "
+        f"{len(plan) - len(omitted)} of {len(plan)} figures shown.</footer>",
+    ]
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        f'<meta http-equiv="Content-Security-Policy" content="{_CSP}">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        '<link rel="icon" href="data:,">'
+        f"<title>{_esc(title)}</title><style>{_CSS}</style></head>\n<body>\n"
+        + "\n".join(body)
+        + "\n</body></html>\n"
+    )
+
+
+def write_report(path, html: str) -> None:
+    """Write the report atomically (temporary file in the same folder, then :func:`os.replace`).
+
+    Raises
+    ------
+    ConfigError
+        The folder does not exist (named in the message), ``path`` is a folder, or
+        writing fails.
+    """
+    from gyrodrift.plots import _atomic_write
+
+    _atomic_write(Path(path), html.encode("utf-8"))
+
+
+# ----------------------------------------------------------------------- command
+
+
+def _parse_map(text: str | None) -> dict[str, str] | None:
+    if not text:
+        return None
+    mapping = {}
+    for item in text.split(","):
+        new, sep, old = item.partition("=")
+        if not sep or not new.strip() or not old.strip():
+            raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
+        mapping[new.strip()] = old.strip()
+    return mapping
+
+
+def _parse_methods(text: str) -> tuple[str, ...]:
+    from gyrodrift.compare import METHODS
+
+    names = list(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
+    unknown = [m for m in names if m not in METHODS]
+    if unknown or not names:
+        raise ConfigError(
+            f"--methods: unknown method(s) {', '.join(unknown) or '(none given)'}; choose from: {', '.join(METHODS)}"
+        )
+    return tuple(names)
+
+
+def _run_all(log, methods, config, calibration):
+    """Run each method in turn (with a progress bar on a terminal)."""
+    from gyrodrift.compare import calibration_from_log, run_methods
+
+    if calibration is not None and "poly3" in methods:
+        calibration = calibration_from_log(calibration)
+    outputs, skipped = {}, {}
+    for name in _progress(methods, len(methods), "compensating"):
+        out, skip = run_methods(log, (name,), config, calibration=calibration)
+        outputs.update(out)
+        skipped.update(skip)
+    return outputs, skipped
+
+
+def report_command(args: argparse.Namespace) -> int:
+    """Run ``gyrodrift report``: read, compensate with each method, write the HTML report.
+
+    Returns 0; problems the user can fix raise :class:`GyroDriftError` (the command
+    line prints them as one line and exits 2).
+    """
+    from gyrodrift.config import load_config
+    from gyrodrift.io import check_output_path, read_log
+    from gyrodrift.plots import _require_matplotlib
+
+    _require_matplotlib()  # before the long work, not after it
+    out_path = Path(args.output)
+    check_output_path(args.input, out_path)
+    if getattr(args, "calibration", None):
+        check_output_path(args.calibration, out_path)
+    if not out_path.parent.is_dir():
+        raise ConfigError(
+            f"{out_path}: output folder {str(out_path.parent)!r} does not exist; create it first or choose another -o"
+        )
+    methods = _parse_methods(args.methods)
+    config = load_config(args.config) if getattr(args, "config", None) else CompensatorConfig()
+    options = dict(gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(getattr(args, "map", None)))
+    log = read_log(args.input, fmt=getattr(args, "format", None), **options)
+    calibration = read_log(args.calibration, **options) if getattr(args, "calibration", None) else None
+    outputs, skipped = _run_all(log, methods, config, calibration)
+    if not outputs:
+        reasons = "; ".join(f"{m}: {r}" for m, r in skipped.items())
+        raise ConfigError(f"{args.input}: none of the methods could run ({reasons}); choose others with --methods")
+    title = getattr(args, "title", None) or f"gyrodrift report: {Path(args.input).name}"
+    page = build_report(log, outputs, skipped, title=title, source=str(args.input), config=config)
+    write_report(out_path, page)
+    if not getattr(args, "quiet", False):
+        print(f"wrote {out_path}: {len(outputs)} method(s) ({', '.join(outputs)}), {len(page) / 1e6:.1f} MB")
+    return 0
+
+
+def add_report_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``report`` subcommand to an argparse ``subparsers`` object; return its parser.
+
+    The parser's ``func`` default is :func:`report_command`.
+    """
+    from gyrodrift.compare import METHODS
+
+    p = subparsers.add_parser(
+        "report",
+        help="compensate a log with several methods and write a self-contained HTML report",
+        description="Compensate a log with each method and write one self-contained HTML page: what was "
+        "read, an error table per method, figures after Feng, Li, Zhang (2015) Figs. 1-9 and the settings. "
+        "Needs matplotlib (gyrodrift[plot]); the Allan figure needs allantools (gyrodrift[allan]).",
+    )
+    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="HTML file to write (atomically)")
+    p.add_argument(
+        "--methods", default=",".join(METHODS),
+        help=f"comma-separated methods to run (default: all: {','.join(METHODS)}; "
+        "those that cannot run are listed as skipped)",
+    )
+    p.add_argument("--calibration", type=Path, metavar="CAL.csv", help="static heating run of the same device, for poly3")
+    p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
+    p.add_argument("--format", choices=["csv", "parquet"], help="input format (default: by suffix)")
+    p.add_argument("--gyro-unit", default="deg/s", help="unit of gyro_* columns: deg/s (default) or rad/s")
+    p.add_argument("--frame", default="ned", help="ned (default) or enu (ROS REP-103)")
+    p.add_argument("--map", metavar="NEW=OLD,...", help="rename input columns to contract names, e.g. gyro_z=gz,temp=T")
+    p.add_argument("--title", help="page title (default: 'gyrodrift report: <input file name>')")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.set_defaults(func=report_command)
+    return p
