@@ -32,7 +32,6 @@ import base64
 import io
 import math
 import os
-import secrets
 from pathlib import Path
 from typing import Mapping
 
@@ -41,6 +40,7 @@ import pandas as pd
 
 from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
+from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.metrics import heading_error_deg
 
@@ -631,25 +631,5 @@ def save_png(fig, path, *, dpi: float = 100) -> None:
 
 
 def _atomic_write(path: Path, data: bytes) -> None:
-    """Write bytes to ``path`` through a temporary file beside it and :func:`os.replace`."""
-    parent = path.parent
-    if not parent.is_dir():
-        raise ConfigError(
-            f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path"
-        )
-    if path.is_dir():
-        raise ConfigError(f"{path}: output path is a folder; give a file name")
-    tmp = parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ConfigError(f"{path}: writing failed ({exc.strerror or exc}); check disk space and permissions") from exc
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    """Write bytes to ``path`` atomically."""
+    write_bytes_atomic(path, data)

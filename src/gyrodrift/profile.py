@@ -18,14 +18,13 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from gyrodrift import __version__
+from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.compensate import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators._kalman import cap_covariance
@@ -101,18 +100,7 @@ def profile_from_run(out) -> Profile:
 
 def save_profile(profile: Profile, path) -> None:
     """Write the profile as JSON, atomically."""
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise ConfigError(f"{path}: the folder {path.parent} does not exist; create it or choose another --save-profile")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(profile.to_json(), fh, indent=2)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_bytes_atomic(path, (json.dumps(profile.to_json(), indent=2) + "\n").encode("utf-8"))
 
 
 def _bad(path, what: str) -> ConfigError:

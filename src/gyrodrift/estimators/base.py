@@ -16,7 +16,7 @@ import numpy as np
 
 from gyrodrift.errors import ConfigError
 
-__all__ = ["Observation", "DriftEstimator", "LinearDrift", "ESTIMATORS", "register", "make_estimator"]
+__all__ = ["Observation", "DriftEstimator", "LinearDrift", "Unaided", "ESTIMATORS", "register", "make_estimator"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +75,20 @@ class DriftEstimator(Protocol):
 
     def drift(self, temp_c: np.ndarray, temp_rate_cps: np.ndarray) -> np.ndarray:
         """Drift (deg/s) now in force at temperatures T (degC) and rates T' (degC/s)."""
+
+
+class Unaided:
+    """Mixin for estimators that learn nothing from aiding (fixed or offline models)."""
+
+    @property
+    def cov(self) -> np.ndarray:
+        return np.zeros((3, 3))
+
+    def update(self, obs: Observation) -> np.ndarray:
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        return self.params
 
 
 class LinearDrift:

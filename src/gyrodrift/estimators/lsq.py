@@ -22,7 +22,7 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.estimators.base import LinearDrift, Observation, Unaided, register
 from gyrodrift.estimators.kalman import KalmanConfig
 
 __all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
@@ -117,7 +117,7 @@ class WindowedLsm(LinearDrift):
 
 
 @register
-class FixedParams(LinearDrift):
+class FixedParams(Unaided, LinearDrift):
     """Fixed a, b, c (``fixed``): ignores all observations.
 
     With parameters fitted by :func:`fit_linear_drift` over every measurement of the
@@ -135,13 +135,3 @@ class FixedParams(LinearDrift):
     @property
     def params(self) -> np.ndarray:
         return self._x.copy()
-
-    @property
-    def cov(self) -> np.ndarray:
-        return np.zeros((3, 3))
-
-    def update(self, obs: Observation) -> np.ndarray:
-        return self.params
-
-    def hold(self) -> np.ndarray:
-        return self.params

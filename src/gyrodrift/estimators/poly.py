@@ -16,7 +16,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import Observation, register
+from gyrodrift.estimators.base import Unaided, register
 
 __all__ = ["Poly3Calibration", "fit_poly3", "CubicCalibration"]
 
@@ -71,7 +71,7 @@ def fit_poly3(temp_c, gyro_z_dps, *, median_window: int = 31, order: int = 3) ->
 
 
 @register
-class CubicCalibration:
+class CubicCalibration(Unaided):
     """Offline cubic thermal calibration (``poly3``); ignores compass observations.
 
     :attr:`params` reports the cubic's tangent at ``T_ref`` as (a, b=0, c).
@@ -91,15 +91,5 @@ class CubicCalibration:
     def params(self) -> np.ndarray:
         return self._x.copy()
 
-    @property
-    def cov(self) -> np.ndarray:
-        return np.zeros((3, 3))
-
     def drift(self, temp_c, temp_rate_cps):
         return self.calibration.drift(temp_c)
-
-    def update(self, obs: Observation) -> np.ndarray:
-        return self.params
-
-    def hold(self) -> np.ndarray:
-        return self.params

@@ -18,8 +18,8 @@ optionally followed by ``, column 'name'``. Parts that do not apply are left out
 from __future__ import annotations
 
 import gzip
+import io
 import os
-import secrets
 import zlib
 from pathlib import Path
 from typing import Callable, Mapping, NamedTuple
@@ -47,6 +47,7 @@ from gyrodrift.conventions import (
     TRUE_BIAS_Z,
     wrap_360,
 )
+from gyrodrift._atomic import atomic_output
 from gyrodrift.errors import ConfigError, LogFormatError
 
 __all__ = ["read_log", "write_table", "check_output_path"]
@@ -762,34 +763,19 @@ def read_log(
     return df
 
 
-def _open_temp_beside(path: Path) -> tuple[int, Path]:
-    """Create a new, empty hidden file next to ``path``; return its fd and path."""
-    while True:
-        tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
-        try:
-            # mode 0o666 lets the process umask decide, as for any newly created file
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-        except FileExistsError:
-            continue
-        return fd, tmp
+def _write_csv(df: pd.DataFrame, fh) -> None:
+    """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats) to a binary file."""
+    text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
+    df.to_csv(text, index=False, lineterminator="\n")
+    text.flush()
+    text.detach()  # leave ``fh`` open for the caller
 
 
-def _write_csv(df: pd.DataFrame, fd: int) -> None:
-    """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats) to ``fd``."""
-    with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-        df.to_csv(fh, index=False, lineterminator="\n")
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
-def _write_parquet(df: pd.DataFrame, fd: int) -> None:
-    """Write ``df`` as Parquet (no index) to ``fd``."""
-    with os.fdopen(fd, "wb") as fh:
-        plain = df.copy(deep=False)
-        plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
-        pa_pq.write_table(pa.Table.from_pandas(plain, preserve_index=False), fh)
-        fh.flush()
-        os.fsync(fh.fileno())
+def _write_parquet(df: pd.DataFrame, fh) -> None:
+    """Write ``df`` as Parquet (no index) to a binary file."""
+    plain = df.copy(deep=False)
+    plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
+    pa_pq.write_table(pa.Table.from_pandas(plain, preserve_index=False), fh)
 
 
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
@@ -816,41 +802,9 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     """
     path = Path(path)
     table_fmt = _table_format(path, fmt, _WRITE_SUFFIXES)
-    parent = path.parent
-    if not parent.is_dir():
-        raise ConfigError(
-            _message(
-                str(path),
-                f"output directory {str(parent)!r} does not exist",
-                "create it first or choose another -o",
-            )
-        )
-    if path.is_dir():
-        raise ConfigError(
-            _message(str(path), "output path is a directory", "give a file name such as out.csv")
-        )
-    writer: Callable[[pd.DataFrame, int], None] = _write_csv if table_fmt == "csv" else _write_parquet
-    try:
-        fd, tmp = _open_temp_beside(path)
-    except OSError as exc:
-        raise ConfigError(
-            _message(str(path), f"cannot write in {str(parent)!r} ({exc.strerror})", "choose another -o")
-        ) from exc
-    try:
-        writer(df, fd)
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ConfigError(
-            _message(
-                str(path),
-                f"writing the output failed ({exc.strerror or exc})",
-                "check disk space and permissions",
-            )
-        ) from exc
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
+    with atomic_output(path) as fh:
+        writer(df, fh)
 
 
 def check_output_path(in_path, out_path) -> None:
