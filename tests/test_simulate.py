@@ -15,6 +15,7 @@ from gyrodrift.conventions import ACC_COLS, MAG_COLS, wrap_180
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,
+    SCENARIO_SCALE_FACTOR_PPM,
     SCENARIOS,
     CompassModel,
     DeviceModel,
@@ -311,6 +312,7 @@ def test_unknown_scenario_lists_valid_names():
         (DeviceModel, {"noise_density_dps_rthz": -1.0}, "noise_density_dps_rthz"),
         (DeviceModel, {"bias_tau_s": 0.0}, "bias_tau_s"),
         (DeviceModel, {"c1_dps_per_c": float("nan")}, "c1_dps_per_c"),
+        (DeviceModel, {"sf_ppm_per_c": float("inf")}, "sf_ppm_per_c"),
         (CompassModel, {"rate_hz": 0.0}, "rate_hz"),
         (CompassModel, {"noise_deg": -0.1}, "noise_deg"),
         (CompassModel, {"interference": [(10.0, 5.0)]}, "interference"),
@@ -336,3 +338,113 @@ def test_invalid_models_name_the_field(cls, kwargs, field):
 def test_invalid_arguments(kwargs, field):
     with pytest.raises(ConfigError, match=field):
         simulate("static", **kwargs)
+
+
+# ------------------------------------------------------------------ defaults unchanged by the scale factor
+
+# Checksums of simulate(scenario, seed=1, duration_s=600) computed with the code
+# *before* the scale-factor model was added (math.fsum of the finite values and of
+# their squares, per column): a default device must give the same log. (A relative
+# 1e-13 rather than exact equality only allows for another platform's libm.)
+_BEFORE_SF = {
+    "static": {
+        "gyro_z": (16915.55539309187, 36738.30850323346),
+        "temp": (1187755.5625, 52069508.04296875),
+        "heading": (252317.2589386977, 10610436.511039339),
+        "ref_heading": (1200040.0, 48001600.0),
+        "true_bias_z": (16953.498364364536, 34365.836806717314),
+    },
+    "vehicle": {
+        "gyro_z": (36152.479453350476, 456387.9680353812),
+        "temp": (974127.0, 32036017.46875),
+        "heading": (706533.6921845063, 145461037.89431223),
+        "ref_heading": (3492290.094051018, 722386454.4042417),
+        "true_bias_z": (13626.528593895177, 6493.931481796338),
+    },
+}
+
+
+@pytest.mark.parametrize("scenario", list(_BEFORE_SF))
+def test_default_device_output_unchanged(scenario):
+    df = simulate(scenario, seed=1, duration_s=600)
+    assert list(df.columns) == BASE_COLS  # no true_sf column
+    for col, (total, total_sq) in _BEFORE_SF[scenario].items():
+        v = df[col].to_numpy()
+        v = v[np.isfinite(v)]
+        assert math.fsum(v) == pytest.approx(total, rel=1e-13, abs=1e-9), col
+        assert math.fsum(v * v) == pytest.approx(total_sq, rel=1e-13), col
+
+
+def test_default_scale_factor_is_exactly_one():
+    dev = DeviceModel()
+    assert dev.sf_ppm is dev.sf_ppm_per_c is dev.sf_ppm_per_c2 is None
+    np.testing.assert_array_equal(dev.scale_factor(np.linspace(-40, 120, 50)), 1.0)
+    assert not dev.has_scale_factor_error()
+    for name in SCENARIOS:
+        if name != "scale-factor":
+            assert not dev.with_scenario_scale_factor(name).has_scale_factor_error()
+
+
+# ------------------------------------------------------------------ scale-factor scenario
+
+
+def test_scale_factor_scenario_columns_and_sf_span():
+    df = simulate("scale-factor", seed=0, duration_s=3600.0, fs_hz=10.0)
+    assert list(df.columns) == BASE_COLS + ["true_sf"]
+    dev = df.attrs["device"]
+    want = SCENARIO_SCALE_FACTOR_PPM["scale-factor"]
+    assert {k: dev[k] for k in want} == want
+    # ADXRS623: about ±3 % sensitivity change over temperature, here over 23-58 degC
+    assert 0.028 < df["true_sf"].max() - df["true_sf"].min() < 0.034
+    assert np.corrcoef(df["temp"], df["true_sf"])[0, 1] > 0.99  # rises with temperature
+    json.dumps(df.attrs)
+
+
+def test_scale_factor_gyro_is_sf_times_true_rate():
+    dev = DeviceModel.noiseless(temp_quant_c=0.0)
+    df = simulate("scale-factor", seed=3, duration_s=1800.0, fs_hz=20.0, device=dev, compass=TRUE_COMPASS)
+    t = df["t"].to_numpy()
+    temp, _ = static_temperature(t, 1800.0)
+    want_sf = dev.with_scenario_scale_factor("scale-factor").scale_factor(temp)
+    np.testing.assert_allclose(df["true_sf"], want_sf, rtol=0, atol=1e-15)
+    measured = (df["gyro_z"] - df["true_bias_z"]).to_numpy()
+    true_rate = measured / df["true_sf"].to_numpy()
+    ref = np.degrees(np.unwrap(np.radians(df["ref_heading"].to_numpy())))
+    # gyro_z - true_bias_z = true_sf * true rate: dividing out SF gives the reference heading ...
+    np.testing.assert_allclose(ref[0] + cumulative_trapezoid(true_rate, t, initial=0.0), ref, rtol=0, atol=1e-6)
+    # ... while the raw gyro over-reads every turn by SF - 1 (about 1-4 %)
+    gyro_heading = ref[0] + cumulative_trapezoid(measured, t, initial=0.0)
+    assert np.abs(gyro_heading - ref).max() > 3.0
+    # the compass is clean: no interference, reads the true heading
+    rows = df["heading"].notna()
+    assert _angle_err(df.loc[rows, "heading"], df.loc[rows, "ref_heading"]).max() < 1e-9
+
+
+def test_scale_factor_rotations():
+    df = simulate("scale-factor", seed=5, duration_s=1500.0, device=DeviceModel.noiseless())
+    t = df["t"].to_numpy()
+    rate = ((df["gyro_z"] - df["true_bias_z"]) / df["true_sf"]).to_numpy()
+    turning = np.abs(rate) > 1e-6
+    edges = np.flatnonzero(np.diff(turning.astype(np.int8))) + 1
+    turns = [s for s in np.split(np.arange(t.size), edges) if turning[s[0]]]
+    assert len(turns) == 12  # every 120 s from 120 s
+    starts = np.array([t[s[0]] for s in turns])
+    np.testing.assert_allclose(np.diff(starts), 120.0, atol=0.05)
+    angles = [np.trapezoid(rate[s[0] - 1 : s[-1] + 2], t[s[0] - 1 : s[-1] + 2]) for s in turns]
+    np.testing.assert_allclose(angles, [360.0 * (-1) ** k for k in range(12)], atol=1e-6)  # full turns, alternating
+    for s in turns:
+        assert 30.0 - 1e-9 <= np.abs(rate[s]).max() <= 90.0 + 1e-9
+    assert not turning[t < 120.0].any()  # still start: initialisation and first drift updates
+    np.testing.assert_allclose(df["ref_heading"].to_numpy()[[0, -1]], 40.0, atol=1e-6)
+
+
+def test_explicit_scale_factor_overrides_the_scenario():
+    no_sf = DeviceModel(sf_ppm=0.0, sf_ppm_per_c=0.0, sf_ppm_per_c2=0.0)
+    unit = simulate("scale-factor", seed=0, duration_s=600.0, device=no_sf)
+    np.testing.assert_array_equal(unit["true_sf"], 1.0)
+    # a scale factor on a static run: the column appears, the still gyro is unchanged
+    plain = simulate("static", seed=0, duration_s=300.0)
+    scaled = simulate("static", seed=0, duration_s=300.0, device=DeviceModel(sf_ppm=2000.0))
+    np.testing.assert_allclose(scaled["true_sf"], 1.002, rtol=0, atol=1e-15)
+    pd.testing.assert_frame_equal(scaled[BASE_COLS], plain)
+    assert scaled.attrs["device"]["sf_ppm"] == 2000.0 and plain.attrs["device"]["sf_ppm"] == 0.0

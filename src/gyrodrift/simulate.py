@@ -16,17 +16,23 @@ cubic in temperature plus a rate term, a heating/cooling hysteresis and stochast
 bias terms (see :meth:`DeviceModel.drift`), so a filter that assumes eq. (2) has to
 track slowly changing parameters, as on a real sensor.
 
+The gyro scale factor is exactly 1 except in the ``scale-factor`` scenario (Section
+4.3: the static heating run with full turns on a turntable), where it changes by
+about 3 % with temperature (:meth:`DeviceModel.scale_factor`).
+
 Output columns
 --------------
 ==================  ========  =====================================================
 column              unit      meaning
 ==================  ========  =====================================================
 ``t``               s         sample time, ``k / fs_hz``
-``gyro_z``          deg/s     raw gyro: true body rate + drift + white noise
+``gyro_z``          deg/s     raw gyro: SF × true body rate + drift + white noise
 ``temp``            degC      sensor temperature reading (noise, quantisation)
 ``heading``         deg       compass heading in [0, 360); NaN between compass samples
 ``ref_heading``     deg       true heading in [0, 360) (a perfect FOG reference)
 ``true_bias_z``     deg/s     true drift (deterministic + bias instability + RRW)
+``true_sf``         --        true gyro scale factor ``SF(T)``; only in ``scale-factor``
+                              or when a device scale-factor coefficient is non-zero
 ``mag_x/y/z``       µT        ``raw_mag=True`` only: FRD body field, NaN off compass rows
 ``acc_x/y/z``       g         ``raw_mag=True`` only: FRD specific force (still: z = -1)
 ==================  ========  =====================================================
@@ -95,7 +101,25 @@ __all__ = [
     "scenario_static_outages",
     "scenario_vehicle",
     "scenario_calibration",
+    "scenario_scale_factor",
+    "rotation_plan",
+    "SCENARIO_SCALE_FACTOR_PPM",
+    "TRUE_SF",
 ]
+
+#: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
+TRUE_SF = "true_sf"
+
+#: Scale-factor coefficients (:class:`DeviceModel` ``sf_*`` fields) of each scenario
+#: that sets them; a device coefficient left ``None`` takes this value (else 0).
+#: ``scale-factor``: 1 % high at 25 degC (a residual initial calibration error) and
+#: ``SF(T) - SF(23 degC)`` = 3.1 % at 58 degC: about the ±3 % sensitivity change over
+#: temperature of the ADXRS623 datasheet (Feng et al. 2015, Table 1), over the span of
+#: the static heating run, slightly curved (quadratic term) so that a linear SF model
+#: must keep adapting.
+SCENARIO_SCALE_FACTOR_PPM: dict[str, dict[str, float]] = {
+    "scale-factor": {"sf_ppm": 10000.0, "sf_ppm_per_c": 700.0, "sf_ppm_per_c2": 6.0},
+}
 
 #: Standard gravity, m/s² (converts kinematic acceleration to g).
 GRAVITY_MPS2 = 9.80665
@@ -134,9 +158,13 @@ class DeviceModel:
     Defaults resemble an ADXRS623 (Feng et al. 2015, Table 1): white noise density
     0.04 deg/s/√Hz and a drift that changes by about 1 deg/s between 23 and 58 degC.
 
-    The gyro reads ``gyro_z = true_rate + true_bias_z + white``, with
+    The gyro reads ``gyro_z = SF(T) * true_rate + true_bias_z + white``, with
 
     ``true_bias_z = drift(T, T') + gauss_markov + rate_random_walk``
+
+    and the scale factor ``SF(T)`` of :meth:`scale_factor` (exactly 1 unless a
+    scale-factor coefficient is non-zero: only the ``scale-factor`` scenario sets them
+    by default, Section 4.3).
 
     where :meth:`drift` is the deterministic part (a function of the *true* die
     temperature ``T`` and its true rate ``T'``), ``gauss_markov`` a first-order
@@ -177,6 +205,18 @@ class DeviceModel:
     temp_quant_c : float
         Quantisation step of the temperature reading, degC (0 = off). Deterministic:
         kept by :meth:`noiseless` and :meth:`scale_noise`.
+    sf_ppm : float or None
+        Scale-factor error at ``t_ref_c``, ppm (parts per million of the true rate).
+    sf_ppm_per_c : float or None
+        Linear temperature coefficient of the scale factor, ppm/degC.
+    sf_ppm_per_c2 : float or None
+        Quadratic temperature coefficient of the scale factor, ppm/degC².
+
+        ``None`` (the default of all three) means "the scenario's value": 0 in every
+        scenario except ``scale-factor``, which uses ``SCENARIO_SCALE_FACTOR_PPM['scale-factor']``
+        (about 3 % over 23–58 degC, the ADXRS623 datasheet's sensitivity change over
+        temperature, Table 1). Give numbers (e.g. 0.0) to override the scenario.
+        Deterministic: kept by :meth:`noiseless` and :meth:`scale_noise`.
     """
 
     noise_density_dps_rthz: float = 0.04
@@ -193,6 +233,9 @@ class DeviceModel:
     rate_random_walk_dps_rts: float = 2.0e-5
     temp_noise_c: float = 0.02
     temp_quant_c: float = 0.0625
+    sf_ppm: float | None = None
+    sf_ppm_per_c: float | None = None
+    sf_ppm_per_c2: float | None = None
 
     #: The stochastic terms: zeroed by :meth:`noiseless`, scaled by :meth:`scale_noise`.
     _NOISE_FIELDS = (
@@ -202,8 +245,13 @@ class DeviceModel:
         "temp_noise_c",
     )
 
+    #: The scale-factor coefficients (None: the scenario's value).
+    _SF_FIELDS = ("sf_ppm", "sf_ppm_per_c", "sf_ppm_per_c2")
+
     def __post_init__(self):
         for f in fields(self):
+            if f.name in self._SF_FIELDS and getattr(self, f.name) is None:
+                continue
             _finite(f.name, getattr(self, f.name), "DeviceModel")
         for name in (*self._NOISE_FIELDS, "temp_quant_c"):
             _nonneg(name, getattr(self, name), "DeviceModel")
@@ -262,6 +310,57 @@ class DeviceModel:
     def white_sigma_dps(self, fs_hz: float) -> float:
         """Per-sample standard deviation of the white rate noise, deg/s."""
         return self.noise_density_dps_rthz * math.sqrt(fs_hz)
+
+    def scale_factor(self, temp_true_c):
+        """Gyro scale factor (unitless) at the true temperature: measured/true rate.
+
+        ``x = T - t_ref_c``;
+        ``SF = 1 + 1e-6 * (sf_ppm + sf_ppm_per_c*x + sf_ppm_per_c2*x**2)``
+
+        A coefficient that is ``None`` counts as 0 here; :func:`simulate` first
+        replaces ``None`` by the scenario's value. With all coefficients 0 the result
+        is exactly 1.0.
+
+        Parameters
+        ----------
+        temp_true_c : array_like
+            True die temperature ``T``, degC.
+
+        Returns
+        -------
+        ndarray
+            Scale factor, unitless.
+
+        Examples
+        --------
+        >>> float(DeviceModel().scale_factor(40.0))
+        1.0
+        >>> round(float(DeviceModel(sf_ppm=1e4, sf_ppm_per_c=700.0).scale_factor(35.0)), 6)
+        1.017
+        """
+        s0, s1, s2 = (0.0 if getattr(self, n) is None else getattr(self, n) for n in self._SF_FIELDS)
+        x = np.asarray(temp_true_c, dtype=float) - self.t_ref_c
+        return 1.0 + 1e-6 * (s0 + x * (s1 + x * s2))
+
+    def has_scale_factor_error(self) -> bool:
+        """True when some scale-factor coefficient is set and non-zero (SF not ≡ 1)."""
+        return any(getattr(self, n) not in (None, 0.0) for n in self._SF_FIELDS)
+
+    def with_scenario_scale_factor(self, scenario: str) -> "DeviceModel":
+        """A copy with each ``None`` scale-factor coefficient set to the scenario's value.
+
+        Examples
+        --------
+        >>> DeviceModel().with_scenario_scale_factor("static").sf_ppm
+        0.0
+        >>> DeviceModel(sf_ppm=0.0).with_scenario_scale_factor("scale-factor").sf_ppm
+        0.0
+        """
+        defaults = SCENARIO_SCALE_FACTOR_PPM.get(scenario, {})
+        return replace(
+            self,
+            **{n: float(defaults.get(n, 0.0)) for n in self._SF_FIELDS if getattr(self, n) is None},
+        )
 
 
 def _gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.random.Generator) -> np.ndarray:
@@ -695,12 +794,80 @@ def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion
     )
 
 
+#: Rotation schedule of ``scale-factor``: period (s), ramp time (s), peak rate range (deg/s).
+_SF_TURN_PERIOD_S = 120.0
+_SF_TURN_RAMP_S = 2.0
+_SF_TURN_PEAK_DPS = (30.0, 90.0)
+_SF_TURN_DEG = 360.0
+
+
+def _rotation_rate(t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float, ramp_s: float) -> np.ndarray:
+    """Rate of one rotation by ``angle_deg`` (signed), deg/s: raised-cosine ramps, plateau ``peak_dps``.
+
+    Lasts ``|angle_deg|/peak_dps + ramp_s``; the ramp pair integrates to
+    ``peak_dps * (duration - ramp_s) = |angle_deg|``.
+    """
+    dur = abs(angle_deg) / peak_dps + ramp_s
+    up = _smooth_step((t_s - t0) / ramp_s)
+    down = _smooth_step((t_s - (t0 + dur - ramp_s)) / ramp_s)
+    return math.copysign(peak_dps, angle_deg) * (up - down)
+
+
+def rotation_plan(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float, float], ...]:
+    """The rotations of ``scale-factor``: ``(start_s, angle_deg, peak_dps)`` each.
+
+    One full turn (±360°, so the compass deviation is the same before and after) every
+    120 s, the first 60 s after the still start, alternating clockwise and
+    anticlockwise, plateau rate uniform in 30–90 deg/s (from ``rng``), raised-cosine
+    ramps of 2 s; the unit stands still between turns. A turn that would not end 10 s
+    before the end of the run is left out.
+    """
+    turns = []
+    t0 = _hold_s(duration_s) + 0.5 * _SF_TURN_PERIOD_S
+    sign = 1.0
+    while True:
+        peak = float(rng.uniform(*_SF_TURN_PEAK_DPS))
+        if t0 + _SF_TURN_DEG / peak + _SF_TURN_RAMP_S + 10.0 > duration_s:
+            break
+        turns.append((t0, sign * _SF_TURN_DEG, peak))
+        t0 += _SF_TURN_PERIOD_S
+        sign = -sign
+    return tuple(turns)
+
+
+def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Section 4.3: the static heating run on a level turntable with repeated full turns.
+
+    The temperature profile of ``static`` (23 → 58 degC and back), a stable magnetic
+    field (no interference windows) and the turns of :func:`rotation_plan`: the
+    heading change of the gyro over a turn against the compass measures the scale
+    factor, the still periods between turns the drift. The unit turns about its own
+    axis (no kinematic acceleration); the gyro scale factor comes from
+    ``SCENARIO_SCALE_FACTOR_PPM['scale-factor']`` unless the device sets its own.
+    """
+    t = np.asarray(t_s, dtype=float)
+    temp, temp_rate = static_temperature(t, duration_s)
+    rate = np.zeros(t.size)
+    for t0, angle, peak in rotation_plan(duration_s, rng):
+        rate += _rotation_rate(t, t0, angle, peak, _SF_TURN_RAMP_S)
+    zero = np.zeros(t.size)
+    return Motion(
+        temp_c=temp,
+        temp_rate_cps=temp_rate,
+        heading_rate_dps=rate,
+        heading0_deg=40.0,
+        accel_fwd_mps2=zero,
+        accel_lat_mps2=zero,
+    )
+
+
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion``.
 SCENARIOS: dict[str, Callable[[np.ndarray, float, np.random.Generator], Motion]] = {
     "static": scenario_static,
     "static-outages": scenario_static_outages,
     "vehicle": scenario_vehicle,
     "calibration": scenario_calibration,
+    "scale-factor": scenario_scale_factor,
 }
 
 #: Default run length of each scenario, s.
@@ -709,6 +876,7 @@ DEFAULT_DURATION_S: dict[str, float] = {
     "static-outages": 3 * 3600.0,
     "vehicle": 40 * 60.0,
     "calibration": 2 * 3600.0,
+    "scale-factor": 3 * 3600.0,
 }
 
 
@@ -786,7 +954,7 @@ def simulate(
     ----------
     scenario : str
         One of :data:`SCENARIOS`: ``static``, ``static-outages``, ``vehicle``,
-        ``calibration``.
+        ``calibration``, ``scale-factor``.
     seed : int
         Seed of all randomness (trajectory details and every noise term); the same
         seed gives an identical DataFrame.
@@ -797,7 +965,8 @@ def simulate(
     fs_hz : float
         Gyro and temperature sample rate, Hz.
     device : DeviceModel, optional
-        Gyro error model (default :class:`DeviceModel`).
+        Gyro error model (default :class:`DeviceModel`). Scale-factor coefficients
+        left ``None`` take the scenario's values (:data:`SCENARIO_SCALE_FACTOR_PPM`).
     compass : CompassModel, optional
         Compass error model (default :class:`CompassModel`); the scenario's own
         interference windows are added to its ``interference``.
@@ -808,9 +977,11 @@ def simulate(
     Returns
     -------
     pandas.DataFrame
-        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z`` (+ raw
-        columns); ``attrs`` holds ``scenario``, ``seed``, ``duration_s``, ``fs_hz``,
-        and the effective ``device`` and ``compass`` models as plain dicts.
+        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, then
+        ``true_sf`` in the ``scale-factor`` scenario or whenever the scale factor is
+        not ≡ 1 (+ raw columns); ``attrs`` holds ``scenario``, ``seed``,
+        ``duration_s``, ``fs_hz``, and the effective ``device`` (scale-factor
+        coefficients resolved) and ``compass`` models as plain dicts.
 
     Raises
     ------
@@ -820,6 +991,7 @@ def simulate(
     device = DeviceModel() if device is None else device
     compass = CompassModel() if compass is None else compass
     duration = _check_args(scenario, seed, duration_s, fs_hz, device, compass)
+    device = device.with_scenario_scale_factor(scenario)
     fs = float(fs_hz)
     n = int(math.floor(duration * fs + 1e-9)) + 1
     t = np.arange(n) / fs
@@ -839,7 +1011,8 @@ def simulate(
     )
     sigma = device.white_sigma_dps(fs)
     white = sigma * rng["white"].standard_normal(n) if sigma > 0 else np.zeros(n)
-    gyro = body_rate + bias + white
+    true_sf = device.scale_factor(motion.temp_c)  # exactly 1.0 unless an sf_* is non-zero
+    gyro = true_sf * body_rate + bias + white
     temp = _temperature_reading(motion.temp_c, device, rng["temp"])
 
     mask = _compass_rows(t, compass.rate_hz)
@@ -853,6 +1026,8 @@ def simulate(
         REF_HEADING: wrap_360(heading_true),
         TRUE_BIAS_Z: bias,
     }
+    if scenario == "scale-factor" or device.has_scale_factor_error():
+        columns[TRUE_SF] = true_sf
     if raw_mag:
         columns.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
         columns.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
