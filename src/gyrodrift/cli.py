@@ -170,6 +170,12 @@ def _cmd_demo(args) -> int:
     return 0
 
 
+def _scenarios() -> list[str]:
+    from gyrodrift.simulate import SCENARIOS
+
+    return list(SCENARIOS)
+
+
 def _cmd_simulate(args) -> int:
     from gyrodrift.config import apply_settings, load_toml
     from gyrodrift.simulate import SCENARIOS, CompassModel, DeviceModel, simulate
@@ -311,11 +317,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim = sub.add_parser(
         "simulate", help="write a simulated log (input contract + ref_heading, true_bias_z)",
-        description="Seeded, deterministic simulated logs (gyrodrift.simulate): scenarios static, "
-        "static-outages, vehicle, calibration. The drift is a nonlinear function of temperature and "
-        "its rate, not the paper's linear model.",
+        description="Seeded, deterministic simulated logs (gyrodrift.simulate). The drift is a nonlinear "
+        "function of temperature and its rate, not the paper's linear model.",
     )
-    sim.add_argument("scenario", help="static, static-outages, vehicle or calibration")
+    sim.add_argument("scenario", help="one of: " + ", ".join(_scenarios()))
     sim.add_argument("-o", "--output", type=Path, required=True, help="output log (.csv or .parquet)")
     sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     sim.add_argument("--duration-s", type=float, help="length, s (default: the scenario's)")

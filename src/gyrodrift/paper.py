@@ -50,7 +50,7 @@ from gyrodrift.simulate import DEFAULT_DURATION_S, interference_windows_static, 
 
 __all__ = [
     "PaperSettings", "PaperRun", "run_paper", "OURS_TO_PAPER", "table2_comparison", "aligned", "envelope",
-    "Claim", "check_claims",
+    "Claim", "check_claims", "scale_factor_run", "scale_factor_claims", "write_paper",
 ]
 
 #: Our method names for the paper's Table 2 columns.
@@ -393,6 +393,36 @@ def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
     return written
 
 
+def scale_factor_run(settings: PaperSettings) -> dict:
+    """The scale-factor simulation of Section 4.3 (Figs. 10 and 11)."""
+    from gyrodrift.scale_factor import scale_factor_experiment
+    from gyrodrift.simulate import DEFAULT_DURATION_S
+
+    return scale_factor_experiment(
+        seed=settings.seed, duration_s=DEFAULT_DURATION_S["scale-factor"] * settings.duration_scale,
+        fs_hz=settings.fs_hz, compensator_config=settings.config,
+    )
+
+
+def scale_factor_claims(sf: dict) -> list[Claim]:
+    """Fig. 10/11 claims: the adaptive SF follows the ideal one and gives the smallest heading error."""
+    s = sf["summary"]
+    rms = s["sf_rms"]
+    part = s["sf_heading_rms_deg"]
+    whole = s["heading_rms_deg"]
+    return [
+        Claim("Fig. 10", "the adaptive SF follows the ideal SF (better than fixed parameters)", "follows",
+              f"SF error RMS: adaptive {rms['adaptive']:.2g}, fixed {rms['fixed']:.2g}, none {rms['none']:.2g}",
+              rms["adaptive"] < rms["fixed"] < rms["none"]),
+        Claim("Fig. 11", "heading error: adaptive SF < fixed SF < no SF compensation (SF share alone)",
+              "adaptive smallest", f"RMS adaptive {part['adaptive']:.2f}, fixed {part['fixed']:.2f}, "
+              f"none {part['none']:.2f} deg", part["adaptive"] < part["fixed"] < part["none"]),
+        Claim("Fig. 11", "heading error: adaptive SF < fixed SF < no SF compensation (whole heading error)",
+              "adaptive smallest", f"RMS adaptive {whole['adaptive']:.2f}, fixed {whole['fixed']:.2f}, "
+              f"none {whole['none']:.2f} deg", whole["adaptive"] < whole["fixed"] < whole["none"]),
+    ]
+
+
 def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=None, figures: bool = True) -> list:
     """Run every experiment and write ``table2.md``, ``results.json`` and the figures."""
     import json
@@ -408,12 +438,22 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
     if progress:
         progress("Allan deviation")
     allan = allan_static(runs["static"], settings.fs_hz)
-    claims = check_claims(runs, allan)
+    if progress:
+        progress("scale factor")
+    sf = scale_factor_run(settings)
+    claims = check_claims(runs, allan) + scale_factor_claims(sf)
     write_report(out_dir / "table2.md", report_markdown(runs, claims, allan, settings))
-    write_report(out_dir / "results.json", json.dumps(results_json(runs, claims, allan), indent=1))
+    numbers = results_json(runs, claims, allan)
+    numbers["scale_factor"] = sf["summary"]
+    write_report(out_dir / "results.json", json.dumps(numbers, indent=1))
     written = [out_dir / "table2.md", out_dir / "results.json"]
     if figures:
         if progress:
             progress("figures")
         written += write_figures(out_dir, runs, allan)
+        from gyrodrift import plots
+
+        path = out_dir / "fig10_11_scale_factor.png"
+        plots.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)
+        written.append(path)
     return written

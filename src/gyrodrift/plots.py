@@ -57,6 +57,7 @@ __all__ = [
     "fig_heading_error",
     "fig_heading",
     "fig_allan",
+    "fig_scale_factor",
     "save_png",
     "png_base64",
 ]
@@ -576,6 +577,45 @@ def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None =
             handles.append(Line2D([], [], ls="", marker=marker, mfc="white", mec="#333333", label=text))
     ax.legend(handles=handles, loc="best", fontsize=8)
     ax.grid(True, which="minor", alpha=0.12, linewidth=0.5)
+    return fig
+
+
+def fig_scale_factor(fig10: pd.DataFrame, fig11: pd.DataFrame):
+    """Scale factor and the heading error it causes (paper Figs. 10 and 11).
+
+    Parameters
+    ----------
+    fig10 : DataFrame
+        ``t`` (s), ``sf_ideal``, ``sf_fixed``, ``sf_adaptive`` (unitless).
+    fig11 : DataFrame
+        ``t`` (s) and heading errors (deg) ``err_none``, ``err_fixed``,
+        ``err_adaptive`` (and optionally ``err_ideal``), as returned by
+        :func:`gyrodrift.scale_factor.scale_factor_experiment`.
+    """
+    _need(fig10, ("t", "sf_ideal", "sf_fixed", "sf_adaptive"), "fig_scale_factor")
+    _need(fig11, ("t", "err_none", "err_fixed", "err_adaptive"), "fig_scale_factor")
+    x, xlabel = time_axis(_column(fig10, "t"))
+    fig, (ax_sf, ax_err) = _figure(5.6, 2)
+    styles = {"ideal": ("#1f77b4", "-"), "fixed": ("#2ca02c", "-"), "adaptive": ("#d62728", "-"), "none": ("#1f77b4", "-")}
+    for key in ("ideal", "fixed", "adaptive"):
+        color, ls = styles[key]
+        _plot(ax_sf, x, _column(fig10, f"sf_{key}"), color=color, ls=ls, lw=1.1, label=f"{key} SF")
+    ax_sf.set_ylabel("scale factor")
+    ax_sf.set_title("Scale factor: ideal, fixed parameters, adaptive (paper Fig. 10)")
+    ax_sf.legend(loc="best", fontsize=8)
+    x11, _ = time_axis(_column(fig11, "t"))
+    labels = {"none": "no SF compensation", "fixed": "fixed SF", "adaptive": "adaptive SF", "ideal": "true SF"}
+    for key in ("none", "fixed", "adaptive", "ideal"):
+        if f"err_{key}" not in fig11.columns:
+            continue
+        color, ls = styles[key] if key != "ideal" else ("#7f7f7f", "--")
+        _plot(ax_err, x11, _column(fig11, f"err_{key}"), color=color, ls=ls, lw=0.9, label=labels[key])
+    ax_err.axhline(0.0, color="#555555", lw=0.6)
+    ax_err.set_ylabel("heading error (deg)")
+    ax_err.set_title("Heading error (paper Fig. 11)")
+    ax_err.set_xlabel(xlabel)
+    ax_err.legend(loc="best", fontsize=8)
+    _envelope_note(ax_err, len(fig11))
     return fig
 
 
