@@ -1,10 +1,164 @@
-"""Input and output of tables: read logs in the input contract, write results.
+"""Input and output of logs: read any supported log in the input contract, write results.
 
-See :mod:`gyrodrift.io.tabular` for the formats, checks and error-message style.
+:func:`read_log` picks the reader by ``fmt`` or by the path:
+
+* ``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz`` (csv) and ``.parquet``, ``.pq``
+  (parquet): :mod:`gyrodrift.io.tabular`;
+* ``.ulg`` (ulog, PX4 ULog): :mod:`gyrodrift.io.ulog`;
+* ``.bag``, ``.db3``, ``.mcap`` or a directory holding ``metadata.yaml`` (rosbag):
+  :mod:`gyrodrift.io.rosbag`.
+
+See :mod:`gyrodrift.io.tabular` for the checks and the error-message style shared by all.
 """
 
 from __future__ import annotations
 
-from gyrodrift.io.tabular import check_output_path, read_log, write_table
+from pathlib import Path
+from typing import Mapping
 
-__all__ = ["read_log", "write_table", "check_output_path"]
+import pandas as pd
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.io import tabular
+from gyrodrift.io.rosbag import read_rosbag
+from gyrodrift.io.tabular import check_output_path, write_table
+from gyrodrift.io.ulog import read_ulog
+
+__all__ = ["read_log", "read_ulog", "read_rosbag", "write_table", "check_output_path"]
+
+#: Formats :func:`read_log` accepts for ``fmt``.
+FORMATS = ("csv", "parquet", "ulog", "rosbag")
+_ULOG_SUFFIXES = (".ulg",)
+_ROSBAG_SUFFIXES = (".bag", ".db3", ".mcap")
+#: Option values that mean "the file is already in contract units and frames".
+_NEUTRAL_UNITS = ("deg/s", "dps")
+_NEUTRAL_FRAME = "ned"
+
+
+def _format_from_path(path: Path) -> str | None:
+    """"ulog" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
+    name = path.name.lower()
+    if name.endswith(_ULOG_SUFFIXES):
+        return "ulog"
+    if name.endswith(_ROSBAG_SUFFIXES) or (path.is_dir() and (path / "metadata.yaml").is_file()):
+        return "rosbag"
+    for suffix, table_fmt in tabular._READ_SUFFIXES.items():
+        if name.endswith(suffix):
+            return table_fmt
+    return None
+
+
+def _log_format(path: Path, fmt: str | None) -> str | None:
+    """The format named by ``fmt`` or by the path (None: let the table reader decide)."""
+    if fmt is not None:
+        key = str(fmt).strip().lower()
+        if key not in FORMATS:
+            raise ConfigError(tabular._one_line(f"unknown log format {fmt!r}; use one of: {', '.join(FORMATS)}"))
+        return key
+    found = _format_from_path(path)
+    if found is None and path.is_file():
+        endings = sorted(tabular._READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ROSBAG_SUFFIXES)
+        raise ConfigError(
+            tabular._message(
+                str(path),
+                f"cannot tell the log format from the file name (accepted endings: {', '.join(endings)};"
+                " or a ROS 2 bag directory)",
+                f"rename the file or give the format explicitly ({', '.join(FORMATS)})",
+            )
+        )
+    return found
+
+
+def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None:
+    """Raise :class:`ConfigError` naming the first option that does not apply to ``fmt``."""
+    if not options:
+        return
+    option, value = next(iter(options.items()))
+    raise ConfigError(
+        tabular._message(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
+    )
+
+
+def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map) -> None:
+    """ULog and ROS bags state their units and frames: unit/frame/column options must stay default."""
+    changed = {}
+    if str(gyro_unit).strip().lower() not in _NEUTRAL_UNITS:
+        changed["gyro_unit"] = gyro_unit
+    if str(frame).strip().lower() != _NEUTRAL_FRAME:
+        changed["frame"] = frame
+    if column_map:
+        changed["column_map"] = dict(column_map)
+    if changed:
+        option, value = next(iter(changed.items()))
+        raise ConfigError(
+            tabular._message(
+                str(path),
+                f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
+                " frames and the reader converts them (to deg/s, NED/FRD)",
+                "leave gyro_unit, frame and column_map at their defaults",
+            )
+        )
+
+
+def read_log(
+    path,
+    *,
+    fmt: str | None = None,
+    gyro_unit: str = "deg/s",
+    frame: str = "ned",
+    column_map: Mapping[str, str] | None = None,
+    instance: int = 0,
+    mag_instance: int | None = None,
+    imu_topic: str | None = None,
+    temp_topic: str | None = None,
+    mag_topic: str | None = None,
+) -> pd.DataFrame:
+    """Read any supported log into the input contract (units and frames of :mod:`gyrodrift.conventions`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The log: CSV/Parquet table, PX4 ULog (``.ulg``), ROS 1 ``.bag``, ROS 2 bag
+        directory or ``.db3``/``.mcap`` file.
+    fmt : {"csv", "parquet", "ulog", "rosbag"}, optional
+        Format; overrides the file-name ending.
+    gyro_unit, frame, column_map
+        Table options, see :func:`gyrodrift.io.tabular.read_log`. ULog and ROS bags state
+        their units and frames, so these must stay at their defaults for them.
+    instance : int, default 0
+        ULog only: ``sensor_gyro`` instance (see :func:`gyrodrift.io.ulog.read_ulog`).
+    mag_instance : int, optional
+        ULog only: ``sensor_mag`` instance; default the magnetometer PX4 selected.
+    imu_topic, temp_topic, mag_topic : str, optional
+        ROS bags only: topics of type Imu, Temperature and MagneticField (see
+        :func:`gyrodrift.io.rosbag.read_rosbag`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The log in the input contract; ``df.attrs["format"]`` names the format.
+
+    Raises
+    ------
+    LogFormatError
+        The file does not follow its format or lacks data (see the readers).
+    ConfigError
+        Unknown ``fmt``; an ending that names no format; an option that does not apply
+        to the format; a reader's own option errors; a missing optional package.
+    """
+    path = Path(path)
+    log_fmt = _log_format(path, fmt)
+    ulog_options = {"instance": instance, "mag_instance": mag_instance}
+    ros_options = {"imu_topic": imu_topic, "temp_topic": temp_topic, "mag_topic": mag_topic}
+    set_ulog = {k: v for k, v in ulog_options.items() if v is not None and not (k == "instance" and v == 0)}
+    set_ros = {k: v for k, v in ros_options.items() if v is not None}
+    if log_fmt == "ulog":
+        _check_stated_units(path, "ulog", gyro_unit, frame, column_map)
+        _refuse_options(path, "ulog", set_ros)
+        return read_ulog(path, instance=instance, mag_instance=mag_instance)
+    if log_fmt == "rosbag":
+        _check_stated_units(path, "rosbag", gyro_unit, frame, column_map)
+        _refuse_options(path, "rosbag", set_ulog)
+        return read_rosbag(path, imu_topic=imu_topic, temp_topic=temp_topic, mag_topic=mag_topic)
+    _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
+    return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map)

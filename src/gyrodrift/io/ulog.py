@@ -1,0 +1,701 @@
+"""Read PX4 ULog flight logs (``.ulg``) into the gyrodrift input contract.
+
+Needs the optional package pyulog: ``pip install 'gyrodrift[ulog]'``.
+
+Which topics give which column
+------------------------------
+``t``
+    The gyro sample times: ``timestamp_sample`` (µs since boot) where the topic has
+    it, else ``timestamp``; converted to seconds and kept absolute (not shifted to 0).
+``gyro_x``, ``gyro_y``, ``gyro_z`` (deg/s, body FRD)
+    ``sensor_combined`` (``gyro_rad[0..2]``, rad/s, vehicle body frame, calibrated by
+    PX4) when it is at least :data:`FASTER` times faster than ``sensor_gyro`` *and* it
+    comes from the chosen gyro instance (``sensor_selection.gyro_device_id`` equals that
+    instance's ``device_id``; without ``sensor_selection``, instance 0 is taken as the
+    one PX4 used). Otherwise ``sensor_gyro`` of that instance (``x, y, z``, rad/s,
+    uncalibrated, in the FRD *board* frame its message definition states), rotated to
+    the body frame (see below). The rate is never taken from another gyro chip than
+    the temperature.
+``temp`` (degC)
+    ``sensor_gyro.temperature`` of the instance, else ``sensor_accel.temperature`` of
+    the same chip (same ``device_id``). A temperature that is exactly 0 in every sample
+    (or NaN) counts as "not measured" (simulators log it so). Interpolated linearly
+    onto the gyro times, held at the first/last value before/after it.
+``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD)
+    ``sensor_combined.accelerometer_m_s2[0..2]`` (time = ``timestamp`` +
+    ``accelerometer_timestamp_relative``), else ``sensor_accel`` of the gyro's chip
+    rotated to the body frame. Level and still reads ``acc_z`` ≈ −9.81. Interpolated
+    onto every gyro row like the temperature.
+``mag_x``, ``mag_y``, ``mag_z`` (gauss, body FRD)
+    With ``mag_instance`` given: ``sensor_mag`` of that instance (raw, board/sensor
+    frame, rotated to the body frame). Without it: the magnetometer PX4 selected
+    (``sensor_selection.mag_device_id``, else instance 0) -- from
+    ``vehicle_magnetometer`` (``magnetometer_ga[0..2]``, body frame, calibrated) when
+    that is at least :data:`FASTER` times faster than ``sensor_mag`` or there is no
+    ``sensor_mag``, else from ``sensor_mag``. Each sample goes on the row of the first
+    gyro sample at or after it; the other rows are NaN.
+``ref_heading`` (deg, [0, 360)), with ``reference=True``
+    Yaw of ``vehicle_attitude.q[0..3]`` (w, x, y, z; NED to body):
+    ``atan2(2 (w z + x y), 1 - 2 (y² + z²))``, interpolated in unwrapped form onto the
+    gyro rows, NaN outside the attitude record. For evaluation only.
+
+Board frame to body frame
+-------------------------
+``sensor_gyro``, ``sensor_accel`` and ``sensor_mag`` hold driver output in the board
+(or external sensor) frame. For a sensor whose calibration slot ``CAL_<S>n_ID`` has
+``CAL_<S>n_ROT`` >= 0 (external) that rotation is applied; otherwise (internal, or
+no calibration slot for the sensor's ``device_id``) the board rotation
+``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X_OFF``,
+``SENS_BOARD_Y_OFF``, ``SENS_BOARD_Z_OFF`` (deg) -- PX4's own order, checked on
+``sample_log_small.ulg`` (board yaw 180 deg, trims ~3 deg) where it turns
+``sensor_accel`` into ``sensor_combined``. Rotation numbers 0..25 (PX4 ``Rotation``
+enum) are supported; others raise :class:`LogFormatError`. Calibration offsets and
+scales are *not* applied: those topics stay raw.
+
+Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
+:mod:`gyrodrift.io.tabular`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import struct
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.io._align import (
+    Stream,
+    check_temperature,
+    contract_frame,
+    describe_rate,
+    increasing,
+    interp_heading,
+    interp_held,
+    median_rate_hz,
+    on_following_rows,
+    yaw_deg,
+)
+from gyrodrift.io.tabular import _message, _one_line
+
+__all__ = ["read_ulog", "FASTER"]
+
+#: ``sensor_combined`` (or ``vehicle_magnetometer``) replaces the per-instance topic
+#: when its median sample rate is at least this many times higher.
+FASTER = 4.0
+
+_INSTALL = "pip install 'gyrodrift[ulog]'"
+_MAGIC = b"ULog\x01\x12\x35"
+_FILE_HEADER_SIZE = 16
+_MSG_HEADER_SIZE = 3
+#: ULog message types of the header (definitions) section: flags, format, info,
+#: info multiple, parameter, parameter default.
+_DEFINITION_TYPES = frozenset(b"BFIMPQ")
+#: Message types that start the data section: add subscription, logging, tagged logging.
+_DATA_START_TYPES = frozenset(b"ALC")
+#: Known data-section message types.
+_DATA_TYPES = frozenset(b"ARDLCSOIMPQ")
+#: pyulog treats larger unknown messages as corruption.
+_MAX_UNKNOWN_SIZE = 10000
+_MIN_GYRO_SAMPLES = 2
+#: Accelerometer time offset in sensor_combined that means "no sample".
+_RELATIVE_TIMESTAMP_INVALID = 2**31 - 1
+_TOPICS = (
+    "sensor_combined",
+    "sensor_gyro",
+    "sensor_accel",
+    "sensor_mag",
+    "vehicle_magnetometer",
+    "vehicle_attitude",
+    "sensor_selection",
+)
+_GYRO_COMBINED = ("gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]")
+_ACC_COMBINED = ("accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]")
+_XYZ = ("x", "y", "z")
+_MAG_VEHICLE = ("magnetometer_ga[0]", "magnetometer_ga[1]", "magnetometer_ga[2]")
+_QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
+
+#: PX4 ``enum Rotation`` 0..25 (src/lib/conversion/rotation.h): (roll, pitch, yaw) deg.
+_ROTATIONS = (
+    (0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135),
+    (0, 0, 180), (0, 0, 225), (0, 0, 270), (0, 0, 315),
+    (180, 0, 0), (180, 0, 45), (180, 0, 90), (180, 0, 135),
+    (0, 180, 0), (180, 0, 225), (180, 0, 270), (180, 0, 315),
+    (90, 0, 0), (90, 0, 45), (90, 0, 90), (90, 0, 135),
+    (270, 0, 0), (270, 0, 45), (270, 0, 90), (270, 0, 135),
+    (0, 90, 0), (0, 270, 0),
+)  # fmt: skip
+
+
+# ---------------------------------------------------------------------------
+# file checks and parsing
+# ---------------------------------------------------------------------------
+
+
+def _import_pyulog():
+    """Return pyulog's ``ULog`` class, or raise :class:`ConfigError` naming the extra."""
+    try:
+        from pyulog import ULog
+    except ImportError as exc:
+        raise ConfigError(
+            f"reading PX4 ULog files needs the optional package pyulog; install it with {_INSTALL}"
+        ) from exc
+    return ULog
+
+
+def _read_file(path: Path) -> bytes:
+    """Return the file's bytes, or raise a one-line :class:`LogFormatError`."""
+    name = str(path)
+    if path.is_dir():
+        raise LogFormatError(_message(name, "is a directory, not a ULog file", "give the path of a .ulg log"))
+    if not path.exists():
+        raise LogFormatError(
+            _message(name, "input file does not exist", "check the path and the current directory")
+        )
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise LogFormatError(
+            _message(
+                name,
+                f"cannot read the input file ({exc.strerror or type(exc).__name__})",
+                "check that it is a readable file",
+            )
+        ) from exc
+    if not data:
+        raise LogFormatError(_message(name, "file is empty", "give a PX4 .ulg log"))
+    return data
+
+
+def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatError:
+    """The error for a message that runs past the end of the file."""
+    if in_header:
+        return LogFormatError(
+            _message(
+                name,
+                f"the file ends inside the ULog header section (message at byte {start}, file size {total} bytes):"
+                " the file is truncated",
+                "copy the complete .ulg from the vehicle again",
+            )
+        )
+    return LogFormatError(
+        _message(
+            name,
+            f"the file is truncated: its last message starts at byte {start} but the file ends at byte {total}",
+            "copy the complete .ulg from the vehicle again, or keep only the complete messages"
+            f" (the first {start} bytes, e.g. head -c {start})",
+        )
+    )
+
+
+def _check_framing(data: bytes, name: str) -> bool:
+    """Walk the ULog message chain; reject non-ULog, truncated or header-only files.
+
+    pyulog silently stops at a truncated last message and can loop for a long time on
+    a corrupt header section, so both are checked here first.
+
+    Returns
+    -------
+    bool
+        True if the data section holds a corrupt stretch (pyulog skips it and resyncs).
+    """
+    if len(data) < _FILE_HEADER_SIZE or not data.startswith(_MAGIC):
+        raise LogFormatError(
+            _message(
+                name,
+                "is not a ULog file (it does not start with the ULog header bytes)",
+                "give a PX4 .ulg flight log, or name the right format",
+            )
+        )
+    total = len(data)
+    pos = _FILE_HEADER_SIZE
+    in_header = True
+    while pos < total:
+        if pos + _MSG_HEADER_SIZE > total:
+            raise _truncated(name, pos, total, in_header)
+        size, kind = struct.unpack_from("<HB", data, pos)
+        if in_header and kind in _DATA_START_TYPES:
+            in_header = False
+        known = _DEFINITION_TYPES if in_header else _DATA_TYPES
+        if kind not in known and (kind == 0 or size == 0 or size > _MAX_UNKNOWN_SIZE):
+            if in_header:
+                raise LogFormatError(
+                    _message(
+                        name,
+                        f"the ULog header section is corrupt at byte {pos}",
+                        "copy the .ulg from the vehicle again; this file cannot be read",
+                    )
+                )
+            return True
+        if pos + _MSG_HEADER_SIZE + size > total:
+            raise _truncated(name, pos, total, in_header)
+        pos += _MSG_HEADER_SIZE + size
+    if in_header:
+        raise LogFormatError(
+            _message(name, "holds only the ULog header, no logged data", "give a log that recorded data")
+        )
+    return False
+
+
+def _parse(ulog_class, data: bytes, name: str):
+    """Parse the ULog bytes with pyulog's ``ulog_class`` (only the topics used here).
+
+    Any exception pyulog raises means the file cannot be parsed: it becomes one
+    :class:`LogFormatError` (the original exception is chained for debugging).
+    """
+    try:
+        # pyulog prints warnings to stdout; keep them out of gyrodrift's output
+        with contextlib.redirect_stdout(io.StringIO()):
+            return ulog_class(io.BytesIO(data), message_name_filter_list=list(_TOPICS))
+    except Exception as exc:  # any failure of a third-party parser on an untrusted file
+        raise LogFormatError(
+            _message(
+                name,
+                f"cannot be parsed as a ULog file ({_one_line(str(exc))})",
+                "check that it is a complete PX4 .ulg log",
+            )
+        ) from exc
+
+
+# ---------------------------------------------------------------------------
+# topic access
+# ---------------------------------------------------------------------------
+
+
+def _instances(ulog, topic: str) -> dict[int, Any]:
+    """All logged instances of ``topic``: multi_id -> pyulog dataset."""
+    return {d.multi_id: d for d in ulog.data_list if d.name == topic}
+
+
+def _label(topic: str, instance: int) -> str:
+    """Name a topic instance for messages: ``"sensor_gyro instance 0"``."""
+    return f"{topic} instance {instance}"
+
+
+def _fields(ds, names, name: str, where: str) -> np.ndarray:
+    """Stack fields of a dataset as float64 columns, shape (n, len(names))."""
+    missing = [f for f in names if f not in ds.data]
+    if missing:
+        raise LogFormatError(
+            _message(
+                name,
+                f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
+                "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
+                where=where,
+            )
+        )
+    return np.column_stack([np.asarray(ds.data[f], dtype=np.float64) for f in names])
+
+
+def _time_s(ds) -> np.ndarray:
+    """Sample times (s): ``timestamp_sample`` if logged, else ``timestamp`` (both µs)."""
+    key = "timestamp_sample" if "timestamp_sample" in ds.data else "timestamp"
+    return np.asarray(ds.data[key], dtype=np.float64) * 1e-6
+
+
+def _device_id(ds) -> int | None:
+    """The dataset's ``device_id`` (first sample), or None if not logged."""
+    if "device_id" not in ds.data or len(ds.data["device_id"]) == 0:
+        return None
+    return int(ds.data["device_id"][0]) & 0xFFFFFFFF
+
+
+def _selected_ids(ulog, field: str) -> set[int]:
+    """Non-zero device ids in ``sensor_selection.<field>`` over the whole log."""
+    sel = _instances(ulog, "sensor_selection").get(0)
+    if sel is None or field not in sel.data:
+        return set()
+    return {int(v) & 0xFFFFFFFF for v in sel.data[field] if int(v) != 0}
+
+
+def _pick_instance(ulog, topic: str, instance: int, name: str, option: str):
+    """Dataset of ``topic`` instance ``instance``; missing topic or instance raises."""
+    found = _instances(ulog, topic)
+    if not found:
+        raise LogFormatError(
+            _message(
+                name,
+                f"no '{topic}' topic in the log",
+                f"log '{topic}' (PX4 logger profile) or convert the log to CSV",
+            )
+        )
+    if instance not in found:
+        present = ", ".join(str(k) for k in sorted(found))
+        raise ConfigError(
+            _message(
+                name,
+                f"there is no {topic} instance {instance}; instances present: {present}",
+                f"choose one of them ({option}=N)",
+            )
+        )
+    return found[instance]
+
+
+def _same_chip(ulog, topic: str, device: int | None, instance: int):
+    """Instance of ``topic`` with ``device_id`` == ``device`` (else the same instance number)."""
+    found = _instances(ulog, topic)
+    if device is not None:
+        for multi_id in sorted(found):
+            if _device_id(found[multi_id]) == device:
+                return multi_id, found[multi_id]
+        if any(_device_id(d) is not None for d in found.values()):
+            return None, None
+    return instance, found.get(instance)
+
+
+# ---------------------------------------------------------------------------
+# frames
+# ---------------------------------------------------------------------------
+
+
+def _dcm(roll_deg: float, pitch_deg: float, yaw_deg_: float) -> np.ndarray:
+    """Rotation matrix Rz(yaw) Ry(pitch) Rx(roll) (PX4 ``Dcmf(Eulerf(...))``)."""
+    r, p, y = np.radians([roll_deg, pitch_deg, yaw_deg_])
+    rx = np.array([[1, 0, 0], [0, np.cos(r), -np.sin(r)], [0, np.sin(r), np.cos(r)]])
+    ry = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
+    rz = np.array([[np.cos(y), -np.sin(y), 0], [np.sin(y), np.cos(y), 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _rotation(number: int, param: str, name: str) -> np.ndarray:
+    """Matrix of PX4 rotation ``number`` (read from parameter ``param``)."""
+    if not 0 <= number < len(_ROTATIONS):
+        raise LogFormatError(
+            _message(
+                name,
+                f"parameter {param}={number} is a sensor rotation this reader does not support"
+                f" (supported: 0..{len(_ROTATIONS) - 1})",
+                "use the calibrated topics (sensor_combined, vehicle_magnetometer) or convert the log to CSV",
+            )
+        )
+    return _dcm(*_ROTATIONS[number])
+
+
+def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
+    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its description.
+
+    ``kind`` is the calibration name: ``"GYRO"``, ``"ACC"`` or ``"MAG"``.
+    """
+    slot = None
+    if device is not None:
+        slot = next(
+            (n for n in range(4) if int(params.get(f"CAL_{kind}{n}_ID", 0)) & 0xFFFFFFFF == device),
+            None,
+        )
+    own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
+    if own >= 0:
+        param = f"CAL_{kind}{slot}_ROT"
+        return _rotation(own, param, name), f"{param}={own}"
+    board = int(params.get("SENS_BOARD_ROT", 0))
+    trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
+    matrix = _dcm(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
+    how = f"SENS_BOARD_ROT={board}"
+    return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
+
+
+# ---------------------------------------------------------------------------
+# streams
+# ---------------------------------------------------------------------------
+
+
+def _combined_is_instance(ulog, device: int | None, instance: int) -> bool:
+    """True if ``sensor_combined`` carries gyro ``instance`` for the whole log."""
+    ids = _selected_ids(ulog, "gyro_device_id")
+    if not ids or device is None:
+        return instance == 0
+    return ids == {device}
+
+
+def _gyro_stream(ulog, instance: int, name: str) -> Stream:
+    """Rates (rad/s, body FRD) from sensor_combined or sensor_gyro (rule in the module doc)."""
+    gyro = _pick_instance(ulog, "sensor_gyro", instance, name, "instance")
+    device = _device_id(gyro)
+    t_gyro = _time_s(gyro)
+    combined = _instances(ulog, "sensor_combined").get(0)
+    if (
+        combined is not None
+        and len(combined.data["timestamp"]) >= _MIN_GYRO_SAMPLES
+        and all(f in combined.data for f in _GYRO_COMBINED)
+        and _combined_is_instance(ulog, device, instance)
+    ):
+        t_comb = np.asarray(combined.data["timestamp"], dtype=np.float64) * 1e-6
+        if median_rate_hz(t_comb) >= FASTER * median_rate_hz(t_gyro):
+            return Stream("sensor_combined", t_comb, _fields(combined, _GYRO_COMBINED, name, "sensor_combined"))
+    label = _label("sensor_gyro", instance)
+    rot, how = _board_to_body(ulog.initial_parameters, "GYRO", device, name)
+    rates = _fields(gyro, _XYZ, name, label) @ rot.T
+    return Stream(f"{label} rotated to the body frame by {how}", t_gyro, rates)
+
+
+def _temperature_stream(ulog, instance: int, name: str) -> Stream:
+    """Gyro temperature (degC): sensor_gyro, else sensor_accel of the same chip."""
+    gyro = _instances(ulog, "sensor_gyro")[instance]
+    device = _device_id(gyro)
+    candidates = [(_label("sensor_gyro", instance), gyro)]
+    acc_id, acc = _same_chip(ulog, "sensor_accel", device, instance)
+    if acc is not None:
+        candidates.append((_label("sensor_accel", acc_id), acc))
+    reasons = []
+    for label, ds in candidates:
+        if "temperature" not in ds.data:
+            reasons.append(f"'{label}' has no temperature field")
+            continue
+        temp = np.asarray(ds.data["temperature"], dtype=np.float64)
+        ok = np.isfinite(temp)
+        if ok.any() and np.any(temp[ok] != 0.0):
+            t = _time_s(ds)
+            return Stream(label, t[ok], temp[ok])
+        what = "as exactly 0 degC" if ok.any() else "as NaN"
+        reasons.append(f"'{label}' logs the temperature {what} in all {temp.size} samples (not measured)")
+    if len(candidates) == 1:
+        reasons.append("no sensor_accel of the same chip")
+    raise LogFormatError(
+        _message(
+            name,
+            f"no gyro temperature in this log: {'; '.join(reasons)}",
+            "gyrodrift needs the gyro temperature: use a log from an IMU that reports it"
+            " (simulated SITL logs do not)",
+        )
+    )
+
+
+def _acc_stream(ulog, instance: int, name: str) -> Stream:
+    """Specific force (m/s², body FRD): sensor_combined, else sensor_accel of the gyro's chip."""
+    combined = _instances(ulog, "sensor_combined").get(0)
+    if combined is not None and all(f in combined.data for f in _ACC_COMBINED):
+        t = np.asarray(combined.data["timestamp"], dtype=np.float64)
+        rel = combined.data.get("accelerometer_timestamp_relative")
+        if rel is not None:
+            rel = np.asarray(rel, dtype=np.float64)
+            t = np.where(rel == _RELATIVE_TIMESTAMP_INVALID, np.nan, t + rel)
+        values = _fields(combined, _ACC_COMBINED, name, "sensor_combined")
+        return Stream("sensor_combined", t * 1e-6, values)
+    device = _device_id(_instances(ulog, "sensor_gyro")[instance])
+    acc_id, acc = _same_chip(ulog, "sensor_accel", device, instance)
+    if acc is None:
+        raise LogFormatError(
+            _message(
+                name,
+                "no accelerometer: neither sensor_combined.accelerometer_m_s2"
+                " nor a sensor_accel of the gyro's chip",
+                "the compass needs the accelerometer for tilt; log sensor_combined",
+            )
+        )
+    label = _label("sensor_accel", acc_id)
+    rot, how = _board_to_body(ulog.initial_parameters, "ACC", _device_id(acc), name)
+    return Stream(f"{label} rotated by {how}", _time_s(acc), _fields(acc, _XYZ, name, label) @ rot.T)
+
+
+def _sensor_mag_stream(ulog, ds, instance: int, name: str) -> Stream:
+    """Raw sensor_mag (gauss) rotated to the body frame."""
+    label = _label("sensor_mag", instance)
+    rot, how = _board_to_body(ulog.initial_parameters, "MAG", _device_id(ds), name)
+    return Stream(f"{label} rotated by {how}", _time_s(ds), _fields(ds, _XYZ, name, label) @ rot.T)
+
+
+def _vehicle_mag(ulog, device: int | None):
+    """The vehicle_magnetometer instance of magnetometer ``device``, or (None, None).
+
+    Without logged device ids (older PX4: one instance, the selected magnetometer) or
+    without a ``device`` to match, instance 0 is used.
+    """
+    found = _instances(ulog, "vehicle_magnetometer")
+    if device is not None:
+        for multi_id in sorted(found):
+            if _device_id(found[multi_id]) == device:
+                return multi_id, found[multi_id]
+        if any(_device_id(d) is not None for d in found.values()):
+            return None, None
+    return (0, found[0]) if 0 in found else (None, None)
+
+
+def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream:
+    """Magnetometer (gauss, body FRD) by the rule in the module doc."""
+    if mag_instance is not None:
+        ds = _pick_instance(ulog, "sensor_mag", mag_instance, name, "mag_instance")
+        return _sensor_mag_stream(ulog, ds, mag_instance, name)
+    mags = _instances(ulog, "sensor_mag")
+    chosen = 0 if 0 in mags else (min(mags) if mags else None)
+    selected = _selected_ids(ulog, "mag_device_id")
+    if len(selected) == 1:
+        wanted = selected.pop()
+        chosen = next((k for k in sorted(mags) if _device_id(mags[k]) == wanted), chosen)
+    device = _device_id(mags[chosen]) if chosen is not None else None
+    vm_id, vehicle = _vehicle_mag(ulog, device)
+    if vehicle is not None and all(f in vehicle.data for f in _MAG_VEHICLE):
+        t_vehicle = _time_s(vehicle)
+        if chosen is None or median_rate_hz(t_vehicle) >= FASTER * median_rate_hz(_time_s(mags[chosen])):
+            label = _label("vehicle_magnetometer", vm_id)
+            return Stream(label, t_vehicle, _fields(vehicle, _MAG_VEHICLE, name, label))
+    if chosen is None:
+        raise LogFormatError(
+            _message(
+                name,
+                "no magnetometer: neither 'sensor_mag' nor 'vehicle_magnetometer' is in the log",
+                "gyrodrift needs a compass; log sensor_mag or vehicle_magnetometer",
+            )
+        )
+    return _sensor_mag_stream(ulog, mags[chosen], chosen, name)
+
+
+def _reference_stream(ulog, name: str) -> Stream | None:
+    """Heading (deg) from vehicle_attitude, or None if the topic is missing."""
+    att = _instances(ulog, "vehicle_attitude").get(0)
+    if att is None:
+        return None
+    q = _fields(att, _QUAT, name, "vehicle_attitude")
+    return Stream("vehicle_attitude", _time_s(att), yaw_deg(q[:, 0], q[:, 1], q[:, 2], q[:, 3]))
+
+
+# ---------------------------------------------------------------------------
+# public API
+# ---------------------------------------------------------------------------
+
+
+def _check_instance(value, option: str, allow_none: bool = False) -> None:
+    """Raise :class:`ConfigError` unless ``value`` is a non-negative int (or None if allowed)."""
+    if value is None and allow_none:
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ConfigError(_one_line(f"{option} must be a non-negative integer, got {value!r}"))
+
+
+def _summary(
+    name: str, t, gyro: Stream, temp: Stream, mag: Stream, mag_rows: int, acc: Stream, extra: list[str]
+) -> str:
+    """One human line describing what was read."""
+    temp_c = temp.values
+    parts = [
+        f"{Path(name).name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
+        f"gyro {median_rate_hz(t):.3g} Hz from {gyro.label}",
+        f"temperature {np.min(temp_c):.1f}..{np.max(temp_c):.1f} degC from {temp.label}"
+        f" ({describe_rate(temp.t)}, interpolated)",
+        f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_rows} rows)"
+        f" + acc from {acc.label}",
+    ]
+    return "; ".join(parts + extra)
+
+
+def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True) -> pd.DataFrame:
+    """Read a PX4 ULog (``.ulg``) into the gyrodrift input contract.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+    instance : int, default 0
+        ``sensor_gyro`` multi-instance (the IMU chip) whose rate and temperature are used.
+    mag_instance : int, optional
+        ``sensor_mag`` multi-instance to use as the compass. Default: the magnetometer
+        PX4 selected, from ``vehicle_magnetometer`` when that is logged much faster.
+    reference : bool, default True
+        Add ``ref_heading`` (deg) from ``vehicle_attitude`` when the log has it.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per gyro sample: ``t`` (s, absolute, strictly increasing), ``gyro_z``,
+        ``gyro_x``, ``gyro_y`` (deg/s, body FRD; ``gyro_z`` > 0 = heading increasing),
+        ``temp`` (degC), ``mag_x``, ``mag_y``, ``mag_z`` (gauss, body FRD, NaN on rows
+        without a new sample), ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force,
+        body FRD) and, with ``reference``, ``ref_heading`` (deg, [0, 360)). ``df.attrs``:
+        ``source``, ``format`` ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"),
+        ``compass`` ("mag"), ``mag_unit`` ("gauss"), ``acc_unit`` ("m/s^2"),
+        ``topics`` (column group -> topic used) and ``summary`` (one line).
+
+    Raises
+    ------
+    LogFormatError
+        Missing, empty, non-ULog, truncated or corrupt file; a missing topic or field;
+        fewer than 2 gyro samples; no gyro temperature (e.g. logged as 0 in every
+        sample); an implausible temperature; no magnetometer sample within the gyro
+        record; an unsupported sensor rotation.
+    ConfigError
+        pyulog is not installed; ``instance`` or ``mag_instance`` is not a
+        non-negative integer or not in the log (the message lists those present).
+
+    Notes
+    -----
+    Samples with a repeated time stamp are dropped (the first is kept) and counted in
+    the summary; see the module documentation for the topic and alignment rules.
+    """
+    _check_instance(instance, "instance")
+    _check_instance(mag_instance, "mag_instance", allow_none=True)
+    ulog_class = _import_pyulog()
+    path = Path(path)
+    name = str(path)
+    data = _read_file(path)
+    corrupt = _check_framing(data, name)
+    ulog = _parse(ulog_class, data, name)
+
+    gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
+    if gyro.t.size < _MIN_GYRO_SAMPLES:
+        raise LogFormatError(
+            _message(
+                name,
+                f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
+                f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples",
+            )
+        )
+    temp, _ = increasing(_temperature_stream(ulog, instance, name))
+    check_temperature(name, temp.label, temp.values)
+    acc, _ = increasing(_acc_stream(ulog, instance, name))
+    mag, _ = increasing(_mag_stream(ulog, mag_instance, name))
+    t = gyro.t
+    mag_on_rows, mag_rows = on_following_rows(t, mag.t, mag.values)
+    if mag_rows == 0:
+        raise LogFormatError(
+            _message(
+                name,
+                f"no magnetometer sample of {mag.label} falls within the gyro record"
+                f" (t = {t[0]:.3f}..{t[-1]:.3f} s)",
+                "check the log; the compass and the gyro must overlap in time",
+            )
+        )
+
+    extra = []
+    ref = _reference_stream(ulog, name) if reference else None
+    ref_heading = None
+    if ref is not None:
+        ref, _ = increasing(ref)
+        ref_heading = interp_heading(ref.t, ref.values, t)
+        extra.append("ref_heading from vehicle_attitude")
+    elif reference:
+        extra.append("no vehicle_attitude, so no ref_heading")
+    if dropped:
+        extra.append(f"{dropped} gyro samples with a repeated time stamp dropped")
+    if corrupt or ulog.file_corruption:
+        extra.append("the file holds a corrupt stretch that pyulog skipped")
+    if gyro.label == "sensor_combined" and int(ulog.initial_parameters.get("TC_G_ENABLE", 0)) == 1:
+        extra.append("PX4 thermal gyro compensation was on (TC_G_ENABLE=1)")
+
+    attrs = {
+        "source": name,
+        "format": "ulog",
+        "gyro_unit": "deg/s",
+        "frame": "ned",
+        "compass": "mag",
+        "mag_unit": "gauss",
+        "acc_unit": "m/s^2",
+        "topics": {
+            "gyro": gyro.label,
+            "temp": temp.label,
+            "mag": mag.label,
+            "acc": acc.label,
+            "ref_heading": ref.label if ref is not None else None,
+        },
+        "summary": _summary(name, t, gyro, temp, mag, mag_rows, acc, extra),
+    }
+    return contract_frame(
+        t,
+        np.degrees(gyro.values),
+        interp_held(temp.t, temp.values, t),
+        mag_on_rows,
+        interp_held(acc.t, acc.values, t),
+        ref_heading,
+        attrs,
+    )
