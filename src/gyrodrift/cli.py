@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 
 from gyrodrift import __version__
+from gyrodrift._cliargs import add_input_options, read_input
 from gyrodrift.compensate import CompensatorConfig, compensate
 from gyrodrift.config import load_config
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -41,18 +42,6 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, then the other input columns.
 """
-
-
-def _parse_map(text: str | None) -> dict[str, str] | None:
-    if not text:
-        return None
-    mapping = {}
-    for item in text.split(","):
-        new, sep, old = item.partition("=")
-        if not sep or not new.strip() or not old.strip():
-            raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
-        mapping[new.strip()] = old.strip()
-    return mapping
 
 
 def _config(args) -> CompensatorConfig:
@@ -93,14 +82,6 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_input_options(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("input")
-    g.add_argument("--format", choices=["csv", "parquet"], help="input format (default: by suffix)")
-    g.add_argument("--gyro-unit", default="deg/s", help="unit of gyro_* columns: deg/s (default) or rad/s")
-    g.add_argument("--frame", default="ned", help="ned (default) or enu (ROS REP-103)")
-    g.add_argument("--map", metavar="NEW=OLD,...", help="rename input columns to contract names, e.g. gyro_z=gz,temp=T")
-
-
 def _read_summary(log, path) -> str:
     dur = float(log["t"].iloc[-1] - log["t"].iloc[0])
     rate = (len(log) - 1) / dur if dur > 0 else float("nan")
@@ -137,9 +118,7 @@ def _cmd_compensate(args) -> int:
     cfg = _config(args)
     if args.profile:
         cfg = warm_config(load_profile(args.profile), cfg)
-    log = read_log(
-        args.input, fmt=args.format, gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(args.map)
-    )
+    log = read_input(args.input, args)
     out = compensate(log, cfg, source=str(args.input))
     write_table(out, args.output)
     if args.save_profile:
@@ -213,15 +192,13 @@ def _cmd_compare(args) -> int:
     from gyrodrift.metrics import markdown_table
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(METHODS)
-    log = read_log(
-        args.input, fmt=args.format, gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(args.map)
-    )
+    log = read_input(args.input, args)
     if "ref_heading" not in log.columns and "true_bias_z" not in log.columns:
         raise ConfigError(
             f"{args.input}: compare needs a reference: a ref_heading column (e.g. a fibre-optic gyro) "
             "or true_bias_z (simulated logs)"
         )
-    calibration = read_log(args.calibration) if args.calibration else None
+    calibration = read_input(args.calibration, args, with_format=False) if args.calibration else None
     outputs, skipped = run_methods(log, methods, _config(args), calibration=calibration)
     table = summary_table(outputs)
     if args.json:
@@ -279,12 +256,12 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Compensate the heading-axis gyro of a log; write the output table atomically.",
     )
-    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet)")
+    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     c.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
-    _add_input_options(c)
+    add_input_options(c)
     _add_method_options(c)
     c.set_defaults(func=_cmd_compensate)
 
@@ -297,7 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--methods", help="comma-separated (default: all)")
     cmp_.add_argument("--calibration", type=Path, help="a still heating run of the same device, for poly3")
     cmp_.add_argument("--json", action="store_true", help="machine-readable output")
-    _add_input_options(cmp_)
+    add_input_options(cmp_)
     _add_method_options(cmp_)
     cmp_.set_defaults(func=_cmd_compare)
 

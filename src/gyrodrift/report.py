@@ -44,6 +44,7 @@ import pandas as pd
 
 from gyrodrift.compensate import CompensatorConfig
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
+from gyrodrift._cliargs import add_input_options
 from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = ["ALLAN_METHODS", "build_report", "write_report", "report_command", "add_report_parser"]
@@ -679,18 +680,6 @@ def write_report(path, html: str) -> None:
 # ----------------------------------------------------------------------- command
 
 
-def _parse_map(text: str | None) -> dict[str, str] | None:
-    if not text:
-        return None
-    mapping = {}
-    for item in text.split(","):
-        new, sep, old = item.partition("=")
-        if not sep or not new.strip() or not old.strip():
-            raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
-        mapping[new.strip()] = old.strip()
-    return mapping
-
-
 def _parse_methods(text: str) -> tuple[str, ...]:
     from gyrodrift.compare import METHODS
 
@@ -724,7 +713,8 @@ def report_command(args: argparse.Namespace) -> int:
     line prints them as one line and exits 2).
     """
     from gyrodrift.config import load_config
-    from gyrodrift.io import check_output_path, read_log
+    from gyrodrift._cliargs import read_input
+    from gyrodrift.io import check_output_path
     from gyrodrift.plots import _require_matplotlib
 
     _require_matplotlib()  # before the long work, not after it
@@ -738,9 +728,8 @@ def report_command(args: argparse.Namespace) -> int:
         )
     methods = _parse_methods(args.methods)
     config = load_config(args.config) if getattr(args, "config", None) else CompensatorConfig()
-    options = dict(gyro_unit=args.gyro_unit, frame=args.frame, column_map=_parse_map(getattr(args, "map", None)))
-    log = read_log(args.input, fmt=getattr(args, "format", None), **options)
-    calibration = read_log(args.calibration, **options) if getattr(args, "calibration", None) else None
+    log = read_input(args.input, args)
+    calibration = read_input(args.calibration, args, with_format=False) if args.calibration else None
     outputs, skipped = _run_all(log, methods, config, calibration)
     if not outputs:
         reasons = "; ".join(f"{m}: {r}" for m, r in skipped.items())
@@ -767,7 +756,7 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
         "read, an error table per method, figures after Feng, Li, Zhang (2015) Figs. 1-9 and the settings. "
         "Needs matplotlib (gyrodrift[plot]); the Allan figure needs allantools (gyrodrift[allan]).",
     )
-    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet)")
+    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
     p.add_argument("-o", "--output", type=Path, required=True, help="HTML file to write (atomically)")
     p.add_argument(
         "--methods", default=",".join(METHODS),
@@ -776,10 +765,7 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--calibration", type=Path, metavar="CAL.csv", help="static heating run of the same device, for poly3")
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
-    p.add_argument("--format", choices=["csv", "parquet"], help="input format (default: by suffix)")
-    p.add_argument("--gyro-unit", default="deg/s", help="unit of gyro_* columns: deg/s (default) or rad/s")
-    p.add_argument("--frame", default="ned", help="ned (default) or enu (ROS REP-103)")
-    p.add_argument("--map", metavar="NEW=OLD,...", help="rename input columns to contract names, e.g. gyro_z=gz,temp=T")
+    add_input_options(p)
     p.add_argument("--title", help="page title (default: 'gyrodrift report: <input file name>')")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(func=report_command)

@@ -24,7 +24,7 @@ from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.ulog import read_ulog
 
-__all__ = ["read_log", "read_ulog", "read_rosbag", "write_table", "check_output_path"]
+__all__ = ["FORMATS", "read_log", "read_ulog", "read_rosbag", "write_table", "check_output_path"]
 
 #: Formats :func:`read_log` accepts for ``fmt``.
 FORMATS = ("csv", "parquet", "ulog", "rosbag")

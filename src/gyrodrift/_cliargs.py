@@ -1,0 +1,54 @@
+"""Command-line pieces shared by every subcommand that reads a log (no business logic here)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.io import FORMATS, read_log
+
+__all__ = ["parse_map", "add_input_options", "read_input"]
+
+
+def parse_map(text: str | None) -> dict[str, str] | None:
+    """``NEW=OLD,NEW=OLD`` → ``{NEW: OLD}``; a malformed item is a :class:`ConfigError`."""
+    if not text:
+        return None
+    mapping = {}
+    for item in text.split(","):
+        new, sep, old = item.partition("=")
+        if not sep or not new.strip() or not old.strip():
+            raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
+        mapping[new.strip()] = old.strip()
+    return mapping
+
+
+def add_input_options(p: argparse.ArgumentParser) -> None:
+    """Options that say how to read the input log (every format)."""
+    g = p.add_argument_group("input")
+    g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
+    g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
+    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
+    g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
+    g.add_argument("--instance", type=int, default=0, help="PX4 ULog: sensor_gyro instance (default 0)")
+    g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected)")
+    g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
+    g.add_argument("--temp-topic", help="ROS bag: sensor_msgs/Temperature topic (default: the only one)")
+    g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")
+
+
+def read_input(path: Path, args: argparse.Namespace, *, with_format: bool = True):
+    """Read ``path`` with the options of :func:`add_input_options`."""
+    return read_log(
+        path,
+        fmt=args.format if with_format else None,
+        gyro_unit=args.gyro_unit,
+        frame=args.frame,
+        column_map=parse_map(args.map),
+        instance=args.instance,
+        mag_instance=args.mag_instance,
+        imu_topic=args.imu_topic,
+        temp_topic=args.temp_topic,
+        mag_topic=args.mag_topic,
+    )
