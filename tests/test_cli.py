@@ -148,3 +148,19 @@ def test_ulog_too_short_is_a_clear_error(shared_data, tmp_path, capsys):
     assert main(["compensate", str(log), "-o", str(tmp_path / "o.csv")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "sample_log_small.ulg" in err[0] and "initialisation needs" in err[0]
+
+
+def test_progress_bar_only_on_a_terminal():
+    import io
+
+    from gyrodrift._progress import progress_iter
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    pipe, tty = io.StringIO(), Tty()
+    assert list(progress_iter(range(5), 5, "x", stream=pipe)) == list(range(5))
+    assert pipe.getvalue() == ""
+    assert list(progress_iter(range(5), 5, "x", stream=tty)) == list(range(5))
+    assert "5/5" in tty.getvalue() or "100%" in tty.getvalue()

@@ -111,6 +111,12 @@ def _result_lines(out) -> list[str]:
     return lines
 
 
+def _bar(desc: str):
+    from gyrodrift._progress import progress_iter
+
+    return lambda iterable, total: progress_iter(iterable, total, desc)
+
+
 def _cmd_compensate(args) -> int:
     from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
 
@@ -119,7 +125,7 @@ def _cmd_compensate(args) -> int:
     if args.profile:
         cfg = warm_config(load_profile(args.profile), cfg)
     log = read_input(args.input, args)
-    out = compensate(log, cfg, source=str(args.input))
+    out = compensate(log, cfg, source=str(args.input), progress=_bar("compensating"))
     write_table(out, args.output)
     if args.save_profile:
         save_profile(profile_from_run(out), args.save_profile)

@@ -552,6 +552,7 @@ def compensate_arrays(
     *,
     estimator=None,
     source: str = "arrays",
+    progress=None,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -571,6 +572,9 @@ def compensate_arrays(
         baselines that need more than settings, e.g. ``poly3``).
     source : str
         Name used in error messages (the file name).
+    progress : callable, optional
+        ``progress(iterable, total)`` wraps the loop over update intervals (e.g. a
+        progress bar); it must yield the same items.
     """
     cfg = config or CompensatorConfig()
     t = np.asarray(t_s, dtype=float)
@@ -649,7 +653,10 @@ def compensate_arrays(
     ends = np.r_[boundaries, n - 1]
     is_boundary = np.zeros(n, dtype=bool)
     is_boundary[boundaries] = True
-    for s, b in zip(starts, ends):
+    intervals = zip(starts, ends)
+    if progress is not None:
+        intervals = progress(intervals, len(starts))
+    for s, b in intervals:
         if s > b:
             continue
         rows = slice(s, b + 1)
@@ -729,7 +736,12 @@ def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass) -
 
 
 def compensate(
-    log: pd.DataFrame, config: CompensatorConfig | None = None, *, estimator=None, source: str | None = None
+    log: pd.DataFrame,
+    config: CompensatorConfig | None = None,
+    *,
+    estimator=None,
+    source: str | None = None,
+    progress=None,
 ) -> pd.DataFrame:
     """Compensate a log in the input contract; return the output table.
 
@@ -744,6 +756,8 @@ def compensate(
         A fresh estimator instance overriding ``config.estimator``.
     source : str, optional
         Name for error messages; defaults to ``log.attrs["source"]``.
+    progress : callable, optional
+        See :func:`compensate_arrays`.
 
     Returns
     -------
@@ -772,6 +786,7 @@ def compensate(
         config=config,
         estimator=estimator,
         source=source,
+        progress=progress,
     )
     for col in log.columns:
         if col in (T, HEADING):
