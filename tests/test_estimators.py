@@ -140,11 +140,11 @@ def test_kernels_reject_bad_fading_and_joseph_form_is_symmetric():
 
 def test_registry():
     assert {"stkf", "kf", "stkf-s1", "lsm", "fixed", "poly3"} <= set(ESTIMATORS)
-    for name in ("stkf", "kf", "stkf-s1", "lsm", "fixed"):
+    for name in ("stkf", "kf", "stkf-s1", "lsm", "fixed", "adaptive"):
         est = make_estimator(name)
         assert isinstance(est, DriftEstimator)
         assert est.params.shape == (3,) and est.cov.shape == (3, 3)
-    with pytest.raises(ConfigError, match="choose one of: fixed, kf, lsm, poly3, stkf, stkf-s1"):
+    with pytest.raises(ConfigError, match="choose one of: adaptive, fixed, kf, lsm, poly3, stkf, stkf-s1"):
         make_estimator("nope")
 
 

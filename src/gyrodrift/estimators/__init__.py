@@ -9,6 +9,7 @@ name         estimator
 ``lsm``      the paper's "modified LSM": a, b, c refitted over a sliding window
 ``fixed``    fixed a, b, c (with a whole-log fit: the paper's MLR, non-causal)
 ``poly3``    PX4-style cubic thermal calibration from a separate heating run
+``adaptive`` centred temperature, innovation-based fading factor (beyond the paper)
 ===========  ==================================================================
 """
 
@@ -20,12 +21,14 @@ from gyrodrift.estimators.base import (
     make_estimator,
     register,
 )
+from gyrodrift.estimators.adaptive import AdaptiveKalman
 from gyrodrift.estimators.kalman import BiasKalman, KalmanConfig, KalmanDrift, PlainKalmanDrift
 from gyrodrift.estimators.lsq import FixedParams, WindowedLsm, fit_linear_drift
 from gyrodrift.estimators.poly import CubicCalibration, Poly3Calibration, fit_poly3
 
 __all__ = [
     "ESTIMATORS",
+    "AdaptiveKalman",
     "DriftEstimator",
     "LinearDrift",
     "Observation",
