@@ -68,12 +68,7 @@ class AdaptiveKalman(LinearDrift):
         self.temp_ref_c: float | None = None
         self._x_abs0 = np.array(config.x0, dtype=float)
         self._z = self._x_abs0.copy()  # [a, b, c'] once T_ref is known
-        if config.p0_cov is not None:
-            self._P = np.array(config.p0_cov, dtype=float)
-        else:
-            self._P = np.diag(np.square(np.array(config.p0_sd, dtype=float)))
-        self._max_var = np.square(np.array(config.max_sd or config.p0_sd, dtype=float))
-        self._Q = np.diag(np.square(np.array(config.q_sd, dtype=float)))
+        self._P, self._max_var, self._Q = config.matrices()
         self._V: np.ndarray | None = None
         #: Fading factor of the last update (diagnostics).
         self.last_lambda = 1.0

@@ -89,6 +89,15 @@ class KalmanConfig:
                 ok = False
             if not ok:
                 raise ConfigError("p0_cov must be a symmetric positive definite 3x3 matrix")
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Initial covariance P0, the variance cap (diagonal) and Q of these settings."""
+        if self.p0_cov is not None:
+            P0 = np.array(self.p0_cov, dtype=float)
+        else:
+            P0 = np.diag(np.square(np.array(self.p0_sd, dtype=float)))
+        max_var = np.square(np.array(self.max_sd or self.p0_sd, dtype=float))
+        return P0, max_var, np.diag(np.square(np.array(self.q_sd, dtype=float)))
         if not all(float(e) >= 0 for e in self.q_sd):
             raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
 
@@ -113,12 +122,7 @@ class KalmanDrift(LinearDrift):
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
         self._x = np.array(config.x0, dtype=float)
-        if config.p0_cov is not None:
-            self._P = np.array(config.p0_cov, dtype=float)
-        else:
-            self._P = np.diag(np.square(np.array(config.p0_sd, dtype=float)))
-        self._max_var = np.square(np.array(config.max_sd or config.p0_sd, dtype=float))
-        self._Q = np.diag(np.square(np.array(config.q_sd, dtype=float)))
+        self._P, self._max_var, self._Q = config.matrices()
         #: Innovation and its covariance of the last update (diagnostics).
         self.last_innovation: np.ndarray | None = None
         self.last_S: np.ndarray | None = None
