@@ -83,6 +83,8 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
 
 
 def _read_summary(log, path) -> str:
+    if log.attrs.get("summary"):  # ULog and ROS readers say which topics and instances they used
+        return f"read {path}: {log.attrs['summary']}"
     dur = float(log["t"].iloc[-1] - log["t"].iloc[0])
     rate = (len(log) - 1) / dur if dur > 0 else float("nan")
     temp = log["temp"]
