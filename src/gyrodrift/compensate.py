@@ -350,7 +350,10 @@ class _Aiding:
 
 
 def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float, source: str):
-    """Initialisation from the first window (module notes); returns the anchor row.
+    """Initialisation from the first window (module notes).
+
+    Returns the anchor row (first compass sample) and whether the filter took the
+    initial measurement (False when no sub-window was motionless).
 
     Each motionless sub-window gives one drift measurement, the mean gyro rate (the
     paper's y1..y3). Sub-windows with motion give none: the filter then starts from
@@ -384,7 +387,7 @@ def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float
     if aid.stack:
         aid.accepted.extend((init_end_s, m) for m in reversed(aid.stack))
         aid.estimator.update(aid._observation(init_end_s, n_new=len(aid.stack)))
-    return int(first_compass[0])
+    return int(first_compass[0]), bool(aid.stack)
 
 
 def _interval_index(t_s, t_start_s: float, interval_s: float):
@@ -492,7 +495,7 @@ class Compensator:
         self._buf = []
         t, g, T, Tp, heading, norm, dip, _gap = cols
         _, _, I_raw, I_T, I_Tp, _, _, _ = _rows(None, t, g, T, Tp, _zero_drift)
-        anchor_row = _initialise(self._aid, t, g, heading, I_raw, I_T, I_Tp, float(t[-1]), self.source)
+        anchor_row, updated = _initialise(self._aid, t, g, heading, I_raw, I_T, I_Tp, float(t[-1]), self.source)
         self._aid.field_ref = _field_reference(norm, dip)
         bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
             None, t, g, T, Tp, self._aid.estimator.drift
@@ -507,7 +510,7 @@ class Compensator:
         params = self._aid.estimator.params
         n = t.size
         update = np.zeros(n, dtype=int)
-        update[-1] = 1
+        update[-1] = int(updated)
         reason = np.full(n, gating.INIT, dtype=object)
         reason[-1] = ""
         return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading)
@@ -664,7 +667,7 @@ def compensate_arrays(
 
     sl = slice(0, e + 1)
     _, _, I_raw0, I_T0, I_Tp0, _, _, _ = _rows(None, t[sl], g[sl], T[sl], Tp[sl], _zero_drift)
-    anchor_row = _initialise(aid, t[sl], g[sl], heading[sl], I_raw0, I_T0, I_Tp0, float(t[e]), source)
+    anchor_row, updated = _initialise(aid, t[sl], g[sl], heading[sl], I_raw0, I_T0, I_Tp0, float(t[e]), source)
     aid.field_ref = _field_reference(norm[sl], dip[sl])
     field_bad = (
         gating.field_anomaly(norm, dip, *aid.field_ref, cfg.gate) if aid.field_ref else np.zeros(n, bool)
@@ -689,7 +692,7 @@ def compensate_arrays(
 
     run(sl)
     reason[: e] = gating.INIT
-    update[e] = 1
+    update[e] = int(updated)
     aid.begin(snap_at(e), float(t[e]))
     anchor = float(heading[anchor_row] - out_I_rate[anchor_row])
 
