@@ -315,9 +315,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
 
+    from gyrodrift.fleet import add_batch_parser
     from gyrodrift.report import add_report_parser
 
     add_report_parser(sub)
+    add_batch_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")

@@ -464,6 +464,8 @@ class Compensator:
             to compute a tilt-compensated heading, and to detect field anomalies).
         """
         t_s, g, T = float(t_s), float(gyro_z_dps), float(temp_c)
+        if not math.isfinite(t_s):
+            raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
         held = False
         if self._prev is None:
             if not (math.isfinite(g) and math.isfinite(T)):
@@ -641,8 +643,9 @@ def compensate_arrays(
             f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
         )
     held = ~(np.isfinite(g_in) & np.isfinite(T_in))
-    g = pd.Series(g_in).ffill().to_numpy()
-    T = pd.Series(T_in).ffill().to_numpy()
+    # An empty or non-finite (inf) cell holds the previous value, as in Compensator.push.
+    g = pd.Series(np.where(np.isfinite(g_in), g_in, np.nan)).ffill().to_numpy()
+    T = pd.Series(np.where(np.isfinite(T_in), T_in, np.nan)).ffill().to_numpy()
     gap = held | (np.r_[0.0, np.diff(t)] > cfg.gate.max_gap_s)
     heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
     Tp = temp_rate(t, T, cfg.temp_rate)

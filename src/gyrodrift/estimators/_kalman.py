@@ -79,5 +79,5 @@ def cap_covariance(P: np.ndarray, max_var: np.ndarray) -> np.ndarray:
     lam, V = np.linalg.eigh(0.5 * (M + M.T))
     if lam[-1] <= 1.0:
         return P
-    clipped = (V * np.minimum(lam, 1.0)) @ V.T
-    return clipped * np.outer(scale, scale)
+    clipped = (V * np.minimum(lam, 1.0)) @ V.T * np.outer(scale, scale)
+    return 0.5 * (clipped + clipped.T)

@@ -1,0 +1,385 @@
+"""Throughput of gyrodrift against the memory, I/O and per-sample limits (see README.md here).
+
+Run from the repository root::
+
+    python benchmarks/bench_throughput.py                 # 10 million rows
+    python benchmarks/bench_throughput.py --rows 1000000  # quicker
+
+All measurements use one generated log (static device, 100 Hz, compass on every 10th
+row) written once as CSV and as Parquet in a temporary folder, and print one table with
+PASS/FAIL against the targets. filterpy and imufusion rows are skipped when the package
+is missing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pa_csv
+import pyarrow.parquet as pa_pq
+
+FS_HZ = 100.0
+COMPASS_EVERY = 10
+#: Targets: core >= 20 % of the copy rate; end-to-end <= 1.5 x the I/O limit; streaming <= 20 µs/sample.
+CORE_VS_COPY_MIN = 0.20
+E2E_VS_IO_MAX = 1.5
+STREAM_US_MAX = 20.0
+
+
+# --------------------------------------------------------------------------- data
+
+
+def true_drift(temp_c):
+    """Drift of the generated gyro, deg/s (linear in temperature)."""
+    return 0.2 + 0.01 * (temp_c - 25.0)
+
+
+def make_log(n: int, seed: int = 0) -> dict[str, np.ndarray]:
+    """Static device at 100 Hz: drift linear in a slow temperature cycle, compass every 10th row.
+
+    Columns t (s), gyro_z (deg/s), temp (degC, 0.0625 steps), heading (deg, NaN off compass rows).
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n, dtype=float) / FS_HZ
+    temp = np.round((25.0 + 10.0 * np.sin(2 * np.pi * t / 7200.0)) / 0.0625) * 0.0625
+    gyro = true_drift(temp) + 0.4 * rng.standard_normal(n)
+    heading = np.full(n, np.nan)
+    heading[::COMPASS_EVERY] = np.mod(123.0 + 0.5 * rng.standard_normal(heading[::COMPASS_EVERY].size), 360.0)
+    return {"t": t, "gyro_z": gyro, "temp": temp, "heading": heading}
+
+
+def arrow_table(cols: dict[str, np.ndarray]) -> pa.Table:
+    """Arrow table with NaN as null (empty CSV cells), as a logger would write."""
+    return pa.table({k: pa.array(v, from_pandas=True) for k, v in cols.items()})
+
+
+def write_inputs(cols, folder: Path) -> dict[str, Path]:
+    table = arrow_table(cols)
+    paths = {"csv": folder / "in.csv", "parquet": folder / "in.parquet"}
+    pa_csv.write_csv(table, paths["csv"])
+    pa_pq.write_table(table, paths["parquet"])
+    return paths
+
+
+# --------------------------------------------------------------------------- measurements
+
+
+def timed(fn, repeat: int = 1):
+    """Best wall time (s) of ``repeat`` calls, and the last result."""
+    best, result = math.inf, None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, result
+
+
+def bench_core(cols, repeat: int):
+    from gyrodrift.compensate import compensate_arrays
+
+    return timed(lambda: compensate_arrays(cols["t"], cols["gyro_z"], cols["temp"], cols["heading"]), repeat)
+
+
+def copy_sources(cols, out) -> list[np.ndarray]:
+    """The input columns and the output columns as arrays (gate_reason as 1-byte codes)."""
+    arrays = [np.ascontiguousarray(v) for v in cols.values()]
+    for name in out.columns:
+        if name == "gate_reason":
+            arrays.append(np.unique(out[name].to_numpy(dtype=object).astype(str), return_inverse=True)[1].astype(np.int8))
+        else:
+            arrays.append(np.ascontiguousarray(out[name].to_numpy()))
+    return arrays
+
+
+def bench_copy(sources: list[np.ndarray], repeat: int) -> float:
+    targets = [np.empty_like(a) for a in sources]
+    for dst in targets:  # touch the pages once, so the copy measures bandwidth, not page faults
+        dst.fill(0)
+
+    def copy_all():
+        for dst, src in zip(targets, sources):
+            np.copyto(dst, src)
+
+    return timed(copy_all, repeat)[0]
+
+
+def bench_io(path: Path, fmt: str, out_table: pa.Table, folder: Path, repeat: int) -> tuple[float, float]:
+    """pyarrow alone: read the input file; write a table with the output columns in the same format."""
+    if fmt == "csv":
+        read = lambda: pa_csv.read_csv(path)  # noqa: E731
+        write = lambda: pa_csv.write_csv(out_table, folder / "io_out.csv")  # noqa: E731
+    else:
+        read = lambda: pa_pq.read_table(path)  # noqa: E731
+        write = lambda: pa_pq.write_table(out_table, folder / "io_out.parquet")  # noqa: E731
+    return timed(read, repeat)[0], timed(write, repeat)[0]
+
+
+def _child_env() -> dict[str, str]:
+    """Environment in which ``python -m gyrodrift`` imports the gyrodrift this script imported."""
+    import gyrodrift
+
+    src = str(Path(gyrodrift.__file__).resolve().parents[1])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([src, env["PYTHONPATH"]]) if env.get("PYTHONPATH") else src
+    return env
+
+
+def bench_cli_rss(in_path: Path, out_path: Path) -> tuple[float, float]:
+    """``gyrodrift compensate IN -o OUT -q`` in a fresh process: wall time (s) and its peak RSS (MiB).
+
+    The child is reaped with :func:`os.wait4`, which returns that child's own resource usage.
+    """
+    cmd = [sys.executable, "-m", "gyrodrift", "compensate", str(in_path), "-o", str(out_path), "-q"]
+    with tempfile.TemporaryFile() as err:
+        start = time.perf_counter()
+        proc = subprocess.Popen(cmd, env=_child_env(), stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        seconds = time.perf_counter() - start
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        if proc.returncode != 0:
+            err.seek(0)
+            raise RuntimeError(f"gyrodrift compensate failed ({proc.returncode}): {err.read().decode()[-500:]}")
+    scale = 1.0 if sys.platform == "darwin" else 1024.0  # ru_maxrss: bytes on macOS, KiB on Linux
+    return seconds, usage.ru_maxrss * scale / 2**20
+
+
+def bench_startup() -> float:
+    """Wall time (s) of ``python -m gyrodrift --version``: process start and imports, the fixed cost of (d)."""
+    cmd = [sys.executable, "-m", "gyrodrift", "--version"]
+    return timed(lambda: subprocess.run(cmd, env=_child_env(), check=True, capture_output=True), 3)[0]
+
+
+def bench_inprocess(in_path: Path, out_path: Path) -> dict[str, float]:
+    """Breakdown of the end-to-end run in this process: read_log, compensate, write_table (s)."""
+    from gyrodrift.compensate import compensate
+    from gyrodrift.io import read_log, write_table
+
+    t_read, log = timed(lambda: read_log(in_path))
+    t_comp, out = timed(lambda: compensate(log))
+    t_write, _ = timed(lambda: write_table(out, out_path))
+    return {"read_log": t_read, "compensate": t_comp, "write_table": t_write}
+
+
+def bench_stream(cols, m: int) -> float:
+    """µs per sample of ``Compensator.push`` over the first ``m`` rows."""
+    from gyrodrift.compensate import Compensator
+
+    t, g, T, h = (cols[k][:m].tolist() for k in ("t", "gyro_z", "temp", "heading"))
+    comp = Compensator()
+    push = comp.push
+    start = time.perf_counter()
+    for i in range(m):
+        push(t[i], g[i], T[i], heading_deg=h[i])
+    return (time.perf_counter() - start) / m * 1e6
+
+
+def bench_filterpy(cols, m: int, interval_s: float = 10.0) -> tuple[float, str]:
+    """µs per sample, and what it learned, of a per-sample Python loop with filterpy's KalmanFilter for [a, b, c].
+
+    Same structure as gyrodrift: per-sample compensation ``rate = gyro - (a T + b T' + c)``
+    and trapezoid heading; every 10 s one drift measurement
+    ``m = (∫gyro dt - Δcompass)/Δt`` with ``H = [mean T, T', 1]`` (T' a plain 10-s
+    difference, as in the paper), fading memory ``alpha = sqrt(1.2)``.
+    """
+    from filterpy.kalman import KalmanFilter
+
+    kf = KalmanFilter(dim_x=3, dim_z=1)
+    kf.x = np.zeros((3, 1))
+    kf.P = np.diag([0.05**2, 5.0**2, 5.0**2])
+    kf.Q = np.diag([1e-4**2, 0.05**2, 1e-3**2])
+    kf.R = np.array([[2 * 0.5**2 / interval_s**2 + 0.04**2 / interval_s]])
+    kf.alpha = math.sqrt(1.2)
+    t, g, T, h = (cols[k][:m].tolist() for k in ("t", "gyro_z", "temp", "heading"))
+    a = b = c = 0.0
+    temp_rate = 0.0
+    heading = 0.0
+    i_gyro = i_temp = 0.0
+    start_t, start_gyro, start_temp, start_compass = t[0], 0.0, 0.0, None
+    last_compass = None
+    interval_temp = T[0]
+    updates = 0
+    started = time.perf_counter()
+    for i in range(1, m):
+        dt = t[i] - t[i - 1]
+        bias = a * T[i] + b * temp_rate + c
+        rate = g[i] - bias
+        heading += 0.5 * (rate + g[i - 1] - bias) * dt
+        i_gyro += 0.5 * (g[i] + g[i - 1]) * dt
+        i_temp += 0.5 * (T[i] + T[i - 1]) * dt
+        if h[i] == h[i]:  # not NaN: a compass sample
+            last_compass = h[i]
+            if start_compass is None:
+                start_compass, start_t, start_gyro, start_temp = h[i], t[i], i_gyro, i_temp
+        if t[i] - start_t >= interval_s and start_compass is not None and last_compass is not None:
+            span = t[i] - start_t
+            d = ((i_gyro - start_gyro) - (last_compass - start_compass) + 180.0) % 360.0 - 180.0
+            temp_rate = (T[i] - interval_temp) / span
+            interval_temp = T[i]
+            kf.predict()
+            kf.update(np.array([[d / span]]), H=np.array([[(i_temp - start_temp) / span, temp_rate, 1.0]]))
+            a, b, c = (float(v) for v in kf.x[:, 0])
+            updates += 1
+            start_compass, start_t, start_gyro, start_temp = last_compass, t[i], i_gyro, i_temp
+    us = (time.perf_counter() - started) / (m - 1) * 1e6
+    est = a * T[-1] + b * temp_rate + c
+    return us, f"{updates} updates; drift at the end {est:.3f} deg/s, true {true_drift(T[-1]):.3f}"
+
+
+def bench_imufusion(cols, m: int) -> tuple[float, str]:
+    """µs per sample, and its final gyro offset, of x-io Fusion (imufusion >= 1.3): ``Bias`` (gyro offset) + ``Ahrs`` with external heading."""
+    import imufusion
+
+    bias = imufusion.Bias()
+    bias.set_settings(imufusion.BiasSettings(sample_rate=FS_HZ, stationary_threshold=3.0, stationary_period=5.0))
+    ahrs = imufusion.Ahrs()
+    ahrs.set_settings(
+        imufusion.AhrsSettings(
+            sample_rate=FS_HZ, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
+            acceleration_rejection=10.0, magnetic_rejection=0.0, rejection_timeout=int(5 * FS_HZ),
+        )
+    )
+    acc = np.array([0.0, 0.0, -1.0])  # level and still (NED, g)
+    g, h = (cols[k][:m].tolist() for k in ("gyro_z", "heading"))
+    start = time.perf_counter()
+    for i in range(m):
+        gyro = bias.update(np.array((0.0, 0.0, g[i])))
+        if h[i] == h[i]:
+            ahrs.update_external_heading(gyro, acc, h[i])
+        else:
+            ahrs.update_no_magnetometer(gyro, acc)
+        ahrs.get_quaternion()
+    us = (time.perf_counter() - start) / m * 1e6
+    truth = true_drift(cols["temp"][m - 1])
+    return us, f"offset z at the end {float(bias.get_offset()[2]):.3f} deg/s, true {truth:.3f}"
+
+
+# --------------------------------------------------------------------------- report
+
+
+@dataclass
+class Row:
+    name: str
+    value: float
+    unit: str
+    target: str = ""
+    ratio: float = math.nan
+    verdict: str = ""
+
+
+def _fmt(v: float) -> str:
+    if isinstance(v, float) and math.isnan(v):
+        return ""
+    if abs(v) >= 1e5:
+        return f"{v:,.0f}"
+    return f"{v:.3g}" if abs(v) < 100 else f"{v:.0f}"
+
+
+def table(rows: list[Row]) -> str:
+    lines = ["| measurement | value | unit | target | ratio | result |", "| :--- | ---: | :--- | :--- | ---: | :--- |"]
+    for r in rows:
+        lines.append(f"| {r.name} | {_fmt(r.value)} | {r.unit} | {r.target} | {_fmt(r.ratio)} | {r.verdict} |")
+    return "\n".join(lines)
+
+
+def verdict(ok: bool) -> str:
+    return "PASS" if ok else "FAIL"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--rows", type=int, default=10_000_000, help="rows of the generated log (default 10 million)")
+    p.add_argument("--stream-rows", type=int, default=200_000, help="rows for the per-sample loops (default 200k)")
+    p.add_argument("--repeat", type=int, default=1, help="best of N for the in-process timings (default 1)")
+    p.add_argument("--tmp", type=Path, help="folder for the generated files (default: a temporary folder)")
+    p.add_argument("--no-breakdown", action="store_true", help="skip the in-process read/compensate/write breakdown")
+    args = p.parse_args(argv)
+
+    import gyrodrift
+
+    n, m = args.rows, min(args.stream_rows, args.rows)
+    print(f"gyrodrift {gyrodrift.__version__}, Python {platform.python_version()}, numpy {np.__version__}, "
+          f"pyarrow {pa.__version__}, {os.cpu_count()} CPUs, {platform.machine()}", flush=True)
+    print(f"log: {n:,} rows at {FS_HZ:g} Hz ({n / FS_HZ / 3600:.1f} h), compass every {COMPASS_EVERY}th row; "
+          f"per-sample loops on the first {m:,} rows", flush=True)
+    rows: list[Row] = []
+    with tempfile.TemporaryDirectory(dir=args.tmp) as tmp:
+        folder = Path(tmp)
+        cols = make_log(n)
+        paths = write_inputs(cols, folder)
+        sizes = {fmt: path.stat().st_size / 2**20 for fmt, path in paths.items()}
+        print(f"input files: CSV {sizes['csv']:.0f} MiB, Parquet {sizes['parquet']:.0f} MiB", flush=True)
+
+        t_core, out = bench_core(cols, args.repeat)
+        core_rate = n / t_core
+        sources = copy_sources(cols, out)
+        t_copy = bench_copy(sources, max(args.repeat, 3))
+        copy_rate = n / t_copy
+        copied_mib = sum(a.nbytes for a in sources) / 2**20
+        rows.append(Row("(a) core compensate_arrays", core_rate, "samples/s", f">= {CORE_VS_COPY_MIN:.0%} of copy",
+                        core_rate / copy_rate, verdict(core_rate / copy_rate >= CORE_VS_COPY_MIN)))
+        rows.append(Row(f"(b) numpy.copyto of inputs + outputs ({copied_mib:.0f} MiB)", copy_rate, "samples/s"))
+        print(f"core {t_core:.2f} s, copy {t_copy:.3f} s", flush=True)
+
+        out_frame = out.copy()
+        out_frame["gyro_z"], out_frame["temp"] = cols["gyro_z"], cols["temp"]  # the CLI passes these through
+        out_frame.attrs = {}
+        out_table = pa.Table.from_pandas(out_frame, preserve_index=False)
+        del out, out_frame, sources
+
+        rows.append(Row("    fixed cost in (d): python -m gyrodrift --version", bench_startup(), "s"))
+        for fmt in ("csv", "parquet"):
+            t_read, t_write = bench_io(paths[fmt], fmt, out_table, folder, args.repeat)
+            io_limit = t_read + t_write
+            t_e2e, rss = bench_cli_rss(paths[fmt], folder / f"cli_out.{fmt}")
+            rows.append(Row(f"(c) I/O limit {fmt}: pyarrow read {t_read:.2f} s + write {t_write:.2f} s", io_limit, "s"))
+            rows.append(Row(f"(d) end-to-end gyrodrift compensate, {fmt}", t_e2e, "s", f"<= {E2E_VS_IO_MAX:g} x I/O limit",
+                            t_e2e / io_limit, verdict(t_e2e / io_limit <= E2E_VS_IO_MAX)))
+            rows.append(Row(f"    peak RSS of that run ({fmt})", rss, "MiB"))
+            rows.append(Row(f"    end-to-end rate ({fmt})", n / t_e2e, "samples/s"))
+            print(f"{fmt}: read {t_read:.2f} s, write {t_write:.2f} s, end-to-end {t_e2e:.2f} s, peak RSS {rss:.0f} MiB",
+                  flush=True)
+            if not args.no_breakdown:
+                parts = bench_inprocess(paths[fmt], folder / f"inproc_out.{fmt}")
+                detail = ", ".join(f"{k} {v:.2f} s" for k, v in parts.items())
+                rows.append(Row(f"    in-process breakdown ({fmt}): {detail}", sum(parts.values()), "s"))
+                print(f"{fmt} breakdown: {detail}", flush=True)
+        del out_table
+
+        us_stream = bench_stream(cols, m)
+        rows.append(Row("(e) streaming Compensator.push", us_stream, "µs/sample", f"<= {STREAM_US_MAX:g} µs/sample",
+                        us_stream / STREAM_US_MAX, verdict(us_stream <= STREAM_US_MAX)))
+        print(f"streaming {us_stream:.1f} µs/sample", flush=True)
+        for name, fn, package in (
+            ("(f) filterpy KalmanFilter per-sample loop", bench_filterpy, "filterpy"),
+            ("(f) imufusion Bias + Ahrs per sample", bench_imufusion, "imufusion"),
+        ):
+            try:
+                us, note = fn(cols, m)
+            except ImportError:
+                rows.append(Row(f"{name} (skipped: {package} not installed)", math.nan, ""))
+                continue
+            rows.append(Row(f"{name} ({note})", us, "µs/sample", "reference", us / us_stream))
+            print(f"{name}: {us:.2f} µs/sample", flush=True)
+
+    print()
+    print(table(rows))
+    print("ratio: core/copy rate; end-to-end/I/O-limit time; streaming/target; (f) rows: reference/streaming time.")
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / (1.0 if sys.platform == "darwin" else 1024.0)
+    print(f"peak RSS of this benchmark process (data, core run, I/O tables): {own:.0f} MiB")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

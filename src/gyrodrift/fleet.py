@@ -1,0 +1,491 @@
+"""Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
+
+``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) reads
+every log, compensates it with :func:`gyrodrift.compensate.compensate`, writes
+``OUTDIR/<stem>_out.parquet`` (or ``.csv``) atomically, and returns one summary row per
+log. A log that cannot be processed (bad file, too short, no compass, even an
+unexpected exception in a reader) gives a row with ``status = "error"`` and a one-line
+message; it never stops the other logs.
+
+Parallelism
+-----------
+* Local (default): :class:`concurrent.futures.ProcessPoolExecutor` with ``workers``
+  processes (default :func:`os.cpu_count`), started with the ``spawn`` method (safe
+  with pyarrow's threads; costs about a second per worker to start). ``workers=1``
+  runs in this process, one log after the other.
+* Dask (optional extra ``gyrodrift[fleet]``): ``dask_address`` is the scheduler
+  address (``tcp://host:8786``) or anything :class:`distributed.Client` accepts (a
+  ``LocalCluster``). Every worker must see the input logs and ``out_dir`` at the
+  same paths (a shared file system) and have gyrodrift installed.
+
+Both give identical numbers, and the same numbers as :func:`compensate` on each log.
+
+Summary columns
+---------------
+==============  ========  =====================================================
+column          unit      meaning
+==============  ========  =====================================================
+``file``        --        the input log, as given
+``status``      --        ``ok`` or ``error``
+``error``       --        one-line message (``""`` when ok)
+``rows``        --        input rows (empty if the log could not be read)
+``duration_s``  s         last minus first time stamp
+``temp_min_c``  degC      lowest temperature in the log
+``temp_max_c``  degC      highest temperature in the log
+``updates``     --        filter updates taken (empty on error)
+``a``           deg/s/°C  final drift-model parameters (empty on error)
+``b``           deg
+``c``           deg/s
+``seconds``     s         wall time spent on this log (read, compensate, write)
+==============  ========  =====================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import math
+import os
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.errors import ConfigError, GyroDriftError
+
+__all__ = [
+    "LOG_SUFFIXES",
+    "SUMMARY_COLUMNS",
+    "OUT_FORMATS",
+    "find_logs",
+    "output_path",
+    "process_one",
+    "process_many",
+    "summary_markdown",
+    "add_batch_parser",
+    "batch_command",
+]
+
+#: File-name endings (lower case) that :func:`find_logs` picks up.
+LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq", ".ulg", ".bag", ".mcap", ".db3")
+#: Output table formats of :func:`process_one` and their file-name endings.
+OUT_FORMATS = {"parquet": ".parquet", "csv": ".csv"}
+#: Columns of the summary table, in order (see the module notes).
+SUMMARY_COLUMNS = (
+    "file", "status", "error", "rows", "duration_s", "temp_min_c", "temp_max_c",
+    "updates", "a", "b", "c", "seconds",
+)
+#: Name of the summary file ``gyrodrift batch`` writes in OUTDIR.
+SUMMARY_FILE = "summary.csv"
+_EXTRA = "pip install 'gyrodrift[fleet]'"
+_GLOB_CHARS = frozenset("*?[")
+#: Endings stripped from a log's name to make its output name (longest first).
+_STEM_SUFFIXES = tuple(sorted(LOG_SUFFIXES + (".txt", ".txt.gz"), key=len, reverse=True))
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+# --------------------------------------------------------------------------- finding logs
+
+
+def _is_log(path: Path) -> bool:
+    """True for a file with a supported ending, or a ROS 2 bag folder (``metadata.yaml``)."""
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file()
+    return path.is_file() and path.name.lower().endswith(LOG_SUFFIXES)
+
+
+def find_logs(dir_or_glob) -> list[Path]:
+    """The logs in a folder, or the logs a glob pattern matches, sorted by path.
+
+    Parameters
+    ----------
+    dir_or_glob : str or os.PathLike
+        A folder (its own files, not sub-folders: every ``.csv``, ``.csv.gz``,
+        ``.parquet``, ``.pq``, ``.ulg``, ``.bag``, ``.mcap``, ``.db3`` file and every
+        ROS 2 bag folder in it), a glob pattern (``logs/*.csv``, ``runs/**/*.parquet``;
+        matches with other endings are left out), or a single log file.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Sorted by their text.
+
+    Raises
+    ------
+    ConfigError
+        No log found, or the folder does not exist.
+    """
+    text = os.fspath(dir_or_glob)
+    path = Path(text)
+    accepted = ", ".join(LOG_SUFFIXES)
+    advice = "give a folder of logs or a quoted glob pattern such as 'logs/*.csv'"
+    if path.is_dir() and not _is_log(path):
+        found, kind = [p for p in path.iterdir() if _is_log(p)], "folder"
+    elif path.exists():
+        found, kind = ([path] if _is_log(path) else []), "file"
+    elif _GLOB_CHARS & set(text):
+        found, kind = [Path(p) for p in glob.glob(text, recursive=True) if _is_log(Path(p))], "glob pattern"
+    else:
+        raise ConfigError(f"{text}: no such folder or file; {advice}")
+    if not found:
+        problem = "not a log file" if kind == "file" else f"no logs found in this {kind}"
+        raise ConfigError(f"{text}: {problem} (accepted endings: {accepted}); {advice}")
+    return sorted(found, key=str)
+
+
+def output_path(path, out_dir, out_format: str = "parquet") -> Path:
+    """Where :func:`process_one` writes the output of ``path``: ``out_dir/<stem>_out.<ext>``.
+
+    ``<stem>`` is the file name without its log ending (``run.csv.gz`` → ``run``).
+
+    >>> output_path("logs/run1.csv.gz", "out").as_posix()
+    'out/run1_out.parquet'
+    """
+    if out_format not in OUT_FORMATS:
+        raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
+    name = Path(path).name
+    lower = name.lower()
+    stem = next((name[: -len(s)] for s in _STEM_SUFFIXES if lower.endswith(s) and len(name) > len(s)), None)
+    stem = stem if stem is not None else Path(name).stem
+    return Path(out_dir) / f"{stem}_out{OUT_FORMATS[out_format]}"
+
+
+# --------------------------------------------------------------------------- one log
+
+
+def _empty_row(path) -> dict:
+    row = {c: math.nan for c in SUMMARY_COLUMNS}
+    row.update(file=str(path), status="error", error="", rows=None, updates=None)
+    return row
+
+
+def _log_facts(log: pd.DataFrame) -> dict:
+    """Rows, duration (s) and temperature range (degC) of an input log."""
+    t = log["t"].to_numpy(float)
+    temp = log["temp"].to_numpy(float)
+    has_temp = bool(np.isfinite(temp).any())
+    return {
+        "rows": int(len(log)),
+        "duration_s": float(t[-1] - t[0]) if t.size else math.nan,
+        "temp_min_c": float(np.nanmin(temp)) if has_temp else math.nan,
+        "temp_max_c": float(np.nanmax(temp)) if has_temp else math.nan,
+    }
+
+
+def _error_text(err: BaseException) -> str:
+    """One line: the message of a user error; type and message of anything else."""
+    if isinstance(err, GyroDriftError):
+        return _one_line(str(err))
+    return _one_line(f"unexpected {type(err).__name__}: {err}")
+
+
+def process_one(path, out_dir, *, config=None, out_format: str = "parquet") -> dict:
+    """Read, compensate and write one log; return its summary row. Never raises.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The log (any format :func:`gyrodrift.io.read_log` reads, in contract units:
+        the table options ``gyro_unit``, ``frame`` and ``column_map`` keep their defaults).
+    out_dir : str or os.PathLike
+        Existing folder for the output table (see :func:`output_path`).
+    config : CompensatorConfig, optional
+    out_format : {"parquet", "csv"}
+        Format of the output table.
+
+    Returns
+    -------
+    dict
+        The keys of :data:`SUMMARY_COLUMNS` (module notes). Any exception (a
+        :class:`~gyrodrift.errors.GyroDriftError` or anything unexpected) gives
+        ``status = "error"`` and a one-line ``error``; what was learned before the
+        failure (rows, duration, temperatures) is kept.
+    """
+    from gyrodrift.compensate import compensate
+    from gyrodrift.io import check_output_path, read_log, write_table
+    from gyrodrift.profile import profile_from_run
+
+    start = time.perf_counter()
+    row = _empty_row(path)
+    try:
+        out_path = output_path(path, out_dir, out_format)
+        check_output_path(path, out_path)
+        log = read_log(path)
+        row.update(_log_facts(log))
+        out = compensate(log, config, source=str(path))
+        write_table(out, out_path, fmt=out_format)
+        prof = profile_from_run(out)
+        a, b, c = prof.params
+        row.update(status="ok", updates=prof.updates, a=a, b=b, c=c)
+    except Exception as err:  # one bad file never stops the rest: report it in the row
+        row.update(status="error", error=_error_text(err))
+    row["seconds"] = time.perf_counter() - start
+    return row
+
+
+# --------------------------------------------------------------------------- many logs
+
+
+def _summary_frame(rows: list[dict]) -> pd.DataFrame:
+    df = pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+    for col in ("rows", "updates"):
+        df[col] = pd.array(df[col].tolist(), dtype="Int64")
+    for col in ("duration_s", "temp_min_c", "temp_max_c", "a", "b", "c", "seconds"):
+        df[col] = df[col].astype(float)
+    return df
+
+
+def _check_workers(workers) -> int:
+    if workers is None:
+        return max(1, os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ConfigError(f"workers must be a whole number >= 1, got {workers!r}")
+    return int(workers)
+
+
+def _check_outputs(paths: list[Path], out_dir: Path, out_format: str) -> None:
+    """Refuse a missing output folder, two logs with one output, an output that is an input."""
+    if not out_dir.is_dir():
+        raise ConfigError(f"{out_dir}: output folder does not exist; create it first or choose another")
+    inputs = {os.path.realpath(p): p for p in paths}
+    seen: dict[str, Path] = {}
+    for p in paths:
+        out = output_path(p, out_dir, out_format)
+        key = os.path.realpath(out)
+        if key in seen:
+            raise ConfigError(
+                f"{p} and {seen[key]} would both be written to {out}; rename one of them or process them apart"
+            )
+        if key in inputs:
+            raise ConfigError(
+                f"{out}: the output of {p} would overwrite the input log {inputs[key]}; "
+                "choose an output folder apart from the logs"
+            )
+        seen[key] = p
+
+
+def _failed_future(path, err: BaseException, seconds: float = math.nan) -> dict:
+    """Summary row for a log whose worker failed outside :func:`process_one` (crash, lost worker)."""
+    row = _empty_row(path)
+    row.update(error=_one_line(f"worker failed: {type(err).__name__}: {err}"), seconds=seconds)
+    return row
+
+
+def _run_serial(job, paths, progress) -> list[dict]:
+    items = iter(paths)
+    if progress is not None:
+        items = progress(items, len(paths))
+    return [job(p) for p in items]
+
+
+def _run_local(job, paths, workers: int, progress) -> list[dict]:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    results: list[dict | None] = [None] * len(paths)
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(paths)), mp_context=ctx) as pool:
+        futures = {pool.submit(job, p): i for i, p in enumerate(paths)}
+        done = as_completed(futures)
+        if progress is not None:
+            done = progress(done, len(futures))
+        for fut in done:
+            i = futures[fut]
+            try:
+                results[i] = fut.result()
+            except Exception as err:  # a worker process died (BrokenProcessPool) or could not pickle
+                results[i] = _failed_future(paths[i], err)
+    return results
+
+
+def _run_dask(job, paths, address, progress) -> list[dict]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise ConfigError(f"--dask needs the optional packages dask and distributed: {_EXTRA}") from None
+    try:
+        client = Client(address, timeout="20s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as err:
+        raise ConfigError(f"cannot connect to the Dask scheduler at {address!r} ({_one_line(err)})") from None
+    results: list[dict | None] = [None] * len(paths)
+    with client:
+        futures = [client.submit(job, p, pure=False) for p in paths]
+        index = {f.key: i for i, f in enumerate(futures)}
+        done = as_completed(futures, loop=client.loop)
+        if progress is not None:
+            done = progress(done, len(futures))
+        for fut in done:
+            i = index[fut.key]
+            try:
+                results[i] = fut.result()
+            except Exception as err:  # a lost worker (KilledWorker) or a failed transfer
+                results[i] = _failed_future(paths[i], err)
+    return results
+
+
+def process_many(
+    paths,
+    out_dir,
+    *,
+    config=None,
+    workers: int | None = None,
+    dask_address=None,
+    progress=None,
+    out_format: str = "parquet",
+) -> pd.DataFrame:
+    """Compensate many logs in parallel; return the summary table, in the input order.
+
+    Parameters
+    ----------
+    paths : iterable of str or os.PathLike
+        The logs (see :func:`find_logs`).
+    out_dir : str or os.PathLike
+        Existing folder for the outputs ``<stem>_out.<ext>`` (see :func:`output_path`).
+    config : CompensatorConfig, optional
+        Settings for every log.
+    workers : int, optional
+        Local processes (default :func:`os.cpu_count`); 1 runs in this process.
+        Ignored with ``dask_address``. The processes are started with ``spawn``: a
+        script that calls this with more than one worker needs the usual
+        ``if __name__ == "__main__":`` guard.
+    dask_address : str or distributed cluster, optional
+        Run on this Dask scheduler instead (needs ``gyrodrift[fleet]``).
+    progress : callable, optional
+        ``progress(iterable, total)`` wraps the iteration over finished logs (e.g.
+        :func:`gyrodrift._progress.progress_iter`); it must yield the same items.
+    out_format : {"parquet", "csv"}
+        Format of the output tables.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per log (:data:`SUMMARY_COLUMNS`); ``rows`` and ``updates`` are
+        nullable integers (empty on error).
+
+    Raises
+    ------
+    ConfigError
+        Bad usage, before any log is processed: unknown ``out_format``, bad
+        ``workers``, missing ``out_dir``, two logs with the same output name, an
+        output that would overwrite an input log, dask missing or the scheduler not
+        reachable. Problems of single logs are never raised: they are rows with
+        ``status = "error"``.
+    """
+    paths = [Path(p) for p in paths]
+    out_dir = Path(out_dir)
+    if out_format not in OUT_FORMATS:
+        raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
+    n_workers = _check_workers(workers)
+    if not paths:
+        return _summary_frame([])
+    _check_outputs(paths, out_dir, out_format)
+    job = partial(process_one, out_dir=out_dir, config=config, out_format=out_format)
+    if dask_address is not None:
+        rows = _run_dask(job, paths, dask_address, progress)
+    elif n_workers == 1 or len(paths) == 1:
+        rows = _run_serial(job, paths, progress)
+    else:
+        rows = _run_local(job, paths, n_workers, progress)
+    for row, p in zip(rows, paths):
+        row["file"] = str(p)
+    return _summary_frame(rows)
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def summary_markdown(summary: pd.DataFrame) -> str:
+    """The summary table as Markdown: integers as integers, numbers to 4 significant digits."""
+    from gyrodrift.metrics import markdown_table
+
+    shown = summary.copy()
+    for col in ("rows", "updates"):
+        shown[col] = [("" if pd.isna(v) else str(int(v))) for v in shown[col]]
+    shown["seconds"] = [f"{v:.2f}" for v in shown["seconds"]]
+    return markdown_table(shown, floatfmt=".4g", index=False)
+
+
+BATCH_EPILOG = """\
+output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically, and
+OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
+temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg), c (deg/s) final
+drift model, seconds (wall time per log).
+
+exit status: 0 if every log was compensated, 1 if some logs failed (each one is
+reported in the table and in summary.csv; the others are still written), 2 for bad
+usage (no logs found, missing config, unreachable Dask scheduler).
+"""
+
+
+def add_batch_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``batch`` subcommand to an argparse ``subparsers`` object; return its parser.
+
+    The parser's ``func`` default is :func:`batch_command`.
+    """
+    p = subparsers.add_parser(
+        "batch",
+        help="compensate every log in a folder (or glob) in parallel; write a summary table",
+        description="Compensate many logs on local processes or a Dask cluster. A log that fails is "
+        "reported and skipped; it never stops the others.",
+        epilog=BATCH_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "logs", metavar="DIR_OR_GLOB",
+        help=f"a folder of logs ({', '.join(LOG_SUFFIXES)}) or a quoted glob pattern such as 'runs/*.csv'",
+    )
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR", help="output folder (created if missing)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: the number of CPUs)")
+    p.add_argument(
+        "--dask", metavar="ADDRESS",
+        help=f"run on a Dask scheduler, e.g. tcp://host:8786 (needs {_EXTRA}); workers must see the same paths",
+    )
+    p.add_argument("--format", choices=list(OUT_FORMATS), default="parquet", help="output table format (default parquet)")
+    p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
+    p.set_defaults(func=batch_command)
+    return p
+
+
+def _prepare_output_dir(out_dir: Path) -> None:
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ConfigError(f"{out_dir}: cannot create the output folder ({err.strerror})") from None
+
+
+def batch_command(args: argparse.Namespace) -> int:
+    """Run ``gyrodrift batch``; return 0 (all ok), 1 (some logs failed) or 2 (bad usage)."""
+    from gyrodrift._progress import progress_iter
+    from gyrodrift.config import load_config
+    from gyrodrift.io import write_table
+
+    try:
+        paths = find_logs(args.logs)
+        config = load_config(args.config) if args.config else None
+        summary_path = args.output / SUMMARY_FILE
+        clash = [p for p in paths if os.path.realpath(p) == os.path.realpath(summary_path)]
+        if clash:
+            raise ConfigError(
+                f"{summary_path}: the summary would overwrite the input log {clash[0]}; "
+                "choose an output folder apart from the logs"
+            )
+        _prepare_output_dir(args.output)
+        summary = process_many(
+            paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
+            progress=lambda items, total: progress_iter(items, total, "logs"), out_format=args.format,
+        )
+        write_table(summary, summary_path, fmt="csv")
+    except GyroDriftError as err:
+        print(f"gyrodrift: error: {err}", file=sys.stderr)
+        return 2
+    n_bad = int((summary["status"] != "ok").sum())
+    print(summary_markdown(summary))
+    print(f"{len(summary) - n_bad} ok, {n_bad} failed")
+    print(f"wrote {summary_path}")
+    return 1 if n_bad else 0
