@@ -518,37 +518,51 @@ class Compensator:
         return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading)
 
     def _step(self, row) -> CompensatedSample:
+        """One row after initialisation, in plain floats.
+
+        The arithmetic is that of :func:`_rows` and :func:`compensate_arrays`, operation
+        for operation (element-wise IEEE operations and sequential sums give the same
+        bits on floats as on arrays); the streaming-equals-batch tests hold it to that.
+        """
         t_s, g, T, Tp, heading, norm, dip, gap = row
-        params = self._aid.estimator.params
-        arr = np.array
-        bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, self._carry = _rows(
-            self._carry, arr([t_s]), arr([g]), arr([T]), arr([Tp]), self._aid.estimator.drift
-        )
-        if math.isfinite(heading):
-            self._snap = _Snap(t_s, heading, float(I_raw[0]), float(I_T[0]), float(I_Tp[0]), float(I_bias[0]))
-            self._aid.add(self._snap)
+        aid, cfg, c = self._aid, self.config, self._carry
+        params = aid.estimator.params
+        bias = float(aid.estimator.drift(T, Tp))
+        rate = g - bias
+        dt = t_s - c.t
+        c.I_raw = c.I_raw + 0.5 * (g + c.g) * dt
+        c.I_T = c.I_T + 0.5 * (T + c.T) * dt
+        c.I_Tp = c.I_Tp + 0.5 * (Tp + c.Tp) * dt
+        c.I_bias = c.I_bias + 0.5 * (bias + c.bias) * dt
+        c.I_rate = c.I_rate + 0.5 * (rate + c.rate) * dt
+        c.t, c.g, c.T, c.Tp, c.bias, c.rate = t_s, g, T, Tp, bias, rate
+        has_compass = math.isfinite(heading)
+        if has_compass:
+            self._snap = _Snap(t_s, heading, c.I_raw, c.I_T, c.I_Tp, c.I_bias)
+            aid.add(self._snap)
         # 1-s mean compensated rate, from the oldest row inside the window.
         lb = self._lookback
-        window_start = t_s - self.config.gate.turn_window_s
+        window_start = t_s - cfg.gate.turn_window_s
         while len(lb) > 1 and lb[0][0] < window_start:
             lb.popleft()
-        mean_rate = (float(I_rate[0]) - lb[0][1]) / (t_s - lb[0][0])
-        lb.append((t_s, float(I_rate[0])))
-        field_bad = bool(gating.field_anomaly(norm, dip, *self._aid.field_ref, self.config.gate)) if self._aid.field_ref else False
-        aid = self._aid
+        mean_rate = (c.I_rate - lb[0][1]) / (t_s - lb[0][0])
+        lb.append((t_s, c.I_rate))
         if aid.sticky is None:
-            resid = _residual_deg(aid.start, arr([heading]), I_raw, I_bias)
-            code = gating.row_conditions([gap], [field_bad], resid, [mean_rate], self.config.gate)[0]
-            aid.sticky = code or None
-        k = float(_interval_index(t_s, self._t_start, self.config.update_interval_s))
+            field_bad = bool(gating.field_anomaly(norm, dip, *aid.field_ref, cfg.gate)) if aid.field_ref else False
+            resid = math.nan
+            if has_compass and aid.start is not None:
+                resid = float(_residual_deg(aid.start, heading, c.I_raw, c.I_bias))
+            aid.sticky = gating.row_condition(gap, field_bad, resid, mean_rate, cfg.gate) or None
+        k = math.floor((t_s - self._t_start) / cfg.update_interval_s)
         update, reason = 0, aid.display()
         if k > self._k:
             self._k = k
             update, reason = aid.close(self._snap, t_s)
-        return _samples(
-            arr([t_s]), rate, bias, self._anchor + I_rate, params, arr([update]),
-            np.array([reason], dtype=object), arr([Tp]), arr([heading]),
-        )[0]
+        a, b, c0 = (float(v) for v in params)
+        return CompensatedSample(
+            t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
+            update, int(reason != ""), reason, Tp, heading,
+        )
 
 
 def _compass_values(heading_deg, mag, acc):

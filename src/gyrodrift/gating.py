@@ -40,6 +40,7 @@ __all__ = [
     "FIELD",
     "TURNING",
     "INTERFERENCE",
+    "row_condition",
     "row_conditions",
     "field_anomaly",
 ]
@@ -106,6 +107,19 @@ def field_anomaly(norm, dip_deg, ref_norm: float, ref_dip_deg: float, config: Ga
             np.abs(dip_deg - ref_dip_deg) > config.dip_tol_deg
         )
     return bad & np.isfinite(norm)
+
+
+def row_condition(gap: bool, field: bool, residual_deg: float, mean_rate_dps: float, config: GateConfig) -> str:
+    """:func:`row_conditions` for one row (the streaming path), same priorities."""
+    if gap:
+        return GAP
+    if field:
+        return FIELD
+    if abs(mean_rate_dps) > config.turn_rate_dps:
+        return TURNING
+    if abs(residual_deg) > config.interference_deg:  # False for NaN (no compass sample)
+        return INTERFERENCE
+    return ""
 
 
 def row_conditions(gap, field, residual_deg, mean_rate_dps, config: GateConfig) -> np.ndarray:
