@@ -456,11 +456,16 @@ def test_write_failure_keeps_existing_file_csv(tmp_path, monkeypatch):
     path = tmp_path / "out.csv"
     path.write_text("old,content\n")
 
-    def half_write(self, fh, **kwargs):
+    def half_write(self, fh, *args, **kwargs):
         fh.write("t,partial\n1,")
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(pd.DataFrame, "to_csv", half_write)
+    def half_write_arrow(table, fh, *args, **kwargs):
+        fh.write(b"t,partial\n1,")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", half_write)  # both CSV writers fail half-way
+    monkeypatch.setattr(tabular.pa_csv, "write_csv", half_write_arrow)
     msg = _raises(ConfigError, write_table, _sample_frame(5), path)
     assert "out.csv" in msg and "No space left" in msg
     assert path.read_text() == "old,content\n"
