@@ -40,7 +40,8 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (deg/s/degC), b (deg), c (deg/s) of the drift model a*T + b*T' + c, update
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
-  compass_heading, then the other input columns.
+  compass_heading, unobservable (a, b or a,b: parameters not yet determined by
+  the data, e.g. at a flat temperature), then the other input columns.
 """
 
 

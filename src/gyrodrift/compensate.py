@@ -153,6 +153,7 @@ class CompensatedSample:
     gate_reason: str
     temp_rate: float
     compass_heading: float
+    unobservable: str
 
 
 # --------------------------------------------------------------------------- rows
@@ -278,6 +279,20 @@ def _residual_deg(start: _Snap | None, heading, I_raw, I_bias):
     return d - (I_bias - start.I_bias)
 
 
+#: A parameter counts as not observable while its standard deviation is above this
+#: fraction of its prior one: the measurements so far have not pinned it down (a flat
+#: temperature leaves a confounded with c; T' ≡ 0 leaves b free).
+UNOBSERVABLE_SD_FRACTION = 0.5
+
+
+def _unobservable(estimator, prior_sd) -> str:
+    """Names of the drift parameters (``a``, ``b``) the data have not determined, comma-separated."""
+    sd = np.sqrt(np.maximum(np.diag(estimator.cov), 0.0))
+    return ",".join(
+        name for i, name in ((0, "a"), (1, "b")) if sd[i] > UNOBSERVABLE_SD_FRACTION * prior_sd[i]
+    )
+
+
 class _Aiding:
     """Per-interval aiding decisions and the estimator: shared by streaming and batch."""
 
@@ -292,6 +307,11 @@ class _Aiding:
         self.field_ref: tuple[float, float] | None = None
         #: Every accepted measurement: (time s, _Meas), for diagnostics and offline fits.
         self.accepted: list[tuple[float, _Meas]] = []
+        self.unobservable = ""
+        self.refresh_observability()
+
+    def refresh_observability(self) -> None:
+        self.unobservable = _unobservable(self.estimator, self.cfg.kalman.p0_sd)
 
     def valid(self, snap: _Snap | None, t_end: float) -> _Snap | None:
         if snap is None or t_end - snap.t > self.cfg.gate.compass_max_age_s:
@@ -336,6 +356,7 @@ class _Aiding:
         else:
             self.estimator.hold()
             self.after_interference = reason == gating.INTERFERENCE
+        self.refresh_observability()
         self.begin(snap, t_boundary)
         return (1, "") if reason is None else (0, reason)
 
@@ -387,6 +408,7 @@ def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float
     if aid.stack:
         aid.accepted.extend((init_end_s, m) for m in reversed(aid.stack))
         aid.estimator.update(aid._observation(init_end_s, n_new=len(aid.stack)))
+        aid.refresh_observability()
     return int(first_compass[0]), bool(aid.stack)
 
 
@@ -515,7 +537,8 @@ class Compensator:
         update[-1] = int(updated)
         reason = np.full(n, gating.INIT, dtype=object)
         reason[-1] = ""
-        return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading)
+        return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading,
+                        self._aid.unobservable)
 
     def _step(self, row) -> CompensatedSample:
         """One row after initialisation, in plain floats.
@@ -527,6 +550,7 @@ class Compensator:
         t_s, g, T, Tp, heading, norm, dip, gap = row
         aid, cfg, c = self._aid, self.config, self._carry
         params = aid.estimator.params
+        unobservable = aid.unobservable
         bias = float(aid.estimator.drift(T, Tp))
         rate = g - bias
         dt = t_s - c.t
@@ -561,7 +585,7 @@ class Compensator:
         a, b, c0 = (float(v) for v in params)
         return CompensatedSample(
             t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
-            update, int(reason != ""), reason, Tp, heading,
+            update, int(reason != ""), reason, Tp, heading, unobservable,
         )
 
 
@@ -588,13 +612,13 @@ def _field_reference(norm, dip) -> tuple[float, float] | None:
     return float(np.median(norm[ok])), float(np.median(dip[ok]))
 
 
-def _samples(t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass) -> list[CompensatedSample]:
+def _samples(t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass, unobservable) -> list[CompensatedSample]:
     a, b, c = (float(v) for v in params)
     heading = wrap_360(heading_unwrapped)
     return [
         CompensatedSample(
             float(t[i]), float(rate[i]), float(bias[i]), float(heading[i]), a, b, c,
-            int(update[i]), int(reason[i] != ""), str(reason[i]), float(Tp[i]), float(compass[i]),
+            int(update[i]), int(reason[i] != ""), str(reason[i]), float(Tp[i]), float(compass[i]), unobservable,
         )
         for i in range(len(t))
     ]
@@ -679,6 +703,7 @@ def compensate_arrays(
     I_Tp_all = np.empty(n)
     I_bias_all = np.empty(n)
     out_params = np.empty((n, 3))
+    out_unobservable = np.empty(n, dtype=object)
     update = np.zeros(n, dtype=int)
     reason = np.full(n, "", dtype=object)
 
@@ -698,6 +723,7 @@ def compensate_arrays(
         (out_bias[rows], out_rate[rows], I_raw_all[rows], I_T_all[rows], I_Tp_all[rows],
          I_bias_all[rows], out_I_rate[rows], carry) = cols
         out_params[rows] = est.params
+        out_unobservable[rows] = aid.unobservable
 
     def snap_row(i: int) -> _Snap:
         return _Snap(float(t[i]), float(heading[i]), float(I_raw_all[i]), float(I_T_all[i]), float(I_Tp_all[i]), float(I_bias_all[i]))
@@ -746,7 +772,9 @@ def compensate_arrays(
         if is_boundary[b]:
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
-    out = _output_frame(t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading)
+    out = _output_frame(
+        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading, out_unobservable
+    )
     out.attrs["measurements"] = _measurement_table(aid.accepted)
     out.attrs["estimator"] = est.name
     out.attrs["final_params"] = est.params
@@ -784,7 +812,7 @@ def _compass_arrays(n: int, heading_deg, mag, acc):
     return heading, norm, dip
 
 
-def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass) -> pd.DataFrame:
+def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass, unobservable) -> pd.DataFrame:
     return pd.DataFrame(
         {
             "t": t,
@@ -799,6 +827,7 @@ def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass) -
             "gate_reason": reason.astype(str),
             "temp_rate": Tp,
             "compass_heading": compass,
+            "unobservable": unobservable.astype(str),
         }
     )
 
@@ -832,8 +861,10 @@ def compensate(
     DataFrame
         ``t, rate_z, bias_z, heading, a, b, c, update, gated, gate_reason`` (the output
         contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
-        compass used; empty where there was no sample) and every other input column
-        (the input ``heading`` is ``compass_heading``).
+        compass used; empty where there was no sample), ``unobservable`` (``a``, ``b``
+        or ``a,b``: drift parameters the data have not yet determined, e.g. while the
+        temperature is flat; empty when all are) and every other input column (the
+        input ``heading`` is ``compass_heading``).
     """
     source = source or log.attrs.get("source", "log")
     missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
