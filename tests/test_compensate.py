@@ -282,3 +282,21 @@ def test_flat_temperature_says_a_and_b_are_not_observable():
     out = compensate(ramp, CompensatorConfig(estimator="stkf-s1"))
     assert out["unobservable"].iloc[0] == "a,b"
     assert "a" not in out["unobservable"].iloc[-1]  # a temperature span determines a
+
+
+def test_lock_out_recovery_on_a_fast_heating_run():
+    """20-min heating: the drift outruns the filter, every interval disagrees with the compass.
+    Without recovery the gate locks the filter out; with it, steady disagreements are
+    recognised as drift and aiding resumes."""
+    from gyrodrift.metrics import heading_error_stats
+    from gyrodrift.paper import aligned
+    from gyrodrift.simulate import simulate
+
+    log = simulate("static", seed=2, fs_hz=10.0, duration_s=1200.0)
+    locked = compensate(log, CompensatorConfig(gate=GateConfig(relock_intervals=0)))
+    recovered = compensate(log)
+    assert (locked["gate_reason"] == "interference").mean() > 0.4
+    assert (recovered["gate_reason"] == "interference").mean() < 0.25
+    assert heading_error_stats(aligned(recovered))["rms"] < 0.5 * heading_error_stats(aligned(locked))["rms"]
+    cfg = CompensatorConfig()
+    assert_same(recovered, stream(log, cfg))

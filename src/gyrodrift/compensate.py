@@ -303,6 +303,8 @@ class _Aiding:
         self.start: _Snap | None = None
         self.sticky: str | None = None
         self.after_interference = False
+        #: Residual rates (deg/s) of the consecutive intervals refused for interference.
+        self.refused_rates: list[float] = []
         self.samples: list[_Snap] = []
         self.field_ref: tuple[float, float] | None = None
         #: Every accepted measurement: (time s, _Meas), for diagnostics and offline fits.
@@ -348,6 +350,12 @@ class _Aiding:
                     meas = _slope_measurement(self.samples, self.cfg) or meas
                 if abs(meas.residual_deg) > self.cfg.gate.interference_deg:
                     reason = gating.INTERFERENCE
+        if reason == gating.INTERFERENCE and self.start is not None and end is not None:
+            meas = meas or _compass_measurement(self.start, end, self.cfg)
+            if self._drift_not_interference(meas.residual_deg / (end.t - self.start.t)):
+                reason = None
+        if reason != gating.INTERFERENCE:
+            self.refused_rates = []
         if reason is None:
             self.stack.appendleft(meas)
             self.accepted.append((t_boundary, meas))
@@ -359,6 +367,20 @@ class _Aiding:
         self.refresh_observability()
         self.begin(snap, t_boundary)
         return (1, "") if reason is None else (0, reason)
+
+    def _drift_not_interference(self, residual_rate_dps: float) -> bool:
+        """Lock-out recovery (``GateConfig.relock_intervals``): True when the last refusals
+        agree on one steady compass-minus-gyro rate, i.e. a drift change."""
+        n = self.cfg.gate.relock_intervals
+        if n == 0:
+            return False
+        rates = self.refused_rates[-n:]
+        self.refused_rates.append(residual_rate_dps)
+        if len(rates) < n:
+            return False
+        rates = np.array(rates + [residual_rate_dps])
+        mean = float(np.mean(rates))
+        return bool(np.all(np.sign(rates) == np.sign(mean)) and np.std(rates) < 0.5 * abs(mean))
 
     def _observation(self, t: float, n_new: int) -> Observation:
         return Observation(

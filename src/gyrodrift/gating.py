@@ -79,6 +79,13 @@ class GateConfig:
         is below this, deg/s ...
     still_heading_deg : float
         ... and the compass heading changes by less than this, deg.
+    relock_intervals : int
+        Lock-out recovery (0 = off, as in the paper; default 3): after this many
+        consecutive intervals
+        refused for ``interference`` whose compass-minus-gyro rates agree (same sign,
+        spread below half their mean), the disagreement is taken for a drift change the
+        filter has not followed, not for a magnetic disturbance, and the next such
+        interval is accepted.
     """
 
     turn_rate_dps: float = 2.0
@@ -90,11 +97,15 @@ class GateConfig:
     max_gap_s: float = 1.0
     still_std_dps: float = 1.0
     still_heading_deg: float = 2.0
+    relock_intervals: int = 3
 
     def __post_init__(self):
         for f in fields(self):
             v = getattr(self, f.name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if f.name == "relock_intervals":
+                if not (isinstance(v, int) and v >= 0):
+                    raise ConfigError(f"gate setting relock_intervals must be a whole number >= 0, got {v!r}")
+            elif not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigError(f"gate setting {f.name} must be a positive number, got {v!r}")
 
 
