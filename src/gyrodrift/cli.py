@@ -41,7 +41,8 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, unobservable (a, b or a,b: parameters not yet determined by
-  the data, e.g. at a flat temperature), then the other input columns.
+  the data, e.g. at a flat temperature), bias_sd (deg/s, standard deviation of
+  bias_z), then the other input columns.
 """
 
 

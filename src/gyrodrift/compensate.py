@@ -154,6 +154,7 @@ class CompensatedSample:
     temp_rate: float
     compass_heading: float
     unobservable: str
+    bias_sd: float
 
 
 # --------------------------------------------------------------------------- rows
@@ -285,6 +286,17 @@ def _residual_deg(start: _Snap | None, heading, I_raw, I_bias):
 UNOBSERVABLE_SD_FRACTION = 0.5
 
 
+def _bias_sd(P: np.ndarray, T, Tp):
+    """Standard deviation (deg/s) of the drift ``h x`` with ``h = [T, T', 1]``: ``sqrt(h P hᵀ)``.
+
+    Written out element-wise so that floats (streaming) and arrays (batch) give the same bits.
+    """
+    var = ((P[0, 0] * T + P[0, 1] * Tp + P[0, 2]) * T
+           + (P[1, 0] * T + P[1, 1] * Tp + P[1, 2]) * Tp
+           + (P[2, 0] * T + P[2, 1] * Tp + P[2, 2]))
+    return np.sqrt(np.maximum(var, 0.0))
+
+
 def _unobservable(estimator, prior_sd) -> str:
     """Names of the drift parameters (``a``, ``b``) the data have not determined, comma-separated."""
     sd = np.sqrt(np.maximum(np.diag(estimator.cov), 0.0))
@@ -310,9 +322,12 @@ class _Aiding:
         #: Every accepted measurement: (time s, _Meas), for diagnostics and offline fits.
         self.accepted: list[tuple[float, _Meas]] = []
         self.unobservable = ""
+        self.cov = np.zeros((3, 3))
         self.refresh_observability()
 
     def refresh_observability(self) -> None:
+        """Cache what the rows until the next update report: covariance, unobservable names."""
+        self.cov = self.estimator.cov
         self.unobservable = _unobservable(self.estimator, self.cfg.kalman.p0_sd)
 
     def valid(self, snap: _Snap | None, t_end: float) -> _Snap | None:
@@ -560,7 +575,7 @@ class Compensator:
         reason = np.full(n, gating.INIT, dtype=object)
         reason[-1] = ""
         return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading,
-                        self._aid.unobservable)
+                        self._aid.unobservable, _bias_sd(self._aid.cov, T, Tp))
 
     def _step(self, row) -> CompensatedSample:
         """One row after initialisation, in plain floats.
@@ -572,7 +587,7 @@ class Compensator:
         t_s, g, T, Tp, heading, norm, dip, gap = row
         aid, cfg, c = self._aid, self.config, self._carry
         params = aid.estimator.params
-        unobservable = aid.unobservable
+        unobservable, cov = aid.unobservable, aid.cov
         bias = float(aid.estimator.drift(T, Tp))
         rate = g - bias
         dt = t_s - c.t
@@ -607,7 +622,7 @@ class Compensator:
         a, b, c0 = (float(v) for v in params)
         return CompensatedSample(
             t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
-            update, int(reason != ""), reason, Tp, heading, unobservable,
+            update, int(reason != ""), reason, Tp, heading, unobservable, float(_bias_sd(cov, T, Tp)),
         )
 
 
@@ -634,13 +649,16 @@ def _field_reference(norm, dip) -> tuple[float, float] | None:
     return float(np.median(norm[ok])), float(np.median(dip[ok]))
 
 
-def _samples(t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass, unobservable) -> list[CompensatedSample]:
+def _samples(
+    t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass, unobservable, bias_sd
+) -> list[CompensatedSample]:
     a, b, c = (float(v) for v in params)
     heading = wrap_360(heading_unwrapped)
     return [
         CompensatedSample(
             float(t[i]), float(rate[i]), float(bias[i]), float(heading[i]), a, b, c,
             int(update[i]), int(reason[i] != ""), str(reason[i]), float(Tp[i]), float(compass[i]), unobservable,
+            float(bias_sd[i]),
         )
         for i in range(len(t))
     ]
@@ -726,6 +744,7 @@ def compensate_arrays(
     I_bias_all = np.empty(n)
     out_params = np.empty((n, 3))
     out_unobservable = np.empty(n, dtype=object)
+    out_bias_sd = np.empty(n)
     update = np.zeros(n, dtype=int)
     reason = np.full(n, "", dtype=object)
 
@@ -746,6 +765,7 @@ def compensate_arrays(
          I_bias_all[rows], out_I_rate[rows], carry) = cols
         out_params[rows] = est.params
         out_unobservable[rows] = aid.unobservable
+        out_bias_sd[rows] = _bias_sd(aid.cov, T[rows], Tp[rows])
 
     def snap_row(i: int) -> _Snap:
         return _Snap(float(t[i]), float(heading[i]), float(I_raw_all[i]), float(I_T_all[i]), float(I_Tp_all[i]), float(I_bias_all[i]))
@@ -795,7 +815,8 @@ def compensate_arrays(
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
     out = _output_frame(
-        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading, out_unobservable
+        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading, out_unobservable,
+        out_bias_sd,
     )
     out.attrs["measurements"] = _measurement_table(aid.accepted)
     out.attrs["estimator"] = est.name
@@ -834,7 +855,7 @@ def _compass_arrays(n: int, heading_deg, mag, acc):
     return heading, norm, dip
 
 
-def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass, unobservable) -> pd.DataFrame:
+def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass, unobservable, bias_sd) -> pd.DataFrame:
     return pd.DataFrame(
         {
             "t": t,
@@ -850,6 +871,7 @@ def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass, u
             "temp_rate": Tp,
             "compass_heading": compass,
             "unobservable": unobservable.astype(str),
+            "bias_sd": bias_sd,
         }
     )
 
@@ -885,8 +907,9 @@ def compensate(
         contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
         compass used; empty where there was no sample), ``unobservable`` (``a``, ``b``
         or ``a,b``: drift parameters the data have not yet determined, e.g. while the
-        temperature is flat; empty when all are) and every other input column (the
-        input ``heading`` is ``compass_heading``).
+        temperature is flat; empty when all are), ``bias_sd`` (deg/s, the filter's
+        standard deviation of ``bias_z``) and every other input column (the input
+        ``heading`` is ``compass_heading``).
     """
     source = source or log.attrs.get("source", "log")
     missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
