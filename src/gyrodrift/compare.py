@@ -16,6 +16,10 @@ method      what it is                                                causal
             set by sensor noise alone
 ==========  ========================================================  ======
 
+Any other registered estimator that can be built from settings alone (for example
+``adaptive``, see :mod:`gyrodrift.estimators`) is accepted as a method name too: it
+runs as :func:`compensate` with ``estimator=name``.
+
 Every method sees the same log, the same compass gates and the same integration;
 only the drift estimate differs.
 """
@@ -30,7 +34,14 @@ import pandas as pd
 from gyrodrift.compensate import CompensatorConfig, compensate
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators import CubicCalibration, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
+from gyrodrift.estimators import (
+    ESTIMATORS,
+    CubicCalibration,
+    FixedParams,
+    Poly3Calibration,
+    fit_linear_drift,
+    fit_poly3,
+)
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
@@ -38,6 +49,22 @@ __all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_l
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "poly3", "oracle")
 CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "poly3": True, "oracle": False}
 _FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
+
+
+def _is_estimator_method(name: str) -> bool:
+    """A registered estimator name that is not one of :data:`METHODS` (run as ``estimator=name``)."""
+    return name in ESTIMATORS and name not in METHODS
+
+
+def _valid_methods() -> str:
+    return ", ".join([*METHODS, *sorted(n for n in ESTIMATORS if _is_estimator_method(n))])
+
+
+def _causal(name: str):
+    """Whether a method is causal: :data:`CAUSAL`, else the registered estimator's ``causal``."""
+    if name in CAUSAL:
+        return CAUSAL[name]
+    return getattr(ESTIMATORS.get(name), "causal", None)
 
 
 def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
@@ -77,7 +104,7 @@ def run_method(
     Parameters
     ----------
     name : str
-        One of :data:`METHODS`.
+        One of :data:`METHODS`, or another registered estimator name (e.g. ``adaptive``).
     log : DataFrame
         Input contract.
     config : CompensatorConfig, optional
@@ -86,7 +113,7 @@ def run_method(
         For ``poly3``: a fitted calibration, or the heating-run log to fit it on.
     """
     config = config or CompensatorConfig()
-    if name in _FILTERS:
+    if name in _FILTERS or _is_estimator_method(name):
         return compensate(log, replace(config, estimator=name))
     if name == "mlr":
         first = compensate(log, config)
@@ -104,7 +131,7 @@ def run_method(
         return compensate(log, config, estimator=CubicCalibration(calibration))
     if name == "oracle":
         return _oracle(log, config)
-    raise ConfigError(f"unknown method {name!r}; choose from: {', '.join(METHODS)}")
+    raise ConfigError(f"unknown method {name!r}; choose from: {_valid_methods()}")
 
 
 def run_methods(
@@ -123,9 +150,9 @@ def run_methods(
     skipped : dict
         Method name → why it was not run (no truth column, no calibration run).
     """
-    unknown = [m for m in methods if m not in METHODS]
+    unknown = [m for m in methods if m not in METHODS and not _is_estimator_method(m)]
     if unknown:
-        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {', '.join(METHODS)}")
+        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {_valid_methods()}")
     if isinstance(calibration, pd.DataFrame):
         calibration = calibration_from_log(calibration)
     outputs, skipped = {}, {}
@@ -152,7 +179,7 @@ def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
     """
     rows = {}
     for name, out in outputs.items():
-        row = {"causal": CAUSAL[name], "updates": int(out["update"].sum()), "gated_pct": 100.0 * float(out["gated"].mean())}
+        row = {"causal": _causal(name), "updates": int(out["update"].sum()), "gated_pct": 100.0 * float(out["gated"].mean())}
         if name == "oracle":
             row.update(updates=np.nan, gated_pct=np.nan)
         if TRUE_BIAS_Z in out.columns:
