@@ -448,3 +448,181 @@ def test_explicit_scale_factor_overrides_the_scenario():
     np.testing.assert_allclose(scaled["true_sf"], 1.002, rtol=0, atol=1e-15)
     pd.testing.assert_frame_equal(scaled[BASE_COLS], plain)
     assert scaled.attrs["device"]["sf_ppm"] == 2000.0 and plain.attrs["device"]["sf_ppm"] == 0.0
+
+
+# ------------------------------------------------------------------ scenarios beyond the paper (issue 6)
+
+from dataclasses import replace  # noqa: E402
+
+from gyrodrift.simulate import (  # noqa: E402
+    SCENARIO_MEMORY,
+    cold_start_temperature,
+    hysteresis_temperature,
+    interference_windows_wander,
+    random_compass,
+    random_device,
+    soak_outages,
+    soak_ramps,
+    soak_temperature,
+)
+
+NEW_SCENARIOS = ("interference-wander", "hysteresis", "cold-start", "soak")
+
+
+def test_new_scenarios_registered_with_default_durations():
+    for name in ("static", "static-outages", "vehicle", "calibration", "scale-factor", *NEW_SCENARIOS):
+        assert name in SCENARIOS
+    assert DEFAULT_DURATION_S["soak"] == 12 * 3600.0
+    assert DEFAULT_DURATION_S["cold-start"] >= 3600.0
+    for name in NEW_SCENARIOS:
+        df = simulate(name, seed=0, duration_s=120.0, fs_hz=10.0)
+        assert list(df.columns) == BASE_COLS
+        assert df.attrs["duration_s"] == 120.0 and len(df) == 1201
+
+
+@pytest.mark.parametrize("scenario", ["interference-wander", "soak"])
+def test_new_scenarios_random_parts_follow_the_seed(scenario):
+    a = simulate(scenario, seed=1, duration_s=1800.0, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+    b = simulate(scenario, seed=2, duration_s=1800.0, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+    assert not np.allclose(a["heading"].fillna(0.0), b["heading"].fillna(0.0))
+
+
+def test_cold_start_spans_minus_20_to_plus_60():
+    df = simulate("cold-start", seed=0, duration_s=1800.0, fs_hz=10.0)
+    assert df["temp"].min() <= -19.9 and df["temp"].max() >= 59.9
+    assert (df.loc[df["t"] < 60.0, "temp"] < -19.8).all()  # the cold soak: held at -20 first
+    temp, rate = cold_start_temperature(df["t"].to_numpy(), 1800.0)
+    assert temp[0] == pytest.approx(-20.0) and temp[-1] == pytest.approx(60.0)
+    assert (rate >= -1e-12).all()  # a warm-up: never cools
+    assert rate.max() > 3 * rate[df["t"].to_numpy() > 1200.0].max()  # fast at first, levelling off
+    np.testing.assert_array_equal(df["ref_heading"], 300.0)  # motionless
+
+
+def _heating_vs_cooling(df, duration_s, temp_c):
+    """Mean true drift within 0.5 degC of ``temp_c`` on the major loop: heating, cooling."""
+    t = df["t"].to_numpy()
+    temp, rate = hysteresis_temperature(t, duration_s)
+    band = (np.abs(temp - temp_c) < 0.5) & (t < 60.0 + 0.60 * (duration_s - 60.0))  # up to 70 and back to 10
+    bias = df["true_bias_z"].to_numpy()
+    return bias[band & (rate > 0)].mean(), bias[band & (rate < 0)].mean()
+
+
+def test_hysteresis_drift_differs_between_heating_and_cooling():
+    # no T' terms: any heating/cooling difference comes from the temperature history
+    dev = DeviceModel.noiseless(temp_quant_c=0.0, k_rate_dps_per_cps=0.0, hyst_dps=0.0)
+    dur = DEFAULT_DURATION_S["hysteresis"]
+    hyst = simulate("hysteresis", duration_s=dur, fs_hz=10.0, device=dev)
+    assert hyst.attrs["device"]["play_dps"] == SCENARIO_MEMORY["hysteresis"]["play_dps"]
+    assert hyst["temp"].min() <= 10.0 and hyst["temp"].max() >= 70.0
+    heat, cool = _heating_vs_cooling(hyst, dur, 30.0)
+    assert heat - cool > 0.1  # deg/s at the same temperature, same |T'|
+    plain = simulate("hysteresis", duration_s=dur, fs_hz=10.0, device=replace(dev, lag_tau_s=0.0, play_dps=0.0))
+    heat0, cool0 = _heating_vs_cooling(plain, dur, 30.0)
+    assert abs(heat0 - cool0) < 0.01  # memory off: the drift is a function of T alone
+    # remanence: after the temperature has stopped changing the backlash term stays
+    t = hyst["t"].to_numpy()
+    temp, rate = hysteresis_temperature(t, dur)
+    excess = hyst["true_bias_z"].to_numpy() - dev.drift(temp, rate)
+    play = SCENARIO_MEMORY["hysteresis"]["play_dps"]
+    top = np.flatnonzero(temp >= 70.0 - 1e-9)[-1]  # end of the 70 degC plateau (after heating)
+    bottom = np.flatnonzero((temp <= 10.0 + 1e-9) & (t > 600.0))[-1]  # end of the 10 degC plateau (after cooling)
+    assert excess[top] == pytest.approx(play, abs=0.02)
+    assert excess[bottom] == pytest.approx(-play, abs=0.02)
+
+
+def test_memory_defaults_leave_other_scenarios_unchanged():
+    dev = DeviceModel()
+    assert dev.lag_tau_s is dev.play_dps is dev.play_width_c is None
+    for name in SCENARIOS:
+        assert dev.with_scenario_memory(name).has_memory() == (name == "hysteresis")
+    t = np.arange(100.0)
+    temp = 25.0 + 0.1 * t
+    np.testing.assert_array_equal(dev.drift_series(t, temp, np.full(100, 0.1)), dev.drift(temp, 0.1))
+    # an explicit memory on a paper scenario is honoured
+    df = simulate("static", duration_s=600.0, fs_hz=10.0, device=DeviceModel(play_dps=0.1, play_width_c=2.0))
+    assert df.attrs["device"]["play_dps"] == 0.1
+
+
+def test_play_operator_is_rate_independent():
+    dev = DeviceModel.noiseless(temp_quant_c=0.0, play_dps=0.2, play_width_c=4.0, k_rate_dps_per_cps=0.0, hyst_dps=0.0)
+    up_down = np.r_[np.linspace(20.0, 40.0, 201), np.linspace(40.0, 20.0, 201)]
+    for step_s in (0.1, 10.0):  # 100x slower: the same loop
+        t = step_s * np.arange(up_down.size)
+        excess = dev.drift_series(t, up_down, np.zeros(t.size)) - dev.drift(up_down, 0.0)
+        assert excess[200] == pytest.approx(0.2) and excess[-1] == pytest.approx(-0.2)
+        assert np.all(np.abs(excess) <= 0.2 + 1e-12)
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [({"play_width_c": 0.0}, "play_width_c"), ({"lag_tau_s": -1.0}, "lag_tau_s")])
+def test_invalid_memory_fields(kwargs, name):
+    with pytest.raises(ConfigError, match=name):
+        DeviceModel(**kwargs)
+
+
+def test_soak_outages_lie_in_temperature_ramps():
+    dur = 7200.0
+    ramps = soak_ramps(dur)
+    assert len(ramps) == 4
+    dropouts, interference = soak_outages(dur)
+    windows = [(s, d) for s, d in dropouts] + [(s, d) for s, d, _ in interference]
+    assert len(dropouts) == 2 and len(interference) == 2
+    t = np.linspace(0.0, dur, 20001)
+    _, rate = soak_temperature(t, dur)
+    for start, length in windows:
+        assert any(r0 <= start and start + length <= r1 for r0, r1 in ramps)
+        inside = (t >= start) & (t < start + length)
+        assert np.abs(rate[inside]).min() > 0.3 * np.abs(rate).max()  # the steep middle of a ramp
+    df = simulate("soak", seed=4, duration_s=dur, fs_hz=10.0)
+    assert df.attrs["compass_dropouts"] == [list(w) for w in dropouts]
+    for start, length in dropouts:
+        rows = df["t"].between(start, start + length, inclusive="left")
+        assert df.loc[rows, "heading"].isna().all()
+    assert df["heading"].notna().mean() > 0.9
+    assert len(df.attrs["compass"]["interference"]) == 2
+
+
+def test_soak_default_outages_are_minutes_long_and_sway_is_slow():
+    dropouts, interference = soak_outages(DEFAULT_DURATION_S["soak"])
+    assert all(300.0 <= d <= 1800.0 for _, d in dropouts) and all(300.0 <= d <= 1800.0 for _, d, _ in interference)
+    df = simulate("soak", seed=3, duration_s=7200.0, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+    rate = _true_rate(df)
+    assert 0.1 < np.abs(rate).max() < 2.0  # below the 2 deg/s turning gate
+    swing = wrap_180(df["ref_heading"] - 70.0)
+    assert 10.0 <= np.abs(swing).max() <= 30.0
+
+
+def test_interference_wander_offset_is_slow_and_in_windows():
+    dur = DEFAULT_DURATION_S["interference-wander"]
+    df = simulate("interference-wander", seed=5, duration_s=dur, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+    offset = np.asarray(wrap_180(df["heading"] - df["ref_heading"]))
+    t = df["t"].to_numpy()
+    windows = interference_windows_wander(dur)
+    assert len(windows) == 4
+    in_any = np.zeros(t.size, dtype=bool)
+    for start, length in windows:
+        inside = (t >= start) & (t <= start + length)
+        in_any |= inside
+        core = (t >= start + 120.0) & (t <= start + length - 120.0)
+        assert np.abs(offset[core]).max() > 1.0  # degrees, not a rounding error
+        assert np.ptp(offset[core]) > 0.5  # it wanders, it is not a constant window
+    assert np.abs(offset[~in_any]).max() < 1e-9
+    assert np.abs(np.diff(offset) / np.diff(t)).max() < 0.5  # deg/s: slow
+    assert np.abs(offset).max() < 20.0
+
+
+def test_random_device_and_compass():
+    devs = [random_device(np.random.default_rng(s)) for s in range(30)]
+    assert devs[0] == random_device(np.random.default_rng(0))
+    assert len({d.c1_dps_per_c for d in devs}) == 30
+    for d in devs:
+        assert 0.015 <= d.noise_density_dps_rthz <= 0.08
+        assert 0.005 <= abs(d.c1_dps_per_c) <= 0.04
+        assert not d.has_memory() and not d.has_scale_factor_error()
+    assert {np.sign(d.c1_dps_per_c) for d in devs} == {-1.0, 1.0}
+    hyst = random_device(np.random.default_rng(0), scenario="hysteresis")
+    assert hyst.has_memory() and 60.0 <= hyst.lag_tau_s <= 300.0 and 3e-4 <= abs(hyst.c2_dps_per_c2) <= 8e-4
+    comp = random_compass(np.random.default_rng(1))
+    assert comp == random_compass(np.random.default_rng(1))
+    assert 0.3 <= comp.noise_deg <= 1.0 and 0.0 <= comp.deviation_deg <= 3.0
+    df = simulate("hysteresis", seed=1, duration_s=600.0, fs_hz=10.0, device=hyst, compass=comp)
+    assert df.attrs["device"]["lag_tau_s"] == hyst.lag_tau_s  # the drawn memory, not the scenario's

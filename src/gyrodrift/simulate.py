@@ -20,6 +20,23 @@ The gyro scale factor is exactly 1 except in the ``scale-factor`` scenario (Sect
 4.3: the static heating run with full turns on a turntable), where it changes by
 about 3 % with temperature (:meth:`DeviceModel.scale_factor`).
 
+Scenarios (:data:`SCENARIOS`, default lengths in :data:`DEFAULT_DURATION_S`): the
+paper's ``static``, ``static-outages``, ``vehicle``, ``calibration`` and
+``scale-factor``, and four beyond the paper:
+
+* ``interference-wander``: ``static`` with magnetic interference whose offset wanders
+  by a few degrees over minutes (:func:`wander_offset`), too slowly for a
+  disagreement gate to notice;
+* ``hysteresis``: a 10 → 70 → 10 degC cycle and a minor loop, with a device whose
+  drift depends on the temperature history (a thermal lag and a backlash hysteresis,
+  :data:`SCENARIO_MEMORY`, :meth:`DeviceModel.drift_series`);
+* ``cold-start``: a warm-up from -20 to +60 degC after a cold soak;
+* ``soak``: 12 h of slow yaw sway, temperature plateaus and ramps, and long compass
+  outages (missing or interfered) during the ramps (:func:`soak_outages`).
+
+:func:`random_device` and :func:`random_compass` draw randomised sensors for Monte
+Carlo runs (:mod:`gyrodrift.montecarlo`).
+
 Output columns
 --------------
 ==================  ========  =====================================================
@@ -105,6 +122,20 @@ __all__ = [
     "rotation_plan",
     "SCENARIO_SCALE_FACTOR_PPM",
     "TRUE_SF",
+    "SCENARIO_MEMORY",
+    "hysteresis_temperature",
+    "cold_start_temperature",
+    "soak_temperature",
+    "soak_ramps",
+    "soak_outages",
+    "interference_windows_wander",
+    "wander_offset",
+    "scenario_interference_wander",
+    "scenario_hysteresis",
+    "scenario_cold_start",
+    "scenario_soak",
+    "random_device",
+    "random_compass",
 ]
 
 #: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
@@ -120,6 +151,21 @@ TRUE_SF = "true_sf"
 SCENARIO_SCALE_FACTOR_PPM: dict[str, dict[str, float]] = {
     "scale-factor": {"sf_ppm": 10000.0, "sf_ppm_per_c": 700.0, "sf_ppm_per_c2": 6.0},
 }
+
+#: Temperature-memory fields (:class:`DeviceModel` ``lag_tau_s``, ``play_dps``,
+#: ``play_width_c``) of each scenario that sets them; a device field left ``None`` takes
+#: this value (else the memory is off). ``hysteresis``: the sensing element lags the
+#: temperature sensor by 120 s (at 0.02 degC/s the polynomial sees a temperature
+#: 2.4 degC behind the reading) and a 0.15 deg/s backlash of 6 degC width: with the
+#: default device, heating and cooling drifts differ by about 0.3 deg/s at the same
+#: temperature, and by 0.3 deg/s (the backlash) after the temperature has stopped
+#: changing.
+SCENARIO_MEMORY: dict[str, dict[str, float]] = {
+    "hysteresis": {"lag_tau_s": 120.0, "play_dps": 0.15, "play_width_c": 6.0},
+}
+
+#: Memory fields of every other scenario: off.
+_NO_MEMORY = {"lag_tau_s": 0.0, "play_dps": 0.0, "play_width_c": 1.0}
 
 #: Standard gravity, m/s² (converts kinematic acceleration to g).
 GRAVITY_MPS2 = 9.80665
@@ -217,6 +263,28 @@ class DeviceModel:
         (about 3 % over 23–58 degC, the ADXRS623 datasheet's sensitivity change over
         temperature, Table 1). Give numbers (e.g. 0.0) to override the scenario.
         Deterministic: kept by :meth:`noiseless` and :meth:`scale_noise`.
+    lag_tau_s : float or None
+        Thermal lag of the sensing element behind the die temperature ``T`` (which the
+        temperature sensor reads), s: the polynomial part of the drift is evaluated at
+        ``T_lag`` with ``dT_lag/dt = (T - T_lag)/lag_tau_s``, starting at ``T_lag = T``.
+        Heating, the element is colder than the reading, cooling, warmer: a hysteresis
+        loop whose width grows with ``|T'|``. 0 = off.
+    play_dps : float or None
+        Rate-independent (backlash) hysteresis, deg/s: ``play_dps * (T - p)/(w/2)``
+        where ``p`` is the play operator of ``T`` with width ``w = play_width_c``
+        (``p`` follows ``T`` with a slack of ``w/2``, starting at ``p = T``). After
+        heating by ``w`` or more the term is ``+play_dps``, after cooling
+        ``-play_dps``, and it stays there when the temperature stops changing: the
+        drift depends on the temperature *history*, not only on ``T`` and ``T'``.
+        0 = off.
+    play_width_c : float or None
+        Width ``w`` of the play operator, degC (> 0).
+
+        ``None`` (the default of all three) means "the scenario's value": off in every
+        scenario except ``hysteresis`` (:data:`SCENARIO_MEMORY`), so the default device
+        of every other scenario is unchanged. Deterministic: kept by :meth:`noiseless`
+        and :meth:`scale_noise`. The memory terms need the time series, so they are in
+        :meth:`drift_series`, not :meth:`drift`.
     """
 
     noise_density_dps_rthz: float = 0.04
@@ -236,6 +304,9 @@ class DeviceModel:
     sf_ppm: float | None = None
     sf_ppm_per_c: float | None = None
     sf_ppm_per_c2: float | None = None
+    lag_tau_s: float | None = None
+    play_dps: float | None = None
+    play_width_c: float | None = None
 
     #: The stochastic terms: zeroed by :meth:`noiseless`, scaled by :meth:`scale_noise`.
     _NOISE_FIELDS = (
@@ -248,15 +319,22 @@ class DeviceModel:
     #: The scale-factor coefficients (None: the scenario's value).
     _SF_FIELDS = ("sf_ppm", "sf_ppm_per_c", "sf_ppm_per_c2")
 
+    #: The temperature-memory (hysteresis) fields (None: the scenario's value).
+    _MEMORY_FIELDS = ("lag_tau_s", "play_dps", "play_width_c")
+
     def __post_init__(self):
         for f in fields(self):
-            if f.name in self._SF_FIELDS and getattr(self, f.name) is None:
+            if f.name in (*self._SF_FIELDS, *self._MEMORY_FIELDS) and getattr(self, f.name) is None:
                 continue
             _finite(f.name, getattr(self, f.name), "DeviceModel")
         for name in (*self._NOISE_FIELDS, "temp_quant_c"):
             _nonneg(name, getattr(self, name), "DeviceModel")
         for name in ("bias_tau_s", "hyst_rate_cps"):
             _positive(name, getattr(self, name), "DeviceModel")
+        if self.lag_tau_s is not None:
+            _nonneg("lag_tau_s", self.lag_tau_s, "DeviceModel")
+        if self.play_width_c is not None:
+            _positive("play_width_c", self.play_width_c, "DeviceModel")
 
     @classmethod
     def noiseless(cls, **overrides) -> "DeviceModel":
@@ -306,6 +384,54 @@ class DeviceModel:
         rate = np.asarray(temp_rate_true_cps, dtype=float)
         poly = self.c0_dps + x * (self.c1_dps_per_c + x * (self.c2_dps_per_c2 + x * self.c3_dps_per_c3))
         return poly + self.k_rate_dps_per_cps * rate + self.hyst_dps * np.tanh(rate / self.hyst_rate_cps)
+
+    def has_memory(self) -> bool:
+        """True when a thermal lag or a play hysteresis is set and non-zero."""
+        return bool(self.lag_tau_s) or bool(self.play_dps)
+
+    def drift_series(self, t_s, temp_true_c, temp_rate_true_cps) -> np.ndarray:
+        """Deterministic drift, deg/s, of a temperature time series, memory terms included.
+
+        Without memory terms (``lag_tau_s`` and ``play_dps`` 0 or None) this is exactly
+        :meth:`drift`. Otherwise the polynomial is evaluated at the lagged temperature
+        (``lag_tau_s``) and the play hysteresis (``play_dps``) is added; the ``T'``
+        terms use the true rate.
+
+        Parameters
+        ----------
+        t_s : array_like
+            Sample times, s, uniformly spaced (the simulator's grid).
+        temp_true_c : array_like
+            True die temperature ``T`` at ``t_s``, degC.
+        temp_rate_true_cps : array_like
+            True temperature rate ``T'`` at ``t_s``, degC/s.
+
+        Returns
+        -------
+        ndarray
+            Drift, deg/s.
+
+        Examples
+        --------
+        >>> dev = DeviceModel(play_dps=0.1, play_width_c=2.0, k_rate_dps_per_cps=0.0, hyst_dps=0.0)
+        >>> t = np.arange(5.0)
+        >>> up = dev.drift_series(t, [25.0, 26.0, 27.0, 28.0, 29.0], np.zeros(5))
+        >>> round(float(up[-1] - dev.drift(29.0, 0.0)), 6)  # heated by more than the width
+        0.1
+        """
+        if not self.has_memory():
+            return self.drift(temp_true_c, temp_rate_true_cps)
+        t = np.asarray(t_s, dtype=float)
+        temp = np.asarray(temp_true_c, dtype=float)
+        temp_poly = temp
+        if self.lag_tau_s:
+            dt = (t[-1] - t[0]) / (t.size - 1) if t.size > 1 else 0.0
+            temp_poly = _first_order_lag(temp, dt, self.lag_tau_s)
+        out = self.drift(temp_poly, temp_rate_true_cps)
+        if self.play_dps:
+            half = 0.5 * self.play_width_c
+            out = out + self.play_dps * (temp - _play_operator(temp, half)) / half
+        return out
 
     def white_sigma_dps(self, fs_hz: float) -> float:
         """Per-sample standard deviation of the white rate noise, deg/s."""
@@ -361,6 +487,49 @@ class DeviceModel:
             self,
             **{n: float(defaults.get(n, 0.0)) for n in self._SF_FIELDS if getattr(self, n) is None},
         )
+
+    def with_scenario_memory(self, scenario: str) -> "DeviceModel":
+        """A copy with each ``None`` memory field set to the scenario's value (:data:`SCENARIO_MEMORY`).
+
+        Scenarios other than ``hysteresis`` switch the memory off (``lag_tau_s = 0``,
+        ``play_dps = 0``, ``play_width_c = 1``).
+
+        Examples
+        --------
+        >>> DeviceModel().with_scenario_memory("static").has_memory()
+        False
+        >>> DeviceModel().with_scenario_memory("hysteresis").has_memory()
+        True
+        """
+        defaults = {**_NO_MEMORY, **SCENARIO_MEMORY.get(scenario, {})}
+        return replace(
+            self,
+            **{n: float(defaults[n]) for n in self._MEMORY_FIELDS if getattr(self, n) is None},
+        )
+
+
+def _first_order_lag(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
+    """First-order lag of a uniformly sampled series, starting in equilibrium (``y[0] = x[0]``)."""
+    if x.size == 0:
+        return x.copy()
+    phi = math.exp(-dt_s / tau_s)
+    y, _ = lfilter([1.0 - phi], [1.0, -phi], x, zi=[phi * x[0]])
+    return y
+
+
+def _play_operator(x: np.ndarray, half_width: float) -> np.ndarray:
+    """Play (backlash) operator: ``p_k = clip(p_{k-1}, x_k - h, x_k + h)``, ``p_0 = x_0``."""
+    out = np.empty(x.size)
+    if x.size == 0:
+        return out
+    p = float(x[0])
+    for k, v in enumerate(x.tolist()):
+        if p < v - half_width:
+            p = v - half_width
+        elif p > v + half_width:
+            p = v + half_width
+        out[k] = p
+    return out
 
 
 def _gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.random.Generator) -> np.ndarray:
@@ -602,6 +771,13 @@ class Motion:
         Kinematic acceleration along the forward and right level axes, m/s².
     interference : tuple of (start_s, duration_s, offset_deg)
         Magnetic interference windows of the scenario.
+    interference_offset_deg : ndarray or None
+        A further time-varying compass heading offset at the log times, deg (magnetic
+        interference that wanders, which constant windows cannot describe); added to
+        the windows' offset, in the simulated field as well. None = none.
+    compass_dropouts : tuple of (start_s, duration_s)
+        Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
+        ``start_s <= t < start_s + duration_s``).
     """
 
     temp_c: np.ndarray
@@ -613,6 +789,8 @@ class Motion:
     accel_fwd_mps2: np.ndarray | None = None
     accel_lat_mps2: np.ndarray | None = None
     interference: tuple[tuple[float, float, float], ...] = field(default=())
+    interference_offset_deg: np.ndarray | None = None
+    compass_dropouts: tuple[tuple[float, float], ...] = field(default=())
 
 
 def _hold_s(duration_s: float) -> float:
@@ -861,6 +1039,239 @@ def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> M
     )
 
 
+# --------------------------------------------------------------------------- beyond the paper
+
+
+def hysteresis_temperature(t_s, duration_s: float):
+    """Heating and cooling cycle of ``hysteresis``: 10 → 70 → 10 degC, then 10 → 45 → 20 degC.
+
+    Shape in fractions of the run after the hold: 10 → 70 degC by 0.25, plateau to
+    0.32, cooling to 10 degC by 0.60, plateau to 0.66, a minor loop up to 45 degC by
+    0.80, plateau to 0.84 and cooling to 20 degC at the end. Every temperature between
+    20 and 45 degC is passed four times, twice heating and twice cooling.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    knots_u = [0.0, 0.25, 0.32, 0.60, 0.66, 0.80, 0.84, 1.0]
+    knots_c = [10.0, 70.0, 70.0, 10.0, 10.0, 45.0, 45.0, 20.0]
+    return _knot_profile(t_s, duration_s, knots_u, knots_c)
+
+
+def cold_start_temperature(t_s, duration_s: float):
+    """Warm-up after a cold soak: -20 degC held, then up to +60 degC, fast at first.
+
+    ``T = -20 + 80 * (1 - exp(-u/0.25)) / (1 - exp(-4))`` through 9 knots, ``u`` the
+    fraction of the run after the hold: half of the 80 degC rise comes in the first
+    18 % of the run (for the default 2-h run about 0.04 degC/s at first), and the
+    profile ends at exactly +60 degC.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    u = np.linspace(0.0, 1.0, 9)
+    c = -20.0 + 80.0 * (1.0 - np.exp(-u / 0.25)) / (1.0 - math.exp(-4.0))
+    return _knot_profile(t_s, duration_s, u, c)
+
+
+#: Soak profile: knots (fraction of the run after the hold, degC); ramps between unequal knots.
+_SOAK_KNOTS_U = (0.0, 0.08, 0.20, 0.33, 0.50, 0.62, 0.75, 0.86, 0.95, 1.0)
+_SOAK_KNOTS_C = (20.0, 20.0, 45.0, 45.0, 5.0, 5.0, 35.0, 35.0, 20.0, 20.0)
+
+#: Soak outages, one in the middle of each temperature ramp: (duration in s of the
+#: 12-h run, offset deg or None = compass missing).
+_SOAK_OUTAGES = ((900.0, None), (1200.0, 30.0), (900.0, None), (600.0, -25.0))
+
+
+def soak_temperature(t_s, duration_s: float):
+    """Thermal soak of ``soak``: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC.
+
+    Knots (fraction of the run after the hold → degC): 0.08 → 20, 0.20 → 45,
+    0.33 → 45, 0.50 → 5, 0.62 → 5, 0.75 → 35, 0.86 → 35, 0.95 → 20, flat to the end.
+    For the default 12-h run the ramps take 1.1–2.0 h (at most about 0.01 degC/s).
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    return _knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
+
+
+def soak_ramps(duration_s: float) -> tuple[tuple[float, float], ...]:
+    """The temperature ramps of ``soak``: ``(start_s, end_s)`` each, in run time."""
+    hold = _hold_s(duration_s)
+    at = [hold + (duration_s - hold) * u for u in _SOAK_KNOTS_U]
+    return tuple(
+        (at[i], at[i + 1]) for i in range(len(at) - 1) if _SOAK_KNOTS_C[i] != _SOAK_KNOTS_C[i + 1]
+    )
+
+
+def soak_outages(duration_s: float):
+    """The compass outages of ``soak``, one centred in each temperature ramp.
+
+    For the default 12-h run: 900 s without compass (first ramp, heating), 1200 s of
+    +30 deg interference (second ramp, cooling), 900 s without compass (third,
+    heating) and 600 s of -25 deg interference (fourth, cooling); durations scale with
+    the run.
+
+    Returns
+    -------
+    dropouts : tuple of (start_s, duration_s)
+        Windows without compass samples.
+    interference : tuple of (start_s, duration_s, offset_deg)
+        Magnetic interference windows.
+    """
+    scale = duration_s / (12 * 3600.0)
+    dropouts, interference = [], []
+    for (start, end), (dur, offset) in zip(soak_ramps(duration_s), _SOAK_OUTAGES):
+        dur *= scale
+        t0 = 0.5 * (start + end) - 0.5 * dur
+        if offset is None:
+            dropouts.append((t0, dur))
+        else:
+            interference.append((t0, dur, offset))
+    return tuple(dropouts), tuple(interference)
+
+
+def interference_windows_wander(duration_s: float) -> tuple[tuple[float, float], ...]:
+    """Where the interference of ``interference-wander`` acts: ``(start_s, duration_s)`` each.
+
+    For the default 3-h run: 900 s from 1296 s (early rise), 1200 s from 3456 s (top
+    of the rise), 900 s from 5940 s (plateau) and 1500 s from 8424 s (cooling); start
+    and length scale with the run.
+    """
+    scale = duration_s / (3 * 3600.0)
+    return tuple((f * duration_s, d * scale) for f, d in ((0.12, 900.0), (0.32, 1200.0), (0.55, 900.0), (0.78, 1500.0)))
+
+
+#: Wandering interference: ramp in/out (s), mean offset (deg), sinusoid amplitudes (deg)
+#: and periods (s) of the three components of each window.
+_WANDER_RAMP_S = 120.0
+_WANDER_MEAN_DEG = (2.0, 6.0)
+_WANDER_AMP_DEG = (1.0, 3.0)
+_WANDER_PERIOD_S = (180.0, 900.0)
+
+
+def wander_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Slowly wandering compass heading offset of ``interference-wander``, deg.
+
+    In each window of :func:`interference_windows_wander` the offset is a mean of
+    2–6 deg (random sign) plus three sinusoids of 1–3 deg amplitude and 3–15 min
+    period (random phases), faded in and out with raised-cosine ramps of
+    ``min(120 s, window/4)``; 0 outside the windows. For a window longer than 8 min the
+    offset changes by at most about 0.35 deg/s (typically 0.05–0.15 deg/s): too slow
+    for a 10-s disagreement gate of 3 deg to notice, so it pulls the compass along
+    with it. Periods are absolute (minutes), not scaled with the run.
+
+    Parameters
+    ----------
+    t_s : array_like
+        Times, s.
+    duration_s : float
+        Run length, s.
+    rng : numpy.random.Generator
+        Source of the offsets, amplitudes, periods and phases (a fixed number of
+        draws per window).
+
+    Returns
+    -------
+    ndarray
+        Offset, deg.
+    """
+    t = np.asarray(t_s, dtype=float)
+    out = np.zeros(t.shape)
+    for start, dur in interference_windows_wander(duration_s):
+        mean = rng.choice([-1.0, 1.0]) * rng.uniform(*_WANDER_MEAN_DEG)
+        amp = rng.uniform(*_WANDER_AMP_DEG, size=3)
+        period = rng.uniform(*_WANDER_PERIOD_S, size=3)
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+        ramp = min(_WANDER_RAMP_S, dur / 4.0)
+        envelope = _smooth_step((t - start) / ramp) - _smooth_step((t - (start + dur - ramp)) / ramp)
+        inside = envelope > 0.0
+        x = t[inside] - start
+        wave = mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
+        out[inside] = out[inside] + envelope[inside] * wave
+    return out
+
+
+def scenario_interference_wander(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """``static`` with magnetic interference that wanders slowly in four windows.
+
+    The bench, attitude and temperature of ``static`` (23 → 58 degC and back); the
+    compass offset of :func:`wander_offset` (a few degrees, changing over minutes) in
+    the windows of :func:`interference_windows_wander`.
+    """
+    temp, rate = static_temperature(t_s, duration_s)
+    still = _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    return replace(still, interference_offset_deg=wander_offset(t_s, duration_s, rng))
+
+
+def scenario_hysteresis(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """A strongly nonlinear device with hysteresis, motionless at 120 deg, heated and cooled.
+
+    The temperature cycle of :func:`hysteresis_temperature` (10 → 70 → 10 degC, then a
+    minor loop 10 → 45 → 20 degC) spans 60 degC of the cubic drift, and the scenario's
+    device (:data:`SCENARIO_MEMORY`) adds a 120-s thermal lag and a 0.15 deg/s
+    backlash hysteresis: the drift at one temperature differs between heating and
+    cooling, also when the temperature has stopped changing.
+    """
+    temp, rate = hysteresis_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 120.0, -0.6, 1.0)
+
+
+def scenario_cold_start(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Cold start: motionless at 300 deg, warming from -20 to +60 degC after a cold soak."""
+    temp, rate = cold_start_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 300.0, 1.1, 0.4)
+
+
+#: Yaw sway of ``soak``: (amplitude range deg, period range s) of its two components.
+_SWAY = (((10.0, 20.0), (180.0, 600.0)), ((2.0, 5.0), (60.0, 180.0)))
+
+
+def scenario_soak(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """A 12-h soak: slow yaw sway, temperature ramps, long compass outages during the ramps.
+
+    The unit sways about heading 70 deg (a moored boat, a vehicle on a rocking
+    platform): a 10–20 deg sinusoid of 3–10 min period plus a 2–5 deg one of 1–3 min
+    (random amplitudes, periods and phases), faded in over ``min(120 s, 10 %)`` after
+    the hold; at most about 1.2 deg/s, below the 2 deg/s turning gate. Temperature of
+    :func:`soak_temperature`; the outages of :func:`soak_outages` (compass missing, or
+    interference of 25–30 deg) in the middle of the ramps, where the drift changes
+    fastest.
+    """
+    t = np.asarray(t_s, dtype=float)
+    temp, temp_rate = soak_temperature(t, duration_s)
+    hold = _hold_s(duration_s)
+    fade = min(120.0, 0.1 * duration_s)
+    env = _smooth_step((t - hold) / fade)
+    env_rate = _smooth_step_slope((t - hold) / fade) / fade
+    sway = np.zeros(t.size)
+    sway_rate = np.zeros(t.size)
+    for amp_range, period_range in _SWAY:
+        amp = rng.uniform(*amp_range)
+        omega = 2.0 * np.pi / rng.uniform(*period_range)
+        phase = rng.uniform(0.0, 2.0 * np.pi)
+        sway += amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
+        sway_rate += amp * omega * np.cos(omega * (t - hold) + phase)
+    dropouts, interference = soak_outages(duration_s)
+    zero = np.zeros(t.size)
+    return Motion(
+        temp_c=temp,
+        temp_rate_cps=temp_rate,
+        heading_rate_dps=env_rate * sway + env * sway_rate,
+        heading0_deg=70.0,
+        roll_deg=0.5,
+        pitch_deg=-0.8,
+        accel_fwd_mps2=zero,
+        accel_lat_mps2=zero,
+        interference=interference,
+        compass_dropouts=dropouts,
+    )
+
+
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion``.
 SCENARIOS: dict[str, Callable[[np.ndarray, float, np.random.Generator], Motion]] = {
     "static": scenario_static,
@@ -868,6 +1279,10 @@ SCENARIOS: dict[str, Callable[[np.ndarray, float, np.random.Generator], Motion]]
     "vehicle": scenario_vehicle,
     "calibration": scenario_calibration,
     "scale-factor": scenario_scale_factor,
+    "interference-wander": scenario_interference_wander,
+    "hysteresis": scenario_hysteresis,
+    "cold-start": scenario_cold_start,
+    "soak": scenario_soak,
 }
 
 #: Default run length of each scenario, s.
@@ -877,7 +1292,136 @@ DEFAULT_DURATION_S: dict[str, float] = {
     "vehicle": 40 * 60.0,
     "calibration": 2 * 3600.0,
     "scale-factor": 3 * 3600.0,
+    "interference-wander": 3 * 3600.0,
+    "hysteresis": 4 * 3600.0,
+    "cold-start": 2 * 3600.0,
+    "soak": 12 * 3600.0,
 }
+
+
+# --------------------------------------------------------------------------- randomised devices
+
+
+def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
+    return float(math.exp(rng.uniform(math.log(low), math.log(high))))
+
+
+def _signed(rng: np.random.Generator, low: float, high: float) -> float:
+    """Magnitude uniform in [low, high], random sign."""
+    return float(rng.choice([-1.0, 1.0]) * rng.uniform(low, high))
+
+
+def random_device(rng: np.random.Generator, *, scenario: str | None = None) -> DeviceModel:
+    """A plausible randomised MEMS gyro for Monte Carlo runs.
+
+    Parameters are drawn independently, in a fixed order, around the ADXRS623-like
+    default (:class:`DeviceModel`):
+
+    ==========================  ==========================================  ============
+    field                       distribution                                unit
+    ==========================  ==========================================  ============
+    ``noise_density_dps_rthz``  log-uniform 0.015–0.08                      deg/s/√Hz
+    ``c0_dps``                  uniform −0.5 … 0.5                          deg/s
+    ``c1_dps_per_c``            ±(0.005–0.04), random sign                  deg/s/degC
+    ``c2_dps_per_c2``           uniform −5e-4 … 5e-4                        deg/s/degC²
+    ``c3_dps_per_c3``           uniform −5e-6 … 5e-6                        deg/s/degC³
+    ``k_rate_dps_per_cps``      uniform −8 … 8                              deg/s/(degC/s)
+    ``hyst_dps``                uniform 0 … 0.05                            deg/s
+    ``bias_instability_dps``    log-uniform 0.001–0.005                     deg/s
+    ``bias_tau_s``              uniform 100–1000                            s
+    ``rate_random_walk_dps_rts`` log-uniform 5e-6–5e-5                      deg/s/√s
+    ``temp_noise_c``            uniform 0.005–0.05                          degC
+    ``temp_quant_c``            one of 1/340, 1/16, 1/8                     degC
+    ==========================  ==========================================  ============
+
+    Over 23–58 degC the linear part alone moves the drift by 0.18–1.4 deg/s. The
+    scale factor is exactly 1 (all ``sf_*`` 0).
+
+    For ``scenario="hysteresis"`` the device is strongly nonlinear with memory: the
+    quadratic and cubic coefficients are drawn with magnitudes 3e-4–8e-4 and
+    3e-6–8e-6 (random signs) instead, and ``lag_tau_s`` uniform 60–300 s,
+    ``play_dps`` uniform 0.05–0.2 deg/s (random sign) and ``play_width_c`` uniform
+    3–10 degC. Any other scenario: no memory (``lag_tau_s = play_dps = 0``).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of every draw; the same generator state gives the same device.
+    scenario : str, optional
+        The scenario the device is drawn for (only ``hysteresis`` changes the draws).
+
+    Returns
+    -------
+    DeviceModel
+
+    Examples
+    --------
+    >>> a = random_device(np.random.default_rng(5))
+    >>> a == random_device(np.random.default_rng(5))
+    True
+    >>> a.has_memory(), random_device(np.random.default_rng(5), scenario="hysteresis").has_memory()
+    (False, True)
+    """
+    strong = scenario == "hysteresis"
+    noise = _log_uniform(rng, 0.015, 0.08)
+    c0 = float(rng.uniform(-0.5, 0.5))
+    c1 = _signed(rng, 0.005, 0.04)
+    if strong:
+        c2, c3 = _signed(rng, 3e-4, 8e-4), _signed(rng, 3e-6, 8e-6)
+    else:
+        c2, c3 = float(rng.uniform(-5e-4, 5e-4)), float(rng.uniform(-5e-6, 5e-6))
+    values = {
+        "noise_density_dps_rthz": noise,
+        "c0_dps": c0,
+        "c1_dps_per_c": c1,
+        "c2_dps_per_c2": c2,
+        "c3_dps_per_c3": c3,
+        "k_rate_dps_per_cps": float(rng.uniform(-8.0, 8.0)),
+        "hyst_dps": float(rng.uniform(0.0, 0.05)),
+        "bias_instability_dps": _log_uniform(rng, 0.001, 0.005),
+        "bias_tau_s": float(rng.uniform(100.0, 1000.0)),
+        "rate_random_walk_dps_rts": _log_uniform(rng, 5e-6, 5e-5),
+        "temp_noise_c": float(rng.uniform(0.005, 0.05)),
+        "temp_quant_c": float(rng.choice([1.0 / 340.0, 0.0625, 0.125])),
+        "sf_ppm": 0.0,
+        "sf_ppm_per_c": 0.0,
+        "sf_ppm_per_c2": 0.0,
+    }
+    if strong:
+        values.update(
+            lag_tau_s=float(rng.uniform(60.0, 300.0)),
+            play_dps=_signed(rng, 0.05, 0.2),
+            play_width_c=float(rng.uniform(3.0, 10.0)),
+        )
+    else:
+        values.update(_NO_MEMORY)
+    return DeviceModel(**values)
+
+
+def random_compass(rng: np.random.Generator) -> CompassModel:
+    """A plausible randomised compass for Monte Carlo runs.
+
+    ``noise_deg`` uniform 0.3–1.0 deg; semicircular deviation ``deviation_deg``
+    uniform 0–3 deg and quadrantal ``deviation2_deg`` 0–1 deg, both at a uniform
+    random phase; everything else as :class:`CompassModel` (10 Hz, 50 µT, dip 60 deg,
+    kinematic tilt).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of every draw.
+
+    Returns
+    -------
+    CompassModel
+    """
+    return CompassModel(
+        noise_deg=float(rng.uniform(0.3, 1.0)),
+        deviation_deg=float(rng.uniform(0.0, 3.0)),
+        deviation_phase_deg=float(rng.uniform(-180.0, 180.0)),
+        deviation2_deg=float(rng.uniform(0.0, 1.0)),
+        deviation2_phase_deg=float(rng.uniform(-180.0, 180.0)),
+    )
 
 
 # --------------------------------------------------------------------------- assembly
@@ -928,6 +1472,8 @@ def _compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mas
     idx = np.flatnonzero(mask)
     psi = heading_true[idx]
     offset = compass.interference_offset(t[idx], motion.interference)
+    if motion.interference_offset_deg is not None:
+        offset = offset + np.asarray(motion.interference_offset_deg, dtype=float)[idx]
     noise = compass.noise_deg * rng.standard_normal(idx.size) if compass.noise_deg > 0 else 0.0
     apparent = psi + compass.deviation(psi) + offset + noise
     mag = np.full((n, 3), np.nan)
@@ -954,7 +1500,8 @@ def simulate(
     ----------
     scenario : str
         One of :data:`SCENARIOS`: ``static``, ``static-outages``, ``vehicle``,
-        ``calibration``, ``scale-factor``.
+        ``calibration``, ``scale-factor``, ``interference-wander``, ``hysteresis``,
+        ``cold-start``, ``soak``.
     seed : int
         Seed of all randomness (trajectory details and every noise term); the same
         seed gives an identical DataFrame.
@@ -966,7 +1513,8 @@ def simulate(
         Gyro and temperature sample rate, Hz.
     device : DeviceModel, optional
         Gyro error model (default :class:`DeviceModel`). Scale-factor coefficients
-        left ``None`` take the scenario's values (:data:`SCENARIO_SCALE_FACTOR_PPM`).
+        and memory fields left ``None`` take the scenario's values
+        (:data:`SCENARIO_SCALE_FACTOR_PPM`, :data:`SCENARIO_MEMORY`).
     compass : CompassModel, optional
         Compass error model (default :class:`CompassModel`); the scenario's own
         interference windows are added to its ``interference``.
@@ -981,7 +1529,9 @@ def simulate(
         ``true_sf`` in the ``scale-factor`` scenario or whenever the scale factor is
         not ≡ 1 (+ raw columns); ``attrs`` holds ``scenario``, ``seed``,
         ``duration_s``, ``fs_hz``, and the effective ``device`` (scale-factor
-        coefficients resolved) and ``compass`` models as plain dicts.
+        coefficients and memory fields resolved) and ``compass`` models as plain
+        dicts, and ``compass_dropouts`` (list of ``[start_s, duration_s]``) when the
+        scenario has windows without compass samples (``soak``).
 
     Raises
     ------
@@ -991,7 +1541,7 @@ def simulate(
     device = DeviceModel() if device is None else device
     compass = CompassModel() if compass is None else compass
     duration = _check_args(scenario, seed, duration_s, fs_hz, device, compass)
-    device = device.with_scenario_scale_factor(scenario)
+    device = device.with_scenario_scale_factor(scenario).with_scenario_memory(scenario)
     fs = float(fs_hz)
     n = int(math.floor(duration * fs + 1e-9)) + 1
     t = np.arange(n) / fs
@@ -1005,7 +1555,7 @@ def simulate(
     )
 
     bias = (
-        device.drift(motion.temp_c, motion.temp_rate_cps)
+        device.drift_series(t, motion.temp_c, motion.temp_rate_cps)
         + _gauss_markov(n, dt, device.bias_instability_dps, device.bias_tau_s, rng["bias"])
         + _random_walk(n, dt, device.rate_random_walk_dps_rts, rng["rrw"])
     )
@@ -1017,6 +1567,10 @@ def simulate(
 
     mask = _compass_rows(t, compass.rate_hz)
     heading, mag, acc = _compass_columns(t, heading_true, motion, compass, mask, rng["compass"])
+    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
+        out = (t >= start) & (t < start + dur)
+        heading[out] = np.nan
+        mag[out] = np.nan
 
     columns = {
         T: t,
@@ -1041,4 +1595,6 @@ def simulate(
         "device": _jsonable(asdict(device)),
         "compass": _jsonable(asdict(effective)),
     }
+    if motion.compass_dropouts:
+        df.attrs["compass_dropouts"] = _jsonable(motion.compass_dropouts)
     return df
