@@ -1,0 +1,607 @@
+"""Monte Carlo comparison of the drift estimators over every simulated scenario family.
+
+One *case* is a (family, seed) pair: a device and a compass drawn at random
+(:func:`gyrodrift.simulate.random_device`, :func:`gyrodrift.simulate.random_compass`)
+from a generator seeded by the pair, one simulated log of the family's scenario with
+that device, and (for ``poly3``) a separate 2-h calibration heating run of the same
+device and compass. Every method of the case runs on that same log
+(:func:`gyrodrift.compare.run_method`: same gates, same integration, same anchor),
+and is scored against the log's truth columns:
+
+===================  =====  ====================================================
+column               unit   meaning
+===================  =====  ====================================================
+``family``           --     scenario family (:data:`FAMILIES`)
+``seed``             --     Monte Carlo seed of the case
+``method``           --     drift estimator (:mod:`gyrodrift.compare` names)
+``scenario``         --     simulated scenario (:data:`gyrodrift.simulate.SCENARIOS`)
+``duration_s``       s      length of the log
+``heading_rms_deg``  deg    RMS of heading minus ``ref_heading`` (wrapped)
+``heading_max_deg``  deg    largest absolute heading error
+``bias_rms_dps``     deg/s  RMS of estimated minus true drift (``true_bias_z``)
+``status``           --     ``ok`` or ``error``
+``error``            --     one line: why the method or the case failed ("" if ok)
+===================  =====  ====================================================
+
+Results do not depend on the number of worker processes: each case is simulated from
+its own seeds, and the rows are sorted by family (in the order asked), seed and
+method (in the order asked).
+
+Examples
+--------
+>>> df = run_monte_carlo(["static"], 1, ["adaptive", "kf"], duration_scale=0.02, workers=1)
+>>> list(df["method"]), list(df["status"])
+(['adaptive', 'kf'], ['ok', 'ok'])
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import zlib
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.compare import METHODS, run_method
+from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators import ESTIMATORS
+from gyrodrift.metrics import bias_error, error_stats, heading_error_stats, markdown_table
+from gyrodrift.simulate import (
+    DEFAULT_DURATION_S,
+    CompassModel,
+    DeviceModel,
+    random_compass,
+    random_device,
+    simulate,
+)
+
+__all__ = [
+    "Family",
+    "FAMILIES",
+    "DEFAULT_METHODS",
+    "REFERENCE_METHOD",
+    "COLUMNS",
+    "Case",
+    "draw_case",
+    "simulate_case",
+    "run_case",
+    "run_monte_carlo",
+    "summarise",
+    "markdown",
+]
+
+
+@dataclass(frozen=True)
+class Family:
+    """A scenario family of the Monte Carlo.
+
+    Attributes
+    ----------
+    scenario : str
+        Simulated scenario (:data:`gyrodrift.simulate.SCENARIOS`).
+    duration_s : float
+        Default log length, s (scaled by ``duration_scale``).
+    description : str
+        One line for tables and help.
+    """
+
+    scenario: str
+    duration_s: float
+    description: str
+
+
+#: The six scenario families of issue 6, by name.
+FAMILIES: Mapping[str, Family] = MappingProxyType(
+    {
+        "static": Family("static", DEFAULT_DURATION_S["static"], "motionless, heated 23 -> 58 degC and cooled (3 h)"),
+        "interference-wander": Family(
+            "interference-wander", DEFAULT_DURATION_S["interference-wander"],
+            "static ramp with slowly wandering magnetic interference in four windows (3 h)",
+        ),
+        "vehicle": Family("vehicle", DEFAULT_DURATION_S["vehicle"], "car loops with 90 deg turns, 26 -> 37 degC (40 min)"),
+        "hysteresis": Family(
+            "hysteresis", DEFAULT_DURATION_S["hysteresis"],
+            "strongly nonlinear device with thermal lag and backlash, 10 -> 70 -> 10 degC cycles (4 h)",
+        ),
+        "cold-start": Family("cold-start", DEFAULT_DURATION_S["cold-start"], "warm-up from -20 to +60 degC (2 h)"),
+        "soak": Family(
+            "soak", DEFAULT_DURATION_S["soak"],
+            "12-h soak, slow yaw sway, temperature ramps, long compass outages during the ramps",
+        ),
+    }
+)
+
+#: Methods of the comparison by default: ours, then the paper's and PX4's baselines.
+DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3")
+
+#: The method the others are counted against in :func:`summarise`.
+REFERENCE_METHOD = "adaptive"
+
+#: Columns of :func:`run_monte_carlo`, in order.
+COLUMNS = (
+    "family", "seed", "method", "scenario", "duration_s",
+    "heading_rms_deg", "heading_max_deg", "bias_rms_dps", "status", "error",
+)
+
+#: Length of the separate calibration heating run of ``poly3``, s (not scaled).
+CALIBRATION_S = DEFAULT_DURATION_S["calibration"]
+
+
+# --------------------------------------------------------------------------- one case
+
+
+@dataclass(frozen=True)
+class Case:
+    """One (family, seed) of the Monte Carlo: what is simulated, fully determined.
+
+    Attributes
+    ----------
+    family : str
+        Family name (:data:`FAMILIES`).
+    seed : int
+        Monte Carlo seed.
+    scenario : str
+        Scenario of the log.
+    duration_s : float
+        Log length, s.
+    log_seed, calibration_seed : int
+        :func:`gyrodrift.simulate.simulate` seeds of the log and of the calibration run.
+    device : DeviceModel
+        The randomised gyro (shared by the log and the calibration run).
+    compass : CompassModel
+        The randomised compass.
+    """
+
+    family: str
+    seed: int
+    scenario: str
+    duration_s: float
+    log_seed: int
+    calibration_seed: int
+    device: DeviceModel
+    compass: CompassModel
+
+
+def _family_key(family: str) -> int:
+    """A stable integer of a family name (not :func:`hash`, which changes per process)."""
+    return zlib.crc32(family.encode("utf-8"))
+
+
+def _check_families(families) -> list[str]:
+    names = list(FAMILIES) if families is None else [families] if isinstance(families, str) else list(families)
+    unknown = [f for f in names if f not in FAMILIES]
+    if unknown or not names:
+        raise ConfigError(
+            f"unknown famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(map(str, unknown)) or '(none given)'}; "
+            f"choose from: {', '.join(FAMILIES)}"
+        )
+    if len(set(names)) != len(names):
+        raise ConfigError(f"families must not repeat, got {', '.join(names)}")
+    return names
+
+
+def _check_seeds(seeds) -> list[int]:
+    if isinstance(seeds, (int, np.integer)) and not isinstance(seeds, bool):
+        if seeds < 1:
+            raise ConfigError(f"seeds must be at least 1, got {seeds}")
+        return list(range(int(seeds)))
+    try:
+        out = list(seeds)
+    except TypeError:
+        raise ConfigError(f"seeds must be a count or a list of non-negative integers, got {seeds!r}") from None
+    bad = [s for s in out if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0]
+    if bad or not out:
+        raise ConfigError(f"seeds must be non-negative integers, got {out!r}")
+    if len(set(out)) != len(out):
+        raise ConfigError(f"seeds must not repeat, got {out!r}")
+    return [int(s) for s in out]
+
+
+def _check_methods(methods) -> list[str]:
+    names = [methods] if isinstance(methods, str) else list(methods)
+    unknown = [m for m in names if m not in METHODS and m not in ESTIMATORS]
+    if unknown or not names:
+        valid = [*METHODS, *sorted(n for n in ESTIMATORS if n not in METHODS)]
+        raise ConfigError(
+            f"unknown method(s) {', '.join(map(str, unknown)) or '(none given)'}; choose from: {', '.join(valid)}"
+        )
+    if len(set(names)) != len(names):
+        raise ConfigError(f"methods must not repeat, got {', '.join(names)}")
+    return names
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise ConfigError(f"{name} must be a positive number, got {value!r}")
+    return float(value)
+
+
+def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
+    """Draw the device, compass and simulation seeds of one case.
+
+    The generator is seeded by ``(crc32(family), seed)``, so a case is the same in
+    every process and independent of which other cases run; different families with
+    the same seed get different devices.
+
+    Parameters
+    ----------
+    family : str
+        One of :data:`FAMILIES`.
+    seed : int
+        Non-negative Monte Carlo seed.
+    duration_scale : float
+        Log length as a multiple of the family's default.
+
+    Returns
+    -------
+    Case
+
+    Examples
+    --------
+    >>> draw_case("vehicle", 3) == draw_case("vehicle", 3)
+    True
+    >>> draw_case("vehicle", 3).device == draw_case("static", 3).device
+    False
+    """
+    (family,) = _check_families([family])
+    (seed,) = _check_seeds([seed])
+    scale = _positive("duration_scale", duration_scale)
+    spec = FAMILIES[family]
+    root = np.random.SeedSequence([_family_key(family), seed])
+    device_ss, compass_ss = root.spawn(2)
+    log_seed, calibration_seed = (int(x) for x in root.generate_state(2))
+    return Case(
+        family=family,
+        seed=seed,
+        scenario=spec.scenario,
+        duration_s=spec.duration_s * scale,
+        log_seed=log_seed,
+        calibration_seed=calibration_seed,
+        device=random_device(np.random.default_rng(device_ss), scenario=spec.scenario),
+        compass=random_compass(np.random.default_rng(compass_ss)),
+    )
+
+
+def simulate_case(case: Case, *, fs_hz: float = 10.0, calibration: bool = True):
+    """The log of a case and, if asked, its calibration run (same device and compass).
+
+    Parameters
+    ----------
+    case : Case
+        From :func:`draw_case`.
+    fs_hz : float
+        Gyro sample rate, Hz.
+    calibration : bool
+        Also simulate the ``calibration`` heating run (-10 → 60 degC, always
+        :data:`CALIBRATION_S` long, whatever the duration scale) for ``poly3``.
+
+    Returns
+    -------
+    log : DataFrame
+        Input contract with ``ref_heading`` and ``true_bias_z``.
+    calibration_log : DataFrame or None
+    """
+    log = simulate(
+        case.scenario, seed=case.log_seed, duration_s=case.duration_s, fs_hz=fs_hz,
+        device=case.device, compass=case.compass,
+    )
+    cal = None
+    if calibration:
+        cal = simulate(
+            "calibration", seed=case.calibration_seed, duration_s=CALIBRATION_S, fs_hz=fs_hz,
+            device=case.device, compass=case.compass,
+        )
+    return log, cal
+
+
+def _one_line(err: BaseException) -> str:
+    text = " ".join(str(err).split())
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def _row(case_family, seed, method, scenario, duration_s, **values) -> dict:
+    row = {
+        "family": case_family, "seed": int(seed), "method": method, "scenario": scenario,
+        "duration_s": float(duration_s), "heading_rms_deg": math.nan, "heading_max_deg": math.nan,
+        "bias_rms_dps": math.nan, "status": "ok", "error": "",
+    }
+    row.update(values)
+    return row
+
+
+def _score(out: pd.DataFrame) -> dict:
+    heading = heading_error_stats(out)
+    return {
+        "heading_rms_deg": heading["rms"],
+        "heading_max_deg": heading["max_abs"],
+        "bias_rms_dps": error_stats(bias_error(out))["rms"],
+    }
+
+
+def run_case(
+    family: str,
+    seed: int,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    *,
+    duration_scale: float = 1.0,
+    config: CompensatorConfig | None = None,
+    fs_hz: float = 10.0,
+) -> list[dict]:
+    """Simulate one case and run every method on it; one result row per method.
+
+    A method that fails gives a row with ``status = "error"`` and the reason; a case
+    whose simulation fails gives such a row for every method.
+
+    Parameters
+    ----------
+    family, seed, duration_scale :
+        See :func:`draw_case`.
+    methods : sequence of str
+        Method names (:func:`gyrodrift.compare.run_method`).
+    config : CompensatorConfig, optional
+        Shared settings of every method (default :class:`CompensatorConfig`).
+    fs_hz : float
+        Gyro sample rate of the simulated logs, Hz.
+
+    Returns
+    -------
+    list of dict
+        Rows with the keys of :data:`COLUMNS`.
+    """
+    methods = _check_methods(methods)
+    case = draw_case(family, seed, duration_scale=duration_scale)
+    config = config or CompensatorConfig()
+    try:
+        log, cal = simulate_case(case, fs_hz=fs_hz, calibration="poly3" in methods)
+    except Exception as err:  # reported per case, never stops the whole Monte Carlo
+        why = "simulation failed: " + _one_line(err)
+        return [_row(family, seed, m, case.scenario, case.duration_s, status="error", error=why) for m in methods]
+    rows = []
+    for name in methods:
+        try:
+            out = run_method(name, log, config, calibration=cal)
+            rows.append(_row(family, seed, name, case.scenario, case.duration_s, **_score(out)))
+        except Exception as err:  # one failing method must not hide the others
+            rows.append(_row(family, seed, name, case.scenario, case.duration_s, status="error", error=_one_line(err)))
+    return rows
+
+
+def _run_task(task: tuple) -> list[dict]:
+    """Process-pool entry point (module level, so it pickles)."""
+    family, seed, methods, duration_scale, config, fs_hz = task
+    return run_case(family, seed, methods, duration_scale=duration_scale, config=config, fs_hz=fs_hz)
+
+
+def _failed_task(task: tuple, err: BaseException) -> list[dict]:
+    family, seed, methods, duration_scale, _, _ = task
+    scenario = FAMILIES[family].scenario
+    duration = FAMILIES[family].duration_s * duration_scale
+    why = "worker failed: " + _one_line(err)
+    return [_row(family, seed, m, scenario, duration, status="error", error=why) for m in methods]
+
+
+# --------------------------------------------------------------------------- many cases
+
+
+def run_monte_carlo(
+    families: Iterable[str] | None = None,
+    seeds: int | Iterable[int] = 20,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    duration_scale: float = 1.0,
+    config: CompensatorConfig | None = None,
+    workers: int | None = None,
+    progress: Callable | None = None,
+    *,
+    fs_hz: float = 10.0,
+) -> pd.DataFrame:
+    """Run every method on every (family, seed) case; one row per (family, seed, method).
+
+    Parameters
+    ----------
+    families : iterable of str, optional
+        Family names (default: all of :data:`FAMILIES`, in that order).
+    seeds : int or iterable of int
+        A count ``N`` (seeds ``0 .. N-1``) or the seeds themselves.
+    methods : sequence of str
+        Methods (default :data:`DEFAULT_METHODS`); any name of
+        :data:`gyrodrift.compare.METHODS` or a registered estimator.
+    duration_scale : float
+        Every log's length as a multiple of its family's default (the ``poly3``
+        calibration run keeps its 2 h).
+    config : CompensatorConfig, optional
+        Settings shared by every method and case (frozen for all families).
+    workers : int, optional
+        Worker processes (default :func:`os.cpu_count`); 1 runs in this process.
+        The result does not depend on it.
+    progress : callable, optional
+        ``progress(iterable, total)`` wraps the iteration over finished cases (for a
+        progress bar) and yields the same items.
+    fs_hz : float
+        Gyro sample rate of the simulated logs, Hz (the paper's experiments use 10).
+
+    Returns
+    -------
+    DataFrame
+        Columns :data:`COLUMNS`, sorted by family (order given), seed, method (order
+        given); ``attrs`` holds ``families``, ``seeds``, ``methods``,
+        ``duration_scale`` and ``fs_hz``.
+
+    Raises
+    ------
+    ConfigError
+        Unknown family or method, or an invalid count, scale or worker number.
+    """
+    fams = _check_families(families)
+    seed_list = _check_seeds(seeds)
+    names = _check_methods(methods)
+    scale = _positive("duration_scale", duration_scale)
+    fs = _positive("fs_hz", fs_hz)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ConfigError(f"workers must be a whole number >= 1, got {workers!r}")
+    config = config or CompensatorConfig()
+    tasks = [(f, s, tuple(names), scale, config, fs) for f in fams for s in seed_list]
+    if workers == 1 or len(tasks) == 1:
+        results = _run_serial(tasks, progress)
+    else:
+        results = _run_pool(tasks, int(workers), progress)
+    rows = [row for task_rows in results for row in task_rows]
+    df = pd.DataFrame(rows, columns=list(COLUMNS))
+    df.attrs = {"families": fams, "seeds": seed_list, "methods": names, "duration_scale": scale, "fs_hz": fs}
+    return df
+
+
+def _run_serial(tasks, progress) -> list[list[dict]]:
+    items = iter(tasks)
+    if progress is not None:
+        items = progress(items, len(tasks))
+    return [_run_task(task) for task in items]
+
+
+def _run_pool(tasks, workers: int, progress) -> list[list[dict]]:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    results: list[list[dict] | None] = [None] * len(tasks)
+    ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads
+    with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=ctx) as pool:
+        futures = {pool.submit(_run_task, task): i for i, task in enumerate(tasks)}
+        done = as_completed(futures)
+        if progress is not None:
+            done = progress(done, len(futures))
+        for fut in done:
+            i = futures[fut]
+            try:
+                results[i] = fut.result()
+            except Exception as err:  # a worker died (BrokenProcessPool) or could not pickle
+                results[i] = _failed_task(tasks[i], err)
+    return results
+
+
+# --------------------------------------------------------------------------- summary
+
+
+def summarise(df: pd.DataFrame, reference: str = REFERENCE_METHOD) -> pd.DataFrame:
+    """Per family and method: mean and median of both RMS errors, and how often ``reference`` wins.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Rows of :func:`run_monte_carlo`.
+    reference : str
+        The method the others are compared with (default ``adaptive``).
+
+    Returns
+    -------
+    DataFrame
+        One row per (family, method), families and methods in the order of ``df``,
+        then (with more than one family) an ``all`` family over every case. Columns:
+        ``family``, ``method``, ``n`` (cases that ran), ``failed``,
+        ``heading_rms_mean_deg``, ``heading_rms_median_deg``,
+        ``bias_rms_mean_dps``, ``bias_rms_median_dps``, ``pairs`` (cases where
+        both this method and ``reference`` ran), ``wins`` (of those, cases where
+        ``reference`` has a lower heading-error RMS *and* a lower bias RMS; empty on
+        the reference's own row) and ``better_mean`` (``reference`` has the lower
+        mean of both RMS errors).
+    """
+    metrics = ["heading_rms_deg", "bias_rms_dps"]
+    missing = [c for c in ("family", "seed", "method", *metrics, "status") if c not in df.columns]
+    if missing:
+        raise ConfigError(f"summarise needs the columns of run_monte_carlo; missing {', '.join(missing)}")
+    base = df.assign(case=df["family"].astype(str) + ":" + df["seed"].astype(str))
+    families = list(dict.fromkeys(base["family"]))
+    methods = list(dict.fromkeys(base["method"]))
+    groups = [(fam, base[base["family"] == fam]) for fam in families]
+    if len(families) > 1:
+        groups.append(("all", base))
+    rows = []
+    for fam, part in groups:
+        ok = part[part["status"] == "ok"]
+        ref = ok[ok["method"] == reference].set_index("case")[metrics]
+        for m in methods:
+            tried = part[part["method"] == m]
+            if tried.empty:
+                continue
+            cur = ok[ok["method"] == m].set_index("case")[metrics]
+            row = {
+                "family": fam,
+                "method": m,
+                "n": int(len(cur)),
+                "failed": int(len(tried) - len(cur)),
+                "heading_rms_mean_deg": float(cur["heading_rms_deg"].mean()) if len(cur) else math.nan,
+                "heading_rms_median_deg": float(cur["heading_rms_deg"].median()) if len(cur) else math.nan,
+                "bias_rms_mean_dps": float(cur["bias_rms_dps"].mean()) if len(cur) else math.nan,
+                "bias_rms_median_dps": float(cur["bias_rms_dps"].median()) if len(cur) else math.nan,
+                "pairs": pd.NA,
+                "wins": pd.NA,
+                "better_mean": pd.NA,
+            }
+            if m != reference and len(ref):
+                both = cur.join(ref, how="inner", rsuffix="_ref")
+                wins = (both["heading_rms_deg_ref"] < both["heading_rms_deg"]) & (
+                    both["bias_rms_dps_ref"] < both["bias_rms_dps"]
+                )
+                row.update(pairs=int(len(both)), wins=int(wins.sum()))
+                if len(cur):
+                    row["better_mean"] = bool(
+                        ref["heading_rms_deg"].mean() < row["heading_rms_mean_deg"]
+                        and ref["bias_rms_dps"].mean() < row["bias_rms_mean_dps"]
+                    )
+            rows.append(row)
+    out = pd.DataFrame(rows)
+    for col in ("pairs", "wins"):
+        out[col] = out[col].astype("Int64")
+    out["better_mean"] = out["better_mean"].astype("boolean")
+    out.attrs = {"reference": reference}
+    return out
+
+
+def markdown(summary: pd.DataFrame, *, tuned_on: str | None = None, floatfmt: str = ".4g") -> str:
+    """Render :func:`summarise` as GitHub Markdown, with a legend.
+
+    Parameters
+    ----------
+    summary : DataFrame
+        Output of :func:`summarise`.
+    tuned_on : str, optional
+        The family the settings were tuned on: it gets its own table, and the other
+        families (the settings frozen) theirs, so both are reported.
+    floatfmt : str
+        :func:`format` spec of the numbers.
+
+    Returns
+    -------
+    str
+        Markdown, no trailing newline.
+    """
+    reference = summary.attrs.get("reference", REFERENCE_METHOD)
+    table = summary.copy()
+    table["wins"] = [
+        "" if pd.isna(w) else f"{int(w)}/{int(p)}" for w, p in zip(summary["wins"], summary["pairs"])
+    ]
+    table["better_mean"] = ["" if pd.isna(b) else ("yes" if b else "no") for b in summary["better_mean"]]
+    table = table.drop(columns=["pairs"]).rename(
+        columns={"wins": f"{reference} wins", "better_mean": f"{reference} better on mean"}
+    )
+    legend = (
+        f"heading_rms: RMS of heading minus ref_heading (deg); bias_rms: RMS of estimated minus true drift "
+        f"(deg/s), per case, then mean and median over the cases (n; failed = cases where the method raised). "
+        f"'{reference} wins k/n': cases where {reference} has both a lower heading RMS and a lower bias RMS "
+        f"than the method; 'better on mean': both means lower."
+    )
+    if tuned_on is None:
+        return markdown_table(table, floatfmt, index=False) + "\n\n" + legend
+    if tuned_on not in set(table["family"]):
+        raise ConfigError(f"tuned_on={tuned_on!r} is not a family of the summary: {', '.join(dict.fromkeys(table['family']))}")
+    tuned = table[table["family"] == tuned_on]
+    held = table[(table["family"] != tuned_on) & (table["family"] != "all")]
+    parts = [f"Settings tuned on `{tuned_on}`:", "", markdown_table(tuned, floatfmt, index=False)]
+    if len(held):
+        parts += ["", "Held-out families (settings frozen):", "", markdown_table(held, floatfmt, index=False)]
+    return "\n".join(parts) + "\n\n" + legend
