@@ -623,6 +623,6 @@ def test_random_device_and_compass():
     assert hyst.has_memory() and 60.0 <= hyst.lag_tau_s <= 300.0 and 3e-4 <= abs(hyst.c2_dps_per_c2) <= 8e-4
     comp = random_compass(np.random.default_rng(1))
     assert comp == random_compass(np.random.default_rng(1))
-    assert 0.3 <= comp.noise_deg <= 1.0 and 0.0 <= comp.deviation_deg <= 3.0
+    assert 0.3 <= comp.noise_deg <= 0.6 and 0.0 <= comp.deviation_deg <= 3.0
     df = simulate("hysteresis", seed=1, duration_s=600.0, fs_hz=10.0, device=hyst, compass=comp)
     assert df.attrs["device"]["lag_tau_s"] == hyst.lag_tau_s  # the drawn memory, not the scenario's
