@@ -250,6 +250,58 @@ def _cmd_paper(args) -> int:
     return 0
 
 
+def _names(values, what: str) -> list[str] | None:
+    """``--families a b,c`` → ``[a, b, c]`` (spaces or commas); None when not given."""
+    if values is None:
+        return None
+    names = [n.strip() for v in values for n in v.split(",") if n.strip()]
+    if not names:
+        raise ConfigError(f"--{what} needs at least one name")
+    return names
+
+
+def _cmd_montecarlo(args) -> int:
+    import time
+
+    from gyrodrift.io import write_table
+    from gyrodrift.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
+
+    if args.seeds < 1:
+        raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.first_seed < 0:
+        raise ConfigError(f"--first-seed must be >= 0, got {args.first_seed}")
+    config = load_config(args.config) if args.config else CompensatorConfig()
+    methods = _names(args.methods, "methods") or list(DEFAULT_METHODS)
+    start = time.monotonic()
+    df = run_monte_carlo(
+        _names(args.families, "families"),
+        range(args.first_seed, args.first_seed + args.seeds),
+        methods,
+        duration_scale=args.duration_scale,
+        config=config,
+        workers=args.workers,
+        progress=_bar("monte carlo"),
+        fs_hz=args.fs_hz,
+    )
+    seconds = time.monotonic() - start
+    if args.output:
+        write_table(df, args.output)
+    summary = summarise(df)
+    if args.markdown:
+        print(markdown(summary, tuned_on=args.tuned_on))
+    else:
+        print(summary.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    failed = df[df["status"] != "ok"]
+    print(
+        f"{df['family'].nunique()} families x {args.seeds} seeds x {len(methods)} methods "
+        f"(durations x {args.duration_scale:g}, {args.fs_hz:g} Hz) in {seconds:.0f} s; "
+        f"{len(failed)} of {len(df)} runs failed" + (f"; wrote {args.output}" if args.output else "")
+    )
+    for _, row in failed.drop_duplicates("error").head(5).iterrows():
+        print(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="gyrodrift",
@@ -316,6 +368,30 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--config", type=Path, metavar="FILE.toml", help="[device] and [compass] model overrides")
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
+
+    from gyrodrift.montecarlo import DEFAULT_METHODS, FAMILIES
+
+    mc = sub.add_parser(
+        "montecarlo", help="Monte Carlo of every method over the simulated scenario families",
+        description="Simulate each scenario family with randomised gyros and compasses (one per seed), run "
+        "every method on the same logs, and print per family and method the mean and median heading-error "
+        "and bias RMS, and how often adaptive beats each method on both. Families: "
+        + "; ".join(f"{k}: {v.description}" for k, v in FAMILIES.items()),
+    )
+    mc.add_argument("--families", nargs="+", metavar="NAME", help="families (default: all six)")
+    mc.add_argument("--seeds", type=int, default=20, help="seeds per family (default 20)")
+    mc.add_argument("--first-seed", type=int, default=0, help="first seed (default 0)")
+    mc.add_argument(
+        "--methods", nargs="+", metavar="NAME", help=f"methods (default: {' '.join(DEFAULT_METHODS)})",
+    )
+    mc.add_argument("--duration-scale", type=float, default=1.0, help="log lengths x this (default 1)")
+    mc.add_argument("--fs-hz", type=float, default=10.0, help="gyro sample rate, Hz (default 10)")
+    mc.add_argument("--workers", type=int, help="worker processes (default: one per CPU)")
+    mc.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings, frozen for every family")
+    mc.add_argument("--tuned-on", metavar="FAMILY", help="with --markdown: the family the settings were tuned on")
+    mc.add_argument("-o", "--output", type=Path, metavar="OUT.csv", help="write every run (one row per family, seed, method)")
+    mc.add_argument("--markdown", action="store_true", help="print the summary as Markdown")
+    mc.set_defaults(func=_cmd_montecarlo)
 
     from gyrodrift.fleet import add_batch_parser
     from gyrodrift.report import add_report_parser
