@@ -543,7 +543,7 @@ def summarise(df: pd.DataFrame, reference: str = REFERENCE_METHOD) -> pd.DataFra
                 "better_mean": pd.NA,
             }
             if m != reference and len(ref):
-                both = cur.join(ref, how="inner", rsuffix="_ref")
+                both = cur.join(ref.add_suffix("_ref"), how="inner")
                 wins = (both["heading_rms_deg_ref"] < both["heading_rms_deg"]) & (
                     both["bias_rms_dps_ref"] < both["bias_rms_dps"]
                 )
