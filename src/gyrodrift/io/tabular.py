@@ -13,21 +13,28 @@ optionally followed by ``, column 'name'``. Parts that do not apply are left out
 
 :func:`write_table` writes a DataFrame as CSV or Parquet atomically, and
 :func:`check_output_path` refuses an output path that is the input log.
+
+:mod:`gyrodrift.io.chunked` reads and writes the same tables in chunks; it shares the
+per-frame checks and conversions of this module (:func:`_normalise_frame`), the CSV
+reading options (:func:`_csv_convert_options`) and the CSV formatting
+(:func:`_csv_header`, :func:`_csv_body`), so both paths give identical results.
 """
 
 from __future__ import annotations
 
+import functools
 import gzip
 import io
 import os
 import re
 import zlib
 from pathlib import Path
-from typing import Callable, Mapping, NamedTuple
+from typing import Callable, Iterable, Mapping, NamedTuple
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pa_compute
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pa_pq
 
@@ -78,9 +85,16 @@ _MAG_FORM_COLS = MAG_COLS + ACC_COLS
 _FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
 #: Columns holding a heading (deg, clockwise from north in NED).
 _HEADING_COLS = (HEADING, REF_HEADING)
-#: Text that means "no value" in a numeric column stored as text.
-_NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"})
+#: Cells pyarrow's CSV reader takes for "no value" (its defaults, for every column).
+_CSV_NULL_VALUES = tuple(pa_csv.ConvertOptions().null_values)
+#: Text that means "no value" in a numeric column stored as text (compared stripped and in
+#: lower case); it includes every CSV null value, so a cell is empty whether the CSV reader
+#: or the text conversion decides.
+_NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"} | {v.lower() for v in _CSV_NULL_VALUES})
 _GZIP_MAGIC = b"\x1f\x8b"
+_UTF8_BOM = b"\xef\xbb\xbf"
+_CSV_EMPTY_ADVICE = "give a CSV log with a header row and at least one data row"
+_PARQUET_EMPTY_ADVICE = "give a Parquet log with at least one data row"
 _MAX_NAMES_SHOWN = 30
 _MAX_TEXT_SHOWN = 40
 
@@ -90,7 +104,15 @@ class _Source(NamedTuple):
 
     name: str  #: the path as the user gave it
     fmt: str  #: "csv" or "parquet"
-    text: bytes | None  #: CSV bytes (decompressed), to count physical lines on error
+    #: CSV: maps the 1-based index of a non-empty line (header = 1) to the line an
+    #: editor shows (called on error only); None for Parquet
+    line_of: Callable[[int], int] | None
+    #: index in the whole file of the frame's first data row (0 unless read in chunks)
+    row0: int = 0
+
+    def at(self, row0: int) -> "_Source":
+        """The same source for a frame whose first row is data row ``row0`` of the file."""
+        return self._replace(row0=row0)
 
 
 # ---------------------------------------------------------------------------
@@ -133,26 +155,41 @@ def _show_names(names) -> str:
     return ", ".join(names)
 
 
-def _physical_line(text: bytes, nonempty_index: int) -> int:
+def _physical_line(blocks: Iterable[bytes], nonempty_index: int) -> int:
     """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
 
     pyarrow skips empty lines, so its row counts are counts of non-empty lines
-    (1-based, header included); this maps one back to what an editor shows.
+    (1-based, header included); this maps one back to what an editor shows. ``blocks``
+    are the file's bytes in order, in pieces of any size (line ends ``\n``, ``\r\n``
+    or ``\r``, as :meth:`bytes.splitlines` splits them).
     """
     count = 0
-    for line_no, line in enumerate(text.splitlines(), start=1):
-        if line:
-            count += 1
-            if count == nonempty_index:
-                return line_no
+    line_no = 0
+    carry = b""
+    for block in blocks:
+        lines = (carry + block).splitlines(keepends=True)
+        # the last piece may be an unfinished line, or a "\r" whose "\n" is in the next block
+        carry = lines.pop() if lines and (lines[-1].endswith(b"\r") or not lines[-1].endswith(b"\n")) else b""
+        for line in lines:
+            line_no += 1
+            if line.rstrip(b"\r\n"):
+                count += 1
+                if count == nonempty_index:
+                    return line_no
+    if carry:
+        line_no += 1
+        if carry.rstrip(b"\r\n") and count + 1 == nonempty_index:
+            return line_no
     return nonempty_index
 
 
 def _row_label(src: _Source, row: int) -> str:
-    """Name data row ``row`` (0-based) as the user sees it: ``line N`` or ``data row N``."""
-    if src.fmt == "csv" and src.text is not None:
+    """Name data row ``row`` of the frame (0-based; negative: rows before it) as the user
+    sees it: ``line N`` (CSV) or ``data row N`` (Parquet), counted in the whole file."""
+    row = src.row0 + row
+    if src.fmt == "csv" and src.line_of is not None:
         # header is non-empty line 1, data row 0 is non-empty line 2
-        return f"line {_physical_line(src.text, row + 2)}"
+        return f"line {src.line_of(row + 2)}"
     return f"data row {row + 1}"
 
 
@@ -307,16 +344,74 @@ def _check_csv_text(data: bytes, name: str) -> None:
         ) from exc
 
 
-def _read_csv_table(path: Path) -> tuple[pa.Table, _Source]:
+def _header_line(data: bytes, *, at_end: bool) -> bytes | None:
+    """The first non-empty line of CSV text (without its line end), or None when ``data``
+    may not hold all of it yet (``at_end`` False and no line end after it)."""
+    text = data.lstrip(b"\r\n")
+    ends = [i for i in (text.find(b"\n"), text.find(b"\r")) if i >= 0]
+    if ends:
+        return text[: min(ends)]
+    return text if at_end else None
+
+
+def _csv_header_names(line: bytes) -> list[str]:
+    """Column names of a CSV header line as pyarrow reads them (empty if it cannot)."""
+    try:
+        header = pa_csv.read_csv(pa.BufferReader(line + b"\n"), read_options=pa_csv.ReadOptions(use_threads=False))
+    except (pa.ArrowException, ValueError):
+        return []  # the full read reports the problem
+    return list(header.column_names)
+
+
+def _csv_convert_options(
+    names, column_map: Mapping[str, str], *, numbers_as_text: bool, column_types: Mapping[str, pa.DataType] | None = None
+) -> pa_csv.ConvertOptions:
+    """How pyarrow converts CSV cells, the same for the whole-file and the chunked reader.
+
+    Columns that become numeric contract columns (after stripping and ``column_map``) are
+    read as float64, or as text when ``numbers_as_text`` (a cell pyarrow cannot read as a
+    number: :func:`_numeric_column` then converts the text cell by cell, with the same
+    parser, and names the first bad cell). Every cell therefore gets the same value
+    whichever way its column was read. ``column_types`` pins the types of other columns
+    (by header name); the rest are inferred by pyarrow.
+    """
+    new_name = {old: new for new, old in column_map.items()}
+    numeric = set(_NUMERIC_COLS)
+    kind = pa.string() if numbers_as_text else pa.float64()
+    types = {raw: kind for raw in names if new_name.get(raw.strip(), raw.strip()) in numeric}
+    types.update(column_types or {})
+    return pa_csv.ConvertOptions(column_types=types, strings_can_be_null=True)
+
+
+def _ragged_row_error(src: _Source, row) -> LogFormatError:
+    """The error for a row with the wrong number of fields (``row``: pyarrow's InvalidRow)."""
+    line = src.line_of(row.number) if row.number else "?"
+    return _format_error(
+        src,
+        f"row has {row.actual_columns} field(s) but the header has {row.expected_columns}",
+        "every row needs one value per header column (leave a cell empty, do not drop it)",
+        where=f"line {line}",
+    )
+
+
+def _csv_parse_error(src: _Source, exc: Exception) -> LogFormatError:
+    """The error for text pyarrow cannot read as CSV."""
+    return _format_error(
+        src, f"cannot be parsed as CSV ({_one_line(str(exc))})", "give a comma-separated text file with a header row"
+    )
+
+
+def _read_csv_table(path: Path, column_map: Mapping[str, str]) -> tuple[pa.Table, _Source]:
     """Read a CSV (optionally gzip-compressed) into a pyarrow table, strictly."""
     name = str(path)
     data = _decompress_if_gzip(_read_bytes(path), name)
-    if data.startswith(b"\xef\xbb\xbf"):
-        data = data[3:]  # UTF-8 byte-order mark written by some spreadsheet programs
+    if data.startswith(_UTF8_BOM):
+        data = data[len(_UTF8_BOM) :]  # UTF-8 byte-order mark written by some spreadsheet programs
     if not data.strip():
-        raise _empty_file_error(name, "give a CSV log with a header row and at least one data row")
+        raise _empty_file_error(name, _CSV_EMPTY_ADVICE)
     _check_csv_text(data, name)
-    src = _Source(name, "csv", data)
+    src = _Source(name, "csv", functools.partial(_physical_line, (data,)))
+    names = _csv_header_names(_header_line(data, at_end=True))
 
     ragged = []
 
@@ -324,59 +419,67 @@ def _read_csv_table(path: Path) -> tuple[pa.Table, _Source]:
         ragged.append(row)
         return "error"
 
-    try:
-        table = pa_csv.read_csv(
+    def read(numbers_as_text: bool) -> pa.Table:
+        return pa_csv.read_csv(
             pa.BufferReader(data),
             read_options=pa_csv.ReadOptions(use_threads=False),
             parse_options=pa_csv.ParseOptions(invalid_row_handler=on_invalid_row),
-            convert_options=pa_csv.ConvertOptions(strings_can_be_null=True),
+            convert_options=_csv_convert_options(names, column_map, numbers_as_text=numbers_as_text),
         )
+
+    try:
+        try:
+            table = read(numbers_as_text=False)
+        except pa.ArrowInvalid:
+            if ragged:
+                raise
+            table = read(numbers_as_text=True)  # a number column holds text
     except (pa.ArrowException, ValueError) as exc:
         if ragged:
-            row = ragged[0]
-            line = _physical_line(data, row.number) if row.number else "?"
-            raise _format_error(
-                src,
-                f"row has {row.actual_columns} field(s) but the header has {row.expected_columns}",
-                "every row needs one value per header column (leave a cell empty, do not drop it)",
-                where=f"line {line}",
-            ) from exc
-        raise _format_error(
-            src,
-            f"cannot be parsed as CSV ({_one_line(str(exc))})",
-            "give a comma-separated text file with a header row",
-        ) from exc
+            raise _ragged_row_error(src, ragged[0]) from exc
+        raise _csv_parse_error(src, exc) from exc
     if table.num_rows == 0:
-        raise _format_error(
-            src, "has a header row but no data rows", "give a log with at least one data row"
-        )
+        raise _no_data_rows_error(src)
     return table, src
 
 
-def _read_parquet_table(path: Path) -> tuple[pa.Table, _Source]:
-    """Read a Parquet file into a pyarrow table."""
-    name = str(path)
-    src = _Source(name, "parquet", None)
+def _no_data_rows_error(src: _Source) -> LogFormatError:
+    """The error for a table without data rows."""
+    problem = "has a header row but no data rows" if src.fmt == "csv" else "has no data rows"
+    return _format_error(src, problem, "give a log with at least one data row")
+
+
+def _check_parquet_size(path: Path) -> None:
+    """Raise :class:`LogFormatError` for an unreadable or zero-byte Parquet file."""
     try:
         size = path.stat().st_size
     except OSError as exc:
         raise LogFormatError(
-            _message(
-                name, f"cannot read the input file ({exc.strerror})", "check that it is a readable file"
-            )
+            _message(str(path), f"cannot read the input file ({exc.strerror})", "check that it is a readable file")
         ) from exc
     if size == 0:
-        raise _empty_file_error(name, "give a Parquet log with at least one data row")
+        raise _empty_file_error(str(path), _PARQUET_EMPTY_ADVICE)
+
+
+def _parquet_error(src: _Source, exc: Exception) -> LogFormatError:
+    """The error for a file pyarrow cannot read as Parquet."""
+    return _format_error(
+        src,
+        f"is not a readable Parquet file ({_one_line(str(exc))})",
+        "check the file, or read it as CSV if it is a text file",
+    )
+
+
+def _read_parquet_table(path: Path) -> tuple[pa.Table, _Source]:
+    """Read a Parquet file into a pyarrow table."""
+    src = _Source(str(path), "parquet", None)
+    _check_parquet_size(path)
     try:
         table = pa_pq.read_table(path)
     except (pa.ArrowException, OSError, ValueError) as exc:
-        raise _format_error(
-            src,
-            f"is not a readable Parquet file ({_one_line(str(exc))})",
-            "check the file, or read it as CSV if it is a text file",
-        ) from exc
+        raise _parquet_error(src, exc) from exc
     if table.num_rows == 0:
-        raise _format_error(src, "has no data rows", "give a log with at least one data row")
+        raise _no_data_rows_error(src)
     return table, src
 
 
@@ -386,7 +489,7 @@ def _table_to_frame(table: pa.Table, src: _Source) -> pd.DataFrame:
     seen = set()
     for col in names:
         if col in seen:
-            where = "line 1" if src.fmt == "csv" else ""
+            where = f"line {src.line_of(1)}" if src.line_of is not None else ""  # the header line
             raise _format_error(
                 src,
                 f"column {col!r} appears more than once in the header",
@@ -465,23 +568,70 @@ def _is_plain_numeric(series: pd.Series) -> bool:
     return pd.api.types.is_numeric_dtype(series.dtype) and not pd.api.types.is_bool_dtype(series.dtype)
 
 
-def _first_non_number(values: pd.Series) -> int | None:
-    """Return the position of the first cell that holds text which is not a number."""
-    text = values.astype(object)
-    for pos, cell in enumerate(text):
+def _objects_to_numbers(values: pd.Series) -> tuple[np.ndarray | None, int | None]:
+    """Convert cells that are Python objects (numbers, text, e.g. ``Decimal``) one by one.
+
+    Returns ``(values, None)`` or ``(None, pos)`` with the first cell that is not a number.
+    Slow, but only reached for object columns that are not all text.
+    """
+    out = np.empty(len(values), dtype=np.float64)
+    for pos, cell in enumerate(values.astype(object)):
         if cell is None or (isinstance(cell, float) and np.isnan(cell)):
+            out[pos] = np.nan
             continue
-        is_number = isinstance(cell, (int, float, np.integer, np.floating))
-        if is_number and not isinstance(cell, (bool, np.bool_)):
-            continue
-        s = str(cell).strip()
-        if s.lower() in _NAN_TEXT:
+        if isinstance(cell, (bool, np.bool_)):
+            return None, pos
+        text = str(cell).strip()
+        if text.lower() in _NAN_TEXT:
+            out[pos] = np.nan
             continue
         try:
-            float(s)
-        except ValueError:
-            return pos
-    return None
+            out[pos] = float(cell) if not isinstance(cell, str) else float(text)
+        except (TypeError, ValueError):
+            return None, pos
+    return out, None
+
+
+_NAN_TEXT_ARRAY = pa.array(sorted(_NAN_TEXT), pa.string())
+
+
+def _canonical_nan(values: np.ndarray) -> np.ndarray:
+    """``values`` with every NaN as the one NaN numpy uses (not a sign or payload a
+    parser may leave), so that equal cells give equal bits whichever path read them."""
+    nan = np.isnan(values)
+    return np.where(nan, np.nan, values) if nan.any() else values
+
+
+def _parse_text_numbers(series: pd.Series) -> tuple[np.ndarray | None, int | None]:
+    """Convert text cells to float64 with pyarrow's number parser, cell by cell.
+
+    A cell is stripped of white space; one whose lower-case text is in :data:`_NAN_TEXT`
+    is empty (NaN). Returns ``(values, None)``, or ``(None, pos)`` with the position of
+    the first cell that is not a number, or ``(None, None)`` when some cells are not text
+    at all. pyarrow's CSV reader parses numbers with the same parser, so a cell has the
+    same value whether its column was read as numbers or as text (and whether the file
+    was read whole or in chunks).
+    """
+    try:
+        text = pa.array(series.astype(object), type=pa.string(), from_pandas=True)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        return None, None
+    text = pa_compute.utf8_trim_whitespace(text)
+    blank = pa_compute.is_in(pa_compute.utf8_lower(text), value_set=_NAN_TEXT_ARRAY)
+    text = pa_compute.if_else(blank, pa.scalar(None, pa.string()), text)
+    try:
+        return pa_compute.cast(text, pa.float64()).to_numpy(zero_copy_only=False), None
+    except pa.ArrowInvalid:
+        pass
+    lo, hi = 0, len(text)  # the first bad cell is in [lo, hi)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        try:
+            pa_compute.cast(text.slice(lo, mid - lo), pa.float64())
+            lo = mid
+        except pa.ArrowInvalid:
+            hi = mid
+    return None, lo
 
 
 def _numeric_column(series: pd.Series, col: str, src: _Source) -> np.ndarray:
@@ -489,26 +639,17 @@ def _numeric_column(series: pd.Series, col: str, src: _Source) -> np.ndarray:
     if isinstance(series.dtype, pd.CategoricalDtype):  # dictionary-encoded Parquet column
         series = series.astype(object)
     if _is_plain_numeric(series):
-        return series.to_numpy(dtype=np.float64, na_value=np.nan)
+        return _canonical_nan(series.to_numpy(dtype=np.float64, na_value=np.nan))
     if series.isna().all():
         return np.full(len(series), np.nan)
     if pd.api.types.is_string_dtype(series.dtype) or series.dtype == object:
-        text = series.astype(object).map(
-            lambda v: v.strip() if isinstance(v, str) else v
-        )
-        blank = text.map(lambda v: isinstance(v, str) and v.lower() in _NAN_TEXT)
-        try:
-            values = pd.to_numeric(text.mask(blank), errors="coerce")
-        except (TypeError, ValueError):
-            values = None
+        values, pos = _parse_text_numbers(series)
         if values is not None:
-            bad = values.isna() & ~text.isna() & ~blank
-            if not bad.any():
-                return values.to_numpy(dtype=np.float64, na_value=np.nan)
-            pos = int(np.flatnonzero(bad.to_numpy())[0])
-        else:
-            found = _first_non_number(series)
-            pos = 0 if found is None else found
+            return _canonical_nan(values)
+        if pos is None:  # cells that are not all text (e.g. Decimal objects)
+            values, pos = _objects_to_numbers(series)
+            if values is not None:
+                return _canonical_nan(values)
     else:
         # booleans, dates, timestamps, nested values: report the first non-empty cell
         pos = int(np.flatnonzero(series.notna().to_numpy())[0])
@@ -546,28 +687,41 @@ def _first_value_pos(values: np.ndarray) -> int | None:
     return int(idx[0]) if idx.size else None
 
 
-def _check_required_values(frame: pd.DataFrame, src: _Source) -> None:
-    """Reject entirely empty required columns and leading empty gyro_z/temp cells."""
+def _first_values(frame: pd.DataFrame) -> dict[str, int | None]:
+    """Row of the first value (None: none) of each required column, after conversion."""
+    return {col: _first_value_pos(frame[col].to_numpy()) for col in REQUIRED_COLS}
+
+
+def _check_required_values(first: Mapping[str, int | None], src: _Source) -> None:
+    """Reject entirely empty required columns and leading empty gyro_z/temp cells.
+
+    ``first`` maps each required column to the row of its first value in the whole
+    file (None: empty in every row), see :func:`_first_values`.
+    """
     for col in REQUIRED_COLS:
-        if _first_value_pos(frame[col].to_numpy()) is None:
+        if first[col] is None:
             raise _format_error(
                 src,
                 f"required column {col!r} is empty in every row",
                 "check the file, or map the right input column with --map NEW=OLD",
             )
     for col in (GYRO_Z, TEMP):
-        first = _first_value_pos(frame[col].to_numpy())
-        if first is not None and first > 0:
+        pos = first[col]
+        if pos is not None and pos > 0:
             raise _format_error(
                 src,
-                f"the first data row has no {col} value (the first one is on {_row_label(src, first)})",
+                f"the first data row has no {col} value (the first one is on {_row_label(src, pos)})",
                 f"drop the leading rows without {col} data",
                 where=_cell_label(src, 0, col),
             )
 
 
-def _check_time(frame: pd.DataFrame, src: _Source) -> None:
-    """Reject empty time stamps and times that do not strictly increase."""
+def _check_time(frame: pd.DataFrame, src: _Source, prev_t_s: float | None = None) -> None:
+    """Reject empty time stamps and times that do not strictly increase.
+
+    ``prev_t_s`` is the time of the row just before the frame (chunked reading), so
+    that a step back across two chunks is caught too.
+    """
     t = frame[T].to_numpy()
     empty = np.flatnonzero(np.isnan(t))
     if empty.size:
@@ -578,12 +732,14 @@ def _check_time(frame: pd.DataFrame, src: _Source) -> None:
             "every row needs a time stamp in seconds: fill in t or drop the row",
             where=_cell_label(src, pos, T),
         )
-    bad = np.flatnonzero(~(np.diff(t) > 0.0))
+    before = 0 if prev_t_s is None else 1
+    t_all = t if prev_t_s is None else np.concatenate(([prev_t_s], t))
+    bad = np.flatnonzero(~(np.diff(t_all) > 0.0))
     if bad.size:
-        pos = int(bad[0]) + 1
+        pos = int(bad[0]) + 1 - before  # row in the frame; pos - 1 may be the row before it
         raise _format_error(
             src,
-            f"time is not strictly increasing: t={float(t[pos])!r} follows t={float(t[pos - 1])!r}"
+            f"time is not strictly increasing: t={float(t[pos])!r} follows t={float(t_all[pos - 1 + before])!r}"
             f" on {_row_label(src, pos - 1)}",
             "sort the log by time and remove duplicate samples",
             where=_cell_label(src, pos, T),
@@ -607,23 +763,27 @@ def _check_temperature(frame: pd.DataFrame, src: _Source) -> None:
         )
 
 
-def _has_values(frame: pd.DataFrame, cols) -> bool:
-    """True if every column in ``cols`` exists and holds at least one value."""
-    return all(c in frame.columns and frame[c].notna().any() for c in cols)
+def _compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
+    """The compass columns (``heading``, ``mag_*``, ``acc_*``) that hold at least one value."""
+    return frozenset(c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns and frame[c].notna().any())
 
 
-def _compass_form(frame: pd.DataFrame, src: _Source) -> str:
-    """Return "heading", "mag" or "both": the compass forms that hold data."""
-    heading = _has_values(frame, (HEADING,))
-    mag = _has_values(frame, _MAG_FORM_COLS)
+def _compass_form(columns, with_values: frozenset[str], src: _Source) -> str:
+    """Return "heading", "mag" or "both": the compass forms that hold data.
+
+    ``columns`` are the frame's columns, ``with_values`` the compass columns holding a
+    value somewhere in the file (:func:`_compass_columns_with_values`, united over chunks).
+    """
+    heading = HEADING in with_values
+    mag = all(c in with_values for c in _MAG_FORM_COLS)
     if heading and mag:
         return "both"
     if heading:
         return "heading"
     if mag:
         return "mag"
-    present = [c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns]
-    empty = [c for c in present if not frame[c].notna().any()]
+    present = [c for c in (HEADING,) + _MAG_FORM_COLS if c in columns]
+    empty = [c for c in present if c not in with_values]
     raise _format_error(
         src,
         f"the compass column(s) hold no values (empty in every row: {', '.join(empty)})",
@@ -666,6 +826,76 @@ def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
         if col in out.columns:
             out[col] = wrap_360(out[col].to_numpy())
     return out
+
+
+# ---------------------------------------------------------------------------
+# one frame: checks and conversions shared by the whole-file and the chunked reader
+# ---------------------------------------------------------------------------
+
+
+class _ReadOptions(NamedTuple):
+    """The table options of :func:`read_log`, checked."""
+
+    gyro_unit: str  #: canonical unit name of the gyro columns in the file
+    scale: float  #: multiplier from that unit to deg/s
+    frame: str  #: "ned" or "enu"
+    renames: dict[str, str]  #: column map NEW -> OLD
+
+
+def _read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None) -> _ReadOptions:
+    """Check the table options (raising :class:`ConfigError`) and return them canonical."""
+    unit_name, scale = _gyro_scale(gyro_unit)
+    frame_name = _frame_name(frame)
+    return _ReadOptions(unit_name, scale, frame_name, _check_column_map(column_map))
+
+
+def _normalise_frame(
+    frame: pd.DataFrame,
+    src: _Source,
+    opts: _ReadOptions,
+    *,
+    prev_t_s: float | None = None,
+    first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = _first_values,
+) -> tuple[pd.DataFrame, frozenset[str]]:
+    """Check a frame of a table and bring it into the input contract.
+
+    The whole file (:func:`read_log`) or one chunk of it (:mod:`gyrodrift.io.chunked`)
+    goes through here; every step is row by row, so the chunks of a file come out as
+    the rows of the whole.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Rows as read (:func:`_table_to_frame`), names stripped.
+    src : _Source
+        Where the rows are; ``src.row0`` is the file row of the frame's first row.
+    opts : _ReadOptions
+    prev_t_s : float, optional
+        Time (s) of the file row just before the frame, for the strictly-increasing check.
+    first_values : callable, optional
+        ``first_values(converted_frame)`` gives the file row of the first value of each
+        required column (:func:`_first_values`); None skips that check (later chunks).
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        Numeric contract columns float64 in deg/s and NED, headings in [0, 360).
+    with_values : frozenset of str
+        Compass columns holding a value in this frame (for :func:`_compass_form`).
+    """
+    df = _apply_column_map(frame, opts.renames, src)
+    _check_required_columns(df, src)
+    _check_compass_columns(df, src)
+    df = _convert_numeric(df, src)
+    if first_values is not None:
+        _check_required_values(first_values(df), src)
+    _check_time(df, src, prev_t_s)
+    _check_temperature(df, src)
+    with_values = _compass_columns_with_values(df)
+    df = _to_deg_per_s(df, opts.scale)
+    if opts.frame == "enu":
+        df = _enu_to_ned(df)
+    return _wrap_headings(df), with_values
 
 
 # ---------------------------------------------------------------------------
@@ -731,65 +961,128 @@ def read_log(
     ``data row N`` (1-based) for Parquet.
     """
     path = Path(path)
-    unit_name, scale = _gyro_scale(gyro_unit)
-    frame_name = _frame_name(frame)
-    renames = _check_column_map(column_map)
+    opts = _read_options(gyro_unit, frame, column_map)
     _check_input_path(path)
     table_fmt = _table_format(path, fmt, _READ_SUFFIXES)
     if table_fmt == "csv":
-        table, src = _read_csv_table(path)
+        table, src = _read_csv_table(path, opts.renames)
     else:
         table, src = _read_parquet_table(path)
 
-    df = _apply_column_map(_table_to_frame(table, src), renames, src)
-    _check_required_columns(df, src)
-    _check_compass_columns(df, src)
-    df = _convert_numeric(df, src)
-    _check_required_values(df, src)
-    _check_time(df, src)
-    _check_temperature(df, src)
-    compass = _compass_form(df, src)
-
-    df = _to_deg_per_s(df, scale)
-    if frame_name == "enu":
-        df = _enu_to_ned(df)
-    df = _wrap_headings(df)
+    df, with_values = _normalise_frame(_table_to_frame(table, src), src, opts)
     df.attrs = {
         "source": str(path),
         "format": table_fmt,
-        "gyro_unit": unit_name,
-        "frame": frame_name,
-        "compass": compass,
+        "gyro_unit": opts.gyro_unit,
+        "frame": opts.frame,
+        "compass": _compass_form(df.columns, with_values, src),
     }
     return df
 
 
 _CSV_SPECIAL = re.compile(r'[,"\r\n]')
+_CSV_SPECIAL_PATTERN = _CSV_SPECIAL.pattern
+_ARROW_WRITE_ERRORS = (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError)
+
+
+def _csv_field(text: str) -> str:
+    """One CSV field: quoted (inner quotes doubled) only if it holds ``,``, ``"`` or a line end."""
+    return '"' + text.replace('"', '""') + '"' if _CSV_SPECIAL.search(text) else text
+
+
+def _csv_header(names) -> bytes:
+    """The CSV header line (UTF-8, ``\n``-terminated) for column ``names``."""
+    return (",".join(_csv_field(str(n)) for n in names) + "\n").encode("utf-8")
+
+
+def _arrow_table(df: pd.DataFrame) -> pa.Table:
+    """``df`` as a pyarrow table, without index and metadata (raises pyarrow errors)."""
+    plain = df.copy(deep=False).set_axis([str(c) for c in df.columns], axis=1)
+    plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
+    return pa.Table.from_pandas(plain, preserve_index=False)
+
+
+def _is_text(arrow_type: pa.DataType) -> bool:
+    return pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type)
+
+
+def _quoted_column(column: pa.ChunkedArray) -> pa.ChunkedArray:
+    """A column as CSV fields: values as text (as pyarrow's CSV writer prints them), text
+    quoted where :func:`_csv_field` would, empty cells as empty text."""
+    if pa.types.is_dictionary(column.type):
+        column = column.cast(column.type.value_type)
+    text = column.cast(pa.large_string())
+    if _is_text(column.type):
+        special = pa_compute.match_substring_regex(text, _CSV_SPECIAL_PATTERN)
+        quote, nothing = pa.scalar('"', pa.large_string()), pa.scalar("", pa.large_string())
+        quoted = pa_compute.binary_join_element_wise(quote, pa_compute.replace_substring(text, '"', '""'), quote, nothing)
+        text = pa_compute.if_else(special, quoted, text)
+    return pa_compute.fill_null(text, pa.scalar("", pa.large_string()))
+
+
+def _needs_quoting(table: pa.Table) -> bool:
+    """True if a text cell of ``table`` holds ``,``, ``"`` or a line end."""
+    for column in table.columns:
+        if pa.types.is_dictionary(column.type) and _is_text(column.type.value_type):
+            column = column.cast(column.type.value_type)
+        if _is_text(column.type) and pa_compute.any(
+            pa_compute.match_substring_regex(column, _CSV_SPECIAL_PATTERN)
+        ).as_py():
+            return True
+    return False
+
+
+def _text_data(lines: pa.Array) -> pa.Buffer:
+    """The characters of a large_string array without nulls, all values end to end."""
+    offsets = np.frombuffer(lines.buffers()[1], dtype=np.int64)[lines.offset : lines.offset + len(lines) + 1]
+    return lines.buffers()[2][int(offsets[0]) : int(offsets[-1])]
+
+
+def _csv_lines(table: pa.Table) -> list:
+    """The CSV data lines of ``table`` built column by column (see :func:`_csv_body`)."""
+    fields = [_quoted_column(column) for column in table.columns]
+    comma, nothing, line_end = (pa.scalar(c, pa.large_string()) for c in (",", "", "\n"))
+    lines = pa_compute.binary_join_element_wise(*fields, comma)
+    lines = pa_compute.binary_join_element_wise(lines, nothing, line_end)  # a line end after each row
+    return [_text_data(chunk) for chunk in lines.chunks]
+
+
+def _csv_body(df: pd.DataFrame) -> list | None:
+    """The CSV data lines of ``df`` (no header) as byte buffers to write in order, or
+    None if pyarrow cannot write it.
+
+    Numbers and other values are printed by pyarrow (shortest round-trip floats, NaN as
+    an empty cell); text is quoted only where needed. Every line depends on its own row
+    only, so the lines of a table split in chunks are the lines of the whole table.
+    pyarrow's own writer is used when no text needs quoting (it would quote every text
+    value otherwise); the column-by-column path prints the same values the same way.
+    """
+    try:
+        table = _arrow_table(df)
+        if table.num_rows == 0:
+            return []
+        if not _needs_quoting(table):
+            body = pa.BufferOutputStream()
+            pa_csv.write_csv(table, body, pa_csv.WriteOptions(include_header=False, quoting_style="none"))
+            return [body.getvalue()]
+        return _csv_lines(table) if table.num_columns else None
+    except _ARROW_WRITE_ERRORS:
+        return None
 
 
 def _write_csv(df: pd.DataFrame, fh) -> None:
     """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats, NaN as an empty
     cell) to a binary file.
 
-    pyarrow's writer is about ten times faster than pandas' on numbers, but it quotes
-    every text value; it is used, unquoted, when no column name or text cell needs
-    quoting (the usual output table), and pandas writes everything else.
+    pyarrow formats the values (about ten times faster than pandas), see
+    :func:`_csv_body`; pandas writes tables pyarrow cannot convert.
     """
-    names = [str(c) for c in df.columns]
-    if not any(_CSV_SPECIAL.search(n) for n in names):
-        try:
-            plain = df.copy(deep=False).set_axis(names, axis=1)
-            plain.attrs = {}  # run diagnostics stay in memory
-            table = pa.Table.from_pandas(plain, preserve_index=False)
-            options = pa_csv.WriteOptions(include_header=False, quoting_style="none")
-            body = pa.BufferOutputStream()
-            pa_csv.write_csv(table, body, options)
-        except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError):
-            pass  # a text cell needs quoting, or a type arrow cannot write: use pandas
-        else:
-            fh.write((",".join(names) + "\n").encode("utf-8"))
-            fh.write(body.getvalue())
-            return
+    body = _csv_body(df)
+    if body is not None:
+        fh.write(_csv_header(df.columns))
+        for piece in body:
+            fh.write(piece)
+        return
     text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
     df.to_csv(text, index=False, lineterminator="\n")
     text.flush()
