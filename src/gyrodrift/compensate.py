@@ -679,6 +679,7 @@ def compensate_arrays(
     estimator=None,
     source: str = "arrays",
     progress=None,
+    engine: str = "auto",
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -700,7 +701,12 @@ def compensate_arrays(
         Name used in error messages (the file name).
     progress : callable, optional
         ``progress(iterable, total)`` wraps the loop over update intervals (e.g. a
-        progress bar); it must yield the same items.
+        progress bar); it must yield the same items. Used by the reference engine.
+    engine : {"auto", "fast", "reference"}
+        ``reference``: numpy per update interval, the arithmetic of :class:`Compensator`
+        (bit for bit). ``fast``: the compiled engine of :mod:`gyrodrift._engine` (needs
+        numba; Kalman-family estimators, ``endpoints`` measurement), equal to the
+        reference to rounding. ``auto`` (default): ``fast`` when it can run.
     """
     cfg = config or CompensatorConfig()
     t = np.asarray(t_s, dtype=float)
@@ -711,8 +717,6 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the log has no samples")
     if not (np.isfinite(g_in[0]) and np.isfinite(T_in[0])):
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
-    if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise LogFormatError(f"{source}: time must be finite and strictly increasing")
     t_start = float(t[0]) + cfg.init_s
     need = cfg.init_s + cfg.update_interval_s
     if t[-1] - t[0] < need:
@@ -720,15 +724,29 @@ def compensate_arrays(
             f"{source}: the log is {t[-1] - t[0]:.1f} s long; initialisation needs at least "
             f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
         )
+    est = estimator if estimator is not None else make_estimator(cfg.estimator, config=cfg.kalman)
+    if _use_fast(engine, cfg, est):
+        from gyrodrift._engine import ChunkEngine
+
+        if mag is not None and acc is not None:
+            heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
+        else:  # the engine wraps the heading itself
+            heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
+            norm = dip = None
+        eng = ChunkEngine(cfg, est, source)
+        cols = eng.feed(t, g_in, T_in, heading, norm, dip)
+        accepted = eng.finish()
+        return _with_attrs(_fast_frame(cols), pd.DataFrame(accepted, columns=list(MEASUREMENT_COLUMNS)), est)
+
+    if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise LogFormatError(f"{source}: time must be finite and strictly increasing")
+    heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
     held = ~(np.isfinite(g_in) & np.isfinite(T_in))
     # An empty or non-finite (inf) cell holds the previous value, as in Compensator.push.
     g = pd.Series(np.where(np.isfinite(g_in), g_in, np.nan)).ffill().to_numpy()
     T = pd.Series(np.where(np.isfinite(T_in), T_in, np.nan)).ffill().to_numpy()
     gap = held | (np.r_[0.0, np.diff(t)] > cfg.gate.max_gap_s)
-    heading, norm, dip = _compass_arrays(n, heading_deg, mag, acc)
     Tp = temp_rate(t, T, cfg.temp_rate)
-
-    est = estimator if estimator is not None else make_estimator(cfg.estimator, config=cfg.kalman)
     aid = _Aiding(cfg, est)
     k = _interval_index(t, t_start, cfg.update_interval_s)
     e = int(np.flatnonzero(k >= 0)[0])  # last row of the init window
@@ -815,27 +833,50 @@ def compensate_arrays(
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
     out = _output_frame(
-        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), out_params, update, reason, Tp, heading, out_unobservable,
-        out_bias_sd,
+        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), tuple(out_params.T), update,
+        pd.Categorical(reason, categories=gating.REASONS).codes, Tp, heading,
+        pd.Categorical(out_unobservable, categories=UNOBSERVABLE).codes, out_bias_sd,
     )
-    out.attrs["measurements"] = _measurement_table(aid.accepted)
+    return _with_attrs(out, _measurement_table(aid.accepted), est)
+
+
+def _use_fast(engine: str, cfg: CompensatorConfig, est) -> bool:
+    """Whether :func:`compensate_arrays` runs the compiled engine (see its ``engine``)."""
+    if engine not in ("auto", "fast", "reference"):
+        raise ConfigError(f"engine must be 'auto', 'fast' or 'reference', got {engine!r}")
+    if engine == "reference":
+        return False
+    from gyrodrift import _engine
+
+    ok = _engine.available() and _engine.supports(cfg, est)
+    if engine == "fast" and not ok:
+        why = "numba is not installed (pip install 'gyrodrift[fast]')" if not _engine.available() else (
+            f"it does not implement estimator {est.name!r} with measurement {cfg.measurement!r}"
+        )
+        raise ConfigError(f"the fast engine cannot run: {why}; use engine='reference'")
+    return ok
+
+
+def _with_attrs(out: pd.DataFrame, measurements: pd.DataFrame, est) -> pd.DataFrame:
+    out.attrs["measurements"] = measurements
     out.attrs["estimator"] = est.name
     out.attrs["final_params"] = est.params
     out.attrs["final_cov"] = est.cov
     return out
 
 
+#: Columns of ``attrs["measurements"]``: time (s), drift measurement m (deg/s), interval
+#: means of T (degC) and T' (degC/s), variance r ((deg/s)²).
+MEASUREMENT_COLUMNS = ("t", "m", "temp", "temp_rate", "r")
+
+#: Every value of the ``unobservable`` column, in a fixed order (its categories).
+UNOBSERVABLE = ("", "a", "b", "a,b")
+
+
 def _measurement_table(accepted) -> pd.DataFrame:
-    """The accepted drift measurements: time (s), m (deg/s), mean T, T', variance r."""
-    return pd.DataFrame(
-        {
-            "t": [t for t, _ in accepted],
-            "m": [e.m for _, e in accepted],
-            "temp": [e.h[0] for _, e in accepted],
-            "temp_rate": [e.h[1] for _, e in accepted],
-            "r": [e.r for _, e in accepted],
-        }
-    )
+    """The accepted drift measurements (:data:`MEASUREMENT_COLUMNS`)."""
+    rows = np.array([(t, e.m, e.h[0], e.h[1], e.r) for t, e in accepted], dtype=float).reshape(-1, 5)
+    return pd.DataFrame(rows, columns=list(MEASUREMENT_COLUMNS))
 
 
 def _compass_arrays(n: int, heading_deg, mag, acc):
@@ -855,24 +896,38 @@ def _compass_arrays(n: int, heading_deg, mag, acc):
     return heading, norm, dip
 
 
-def _output_frame(t, rate, bias, heading, params, update, reason, Tp, compass, unobservable, bias_sd) -> pd.DataFrame:
+def _fast_frame(cols: dict) -> pd.DataFrame:
+    """The output table from the columns of :class:`gyrodrift._engine.ChunkEngine`."""
+    return _output_frame(
+        cols["t"], cols["rate_z"], cols["bias_z"], cols["heading"], (cols["a"], cols["b"], cols["c"]),
+        cols["update"], cols["reason"], cols["temp_rate"], cols["compass_heading"], cols["unobs"], cols["bias_sd"],
+    )
+
+
+def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compass, unobservable_code, bias_sd):
+    """The output table (``params``: the a, b and c columns); ``gate_reason`` and ``unobservable`` as categoricals from their codes
+    (indices into :data:`gyrodrift.gating.REASONS` and :data:`UNOBSERVABLE`). No column is copied."""
+    reason_code = np.asarray(reason_code, dtype=np.int8)
     return pd.DataFrame(
         {
             "t": t,
             "rate_z": rate,
             "bias_z": bias,
             "heading": heading,
-            "a": params[:, 0],
-            "b": params[:, 1],
-            "c": params[:, 2],
-            "update": update,
-            "gated": (reason != "").astype(int),
-            "gate_reason": reason.astype(str),
+            "a": params[0],
+            "b": params[1],
+            "c": params[2],
+            "update": np.asarray(update, dtype=np.int8),
+            "gated": (reason_code != 0).astype(np.int8),
+            "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS)),
             "temp_rate": Tp,
             "compass_heading": compass,
-            "unobservable": unobservable.astype(str),
+            "unobservable": pd.Categorical.from_codes(
+                np.asarray(unobservable_code, dtype=np.int8), categories=list(UNOBSERVABLE)
+            ),
             "bias_sd": bias_sd,
-        }
+        },
+        copy=False,
     )
 
 
@@ -883,6 +938,7 @@ def compensate(
     estimator=None,
     source: str | None = None,
     progress=None,
+    engine: str = "auto",
 ) -> pd.DataFrame:
     """Compensate a log in the input contract; return the output table.
 
@@ -898,6 +954,8 @@ def compensate(
     source : str, optional
         Name for error messages; defaults to ``log.attrs["source"]``.
     progress : callable, optional
+        See :func:`compensate_arrays`.
+    engine : {"auto", "fast", "reference"}
         See :func:`compensate_arrays`.
 
     Returns
@@ -931,6 +989,7 @@ def compensate(
         estimator=estimator,
         source=source,
         progress=progress,
+        engine=engine,
     )
     for col in log.columns:
         if col in (T, HEADING):

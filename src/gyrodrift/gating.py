@@ -40,6 +40,7 @@ __all__ = [
     "FIELD",
     "TURNING",
     "INTERFERENCE",
+    "REASONS",
     "row_condition",
     "row_conditions",
     "field_anomaly",
@@ -51,6 +52,9 @@ NO_COMPASS = "no_compass"
 FIELD = "field"
 TURNING = "turning"
 INTERFERENCE = "interference"
+#: Every value of ``gate_reason`` ("" = accepted), in a fixed order (the categories of
+#: the output column).
+REASONS = ("", INIT, GAP, NO_COMPASS, FIELD, TURNING, INTERFERENCE)
 
 
 @dataclass(frozen=True, kw_only=True)

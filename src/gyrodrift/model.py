@@ -12,7 +12,8 @@ spikes when the reading steps. gyrodrift instead:
 1. averages the temperature over bins of ``bin_s`` seconds (default 1 s), aligned on
    the first sample;
 2. fits a least-squares line through the completed bins of the trailing
-   ``window_s`` seconds (default 60 s) and takes its slope as T'.
+   ``window_s`` seconds (default 60 s: the newest bin and the 60 before it, counted by
+   bin number so that the choice does not depend on rounding) and takes its slope as T'.
 
 The estimate is causal: a sample uses only bins that closed before its own bin
 (so streaming and batch give the same numbers). It is exact for a linear ramp
@@ -47,6 +48,11 @@ class TempRateConfig:
 
     window_s: float = 60.0
     bin_s: float = 1.0
+
+    @property
+    def window_bins(self) -> int:
+        """How many bins before the newest one the window reaches back."""
+        return int(round(self.window_s / self.bin_s))
 
     def __post_init__(self):
         if not (self.bin_s > 0 and math.isfinite(self.bin_s)):
@@ -102,11 +108,11 @@ class TempRateTracker:
     def _close_bin(self) -> None:
         tb, Tb = _bin_mean(np.array(self._cur_t), np.array(self._cur_temp))
         self._cur_t, self._cur_temp = [], []
-        self._bins.append((tb, Tb))
-        while self._bins[0][0] < tb - self._cfg.window_s:
+        self._bins.append((self._bin, tb, Tb))
+        while self._bins[0][0] < self._bin - self._cfg.window_bins:
             self._bins.popleft()
         arr = np.array(self._bins)
-        self._rate = _ls_slope(arr[:, 0], arr[:, 1])
+        self._rate = _ls_slope(arr[:, 1], arr[:, 2])
 
 
 def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndarray:
@@ -148,7 +154,7 @@ def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndar
     for j, (s, e) in enumerate(zip(starts, ends)):
         out[s:e] = rate
         bin_t[j], bin_temp[j] = _bin_mean(t_s[s:e], temp_c[s:e])
-        while bin_t[first] < bin_t[j] - config.window_s:
+        while bins[starts[first]] < bins[s] - config.window_bins:
             first += 1
         rate = _ls_slope(bin_t[first : j + 1], bin_temp[first : j + 1])
     return out

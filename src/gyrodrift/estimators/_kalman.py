@@ -76,6 +76,8 @@ def cap_covariance(P: np.ndarray, max_var: np.ndarray) -> np.ndarray:
     """
     scale = np.sqrt(max_var)
     M = P / np.outer(scale, scale)
+    if np.trace(M) <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
+        return P
     lam, V = np.linalg.eigh(0.5 * (M + M.T))
     if lam[-1] <= 1.0:
         return P

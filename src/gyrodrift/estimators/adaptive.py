@@ -115,3 +115,20 @@ class AdaptiveKalman(LinearDrift):
     def hold(self) -> np.ndarray:
         self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
         return self.params
+
+    def engine_state(self) -> dict:
+        """State and settings for the compiled engine (:mod:`gyrodrift._engine`)."""
+        return {"mode": "zhou", "fading": 1.0, "lambda_max": self.lambda_max, "rho": self.rho, "centred": True,
+                "x": self._z, "P": self._P, "Q": self._Q, "max_var": self._max_var, "active": (0, 1, 2),
+                "V": self._V, "temp_ref_c": self.temp_ref_c}
+
+    def set_engine_state(self, state: dict) -> None:
+        """Take back the state the compiled engine ended with."""
+        self._z = np.array(state["x"], dtype=float)
+        self._P = np.array(state["P"], dtype=float)
+        if state.get("V") is not None:
+            self._V = np.array(state["V"], dtype=float)
+        if state.get("temp_ref_c") is not None:
+            self.temp_ref_c = float(state["temp_ref_c"])
+        if state.get("last_lambda") is not None:
+            self.last_lambda = float(state["last_lambda"])

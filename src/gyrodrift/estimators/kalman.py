@@ -151,6 +151,16 @@ class KalmanDrift(LinearDrift):
         self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
         return self.params
 
+    def engine_state(self) -> dict:
+        """State and settings for the compiled engine (:mod:`gyrodrift._engine`)."""
+        return {"mode": "fixed", "fading": float(self.fading), "x": self._x, "P": self._P, "Q": self._Q,
+                "max_var": self._max_var, "active": (0, 1, 2)}
+
+    def set_engine_state(self, state: dict) -> None:
+        """Take back the state the compiled engine ended with."""
+        self._x = np.array(state["x"], dtype=float)
+        self._P = np.array(state["P"], dtype=float)
+
 
 @register
 class PlainKalmanDrift(KalmanDrift):
@@ -211,3 +221,17 @@ class BiasKalman(LinearDrift):
     def hold(self) -> np.ndarray:
         self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
         return self.params
+
+    def engine_state(self) -> dict:
+        """State and settings for the compiled engine: the 3-state form with only c active."""
+        P = np.zeros((3, 3))
+        P[2, 2] = self._P[0, 0]
+        Q = np.zeros((3, 3))
+        Q[2, 2] = self._Q[0, 0]
+        return {"mode": "fixed", "fading": 1.0, "x": np.array([0.0, 0.0, self._x[0]]), "P": P, "Q": Q,
+                "max_var": np.array([1.0, 1.0, self._max_var[0]]), "active": (2,)}
+
+    def set_engine_state(self, state: dict) -> None:
+        """Take back the state the compiled engine ended with."""
+        self._x = np.array([state["x"][2]], dtype=float)
+        self._P = np.array([[state["P"][2, 2]]], dtype=float)

@@ -1,0 +1,626 @@
+"""Compiled kernels of the fast batch engine (numba; see :mod:`gyrodrift._engine`).
+
+Every function here is a loop over samples, or a small-matrix Kalman step, written
+once and compiled with numba (``nopython``, no ``fastmath``: IEEE arithmetic in the
+order written). They mirror, operation for operation where it matters, the reference
+implementation in :mod:`gyrodrift.compensate`, :mod:`gyrodrift.model`,
+:mod:`gyrodrift.gating` and :mod:`gyrodrift.estimators`; the tests hold the two to
+agree. They are resumable: each takes its state arrays, updates them in place and
+can stop early (returning the next row to do) when an output buffer is full, so a
+log may be fed in chunks of any size with identical results.
+
+Importing this module imports numba (about 0.5 s); :mod:`gyrodrift._engine` does it
+only when the fast engine runs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# ---------------------------------------------------------------- state layouts
+
+# Float state of the main kernel (index names).
+F_T, F_G, F_TEMP, F_TP, F_BIAS, F_RATE = 0, 1, 2, 3, 4, 5
+F_IRAW, F_IT, F_ITP, F_IBIAS, F_IRATE = 6, 7, 8, 9, 10
+F_K, F_TSTART, F_ANCHOR = 11, 12, 13
+F_S0 = 14  # start snap: t, heading, I_raw, I_T, I_Tp, I_bias (6 values)
+F_S1 = 20  # last compass snap: same 6 values
+F_TREF, F_LAMBDA = 26, 27
+F_PA, F_PB, F_PC = 28, 29, 30  # absolute a, b, c in force
+N_FSTATE = 31
+
+# Integer state of the main kernel.
+I_S0_OK, I_S1_OK, I_STICKY, I_AFTER_INT = 0, 1, 2, 3
+I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_V_N, I_TREF_SET, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9, 10, 11
+N_ISTATE = 12
+
+# Settings (float) of the main kernel.
+C_INTERVAL, C_COMPASS_SD, C_GYRO_NOISE, C_TURN_RATE, C_TURN_WIN = 0, 1, 2, 3, 4
+C_INTERF, C_MAX_AGE, C_FADING, C_LAMBDA_MAX, C_RHO, C_PRIOR_A, C_PRIOR_B = 5, 6, 7, 8, 9, 10, 11
+N_CFG = 12
+
+# Integer settings.
+K_RELOCK, K_MODE, K_CENTRED, K_DEPTH = 0, 1, 2, 3
+N_KCFG = 4
+MODE_FIXED, MODE_ZHOU = 0, 1
+
+# Reason codes (gate_reason categories, in this order).
+R_NONE, R_INIT, R_GAP, R_NO_COMPASS, R_FIELD, R_TURNING, R_INTERFERENCE = 0, 1, 2, 3, 4, 5, 6
+NO_STICKY = -1
+
+# T' tracker state.
+TF_T0, TF_SUM_T, TF_SUM_TEMP, TF_RATE = 0, 1, 2, 3
+TI_BIN, TI_N, TI_HEAD, TI_LEN, TI_STARTED = 0, 1, 2, 3, 4
+
+
+# ------------------------------------------------------------------------ T'
+
+
+@njit(cache=True, nogil=True)
+def temp_rate_kernel(t, temp, window_bins, bin_s, tf, ti, bins, out):
+    """T' (degC/s) of every sample, resumable (mirror of :class:`gyrodrift.model.TempRateTracker`).
+
+    ``bins`` is a ring of (bin number, mean time, mean temperature) of the closed bins,
+    at least ``window_bins + 2`` rows.
+    """
+    cap = bins.shape[0]
+    for i in range(t.size):
+        if ti[TI_STARTED] == 0:
+            tf[TF_T0] = t[i]
+            ti[TI_STARTED] = 1
+            ti[TI_BIN] = math.floor((t[i] - tf[TF_T0]) / bin_s)
+        b = math.floor((t[i] - tf[TF_T0]) / bin_s)
+        if ti[TI_N] > 0 and b != ti[TI_BIN]:
+            # close the bin: its mean time and temperature
+            tb = tf[TF_SUM_T] / ti[TI_N]
+            Tb = tf[TF_SUM_TEMP] / ti[TI_N]
+            pos = (ti[TI_HEAD] + ti[TI_LEN]) % cap
+            bins[pos, 0] = ti[TI_BIN]
+            bins[pos, 1] = tb
+            bins[pos, 2] = Tb
+            ti[TI_LEN] += 1
+            while bins[ti[TI_HEAD], 0] < ti[TI_BIN] - window_bins:
+                ti[TI_HEAD] = (ti[TI_HEAD] + 1) % cap
+                ti[TI_LEN] -= 1
+            tf[TF_RATE] = _ring_slope(bins, ti[TI_HEAD], ti[TI_LEN])
+            tf[TF_SUM_T] = 0.0
+            tf[TF_SUM_TEMP] = 0.0
+            ti[TI_N] = 0
+        ti[TI_BIN] = b
+        tf[TF_SUM_T] += t[i]
+        tf[TF_SUM_TEMP] += temp[i]
+        ti[TI_N] += 1
+        out[i] = tf[TF_RATE]
+
+
+@njit(cache=True, nogil=True)
+def _ring_slope(bins, head, n):
+    """Least-squares slope of column 2 against column 1 over ``n`` ring rows; 0 if undetermined."""
+    if n < 2:
+        return 0.0
+    cap = bins.shape[0]
+    st = 0.0
+    sT = 0.0
+    for j in range(n):
+        st += bins[(head + j) % cap, 1]
+        sT += bins[(head + j) % cap, 2]
+    mt = st / n
+    mT = sT / n
+    sxx = 0.0
+    sxy = 0.0
+    for j in range(n):
+        dt = bins[(head + j) % cap, 1] - mt
+        sxx += dt * dt
+        sxy += dt * (bins[(head + j) % cap, 2] - mT)
+    if sxx <= 0.0:
+        return 0.0
+    return sxy / sxx
+
+
+# -------------------------------------------------------------------- angles
+
+
+@njit(cache=True, nogil=True)
+def wrap360(x):
+    """Mirror of :func:`gyrodrift.conventions.wrap_360` (an angle already in range is returned as is,
+    which is what ``np.mod`` gives for it)."""
+    if 0.0 <= x < 360.0:
+        return x
+    out = np.mod(x, 360.0)
+    if out >= 360.0:
+        out -= 360.0
+    return out
+
+
+@njit(cache=True, nogil=True)
+def prepare_kernel(t, g, T, heading, t_prev, g_last, T_last, first_chunk, max_gap_s, out_g, out_T, out_heading, gap):
+    """Per-row input preparation of a chunk (mirror of the reference ``compensate_arrays`` set-up).
+
+    Holds the previous value over non-finite gyro/temperature cells, flags ``gap`` rows
+    (held cell or time step above ``max_gap_s``), wraps the compass heading to [0, 360)
+    (NaN where absent or not finite). Returns -1, or the first row whose time is not
+    finite or does not increase.
+    """
+    prev = t_prev
+    for i in range(t.size):
+        ti = t[i]
+        if not math.isfinite(ti):
+            return i
+        step = 0.0
+        if i > 0 or not first_chunk:
+            step = ti - prev
+            if not step > 0.0:
+                return i
+        prev = ti
+        held = False
+        gi = g[i]
+        if math.isfinite(gi):
+            g_last = gi
+        else:
+            held = True
+        Ti = T[i]
+        if math.isfinite(Ti):
+            T_last = Ti
+        else:
+            held = True
+        out_g[i] = g_last
+        out_T[i] = T_last
+        gap[i] = held or step > max_gap_s
+        h = heading[i]
+        out_heading[i] = wrap360(h) if math.isfinite(h) else math.nan
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def wrap180(x):
+    return wrap360(x + 180.0) - 180.0
+
+
+# -------------------------------------------------------------------- Kalman
+
+
+@njit(cache=True, nogil=True)
+def cap_covariance(P, max_var):
+    """Mirror of :func:`gyrodrift.estimators._kalman.cap_covariance`."""
+    n = P.shape[0]
+    scale = np.sqrt(max_var)
+    M = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            M[i, j] = P[i, j] / (scale[i] * scale[j])
+    tr = 0.0
+    for i in range(n):
+        tr += M[i, i]
+    if tr <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
+        return P.copy()
+    Ms = 0.5 * (M + M.T)
+    lam, V = np.linalg.eigh(Ms)
+    if lam[n - 1] <= 1.0:
+        return P.copy()
+    C = np.ascontiguousarray(V * np.minimum(lam, 1.0)) @ np.ascontiguousarray(V.T)
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = C[i, j] * (scale[i] * scale[j])
+    return 0.5 * (out + out.T)
+
+
+@njit(cache=True, nogil=True)
+def correct(x, P, y, H, R):
+    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P."""
+    Ht = np.ascontiguousarray(H.T)
+    S = H @ P @ Ht + R
+    K = np.ascontiguousarray(np.linalg.solve(S, H @ P).T)
+    innovation = y - H @ x
+    A = np.eye(x.size) - K @ H
+    P_post = A @ P @ np.ascontiguousarray(A.T) + K @ R @ np.ascontiguousarray(K.T)
+    return x + K @ innovation, 0.5 * (P_post + P_post.T)
+
+
+@njit(cache=True, nogil=True)
+def _sub(P, active):
+    n = active.size
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = P[active[i], active[j]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _put(P, active, Pa):
+    n = active.size
+    for i in range(n):
+        for j in range(n):
+            P[active[i], active[j]] = Pa[i, j]
+
+
+@njit(cache=True, nogil=True)
+def hold(P, Q, max_var, active):
+    """No aiding: ``P <- cap(P + Q)`` on the active states."""
+    Pa = _sub(P, active)
+    Qa = _sub(Q, active)
+    _put(P, active, cap_covariance(1.0 * Pa + Qa, max_var[active]))
+
+
+@njit(cache=True, nogil=True)
+def kalman_update(x, P, Q, max_var, active, y, H, R, fading, mode, centred, lambda_max, rho, V, fs, ist):
+    """One accepted update of the linear drift filter; x, P (and V, T_ref, λ) in place.
+
+    ``mode`` MODE_FIXED: ``P- = cap(s P + Q)`` (eq. 10, ``stkf``/``stkf-s1``/``kf``);
+    MODE_ZHOU: the innovation-based fading factor of :class:`~gyrodrift.estimators.adaptive.AdaptiveKalman`,
+    with temperature centred on T_ref (``centred``).
+    """
+    m = y.size
+    Hc = H.copy()
+    if centred:
+        if ist[I_TREF_SET] == 0:
+            s = 0.0
+            for r in range(m):
+                s += H[r, 0]
+            tref = s / m
+            fs[F_TREF] = tref
+            ist[I_TREF_SET] = 1
+            x[2] = x[2] + x[0] * tref
+        for r in range(m):
+            Hc[r, 0] -= fs[F_TREF]
+    na = active.size
+    Ha = np.empty((m, na))
+    for r in range(m):
+        for j in range(na):
+            Ha[r, j] = Hc[r, active[j]]
+    xa = np.empty(na)
+    for j in range(na):
+        xa[j] = x[active[j]]
+    Pa = _sub(P, active)
+    Qa = _sub(Q, active)
+    mv = max_var[active]
+    lam = fading
+    if mode == MODE_ZHOU:
+        gamma = y - Ha @ xa
+        if ist[I_V_N] != m:
+            for i in range(m):
+                for j in range(m):
+                    V[i, j] = gamma[i] * gamma[j]
+            ist[I_V_N] = m
+        else:
+            for i in range(m):
+                for j in range(m):
+                    V[i, j] = (rho * V[i, j] + gamma[i] * gamma[j]) / (1.0 + rho)
+        Hat = np.ascontiguousarray(Ha.T)
+        N = V[:m, :m] - Ha @ Qa @ Hat - R
+        M = Ha @ Pa @ Hat
+        trN = np.trace(N)
+        trM = np.trace(M)
+        lam = trN / trM if trM > 0 else 1.0
+        lam = min(max(1.0, lam), lambda_max)
+        fs[F_LAMBDA] = lam
+    P_prior = cap_covariance(lam * Pa + Qa, mv)
+    xa, P_post = correct(xa, P_prior, y, Ha, R)
+    _put(P, active, cap_covariance(P_post, mv))
+    for j in range(na):
+        x[active[j]] = xa[j]
+
+
+@njit(cache=True, nogil=True)
+def absolute(x, P, centred, tref, fs):
+    """Absolute [a, b, c] into ``fs`` and the absolute covariance (``J P Jᵀ`` when centred)."""
+    if centred:
+        fs[F_PA] = x[0]
+        fs[F_PB] = x[1]
+        fs[F_PC] = x[2] - x[0] * tref
+        J = np.eye(3)
+        J[2, 0] = -tref
+        return J @ P @ np.ascontiguousarray(J.T)
+    fs[F_PA] = x[0]
+    fs[F_PB] = x[1]
+    fs[F_PC] = x[2]
+    return P.copy()
+
+
+# ---------------------------------------------------------------- main loop
+
+
+@njit(cache=True, nogil=True)
+def _unobservable_code(C, prior_a, prior_b):
+    code = 0
+    if math.sqrt(max(C[0, 0], 0.0)) > 0.5 * prior_a:
+        code += 1
+    if math.sqrt(max(C[1, 1], 0.0)) > 0.5 * prior_b:
+        code += 2
+    return code
+
+
+@njit(cache=True, nogil=True)
+def _row_condition(gap, field, resid, mean_rate, turn_rate, interf):
+    if gap:
+        return R_GAP
+    if field:
+        return R_FIELD
+    if abs(mean_rate) > turn_rate:
+        return R_TURNING
+    if abs(resid) > interf:  # False for NaN
+        return R_INTERFERENCE
+    return NO_STICKY
+
+
+@njit(cache=True, nogil=True)
+def compensate_kernel(
+    t, g, T, Tp, heading, gap, field, i0,
+    fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, lb,
+    Cabs,
+    out_bias, out_rate, out_heading, out_a, out_b, out_c, out_update, out_reason, out_bias_sd, out_unobs,
+    acc,
+):
+    """Compensate rows ``i0..`` of a chunk after initialisation (mirror of ``Compensator._step``).
+
+    Returns the next row to do: ``t.size`` when done, less when the turn-window ring
+    ``lb`` or the accepted-measurement buffer ``acc`` is full (grow it and call again).
+
+    The per-row state lives in local variables (kept in registers) and goes back to
+    ``fs``/``ist`` around each interval decision and at the end.
+    """
+    interval = cfg[C_INTERVAL]
+    turn_win = cfg[C_TURN_WIN]
+    turn_rate = cfg[C_TURN_RATE]
+    interf = cfg[C_INTERF]
+    max_age = cfg[C_MAX_AGE]
+    t_start = fs[F_TSTART]
+    anchor = fs[F_ANCHOR]
+    depth = kcfg[K_DEPTH]
+    lb_cap = lb.shape[0]
+    acc_cap = acc.shape[0]
+    # carry
+    c_t, c_g, c_T, c_Tp, c_bias, c_rate = fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE]
+    I_raw, I_T, I_Tp, I_bias, I_rate = fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE]
+    k_cur = fs[F_K]
+    pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
+    s0_heading, s0_Iraw, s0_Ibias = fs[F_S0 + 1], fs[F_S0 + 2], fs[F_S0 + 5]
+    s0_ok = ist[I_S0_OK] == 1
+    sticky = ist[I_STICKY]
+    after_int = ist[I_AFTER_INT] == 1
+    unobs = ist[I_UNOBS]
+    lb_head, lb_n = ist[I_LB_HEAD], ist[I_LB_N]
+    C00, C01, C02 = Cabs[0, 0], Cabs[0, 1], Cabs[0, 2]
+    C10, C11, C12 = Cabs[1, 0], Cabs[1, 1], Cabs[1, 2]
+    C20, C21, C22 = Cabs[2, 0], Cabs[2, 1], Cabs[2, 2]
+    t_near = _near_boundary(t_start, k_cur, interval)
+    stop = t.size
+    for i in range(i0, t.size):
+        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap:
+            stop = i
+            break
+        t_s = t[i]
+        gi = g[i]
+        Ti = T[i]
+        Tpi = Tp[i]
+        h = heading[i]
+        bias = pa * Ti + pb * Tpi + pc
+        rate = gi - bias
+        dt = t_s - c_t
+        I_raw = I_raw + 0.5 * (gi + c_g) * dt
+        I_T = I_T + 0.5 * (Ti + c_T) * dt
+        I_Tp = I_Tp + 0.5 * (Tpi + c_Tp) * dt
+        I_bias = I_bias + 0.5 * (bias + c_bias) * dt
+        I_rate = I_rate + 0.5 * (rate + c_rate) * dt
+        c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
+        has_compass = not math.isnan(h)
+        if has_compass:
+            fs[F_S1] = t_s
+            fs[F_S1 + 1] = h
+            fs[F_S1 + 2] = I_raw
+            fs[F_S1 + 3] = I_T
+            fs[F_S1 + 4] = I_Tp
+            fs[F_S1 + 5] = I_bias
+            ist[I_S1_OK] = 1
+        # 1-s mean compensated rate, from the oldest row inside the window
+        window_start = t_s - turn_win
+        while lb_n > 1 and lb[lb_head, 0] < window_start:
+            lb_head += 1
+            if lb_head == lb_cap:
+                lb_head = 0
+            lb_n -= 1
+        lb_t0 = lb[lb_head, 0]
+        lb_I0 = lb[lb_head, 1]
+        pos = lb_head + lb_n
+        if pos >= lb_cap:
+            pos -= lb_cap
+        lb[pos, 0] = t_s
+        lb[pos, 1] = I_rate
+        lb_n += 1
+        if sticky == NO_STICKY:
+            resid = math.nan
+            if has_compass and s0_ok:
+                d = wrap180((I_raw - h) - (s0_Iraw - s0_heading))
+                resid = d - (I_bias - s0_Ibias)
+            mean_rate = (I_rate - lb_I0) / (t_s - lb_t0)
+            sticky = _row_condition(gap[i], field[i], resid, mean_rate, turn_rate, interf)
+        update = 0
+        if sticky != NO_STICKY:
+            reason = sticky
+        elif after_int:
+            reason = R_INTERFERENCE
+        else:
+            reason = R_NONE
+        # bias_sd with the covariance in force for this row
+        var = ((C00 * Ti + C01 * Tpi + C02) * Ti
+               + (C10 * Ti + C11 * Tpi + C12) * Tpi
+               + (C20 * Ti + C21 * Tpi + C22))
+        out_bias_sd[i] = math.sqrt(max(var, 0.0))
+        out_bias[i] = bias
+        out_rate[i] = rate
+        out_heading[i] = wrap360(anchor + I_rate)
+        out_a[i] = pa
+        out_b[i] = pb
+        out_c[i] = pc
+        out_unobs[i] = unobs
+        # the interval number floor((t - t_start)/interval), computed only near a boundary
+        k = k_cur
+        if t_s >= t_near:
+            k = math.floor((t_s - t_start) / interval)
+        if k > k_cur:
+            k_cur = k
+            ist[I_STICKY] = sticky
+            ist[I_AFTER_INT] = 1 if after_int else 0
+            update, reason = _close(t_s, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, acc, depth)
+            C = absolute(x, P, kcfg[K_CENTRED] == 1, fs[F_TREF], fs)
+            for r in range(3):
+                for c in range(3):
+                    Cabs[r, c] = C[r, c]
+            C00, C01, C02 = C[0, 0], C[0, 1], C[0, 2]
+            C10, C11, C12 = C[1, 0], C[1, 1], C[1, 2]
+            C20, C21, C22 = C[2, 0], C[2, 1], C[2, 2]
+            unobs = _unobservable_code(C, cfg[C_PRIOR_A], cfg[C_PRIOR_B])
+            _begin(t_s, fs, ist, max_age)
+            pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
+            s0_heading, s0_Iraw, s0_Ibias = fs[F_S0 + 1], fs[F_S0 + 2], fs[F_S0 + 5]
+            s0_ok = ist[I_S0_OK] == 1
+            sticky = ist[I_STICKY]
+            after_int = ist[I_AFTER_INT] == 1
+            t_near = _near_boundary(t_start, k_cur, interval)
+        out_update[i] = update
+        out_reason[i] = reason
+    fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
+    fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE] = I_raw, I_T, I_Tp, I_bias, I_rate
+    fs[F_K] = k_cur
+    ist[I_STICKY] = sticky
+    ist[I_AFTER_INT] = 1 if after_int else 0
+    ist[I_UNOBS] = unobs
+    ist[I_LB_HEAD], ist[I_LB_N] = lb_head, lb_n
+    return stop
+
+
+@njit(cache=True, nogil=True)
+def _near_boundary(t_start, k_cur, interval):
+    """A time safely before the start of interval ``k_cur + 1``: below it the interval
+    number cannot have changed (the margin covers the rounding of the division)."""
+    t_next = t_start + (k_cur + 1.0) * interval
+    return t_next - 1e-9 * (abs(t_next) + abs(t_start) + interval)
+
+
+@njit(cache=True, nogil=True)
+def _begin(t_boundary, fs, ist, max_age):
+    """Open the next interval at a boundary row (``_Aiding.begin``)."""
+    if ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > max_age):
+        for j in range(6):
+            fs[F_S0 + j] = fs[F_S1 + j]
+        ist[I_S0_OK] = 1
+        ist[I_STICKY] = NO_STICKY
+    else:
+        ist[I_S0_OK] = 0
+        ist[I_STICKY] = R_NO_COMPASS
+
+
+@njit(cache=True, nogil=True)
+def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, acc, depth):
+    """Decide the interval ending at a boundary row (``_Aiding.close``); returns (update, reason)."""
+    reason = ist[I_STICKY]
+    end_ok = ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE])
+    have_meas = False
+    m = 0.0
+    h0 = 0.0
+    h1 = 0.0
+    r = 0.0
+    resid = 0.0
+    if reason == NO_STICKY:
+        if (not end_ok) or fs[F_S1] - fs[F_S0] < 0.5 * cfg[C_INTERVAL]:
+            reason = R_NO_COMPASS
+        else:
+            m, h0, h1, r, resid = _measurement(fs, cfg)
+            have_meas = True
+            if abs(resid) > cfg[C_INTERF]:
+                reason = R_INTERFERENCE
+    if reason == R_INTERFERENCE and ist[I_S0_OK] == 1 and end_ok:
+        if not have_meas:
+            m, h0, h1, r, resid = _measurement(fs, cfg)
+            have_meas = True
+        if _drift_not_interference(resid / (fs[F_S1] - fs[F_S0]), ist, refused, kcfg[K_RELOCK]):
+            reason = NO_STICKY
+    if reason != R_INTERFERENCE:
+        ist[I_REFUSED_N] = 0
+    if reason == NO_STICKY:
+        # stack.appendleft
+        n = min(ist[I_STACK_N] + 1, depth)
+        for j in range(n - 1, 0, -1):
+            for c in range(5):
+                stack[j, c] = stack[j - 1, c]
+        stack[0, 0] = m
+        stack[0, 1] = h0
+        stack[0, 2] = h1
+        stack[0, 3] = 1.0
+        stack[0, 4] = r
+        ist[I_STACK_N] = n
+        a = ist[I_N_ACC]
+        acc[a, 0] = t_boundary
+        acc[a, 1] = m
+        acc[a, 2] = h0
+        acc[a, 3] = h1
+        acc[a, 4] = r
+        ist[I_N_ACC] = a + 1
+        y = np.empty(n)
+        H = np.empty((n, 3))
+        R = np.zeros((n, n))
+        for j in range(n):
+            y[j] = stack[j, 0]
+            H[j, 0] = stack[j, 1]
+            H[j, 1] = stack[j, 2]
+            H[j, 2] = stack[j, 3]
+            R[j, j] = stack[j, 4]
+        kalman_update(x, P, Q, max_var, active, y, H, R, cfg[C_FADING], kcfg[K_MODE], kcfg[K_CENTRED] == 1,
+                      cfg[C_LAMBDA_MAX], cfg[C_RHO], V, fs, ist)
+        ist[I_AFTER_INT] = 0
+        return 1, R_NONE
+    hold(P, Q, max_var, active)
+    ist[I_AFTER_INT] = 1 if reason == R_INTERFERENCE else 0
+    return 0, reason
+
+
+@njit(cache=True, nogil=True)
+def _measurement(fs, cfg):
+    """Eqs. (4)–(6) between the start and end snaps (``_compass_measurement``)."""
+    dt = fs[F_S1] - fs[F_S0]
+    d_diff = wrap180((fs[F_S1 + 2] - fs[F_S1 + 1]) - (fs[F_S0 + 2] - fs[F_S0 + 1]))
+    m = d_diff / dt
+    h0 = (fs[F_S1 + 3] - fs[F_S0 + 3]) / dt
+    h1 = (fs[F_S1 + 4] - fs[F_S0 + 4]) / dt
+    r = 2.0 * cfg[C_COMPASS_SD] ** 2 / dt**2 + cfg[C_GYRO_NOISE] ** 2 / dt
+    return m, h0, h1, r, d_diff - (fs[F_S1 + 5] - fs[F_S0 + 5])
+
+
+@njit(cache=True, nogil=True)
+def _drift_not_interference(rate, ist, refused, n):
+    """Lock-out recovery (``_Aiding._drift_not_interference``); ``refused`` keeps the last n rates."""
+    if n == 0:
+        return False
+    have = ist[I_REFUSED_N]
+    enough = have >= n
+    if enough:
+        rates = np.empty(n + 1)
+        for j in range(n):
+            rates[j] = refused[have - n + j] if have <= refused.size else refused[refused.size - n + j]
+        rates[n] = rate
+    # append, keeping only the last n
+    if have < refused.size:
+        refused[have] = rate
+    else:
+        for j in range(refused.size - 1):
+            refused[j] = refused[j + 1]
+        refused[refused.size - 1] = rate
+    ist[I_REFUSED_N] = min(have + 1, refused.size)
+    if not enough:
+        return False
+    total = 0.0
+    for j in range(n + 1):
+        total += rates[j]
+    mean = total / (n + 1)
+    ss = 0.0
+    for j in range(n + 1):
+        ss += abs(rates[j] - mean) ** 2
+    std = math.sqrt(ss / (n + 1))
+    for j in range(n + 1):
+        if np.sign(rates[j]) != np.sign(mean):
+            return False
+    return std < 0.5 * abs(mean)
