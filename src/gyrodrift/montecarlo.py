@@ -304,9 +304,9 @@ def _one_line(err: BaseException) -> str:
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
-def _row(case_family, seed, method, scenario, duration_s, **values) -> dict:
+def _row(family, seed, method, scenario, duration_s, **values) -> dict:
     row = {
-        "family": case_family, "seed": int(seed), "method": method, "scenario": scenario,
+        "family": family, "seed": int(seed), "method": method, "scenario": scenario,
         "duration_s": float(duration_s), "heading_rms_deg": math.nan, "heading_max_deg": math.nan,
         "bias_rms_dps": math.nan, "status": "ok", "error": "",
     }
