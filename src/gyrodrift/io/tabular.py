@@ -22,6 +22,7 @@ reading options (:func:`_csv_convert_options`) and the CSV formatting
 
 from __future__ import annotations
 
+import codecs
 import functools
 import gzip
 import io
@@ -285,20 +286,38 @@ def _check_input_path(path: Path) -> None:
         )
 
 
+def _read_error(path, exc: OSError) -> LogFormatError:
+    """The error for an input file the operating system cannot read."""
+    reason = exc.strerror or type(exc).__name__
+    return LogFormatError(_message(str(path), f"cannot read the input file ({reason})", "check that it is a readable file"))
+
+
 def _read_bytes(path: Path) -> bytes:
     """Read the whole file, turning OS errors into one-line :class:`LogFormatError`."""
     try:
         return path.read_bytes()
     except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
-        raise LogFormatError(
-            _message(str(path), f"cannot read the input file ({reason})", "check that it is a readable file")
-        ) from exc
+        raise _read_error(path, exc) from exc
 
 
 def _empty_file_error(name: str, advice: str) -> LogFormatError:
     """The error for a file with no content at all."""
     return LogFormatError(_message(name, "file is empty", advice))
+
+
+def _gzip_error(name: str, exc: Exception) -> LogFormatError:
+    """The error for a file that starts like gzip but does not decompress."""
+    return LogFormatError(
+        _message(
+            name,
+            f"is not a valid gzip file ({_one_line(str(exc))})",
+            "re-compress the CSV with gzip or give the uncompressed .csv",
+        )
+    )
+
+
+#: What decompressing a broken gzip file raises.
+_GZIP_ERRORS = (OSError, EOFError, zlib.error)
 
 
 def _decompress_if_gzip(data: bytes, name: str) -> bytes:
@@ -307,21 +326,20 @@ def _decompress_if_gzip(data: bytes, name: str) -> bytes:
         return data
     try:
         return gzip.decompress(data)
-    except (OSError, EOFError, zlib.error) as exc:
-        raise LogFormatError(
-            _message(
-                name,
-                f"is not a valid gzip file ({_one_line(str(exc))})",
-                "re-compress the CSV with gzip or give the uncompressed .csv",
-            )
-        ) from exc
+    except _GZIP_ERRORS as exc:
+        raise _gzip_error(name, exc) from exc
 
 
-def _check_csv_text(data: bytes, name: str) -> None:
-    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text."""
+def _check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=None, final: bool = True) -> None:
+    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text.
+
+    For text checked piece by piece (chunked reading), ``lines_before`` counts the
+    ``\n`` before ``data`` and ``decoder`` (a UTF-8 incremental decoder) carries an
+    unfinished character from one piece to the next; ``final`` marks the last piece.
+    """
     nul = data.find(b"\x00")
     if nul >= 0:
-        line = data.count(b"\n", 0, nul) + 1
+        line = lines_before + data.count(b"\n", 0, nul) + 1
         raise LogFormatError(
             _message(
                 name,
@@ -330,14 +348,19 @@ def _check_csv_text(data: bytes, name: str) -> None:
                 where=f"line {line}",
             )
         )
+    if decoder is None:
+        decoder = codecs.getincrementaldecoder("utf-8")()
+    elif not decoder.getstate()[0] and data.isascii() and not final:
+        return  # the usual case, without decoding
     try:
-        data.decode("utf-8")
+        decoder.decode(data, final)
     except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
+        pos = exc.start - (len(exc.object) - len(data))  # in ``data``; < 0: in the piece before
+        line = lines_before + data.count(b"\n", 0, max(pos, 0)) + 1
         raise LogFormatError(
             _message(
                 name,
-                f"byte 0x{data[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
+                f"byte 0x{exc.object[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
                 "export or re-save the log as UTF-8 comma-separated text",
                 where=f"line {line}",
             )
@@ -363,6 +386,13 @@ def _csv_header_names(line: bytes) -> list[str]:
     return list(header.column_names)
 
 
+def _numeric_raw_names(names, column_map: Mapping[str, str]) -> set[str]:
+    """Header names (as in the file) of the columns that become numeric contract columns."""
+    new_name = {old: new for new, old in column_map.items()}
+    numeric = set(_NUMERIC_COLS)
+    return {raw for raw in names if new_name.get(raw.strip(), raw.strip()) in numeric}
+
+
 def _csv_convert_options(
     names, column_map: Mapping[str, str], *, numbers_as_text: bool, column_types: Mapping[str, pa.DataType] | None = None
 ) -> pa_csv.ConvertOptions:
@@ -375,10 +405,8 @@ def _csv_convert_options(
     whichever way its column was read. ``column_types`` pins the types of other columns
     (by header name); the rest are inferred by pyarrow.
     """
-    new_name = {old: new for new, old in column_map.items()}
-    numeric = set(_NUMERIC_COLS)
     kind = pa.string() if numbers_as_text else pa.float64()
-    types = {raw: kind for raw in names if new_name.get(raw.strip(), raw.strip()) in numeric}
+    types = {raw: kind for raw in _numeric_raw_names(names, column_map)}
     types.update(column_types or {})
     return pa_csv.ConvertOptions(column_types=types, strings_can_be_null=True)
 
