@@ -134,10 +134,12 @@ class _CsvText(io.RawIOBase):
     def read(self, size: int = -1) -> bytes:
         if size is None or size < 0:
             size = _READ_PIECE_BYTES
+        if not self._started:  # the first piece is large enough to hold a byte-order mark
+            self._ahead = self._next_piece(max(size, _READ_PIECE_BYTES))
         if self._ahead:
             out, self._ahead = self._ahead[:size], self._ahead[size:]
             return out
-        return self._next_piece(max(size, 1) if self._started else max(size, _READ_PIECE_BYTES))
+        return self._next_piece(max(size, 1))
 
     def readinto(self, buffer) -> int:
         data = self.read(len(buffer))
@@ -291,9 +293,7 @@ class _CsvBatches:
                 try:
                     reader = pa_csv.open_csv(
                         text,
-                        read_options=pa_csv.ReadOptions(
-                            use_threads=False, block_size=self._block_size, skip_rows_after_names=delivered
-                        ),
+                        read_options=pa_csv.ReadOptions(use_threads=False, block_size=self._block_size),
                         parse_options=pa_csv.ParseOptions(invalid_row_handler=on_invalid_row),
                         convert_options=tabular._csv_convert_options(
                             self._names, self._renames, numbers_as_text=numbers_as_text, column_types=self._pinned
@@ -304,7 +304,13 @@ class _CsvBatches:
                     for field in reader.schema:
                         if field.name not in numeric:
                             self._pinned.setdefault(field.name, field.type)
+                    skip = delivered  # rows handed out before reopening (skip_rows_after_names would count blank lines)
                     for batch in reader:
+                        if skip:
+                            dropped = min(skip, batch.num_rows)
+                            batch, skip = batch.slice(dropped), skip - dropped
+                            if not batch.num_rows:
+                                continue
                         delivered += batch.num_rows
                         yield batch
                     return
