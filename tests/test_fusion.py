@@ -1,0 +1,110 @@
+"""The fused heading and the heading standard deviations (gyrodrift.fusion)."""
+
+import numpy as np
+import pytest
+
+from conftest import synthetic_log
+from gyrodrift import _fusion_kernels
+from gyrodrift.compensate import compensate
+from gyrodrift.conventions import wrap_180
+from gyrodrift.errors import ConfigError
+from gyrodrift.fusion import FusionConfig, FusionState, fuse_rows
+
+
+def rms(x):
+    x = np.asarray(x, dtype=float)
+    return float(np.sqrt(np.mean(x[np.isfinite(x)] ** 2)))
+
+
+def test_perfect_sensors_give_the_true_heading():
+    t = np.arange(0.0, 60.0, 0.1)
+    heading = np.mod(40.0 + 3.0 * t, 360.0)  # a steady 3 deg/s turn, across the 0/360 seam
+    compass = np.where(np.arange(t.size) % 5 == 0, heading, np.nan)
+    h, sd, gsd = fuse_rows(t, np.full(t.size, 3.0), compass, np.ones(t.size, bool), np.zeros(t.size))
+    np.testing.assert_allclose(wrap_180(h - heading), 0.0, atol=1e-9)
+    assert (h >= 0).all() and (h < 360).all()
+
+
+def test_before_the_first_compass_sample_there_is_no_fused_heading():
+    t = np.arange(0.0, 10.0, 0.1)
+    compass = np.full(t.size, np.nan)
+    compass[50:] = 10.0
+    h, sd, gsd = fuse_rows(t, np.zeros(t.size), compass, np.ones(t.size, bool), np.full(t.size, 0.01))
+    assert np.isnan(h[:50]).all() and np.isnan(sd[:50]).all() and np.isnan(gsd[:50]).all()
+    assert np.isfinite(h[50:]).all()
+
+
+def test_an_outlier_is_refused_and_a_refused_row_is_not_used():
+    """A single 40-deg compass spike fails the innovation test; a row marked not allowed
+    (magnetic refusal) is ignored whatever it says."""
+    t = np.arange(0.0, 100.0, 0.1)
+    compass = np.where(np.arange(t.size) % 10 == 0, 100.0, np.nan)
+    compass[500] = 140.0
+    allow = np.ones(t.size, bool)
+    h, sd, _ = fuse_rows(t, np.zeros(t.size), compass, allow, np.full(t.size, 0.001))
+    assert abs(h[500] - 100.0) < 1e-6
+    compass[600] = 101.0  # a plausible value, but refused by the gates
+    allow[600] = False
+    h2, _, _ = fuse_rows(t, np.zeros(t.size), compass, allow, np.full(t.size, 0.001))
+    assert abs(h2[600] - h2[599]) < 1e-12
+
+
+def test_standard_deviations_behave():
+    """σ of the gyro heading never shrinks; σ of the fused heading shrinks at compass updates
+    and grows between them."""
+    log = synthetic_log(duration_s=600.0, gyro_noise_dps=0.05, compass_noise_deg=0.5, seed=4)
+    out = compensate(log)
+    gsd = out["heading_sd"].to_numpy()
+    ok = np.isfinite(gsd)
+    assert (np.diff(gsd[ok]) >= -1e-12).all()
+    fsd = out["heading_fused_sd"].to_numpy()
+    has = np.isfinite(out["compass_heading"].to_numpy())
+    step = np.diff(fsd)
+    assert (step[~has[1:] & np.isfinite(step)] >= 0).all()
+    assert (step[has[1:] & np.isfinite(step)] < 0).any()
+
+
+def test_fused_heading_beats_both_sensors_on_a_turning_noisy_log():
+    """A log that starts still then sways, with a noisy compass, a noisy gyro with a drift the
+    filter learns, and a 30-deg interference window: the fused heading is closer to the truth
+    than the compass and than the gyro heading."""
+    log = synthetic_log(duration_s=1800.0, gyro_noise_dps=0.2, compass_noise_deg=1.0, seed=8,
+                        drift_dps=lambda t, T: 0.02 * T - 0.3,
+                        heading_deg=lambda t: 50.0 + 40.0 * np.sin(2 * np.pi * np.maximum(t - 60.0, 0.0) / 300.0))
+    window = (log["t"] > 900) & (log["t"] < 1000)
+    log.loc[window, "heading"] = np.mod(log.loc[window, "heading"] + 30.0, 360.0)
+    out = compensate(log)
+    truth = log["ref_heading"].to_numpy()
+    fused = rms(wrap_180(out["heading_fused"].to_numpy() - truth))
+    gyro = rms(wrap_180(out["heading"].to_numpy() - truth))
+    compass = rms(wrap_180(out["compass_heading"].to_numpy() - truth))
+    assert fused < 0.8 * min(gyro, compass), (fused, gyro, compass)
+
+
+def test_row_by_row_equals_batch_and_python_equals_compiled():
+    rng = np.random.default_rng(0)
+    n = 2000
+    t = np.cumsum(rng.uniform(0.005, 0.02, n))
+    rate = rng.normal(0, 2, n)
+    compass = np.where(rng.random(n) < 0.2, rng.uniform(0, 360, n), np.nan)
+    allow = rng.random(n) < 0.9
+    sd = rng.uniform(0.001, 0.05, n)
+    cfg = FusionConfig()
+    batch = FusionState(cfg, 0.04).rows(t, rate, compass, allow, sd)
+    one = FusionState(cfg, 0.04)
+    rows = np.array([one.row(*args) for args in zip(t, rate, compass, allow, sd)])
+    for k in range(3):
+        assert np.array_equal(rows[:, k], batch[k], equal_nan=True)
+    py = getattr(_fusion_kernels.fuse_row, "py_func", None)
+    if py is not None:  # compiled: the plain-Python function gives the same bits
+        st = np.zeros(_fusion_kernels.N_STATE)
+        vec = cfg.vector(0.04)
+        rows_py = np.array([py(st, *args, vec) for args in zip(t, rate, compass, allow, sd)])
+        assert np.array_equal(rows_py, rows, equal_nan=True)
+
+
+def test_settings_are_checked():
+    with pytest.raises(ConfigError, match="heading_sigma_deg"):
+        FusionConfig(heading_sigma_deg=0.0)
+    with pytest.raises(ConfigError, match="nis_gate"):
+        FusionConfig(nis_gate=float("nan"))
