@@ -288,15 +288,16 @@ def test_nul_line_counted_in_the_whole_file(tmp_path):
     assert "line 3002" in msg
 
 
-def test_pass_through_type_change_asks_for_column_types(tmp_path):
-    rows = [f"{i},0.5,20,1,{i}" for i in range(300)]
-    rows[250] = "250,0.5,20,1,2.5"
+@pytest.mark.parametrize(("first", "later", "kind"), [("{i}", "2.5", "float64"), ("", "late", "string")])
+def test_pass_through_type_change_asks_for_column_types(tmp_path, first, later, kind):
+    rows = [f"{i},0.5,20,1,{first.format(i=i)}" for i in range(300)]
+    rows[250] = f"250,0.5,20,1,{later}"
     path = _write(tmp_path, "t,gyro_z,temp,heading,count\n" + "\n".join(rows) + "\n", "pt.csv")
     with pytest.raises(LogFormatError) as info:
         _chunks(path, chunk_rows=64)
     msg = str(info.value)
-    assert "pt.csv: line 252, column 'count'" in msg and "'2.5'" in msg and "column_types" in msg
-    parts = _chunks(path, chunk_rows=64, column_types={"count": "float64"})
+    assert "pt.csv: line 252, column 'count'" in msg and repr(later) in msg and "column_types" in msg
+    parts = _chunks(path, chunk_rows=64, column_types={"count": kind})
     pd.testing.assert_frame_equal(pd.concat(parts), read_log(path), check_exact=True)
 
 

@@ -691,7 +691,7 @@ def _numeric_column(series: pd.Series, col: str, src: _Source) -> np.ndarray:
 
 def _convert_numeric(frame: pd.DataFrame, src: _Source) -> pd.DataFrame:
     """Convert every numeric contract column to float64 and reject inf values."""
-    out = frame.copy()
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
     for col in _NUMERIC_COLS:
         if col not in out.columns:
             continue
@@ -828,7 +828,7 @@ def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
     """Multiply the gyro rate columns (and ``true_bias_z``) by ``scale``."""
     if scale == 1.0:
         return frame
-    out = frame.copy()
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
     for col in _GYRO_COLS + (TRUE_BIAS_Z,):
         if col in out.columns:
             out[col] = out[col] * scale
@@ -837,7 +837,7 @@ def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
 
 def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
     """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
-    out = frame.copy()
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
     for col in _HEADING_COLS:
         if col in out.columns:
             out[col] = wrap_360(90.0 - out[col].to_numpy())
@@ -849,7 +849,7 @@ def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
 
 def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
     """Wrap ``heading`` and ``ref_heading`` to [0, 360) deg (NaN stays NaN)."""
-    out = frame.copy()
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
     for col in _HEADING_COLS:
         if col in out.columns:
             out[col] = wrap_360(out[col].to_numpy())
