@@ -46,6 +46,7 @@ columns peaked at about 470 MiB of RSS with 1 000 000-row chunks and 260 MiB wit
 
 from __future__ import annotations
 
+import codecs
 import gzip
 import io
 import re
@@ -100,7 +101,7 @@ class _CsvText(io.RawIOBase):
         except OSError as exc:
             raise tabular._read_error(path, exc) from exc
         self._source = gzip.GzipFile(fileobj=self._file, mode="rb") if self._gzip else self._file
-        self._decoder = tabular.codecs.getincrementaldecoder("utf-8")()
+        self._decoder = codecs.getincrementaldecoder("utf-8")()
         self._lines_before = 0  # "\n" handed out so far, for error lines
         self._ahead = b""  # read and checked, not handed out yet
         self._started = False
@@ -281,6 +282,13 @@ class _CsvBatches:
             where=f"line {self.src.line_of(int(found['row']))}, column {name!r}",
         )
 
+    def _other_column_failed(self, exc: pa.ArrowInvalid) -> bool:
+        """True if pyarrow names a cell of a column that is not a number column."""
+        found = _CONVERSION_ERROR.search(str(exc))
+        if found is None or int(found["col"]) >= len(self._names):
+            return False
+        return self._names[int(found["col"])] not in tabular._numeric_raw_names(self._names, self._renames)
+
     def __iter__(self) -> Iterator[pa.RecordBatch]:
         numbers_as_text = False
         delivered = 0  # data rows handed out
@@ -321,7 +329,7 @@ class _CsvBatches:
                 except pa.ArrowInvalid as exc:
                     if ragged:
                         raise tabular._ragged_row_error(self.src, ragged[0]) from exc
-                    if not numbers_as_text:
+                    if not numbers_as_text and not self._other_column_failed(exc):
                         numbers_as_text = True  # a number column holds text: read on from this row as text
                         continue
                     raise self._type_error(exc) from exc
