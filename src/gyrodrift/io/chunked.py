@@ -591,7 +591,8 @@ def iter_log_chunks(
     Raises
     ------
     LogFormatError
-        As ``read_log``, while the chunks are read (errors that need the whole file,
+        As ``read_log``: problems of the file as a whole (missing, empty, no header) at
+        the call, the others while the chunks are read (those that need the whole file,
         such as compass columns empty in every row, after the last chunk); also a CSV
         cell that does not fit the type the first block gave its pass-through column.
     ConfigError
