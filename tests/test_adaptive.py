@@ -62,3 +62,70 @@ def test_slope_measurement_streaming_equals_batch_and_is_less_noisy():
     slope = compensate(noisy, CompensatorConfig(stack_depth=1, measurement="slope")).attrs["measurements"]
     assert slope["m"].std() < 0.5 * ends["m"].std()
     assert slope["m"].mean() == pytest.approx(0.3, abs=0.01)
+
+
+# ------------------------------------------------------------------ issue 6 fixes
+
+from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
+
+
+def still_log(heading_deg=lambda t: np.full_like(t, 100.0), seed=4):
+    """Motionless unit (or a given heading), drift following a quadratic in temperature."""
+    return synthetic_log(
+        duration_s=1800.0, fs_hz=10.0, compass_hz=10.0, gyro_noise_dps=0.1, compass_noise_deg=0.5, seed=seed,
+        drift_dps=lambda t, T: 0.02 * T - 0.3 + 0.001 * (T - 30) ** 2, heading_deg=heading_deg,
+    )
+
+
+def test_default_adaptive_streaming_equals_batch():
+    """ZARU and one measurement per interval: the streaming compensator gives the same bits."""
+    cfg = CompensatorConfig(estimator="adaptive")
+    for log in (complex_log(), still_log()):
+        batch = compensate(log, cfg, engine="reference")
+        assert_same(batch, stream(log, cfg))
+
+
+def test_zaru_used_when_still_and_not_fooled_by_a_slow_turn():
+    cfg = CompensatorConfig(estimator="adaptive")
+    still = compensate(still_log(), cfg).attrs["measurements"]
+    # A ZARU measurement has the gyro's variance N²/Δt (plus a tiny slope term), far below a compass difference.
+    compass_r = 2 * cfg.compass_sigma_deg**2 / cfg.update_interval_s**2
+    assert (still["r"] < 0.1 * compass_r).mean() > 0.8
+    slow = compensate(still_log(heading_deg=lambda t: 100.0 + 0.05 * t), cfg).attrs["measurements"]
+    assert (slow["r"][3:] < 0.1 * compass_r).sum() == 0  # after init: a 0.05 deg/s turn: never taken for stillness
+    # ... and the drift estimate on the still log beats the compass-only one.
+    log = still_log()
+    err = {}
+    for zaru in (True, False):
+        out = compensate(log, CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru=zaru)))
+        err[zaru] = float(np.sqrt(np.mean((out["bias_z"] - log["true_bias_z"]).to_numpy()[3000:] ** 2)))
+    assert err[True] < 0.5 * err[False]
+
+
+def test_one_measurement_per_interval_unless_stacked():
+    log = still_log()
+    seen = {}
+    for stacked in (False, True):
+        est = make_estimator("adaptive", settings=AdaptiveConfig(zaru=False, stacked=stacked))
+        sizes = []
+        update = est.update
+        est.update = lambda obs, _u=update: (sizes.append(len(obs.y)), _u(obs))[1]
+        compensate(log, CompensatorConfig(estimator="adaptive"), estimator=est, engine="reference")
+        seen[stacked] = sizes
+    assert seen[False][0] == 3 and set(seen[False][1:]) == {1}  # init sub-windows, then one each
+    assert set(seen[True][3:]) == {3}
+
+
+def test_adaptive_settings_validated_and_ablated():
+    with pytest.raises(ConfigError, match="q_sd"):
+        AdaptiveConfig(q_sd=(1e-3, -1.0, 1e-3))
+    with pytest.raises(ConfigError, match="zaru_window_s"):
+        AdaptiveConfig(zaru_window_s=0.0)
+    with pytest.raises(ConfigError, match="AdaptiveConfig"):
+        CompensatorConfig(adaptive={"zaru": False})
+    base = AdaptiveConfig()
+    assert base.ablated("zaru").zaru is False and base.ablated("one_measurement").stacked is True
+    assert base.ablated("fading").fading is False and base.ablated("process_noise").q_sd is None
+    with pytest.raises(ConfigError, match="unknown fix"):
+        base.ablated("magic")
+    assert make_estimator("adaptive", settings=base.ablated("fading")).lambda_max == 1.0

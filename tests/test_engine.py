@@ -8,14 +8,23 @@ pytest.importorskip("numba")
 
 from conftest import synthetic_log  # noqa: E402
 from gyrodrift import _engine  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig, _compass_arrays, _fast_frame, compensate  # noqa: E402
+from gyrodrift.compensate import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
-from gyrodrift.estimators import KalmanConfig, make_estimator  # noqa: E402
+from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, make_estimator  # noqa: E402
 from gyrodrift.estimators.kalman import KalmanDrift  # noqa: E402
 from gyrodrift.gating import GateConfig  # noqa: E402
 from test_compensate import complex_log  # noqa: E402
 
 ESTIMATORS = ("stkf", "stkf-s1", "kf", "adaptive")
+
+#: The ``adaptive`` settings the compiled engine implements: no stationarity updates,
+#: stacked measurements (the defaults run on the reference engine).
+COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True)
+
+
+def config(estimator: str, **kw) -> CompensatorConfig:
+    """Settings of ``estimator`` that the compiled engine runs."""
+    return CompensatorConfig(estimator=estimator, adaptive=COMPILED_ADAPTIVE, **kw)
 
 
 def assert_close(fast: pd.DataFrame, ref: pd.DataFrame, atol: float = 1e-8) -> None:
@@ -38,7 +47,7 @@ def assert_close(fast: pd.DataFrame, ref: pd.DataFrame, atol: float = 1e-8) -> N
 def test_fast_engine_equals_reference(estimator, raw_mag):
     """Turns, an interference window, a compass outage, empty cells, a time gap, field anomaly."""
     log = complex_log(raw_mag)
-    cfg = CompensatorConfig(estimator=estimator)
+    cfg = config(estimator)
     fast = compensate(log, cfg, engine="fast")
     ref = compensate(log, cfg, engine="reference")
     assert_close(fast, ref)
@@ -63,7 +72,7 @@ def test_fast_engine_lock_out_recovery_and_paper_gate():
 def feed_in_chunks(log: pd.DataFrame, cfg: CompensatorConfig, sizes, estimator="stkf"):
     t = log["t"].to_numpy(float)
     heading, norm, dip = _compass_arrays(t.size, log["heading"].to_numpy(float), None, None)
-    eng = _engine.ChunkEngine(cfg, make_estimator(estimator, config=cfg.kalman), "chunks")
+    eng = _engine.ChunkEngine(cfg, build_estimator(cfg), "chunks")
     parts, start = [], 0
     for size in sizes:
         sl = slice(start, start + size)
@@ -83,7 +92,7 @@ def test_chunks_of_any_size_give_identical_results(estimator):
     """Chunk boundaries inside the init window and at single rows, empty cells held across
     chunks, a 5-s turn window that makes the ring grow: bit for bit the same as one chunk."""
     log = complex_log(False)
-    cfg = CompensatorConfig(estimator=estimator, gate=GateConfig(turn_window_s=5.0))
+    cfg = config(estimator, gate=GateConfig(turn_window_s=5.0))
     whole, m_whole, est_whole = feed_in_chunks(log, cfg, [len(log)], estimator)
     rng = np.random.default_rng(3)
     sizes = [1, 1, 7, 250, 1] + list(rng.integers(1, 3000, size=200)) + [len(log)]
@@ -118,7 +127,12 @@ def test_engine_choice():
 
     cfg = CompensatorConfig()
     assert _engine.supports(cfg, make_estimator("stkf", config=KalmanConfig()))
-    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
+    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig(), settings=COMPILED_ADAPTIVE))
+    # Stationarity updates and unstacked measurements are not compiled: the reference engine runs them.
+    assert not _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
+    assert not _engine.supports(cfg, make_estimator("adaptive", settings=AdaptiveConfig(zaru=False)))
+    assert _engine.supports(CompensatorConfig(stack_depth=1),
+                            make_estimator("adaptive", settings=AdaptiveConfig(zaru=False)))
     assert not _engine.supports(cfg, Watched(KalmanConfig()))
     assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("stkf"))
     assert not _engine.supports(cfg, make_estimator("lsm"))

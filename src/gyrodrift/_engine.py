@@ -44,7 +44,15 @@ def supports(config, estimator) -> bool:
     """
     if config.measurement != "endpoints":
         return False
+    from gyrodrift.estimators.adaptive import AdaptiveConfig
     from gyrodrift.estimators.base import LinearDrift
+
+    settings = getattr(estimator, "settings", None)
+    if isinstance(settings, AdaptiveConfig):
+        # Not compiled: stationarity (ZARU) updates, and one measurement per interval
+        # where the compensator would stack several; the reference engine runs these.
+        if settings.zaru or (not settings.stacked and config.stack_depth > 1):
+            return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)
               for name in ("update", "hold", "engine_state", "drift")}

@@ -68,11 +68,11 @@ from gyrodrift.conventions import (
     wrap_360,
 )
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
-from gyrodrift.estimators import KalmanConfig, Observation, make_estimator
+from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, Observation, make_estimator
 from gyrodrift.gating import GateConfig
 from gyrodrift.model import TempRateConfig, TempRateTracker, temp_rate
 
-__all__ = ["CompensatorConfig", "CompensatedSample", "Compensator", "compensate", "compensate_arrays"]
+__all__ = ["CompensatorConfig", "build_estimator", "CompensatedSample", "Compensator", "compensate", "compensate_arrays"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -104,6 +104,10 @@ class CompensatorConfig:
         How T' is computed (see :mod:`gyrodrift.model`).
     gate : GateConfig
         Thresholds of the aiding gates (see :mod:`gyrodrift.gating`).
+    adaptive : AdaptiveConfig
+        Settings of the ``adaptive`` estimator, each fix of issue 6 switchable
+        (:class:`gyrodrift.estimators.AdaptiveConfig`); used only when ``estimator`` is
+        ``adaptive``.
     """
 
     update_interval_s: float = 10.0
@@ -116,6 +120,7 @@ class CompensatorConfig:
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     temp_rate: TempRateConfig = field(default_factory=TempRateConfig)
     gate: GateConfig = field(default_factory=GateConfig)
+    adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
 
     def __post_init__(self):
         for name in ("update_interval_s", "init_s", "compass_sigma_deg", "gyro_noise_dps_rthz"):
@@ -128,13 +133,22 @@ class CompensatorConfig:
             raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
         if self.init_s < self.stack_depth * 0.1:
             raise ConfigError(f"init_s={self.init_s} s is too short for {self.stack_depth} sub-windows")
+        if not isinstance(self.adaptive, AdaptiveConfig):
+            raise ConfigError(f"adaptive must be an AdaptiveConfig, got {type(self.adaptive).__name__}")
         try:
-            make_estimator(self.estimator, config=self.kalman)  # validates the name
+            build_estimator(self)  # validates the name
         except TypeError:
             raise ConfigError(
                 f"estimator {self.estimator!r} cannot be built from settings alone; "
                 "pass an instance as compensate(..., estimator=...)"
             ) from None
+
+
+def build_estimator(cfg: "CompensatorConfig"):
+    """A fresh estimator of ``cfg.estimator`` with its settings (``adaptive`` gets ``cfg.adaptive``)."""
+    if cfg.estimator == "adaptive":
+        return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.adaptive)
+    return make_estimator(cfg.estimator, config=cfg.kalman)
 
 
 @dataclass(frozen=True)
@@ -311,6 +325,14 @@ class _Aiding:
     def __init__(self, cfg: CompensatorConfig, estimator):
         self.cfg = cfg
         self.estimator = estimator
+        #: The ``adaptive`` estimator's switches (None for every other estimator).
+        self.adaptive: AdaptiveConfig | None = getattr(estimator, "settings", None)
+        if not isinstance(self.adaptive, AdaptiveConfig):
+            self.adaptive = None
+        #: Measurements per update after initialisation: 1 unless stacked as in eq. (3).
+        self.depth = cfg.stack_depth if self.adaptive is None or self.adaptive.stacked else 1
+        #: Compass samples of the last ``zaru_window_s`` (stationarity test).
+        self.window: deque[_Snap] = deque()
         self.stack: deque[_Meas] = deque(maxlen=cfg.stack_depth)
         self.start: _Snap | None = None
         self.sticky: str | None = None
@@ -341,10 +363,19 @@ class _Aiding:
         self.sticky = gating.NO_COMPASS if self.start is None else None
         self.samples = [self.start] if self.start is not None else []
 
+    @property
+    def collects(self) -> bool:
+        """Whether :meth:`add` needs every compass sample (``slope`` measurement or ZARU)."""
+        return self.cfg.measurement == "slope" or (self.adaptive is not None and self.adaptive.zaru)
+
     def add(self, snap: _Snap) -> None:
-        """A compass sample inside the current interval (``slope`` measurement)."""
+        """A compass sample inside the current interval (``slope`` measurement, ZARU)."""
         if self.cfg.measurement == "slope":
             self.samples.append(snap)
+        if self.adaptive is not None and self.adaptive.zaru:
+            self.window.append(snap)
+            while self.window[0].t < snap.t - self.adaptive.zaru_window_s:
+                self.window.popleft()
 
     def display(self) -> str:
         if self.sticky is not None:
@@ -365,7 +396,12 @@ class _Aiding:
                     meas = _slope_measurement(self.samples, self.cfg) or meas
                 if abs(meas.residual_deg) > self.cfg.gate.interference_deg:
                     reason = gating.INTERFERENCE
-        if reason == gating.INTERFERENCE and self.start is not None and end is not None:
+        zaru = None
+        if reason in (None, gating.INTERFERENCE) and self.start is not None and end is not None:
+            zaru = self._zaru_measurement(end)
+        if zaru is not None:  # still: the drift moved, not the heading; no lock-out
+            meas, reason = zaru, None
+        elif reason == gating.INTERFERENCE and self.start is not None and end is not None:
             meas = meas or _compass_measurement(self.start, end, self.cfg)
             if self._drift_not_interference(meas.residual_deg / (end.t - self.start.t)):
                 reason = None
@@ -398,13 +434,52 @@ class _Aiding:
         return bool(np.all(np.sign(rates) == np.sign(mean)) and np.std(rates) < 0.5 * abs(mean))
 
     def _observation(self, t: float, n_new: int) -> Observation:
+        rows = list(self.stack)[: max(n_new, self.depth)]
         return Observation(
             t=t,
-            y=np.array([e.m for e in self.stack]),
-            H=np.array([e.h for e in self.stack]),
-            R=np.diag([e.r for e in self.stack]),
+            y=np.array([e.m for e in rows]),
+            H=np.array([e.h for e in rows]),
+            R=np.diag([e.r for e in rows]),
             n_new=n_new,
         )
+
+    def _zaru_measurement(self, end: _Snap) -> _Meas | None:
+        """Zero-rate measurement of the interval ending at ``end`` when the unit is still, else None.
+
+        Still (see :class:`gyrodrift.estimators.AdaptiveConfig`): over the last
+        ``zaru_window_s`` the compass heading fits a flat line, and the gyro rate between
+        compass samples of this interval varies less than ``still_std_dps``. Then the
+        mean gyro rate is the drift (eq. 1 with zero true rate), with variance
+        ``N²/Δt`` plus the squared standard error of the flat line's slope (a rotation
+        too slow to see).
+        """
+        st = self.adaptive
+        if st is None or not st.zaru:
+            return None
+        win = [s for s in self.window if s.t <= end.t]
+        if len(win) < 10 or end.t - win[0].t < 0.8 * st.zaru_window_s:
+            return None
+        t = np.array([s.t for s in win])
+        d = wrap_180(np.array([s.heading for s in win]) - win[0].heading)
+        tc = t - np.mean(t)
+        sxx = float(np.dot(tc, tc))
+        slope = float(np.dot(tc, d - np.mean(d))) / sxx
+        resid = d - np.mean(d) - slope * tc
+        resid_sd = math.sqrt(float(np.dot(resid, resid)) / max(len(win) - 2, 1))
+        slope_se = resid_sd / math.sqrt(sxx)
+        if resid_sd > st.zaru_resid_k * self.cfg.compass_sigma_deg or abs(slope) > st.zaru_slope_k * slope_se:
+            return None
+        inside = [s for s in win if s.t >= self.start.t]
+        if len(inside) >= 3:
+            ti = np.array([s.t for s in inside])
+            rates = np.diff(np.array([s.I_raw for s in inside])) / np.diff(ti)
+            if float(np.std(rates)) > self.cfg.gate.still_std_dps:
+                return None
+        dt = end.t - self.start.t
+        m = (end.I_raw - self.start.I_raw) / dt
+        h = np.array([(end.I_T - self.start.I_T) / dt, (end.I_Tp - self.start.I_Tp) / dt, 1.0])
+        r = self.cfg.gyro_noise_dps_rthz**2 / dt + slope_se**2
+        return _Meas(m, h, r, 0.0)
 
 
 def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float, source: str):
@@ -477,7 +552,7 @@ class Compensator:
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream"):
         self.config = config or CompensatorConfig()
         self.source = source
-        est = estimator if estimator is not None else make_estimator(self.config.estimator, config=self.config.kalman)
+        est = estimator if estimator is not None else build_estimator(self.config)
         self._aid = _Aiding(self.config, est)
         self._trate = TempRateTracker(self.config.temp_rate)
         self._buf: list[tuple] = []
@@ -724,7 +799,7 @@ def compensate_arrays(
             f"{source}: the log is {t[-1] - t[0]:.1f} s long; initialisation needs at least "
             f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
         )
-    est = estimator if estimator is not None else make_estimator(cfg.estimator, config=cfg.kalman)
+    est = estimator if estimator is not None else build_estimator(cfg)
     if _use_fast(engine, cfg, est):
         from gyrodrift._engine import ChunkEngine
 
@@ -811,7 +886,7 @@ def compensate_arrays(
             continue
         rows = slice(s, b + 1)
         run(rows)
-        if cfg.measurement == "slope":
+        if aid.collects:
             lo, hi = np.searchsorted(compass_rows, [s, b + 1])
             for i in compass_rows[lo:hi]:
                 aid.add(snap_row(i))

@@ -21,13 +21,14 @@ from gyrodrift.estimators.base import (
     make_estimator,
     register,
 )
-from gyrodrift.estimators.adaptive import AdaptiveKalman
+from gyrodrift.estimators.adaptive import AdaptiveConfig, AdaptiveKalman
 from gyrodrift.estimators.kalman import BiasKalman, KalmanConfig, KalmanDrift, PlainKalmanDrift
 from gyrodrift.estimators.lsq import FixedParams, WindowedLsm, fit_linear_drift
 from gyrodrift.estimators.poly import CubicCalibration, Poly3Calibration, fit_poly3
 
 __all__ = [
     "ESTIMATORS",
+    "AdaptiveConfig",
     "AdaptiveKalman",
     "DriftEstimator",
     "LinearDrift",

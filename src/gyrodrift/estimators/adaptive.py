@@ -21,11 +21,16 @@ Same drift model and states as the paper (eq. 2), same constant-parameter filter
 
 The covariance is bounded as in :mod:`gyrodrift.estimators.kalman` (capped at the
 prior, no fading in outages).
+
+Every change beyond the paper is a switch of :class:`AdaptiveConfig` (issue 6, for the
+ablation); the compensator (:mod:`gyrodrift.compensate`) reads the switches that concern
+its measurements (one measurement per interval, stationarity updates).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -35,7 +40,90 @@ from gyrodrift.estimators._kalman import cap_covariance, correct, predict
 from gyrodrift.estimators.base import LinearDrift, Observation, register
 from gyrodrift.estimators.kalman import KalmanConfig
 
-__all__ = ["AdaptiveKalman"]
+__all__ = ["AdaptiveConfig", "AdaptiveKalman"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class AdaptiveConfig:
+    """Settings of the ``adaptive`` estimator, each fix of issue 6 switchable.
+
+    Attributes
+    ----------
+    stacked : bool
+        Fix 1 off (``True``): the paper's stacked copies of the last ``stack_depth``
+        measurements in y (eq. 3), each measurement used in several updates with its
+        noise counted as new each time. ``False`` (default): one measurement per update
+        interval with its own variance.
+    zaru : bool
+        Fix 4: a zero-rate (stationarity) measurement when the unit is still. The mean
+        gyro rate over the interval then measures the drift with only the gyro's white
+        noise, ``N²/Δt``, about 5 times more precise than a compass difference (eq. 6).
+        Still means: the compass heading over the last ``zaru_window_s`` fits a flat
+        line (slope within ``zaru_slope_k`` of its standard error, scatter within
+        ``zaru_resid_k`` compass sigmas: a slow turn or sway fails this) and the gyro
+        rate between compass samples has a standard deviation below
+        ``GateConfig.still_std_dps``. A still interval is accepted even when the compass
+        and gyro disagree (the drift moved, not the heading).
+    zaru_window_s : float
+        Length of the compass stillness window, s.
+    zaru_slope_k, zaru_resid_k : float
+        Stillness thresholds (see ``zaru``).
+    fading : bool
+        Fix 5: the innovation-based fading factor of Zhou et al. (``False``: λ = 1, a
+        plain Kalman filter with process noise ``q_sd``).
+    lambda_max : float
+        Largest fading factor of one update.
+    rho : float
+        Forgetting of the innovation covariance estimate, 0 < rho < 1.
+    q_sd : tuple of 3 floats, optional
+        Fix 5, per-parameter process noise: random-walk standard deviations of
+        [a (deg/s/degC), b (deg), c' (deg/s, the drift at T_ref)] per update interval.
+        A random-walk ``c'`` follows drift the linear model does not explain
+        (curvature, hysteresis, bias instability) while a and b keep a long memory.
+        None: ``KalmanConfig.q_sd``, shared with the other Kalman estimators. The
+        default was tuned on the ``static`` Monte Carlo family alone (5 seeds, full
+        length; see ``docs/results.md``) and frozen for the others.
+    """
+
+    stacked: bool = False
+    zaru: bool = True
+    zaru_window_s: float = 60.0
+    zaru_slope_k: float = 3.0
+    zaru_resid_k: float = 2.0
+    fading: bool = True
+    lambda_max: float = 20.0
+    rho: float = 0.8
+    q_sd: tuple[float, float, float] | None = (1e-3, 0.05, 3e-3)
+
+    def __post_init__(self):
+        if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
+            raise ConfigError(f"lambda_max must be >= 1, got {self.lambda_max!r}")
+        if not (0.0 < self.rho < 1.0):
+            raise ConfigError(f"rho must be between 0 and 1, got {self.rho!r}")
+        for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ConfigError(f"adaptive setting {name} must be a positive number, got {v!r}")
+        if self.q_sd is not None:
+            try:
+                ok = len(self.q_sd) == 3 and all(math.isfinite(float(e)) and float(e) >= 0 for e in self.q_sd)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
+
+    #: The fixes that :meth:`ablated` switches off one at a time, by name.
+    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "zaru", "fading", "process_noise")
+
+    def ablated(self, fix: str) -> "AdaptiveConfig":
+        """These settings with one fix of :attr:`FIXES` switched off."""
+        from dataclasses import replace
+
+        off = {"one_measurement": {"stacked": True}, "zaru": {"zaru": False}, "fading": {"fading": False},
+               "process_noise": {"q_sd": None}}
+        if fix not in off:
+            raise ConfigError(f"unknown fix {fix!r}; choose from: {', '.join(self.FIXES)}")
+        return replace(self, **off[fix])
 
 
 @register
@@ -48,27 +136,34 @@ class AdaptiveKalman(LinearDrift):
         Prior (``x0`` absolute [a, b, c], ``p0_sd`` of [a, b, c'], cap ``max_sd``) and
         process noise ``q_sd`` of [a, b, c'] per update interval, shared with the other
         Kalman estimators; ``fading`` is ignored (the fading factor is adaptive).
-    lambda_max : float
-        Largest fading factor of one update.
-    rho : float
-        Forgetting of the innovation covariance estimate, 0 < rho < 1.
+    settings : AdaptiveConfig
+        The switches of this estimator (its own ``q_sd`` replaces ``config.q_sd``).
+    lambda_max, rho : float, optional
+        Override ``settings.lambda_max`` and ``settings.rho``.
     """
 
     name: ClassVar[str] = "adaptive"
     causal: ClassVar[bool] = True
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), *, lambda_max: float = 20.0, rho: float = 0.8):
-        if not (math.isfinite(lambda_max) and lambda_max >= 1.0):
-            raise ConfigError(f"lambda_max must be >= 1, got {lambda_max!r}")
-        if not (0.0 < rho < 1.0):
-            raise ConfigError(f"rho must be between 0 and 1, got {rho!r}")
+    def __init__(self, config: KalmanConfig = KalmanConfig(), *, settings: AdaptiveConfig | None = None,
+                 lambda_max: float | None = None, rho: float | None = None):
+        from dataclasses import replace
+
+        settings = settings if settings is not None else AdaptiveConfig()
+        if not isinstance(settings, AdaptiveConfig):
+            raise ConfigError(f"adaptive settings must be an AdaptiveConfig, got {type(settings).__name__}")
+        overrides = {k: v for k, v in (("lambda_max", lambda_max), ("rho", rho)) if v is not None}
+        settings = replace(settings, **overrides) if overrides else settings
+        self.settings = settings
         self.config = config
-        self.lambda_max = float(lambda_max)
-        self.rho = float(rho)
+        self.lambda_max = float(settings.lambda_max) if settings.fading else 1.0
+        self.rho = float(settings.rho)
         self.temp_ref_c: float | None = None
         self._x_abs0 = np.array(config.x0, dtype=float)
         self._z = self._x_abs0.copy()  # [a, b, c'] once T_ref is known
         self._P, self._max_var, self._Q = config.matrices()
+        if settings.q_sd is not None:
+            self._Q = np.diag(np.square(np.array(settings.q_sd, dtype=float)))
         self._V: np.ndarray | None = None
         #: Fading factor of the last update (diagnostics).
         self.last_lambda = 1.0
