@@ -274,13 +274,13 @@ def test_flat_temperature_says_a_and_b_are_not_observable():
     flat = synthetic_log(duration_s=600.0, temp_c=lambda t: np.full_like(t, 40.0), gyro_noise_dps=0.05,
                          compass_noise_deg=0.5)
     out = compensate(flat)
-    assert (out["unobservable"] == "a,b").all()
+    assert (out["unobservable"] == "a+b").all()
     assert not out[list(OUTPUT_COLS[:-1])].isna().any().any()
     ramp = synthetic_log(duration_s=3600.0, gyro_noise_dps=0.05, compass_noise_deg=0.5,
                          temp_c=lambda t: 20 + 30 * np.sin(np.pi * t / 7200.0) ** 2,
                          drift_dps=lambda t, T: 0.02 * T - 0.3)
     out = compensate(ramp, CompensatorConfig(estimator="stkf-s1"))
-    assert out["unobservable"].iloc[0] == "a,b"
+    assert out["unobservable"].iloc[0] == "a+b"
     assert "a" not in out["unobservable"].iloc[-1]  # a temperature span determines a
 
 

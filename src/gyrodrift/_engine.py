@@ -51,7 +51,7 @@ def supports(config, estimator) -> bool:
     if isinstance(settings, AdaptiveConfig):
         # Not compiled: stationarity (ZARU) updates, and one measurement per interval
         # where the compensator would stack several; the reference engine runs these.
-        if settings.zaru or (not settings.stacked and config.stack_depth > 1):
+        if settings.zaru or settings.softening != 1.0 or (not settings.stacked and config.stack_depth > 1):
             return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)
@@ -109,6 +109,9 @@ class ChunkEngine:
         self._acc = np.zeros((64, 5))
         self._accepted: list[np.ndarray] = []
         self._aid = None
+        from gyrodrift.fusion import FusionState
+
+        self._fusion = FusionState(config.fusion, config.gyro_noise_dps_rthz)
 
     # ------------------------------------------------------------------ input
     def _prepare(self, t, g, T, heading, norm, dip):
@@ -152,8 +155,16 @@ class ChunkEngine:
                 return None
             cols = tuple(_concat(c) for c in zip(*self._buf)) if len(self._buf) > 1 else self._buf[0]
             self._buf = None
-            return self._initialise(*cols)
-        return self._run(*cols, i0=0, out=None)
+            return self._fuse(self._initialise(*cols))
+        return self._fuse(self._run(*cols, i0=0, out=None))
+
+    def _fuse(self, out: dict) -> dict:
+        """The fused heading and the heading σ columns (:mod:`gyrodrift.fusion`)."""
+        C = importlib.import_module("gyrodrift.compensate")
+        out["heading_fused"], out["heading_fused_sd"], out["heading_sd"] = self._fusion.rows(
+            out["t"], out["rate_z"], out["compass_heading"], C.fusion_allowed(out["reason"]), out["bias_sd"]
+        )
+        return out
 
     def _initialise(self, t, g, T, Tp, heading, gap, norm, dip) -> dict:
         C = importlib.import_module("gyrodrift.compensate")  # the module; the package exports a function of that name

@@ -5,19 +5,17 @@ from __future__ import annotations
 import argparse
 import sys
 
-import pandas as pd
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
 from gyrodrift import __version__
-from gyrodrift._cliargs import add_input_options, read_input
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift._cliargs import add_input_options, parse_map, read_input
+from gyrodrift.compensate import CompensatorConfig
 from gyrodrift.config import load_config
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import ESTIMATORS
-from gyrodrift.io import check_output_path, read_log, write_table
-from gyrodrift.metrics import accuracy
+from gyrodrift.io import check_output_path
 
 __all__ = ["main"]
 
@@ -40,9 +38,11 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (deg/s/degC), b (deg), c (deg/s) of the drift model a*T + b*T' + c, update
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
-  compass_heading, unobservable (a, b or a,b: parameters not yet determined by
+  compass_heading, unobservable (a, b or a+b: parameters not yet determined by
   the data, e.g. at a flat temperature), bias_sd (deg/s, standard deviation of
-  bias_z), then the other input columns.
+  bias_z), heading_fused (deg [0,360), gyro and compass combined),
+  heading_fused_sd and heading_sd (deg, standard deviations of heading_fused and
+  of heading), then the other input columns.
 """
 
 
@@ -84,37 +84,6 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _read_summary(log, path) -> str:
-    if log.attrs.get("summary"):  # ULog and ROS readers say which topics and instances they used
-        return f"read {path}: {log.attrs['summary']}"
-    dur = float(log["t"].iloc[-1] - log["t"].iloc[0])
-    rate = (len(log) - 1) / dur if dur > 0 else float("nan")
-    temp = log["temp"]
-    return (
-        f"read {path}: {len(log)} rows, {dur:.1f} s at {rate:.1f} Hz, "
-        f"temperature {temp.min():.2f} to {temp.max():.2f} degC, compass from {log.attrs.get('compass', '?')}"
-    )
-
-
-def _result_lines(out) -> list[str]:
-    gated = out.loc[out["gated"] == 1, "gate_reason"].value_counts()
-    shares = ", ".join(f"{k} {100 * v / len(out):.1f} %" for k, v in gated.items()) or "never"
-    a, b, c = out[["a", "b", "c"]].iloc[-1]
-    lines = [
-        f"{int(out['update'].sum())} filter updates; compass aiding refused: {shares} of rows",
-        f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
-    ]
-    acc = accuracy(out)
-    if acc.bias_rms is not None:
-        lines.append(f"drift error RMS vs true_bias_z: raw {acc.bias_rms_raw:.4f} deg/s -> compensated {acc.bias_rms:.4f} deg/s")
-    if acc.heading_rms is not None:
-        lines.append(
-            f"heading error vs ref_heading: raw gyro RMS {acc.heading_rms_raw:.2f} deg (max {acc.heading_max_raw:.2f}) "
-            f"-> compensated RMS {acc.heading_rms:.2f} deg (max {acc.heading_max:.2f})"
-        )
-    return lines
-
-
 def _bar(desc: str):
     from gyrodrift._progress import progress_iter
 
@@ -124,20 +93,30 @@ def _bar(desc: str):
 def _cmd_compensate(args) -> int:
     from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
 
+    from gyrodrift.pipeline import compensate_file
+
     check_output_path(args.input, args.output)
     cfg = _config(args)
     if args.profile:
         cfg = warm_config(load_profile(args.profile), cfg)
-    log = read_input(args.input, args)
-    out = compensate(log, cfg, source=str(args.input), progress=_bar("compensating"))
-    write_table(out, args.output)
+    stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
+                            progress=_bar("compensating"))
     if args.save_profile:
-        save_profile(profile_from_run(out), args.save_profile)
+        save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
-        print("\n".join([_read_summary(log, args.input), *_result_lines(out), f"wrote {args.output}"]))
+        print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
         if args.save_profile:
             print(f"saved device profile {args.save_profile}")
     return 0
+
+
+def _read_options(args) -> dict:
+    """The read_log options of :func:`gyrodrift._cliargs.add_input_options`."""
+    return {
+        "fmt": args.format, "gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
+        "instance": args.instance, "mag_instance": args.mag_instance, "imu_topic": args.imu_topic,
+        "temp_topic": args.temp_topic, "mag_topic": args.mag_topic,
+    }
 
 
 def demo_log_path() -> Path:
@@ -146,16 +125,17 @@ def demo_log_path() -> Path:
 
 
 def _cmd_demo(args) -> int:
+    from gyrodrift.pipeline import compensate_file
+
     path = demo_log_path()
     check_output_path(path, args.output)
-    log = read_log(path)
     print(
         "gyrodrift demo: a simulated motionless gyro heated 23 -> 58 degC and cooled, with a "
         "10 Hz compass and three magnetic-interference windows (gyrodrift/data/README.md)."
     )
-    out = compensate(log, _config(args), source=path.name)
-    write_table(out, args.output)
-    print("\n".join([_read_summary(log, path.name), *_result_lines(out), f"wrote {args.output}"]))
+    stats = compensate_file(path, args.output, _config(args))
+    stats.source = path.name
+    print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
     return 0
 
 
@@ -183,6 +163,8 @@ def _cmd_simulate(args) -> int:
         args.scenario, seed=args.seed, duration_s=args.duration_s, fs_hz=args.fs_hz,
         device=device, compass=compass, raw_mag=args.raw_mag,
     )
+    from gyrodrift.io import write_table
+
     log.attrs = {}
     write_table(log, args.output)
     if not args.quiet:
@@ -198,8 +180,11 @@ def _cmd_simulate(args) -> int:
 def _cmd_compare(args) -> int:
     import json
 
+    import pandas as pd
+
     from gyrodrift.compare import METHODS, run_methods, summary_table
     from gyrodrift.metrics import markdown_table
+    from gyrodrift.pipeline import describe_log
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(METHODS)
     log = read_input(args.input, args)
@@ -220,7 +205,7 @@ def _cmd_compare(args) -> int:
         }
         print(json.dumps(payload, indent=2))
         return 0
-    print(_read_summary(log, args.input))
+    print(describe_log(log, args.input))
     print(markdown_table(table, floatfmt=".4g"))
     print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
           "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")

@@ -69,6 +69,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, Observation, make_estimator
+from gyrodrift.fusion import FusionConfig, FusionState
 from gyrodrift.gating import GateConfig
 from gyrodrift.model import TempRateConfig, TempRateTracker, temp_rate
 
@@ -104,6 +105,8 @@ class CompensatorConfig:
         How T' is computed (see :mod:`gyrodrift.model`).
     gate : GateConfig
         Thresholds of the aiding gates (see :mod:`gyrodrift.gating`).
+    fusion : FusionConfig
+        The fused heading (``heading_fused``; see :mod:`gyrodrift.fusion`).
     adaptive : AdaptiveConfig
         Settings of the ``adaptive`` estimator, each fix of issue 6 switchable
         (:class:`gyrodrift.estimators.AdaptiveConfig`); used only when ``estimator`` is
@@ -120,6 +123,7 @@ class CompensatorConfig:
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     temp_rate: TempRateConfig = field(default_factory=TempRateConfig)
     gate: GateConfig = field(default_factory=GateConfig)
+    fusion: FusionConfig = field(default_factory=FusionConfig)
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
 
     def __post_init__(self):
@@ -169,6 +173,9 @@ class CompensatedSample:
     compass_heading: float
     unobservable: str
     bias_sd: float
+    heading_fused: float
+    heading_fused_sd: float
+    heading_sd: float
 
 
 # --------------------------------------------------------------------------- rows
@@ -312,9 +319,10 @@ def _bias_sd(P: np.ndarray, T, Tp):
 
 
 def _unobservable(estimator, prior_sd) -> str:
-    """Names of the drift parameters (``a``, ``b``) the data have not determined, comma-separated."""
+    """Names of the drift parameters (``a``, ``b``) the data have not determined, joined by ``+``
+    (no comma, so CSV output needs no quoting)."""
     sd = np.sqrt(np.maximum(np.diag(estimator.cov), 0.0))
-    return ",".join(
+    return "+".join(
         name for i, name in ((0, "a"), (1, "b")) if sd[i] > UNOBSERVABLE_SD_FRACTION * prior_sd[i]
     )
 
@@ -563,6 +571,7 @@ class Compensator:
         self._anchor = 0.0  # heading = anchor + I_rate
         self._lookback: deque[tuple[float, float]] = deque()
         self._t_start: float | None = None
+        self._fusion = FusionState(self.config.fusion, self.config.gyro_noise_dps_rthz)
 
     # -- public state
     @property
@@ -649,8 +658,10 @@ class Compensator:
         update[-1] = int(updated)
         reason = np.full(n, gating.INIT, dtype=object)
         reason[-1] = ""
+        bias_sd = _bias_sd(self._aid.cov, T, Tp)
+        fused = self._fusion.rows(t, rate, heading, np.ones(n, dtype=bool), bias_sd)
         return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading,
-                        self._aid.unobservable, _bias_sd(self._aid.cov, T, Tp))
+                        self._aid.unobservable, bias_sd, fused)
 
     def _step(self, row) -> CompensatedSample:
         """One row after initialisation, in plain floats.
@@ -695,9 +706,11 @@ class Compensator:
             self._k = k
             update, reason = aid.close(self._snap, t_s)
         a, b, c0 = (float(v) for v in params)
+        bias_sd = float(_bias_sd(cov, T, Tp))
+        fused = self._fusion.row(t_s, rate, heading, reason not in _MAGNETIC, bias_sd)
         return CompensatedSample(
             t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
-            update, int(reason != ""), reason, Tp, heading, unobservable, float(_bias_sd(cov, T, Tp)),
+            update, int(reason != ""), reason, Tp, heading, unobservable, bias_sd, *fused,
         )
 
 
@@ -724,8 +737,13 @@ def _field_reference(norm, dip) -> tuple[float, float] | None:
     return float(np.median(norm[ok])), float(np.median(dip[ok]))
 
 
+#: Refusals that mean the compass is wrong (the fused heading does not use it on such rows).
+_MAGNETIC = (gating.FIELD, gating.INTERFERENCE)
+_MAGNETIC_CODES = tuple(gating.REASONS.index(r) for r in _MAGNETIC)
+
+
 def _samples(
-    t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass, unobservable, bias_sd
+    t, rate, bias, heading_unwrapped, params, update, reason, Tp, compass, unobservable, bias_sd, fused
 ) -> list[CompensatedSample]:
     a, b, c = (float(v) for v in params)
     heading = wrap_360(heading_unwrapped)
@@ -733,7 +751,7 @@ def _samples(
         CompensatedSample(
             float(t[i]), float(rate[i]), float(bias[i]), float(heading[i]), a, b, c,
             int(update[i]), int(reason[i] != ""), str(reason[i]), float(Tp[i]), float(compass[i]), unobservable,
-            float(bias_sd[i]),
+            float(bias_sd[i]), float(fused[0][i]), float(fused[1][i]), float(fused[2][i]),
         )
         for i in range(len(t))
     ]
@@ -907,10 +925,13 @@ def compensate_arrays(
         if is_boundary[b]:
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
+    reason_code = pd.Categorical(reason, categories=gating.REASONS).codes
+    fused = FusionState(cfg.fusion, cfg.gyro_noise_dps_rthz).rows(
+        t, out_rate, heading, fusion_allowed(reason_code), out_bias_sd
+    )
     out = _output_frame(
-        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), tuple(out_params.T), update,
-        pd.Categorical(reason, categories=gating.REASONS).codes, Tp, heading,
-        pd.Categorical(out_unobservable, categories=UNOBSERVABLE).codes, out_bias_sd,
+        t, out_rate, out_bias, wrap_360(anchor + out_I_rate), tuple(out_params.T), update, reason_code, Tp, heading,
+        pd.Categorical(out_unobservable, categories=UNOBSERVABLE).codes, out_bias_sd, fused,
     )
     return _with_attrs(out, _measurement_table(aid.accepted), est)
 
@@ -945,7 +966,7 @@ def _with_attrs(out: pd.DataFrame, measurements: pd.DataFrame, est) -> pd.DataFr
 MEASUREMENT_COLUMNS = ("t", "m", "temp", "temp_rate", "r")
 
 #: Every value of the ``unobservable`` column, in a fixed order (its categories).
-UNOBSERVABLE = ("", "a", "b", "a,b")
+UNOBSERVABLE = ("", "a", "b", "a+b")
 
 
 def _measurement_table(accepted) -> pd.DataFrame:
@@ -971,16 +992,24 @@ def _compass_arrays(n: int, heading_deg, mag, acc):
     return heading, norm, dip
 
 
+def fusion_allowed(reason_code) -> np.ndarray:
+    """Rows whose compass sample the fused heading may use: not refused for a magnetic reason."""
+    reason_code = np.asarray(reason_code)
+    return ~np.isin(reason_code, _MAGNETIC_CODES)
+
+
 def _fast_frame(cols: dict) -> pd.DataFrame:
     """The output table from the columns of :class:`gyrodrift._engine.ChunkEngine`."""
     return _output_frame(
         cols["t"], cols["rate_z"], cols["bias_z"], cols["heading"], (cols["a"], cols["b"], cols["c"]),
         cols["update"], cols["reason"], cols["temp_rate"], cols["compass_heading"], cols["unobs"], cols["bias_sd"],
+        (cols["heading_fused"], cols["heading_fused_sd"], cols["heading_sd"]),
     )
 
 
-def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compass, unobservable_code, bias_sd):
-    """The output table (``params``: the a, b and c columns); ``gate_reason`` and ``unobservable`` as categoricals from their codes
+def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compass, unobservable_code, bias_sd, fused):
+    """The output table (``params``: the a, b and c columns; ``fused``: heading_fused, its σ and
+    the σ of ``heading``); ``gate_reason`` and ``unobservable`` as categoricals from their codes
     (indices into :data:`gyrodrift.gating.REASONS` and :data:`UNOBSERVABLE`). No column is copied."""
     reason_code = np.asarray(reason_code, dtype=np.int8)
     return pd.DataFrame(
@@ -1001,6 +1030,9 @@ def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compa
                 np.asarray(unobservable_code, dtype=np.int8), categories=list(UNOBSERVABLE)
             ),
             "bias_sd": bias_sd,
+            "heading_fused": fused[0],
+            "heading_fused_sd": fused[1],
+            "heading_sd": fused[2],
         },
         copy=False,
     )
@@ -1039,7 +1071,7 @@ def compensate(
         ``t, rate_z, bias_z, heading, a, b, c, update, gated, gate_reason`` (the output
         contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
         compass used; empty where there was no sample), ``unobservable`` (``a``, ``b``
-        or ``a,b``: drift parameters the data have not yet determined, e.g. while the
+        or ``a+b``: drift parameters the data have not yet determined, e.g. while the
         temperature is flat; empty when all are), ``bias_sd`` (deg/s, the filter's
         standard deviation of ``bias_z``) and every other input column (the input
         ``heading`` is ``compass_heading``).
@@ -1066,6 +1098,12 @@ def compensate(
         progress=progress,
         engine=engine,
     )
+    return append_input_columns(out, log)
+
+
+def append_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:
+    """Add every input column but ``t`` and ``heading`` to the output (``in_NAME`` where the
+    output already has ``NAME``), row for row."""
     for col in log.columns:
         if col in (T, HEADING):
             continue

@@ -82,17 +82,23 @@ class Profile:
 
 
 def profile_from_run(out) -> Profile:
-    """The profile of a :func:`gyrodrift.compensate.compensate` output table."""
-    params = tuple(float(v) for v in out.attrs["final_params"])
-    cov = tuple(tuple(float(v) for v in row) for row in out.attrs["final_cov"])
-    temp = out["temp"] if "temp" in out.columns else out["in_temp"]
+    """The profile of a run: a :func:`gyrodrift.compensate.compensate` output table, or the
+    :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`."""
+    if hasattr(out, "final_params") and not hasattr(out, "attrs"):  # RunStats
+        final_params, final_cov, estimator = out.final_params, out.final_cov, out.estimator
+        temp_range, samples, updates = (out.temp_min_c, out.temp_max_c), out.rows, out.updates
+    else:
+        final_params, final_cov = out.attrs["final_params"], out.attrs["final_cov"]
+        estimator = out.attrs.get("estimator", "")
+        temp = out["temp"] if "temp" in out.columns else out["in_temp"]
+        temp_range, samples, updates = (temp.min(), temp.max()), len(out), out["update"].sum()
     return Profile(
-        params=params,
-        cov=cov,
-        temp_range_c=(float(temp.min()), float(temp.max())),
-        samples=int(len(out)),
-        updates=int(out["update"].sum()),
-        estimator=str(out.attrs.get("estimator", "")),
+        params=tuple(float(v) for v in final_params),
+        cov=tuple(tuple(float(v) for v in row) for row in final_cov),
+        temp_range_c=(float(temp_range[0]), float(temp_range[1])),
+        samples=int(samples),
+        updates=int(updates),
+        estimator=str(estimator),
         created=_dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
         software=f"gyrodrift {__version__}",
     )

@@ -84,9 +84,6 @@ from typing import Callable
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import cumulative_trapezoid
-from scipy.interpolate import PchipInterpolator
-from scipy.signal import lfilter
 
 from gyrodrift.compass import tilt_compensated_heading
 from gyrodrift.conventions import (
@@ -513,6 +510,8 @@ def _first_order_lag(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
     if x.size == 0:
         return x.copy()
     phi = math.exp(-dt_s / tau_s)
+    from scipy.signal import lfilter  # here, not at the top: scipy costs 0.4 s at start-up
+
     y, _ = lfilter([1.0 - phi], [1.0, -phi], x, zi=[phi * x[0]])
     return y
 
@@ -541,6 +540,8 @@ def _gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.rando
     # x_0 ~ N(0, sigma²); x_k = phi*x_{k-1} + sigma*sqrt(1 - phi²)*w_k
     drive = sigma * math.sqrt(1.0 - phi * phi) * w
     drive[0] = sigma * w[0]
+    from scipy.signal import lfilter  # here, not at the top: scipy costs 0.4 s at start-up
+
     return lfilter([1.0], [1.0, -phi], drive)
 
 
@@ -807,6 +808,8 @@ def _knot_profile(t_s, duration_s: float, knots_u, knots_c):
     hold = _hold_s(duration_s)
     knot_t = np.concatenate([[0.0], hold + (duration_s - hold) * np.asarray(knots_u, dtype=float)])
     knot_c = np.concatenate([[knots_c[0]], np.asarray(knots_c, dtype=float)])
+    from scipy.interpolate import PchipInterpolator  # here, not at the top: scipy costs 0.4 s at start-up
+
     spline = PchipInterpolator(knot_t, knot_c, extrapolate=True)
     t = np.asarray(t_s, dtype=float)
     return spline(t), spline.derivative()(t)
@@ -1555,6 +1558,8 @@ def simulate(
     rng = _streams(int(seed))
 
     motion = SCENARIOS[scenario](t, duration, rng["trajectory"])
+    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
+
     heading_true = motion.heading0_deg + cumulative_trapezoid(motion.heading_rate_dps, t, initial=0.0)
     body_rate = motion.heading_rate_dps * (
         math.cos(math.radians(motion.roll_deg)) * math.cos(math.radians(motion.pitch_deg))

@@ -9,7 +9,8 @@ name         estimator
 ``lsm``      the paper's "modified LSM": a, b, c refitted over a sliding window
 ``fixed``    fixed a, b, c (with a whole-log fit: the paper's MLR, non-causal)
 ``poly3``    PX4-style cubic thermal calibration from a separate heating run
-``adaptive`` centred temperature, innovation-based fading factor (beyond the paper)
+``adaptive`` centred temperature, Zhou fading, ZARU, per-parameter Q (beyond the paper;
+             :class:`AdaptiveConfig`)
 ===========  ==================================================================
 """
 

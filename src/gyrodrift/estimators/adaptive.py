@@ -75,6 +75,12 @@ class AdaptiveConfig:
         Largest fading factor of one update.
     rho : float
         Forgetting of the innovation covariance estimate, 0 < rho < 1.
+    softening : float
+        Zhou's softening (weakening) factor β >= 1 of the fading test,
+        ``λ = max(1, tr(V − H Q Hᵀ − β R) / tr(H P Hᵀ))``: fade only when the innovations
+        exceed β times the measurement noise. With one measurement per interval, V is an
+        average over a few innovations only and exceeds R by chance about half the time;
+        β = 1 then fades on noise.
     q_sd : tuple of 3 floats, optional
         Fix 5, per-parameter process noise: random-walk standard deviations of
         [a (deg/s/degC), b (deg), c' (deg/s, the drift at T_ref)] per update interval.
@@ -93,6 +99,7 @@ class AdaptiveConfig:
     fading: bool = True
     lambda_max: float = 20.0
     rho: float = 0.8
+    softening: float = 1.0
     q_sd: tuple[float, float, float] | None = (1e-3, 0.05, 3e-3)
 
     def __post_init__(self):
@@ -100,6 +107,8 @@ class AdaptiveConfig:
             raise ConfigError(f"lambda_max must be >= 1, got {self.lambda_max!r}")
         if not (0.0 < self.rho < 1.0):
             raise ConfigError(f"rho must be between 0 and 1, got {self.rho!r}")
+        if not (math.isfinite(self.softening) and self.softening >= 1.0):
+            raise ConfigError(f"softening must be >= 1, got {self.softening!r}")
         for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -198,7 +207,7 @@ class AdaptiveKalman(LinearDrift):
             self._V = outer
         else:
             self._V = (self.rho * self._V + outer) / (1.0 + self.rho)
-        N = self._V - H @ self._Q @ H.T - obs.R
+        N = self._V - H @ self._Q @ H.T - self.settings.softening * obs.R
         M = H @ self._P @ H.T
         lam = float(np.trace(N) / np.trace(M)) if np.trace(M) > 0 else 1.0
         self.last_lambda = min(max(1.0, lam), self.lambda_max)

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy.ndimage import median_filter
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators.base import Unaided, register
@@ -63,6 +62,8 @@ def fit_poly3(temp_c, gyro_z_dps, *, median_window: int = 31, order: int = 3) ->
             "calibration run too short or too flat for a cubic fit: it needs a still heating run "
             f"spanning several degC (got {temp_c.size} samples over {np.ptp(temp_c) if temp_c.size else 0:.2f} degC)"
         )
+    from scipy.ndimage import median_filter  # imported here: scipy.ndimage costs 0.2 s at start-up
+
     rate = median_filter(rate, size=median_window, mode="nearest")
     t_min, t_max = float(temp_c.min()), float(temp_c.max())
     t_ref = 0.5 * (t_min + t_max)

@@ -669,22 +669,6 @@ def log_summary(path, *, fmt: str | None = None, column_map: Mapping[str, str] |
 # ---------------------------------------------------------------------------
 
 
-def _plain_strings(df: pd.DataFrame) -> pd.DataFrame:
-    """``df`` with categorical columns as their values (as ``astype(str)`` would give for
-    text), so a chunk writes the same whether a text column arrives categorical or not."""
-    categorical = [pos for pos, dtype in enumerate(df.dtypes) if isinstance(dtype, pd.CategoricalDtype)]
-    if not categorical:
-        return df
-    out = df.copy(deep=False)
-    for pos in categorical:
-        column = out.iloc[:, pos]
-        try:
-            out.isetitem(pos, column.astype(column.cat.categories.dtype))
-        except (TypeError, ValueError):
-            out.isetitem(pos, column.astype(object))
-    return out
-
-
 class ChunkWriter:
     """Write a table chunk by chunk to CSV or Parquet, atomically.
 
@@ -751,7 +735,6 @@ class ChunkWriter:
                 self._fh.write(tabular._csv_header(names))
         elif names != self._names:
             raise ValueError(f"{self.path}: chunk columns {names} differ from the first chunk's {self._names}")
-        df = _plain_strings(df)
         if self.format == "csv":
             self._write_csv(df)
         else:

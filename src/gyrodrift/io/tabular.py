@@ -1024,10 +1024,21 @@ def _csv_header(names) -> bytes:
 
 
 def _arrow_table(df: pd.DataFrame) -> pa.Table:
-    """``df`` as a pyarrow table, without index and metadata (raises pyarrow errors)."""
+    """``df`` as a pyarrow table, without index and metadata (raises pyarrow errors).
+
+    Categorical columns become plain columns of their values (a cast inside Arrow, cheap),
+    so a file holds the same whether a text column arrived categorical or not.
+    """
     plain = df.copy(deep=False).set_axis([str(c) for c in df.columns], axis=1)
     plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
-    return pa.Table.from_pandas(plain, preserve_index=False)
+    table = pa.Table.from_pandas(plain, preserve_index=False)
+    dictionary = [i for i, f in enumerate(table.schema) if pa.types.is_dictionary(f.type)]
+    if not dictionary:
+        return table
+    for i in dictionary:
+        column = table.column(i)
+        table = table.set_column(i, table.field(i).name, column.cast(column.type.value_type))
+    return table.replace_schema_metadata(None)
 
 
 def _is_text(arrow_type: pa.DataType) -> bool:
@@ -1119,9 +1130,7 @@ def _write_csv(df: pd.DataFrame, fh) -> None:
 
 def _write_parquet(df: pd.DataFrame, fh) -> None:
     """Write ``df`` as Parquet (no index) to a binary file."""
-    plain = df.copy(deep=False)
-    plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
-    pa_pq.write_table(pa.Table.from_pandas(plain, preserve_index=False), fh)
+    pa_pq.write_table(_arrow_table(df), fh)
 
 
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:

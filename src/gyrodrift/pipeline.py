@@ -1,0 +1,279 @@
+"""File in, file out: read a log, compensate it, write the result — in constant memory when it can.
+
+:func:`compensate_file` is what ``gyrodrift compensate`` runs. For CSV and Parquet logs
+with the compiled engine (:mod:`gyrodrift._engine`; numba installed, a Kalman-family
+estimator, ``endpoints`` measurement) it streams: the log is read in chunks
+(:func:`gyrodrift.io.chunked.iter_log_chunks`), each chunk is compensated where the
+last one stopped and written out (:class:`gyrodrift.io.chunked.ChunkWriter`), so memory
+does not grow with the log. The output file is the same as the in-memory path
+(``read_log`` → :func:`~gyrodrift.compensate.compensate` → ``write_table``) gives.
+Other formats (ULog, ROS bags) and other estimators run in memory.
+
+:class:`RunStats` gathers, chunk by chunk, what the command prints at the end: the
+log's span and temperature range, the share of refused rows, the final drift model
+and, when the log has truth columns, the accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift import gating
+from gyrodrift.compensate import CompensatorConfig, append_input_columns, compensate, build_estimator
+from gyrodrift.conventions import GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
+
+__all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
+
+#: Rows per chunk of the streaming path (about 200 MB of working memory with pass-through columns).
+CHUNK_ROWS = 1_000_000
+
+
+@dataclass
+class RunStats:
+    """What a run read and found, accumulated chunk by chunk (see :meth:`add`)."""
+
+    source: str
+    read_summary: str | None = None
+    compass: str = "?"
+    rows: int = 0
+    t_first_s: float = math.nan
+    t_last_s: float = math.nan
+    temp_min_c: float = math.inf
+    temp_max_c: float = -math.inf
+    updates: int = 0
+    refused: np.ndarray = field(default_factory=lambda: np.zeros(len(gating.REASONS), dtype=np.int64))
+    final_params: np.ndarray | None = None
+    final_cov: np.ndarray | None = None
+    estimator: str = ""
+    streamed: bool = False
+    # accuracy accumulators (sum of squares, max |error|, count)
+    _heading: list = field(default_factory=lambda: [0.0, 0.0, 0, 0.0, 0.0])  # raw ss, ss, n, raw max, max
+    _bias: list = field(default_factory=lambda: [0.0, 0.0, 0])  # raw ss, ss, n
+    _raw: tuple | None = None  # (t, gyro, raw heading) of the last row
+
+    def add(self, out: pd.DataFrame) -> None:
+        """Account for output rows (with the pass-through input columns), in order."""
+        if len(out) == 0:
+            return
+        t = out[T].to_numpy(float)
+        if self.rows == 0:
+            self.t_first_s = float(t[0])
+        self.t_last_s = float(t[-1])
+        self.rows += len(out)
+        temp = out[TEMP if TEMP in out.columns else f"in_{TEMP}"].to_numpy(float)
+        if np.isfinite(temp).any():
+            self.temp_min_c = min(self.temp_min_c, float(np.nanmin(temp)))
+            self.temp_max_c = max(self.temp_max_c, float(np.nanmax(temp)))
+        self.updates += int(out["update"].to_numpy().sum(dtype=np.int64))
+        codes = pd.Categorical(out["gate_reason"], categories=gating.REASONS).codes
+        self.refused += np.bincount(codes[codes >= 0], minlength=len(gating.REASONS))
+        if REF_HEADING in out.columns and GYRO_Z in out.columns:
+            self._add_heading(t, out)
+        if TRUE_BIAS_Z in out.columns:
+            truth = out[TRUE_BIAS_Z].to_numpy(float)
+            e = out["bias_z"].to_numpy(float) - truth
+            acc = self._bias
+            acc[0] += float(np.sum(truth**2))
+            acc[1] += float(np.sum(e**2))
+            acc[2] += truth.size
+
+    def _add_heading(self, t: np.ndarray, out: pd.DataFrame) -> None:
+        """Raw-gyro heading (trapezoid, from the first compensated heading; an empty gyro cell
+        holds the previous value, as in the compensator) and both errors."""
+        g = out[GYRO_Z].to_numpy(float)
+        if self._raw is None:
+            t_prev, g_prev, raw_prev = float(t[0]), float(g[0]), float(out["heading"].iloc[0])
+        else:
+            t_prev, g_prev, raw_prev = self._raw
+        if not np.isfinite(g).all():
+            g = pd.Series(np.where(np.isfinite(g), g, np.nan)).ffill().fillna(g_prev).to_numpy()
+        inc = 0.5 * (g + np.r_[g_prev, g[:-1]]) * (t - np.r_[t_prev, t[:-1]])
+        raw = raw_prev + np.cumsum(inc)
+        self._raw = (float(t[-1]), float(g[-1]), float(raw[-1]))
+        ref = out[REF_HEADING].to_numpy(float)
+        ok = np.isfinite(ref)
+        e_raw = wrap_180(raw[ok] - ref[ok])
+        e = wrap_180(out["heading"].to_numpy(float)[ok] - ref[ok])
+        acc = self._heading
+        acc[0] += float(np.sum(e_raw**2))
+        acc[1] += float(np.sum(e**2))
+        acc[2] += int(ok.sum())
+        if ok.any():
+            acc[3] = max(acc[3], float(np.max(np.abs(e_raw))))
+            acc[4] = max(acc[4], float(np.max(np.abs(e))))
+
+    # ------------------------------------------------------------------ text
+    def read_line(self) -> str:
+        """One line on what was read."""
+        if self.read_summary:  # ULog and ROS readers say which topics and instances they used
+            return f"read {self.source}: {self.read_summary}"
+        return _read_text(self.source, self.rows, self.t_first_s, self.t_last_s, self.temp_min_c, self.temp_max_c,
+                          self.compass)
+
+    def result_lines(self) -> list[str]:
+        shares = ", ".join(
+            f"{name} {100 * n / self.rows:.1f} %"
+            for name, n in sorted(zip(gating.REASONS, self.refused), key=lambda kv: -kv[1])
+            if name and n
+        ) or "never"
+        a, b, c = (float(v) for v in self.final_params)
+        lines = [
+            f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
+            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
+        ]
+        raw_ss, ss, n = self._bias
+        if n:
+            lines.append(
+                f"drift error RMS vs true_bias_z: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
+                f"compensated {math.sqrt(ss / n):.4f} deg/s"
+            )
+        raw_ss, ss, n, raw_max, e_max = self._heading
+        if n:
+            lines.append(
+                f"heading error vs ref_heading: raw gyro RMS {math.sqrt(raw_ss / n):.2f} deg (max {raw_max:.2f}) "
+                f"-> compensated RMS {math.sqrt(ss / n):.2f} deg (max {e_max:.2f})"
+            )
+        return lines
+
+
+def _read_text(source, rows: int, t_first_s: float, t_last_s: float, temp_min_c: float, temp_max_c: float,
+               compass: str) -> str:
+    dur = t_last_s - t_first_s
+    rate = (rows - 1) / dur if dur > 0 else float("nan")
+    return (
+        f"read {source}: {rows} rows, {dur:.1f} s at {rate:.1f} Hz, "
+        f"temperature {temp_min_c:.2f} to {temp_max_c:.2f} degC, compass from {compass}"
+    )
+
+
+def describe_log(log: pd.DataFrame, source) -> str:
+    """One line on a log read in memory (the line :meth:`RunStats.read_line` prints)."""
+    if log.attrs.get("summary"):
+        return f"read {source}: {log.attrs['summary']}"
+    temp = log[TEMP]
+    return _read_text(source, len(log), float(log[T].iloc[0]), float(log[T].iloc[-1]), float(temp.min()),
+                      float(temp.max()), log.attrs.get("compass", "?"))
+
+
+def _table_format(path: Path, fmt: str | None) -> str | None:
+    from gyrodrift.io import _log_format
+
+    return _log_format(path, fmt)
+
+
+def compensate_file(
+    input_path,
+    output_path,
+    config: CompensatorConfig | None = None,
+    *,
+    read_options: dict | None = None,
+    chunk_rows: int = CHUNK_ROWS,
+    stream: bool | None = None,
+    progress=None,
+) -> RunStats:
+    """Compensate the log at ``input_path`` and write the output table to ``output_path``.
+
+    Parameters
+    ----------
+    input_path, output_path : str or os.PathLike
+        The log (any format of :func:`gyrodrift.io.read_log`) and the output table
+        (CSV or Parquet by its name). The input is never modified; the output is
+        written atomically.
+    config : CompensatorConfig, optional
+    read_options : dict, optional
+        Keyword arguments of :func:`gyrodrift.io.read_log` (``fmt``, ``gyro_unit``,
+        ``frame``, ``column_map``, ULog/ROS options).
+    chunk_rows : int
+        Rows per chunk when streaming.
+    stream : bool, optional
+        Force (True) or forbid (False) the streaming path; default: stream when it can.
+    progress : callable, optional
+        ``progress(iterable, total)`` for the in-memory path (see :func:`compensate`).
+
+    Returns
+    -------
+    RunStats
+    """
+    from gyrodrift import _engine
+    from gyrodrift.errors import ConfigError
+    from gyrodrift.io import read_log, write_table
+
+    cfg = config or CompensatorConfig()
+    opts = dict(read_options or {})
+    input_path, output_path = Path(input_path), Path(output_path)
+    table = _table_format(input_path, opts.get("fmt")) in ("csv", "parquet")
+    ulog_or_ros = {k: v for k, v in opts.items() if k not in ("fmt", "gyro_unit", "frame", "column_map")}
+    can_stream = (
+        table
+        and not any(v not in (None, 0) for v in ulog_or_ros.values())
+        and _engine.available()
+        and _engine.supports(cfg, build_estimator(cfg))
+    )
+    if stream and not can_stream:
+        raise ConfigError(
+            f"{input_path}: cannot stream this run (needs a CSV or Parquet log, numba, and a Kalman-family "
+            "estimator with endpoint measurements)"
+        )
+    if stream is None:
+        stream = can_stream
+    if not stream:
+        log = read_log(input_path, **opts)
+        out = compensate(log, cfg, source=str(input_path), progress=progress)
+        write_table(out, output_path)
+        stats = RunStats(str(input_path), read_summary=log.attrs.get("summary"), compass=log.attrs.get("compass", "?"))
+        stats.add(out)
+        stats.final_params, stats.final_cov = out.attrs["final_params"], out.attrs["final_cov"]
+        stats.estimator = str(out.attrs.get("estimator", ""))
+        return stats
+    return _stream(input_path, output_path, cfg, opts, chunk_rows)
+
+
+def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
+    from gyrodrift._engine import ChunkEngine
+    from gyrodrift.compensate import _compass_arrays, _fast_frame
+    from gyrodrift.errors import LogFormatError
+    from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
+
+    source = str(input_path)
+    stats = RunStats(source, streamed=True)
+    est = build_estimator(cfg)
+    engine = ChunkEngine(cfg, est, source)
+    pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
+    table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
+    with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, ChunkWriter(output_path) as writer:
+        for log in chunks:
+            missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
+            if missing:
+                raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
+            has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
+            if HEADING not in log.columns and not has_mag:
+                raise LogFormatError(
+                    f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
+                )
+            n = len(log)
+            heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
+            if has_mag:
+                heading, norm, dip = _compass_arrays(
+                    n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
+                )
+            else:
+                heading, norm, dip = heading_in, None, None
+            pending.append(log)
+            cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
+                               heading, norm, dip)
+            if cols is None:
+                continue
+            rows = pd.concat(pending) if len(pending) > 1 else pending[0]
+            pending = []
+            out = append_input_columns(_fast_frame(cols), rows.reset_index(drop=True))
+            writer.write(out)
+            stats.add(out)
+        engine.finish()
+        stats.compass = chunks.compass or "?"
+    stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
+    return stats

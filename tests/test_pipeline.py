@@ -1,0 +1,84 @@
+"""compensate_file: the streaming (chunked) path writes what the in-memory path writes."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+pytest.importorskip("numba")
+
+from conftest import synthetic_log  # noqa: E402
+from gyrodrift.compensate import CompensatorConfig  # noqa: E402
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
+from gyrodrift.io import write_table  # noqa: E402
+from gyrodrift.pipeline import compensate_file  # noqa: E402
+from test_compensate import complex_log  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("pipeline")
+    log = complex_log(False)  # turns, interference, outage, empty cells, a time gap
+    log["note"] = np.where(np.arange(len(log)) % 7 == 0, "seven", "other")  # a pass-through text column
+    paths = {}
+    for suffix in ("csv", "parquet"):
+        paths[suffix] = folder / f"log.{suffix}"
+        write_table(log, paths[suffix])
+    mag = complex_log(True)
+    paths["mag"] = folder / "mag.csv"
+    write_table(mag, paths["mag"])
+    return paths
+
+
+@pytest.mark.parametrize("kind", ["csv", "parquet", "mag"])
+def test_streamed_file_equals_in_memory_file(logs, tmp_path, kind):
+    src = logs[kind]
+    before = src.read_bytes()
+    suffix = "parquet" if kind == "parquet" else "csv"
+    whole, parts = tmp_path / f"whole.{suffix}", tmp_path / f"parts.{suffix}"
+    s_whole = compensate_file(src, whole, stream=False)
+    s_parts = compensate_file(src, parts, stream=True, chunk_rows=1000)  # 18 chunks, init inside the first
+    assert src.read_bytes() == before
+    if suffix == "csv":
+        assert parts.read_bytes() == whole.read_bytes()
+    else:
+        pd.testing.assert_frame_equal(pd.read_parquet(parts), pd.read_parquet(whole))
+    assert s_parts.read_line() == s_whole.read_line()
+    assert s_parts.result_lines() == s_whole.result_lines()
+    assert np.array_equal(s_parts.final_params, s_whole.final_params)
+    assert s_parts.streamed and not s_whole.streamed
+    out = pd.read_csv(parts) if suffix == "csv" else pd.read_parquet(parts)
+    assert {"heading_fused", "heading_fused_sd", "heading_sd", "gyro_z", "temp"} <= set(out.columns)
+    assert len(out) == len(pd.read_csv(src) if suffix == "csv" else pd.read_parquet(src))
+
+
+def test_truth_columns_give_accuracy_lines(tmp_path):
+    log = synthetic_log(duration_s=600.0, gyro_noise_dps=0.05, compass_noise_deg=0.3, seed=2)
+    write_table(log, tmp_path / "in.csv")
+    stats = compensate_file(tmp_path / "in.csv", tmp_path / "out.csv", chunk_rows=2500)
+    lines = "\n".join(stats.result_lines())
+    assert "drift error RMS vs true_bias_z" in lines and "heading error vs ref_heading" in lines
+    assert stats.rows == len(log) and stats.streamed
+
+
+def test_a_bad_row_in_a_later_chunk_is_named_and_nothing_is_written(tmp_path):
+    log = synthetic_log(duration_s=300.0)
+    log.loc[4000, "t"] = log.loc[3999, "t"]  # time stops increasing at row 4000 (line 4002)
+    write_table(log, tmp_path / "bad.csv")
+    with pytest.raises(LogFormatError, match=r"bad.csv.*line 4002.*strictly increasing"):
+        compensate_file(tmp_path / "bad.csv", tmp_path / "out.csv", chunk_rows=1000)
+    assert not (tmp_path / "out.csv").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.csv"]
+
+
+def test_a_log_too_short_is_an_error_and_nothing_is_written(tmp_path):
+    write_table(synthetic_log(duration_s=20.0), tmp_path / "short.csv")
+    with pytest.raises(GyroDriftError, match="short.csv: the log is .* long"):
+        compensate_file(tmp_path / "short.csv", tmp_path / "out.parquet", chunk_rows=100)
+    assert not (tmp_path / "out.parquet").exists()
+
+
+def test_estimators_the_engine_lacks_run_in_memory(logs, tmp_path):
+    stats = compensate_file(logs["csv"], tmp_path / "o.csv", CompensatorConfig(estimator="lsm"))
+    assert not stats.streamed
+    with pytest.raises(ConfigError, match="cannot stream"):
+        compensate_file(logs["csv"], tmp_path / "o2.csv", CompensatorConfig(estimator="lsm"), stream=True)
