@@ -66,12 +66,12 @@ def test_standard_deviations_behave():
 
 def test_fused_heading_beats_both_sensors_on_a_turning_noisy_log():
     """A log that starts still then sways, with a noisy compass, a noisy gyro with a drift the
-    filter learns, and a 30-deg interference window: the fused heading is closer to the truth
-    than the compass and than the gyro heading."""
+    filter learns, and a 30-deg interference window shorter than ``relock_s``: the fused heading
+    is closer to the truth than the compass and than the gyro heading."""
     log = synthetic_log(duration_s=1800.0, gyro_noise_dps=0.2, compass_noise_deg=1.0, seed=8,
                         drift_dps=lambda t, T: 0.02 * T - 0.3,
                         heading_deg=lambda t: 50.0 + 40.0 * np.sin(2 * np.pi * np.maximum(t - 60.0, 0.0) / 300.0))
-    window = (log["t"] > 900) & (log["t"] < 1000)
+    window = (log["t"] > 900) & (log["t"] < 940)
     log.loc[window, "heading"] = np.mod(log.loc[window, "heading"] + 30.0, 360.0)
     out = compensate(log)
     truth = log["ref_heading"].to_numpy()
@@ -108,3 +108,15 @@ def test_settings_are_checked():
         FusionConfig(heading_sigma_deg=0.0)
     with pytest.raises(ConfigError, match="nis_gate"):
         FusionConfig(nis_gate=float("nan"))
+
+
+def test_a_compass_refused_for_relock_s_is_taken_again():
+    """A lasting 20-deg step of the compass (a new magnetic environment): refused at first,
+    taken again ``relock_s`` after the first refusal, never a lock-out."""
+    t = np.arange(0.0, 300.0, 0.1)
+    compass = np.where(np.arange(t.size) % 10 == 0, np.where(t < 100.0, 50.0, 70.0), np.nan)
+    cfg = FusionConfig(relock_s=30.0)
+    h, sd, _ = fuse_rows(t, np.zeros(t.size), compass, np.ones(t.size, bool), np.full(t.size, 0.001), cfg)
+    assert abs(h[int(120 / 0.1)] - 50.0) < 0.5  # still refusing 20 s after the step
+    assert abs(h[int(131 / 0.1)] - 70.0) < 1e-6  # re-anchored at 130 s
+    assert abs(h[-1] - 70.0) < 1e-6

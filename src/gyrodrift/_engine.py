@@ -51,7 +51,7 @@ def supports(config, estimator) -> bool:
     if isinstance(settings, AdaptiveConfig):
         # Not compiled: stationarity (ZARU) updates, and one measurement per interval
         # where the compensator would stack several; the reference engine runs these.
-        if settings.zaru or settings.softening != 1.0 or (not settings.stacked and config.stack_depth > 1):
+        if settings.zaru or settings.softening != 1.0 or settings.innovation_window != 1 or (not settings.stacked and config.stack_depth > 1):
             return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)
@@ -162,7 +162,7 @@ class ChunkEngine:
         """The fused heading and the heading σ columns (:mod:`gyrodrift.fusion`)."""
         C = importlib.import_module("gyrodrift.compensate")
         out["heading_fused"], out["heading_fused_sd"], out["heading_sd"] = self._fusion.rows(
-            out["t"], out["rate_z"], out["compass_heading"], C.fusion_allowed(out["reason"]), out["bias_sd"]
+            out["t"], out["rate_z"], out["compass_heading"], C.fusion_allowed(out["reason"], self.cfg.fusion), out["bias_sd"]
         )
         return out
 

@@ -17,8 +17,8 @@ except ImportError:  # pragma: no cover - exercised only without numba
         return f
 
 # state layout
-PSI, P, TPREV, RPREV, STARTED, T0, ISD, SDPREV = range(8)
-N_STATE = 8
+PSI, P, TPREV, RPREV, STARTED, T0, ISD, SDPREV, REJ_T = range(9)
+N_STATE = 9
 
 
 @_jit
@@ -27,51 +27,69 @@ def wrap180(x):
 
 
 @_jit
-def fuse_row(st, t, rate, compass, allow, bias_sd, cfg):
-    """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`); updates ``st``.
+def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, compass, allow, bias_sd,
+         R, N2, tau, gate, relock):
+    """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`) on scalars.
 
-    ``cfg`` = [σ_c², N², τ_b, nis_gate]. Returns (ψ in [0, 360), σ_ψ, σ of the
-    gyro-alone heading), NaN before the first compass sample.
+    State in: ``psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t`` (``rej_t``: time
+    of the first compass sample of the current run of refused ones, NaN if none);
+    settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock`` (s). Returns the new state
+    then (ψ in [0, 360), σ_ψ, σ of the gyro-alone heading), NaN before the first compass
+    sample. Pure: one function for the streaming row and the batch loop, so both give
+    the same bits.
     """
-    R = cfg[0]
-    N2 = cfg[1]
-    tau = cfg[2]
-    if st[STARTED] == 0.0:
+    if started == 0.0:
         if math.isnan(compass):
-            return math.nan, math.nan, math.nan
-        st[PSI] = compass - 360.0 * math.floor(compass / 360.0)
-        st[P] = R
-        st[STARTED] = 1.0
-        st[TPREV] = t
-        st[RPREV] = rate
-        st[T0] = t
-        st[ISD] = 0.0
-        st[SDPREV] = bias_sd
-        return st[PSI], math.sqrt(R), math.sqrt(R)
-    dt = t - st[TPREV]
-    st[PSI] = st[PSI] + 0.5 * (rate + st[RPREV]) * dt
-    st[P] = st[P] + (N2 + tau * bias_sd * bias_sd) * dt
-    st[ISD] = st[ISD] + 0.5 * (bias_sd + st[SDPREV]) * dt
-    st[TPREV] = t
-    st[RPREV] = rate
-    st[SDPREV] = bias_sd
+            return (psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t,
+                    math.nan, math.nan, math.nan)
+        psi = compass - 360.0 * math.floor(compass / 360.0)
+        sr = math.sqrt(R)
+        return psi, R, t, rate, 1.0, t, 0.0, bias_sd, math.nan, psi, sr, sr
+    dt = t - t_prev
+    psi = psi + 0.5 * (rate + r_prev) * dt
+    P = P + (N2 + tau * bias_sd * bias_sd) * dt
+    isd = isd + 0.5 * (bias_sd + sd_prev) * dt
     if allow and not math.isnan(compass):
-        nu = wrap180(compass - st[PSI])
-        S = st[P] + R
-        if nu * nu / S <= cfg[3]:
-            k = st[P] / S
-            st[PSI] = st[PSI] + k * nu
-            st[P] = st[P] - k * st[P]
-    st[PSI] = st[PSI] - 360.0 * math.floor(st[PSI] / 360.0)
-    gyro_var = R + N2 * (t - st[T0]) + st[ISD] * st[ISD]
-    return st[PSI], math.sqrt(max(st[P], 0.0)), math.sqrt(gyro_var)
+        nu = wrap180(compass - psi)
+        S = P + R
+        if nu * nu / S <= gate:
+            k = P / S
+            psi = psi + k * nu
+            P = P - k * P
+            rej_t = math.nan
+        elif math.isnan(rej_t):
+            rej_t = t
+        elif t - rej_t >= relock:  # refused for ``relock`` s on end: trust the compass again
+            psi = compass
+            P = R
+            rej_t = math.nan
+    psi = psi - 360.0 * math.floor(psi / 360.0)
+    gyro_var = R + N2 * (t - t0) + isd * isd
+    return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
+
+
+@_jit
+def fuse_row(st, t, rate, compass, allow, bias_sd, cfg):
+    """:func:`step` with the state in the array ``st`` (updated); returns (ψ, σ_ψ, σ_gyro)."""
+    r = step(st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T],
+             t, rate, compass, allow, bias_sd, cfg[0], cfg[1], cfg[2], cfg[3], cfg[4])
+    st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T] = r[:9]
+    return r[9], r[10], r[11]
 
 
 @_jit
 def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, out_h, out_sd, out_gyro_sd):
-    """:func:`fuse_row` over arrays (outputs written in place)."""
+    """:func:`step` over arrays (outputs written in place; the state stays in registers)."""
+    psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t = (st[PSI], st[P], st[TPREV], st[RPREV],
+                                                                st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T])
+    R, N2, tau, gate, relock = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     for i in range(t.size):
-        h, sd, gsd = fuse_row(st, t[i], rate[i], compass[i], allow[i], bias_sd[i], cfg)
+        psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, h, sd, gsd = step(
+            psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t[i], rate[i], compass[i], allow[i],
+            bias_sd[i], R, N2, tau, gate, relock,
+        )
         out_h[i] = h
         out_sd[i] = sd
         out_gyro_sd[i] = gsd
+    st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T] = (
+        psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t)

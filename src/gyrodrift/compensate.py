@@ -572,6 +572,7 @@ class Compensator:
         self._lookback: deque[tuple[float, float]] = deque()
         self._t_start: float | None = None
         self._fusion = FusionState(self.config.fusion, self.config.gyro_noise_dps_rthz)
+        self._fusion_refused = fusion_refused(self.config.fusion)
 
     # -- public state
     @property
@@ -707,7 +708,7 @@ class Compensator:
             update, reason = aid.close(self._snap, t_s)
         a, b, c0 = (float(v) for v in params)
         bias_sd = float(_bias_sd(cov, T, Tp))
-        fused = self._fusion.row(t_s, rate, heading, reason not in _MAGNETIC, bias_sd)
+        fused = self._fusion.row(t_s, rate, heading, reason not in self._fusion_refused, bias_sd)
         return CompensatedSample(
             t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
             update, int(reason != ""), reason, Tp, heading, unobservable, bias_sd, *fused,
@@ -737,9 +738,10 @@ def _field_reference(norm, dip) -> tuple[float, float] | None:
     return float(np.median(norm[ok])), float(np.median(dip[ok]))
 
 
-#: Refusals that mean the compass is wrong (the fused heading does not use it on such rows).
-_MAGNETIC = (gating.FIELD, gating.INTERFERENCE)
-_MAGNETIC_CODES = tuple(gating.REASONS.index(r) for r in _MAGNETIC)
+def fusion_refused(config: FusionConfig) -> tuple[str, ...]:
+    """The refusals on whose rows the fused heading does not use the compass: ``field``, and
+    ``interference`` with ``FusionConfig.magnetic_gates``."""
+    return (gating.FIELD, gating.INTERFERENCE) if config.magnetic_gates else (gating.FIELD,)
 
 
 def _samples(
@@ -927,7 +929,7 @@ def compensate_arrays(
 
     reason_code = pd.Categorical(reason, categories=gating.REASONS).codes
     fused = FusionState(cfg.fusion, cfg.gyro_noise_dps_rthz).rows(
-        t, out_rate, heading, fusion_allowed(reason_code), out_bias_sd
+        t, out_rate, heading, fusion_allowed(reason_code, cfg.fusion), out_bias_sd
     )
     out = _output_frame(
         t, out_rate, out_bias, wrap_360(anchor + out_I_rate), tuple(out_params.T), update, reason_code, Tp, heading,
@@ -992,10 +994,11 @@ def _compass_arrays(n: int, heading_deg, mag, acc):
     return heading, norm, dip
 
 
-def fusion_allowed(reason_code) -> np.ndarray:
-    """Rows whose compass sample the fused heading may use: not refused for a magnetic reason."""
-    reason_code = np.asarray(reason_code)
-    return ~np.isin(reason_code, _MAGNETIC_CODES)
+def fusion_allowed(reason_code, config: FusionConfig) -> np.ndarray:
+    """Rows whose compass sample the fused heading may use (see :func:`fusion_refused`), from
+    the ``gate_reason`` codes (indices into :data:`gyrodrift.gating.REASONS`)."""
+    codes = [gating.REASONS.index(r) for r in fusion_refused(config)]
+    return ~np.isin(np.asarray(reason_code), codes)
 
 
 def _fast_frame(cols: dict) -> pd.DataFrame:

@@ -62,28 +62,38 @@ class FusionConfig:
     ----------
     heading_sigma_deg : float
         σ_c of a compass heading as the fused filter takes it, deg: not the sample noise
-        alone but also deviation and the slow interference the gates let through (2°:
-        chosen on the simulated static, static-outages and vehicle runs of the paper
-        experiment, seeds 1-2, then frozen; see docs/results.md).
+        alone but also deviation and the slow interference the gates let through.
     bias_corr_s : float
-        Correlation time τ_b of the drift estimate's error, s (30 s, chosen with it).
+        Correlation time τ_b of the drift estimate's error, s.
     nis_gate : float
         Largest accepted normalised innovation squared ν²/S (9 = 3σ).
+    relock_s : float
+        After the compass has been refused for this long without a break, the filter
+        takes the compass heading again (ψ = compass, P = σ_c²), s.
+    magnetic_gates : bool
+        Also refuse the compass where the compensator refused aiding for interference
+        (``field`` is always refused). Off by default: the compensator also refuses when
+        its drift estimate lags, and the fused heading must not starve then.
     """
 
     heading_sigma_deg: float = 2.0
-    bias_corr_s: float = 30.0
+    bias_corr_s: float = 300.0
     nis_gate: float = 9.0
+    relock_s: float = 60.0
+    magnetic_gates: bool = False
 
     def __post_init__(self):
-        for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate"):
+        for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigError(f"fusion setting {name} must be a positive number, got {v!r}")
+        if not isinstance(self.magnetic_gates, bool):
+            raise ConfigError(f"fusion setting magnetic_gates must be true or false, got {self.magnetic_gates!r}")
 
     def vector(self, gyro_noise_dps_rthz: float) -> np.ndarray:
-        """The settings as the kernel takes them: [σ_c², N², τ_b, nis_gate]."""
-        return np.array([self.heading_sigma_deg**2, gyro_noise_dps_rthz**2, self.bias_corr_s, self.nis_gate])
+        """The settings as the kernel takes them: [σ_c², N², τ_b, nis_gate, relock_s]."""
+        return np.array([self.heading_sigma_deg**2, gyro_noise_dps_rthz**2, self.bias_corr_s, self.nis_gate,
+                         self.relock_s])
 
 
 class FusionState:

@@ -17,6 +17,8 @@ and, when the log has truth columns, the accuracy.
 from __future__ import annotations
 
 import math
+import queue
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,8 +31,8 @@ from gyrodrift.conventions import GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADI
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
-#: Rows per chunk of the streaming path (about 200 MB of working memory with pass-through columns).
-CHUNK_ROWS = 1_000_000
+#: Rows per chunk of the streaming path: small enough to overlap reading, compensating and writing and to bound memory.
+CHUNK_ROWS = 250_000
 
 
 @dataclass
@@ -233,12 +235,114 @@ def compensate_file(
     return _stream(input_path, output_path, cfg, opts, chunk_rows)
 
 
+class _Ahead:
+    """Iterate ``iterator`` in a background thread, up to ``depth`` items ahead.
+
+    Items come out in order; an exception raised by the iterator is raised, in its place,
+    in the consuming thread. :meth:`close` stops the thread (call it before closing what
+    the iterator reads).
+    """
+
+    def __init__(self, iterator, depth: int = 1):
+        self._queue: queue.Queue = queue.Queue(maxsize=depth)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, args=(iterator,), name="gyrodrift-read", daemon=True)
+        self._thread.start()
+
+    def _put(self, item) -> bool:
+        while not self._stop.is_set():
+            try:
+                self._queue.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def _run(self, iterator) -> None:
+        try:
+            for value in iterator:
+                if not self._put(("item", value)):
+                    return
+            self._put(("end", None))
+        except BaseException as exc:  # handed to the consumer, raised there
+            self._put(("error", exc))
+
+    def __iter__(self):
+        while True:
+            kind, value = self._queue.get()
+            if kind == "item":
+                yield value
+            elif kind == "end":
+                return
+            else:
+                raise value
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+class _Behind:
+    """Call ``write(item)`` for each :meth:`put` item in a background thread, in order.
+
+    An exception in ``write`` is raised by the next :meth:`put` or by :meth:`close`.
+    """
+
+    def __init__(self, write, depth: int = 1):
+        self._write = write
+        self._queue: queue.Queue = queue.Queue(maxsize=depth)
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, name="gyrodrift-write", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            if self.error is None:
+                try:
+                    self._write(item)
+                except BaseException as exc:
+                    self.error = exc
+
+    def put(self, item) -> None:
+        if self.error is not None:
+            raise self.error
+        self._queue.put(item)
+
+    def close(self) -> None:
+        """Wait for every write; raise the first write error."""
+        self._queue.put(None)
+        self._thread.join()
+        if self.error is not None:
+            raise self.error
+
+
+def _warm_up(cfg: CompensatorConfig) -> None:
+    """Load the compiled kernels (numba's start-up, about 1 s) on a tiny log, so that the
+    first chunk does not wait for them; runs while the first chunk is read."""
+    from gyrodrift._engine import ChunkEngine
+
+    t = np.arange(0.0, cfg.init_s + 2.0 * cfg.update_interval_s, 0.5)
+    heading = np.full(t.size, 10.0)
+    try:
+        engine = ChunkEngine(cfg, build_estimator(cfg), "warm-up")
+        engine.feed(t, np.zeros(t.size), np.full(t.size, 20.0), heading, None, None)
+    except Exception:  # noqa: BLE001 - only a warm-up; the real run reports any problem
+        pass
+
+
 def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
+    """The chunked path: read ahead in one thread, write behind in another, compensate here
+    (the compiled kernels and pyarrow's readers and writers release the GIL)."""
     from gyrodrift._engine import ChunkEngine
     from gyrodrift.compensate import _compass_arrays, _fast_frame
     from gyrodrift.errors import LogFormatError
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
 
+    warm = threading.Thread(target=_warm_up, args=(cfg,), name="gyrodrift-warm-up", daemon=True)
+    warm.start()
     source = str(input_path)
     stats = RunStats(source, streamed=True)
     est = build_estimator(cfg)
@@ -246,34 +350,44 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
     with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, ChunkWriter(output_path) as writer:
-        for log in chunks:
-            missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
-            if missing:
-                raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
-            has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
-            if HEADING not in log.columns and not has_mag:
-                raise LogFormatError(
-                    f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
-                )
-            n = len(log)
-            heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
-            if has_mag:
-                heading, norm, dip = _compass_arrays(
-                    n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
-                )
-            else:
-                heading, norm, dip = heading_in, None, None
-            pending.append(log)
-            cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
-                               heading, norm, dip)
-            if cols is None:
-                continue
-            rows = pd.concat(pending) if len(pending) > 1 else pending[0]
-            pending = []
-            out = append_input_columns(_fast_frame(cols), rows.reset_index(drop=True))
-            writer.write(out)
-            stats.add(out)
-        engine.finish()
+        reader = _Ahead(chunks)
+        behind = _Behind(writer.write)
+        try:
+            for log in reader:
+                missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
+                if missing:
+                    raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
+                has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
+                if HEADING not in log.columns and not has_mag:
+                    raise LogFormatError(
+                        f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
+                    )
+                n = len(log)
+                heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
+                if has_mag:
+                    heading, norm, dip = _compass_arrays(
+                        n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
+                    )
+                else:
+                    heading, norm, dip = heading_in, None, None
+                pending.append(log)
+                warm.join()
+                cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
+                                   heading, norm, dip)
+                if cols is None:
+                    continue
+                rows = pd.concat(pending) if len(pending) > 1 else pending[0]
+                pending = []
+                out = append_input_columns(_fast_frame(cols), rows.reset_index(drop=True))
+                behind.put(out)
+                stats.add(out)
+            engine.finish()
+        finally:
+            reader.close()
+            try:
+                behind.close()
+            finally:
+                warm.join()
         stats.compass = chunks.compass or "?"
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats
