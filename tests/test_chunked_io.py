@@ -384,7 +384,11 @@ def test_chunk_writer_parquet_reads_back_as_write_table(tmp_path, categorical):
     write_table(frame, tmp_path / "whole.parquet")
     _write_chunks(tmp_path / "chunks.pq", frame, [100, 100, 50], categorical=categorical)
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "chunks.pq"), pd.read_parquet(tmp_path / "whole.parquet"), check_exact=True)
-    assert pq.ParquetFile(tmp_path / "chunks.pq").metadata.num_row_groups == 3
+    assert pq.ParquetFile(tmp_path / "chunks.pq").metadata.num_row_groups == 1  # gathered up to row_group_rows
+    _write_chunks(tmp_path / "groups.pq", frame, [60, 60, 60, 60, 10], categorical=categorical, row_group_rows=100)
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "groups.pq"), pd.read_parquet(tmp_path / "whole.parquet"), check_exact=True)
+    groups = pq.ParquetFile(tmp_path / "groups.pq").metadata
+    assert [groups.row_group(i).num_rows for i in range(groups.num_row_groups)] == [120, 120, 10]
 
 
 def test_chunk_writer_log_round_trip(tmp_path):
