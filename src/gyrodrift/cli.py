@@ -147,7 +147,7 @@ def _scenarios() -> list[str]:
 
 def _cmd_simulate(args) -> int:
     from gyrodrift.config import apply_settings, load_toml
-    from gyrodrift.simulate import SCENARIOS, CompassModel, DeviceModel, simulate
+    from gyrodrift.simulate import SCENARIOS, CompassModel, DeviceModel, TriadModel, simulate
 
     if args.scenario not in SCENARIOS:
         raise ConfigError(f"unknown scenario {args.scenario!r}; choose one of: {', '.join(SCENARIOS)}")
@@ -162,6 +162,7 @@ def _cmd_simulate(args) -> int:
     log = simulate(
         args.scenario, seed=args.seed, duration_s=args.duration_s, fs_hz=args.fs_hz,
         device=device, compass=compass, raw_mag=args.raw_mag,
+        triad=TriadModel() if args.triad else None,
     )
     from gyrodrift.io import write_table
 
@@ -350,6 +351,10 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--duration-s", type=float, help="length, s (default: the scenario's)")
     sim.add_argument("--fs-hz", type=float, default=50.0, help="gyro sample rate, Hz (default 50)")
     sim.add_argument("--raw-mag", action="store_true", help="also write raw mag_* (uT) and acc_* (g) columns")
+    sim.add_argument(
+        "--triad", action="store_true",
+        help="also write gyro_x, gyro_y with their own drift, true_bias_x/y and a noisy accelerometer acc_* (g)",
+    )
     sim.add_argument("--config", type=Path, metavar="FILE.toml", help="[device] and [compass] model overrides")
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)

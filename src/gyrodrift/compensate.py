@@ -547,6 +547,10 @@ class Compensator:
     initialisation window fills, all its rows at once when it ends, then one row per
     sample. Gives the same numbers as :func:`compensate` on the same data.
 
+    The heading axis only: the x and y axes (``rate_x``, ``bias_x``, ...) of
+    :func:`compensate` come from :class:`gyrodrift.triad.TriadCompensator`, which a
+    running system feeds beside this one (it takes any number of rows at a time).
+
     Examples
     --------
     >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
@@ -1077,7 +1081,9 @@ def compensate(
         or ``a+b``: drift parameters the data have not yet determined, e.g. while the
         temperature is flat; empty when all are), ``bias_sd`` (deg/s, the filter's
         standard deviation of ``bias_z``) and every other input column (the input
-        ``heading`` is ``compass_heading``).
+        ``heading`` is ``compass_heading``). When the log has ``gyro_x``, ``gyro_y`` and
+        ``acc_x..z``, ``rate_x, rate_y, bias_x, bias_y`` (deg/s) and ``tilt_gated`` come
+        before the input columns (:mod:`gyrodrift.triad`).
     """
     source = source or log.attrs.get("source", "log")
     missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
@@ -1101,6 +1107,10 @@ def compensate(
         progress=progress,
         engine=engine,
     )
+    from gyrodrift.triad import add_triad_columns, has_triad_inputs
+
+    if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
+        add_triad_columns(out, log, config)
     return append_input_columns(out, log)
 
 

@@ -340,6 +340,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
     from gyrodrift.compensate import _compass_arrays, _fast_frame
     from gyrodrift.errors import LogFormatError
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
+    from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
     warm = threading.Thread(target=_warm_up, args=(cfg,), name="gyrodrift-warm-up", daemon=True)
     warm.start()
@@ -347,6 +348,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
     stats = RunStats(source, streamed=True)
     est = build_estimator(cfg)
     engine = ChunkEngine(cfg, est, source)
+    triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
     with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, ChunkWriter(output_path) as writer:
@@ -378,7 +380,12 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
                     continue
                 rows = pd.concat(pending) if len(pending) > 1 else pending[0]
                 pending = []
-                out = append_input_columns(_fast_frame(cols), rows.reset_index(drop=True))
+                rows = rows.reset_index(drop=True)
+                out = _fast_frame(cols)
+                if has_triad_inputs(rows.columns):
+                    triad = triad or TriadCompensator(cfg)
+                    add_triad_columns(out, rows, tc=triad)
+                out = append_input_columns(out, rows)
                 behind.put(out)
                 stats.add(out)
             engine.finish()

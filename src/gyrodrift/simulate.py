@@ -101,6 +101,9 @@ from gyrodrift.errors import ConfigError
 
 __all__ = [
     "DeviceModel",
+    "TriadModel",
+    "TRUE_BIAS_X",
+    "TRUE_BIAS_Y",
     "CompassModel",
     "Motion",
     "SCENARIOS",
@@ -137,6 +140,10 @@ __all__ = [
 
 #: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
 TRUE_SF = "true_sf"
+
+#: Truth columns of the x and y drift (deg/s), written with ``simulate(..., triad=...)``.
+TRUE_BIAS_X = "true_bias_x"
+TRUE_BIAS_Y = "true_bias_y"
 
 #: Scale-factor coefficients (:class:`DeviceModel` ``sf_*`` fields) of each scenario
 #: that sets them; a device coefficient left ``None`` takes this value (else 0).
@@ -503,6 +510,54 @@ class DeviceModel:
             self,
             **{n: float(defaults[n]) for n in self._MEMORY_FIELDS if getattr(self, n) is None},
         )
+
+
+@dataclass(frozen=True, kw_only=True)
+class TriadModel:
+    """The x and y gyros and the accelerometer, for logs of the whole gyro triad.
+
+    Each axis has its own :class:`DeviceModel` (drift, noise; its temperature-reading
+    fields are unused: the one ``temp`` column is the z model's); the defaults differ
+    from the z axis and from each other in sign and size. ``gyro_x``/``gyro_y`` read
+    ``SF × true body rate + true_bias_x/y + white`` with the true body rates of the
+    scenario's constant mounting attitude (``p = -sinθ ψ'``, ``q = sinφ cosθ ψ'``).
+    The accelerometer (``acc_x..z``, g, FRD specific force) feels the vehicle's
+    acceleration (braking, cornering) as the compass does (``CompassModel.kinematic_tilt``)
+    plus white noise of ``acc_noise_g`` per sample.
+
+    Attributes
+    ----------
+    x, y : DeviceModel
+        Error models of the roll- and pitch-axis gyros.
+    acc_noise_g : float
+        Standard deviation of the accelerometer noise per sample and axis, g (0 = off).
+    """
+
+    x: "DeviceModel" = field(
+        default_factory=lambda: DeviceModel(
+            c0_dps=-0.25, c1_dps_per_c=-0.015, c2_dps_per_c2=2.0e-4, c3_dps_per_c3=2.0e-6,
+            k_rate_dps_per_cps=-3.0, hyst_dps=0.02,
+        )
+    )
+    y: "DeviceModel" = field(
+        default_factory=lambda: DeviceModel(
+            c0_dps=0.10, c1_dps_per_c=0.030, c2_dps_per_c2=-2.0e-4, c3_dps_per_c3=-1.0e-6,
+            k_rate_dps_per_cps=4.0, hyst_dps=-0.02,
+        )
+    )
+    acc_noise_g: float = 0.002
+
+    def __post_init__(self):
+        for name in ("x", "y"):
+            if not isinstance(getattr(self, name), DeviceModel):
+                raise ConfigError(f"TriadModel.{name} must be a DeviceModel, got {type(getattr(self, name)).__name__}")
+        _nonneg("acc_noise_g", self.acc_noise_g, "TriadModel")
+
+    @classmethod
+    def noiseless(cls) -> "TriadModel":
+        """The default triad with every stochastic term zero (temperature quantisation kept)."""
+        d = cls()
+        return cls(x=d.x.scale_noise(0.0), y=d.y.scale_noise(0.0), acc_noise_g=0.0)
 
 
 def _first_order_lag(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
@@ -1438,7 +1493,9 @@ def random_compass(rng: np.random.Generator) -> CompassModel:
 
 def _streams(seed: int) -> dict[str, np.random.Generator]:
     """Independent generators of one seed, one per random source."""
-    names = ("trajectory", "white", "bias", "rrw", "temp", "compass")
+    # Appended names only: child i of a SeedSequence does not depend on how many are spawned.
+    names = ("trajectory", "white", "bias", "rrw", "temp", "compass",
+             "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
     children = np.random.SeedSequence(seed).spawn(len(names))
     return {name: np.random.default_rng(child) for name, child in zip(names, children)}
 
@@ -1493,6 +1550,36 @@ def _compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mas
     return heading, mag, acc
 
 
+def _triad_columns(t, dt, motion: Motion, triad: "TriadModel", scenario: str, acc, rng) -> dict:
+    """``gyro_x, gyro_y, true_bias_x, true_bias_y`` and the noisy ``acc_x..z`` of :class:`TriadModel`."""
+    n = t.size
+    phi, theta = math.radians(motion.roll_deg), math.radians(motion.pitch_deg)
+    body_rate = {  # body rates of a yaw rate at a constant attitude (ZYX Euler kinematics)
+        "x": -math.sin(theta) * motion.heading_rate_dps,
+        "y": math.sin(phi) * math.cos(theta) * motion.heading_rate_dps,
+    }
+    gyro, bias = {}, {}
+    for axis in ("x", "y"):
+        dev = getattr(triad, axis).with_scenario_scale_factor(scenario).with_scenario_memory(scenario)
+        bias[axis] = (
+            dev.drift_series(t, motion.temp_c, motion.temp_rate_cps)
+            + _gauss_markov(n, dt, dev.bias_instability_dps, dev.bias_tau_s, rng[f"{axis}_bias"])
+            + _random_walk(n, dt, dev.rate_random_walk_dps_rts, rng[f"{axis}_rrw"])
+        )
+        sigma = dev.white_sigma_dps(1.0 / dt)
+        white = sigma * rng[f"{axis}_white"].standard_normal(n) if sigma > 0 else np.zeros(n)
+        gyro[axis] = dev.scale_factor(motion.temp_c) * body_rate[axis] + bias[axis] + white
+    if triad.acc_noise_g > 0:
+        acc = acc + triad.acc_noise_g * rng["acc"].standard_normal((n, 3))
+    return {
+        "gyro_x": gyro["x"],
+        "gyro_y": gyro["y"],
+        TRUE_BIAS_X: bias["x"],
+        TRUE_BIAS_Y: bias["y"],
+        **{name: acc[:, i] for i, name in enumerate(ACC_COLS)},
+    }
+
+
 def simulate(
     scenario: str,
     *,
@@ -1502,6 +1589,7 @@ def simulate(
     device: DeviceModel | None = None,
     compass: CompassModel | None = None,
     raw_mag: bool = False,
+    triad: "TriadModel | None" = None,
 ) -> pd.DataFrame:
     """Simulate a log in the gyrodrift input contract, with truth columns.
 
@@ -1530,6 +1618,10 @@ def simulate(
     raw_mag : bool
         Also write ``mag_x, mag_y, mag_z`` (µT, FRD, NaN off compass rows) and
         ``acc_x, acc_y, acc_z`` (g, FRD specific force, every row).
+    triad : TriadModel, optional
+        Also write ``gyro_x, gyro_y`` (deg/s, own drift and noise), their truth
+        ``true_bias_x, true_bias_y`` and the accelerometer ``acc_x..z`` (g, with the
+        triad's noise). None (default): none of these (the other columns do not change).
 
     Returns
     -------
@@ -1593,8 +1685,12 @@ def simulate(
     }
     if scenario == "scale-factor" or device.has_scale_factor_error():
         columns[TRUE_SF] = true_sf
+    if triad is not None:
+        columns.update(_triad_columns(t, dt, motion, triad, scenario, acc, rng))
+        acc = np.column_stack([columns.pop(name) for name in ACC_COLS])
     if raw_mag:
         columns.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
+    if raw_mag or triad is not None:
         columns.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
     df = pd.DataFrame(columns)
     effective = replace(compass, interference=compass.interference + motion.interference)
@@ -1606,6 +1702,8 @@ def simulate(
         "device": _jsonable(asdict(device)),
         "compass": _jsonable(asdict(effective)),
     }
+    if triad is not None:
+        df.attrs["triad"] = _jsonable(asdict(triad))
     if motion.compass_dropouts:
         df.attrs["compass_dropouts"] = _jsonable(motion.compass_dropouts)
     return df

@@ -94,10 +94,20 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import Observation
 
-__all__ = ["TriadConfig", "TriadCompensator", "compensate_triad", "TRIAD_COLUMNS", "TRIAD_REASONS", "tilt_angles"]
+__all__ = [
+    "TriadConfig",
+    "TriadCompensator",
+    "compensate_triad",
+    "add_triad_columns",
+    "has_triad_inputs",
+    "TRIAD_COLUMNS",
+    "TRIAD_REASONS",
+    "tilt_angles",
+]
 
 #: Output columns, in order: compensated rates and removed drifts (deg/s), and 1 where the
 #: latest x/y update interval was refused (for either axis) or none has ended yet.
@@ -509,4 +519,36 @@ def compensate_triad(
     out = pd.DataFrame(tc.feed(t_s, gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps, acc, rate_z_dps))
     out.attrs["params_x"], out.attrs["params_y"] = tc.params
     out.attrs["triad_reasons"] = dict(tc.reasons)
+    return out
+
+
+def has_triad_inputs(columns) -> bool:
+    """Whether a log has what the x/y compensation needs: ``gyro_x, gyro_y`` and ``acc_x..z``."""
+    return all(c in columns for c in (GYRO_X, GYRO_Y, *ACC_COLS))
+
+
+def triad_inputs(out: pd.DataFrame, log: pd.DataFrame) -> tuple:
+    """Arguments of :meth:`TriadCompensator.feed` from input rows and their z output rows."""
+    return (
+        log[T].to_numpy(float),
+        log[GYRO_X].to_numpy(float),
+        log[GYRO_Y].to_numpy(float),
+        log[TEMP].to_numpy(float),
+        out["temp_rate"].to_numpy(float),
+        log[list(ACC_COLS)].to_numpy(float),
+        out["rate_z"].to_numpy(float),
+    )
+
+
+def add_triad_columns(out: pd.DataFrame, log: pd.DataFrame, config=None, tc: TriadCompensator | None = None):
+    """Append :data:`TRIAD_COLUMNS` to the z output ``out`` of the rows of ``log`` (in place).
+
+    ``tc`` continues a run chunk by chunk (:func:`gyrodrift.pipeline.compensate_file`);
+    None compensates these rows as a whole log. The x/y estimators are built from
+    ``config`` (``config.estimator``), also when the z axis was given an estimator
+    instance. Returns ``out``.
+    """
+    tc = tc or TriadCompensator(config)
+    for name, col in tc.feed(*triad_inputs(out, log)).items():
+        out[name] = col
     return out
