@@ -64,36 +64,48 @@ def temp_rate_kernel(t, temp, window_bins, bin_s, tf, ti, bins, out):
     """T' (degC/s) of every sample, resumable (mirror of :class:`gyrodrift.model.TempRateTracker`).
 
     ``bins`` is a ring of (bin number, mean time, mean temperature) of the closed bins,
-    at least ``window_bins + 2`` rows.
+    at least ``window_bins + 2`` rows. The state lives in locals during the loop.
     """
     cap = bins.shape[0]
+    if t.size and ti[TI_STARTED] == 0:
+        tf[TF_T0] = t[0]
+        ti[TI_STARTED] = 1
+        ti[TI_BIN] = math.floor((t[0] - tf[TF_T0]) / bin_s)
+    t0 = tf[TF_T0]
+    sum_t, sum_T, rate = tf[TF_SUM_T], tf[TF_SUM_TEMP], tf[TF_RATE]
+    cur, count, head, length = ti[TI_BIN], ti[TI_N], ti[TI_HEAD], ti[TI_LEN]
+    # below t_near the bin number cannot have changed (margin for the rounding of the division)
+    t_near = _near_boundary(t0, float(cur), bin_s)
     for i in range(t.size):
-        if ti[TI_STARTED] == 0:
-            tf[TF_T0] = t[i]
-            ti[TI_STARTED] = 1
-            ti[TI_BIN] = math.floor((t[i] - tf[TF_T0]) / bin_s)
-        b = math.floor((t[i] - tf[TF_T0]) / bin_s)
-        if ti[TI_N] > 0 and b != ti[TI_BIN]:
+        ti_ = t[i]
+        b = cur
+        if ti_ >= t_near:
+            b = math.floor((ti_ - t0) / bin_s)
+        if count > 0 and b != cur:
             # close the bin: its mean time and temperature
-            tb = tf[TF_SUM_T] / ti[TI_N]
-            Tb = tf[TF_SUM_TEMP] / ti[TI_N]
-            pos = (ti[TI_HEAD] + ti[TI_LEN]) % cap
-            bins[pos, 0] = ti[TI_BIN]
+            tb = sum_t / count
+            Tb = sum_T / count
+            pos = (head + length) % cap
+            bins[pos, 0] = cur
             bins[pos, 1] = tb
             bins[pos, 2] = Tb
-            ti[TI_LEN] += 1
-            while bins[ti[TI_HEAD], 0] < ti[TI_BIN] - window_bins:
-                ti[TI_HEAD] = (ti[TI_HEAD] + 1) % cap
-                ti[TI_LEN] -= 1
-            tf[TF_RATE] = _ring_slope(bins, ti[TI_HEAD], ti[TI_LEN])
-            tf[TF_SUM_T] = 0.0
-            tf[TF_SUM_TEMP] = 0.0
-            ti[TI_N] = 0
-        ti[TI_BIN] = b
-        tf[TF_SUM_T] += t[i]
-        tf[TF_SUM_TEMP] += temp[i]
-        ti[TI_N] += 1
-        out[i] = tf[TF_RATE]
+            length += 1
+            while bins[head, 0] < cur - window_bins:
+                head = (head + 1) % cap
+                length -= 1
+            rate = _ring_slope(bins, head, length)
+            sum_t = 0.0
+            sum_T = 0.0
+            count = 0
+        if b != cur:
+            cur = b
+            t_near = _near_boundary(t0, float(cur), bin_s)
+        sum_t += ti_
+        sum_T += temp[i]
+        count += 1
+        out[i] = rate
+    tf[TF_SUM_T], tf[TF_SUM_TEMP], tf[TF_RATE] = sum_t, sum_T, rate
+    ti[TI_BIN], ti[TI_N], ti[TI_HEAD], ti[TI_LEN] = cur, count, head, length
 
 
 @njit(cache=True, nogil=True)
