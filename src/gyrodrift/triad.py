@@ -43,9 +43,11 @@ and the same for θ. The same linear window functional is applied to the gyro
 integral and to the angle, so for a constant drift and any attitude the accelerometer
 sees exactly, ``M`` is the drift exactly; the sign measures the drift (gyro minus
 reference, as gyrodrift's eq. 6). The drifts enter as ``M_φ = d_x + k1 d_y`` and
-``M_θ = k2 d_y`` with ``k1 = mean tanθ sinφ`` and ``k2 = mean cosφ`` over the interval,
-so ``m_y = M_θ/k2`` and ``m_x = M_φ − k1 m_y``. H is the row of window-matched means
-of ``[T, T', 1]`` (exact for the linear drift model, eq. 3 with one row). Measurement
+``M_θ = k2 d_y`` with ``k1`` and ``k2`` the window-matched interval means of
+``tanθ sinφ`` and ``cosφ``, so ``m_y = M_θ/k2`` and ``m_x = M_φ − k1 m_y``: exact for
+constant drifts whatever the attitude does between the edges. H is the row of
+window-matched means of ``[T, T', 1]`` (exact for the linear drift model with a
+constant attitude; eq. 3 with one row). Measurement
 variance per axis: ``R = N²/Δt + (σ_A² + σ_B²)/Δt²`` with ``N`` the gyro noise density
 and ``σ`` the standard error of each edge's mean angle (accelerometer noise, at least
 ``acc_noise_g``, or the spread seen in the window if larger), propagated through
@@ -194,9 +196,9 @@ def _hold(x: np.ndarray, last: float) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 #: Per-row arrays of the open interval, in the order kept by the buffer.
-_FIELDS = ("t", "Iphi", "Ith", "IT", "ITp", "Igx", "Igy", "Irz", "fx", "fy", "fz", "ok", "k1", "k2")
-_F = slice(8, 11)
-_OK = 11
+_FIELDS = ("t", "Iphi", "Ith", "IT", "ITp", "Ik1", "Ik2", "Igx", "Igy", "Irz", "fx", "fy", "fz", "ok")
+_F = slice(10, 13)
+_OK = 13
 
 
 class TriadCompensator:
@@ -242,7 +244,7 @@ class TriadCompensator:
         self._k = 0.0
         self._t_last = -math.inf
         self._prev: np.ndarray | None = None  # integrands of the last row
-        self._I = np.zeros(7)  # their integrals
+        self._I = np.zeros(9)  # their integrals
         self._held = {"gx": math.nan, "gy": math.nan, "T": math.nan, "Tp": 0.0}
         self._buf: list[dict[str, np.ndarray]] = []
         self._bad = False  # a gap or held cell in the open interval
@@ -340,7 +342,7 @@ class TriadCompensator:
         u_th = gy0 * cphi - rz * sphi
 
         # trapezoid integrals continued from the last chunk (sequential sums: chunk-invariant)
-        u = np.stack([u_phi, u_th, T, Tp, gx0, gy0, rz])
+        u = np.stack([u_phi, u_th, T, Tp, k1, cphi, gx0, gy0, rz])
         prev = self._prev if self._prev is not None else u[:, 0]
         inc = 0.5 * (u + np.concatenate([prev[:, None], u[:, :-1]], axis=1)) * dt
         inc[:, 0] += self._I
@@ -348,11 +350,9 @@ class TriadCompensator:
         self._I, self._prev, self._t_last = I[:, -1].copy(), u[:, -1].copy(), float(t[-1])
         rows = np.empty((n, len(_FIELDS)))
         rows[:, 0] = t
-        rows[:, 1:8] = I.T
-        rows[:, 8:11] = f
-        rows[:, 11] = ok
-        rows[:, 12] = k1
-        rows[:, 13] = cphi
+        rows[:, 1:10] = I.T
+        rows[:, _F] = f
+        rows[:, _OK] = ok
 
         out_bias_x, out_bias_y = np.empty(n), np.empty(n)
         out_gated = np.empty(n, dtype=np.int8)
@@ -403,7 +403,7 @@ class TriadCompensator:
         fm = m[_F]
         norm = float(np.sqrt(fm @ fm))
         return {
-            **{name: float(m[i]) for i, name in enumerate(_FIELDS[:5])},
+            **{name: float(m[i]) for i, name in enumerate(_FIELDS[:7])},
             "roll": float(np.mean(roll)),
             "pitch": float(np.mean(pitch)),
             "norm": norm,
@@ -460,7 +460,8 @@ class TriadCompensator:
         dt = end["t"] - start["t"]
         M_phi = (end["Iphi"] - start["Iphi"] - (end["roll"] - start["roll"])) / dt
         M_th = (end["Ith"] - start["Ith"] - (end["pitch"] - start["pitch"])) / dt
-        k1, k2 = float(np.mean(r["k1"])), float(np.mean(r["k2"]))
+        k1 = (end["Ik1"] - start["Ik1"]) / dt  # window-matched means of tanθ sinφ and cos φ
+        k2 = (end["Ik2"] - start["Ik2"]) / dt
         m_y = M_th / k2
         m_x = M_phi - k1 * m_y
         h = np.array([(end["IT"] - start["IT"]) / dt, (end["ITp"] - start["ITp"]) / dt, 1.0])
