@@ -56,6 +56,7 @@ class RunStats:
     # accuracy accumulators (sum of squares, max |error|, count)
     _heading: list = field(default_factory=lambda: [0.0, 0.0, 0, 0.0, 0.0])  # raw ss, ss, n, raw max, max
     _bias: list = field(default_factory=lambda: [0.0, 0.0, 0])  # raw ss, ss, n
+    _bias_xy: dict = field(default_factory=dict)  # axis -> [raw ss, ss, n]
     _raw: tuple | None = None  # (t, gyro, raw heading) of the last row
 
     def add(self, out: pd.DataFrame) -> None:
@@ -77,12 +78,10 @@ class RunStats:
         if REF_HEADING in out.columns and GYRO_Z in out.columns:
             self._add_heading(t, out)
         if TRUE_BIAS_Z in out.columns:
-            truth = out[TRUE_BIAS_Z].to_numpy(float)
-            e = out["bias_z"].to_numpy(float) - truth
-            acc = self._bias
-            acc[0] += float(np.sum(truth**2))
-            acc[1] += float(np.sum(e**2))
-            acc[2] += truth.size
+            _add_bias(self._bias, out[TRUE_BIAS_Z], out["bias_z"])
+        for axis in ("x", "y"):
+            if f"true_bias_{axis}" in out.columns and f"bias_{axis}" in out.columns:
+                _add_bias(self._bias_xy.setdefault(axis, [0.0, 0.0, 0]), out[f"true_bias_{axis}"], out[f"bias_{axis}"])
 
     def _add_heading(self, t: np.ndarray, out: pd.DataFrame) -> None:
         """Raw-gyro heading (trapezoid, from the first compensated heading; an empty gyro cell
@@ -134,6 +133,12 @@ class RunStats:
                 f"drift error RMS vs true_bias_z: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
                 f"compensated {math.sqrt(ss / n):.4f} deg/s"
             )
+        for axis, (raw_ss, ss, n) in self._bias_xy.items():
+            if n:
+                lines.append(
+                    f"{axis} drift error RMS vs true_bias_{axis}: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
+                    f"compensated {math.sqrt(ss / n):.4f} deg/s"
+                )
         raw_ss, ss, n, raw_max, e_max = self._heading
         if n:
             lines.append(
@@ -141,6 +146,16 @@ class RunStats:
                 f"-> compensated RMS {math.sqrt(ss / n):.2f} deg (max {e_max:.2f})"
             )
         return lines
+
+
+def _add_bias(acc: list, truth, estimate) -> None:
+    """Accumulate the squares of the raw drift and of the estimate's error (finite rows)."""
+    truth = np.asarray(truth, dtype=float)
+    e = np.asarray(estimate, dtype=float) - truth
+    ok = np.isfinite(e)
+    acc[0] += float(np.sum(truth[ok] ** 2))
+    acc[1] += float(np.sum(e[ok] ** 2))
+    acc[2] += int(ok.sum())
 
 
 def _read_text(source, rows: int, t_first_s: float, t_last_s: float, temp_min_c: float, temp_max_c: float,
