@@ -82,3 +82,21 @@ def test_estimators_the_engine_lacks_run_in_memory(logs, tmp_path):
     assert not stats.streamed
     with pytest.raises(ConfigError, match="cannot stream"):
         compensate_file(logs["csv"], tmp_path / "o2.csv", CompensatorConfig(estimator="lsm"), stream=True)
+
+
+def test_scale_factor_columns_run_in_memory(tmp_path):
+    from gyrodrift.simulate import simulate
+
+    log = simulate("scale-factor", seed=2, fs_hz=10.0, duration_s=1800.0)
+    write_table(log, tmp_path / "sf.csv")
+    stats = compensate_file(tmp_path / "sf.csv", tmp_path / "out.csv", scale_factor=True)
+    assert not stats.streamed
+    out = pd.read_csv(tmp_path / "out.csv")
+    cols = list(out.columns)
+    assert cols[cols.index("heading_sd") + 1 : cols.index("heading_sd") + 5] == ["sf", "sf_sd", "rate_sf", "heading_sf"]
+    late = out["t"] > 900
+    err = out.loc[late, "sf"].to_numpy() - log.loc[late.to_numpy(), "true_sf"].to_numpy()
+    assert np.sqrt(np.mean(err**2)) < 0.002 and np.abs(err).max() < 0.01  # the SF itself moves by 0.03
+    assert any(line.startswith("heading_sf error") for line in stats.result_lines())
+    with pytest.raises(ConfigError, match="scale-factor"):
+        compensate_file(tmp_path / "sf.csv", tmp_path / "o2.csv", scale_factor=True, stream=True)

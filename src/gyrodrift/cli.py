@@ -100,7 +100,7 @@ def _cmd_compensate(args) -> int:
     if args.profile:
         cfg = warm_config(load_profile(args.profile), cfg)
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
-                            progress=_bar("compensating"))
+                            progress=_bar("compensating"), scale_factor=args.scale_factor)
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
@@ -309,6 +309,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     c.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
+    c.add_argument(
+        "--scale-factor", action="store_true",
+        help="also estimate the gyro scale factor over turns (paper Sec. 4.3; gyrodrift.scale_factor) and add "
+        "sf, sf_sd, rate_sf and heading_sf (runs in memory)",
+    )
     add_input_options(c)
     _add_method_options(c)
     c.set_defaults(func=_cmd_compensate)

@@ -57,6 +57,7 @@ class RunStats:
     _heading: list = field(default_factory=lambda: [0.0, 0.0, 0, 0.0, 0.0])  # raw ss, ss, n, raw max, max
     _bias: list = field(default_factory=lambda: [0.0, 0.0, 0])  # raw ss, ss, n
     _bias_xy: dict = field(default_factory=dict)  # axis -> [raw ss, ss, n]
+    _other_headings: dict = field(default_factory=dict)  # column -> [ss, n, max]
     _raw: tuple | None = None  # (t, gyro, raw heading) of the last row
 
     def add(self, out: pd.DataFrame) -> None:
@@ -97,6 +98,15 @@ class RunStats:
         raw = raw_prev + np.cumsum(inc)
         self._raw = (float(t[-1]), float(g[-1]), float(raw[-1]))
         ref = out[REF_HEADING].to_numpy(float)
+        for col in ("heading_fused", "heading_sf"):
+            if col in out.columns:
+                e_other = wrap_180(out[col].to_numpy(float) - ref)
+                e_other = e_other[np.isfinite(e_other)]
+                acc = self._other_headings.setdefault(col, [0.0, 0, 0.0])
+                acc[0] += float(np.sum(e_other**2))
+                acc[1] += e_other.size
+                if e_other.size:
+                    acc[2] = max(acc[2], float(np.max(np.abs(e_other))))
         ok = np.isfinite(ref)
         e_raw = wrap_180(raw[ok] - ref[ok])
         e = wrap_180(out["heading"].to_numpy(float)[ok] - ref[ok])
@@ -145,6 +155,9 @@ class RunStats:
                 f"heading error vs ref_heading: raw gyro RMS {math.sqrt(raw_ss / n):.2f} deg (max {raw_max:.2f}) "
                 f"-> compensated RMS {math.sqrt(ss / n):.2f} deg (max {e_max:.2f})"
             )
+        for col, (ss, n, e_max) in self._other_headings.items():
+            if n:
+                lines.append(f"{col} error vs ref_heading: RMS {math.sqrt(ss / n):.2f} deg (max {e_max:.2f})")
         return lines
 
 
@@ -192,6 +205,7 @@ def compensate_file(
     chunk_rows: int = CHUNK_ROWS,
     stream: bool | None = None,
     progress=None,
+    scale_factor: bool = False,
 ) -> RunStats:
     """Compensate the log at ``input_path`` and write the output table to ``output_path``.
 
@@ -211,6 +225,11 @@ def compensate_file(
         Force (True) or forbid (False) the streaming path; default: stream when it can.
     progress : callable, optional
         ``progress(iterable, total)`` for the in-memory path (see :func:`compensate`).
+    scale_factor : bool
+        Also estimate the gyro scale factor over the turns of the log
+        (:func:`gyrodrift.scale_factor.estimate_scale_factor`: updated at every accepted
+        rotation, frozen in between) and add its columns ``sf``, ``sf_sd``, ``rate_sf``,
+        ``heading_sf`` after ``heading_sd``. It needs the whole output, so the run is in memory.
 
     Returns
     -------
@@ -236,11 +255,15 @@ def compensate_file(
             f"{input_path}: cannot stream this run (needs a CSV or Parquet log, numba, and a Kalman-family "
             "estimator with endpoint measurements)"
         )
+    if stream and scale_factor:
+        raise ConfigError(f"{input_path}: the scale-factor estimate needs the whole log in memory; do not force streaming")
     if stream is None:
-        stream = can_stream
+        stream = can_stream and not scale_factor
     if not stream:
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
+        if scale_factor:
+            out = _with_scale_factor(out)
         write_table(out, output_path)
         stats = RunStats(str(input_path), read_summary=log.attrs.get("summary"), compass=log.attrs.get("compass", "?"))
         stats.add(out)
@@ -346,6 +369,22 @@ def _warm_up(cfg: CompensatorConfig) -> None:
         engine.feed(t, np.zeros(t.size), np.full(t.size, 20.0), heading, None, None)
     except Exception:  # noqa: BLE001 - only a warm-up; the real run reports any problem
         pass
+
+
+#: Columns of :func:`gyrodrift.scale_factor.estimate_scale_factor` added by ``scale_factor=True``.
+SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
+
+
+def _with_scale_factor(out: pd.DataFrame) -> pd.DataFrame:
+    """``out`` with the scale-factor columns inserted after ``heading_sd``."""
+    from gyrodrift.scale_factor import estimate_scale_factor
+
+    sf = estimate_scale_factor(out)
+    at = list(out.columns).index("heading_sd") + 1
+    for k, name in enumerate(SF_COLUMNS):
+        out.insert(at + k, name, sf[name].to_numpy())
+    out.attrs["scale_factor"] = {"final_params": sf.attrs["final_params"], "turns": int(sf.attrs["turns"]["accepted"].sum())}
+    return out
 
 
 def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
