@@ -99,7 +99,7 @@ def test_zaru_used_when_still_and_not_fooled_by_a_slow_turn():
     for zaru in (True, False):
         out = compensate(log, CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru=zaru)))
         err[zaru] = float(np.sqrt(np.mean((out["bias_z"] - log["true_bias_z"]).to_numpy()[3000:] ** 2)))
-    assert err[True] < 0.5 * err[False]
+    assert err[True] < 0.75 * err[False]
 
 
 def test_one_measurement_per_interval_unless_stacked():
@@ -126,6 +126,33 @@ def test_adaptive_settings_validated_and_ablated():
     base = AdaptiveConfig()
     assert base.ablated("zaru").zaru is False and base.ablated("one_measurement").stacked is True
     assert base.ablated("fading").fading is False and base.ablated("process_noise").q_sd is None
+    assert base.ablated("recentre").recentre is False and base.ablated("process_noise").slope_q_per_rtc == 0.0
     with pytest.raises(ConfigError, match="unknown fix"):
         base.ablated("magic")
     assert make_estimator("adaptive", settings=base.ablated("fading")).lambda_max == 1.0
+
+
+def test_recentring_keeps_the_drift_model():
+    est = make_estimator("adaptive")
+    H = np.array([[30.0, 0.001, 1.0]])
+    for T in (30.0, 32.0, 35.0):
+        est.update(obs(np.array([[T, 0.001, 1.0]]), 0.02 * T - 0.3, r=1e-4))
+    before, cov = est.params.copy(), est.cov.copy()
+    est._recentre(50.0)
+    np.testing.assert_allclose(est.params, before, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(est.cov, cov, rtol=1e-9, atol=1e-15)
+    assert est.temp_ref_c == 50.0 and H.shape == (1, 3)
+
+
+def test_normalised_fading_ignores_one_outlier_but_follows_a_jump():
+    est = make_estimator("adaptive")
+    H = np.array([[30.0, 0.0, 1.0]])
+    for _ in range(50):
+        est.update(obs(H, 0.2, r=1e-3))
+    est.update(obs(H, 0.29, r=1e-3))  # one 2.8-sigma outlier: the mean NIS of 3 stays below 3.78
+    assert est.last_lambda == 1.0
+    for _ in range(3):
+        est.update(obs(H, 0.2, r=1e-3))
+    for _ in range(3):
+        est.update(obs(H, 1.2, r=1e-3))  # the drift jumps by 1 deg/s
+    assert est.last_lambda > 2.0

@@ -1,5 +1,7 @@
 """The compiled engine (gyrodrift._engine) against the reference engine, and fed in chunks."""
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -17,9 +19,11 @@ from test_compensate import complex_log  # noqa: E402
 
 ESTIMATORS = ("stkf", "stkf-s1", "kf", "adaptive")
 
-#: The ``adaptive`` settings the compiled engine implements: no stationarity updates,
-#: stacked measurements (the defaults run on the reference engine).
-COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True)
+#: The ``adaptive`` settings the compiled engine implements: Zhou's recursive fading, a
+#: fixed reference temperature, no stationarity updates, stacked measurements (the
+#: defaults run on the reference engine).
+COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, recentre=False, normalised=False, softening=1.0,
+                                   slope_q_per_rtc=0.0)
 
 
 def config(estimator: str, **kw) -> CompensatorConfig:
@@ -131,8 +135,11 @@ def test_engine_choice():
     # Stationarity updates and unstacked measurements are not compiled: the reference engine runs them.
     assert not _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
     assert not _engine.supports(cfg, make_estimator("adaptive", settings=AdaptiveConfig(zaru=False)))
-    assert _engine.supports(CompensatorConfig(stack_depth=1),
-                            make_estimator("adaptive", settings=AdaptiveConfig(zaru=False)))
+    unstacked = replace(COMPILED_ADAPTIVE, stacked=False)
+    assert _engine.supports(CompensatorConfig(stack_depth=1), make_estimator("adaptive", settings=unstacked))
+    for fix in ("recentre", "normalised", "zaru"):
+        est = make_estimator("adaptive", settings=replace(COMPILED_ADAPTIVE, **{fix: True}))
+        assert not _engine.supports(cfg, est), fix
     assert not _engine.supports(cfg, Watched(KalmanConfig()))
     assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("stkf"))
     assert not _engine.supports(cfg, make_estimator("lsm"))

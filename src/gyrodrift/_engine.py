@@ -51,7 +51,7 @@ def supports(config, estimator) -> bool:
     if isinstance(settings, AdaptiveConfig):
         # Not compiled: stationarity (ZARU) updates, and one measurement per interval
         # where the compensator would stack several; the reference engine runs these.
-        if settings.zaru or settings.softening != 1.0 or settings.innovation_window != 1 or (not settings.stacked and config.stack_depth > 1):
+        if settings.zaru or settings.recentre or settings.slope_q_per_rtc != 0.0 or settings.softening != 1.0 or settings.normalised or (not settings.stacked and config.stack_depth > 1):
             return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)

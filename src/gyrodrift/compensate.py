@@ -473,9 +473,17 @@ class _Aiding:
         sxx = float(np.dot(tc, tc))
         slope = float(np.dot(tc, d - np.mean(d))) / sxx
         resid = d - np.mean(d) - slope * tc
-        resid_sd = math.sqrt(float(np.dot(resid, resid)) / max(len(win) - 2, 1))
-        slope_se = resid_sd / math.sqrt(sxx)
-        if resid_sd > st.zaru_resid_k * self.cfg.compass_sigma_deg or abs(slope) > st.zaru_slope_k * slope_se:
+        dof = max(len(win) - 2, 1)
+        resid_var = float(np.dot(resid, resid)) / dof
+        slope_se = math.sqrt(resid_var / sxx)
+        # Compass white noise from successive differences (slow motion cancels in them):
+        # a heading that wanders inside the window, even about a flat line, leaves a
+        # scatter about the line larger than that noise.
+        hf = np.diff(d)
+        noise_var = 0.5 * float(np.dot(hf - np.mean(hf), hf - np.mean(hf))) / max(hf.size - 1, 1)
+        if (resid_var > (2.0 * self.cfg.compass_sigma_deg) ** 2
+                or resid_var > noise_var * (1.0 + st.zaru_resid_k * math.sqrt(2.0 / dof))
+                or abs(slope) > st.zaru_slope_k * slope_se):
             return None
         inside = [s for s in win if s.t >= self.start.t]
         if len(inside) >= 3:

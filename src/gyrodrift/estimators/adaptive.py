@@ -30,6 +30,7 @@ its measurements (one measurement per interval, stationarity updates).
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -54,13 +55,22 @@ class AdaptiveConfig:
         measurements in y (eq. 3), each measurement used in several updates with its
         noise counted as new each time. ``False`` (default): one measurement per update
         interval with its own variance.
+    recentre : bool
+        Fix 2, well-posed process noise: before each update the reference temperature
+        moves to the temperature of the new measurement (``c' ← c' + a (T_new − T_ref)``,
+        P transformed alike), so that ``q_sd`` of c' is the random walk of the drift *at
+        the current temperature* and that of ``a`` is not amplified by a growing
+        ``|T − T_ref|``. ``False``: T_ref stays the first measurement's temperature.
     zaru : bool
         Fix 4: a zero-rate (stationarity) measurement when the unit is still. The mean
         gyro rate over the interval then measures the drift with only the gyro's white
         noise, ``N²/Δt``, about 5 times more precise than a compass difference (eq. 6).
         Still means: the compass heading over the last ``zaru_window_s`` fits a flat
-        line (slope within ``zaru_slope_k`` of its standard error, scatter within
-        ``zaru_resid_k`` compass sigmas: a slow turn or sway fails this) and the gyro
+        line: slope within ``zaru_slope_k`` of its standard error, scatter about the
+        line within two compass sigmas and not above the compass white noise (estimated
+        online from successive differences) by more than ``zaru_resid_k`` standard
+        errors of a variance ratio; a slow turn, a sway or a wandering heading fails
+        this. And the gyro
         rate between compass samples has a standard deviation below
         ``GateConfig.still_std_dps``. A still interval is accepted even when the compass
         and gyro disagree (the drift moved, not the heading).
@@ -80,27 +90,54 @@ class AdaptiveConfig:
         ``λ = max(1, tr(V − H Q Hᵀ − β R) / tr(H P Hᵀ))``: fade only when the innovations
         exceed β times the measurement noise. With one measurement per interval, V is an
         average over a few innovations only and exceeds R by chance about half the time;
-        β = 1 then fades on noise.
+        β = 1 then fades on noise. Default 3.78, the 99 % quantile of χ² with 3 degrees
+        of freedom divided by 3 (``innovation_window`` = 3): about 1 % of updates of a
+        consistent filter fade. Not tuned (the ``static`` family cannot tell 1 to 6.6
+        apart).
+    normalised : bool
+        Fix 3 (robust fading test): True: the test uses the mean normalised innovation
+        squared (NIS, ``γᵀ S⁻¹ γ / m`` with ``S`` predicted without fading) of the last
+        ``innovation_window`` updates, ε̄, and fades by
+        ``λ = max(1, 1 + (ε̄ − β) tr(S) / tr(H P Hᵀ))``: Zhou's λ with V = ε̄ S, so only
+        a sustained excess over β (a χ² quantile of ``n`` degrees of freedom divided by
+        n) fades the memory, whatever the measurement type (compass or ZARU) and its R.
+        False: Zhou's recursive innovation covariance (``rho``), which mixes the
+        innovations of measurements with very different R (a compass difference
+        followed by a ZARU update looks like a model failure).
+    innovation_window : int
+        Number of updates averaged in the normalised test.
     q_sd : tuple of 3 floats, optional
         Fix 5, per-parameter process noise: random-walk standard deviations of
         [a (deg/s/degC), b (deg), c' (deg/s, the drift at T_ref)] per update interval.
         A random-walk ``c'`` follows drift the linear model does not explain
         (curvature, hysteresis, bias instability) while a and b keep a long memory.
-        None: ``KalmanConfig.q_sd``, shared with the other Kalman estimators. The
-        default was tuned on the ``static`` Monte Carlo family alone (5 seeds, full
-        length; see ``docs/results.md``) and frozen for the others.
+        None: ``KalmanConfig.q_sd``, shared with the other Kalman estimators (and no
+        ``slope_q_per_rtc``). ``q_sd``, ``slope_q_per_rtc`` and the ZARU thresholds
+        were tuned on the ``static`` Monte Carlo family alone (5 seeds, full length;
+        see ``docs/results.md``) and frozen for the others.
+    slope_q_per_rtc : float
+        Fix 5: random walk of ``a`` *in temperature*, deg/s/degC per √degC: the
+        variance ``slope_q_per_rtc² |ΔT|`` is added to that of ``a`` when the
+        temperature moves by ΔT between updates. A curved drift(T) has a slope that
+        changes with temperature, not with time: on a temperature plateau ``a`` keeps its
+        memory (and through an outage on a ramp it is not made noisier by the length of
+        the outage), while on a ramp it follows the local slope.
     """
 
     stacked: bool = False
+    recentre: bool = True
     zaru: bool = True
     zaru_window_s: float = 60.0
     zaru_slope_k: float = 3.0
-    zaru_resid_k: float = 2.0
+    zaru_resid_k: float = 3.0
     fading: bool = True
     lambda_max: float = 20.0
     rho: float = 0.8
-    softening: float = 1.0
-    q_sd: tuple[float, float, float] | None = (1e-3, 0.05, 3e-3)
+    softening: float = 3.78
+    innovation_window: int = 3
+    normalised: bool = True
+    q_sd: tuple[float, float, float] | None = (1e-4, 0.05, 5e-3)
+    slope_q_per_rtc: float = 0.06
 
     def __post_init__(self):
         if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
@@ -109,6 +146,8 @@ class AdaptiveConfig:
             raise ConfigError(f"rho must be between 0 and 1, got {self.rho!r}")
         if not (math.isfinite(self.softening) and self.softening >= 1.0):
             raise ConfigError(f"softening must be >= 1, got {self.softening!r}")
+        if not (isinstance(self.innovation_window, int) and self.innovation_window >= 1):
+            raise ConfigError(f"innovation_window must be a whole number >= 1, got {self.innovation_window!r}")
         for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -122,14 +161,14 @@ class AdaptiveConfig:
                 raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
-    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "zaru", "fading", "process_noise")
+    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "recentre", "zaru", "fading", "process_noise")
 
     def ablated(self, fix: str) -> "AdaptiveConfig":
         """These settings with one fix of :attr:`FIXES` switched off."""
         from dataclasses import replace
 
-        off = {"one_measurement": {"stacked": True}, "zaru": {"zaru": False}, "fading": {"fading": False},
-               "process_noise": {"q_sd": None}}
+        off = {"one_measurement": {"stacked": True}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
+               "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0}}
         if fix not in off:
             raise ConfigError(f"unknown fix {fix!r}; choose from: {', '.join(self.FIXES)}")
         return replace(self, **off[fix])
@@ -174,6 +213,9 @@ class AdaptiveKalman(LinearDrift):
         if settings.q_sd is not None:
             self._Q = np.diag(np.square(np.array(settings.q_sd, dtype=float)))
         self._V: np.ndarray | None = None
+        self._last_temp_c: float | None = None
+        #: Normalised innovations squared of the last ``innovation_window`` updates.
+        self._nis: deque[float] = deque(maxlen=settings.innovation_window)
         #: Fading factor of the last update (diagnostics).
         self.last_lambda = 1.0
 
@@ -199,19 +241,41 @@ class AdaptiveKalman(LinearDrift):
         H[:, 0] -= self.temp_ref_c
         return H
 
+    def _recentre(self, temp_c: float) -> None:
+        """Move the reference temperature to ``temp_c`` (the drift model is unchanged)."""
+        J = np.eye(3)
+        J[2, 0] = temp_c - self.temp_ref_c
+        self._z = J @ self._z
+        self._P = J @ self._P @ J.T
+        self.temp_ref_c = temp_c
+
     def update(self, obs: Observation) -> np.ndarray:
+        temp_c = float(np.mean(obs.H[:, 0]))
+        Q = self._Q
+        if self._last_temp_c is not None and self.settings.slope_q_per_rtc > 0.0 and self.settings.q_sd is not None:
+            Q = Q.copy()
+            Q[0, 0] += self.settings.slope_q_per_rtc**2 * abs(temp_c - self._last_temp_c)
+        self._last_temp_c = temp_c
+        if self.settings.recentre and self.temp_ref_c is not None:
+            self._recentre(temp_c)
         H = self._centre(obs)
         gamma = obs.y - H @ self._z
-        outer = np.outer(gamma, gamma)
-        if self._V is None or self._V.shape != outer.shape:
-            self._V = outer
-        else:
-            self._V = (self.rho * self._V + outer) / (1.0 + self.rho)
-        N = self._V - H @ self._Q @ H.T - self.settings.softening * obs.R
         M = H @ self._P @ H.T
-        lam = float(np.trace(N) / np.trace(M)) if np.trace(M) > 0 else 1.0
+        if self.settings.normalised:
+            S = M + H @ Q @ H.T + obs.R
+            self._nis.append(float(gamma @ np.linalg.solve(S, gamma)) / gamma.size)
+            excess = sum(self._nis) / len(self._nis) - self.settings.softening
+            lam = 1.0 + excess * float(np.trace(S) / np.trace(M)) if np.trace(M) > 0 else 1.0
+        else:
+            outer = np.outer(gamma, gamma)
+            if self._V is None or self._V.shape != outer.shape:
+                self._V = outer
+            else:
+                self._V = (self.rho * self._V + outer) / (1.0 + self.rho)
+            N = self._V - H @ Q @ H.T - self.settings.softening * obs.R
+            lam = float(np.trace(N) / np.trace(M)) if np.trace(M) > 0 else 1.0
         self.last_lambda = min(max(1.0, lam), self.lambda_max)
-        P_prior = cap_covariance(predict(self._P, self._Q, self.last_lambda), self._max_var)
+        P_prior = cap_covariance(predict(self._P, Q, self.last_lambda), self._max_var)
         self._z, P_post, _, _ = correct(self._z, P_prior, obs.y, H, obs.R)
         self._P = cap_covariance(P_post, self._max_var)
         return self.params
