@@ -764,7 +764,9 @@ class ChunkWriter:
     def _write_parquet(self, df: pd.DataFrame) -> None:
         table = tabular._arrow_table(df)
         if self._parquet is None:
-            self._parquet = pa_pq.ParquetWriter(self._fh, table.schema)
+            self._parquet = pa_pq.ParquetWriter(
+                self._fh, table.schema, use_dictionary=tabular._parquet_dictionary_columns(table.schema)
+            )
         elif not table.schema.equals(self._parquet.schema, check_metadata=False):
             try:
                 table = table.cast(self._parquet.schema)
