@@ -155,16 +155,8 @@ class ChunkEngine:
                 return None
             cols = tuple(_concat(c) for c in zip(*self._buf)) if len(self._buf) > 1 else self._buf[0]
             self._buf = None
-            return self._fuse(self._initialise(*cols))
-        return self._fuse(self._run(*cols, i0=0, out=None))
-
-    def _fuse(self, out: dict) -> dict:
-        """The fused heading and the heading σ columns (:mod:`gyrodrift.fusion`)."""
-        C = importlib.import_module("gyrodrift.compensate")
-        out["heading_fused"], out["heading_fused_sd"], out["heading_sd"] = self._fusion.rows(
-            out["t"], out["rate_z"], out["compass_heading"], C.fusion_allowed(out["reason"], self.cfg.fusion), out["bias_sd"]
-        )
-        return out
+            return self._initialise(*cols)
+        return self._run(*cols, i0=0, out=None)
 
     def _initialise(self, t, g, T, Tp, heading, gap, norm, dip) -> dict:
         C = importlib.import_module("gyrodrift.compensate")  # the module; the package exports a function of that name
@@ -187,6 +179,11 @@ class ChunkEngine:
         out["reason"][:e] = K.R_INIT
         out["unobs"][sl] = C.UNOBSERVABLE.index(aid.unobservable)
         out["bias_sd"][sl] = C._bias_sd(aid.cov, T[sl], Tp[sl])
+        # the fused heading of the init rows (the kernel continues from this state)
+        allowed = C.fusion_allowed(out["reason"][sl], cfg.fusion)
+        out["heading_fused"][sl], out["heading_fused_sd"][sl], out["heading_sd"][sl] = self._fusion.rows(
+            t[sl], rate, heading[sl], allowed, out["bias_sd"][sl]
+        )
         # kernel state from the reference objects
         fs, ist = self._fs, self._ist
         for j, v in enumerate((carry.t, carry.g, carry.T, carry.Tp, carry.bias, carry.rate,
@@ -266,6 +263,8 @@ class ChunkEngine:
                 self._active, self._V, self._stack, self._refused, self._lb, self._Cabs,
                 out["bias_z"], out["rate_z"], out["heading"], out["a"], out["b"], out["c"], out["update"], out["reason"],
                 out["bias_sd"], out["unobs"], self._acc,
+                self._fusion.st, self._fusion.cfg, bool(self.cfg.fusion.magnetic_gates),
+                out["heading_fused"], out["heading_fused_sd"], out["heading_sd"],
             )
             if i >= t.size:
                 break
@@ -339,4 +338,7 @@ def _alloc(n: int) -> dict:
         "reason": np.zeros(n, dtype=np.int8),
         "bias_sd": np.empty(n),
         "unobs": np.zeros(n, dtype=np.int8),
+        "heading_fused": np.empty(n),
+        "heading_fused_sd": np.empty(n),
+        "heading_sd": np.empty(n),
     }

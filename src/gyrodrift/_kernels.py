@@ -20,6 +20,8 @@ import math
 import numpy as np
 from numba import njit
 
+from gyrodrift import _fusion_kernels as FZ
+
 # ---------------------------------------------------------------- state layouts
 
 # Float state of the main kernel (index names).
@@ -365,9 +367,13 @@ def compensate_kernel(
     fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, lb,
     Cabs,
     out_bias, out_rate, out_heading, out_a, out_b, out_c, out_update, out_reason, out_bias_sd, out_unobs,
-    acc,
+    acc, fst, fcfg, fuse_interference, out_hf, out_hf_sd, out_h_sd,
 ):
     """Compensate rows ``i0..`` of a chunk after initialisation (mirror of ``Compensator._step``).
+
+    The fused heading (:func:`gyrodrift._fusion_kernels.step`, state ``fst``, settings
+    ``fcfg``) is computed on the same pass; the compass of a row is refused to it for
+    ``field``, and for ``interference`` when ``fuse_interference``.
 
     Returns the next row to do: ``t.size`` when done, less when the turn-window ring
     ``lb`` or the accepted-measurement buffer ``acc`` is full (grow it and call again).
@@ -400,6 +406,9 @@ def compensate_kernel(
     C10, C11, C12 = Cabs[1, 0], Cabs[1, 1], Cabs[1, 2]
     C20, C21, C22 = Cabs[2, 0], Cabs[2, 1], Cabs[2, 2]
     t_near = _near_boundary(t_start, k_cur, interval)
+    f_psi, f_P, f_tp, f_rp, f_started = fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED]
+    f_t0, f_isd, f_sdp, f_rej = fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T]
+    fR, fN2, ftau, fgate, frelock = fcfg[0], fcfg[1], fcfg[2], fcfg[3], fcfg[4]
     stop = t.size
     for i in range(i0, t.size):
         if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap:
@@ -461,7 +470,8 @@ def compensate_kernel(
         var = ((C00 * Ti + C01 * Tpi + C02) * Ti
                + (C10 * Ti + C11 * Tpi + C12) * Tpi
                + (C20 * Ti + C21 * Tpi + C22))
-        out_bias_sd[i] = math.sqrt(max(var, 0.0))
+        bias_sd = math.sqrt(max(var, 0.0))
+        out_bias_sd[i] = bias_sd
         out_bias[i] = bias
         out_rate[i] = rate
         out_heading[i] = wrap360(anchor + I_rate)
@@ -495,6 +505,14 @@ def compensate_kernel(
             t_near = _near_boundary(t_start, k_cur, interval)
         out_update[i] = update
         out_reason[i] = reason
+        allow = reason != R_FIELD and not (fuse_interference and reason == R_INTERFERENCE)
+        f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, hf, hf_sd, h_sd = FZ.step(
+            f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, t_s, rate, h, allow, bias_sd,
+            fR, fN2, ftau, fgate, frelock,
+        )
+        out_hf[i] = hf
+        out_hf_sd[i] = hf_sd
+        out_h_sd[i] = h_sd
     fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE] = I_raw, I_T, I_Tp, I_bias, I_rate
     fs[F_K] = k_cur
@@ -502,6 +520,8 @@ def compensate_kernel(
     ist[I_AFTER_INT] = 1 if after_int else 0
     ist[I_UNOBS] = unobs
     ist[I_LB_HEAD], ist[I_LB_N] = lb_head, lb_n
+    fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED] = f_psi, f_P, f_tp, f_rp, f_started
+    fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T] = f_t0, f_isd, f_sdp, f_rej
     return stop
 
 
