@@ -86,7 +86,8 @@ def test_default_adaptive_streaming_equals_batch():
 
 
 def test_zaru_used_when_still_and_not_fooled_by_a_slow_turn():
-    cfg = CompensatorConfig(estimator="adaptive")
+    # Without edge averaging, only ZARU measurements have a variance far below a compass difference.
+    cfg = CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(edge_s=0.0))
     still = compensate(still_log(), cfg).attrs["measurements"]
     # A ZARU measurement has the gyro's variance N²/Δt (plus a tiny slope term), far below a compass difference.
     compass_r = 2 * cfg.compass_sigma_deg**2 / cfg.update_interval_s**2
@@ -97,7 +98,7 @@ def test_zaru_used_when_still_and_not_fooled_by_a_slow_turn():
     log = still_log()
     err = {}
     for zaru in (True, False):
-        out = compensate(log, CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru=zaru)))
+        out = compensate(log, CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru=zaru, edge_s=0.0)))
         err[zaru] = float(np.sqrt(np.mean((out["bias_z"] - log["true_bias_z"]).to_numpy()[3000:] ** 2)))
     assert err[True] < 0.75 * err[False]
 
@@ -156,3 +157,48 @@ def test_normalised_fading_ignores_one_outlier_but_follows_a_jump():
     for _ in range(3):
         est.update(obs(H, 1.2, r=1e-3))  # the drift jumps by 1 deg/s
     assert est.last_lambda > 2.0
+
+
+def test_zaru_not_fooled_by_a_yaw_wander_the_compass_cannot_see():
+    """A ±0.08 deg/s yaw wander of 20-s period moves the heading by only ±0.25 deg."""
+    from gyrodrift.compensate import _gyro_still
+
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 60.0 + 1e-9, 0.1)
+    g = 0.3 + rng.normal(0.0, 0.1, t.size)
+    for wander, expect in ((0.0, True), (0.08, False)):
+        rate = g + wander * np.sin(2 * np.pi * t / 20.0)
+        trap = 0.5 * (rate[1:] + rate[:-1])  # rates between samples, as from the trapezoid integral
+        assert _gyro_still(trap + 0.001 * t[1:], t, 50.0, 1.0, 3.0) is expect  # a slowly moving drift is fine
+
+
+def test_edge_averaging_lowers_the_compass_noise_and_keeps_telescoping():
+    log = still_log(heading_deg=lambda t: 100.0 + 30.0 * np.sin(2 * np.pi * t / 300.0))  # moving: no ZARU
+    out = {}
+    for edge in (0.0, 2.0):
+        cfg = CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(edge_s=edge))
+        out[edge] = compensate(log, cfg)
+        assert_same(out[edge], stream(log, cfg))
+    m0, m2 = (out[e].attrs["measurements"].iloc[3:] for e in (0.0, 2.0))
+    assert m2["r"].median() < 0.2 * m0["r"].median()
+    truth = np.interp(m2["t"], log["t"], log["true_bias_z"])
+    assert float(np.sqrt(np.mean((m2["m"] - truth) ** 2))) < 0.5 * float(np.sqrt(np.mean((m0["m"] - truth) ** 2)))
+    late = slice(3000, None)
+    err = {e: float(np.sqrt(np.mean((out[e]["bias_z"] - log["true_bias_z"]).to_numpy()[late] ** 2))) for e in out}
+    assert err[2.0] < err[0.0]
+
+
+def test_outage_memory_extrapolates_with_the_long_memory_slope():
+    est = make_estimator("adaptive")
+    rng = np.random.default_rng(2)
+    truth = np.array([0.02, 3.0, -0.4])
+    for T in np.linspace(20.0, 40.0, 200):
+        H = np.array([[T, 0.002, 1.0]])
+        est.update(obs(H, H @ truth + rng.normal(0.0, 0.01), r=1e-4))
+    tracked = est.drift(np.array([40.0]), np.array([0.002]))[0]
+    est.hold()  # outage: the long-memory a and b, anchored at the drift last tracked
+    assert est.drift(np.array([40.0]), np.array([0.002]))[0] == pytest.approx(tracked, abs=1e-12)
+    assert est.params[0] == pytest.approx(est._twin.params[0])
+    assert abs(est.params[0] - 0.02) < 0.003
+    no_twin = make_estimator("adaptive", settings=AdaptiveConfig(outage_memory=False))
+    assert no_twin._twin is None

@@ -22,8 +22,8 @@ ESTIMATORS = ("stkf", "stkf-s1", "kf", "adaptive")
 #: The ``adaptive`` settings the compiled engine implements: Zhou's recursive fading, a
 #: fixed reference temperature, no stationarity updates, stacked measurements (the
 #: defaults run on the reference engine).
-COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, recentre=False, normalised=False, softening=1.0,
-                                   slope_q_per_rtc=0.0)
+COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, edge_s=0.0, recentre=False, normalised=False,
+                                   softening=1.0, slope_q_per_rtc=0.0)
 
 
 def config(estimator: str, **kw) -> CompensatorConfig:
@@ -140,6 +140,7 @@ def test_engine_choice():
     for fix in ("recentre", "normalised", "zaru"):
         est = make_estimator("adaptive", settings=replace(COMPILED_ADAPTIVE, **{fix: True}))
         assert not _engine.supports(cfg, est), fix
+    assert not _engine.supports(cfg, make_estimator("adaptive", settings=replace(COMPILED_ADAPTIVE, edge_s=2.0)))
     assert not _engine.supports(cfg, Watched(KalmanConfig()))
     assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("stkf"))
     assert not _engine.supports(cfg, make_estimator("lsm"))

@@ -49,9 +49,13 @@ def supports(config, estimator) -> bool:
 
     settings = getattr(estimator, "settings", None)
     if isinstance(settings, AdaptiveConfig):
-        # Not compiled: stationarity (ZARU) updates, and one measurement per interval
-        # where the compensator would stack several; the reference engine runs these.
-        if settings.zaru or settings.recentre or settings.slope_q_per_rtc != 0.0 or settings.softening != 1.0 or settings.normalised or (not settings.stacked and config.stack_depth > 1):
+        # Not compiled (the reference engine runs these): any fix of issue 6 beyond
+        # Zhou's recursive fading (AdaptiveConfig: ZARU, edge averaging, moving
+        # reference temperature, slope random walk, normalised fading test, one
+        # measurement per interval where the compensator would stack several).
+        if (settings.zaru or settings.edge_s > 0.0 or settings.recentre or settings.slope_q_per_rtc != 0.0
+                or settings.softening != 1.0 or settings.normalised
+                or (not settings.stacked and config.stack_depth > 1)):
             return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)

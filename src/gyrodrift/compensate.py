@@ -257,13 +257,20 @@ class _Meas:
     residual_deg: float  # compass vs compensated gyro disagreement
 
 
-def _compass_measurement(s0: _Snap, s1: _Snap, cfg: CompensatorConfig) -> _Meas:
-    """Eqs. (4)–(6) between two compass samples (sign: see module notes)."""
+def _compass_measurement(s0: _Snap, s1: _Snap, cfg: CompensatorConfig, end_var=None) -> _Meas:
+    """Eqs. (4)–(6) between two compass samples (sign: see module notes).
+
+    ``end_var``: the compass variances (deg²) of the two ends when they are edge means
+    (:meth:`_Aiding._edge`); default ``compass_sigma_deg²`` each.
+    """
     dt = s1.t - s0.t
     d_diff = float(wrap_180((s1.I_raw - s1.heading) - (s0.I_raw - s0.heading)))
     m = d_diff / dt
     h = np.array([(s1.I_T - s0.I_T) / dt, (s1.I_Tp - s0.I_Tp) / dt, 1.0])
-    r = 2.0 * cfg.compass_sigma_deg**2 / dt**2 + cfg.gyro_noise_dps_rthz**2 / dt
+    if end_var is None:
+        r = 2.0 * cfg.compass_sigma_deg**2 / dt**2 + cfg.gyro_noise_dps_rthz**2 / dt
+    else:
+        r = (end_var[0] + end_var[1]) / dt**2 + cfg.gyro_noise_dps_rthz**2 / dt
     return _Meas(m, h, r, d_diff - (s1.I_bias - s0.I_bias))
 
 
@@ -370,19 +377,22 @@ class _Aiding:
         self.start = self.valid(snap, t_boundary)
         self.sticky = gating.NO_COMPASS if self.start is None else None
         self.samples = [self.start] if self.start is not None else []
+        self.start_edge = self._edge(self.start)
 
     @property
     def collects(self) -> bool:
         """Whether :meth:`add` needs every compass sample (``slope`` measurement or ZARU)."""
-        return self.cfg.measurement == "slope" or (self.adaptive is not None and self.adaptive.zaru)
+        return self.cfg.measurement == "slope" or (
+            self.adaptive is not None and (self.adaptive.zaru or self.adaptive.edge_s > 0.0)
+        )
 
     def add(self, snap: _Snap) -> None:
         """A compass sample inside the current interval (``slope`` measurement, ZARU)."""
         if self.cfg.measurement == "slope":
             self.samples.append(snap)
-        if self.adaptive is not None and self.adaptive.zaru:
+        if self.adaptive is not None and (self.adaptive.zaru or self.adaptive.edge_s > 0.0):
             self.window.append(snap)
-            while self.window[0].t < snap.t - self.adaptive.zaru_window_s:
+            while self.window[0].t < snap.t - max(self.adaptive.zaru_window_s, self.adaptive.edge_s):
                 self.window.popleft()
 
     def display(self) -> str:
@@ -400,6 +410,10 @@ class _Aiding:
                 reason = gating.NO_COMPASS
             else:
                 meas = _compass_measurement(self.start, end, self.cfg)
+                if self.start_edge is not None:
+                    end_edge = self._edge(end)
+                    meas = _compass_measurement(self.start_edge[0], end_edge[0], self.cfg,
+                                                (self.start_edge[1], end_edge[1]))
                 if self.cfg.measurement == "slope":
                     meas = _slope_measurement(self.samples, self.cfg) or meas
                 if abs(meas.residual_deg) > self.cfg.gate.interference_deg:
@@ -451,6 +465,52 @@ class _Aiding:
             n_new=n_new,
         )
 
+    def _edge(self, snap: _Snap | None) -> tuple[_Snap, int] | None:
+        """The compass averaged over the ``edge_s`` seconds up to ``snap`` (fix 1), and its sample count.
+
+        ``D = ∫gyro − compass`` of every compass sample in the edge window is averaged,
+        with time and the other integrals: the edge is a point ``(t̄, D̄)`` of the same
+        line a single sample lies on (D moves at the drift rate), with the compass noise
+        divided by the number of samples. Consecutive intervals share their edge, so the
+        measurements still telescope (the heading follows the compass over many
+        intervals). None when edge averaging is off or no sample is at hand.
+        """
+        st = self.adaptive
+        if snap is None or st is None or st.edge_s <= 0.0:
+            return None
+        win = [s for s in self.window if snap.t - st.edge_s < s.t <= snap.t] or [snap]
+        if win[-1].t != snap.t:  # the window must end at this sample
+            win = [snap]
+        d_ref = snap.I_raw - snap.heading
+        d = np.array([float(wrap_180(s.I_raw - s.heading - d_ref)) for s in win]) + d_ref
+        I_raw = float(np.mean([s.I_raw for s in win]))
+        edge = _Snap(float(np.mean([s.t for s in win])), I_raw - float(np.mean(d)), I_raw,
+                     float(np.mean([s.I_T for s in win])), float(np.mean([s.I_Tp for s in win])),
+                     float(np.mean([s.I_bias for s in win])))
+        return edge, self._edge_variance(snap, d_ref, len(win))
+
+    def _edge_variance(self, snap: _Snap, d_ref: float, k: int) -> float:
+        """Variance (deg²) of an edge mean of ``k`` compass samples, from the compass itself (fix 5).
+
+        Over the last update interval, the scatter of D about its least-squares line is
+        the compass error; successive differences give its white part σ_w², the rest
+        σ_s² is slower (tilt while braking, deviation during a sway) and does not
+        average down: the edge variance is ``σ_w²/k + σ_s²``. With fewer than 10
+        samples: ``compass_sigma_deg²/k``.
+        """
+        win = [s for s in self.window if snap.t - self.cfg.update_interval_s < s.t <= snap.t]
+        if len(win) < 10:
+            return self.cfg.compass_sigma_deg**2 / k
+        t = np.array([s.t for s in win])
+        d = np.array([float(wrap_180(s.I_raw - s.heading - d_ref)) for s in win])
+        tc = t - np.mean(t)
+        slope = float(np.dot(tc, d - np.mean(d))) / float(np.dot(tc, tc))
+        resid = d - np.mean(d) - slope * tc
+        total = float(np.dot(resid, resid)) / (len(win) - 2)
+        hf = np.diff(d)
+        white = min(0.5 * float(np.dot(hf - np.mean(hf), hf - np.mean(hf))) / (hf.size - 1), total)
+        return white / k + (total - white)
+
     def _zaru_measurement(self, end: _Snap) -> _Meas | None:
         """Zero-rate measurement of the interval ending at ``end`` when the unit is still, else None.
 
@@ -485,17 +545,43 @@ class _Aiding:
                 or resid_var > noise_var * (1.0 + st.zaru_resid_k * math.sqrt(2.0 / dof))
                 or abs(slope) > st.zaru_slope_k * slope_se):
             return None
-        inside = [s for s in win if s.t >= self.start.t]
-        if len(inside) >= 3:
-            ti = np.array([s.t for s in inside])
-            rates = np.diff(np.array([s.I_raw for s in inside])) / np.diff(ti)
-            if float(np.std(rates)) > self.cfg.gate.still_std_dps:
-                return None
+        rates = np.diff(np.array([s.I_raw for s in win])) / np.diff(t)
+        if not _gyro_still(rates, t, self.start.t, self.cfg.gate.still_std_dps, st.zaru_resid_k):
+            return None
         dt = end.t - self.start.t
         m = (end.I_raw - self.start.I_raw) / dt
         h = np.array([(end.I_T - self.start.I_T) / dt, (end.I_Tp - self.start.I_Tp) / dt, 1.0])
         r = self.cfg.gyro_noise_dps_rthz**2 / dt + slope_se**2
         return _Meas(m, h, r, 0.0)
+
+
+def _gyro_still(rates, t, interval_start_s: float, max_std_dps: float, k: float) -> bool:
+    """Whether the gyro saw no motion over a stillness window (ZARU, :meth:`_Aiding._zaru_measurement`).
+
+    ``rates`` (deg/s) are the mean gyro rates between successive compass samples at
+    times ``t`` (one more than the rates). Still: the rates of the current interval
+    (from ``interval_start_s``) vary less than ``max_std_dps``, and the Allan variance
+    of the rates at 2 s is no more than white noise allows, i.e. a quarter of that at
+    0.5 s, within ``k`` standard errors of a variance ratio. (Allan variances ignore a
+    slowly moving drift and the short correlation the trapezoid integral gives
+    successive rates.) A yaw wander of a few hundredths of a deg/s that the compass
+    cannot see fails this.
+    """
+    inside = rates[t[1:] > interval_start_s]
+    if inside.size >= 2 and float(np.std(inside)) > max_std_dps:
+        return False
+    small = max(1, int(round(0.5 / float(np.median(np.diff(t))))))
+    big = 4 * small
+    nb = rates.size // big
+    if nb < 6:
+        return True
+
+    def allan(m: int) -> float:
+        means = rates[: (rates.size // m) * m].reshape(-1, m).mean(axis=1)
+        d = np.diff(means)
+        return 0.5 * float(np.dot(d, d)) / d.size
+
+    return allan(big) <= 0.25 * allan(small) * (1.0 + k * math.sqrt(2.0 / (nb - 1)))
 
 
 def _initialise(aid: _Aiding, t, g, heading, I_raw, I_T, I_Tp, init_end_s: float, source: str):

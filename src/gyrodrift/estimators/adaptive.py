@@ -55,6 +55,12 @@ class AdaptiveConfig:
         measurements in y (eq. 3), each measurement used in several updates with its
         noise counted as new each time. ``False`` (default): one measurement per update
         interval with its own variance.
+    edge_s : float
+        Fix 1, compass averaging at the window edges: each end of a compass measurement
+        (eq. 6) is the mean of ``D = ∫gyro − compass`` over the compass samples of the
+        last ``edge_s`` seconds, not one sample; its noise variance is divided by their
+        number, and consecutive intervals share their edge, so the measurements still
+        telescope. 0: one sample at each end (the paper).
     recentre : bool
         Fix 2, well-posed process noise: before each update the reference temperature
         moves to the temperature of the new measurement (``c' ← c' + a (T_new − T_ref)``,
@@ -122,9 +128,16 @@ class AdaptiveConfig:
         changes with temperature, not with time: on a temperature plateau ``a`` keeps its
         memory (and through an outage on a ramp it is not made noisier by the length of
         the outage), while on a ramp it follows the local slope.
+    outage_memory : bool
+        Fix 2, well-posed extrapolation: a twin of the filter without the slope random
+        walk (long memory of a and b) runs on the same measurements. Through refused
+        intervals (outages) the drift is extrapolated with the twin's a and b from the
+        drift the tracking filter had at the last update: the short memory that
+        follows the drift while aided is too noisy a slope to extrapolate a ramp with.
     """
 
     stacked: bool = False
+    edge_s: float = 2.0
     recentre: bool = True
     zaru: bool = True
     zaru_window_s: float = 60.0
@@ -138,6 +151,7 @@ class AdaptiveConfig:
     normalised: bool = True
     q_sd: tuple[float, float, float] | None = (1e-4, 0.05, 5e-3)
     slope_q_per_rtc: float = 0.06
+    outage_memory: bool = True
 
     def __post_init__(self):
         if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
@@ -148,6 +162,8 @@ class AdaptiveConfig:
             raise ConfigError(f"softening must be >= 1, got {self.softening!r}")
         if not (isinstance(self.innovation_window, int) and self.innovation_window >= 1):
             raise ConfigError(f"innovation_window must be a whole number >= 1, got {self.innovation_window!r}")
+        if not (isinstance(self.edge_s, (int, float)) and math.isfinite(self.edge_s) and self.edge_s >= 0):
+            raise ConfigError(f"adaptive setting edge_s must be a number >= 0, got {self.edge_s!r}")
         for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -161,14 +177,16 @@ class AdaptiveConfig:
                 raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
-    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "recentre", "zaru", "fading", "process_noise")
+    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "fading",
+                                         "process_noise")
 
     def ablated(self, fix: str) -> "AdaptiveConfig":
         """These settings with one fix of :attr:`FIXES` switched off."""
         from dataclasses import replace
 
-        off = {"one_measurement": {"stacked": True}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
-               "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0}}
+        off = {"one_measurement": {"stacked": True}, "edge_averaging": {"edge_s": 0.0}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
+               "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0},
+               "outage_memory": {"outage_memory": False}}
         if fix not in off:
             raise ConfigError(f"unknown fix {fix!r}; choose from: {', '.join(self.FIXES)}")
         return replace(self, **off[fix])
@@ -214,6 +232,13 @@ class AdaptiveKalman(LinearDrift):
             self._Q = np.diag(np.square(np.array(settings.q_sd, dtype=float)))
         self._V: np.ndarray | None = None
         self._last_temp_c: float | None = None
+        self._last_h: tuple[float, float] | None = None
+        #: Parameters in force through an outage (``outage_memory``), else None.
+        self._anchor: np.ndarray | None = None
+        #: The long-memory twin (``outage_memory``): same filter, no slope random walk.
+        self._twin = None
+        if settings.outage_memory and settings.slope_q_per_rtc > 0.0 and settings.q_sd is not None:
+            self._twin = AdaptiveKalman(config, settings=replace(settings, slope_q_per_rtc=0.0, outage_memory=False))
         #: Normalised innovations squared of the last ``innovation_window`` updates.
         self._nis: deque[float] = deque(maxlen=settings.innovation_window)
         #: Fading factor of the last update (diagnostics).
@@ -221,6 +246,11 @@ class AdaptiveKalman(LinearDrift):
 
     @property
     def params(self) -> np.ndarray:
+        if self._anchor is not None:
+            return self._anchor.copy()
+        return self._own_params()
+
+    def _own_params(self) -> np.ndarray:
         a, b, c_ref = self._z
         t_ref = self.temp_ref_c or 0.0
         return np.array([a, b, c_ref - a * t_ref])
@@ -256,6 +286,10 @@ class AdaptiveKalman(LinearDrift):
             Q = Q.copy()
             Q[0, 0] += self.settings.slope_q_per_rtc**2 * abs(temp_c - self._last_temp_c)
         self._last_temp_c = temp_c
+        self._last_h = (temp_c, float(np.mean(obs.H[:, 1])))
+        self._anchor = None
+        if self._twin is not None:
+            self._twin.update(obs)
         if self.settings.recentre and self.temp_ref_c is not None:
             self._recentre(temp_c)
         H = self._centre(obs)
@@ -282,6 +316,14 @@ class AdaptiveKalman(LinearDrift):
 
     def hold(self) -> np.ndarray:
         self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
+        if self._twin is not None:
+            self._twin.hold()
+            if self._anchor is None and self._last_h is not None:
+                # Extrapolate with the long memory's a and b from the drift last tracked.
+                T0, Tp0 = self._last_h
+                a, b, _ = self._twin.params
+                drift0 = float(self._own_params() @ np.array([T0, Tp0, 1.0]))
+                self._anchor = np.array([a, b, drift0 - a * T0 - b * Tp0])
         return self.params
 
     def engine_state(self) -> dict:
