@@ -202,3 +202,19 @@ def test_outage_memory_extrapolates_with_the_long_memory_slope():
     assert abs(est.params[0] - 0.02) < 0.003
     no_twin = make_estimator("adaptive", settings=AdaptiveConfig(outage_memory=False))
     assert no_twin._twin is None
+
+
+def test_stillness_holds_through_slowly_wandering_interference():
+    """Still unit, compass pulled 8 deg over 10 min after 15 min: ZARU continues (the compass moved)."""
+    wander = lambda t: 8.0 * np.clip((t - 900.0) / 600.0, 0.0, 1.0)  # noqa: E731
+    log = still_log()
+    log["heading"] = np.mod(log["heading"] + wander(log["t"].to_numpy()), 360.0)
+    err = {}
+    for hold in (True, False):
+        cfg = CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru_hold=hold))
+        out = compensate(log, cfg)
+        if hold:
+            assert_same(out, stream(log, cfg))
+        late = (log["t"] > 900.0).to_numpy()
+        err[hold] = float(np.sqrt(np.mean((out["bias_z"] - log["true_bias_z"]).to_numpy()[late] ** 2)))
+    assert err[True] < 0.8 * err[False]

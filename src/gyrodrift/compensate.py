@@ -348,6 +348,8 @@ class _Aiding:
         self.depth = cfg.stack_depth if self.adaptive is None or self.adaptive.stacked else 1
         #: Compass samples of the last ``zaru_window_s`` (stationarity test).
         self.window: deque[_Snap] = deque()
+        #: Still since the last compass-verified stationarity update (``zaru_hold``).
+        self.still_chain = False
         self.stack: deque[_Meas] = deque(maxlen=cfg.stack_depth)
         self.start: _Snap | None = None
         self.sticky: str | None = None
@@ -514,45 +516,70 @@ class _Aiding:
     def _zaru_measurement(self, end: _Snap) -> _Meas | None:
         """Zero-rate measurement of the interval ending at ``end`` when the unit is still, else None.
 
-        Still (see :class:`gyrodrift.estimators.AdaptiveConfig`): over the last
-        ``zaru_window_s`` the compass heading fits a flat line, and the gyro rate between
-        compass samples of this interval varies less than ``still_std_dps``. Then the
-        mean gyro rate is the drift (eq. 1 with zero true rate), with variance
-        ``N²/Δt`` plus the squared standard error of the flat line's slope (a rotation
-        too slow to see).
+        Still (see :class:`gyrodrift.estimators.AdaptiveConfig`): the gyro saw no motion
+        over the last ``zaru_window_s`` (:func:`_gyro_still`) and either the compass
+        heading fits a flat line over that window (stillness verified), or
+        (``zaru_hold``) every interval since the last verification was still by the gyro
+        and this one's mean rate agrees with the predicted drift (NIS below 6.63, χ²₁ at
+        99 %): the compass moved, not the unit (slowly wandering interference). Then the
+        mean gyro rate is the drift (eq. 1 with zero true rate), with variance ``N²/Δt``
+        plus, when verified, the squared standard error of the flat line's slope (a
+        rotation too slow to see).
         """
         st = self.adaptive
         if st is None or not st.zaru:
             return None
         win = [s for s in self.window if s.t <= end.t]
         if len(win) < 10 or end.t - win[0].t < 0.8 * st.zaru_window_s:
+            self.still_chain = False
             return None
         t = np.array([s.t for s in win])
-        d = wrap_180(np.array([s.heading for s in win]) - win[0].heading)
-        tc = t - np.mean(t)
-        sxx = float(np.dot(tc, tc))
-        slope = float(np.dot(tc, d - np.mean(d))) / sxx
-        resid = d - np.mean(d) - slope * tc
-        dof = max(len(win) - 2, 1)
-        resid_var = float(np.dot(resid, resid)) / dof
-        slope_se = math.sqrt(resid_var / sxx)
-        # Compass white noise from successive differences (slow motion cancels in them):
-        # a heading that wanders inside the window, even about a flat line, leaves a
-        # scatter about the line larger than that noise.
-        hf = np.diff(d)
-        noise_var = 0.5 * float(np.dot(hf - np.mean(hf), hf - np.mean(hf))) / max(hf.size - 1, 1)
-        if (resid_var > (2.0 * self.cfg.compass_sigma_deg) ** 2
-                or resid_var > noise_var * (1.0 + st.zaru_resid_k * math.sqrt(2.0 / dof))
-                or abs(slope) > st.zaru_slope_k * slope_se):
-            return None
         rates = np.diff(np.array([s.I_raw for s in win])) / np.diff(t)
-        if not _gyro_still(rates, t, self.start.t, self.cfg.gate.still_std_dps, st.zaru_resid_k):
-            return None
         dt = end.t - self.start.t
         m = (end.I_raw - self.start.I_raw) / dt
         h = np.array([(end.I_T - self.start.I_T) / dt, (end.I_Tp - self.start.I_Tp) / dt, 1.0])
-        r = self.cfg.gyro_noise_dps_rthz**2 / dt + slope_se**2
-        return _Meas(m, h, r, 0.0)
+        r = self.cfg.gyro_noise_dps_rthz**2 / dt
+        gamma = m - float(self.estimator.drift(h[0], h[1]))
+        consistent = gamma * gamma <= 6.63 * (float(h @ self.estimator.cov @ h) + r)
+        still = _gyro_still(rates, t, self.start.t, self.cfg.gate.still_std_dps, st.zaru_resid_k)
+        # The chain of stillness breaks on evidence of rotation: a mean rate the drift does not
+        # explain. A wobble the Allan test sees only skips this interval.
+        self.still_chain = self.still_chain and consistent
+        if not still:
+            return None
+        slope_se = _flat_compass(win, t, self.cfg.compass_sigma_deg, st)
+        if slope_se is not None:
+            self.still_chain = True
+            return _Meas(m, h, r + slope_se**2, 0.0)
+        if st.zaru_hold and self.still_chain:
+            return _Meas(m, h, r, 0.0)
+        return None
+
+
+def _flat_compass(win, t, compass_sigma_deg: float, st) -> float | None:
+    """Standard error (deg/s) of the slope of a flat compass heading over a stillness window, or None.
+
+    Flat: slope within ``zaru_slope_k`` standard errors of zero, scatter about the
+    line within two compass sigmas and not above the compass white noise (from
+    successive differences, in which slow motion cancels) by more than
+    ``zaru_resid_k`` standard errors of a variance ratio: a heading that wanders
+    inside the window, even about a flat line, fails.
+    """
+    d = wrap_180(np.array([s.heading for s in win]) - win[0].heading)
+    tc = t - np.mean(t)
+    sxx = float(np.dot(tc, tc))
+    slope = float(np.dot(tc, d - np.mean(d))) / sxx
+    resid = d - np.mean(d) - slope * tc
+    dof = max(len(win) - 2, 1)
+    resid_var = float(np.dot(resid, resid)) / dof
+    slope_se = math.sqrt(resid_var / sxx)
+    hf = np.diff(d)
+    noise_var = 0.5 * float(np.dot(hf - np.mean(hf), hf - np.mean(hf))) / max(hf.size - 1, 1)
+    if (resid_var > (2.0 * compass_sigma_deg) ** 2
+            or resid_var > noise_var * (1.0 + st.zaru_resid_k * math.sqrt(2.0 / dof))
+            or abs(slope) > st.zaru_slope_k * slope_se):
+        return None
+    return slope_se
 
 
 def _gyro_still(rates, t, interval_start_s: float, max_std_dps: float, k: float) -> bool:

@@ -80,6 +80,11 @@ class AdaptiveConfig:
         rate between compass samples has a standard deviation below
         ``GateConfig.still_std_dps``. A still interval is accepted even when the compass
         and gyro disagree (the drift moved, not the heading).
+    zaru_hold : bool
+        Fix 3, deciding which sensor moved: once stillness was verified by the compass,
+        it holds while the gyro shows no motion and its mean rate agrees with the
+        predicted drift (NIS test against the predicted covariance), even when the
+        compass wanders (slow magnetic interference the disagreement gate cannot see).
     zaru_window_s : float
         Length of the compass stillness window, s.
     zaru_slope_k, zaru_resid_k : float
@@ -140,6 +145,7 @@ class AdaptiveConfig:
     edge_s: float = 2.0
     recentre: bool = True
     zaru: bool = True
+    zaru_hold: bool = True
     zaru_window_s: float = 60.0
     zaru_slope_k: float = 3.0
     zaru_resid_k: float = 3.0
@@ -177,7 +183,7 @@ class AdaptiveConfig:
                 raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
-    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "fading",
+    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "zaru_hold", "fading",
                                          "process_noise")
 
     def ablated(self, fix: str) -> "AdaptiveConfig":
@@ -185,6 +191,7 @@ class AdaptiveConfig:
         from dataclasses import replace
 
         off = {"one_measurement": {"stacked": True}, "edge_averaging": {"edge_s": 0.0}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
+               "zaru_hold": {"zaru_hold": False},
                "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0},
                "outage_memory": {"outage_memory": False}}
         if fix not in off:
