@@ -131,14 +131,22 @@ class ChunkEngine:
                 raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
             self._t0 = float(t[0])
             self._t_start = float(t[0]) + self.cfg.init_s
-        g_out, T_out, h_out = np.empty(n), np.empty(n), np.empty(n)
         gap = np.empty(n, dtype=np.bool_)
-        bad = K.prepare_kernel(t, g, T, heading, self._t_last, self._g_last, self._T_last, first,
-                               float(self.cfg.gate.max_gap_s), g_out, T_out, h_out, gap)
+        bad, fix = K.prepare_kernel(t, g, T, heading, self._t_last, first, float(self.cfg.gate.max_gap_s), gap)
         if bad >= 0:
             raise LogFormatError(
                 f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing"
             )
+        g_out, T_out, h_out = g, T, heading
+        if fix & 1:  # empty or infinite cells hold the previous value (and refuse the interval)
+            g_out = np.empty(n)
+            K.hold_kernel(g, self._g_last, gap, g_out)
+        if fix & 2:
+            T_out = np.empty(n)
+            K.hold_kernel(T, self._T_last, gap, T_out)
+        if fix & 4:
+            h_out = np.empty(n)
+            K.wrap_kernel(heading, h_out)
         Tp = np.empty(n)
         tr = self.cfg.temp_rate
         K.temp_rate_kernel(t, T_out, tr.window_bins, float(tr.bin_s), self._tf, self._ti, self._bins, Tp)
@@ -165,7 +173,7 @@ class ChunkEngine:
     def _initialise(self, t, g, T, Tp, heading, gap, norm, dip) -> dict:
         C = importlib.import_module("gyrodrift.compensate")  # the module; the package exports a function of that name
         K, cfg = self.K, self.cfg
-        e = int(np.flatnonzero(t - self._t_start >= 0)[0])
+        e = int(np.searchsorted(t, self._t_start, "left"))  # first row with t >= t_start (t increases)
         sl = slice(0, e + 1)
         aid = C._Aiding(cfg, self.est)
         _, _, I_raw0, I_T0, I_Tp0, _, _, _ = C._rows(None, t[sl], g[sl], T[sl], Tp[sl], C._zero_drift)

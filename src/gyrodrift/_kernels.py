@@ -150,42 +150,57 @@ def wrap360(x):
 
 
 @njit(cache=True, nogil=True)
-def prepare_kernel(t, g, T, heading, t_prev, g_last, T_last, first_chunk, max_gap_s, out_g, out_T, out_heading, gap):
-    """Per-row input preparation of a chunk (mirror of the reference ``compensate_arrays`` set-up).
+def prepare_kernel(t, g, T, heading, t_prev, first_chunk, max_gap_s, gap):
+    """Per-row checks of a chunk (the reference ``compensate_arrays`` set-up), reading only.
 
-    Holds the previous value over non-finite gyro/temperature cells, flags ``gap`` rows
-    (held cell or time step above ``max_gap_s``), wraps the compass heading to [0, 360)
-    (NaN where absent or not finite). Returns -1, or the first row whose time is not
-    finite or does not increase.
+    Writes ``gap`` (time step above ``max_gap_s``). Returns ``(bad, fix)``: ``bad`` is -1
+    or the first row whose time is not finite or does not increase; ``fix`` has bit 1
+    when a gyro cell is not finite, 2 for temperature (hold them: :func:`hold_kernel`),
+    4 when a compass heading is infinite or outside [0, 360) (:func:`wrap_kernel`). Most
+    logs need no copy of any column.
     """
     prev = t_prev
+    fix = 0
     for i in range(t.size):
         ti = t[i]
         if not math.isfinite(ti):
-            return i
+            return i, fix
         step = 0.0
         if i > 0 or not first_chunk:
             step = ti - prev
             if not step > 0.0:
-                return i
+                return i, fix
         prev = ti
-        held = False
-        gi = g[i]
-        if math.isfinite(gi):
-            g_last = gi
-        else:
-            held = True
-        Ti = T[i]
-        if math.isfinite(Ti):
-            T_last = Ti
-        else:
-            held = True
-        out_g[i] = g_last
-        out_T[i] = T_last
-        gap[i] = held or step > max_gap_s
+        gap[i] = step > max_gap_s
+        if not math.isfinite(g[i]):
+            fix |= 1
+        if not math.isfinite(T[i]):
+            fix |= 2
         h = heading[i]
-        out_heading[i] = wrap360(h) if math.isfinite(h) else math.nan
-    return -1
+        if math.isinf(h) or not (math.isnan(h) or 0.0 <= h < 360.0):
+            fix |= 4
+    return -1, fix
+
+
+@njit(cache=True, nogil=True)
+def hold_kernel(x, last, gap, out):
+    """``out`` = ``x`` with every non-finite cell holding the previous finite value (``last``
+    before the chunk); such rows are flagged in ``gap``."""
+    for i in range(x.size):
+        v = x[i]
+        if math.isfinite(v):
+            last = v
+        else:
+            gap[i] = True
+        out[i] = last
+
+
+@njit(cache=True, nogil=True)
+def wrap_kernel(heading, out):
+    """Compass headings wrapped to [0, 360); NaN where absent or not finite."""
+    for i in range(heading.size):
+        h = heading[i]
+        out[i] = wrap360(h) if math.isfinite(h) else math.nan
 
 
 @njit(cache=True, nogil=True)
