@@ -147,23 +147,32 @@ def _child_env() -> dict[str, str]:
     return env
 
 
-def bench_cli_rss(in_path: Path, out_path: Path) -> tuple[float, float]:
-    """``gyrodrift compensate IN -o OUT -q`` in a fresh process: wall time (s) and its peak RSS (MiB).
+#: Runs ``gyrodrift`` like ``python -m gyrodrift`` and reports the peak RSS of its own memory
+#: (``VmHWM`` of /proc/self/status). The rusage of a child is no good here: Linux starts a
+#: child's ``ru_maxrss`` from the parent's, as ``subprocess`` forks (vfork) this big process.
+_RSS_WRAPPER = (
+    "import sys\n"
+    "from gyrodrift.cli import main\n"
+    "rc = main(sys.argv[1:])\n"
+    "try:\n"
+    "    hwm = [l.split()[1] for l in open('/proc/self/status') if l.startswith('VmHWM')][0]\n"
+    "except OSError:\n"
+    "    import resource; hwm = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+    "sys.stderr.write(f'VMHWM_KIB {hwm}\\n')\n"
+    "sys.exit(rc)\n"
+)
 
-    The child is reaped with :func:`os.wait4`, which returns that child's own resource usage.
-    """
-    cmd = [sys.executable, "-m", "gyrodrift", "compensate", str(in_path), "-o", str(out_path), "-q"]
-    with tempfile.TemporaryFile() as err:
-        start = time.perf_counter()
-        proc = subprocess.Popen(cmd, env=_child_env(), stdout=subprocess.DEVNULL, stderr=err)
-        _, status, usage = os.wait4(proc.pid, 0)
-        seconds = time.perf_counter() - start
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        if proc.returncode != 0:
-            err.seek(0)
-            raise RuntimeError(f"gyrodrift compensate failed ({proc.returncode}): {err.read().decode()[-500:]}")
-    scale = 1.0 if sys.platform == "darwin" else 1024.0  # ru_maxrss: bytes on macOS, KiB on Linux
-    return seconds, usage.ru_maxrss * scale / 2**20
+
+def bench_cli_rss(in_path: Path, out_path: Path) -> tuple[float, float]:
+    """``gyrodrift compensate IN -o OUT -q`` in a fresh process: wall time (s) and its peak RSS (MiB)."""
+    cmd = [sys.executable, "-c", _RSS_WRAPPER, "compensate", str(in_path), "-o", str(out_path), "-q"]
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, env=_child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"gyrodrift compensate failed ({proc.returncode}): {proc.stderr[-500:]}")
+    kib = [float(line.split()[1]) for line in proc.stderr.splitlines() if line.startswith("VMHWM_KIB")][-1]
+    return seconds, kib / 1024.0
 
 
 def write_long_log(path: Path, hours: float, fs_hz: float, chunk_rows: int = 2_000_000) -> int:
