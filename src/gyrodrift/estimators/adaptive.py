@@ -1,7 +1,7 @@
 """The ``adaptive`` drift estimator: the paper's structure, with a memory that adapts itself.
 
 Same drift model and states as the paper (eq. 2), same constant-parameter filter
-(Φ = I), with two changes:
+(Φ = I, eq. 10), with these changes:
 
 * **Temperature centred** on a reference ``T_ref`` (the mean temperature of the first
   observation): the filter estimates ``[a, b, c']`` with rows ``[T − T_ref, T', 1]``,
@@ -17,14 +17,23 @@ Same drift model and states as the paper (eq. 2), same constant-parameter filter
   ``P⁻ = λ_k P + Q``. While the model explains the measurements λ = 1 and the memory is
   long (well-determined a and b, good extrapolation through outages); when the drift
   departs from the model the innovations grow, λ > 1 and old measurements are
-  forgotten fast (tracking).
+  forgotten fast (tracking). By default the test uses the normalised innovations of the
+  last few updates against a χ² threshold (``AdaptiveConfig.normalised``, ``softening``).
+* **Moving reference temperature** and **per-parameter process noise**: ``T_ref`` follows
+  the sensor, ``c'`` (the drift at the current temperature) random-walks in time, ``a``
+  random-walks in temperature (``AdaptiveConfig.recentre``, ``q_sd``,
+  ``slope_q_per_rtc``).
+* **Outage memory**: a twin without the slope random walk supplies a and b for
+  extrapolating through refused intervals (eq. 5) (``AdaptiveConfig.outage_memory``).
 
 The covariance is bounded as in :mod:`gyrodrift.estimators.kalman` (capped at the
 prior, no fading in outages).
 
 Every change beyond the paper is a switch of :class:`AdaptiveConfig` (issue 6, for the
 ablation); the compensator (:mod:`gyrodrift.compensate`) reads the switches that concern
-its measurements (one measurement per interval, stationarity updates).
+its measurements: one measurement per interval, compass averaging at the interval edges
+with an online compass-noise estimate, and zero-rate (stationarity, ZARU) measurements.
+Results and the ablation: ``docs/results.md``.
 """
 
 from __future__ import annotations
