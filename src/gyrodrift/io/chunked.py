@@ -729,15 +729,16 @@ class ChunkWriter:
         self._stack = stack
         return self
 
-    def write(self, df: pd.DataFrame) -> None:
-        """Append the rows of ``df`` (its index is not written).
+    def write(self, df) -> None:
+        """Append the rows of ``df`` (a DataFrame, its index not written, or what
+        :meth:`encode` made of one).
 
         Every chunk needs the columns of the first, in the same order; for Parquet also
         the same types (or types that convert without loss).
         """
         if self._fh is None:
             raise RuntimeError("ChunkWriter.write() outside its with block")
-        names = [str(c) for c in df.columns]
+        names = [str(c) for c in (df.column_names if isinstance(df, pa.Table) else df.columns)]
         if self._names is None:
             self._names = names
             if self.format == "csv":
@@ -747,8 +748,14 @@ class ChunkWriter:
         if self.format == "csv":
             self._write_csv(df)
         else:
-            self._write_parquet(df)
+            self._write_parquet(df if isinstance(df, pa.Table) else self.encode(df))
         self.rows += len(df)
+
+    def encode(self, df):
+        """The chunk as :meth:`write` will need it: for Parquet an Arrow table, for CSV ``df``
+        itself. A pipeline can encode in one thread and :meth:`write` the result in another
+        (:meth:`write` takes either)."""
+        return tabular._arrow_table(df) if self.format == "parquet" and not isinstance(df, pa.Table) else df
 
     def _write_csv(self, df: pd.DataFrame) -> None:
         body = tabular._csv_body(df)
@@ -761,8 +768,7 @@ class ChunkWriter:
         for piece in body:
             self._fh.write(piece)
 
-    def _write_parquet(self, df: pd.DataFrame) -> None:
-        table = tabular._arrow_table(df)
+    def _write_parquet(self, table: pa.Table) -> None:
         if self._parquet is None:
             self._parquet = pa_pq.ParquetWriter(
                 self._fh, table.schema, use_dictionary=tabular._parquet_dictionary_columns(table.schema)
