@@ -365,9 +365,12 @@ class _Aiding:
         self.refresh_observability()
 
     def refresh_observability(self) -> None:
-        """Cache what the rows until the next update report: covariance, unobservable names."""
+        """Cache what the rows until the next update report: covariance, unobservable names,
+        and as plain floats (for the streaming step) the parameters and covariance."""
         self.cov = self.estimator.cov
         self.unobservable = _unobservable(self.estimator, self.cfg.kalman.p0_sd)
+        self.params_f = tuple(float(v) for v in self.estimator.params)
+        self.cov_f = tuple(float(v) for v in self.cov.ravel())
 
     def valid(self, snap: _Snap | None, t_end: float) -> _Snap | None:
         if snap is None or t_end - snap.t > self.cfg.gate.compass_max_age_s:
@@ -698,6 +701,10 @@ class Compensator:
         self._t_start: float | None = None
         self._fusion = FusionState(self.config.fusion, self.config.gyro_noise_dps_rthz)
         self._fusion_refused = fusion_refused(self.config.fusion)
+        from gyrodrift.estimators.base import LinearDrift
+
+        drift_owner = next((k for k in type(est).__mro__ if "drift" in k.__dict__), None)
+        self._linear_drift = drift_owner is LinearDrift
 
     # -- public state
     @property
@@ -798,9 +805,12 @@ class Compensator:
         """
         t_s, g, T, Tp, heading, norm, dip, gap = row
         aid, cfg, c = self._aid, self.config, self._carry
-        params = aid.estimator.params
-        unobservable, cov = aid.unobservable, aid.cov
-        bias = float(aid.estimator.drift(T, Tp))
+        a, b, c0 = aid.params_f
+        unobservable, P = aid.unobservable, aid.cov_f
+        if self._linear_drift:  # LinearDrift.drift on floats, the same operations
+            bias = a * T + b * Tp + c0
+        else:
+            bias = float(aid.estimator.drift(T, Tp))
         rate = g - bias
         dt = t_s - c.t
         c.I_raw = c.I_raw + 0.5 * (g + c.g) * dt
@@ -831,13 +841,21 @@ class Compensator:
         if k > self._k:
             self._k = k
             update, reason = aid.close(self._snap, t_s)
-        a, b, c0 = (float(v) for v in params)
-        bias_sd = float(_bias_sd(cov, T, Tp))
+        # _bias_sd on floats (the same operations as on arrays)
+        var = ((P[0] * T + P[1] * Tp + P[2]) * T + (P[3] * T + P[4] * Tp + P[5]) * Tp + (P[6] * T + P[7] * Tp + P[8]))
+        bias_sd = math.sqrt(var) if var > 0.0 else (0.0 if var <= 0.0 else math.nan)
         fused = self._fusion.row(t_s, rate, heading, reason not in self._fusion_refused, bias_sd)
         return CompensatedSample(
-            t_s, rate, bias, float(wrap_360(self._anchor + c.I_rate)), a, b, c0,
+            t_s, rate, bias, _wrap_360_float(self._anchor + c.I_rate), a, b, c0,
             update, int(reason != ""), reason, Tp, heading, unobservable, bias_sd, *fused,
         )
+
+
+def _wrap_360_float(x: float) -> float:
+    """:func:`gyrodrift.conventions.wrap_360` of one float (Python's ``%`` on floats is numpy's
+    ``mod``: the same fmod-and-sign rule, so the same bits)."""
+    m = x % 360.0
+    return m - 360.0 if m >= 360.0 else m
 
 
 def _compass_values(heading_deg, mag, acc):
@@ -852,7 +870,7 @@ def _compass_values(heading_deg, mag, acc):
             if not math.isfinite(heading):
                 heading = float(tilt_compensated_heading(*mag, *acc))
     if math.isfinite(heading):
-        heading = float(wrap_360(heading))
+        heading = _wrap_360_float(heading)
     return heading, norm, dip
 
 
