@@ -63,7 +63,12 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
             psi = compass
             P = R
             rej_t = math.nan
-    psi = psi - 360.0 * math.floor(psi / 360.0)
+    if psi >= 360.0:  # keep ψ in [0, 360): one turn at most per row, else the general rule
+        psi = psi - 360.0 if psi < 720.0 else psi - 360.0 * math.floor(psi / 360.0)
+    elif psi < 0.0:
+        psi = psi + 360.0 if psi >= -360.0 else psi - 360.0 * math.floor(psi / 360.0)
+        if psi >= 360.0:  # a tiny negative ψ rounds to 360 when a turn is added
+            psi = psi - 360.0
     gyro_var = R + N2 * (t - t0) + isd * isd
     return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
 
