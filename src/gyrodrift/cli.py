@@ -42,7 +42,8 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   the data, e.g. at a flat temperature), bias_sd (deg/s, standard deviation of
   bias_z), heading_fused (deg [0,360), gyro and compass combined),
   heading_fused_sd and heading_sd (deg, standard deviations of heading_fused and
-  of heading), then the other input columns.
+  of heading); with gyro_x, gyro_y and acc_* in the log also rate_x, rate_y,
+  bias_x, bias_y (deg/s) and tilt_gated; then the other input columns.
 """
 
 
