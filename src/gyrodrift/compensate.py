@@ -1168,12 +1168,13 @@ def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compa
             "b": params[1],
             "c": params[2],
             "update": np.asarray(update, dtype=np.int8),
-            "gated": (reason_code != 0).astype(np.int8),
-            "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS)),
+            "gated": np.not_equal(reason_code, 0).view(np.int8),  # bool and int8 share one byte
+            # codes made here are in range: no validation pass over the rows
+            "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS), validate=False),
             "temp_rate": Tp,
             "compass_heading": compass,
             "unobservable": pd.Categorical.from_codes(
-                np.asarray(unobservable_code, dtype=np.int8), categories=list(UNOBSERVABLE)
+                np.asarray(unobservable_code, dtype=np.int8), categories=list(UNOBSERVABLE), validate=False
             ),
             "bias_sd": bias_sd,
             "heading_fused": fused[0],
