@@ -61,7 +61,6 @@ from gyrodrift.conventions import (
     GYRO_Z,
     HEADING,
     MAG_COLS,
-    OUTPUT_COLS,
     TEMP,
     T,
     wrap_180,
