@@ -770,9 +770,7 @@ class ChunkWriter:
 
     def _write_parquet(self, table: pa.Table) -> None:
         if self._parquet is None:
-            self._parquet = pa_pq.ParquetWriter(
-                self._fh, table.schema, use_dictionary=tabular._parquet_dictionary_columns(table.schema)
-            )
+            self._parquet = pa_pq.ParquetWriter(self._fh, table.schema, **tabular._parquet_options(table.schema))
         elif not table.schema.equals(self._parquet.schema, check_metadata=False):
             try:
                 table = table.cast(self._parquet.schema)
