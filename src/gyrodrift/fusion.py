@@ -69,23 +69,25 @@ class FusionConfig:
         Largest accepted normalised innovation squared ν²/S (9 = 3σ).
     relock_s : float
         After the compass has been refused for this long without a break, the filter
-        takes the compass heading again (ψ = compass, P = σ_c²), s.
+        takes the compass heading again (ψ = compass, P = σ_c²), s. Off (infinite) by
+        default: the variance P grows while the compass is refused, so the innovation
+        gate widens by itself, and a re-anchoring timer follows a lasting interference.
     magnetic_gates : bool
         Also refuse the compass where the compensator refused aiding for interference
-        (``field`` is always refused). Off by default: the compensator also refuses when
-        its drift estimate lags, and the fused heading must not starve then.
+        (``field`` is always refused).
     """
 
     heading_sigma_deg: float = 2.0
-    bias_corr_s: float = 300.0
+    bias_corr_s: float = 30.0
     nis_gate: float = 9.0
-    relock_s: float = 60.0
-    magnetic_gates: bool = False
+    relock_s: float = math.inf
+    magnetic_gates: bool = True
 
     def __post_init__(self):
         for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            finite = math.isfinite(v) if isinstance(v, (int, float)) else False
+            if not (isinstance(v, (int, float)) and v > 0 and (finite or name == "relock_s")):
                 raise ConfigError(f"fusion setting {name} must be a positive number, got {v!r}")
         if not isinstance(self.magnetic_gates, bool):
             raise ConfigError(f"fusion setting magnetic_gates must be true or false, got {self.magnetic_gates!r}")
