@@ -26,17 +26,18 @@ error is correlated over about ``τ_b`` seconds (a bias error of σ_b held for �
 dropped: during slow interference it learned the compass error with confidence and the
 fused heading then ran away from both sensors.
 
-Compass update at a row with a compass sample whose interval is not refused for a
-magnetic reason (``field``/``interference``, :mod:`gyrodrift.gating`)::
+Compass update at a row with a compass sample not refused for a field anomaly (and, with
+``magnetic_gates``, for interference; :mod:`gyrodrift.gating`)::
 
     ν = wrap(compass − ψ),  S = P + σ_c²
     used when ν²/S <= nis_gate (normalised innovation squared; 3σ by default):
     K = P/S,  ψ += K ν,  P ← (1 − K) P
 
 A compass that stays off (interference the gates let through) is refused until P has
-grown enough to admit it, so a lasting change of heading error cannot lock the filter
-out for good. The filter starts at the first compass sample (ψ = compass, P = σ_c²);
-rows before it have NaN.
+grown enough to admit it, or for ``relock_s`` (60 s) at most, after which the filter
+re-anchors on the compass: a lasting change of heading error cannot lock it out, and an
+interference longer than that is followed. The filter starts at the first compass
+sample (ψ = compass, P = σ_c²); rows before it have NaN.
 
 The row update is one function, run as plain Python per sample by the streaming
 :class:`~gyrodrift.compensate.Compensator` and compiled (numba, when installed) over
@@ -68,20 +69,22 @@ class FusionConfig:
     nis_gate : float
         Largest accepted normalised innovation squared ν²/S (9 = 3σ).
     relock_s : float
-        After the compass has been refused for this long without a break, the filter
-        takes the compass heading again (ψ = compass, P = σ_c²), s. Off (infinite) by
-        default: the variance P grows while the compass is refused, so the innovation
-        gate widens by itself, and a re-anchoring timer follows a lasting interference.
+        After the compass has been refused by the innovation test for this long without
+        a break, the filter takes the compass heading again (ψ = compass, P = σ_c²), s
+        (``math.inf``: never). It bounds a lock-out; the price is that an interference
+        lasting longer than this is followed.
     magnetic_gates : bool
         Also refuse the compass where the compensator refused aiding for interference
-        (``field`` is always refused).
+        (``field`` is always refused). Off by default: the compensator also refuses when
+        its drift estimate has lost the drift, and the fused heading then starves (a
+        lock-out the timer cannot end, as no compass sample is tested).
     """
 
     heading_sigma_deg: float = 2.0
-    bias_corr_s: float = 30.0
+    bias_corr_s: float = 300.0
     nis_gate: float = 9.0
-    relock_s: float = math.inf
-    magnetic_gates: bool = True
+    relock_s: float = 60.0
+    magnetic_gates: bool = False
 
     def __post_init__(self):
         for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s"):
