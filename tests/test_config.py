@@ -18,9 +18,22 @@ def test_toml_settings_reach_every_level(tmp_path):
     assert cfg.update_interval_s == 10.0  # untouched default
 
 
+def test_toml_fusion_and_adaptive_tables(tmp_path):
+    """The fused-heading settings (B) of docs/results.md and the adaptive switches from TOML."""
+    path = tmp_path / "b.toml"
+    path.write_text(
+        'estimator = "adaptive"\n[fusion]\nmagnetic_gates = true\nbias_corr_s = 30.0\nrelock_s = inf\n'
+        "[adaptive]\nzaru = false\n"
+    )
+    cfg = load_config(path)
+    assert cfg.fusion.magnetic_gates and cfg.fusion.bias_corr_s == 30.0 and cfg.fusion.relock_s == float("inf")
+    assert cfg.estimator == "adaptive" and cfg.adaptive.zaru is False
+
+
 @pytest.mark.parametrize(
     "values, match",
     [
+        ({"fusion": {"nis_gate": 0}}, r"\[fusion\].*nis_gate"),
         ({"fadding": 1.1}, "unknown setting"),
         ({"kalman": {"fading": 0.5}}, r"\[kalman\].*fading"),
         ({"gate": {"turn_rate_dps": -1}}, r"\[gate\].*turn_rate_dps"),

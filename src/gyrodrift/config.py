@@ -1,9 +1,11 @@
 """Compensator settings from a TOML file (``gyrodrift compensate --config FILE``).
 
 Top-level keys are the fields of :class:`~gyrodrift.compensate.CompensatorConfig`;
-the tables ``[kalman]``, ``[gate]`` and ``[temp_rate]`` hold the fields of
-:class:`~gyrodrift.estimators.KalmanConfig`, :class:`~gyrodrift.gating.GateConfig`
-and :class:`~gyrodrift.model.TempRateConfig`. Anything left out keeps its default::
+the tables ``[kalman]``, ``[gate]``, ``[temp_rate]``, ``[adaptive]`` and ``[fusion]``
+hold the fields of :class:`~gyrodrift.estimators.KalmanConfig`,
+:class:`~gyrodrift.gating.GateConfig`, :class:`~gyrodrift.model.TempRateConfig`,
+:class:`~gyrodrift.estimators.AdaptiveConfig` and :class:`~gyrodrift.fusion.FusionConfig`.
+Anything left out keeps its default::
 
     update_interval_s = 10.0
     init_s = 30.0
@@ -14,6 +16,11 @@ and :class:`~gyrodrift.model.TempRateConfig`. Anything left out keeps its defaul
 
     [gate]
     turn_rate_dps = 2.0
+
+    [fusion]                   # the fused-heading settings (B) of docs/results.md
+    magnetic_gates = true
+    bias_corr_s = 30.0
+    relock_s = inf
 """
 
 from __future__ import annotations
@@ -32,7 +39,7 @@ else:  # pragma: no cover - Python 3.10
 
 __all__ = ["load_config", "config_from_dict", "load_toml", "apply_settings"]
 
-_TABLES = ("kalman", "gate", "temp_rate")
+_TABLES = ("kalman", "gate", "temp_rate", "adaptive", "fusion")
 
 
 def apply_settings(obj, values: dict, where: str):
