@@ -35,8 +35,10 @@ import numpy as np
 import pandas as pd
 
 
-def imufusion_heading(log: pd.DataFrame, fs_hz: float) -> np.ndarray:
-    """Heading (deg, [0, 360)) of x-io Fusion's AHRS with gyroscope offset correction, per row."""
+def imufusion_filters(fs_hz: float, magnetic_rejection_deg: float):
+    """x-io Fusion's gyroscope offset correction (``Bias``) and ``Ahrs`` (NED, gain 0.5,
+    acceleration rejection 10 deg, recovery after 5 s) at ``fs_hz``; also used by
+    ``bench_throughput.py``."""
     import imufusion
 
     bias = imufusion.Bias()
@@ -45,9 +47,15 @@ def imufusion_heading(log: pd.DataFrame, fs_hz: float) -> np.ndarray:
     ahrs.set_settings(
         imufusion.AhrsSettings(
             sample_rate=fs_hz, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
-            acceleration_rejection=10.0, magnetic_rejection=10.0, rejection_timeout=int(5 * fs_hz),
+            acceleration_rejection=10.0, magnetic_rejection=magnetic_rejection_deg, rejection_timeout=int(5 * fs_hz),
         )
     )
+    return bias, ahrs
+
+
+def imufusion_heading(log: pd.DataFrame, fs_hz: float) -> np.ndarray:
+    """Heading (deg, [0, 360)) of x-io Fusion's AHRS with gyroscope offset correction, per row."""
+    bias, ahrs = imufusion_filters(fs_hz, magnetic_rejection_deg=10.0)
     acc = np.array([0.0, 0.0, -1.0])  # level (NED body, g), as the compensator's heading assumes
     gyro_z = log["gyro_z"].to_numpy(float)
     heading = log["heading"].to_numpy(float)

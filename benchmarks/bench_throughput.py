@@ -282,17 +282,9 @@ def bench_filterpy(cols, m: int, interval_s: float = 10.0) -> tuple[float, str]:
 
 def bench_imufusion(cols, m: int) -> tuple[float, str]:
     """µs per sample, and its final gyro offset, of x-io Fusion (imufusion >= 1.3): ``Bias`` (gyro offset) + ``Ahrs`` with external heading."""
-    import imufusion
+    from bench_fused_heading import imufusion_filters
 
-    bias = imufusion.Bias()
-    bias.set_settings(imufusion.BiasSettings(sample_rate=FS_HZ, stationary_threshold=3.0, stationary_period=5.0))
-    ahrs = imufusion.Ahrs()
-    ahrs.set_settings(
-        imufusion.AhrsSettings(
-            sample_rate=FS_HZ, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
-            acceleration_rejection=10.0, magnetic_rejection=0.0, rejection_timeout=int(5 * FS_HZ),
-        )
-    )
+    bias, ahrs = imufusion_filters(FS_HZ, magnetic_rejection_deg=0.0)
     acc = np.array([0.0, 0.0, -1.0])  # level and still (NED, g)
     g, h = (cols[k][:m].tolist() for k in ("gyro_z", "heading"))
     start = time.perf_counter()

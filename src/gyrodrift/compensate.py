@@ -1225,14 +1225,7 @@ def compensate(
         before the input columns (:mod:`gyrodrift.triad`).
     """
     source = source or log.attrs.get("source", "log")
-    missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
-    if missing:
-        raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
-    has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
-    if HEADING not in log.columns and not has_mag:
-        raise LogFormatError(
-            f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
-        )
+    has_mag = check_input_columns(log, source)
     out = compensate_arrays(
         log[T].to_numpy(float),
         log[GYRO_Z].to_numpy(float),
@@ -1251,6 +1244,20 @@ def compensate(
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)
     return append_input_columns(out, log)
+
+
+def check_input_columns(log: pd.DataFrame, source: str) -> bool:
+    """Check a log (or chunk) has the contract's required columns and a compass; return
+    whether the raw magnetometer form (``mag_*`` and ``acc_*``) is complete."""
+    missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
+    if missing:
+        raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
+    has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
+    if HEADING not in log.columns and not has_mag:
+        raise LogFormatError(
+            f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
+        )
+    return has_mag
 
 
 def append_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:

@@ -285,23 +285,9 @@ def _run_serial(job, paths, progress) -> list[dict]:
 
 
 def _run_local(job, paths, workers: int, progress) -> list[dict]:
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from gyrodrift._pool import map_processes
 
-    results: list[dict | None] = [None] * len(paths)
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(paths)), mp_context=ctx) as pool:
-        futures = {pool.submit(job, p): i for i, p in enumerate(paths)}
-        done = as_completed(futures)
-        if progress is not None:
-            done = progress(done, len(futures))
-        for fut in done:
-            i = futures[fut]
-            try:
-                results[i] = fut.result()
-            except Exception as err:  # a worker process died (BrokenProcessPool) or could not pickle
-                results[i] = _failed_future(paths[i], err)
-    return results
+    return map_processes(job, paths, workers, progress, on_error=_failed_future)
 
 
 def _run_dask(job, paths, address, progress) -> list[dict]:

@@ -468,23 +468,9 @@ def _run_serial(tasks, progress) -> list[list[dict]]:
 
 
 def _run_pool(tasks, workers: int, progress) -> list[list[dict]]:
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from gyrodrift._pool import map_processes
 
-    results: list[list[dict] | None] = [None] * len(tasks)
-    ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads
-    with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=ctx) as pool:
-        futures = {pool.submit(_run_task, task): i for i, task in enumerate(tasks)}
-        done = as_completed(futures)
-        if progress is not None:
-            done = progress(done, len(futures))
-        for fut in done:
-            i = futures[fut]
-            try:
-                results[i] = fut.result()
-            except Exception as err:  # a worker died (BrokenProcessPool) or could not pickle
-                results[i] = _failed_task(tasks[i], err)
-    return results
+    return map_processes(_run_task, tasks, workers, progress, on_error=_failed_task)
 
 
 # --------------------------------------------------------------------------- summary

@@ -39,7 +39,6 @@ from gyrodrift.compare import CAUSAL, METHODS, run_methods
 from gyrodrift.compensate import CompensatorConfig
 from gyrodrift.conventions import REF_HEADING, wrap_360
 from gyrodrift.metrics import (
-    PAPER_METHODS,
     bias_error,
     error_stats,
     heading_error_deg,

@@ -27,7 +27,13 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift import gating
-from gyrodrift.compensate import CompensatorConfig, append_input_columns, compensate, build_estimator
+from gyrodrift.compensate import (
+    CompensatorConfig,
+    append_input_columns,
+    build_estimator,
+    check_input_columns,
+    compensate,
+)
 from gyrodrift.conventions import GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
@@ -406,7 +412,6 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
     from gyrodrift._engine import ChunkEngine
     from gyrodrift.compensate import _compass_arrays, _fast_frame
-    from gyrodrift.errors import LogFormatError
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
@@ -424,14 +429,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
         behind = _Behind(writer.write)
         try:
             for log in reader:
-                missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
-                if missing:
-                    raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
-                has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
-                if HEADING not in log.columns and not has_mag:
-                    raise LogFormatError(
-                        f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
-                    )
+                has_mag = check_input_columns(log, source)
                 n = len(log)
                 heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
                 if has_mag:
