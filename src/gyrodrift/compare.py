@@ -10,6 +10,9 @@ method      what it is                                                causal
             over a sliding window
 ``mlr``     the paper's MLR: one a, b, c fitted by least squares      **no**
             over every drift measurement of the whole log
+``smoothed`` the configured estimator's measurements smoothed          **no**
+            forwards and backwards (:mod:`gyrodrift.smooth`), for
+            recorded logs
 ``poly3``   PX4-style cubic thermal calibration fitted on a separate  yes
             static heating run of the same device
 ``oracle``  subtracts the true drift (``true_bias_z``): the limit     --
@@ -46,8 +49,9 @@ from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
-METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "poly3", "oracle")
-CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "poly3": True, "oracle": False}
+METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "oracle")
+CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "smoothed": False, "poly3": True,
+          "oracle": False}
 _FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
 
 
@@ -123,6 +127,10 @@ def run_method(
         out = compensate(log, config, estimator=FixedParams(params))
         out.attrs["measurements"] = meas
         return out
+    if name == "smoothed":
+        from gyrodrift.smooth import smooth_output
+
+        return smooth_output(compensate(log, config), config)
     if name == "poly3":
         if calibration is None:
             raise ConfigError("poly3 needs a calibration run of the same device: give --calibration FILE")
