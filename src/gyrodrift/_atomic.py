@@ -9,7 +9,42 @@ from pathlib import Path
 
 from gyrodrift.errors import ConfigError
 
-__all__ = ["atomic_output", "write_bytes_atomic"]
+__all__ = ["atomic_output", "atomic_path", "write_bytes_atomic"]
+
+
+def _create_temporary(path: Path) -> tuple[int, Path]:
+    """Create a hidden temporary file beside ``path``; return its descriptor (open for
+    writing) and its path. Problems with ``path`` are a :class:`ConfigError` naming it."""
+    parent = path.parent
+    if not parent.is_dir():
+        raise ConfigError(f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path")
+    if path.is_dir():
+        raise ConfigError(f"{path}: output path is a folder; give a file name")
+    while True:
+        tmp = parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            # mode 0o666: the process umask decides, as for any newly created file
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+            return fd, tmp
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise ConfigError(f"{path}: cannot write in {str(parent)!r} ({exc.strerror}); choose another path") from exc
+
+
+@contextmanager
+def _replacing(path: Path, tmp: Path):
+    """Move ``tmp`` onto ``path`` when the block ends normally; remove it otherwise (an
+    OS error becomes a :class:`ConfigError` naming ``path``)."""
+    try:
+        yield
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ConfigError(f"{path}: writing failed ({exc.strerror or exc}); check disk space and permissions") from exc
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 @contextmanager
@@ -22,33 +57,32 @@ def atomic_output(path):
     removed and an existing ``path`` is left untouched.
     """
     path = Path(path)
-    parent = path.parent
-    if not parent.is_dir():
-        raise ConfigError(f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path")
-    if path.is_dir():
-        raise ConfigError(f"{path}: output path is a folder; give a file name")
-    while True:
-        tmp = parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
-        try:
-            # mode 0o666: the process umask decides, as for any newly created file
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-            break
-        except FileExistsError:
-            continue
-        except OSError as exc:
-            raise ConfigError(f"{path}: cannot write in {str(parent)!r} ({exc.strerror}); choose another path") from exc
-    try:
+    fd, tmp = _create_temporary(path)
+    with _replacing(path, tmp):
         with os.fdopen(fd, "wb") as fh:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ConfigError(f"{path}: writing failed ({exc.strerror or exc}); check disk space and permissions") from exc
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+
+
+@contextmanager
+def atomic_path(path):
+    """:func:`atomic_output` for writers that open the file by its name: yield the path
+    of the hidden temporary file (created, empty).
+
+    pyarrow's own files (:class:`pyarrow.OSFile`) write without holding Python's GIL,
+    which a Python file object passed to pyarrow needs for every write. The writer must
+    close its file before the block ends; the file is then synced and moved onto
+    ``path``. Errors and clean-up as for :func:`atomic_output`.
+    """
+    path = Path(path)
+    fd, tmp = _create_temporary(path)
+    with _replacing(path, tmp):
+        try:
+            yield tmp
+            os.fsync(fd)  # any descriptor of the file syncs what was written through another
+        finally:
+            os.close(fd)
 
 
 def write_bytes_atomic(path, data: bytes) -> None:

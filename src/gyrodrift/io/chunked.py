@@ -52,6 +52,7 @@ import io
 import re
 import sys
 from contextlib import ExitStack
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping, NamedTuple
 
@@ -61,7 +62,7 @@ import pyarrow as pa
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pa_pq
 
-from gyrodrift._atomic import atomic_output
+from gyrodrift._atomic import atomic_path
 from gyrodrift.conventions import T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import tabular
@@ -676,15 +677,16 @@ class ChunkWriter:
 
     Use it as a context manager: chunks go to a hidden temporary file beside ``path``,
     which replaces ``path`` when the ``with`` block ends normally
-    (:func:`gyrodrift._atomic.atomic_output`); if the block raises, the temporary file
-    is removed and ``path`` is left as it was.
+    (:func:`gyrodrift._atomic.atomic_path`); if the block raises, the temporary file
+    is removed and ``path`` is left as it was. pyarrow writes the file itself (a
+    :class:`pyarrow.OSFile`), without holding Python's GIL, so another thread can run
+    Python code meanwhile.
 
     The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the
     concatenated chunks: for CSV byte for byte (one header, the same number formatting
     and quoting); for Parquet reading back equal, with chunks gathered into row groups of
-    at least ``row_group_rows`` rows (small row groups make Parquet writing more than
-    twice as slow). Categorical columns (e.g. ``gate_reason``) are written as their
-    values, as for text columns.
+    at least ``row_group_rows`` rows. Categorical columns (e.g. ``gate_reason``) are
+    written as their values, as for text columns.
 
     Parameters
     ----------
@@ -717,60 +719,59 @@ class ChunkWriter:
         self.format = tabular._table_format(self.path, fmt, tabular._WRITE_SUFFIXES)
         self.rows = 0
         self._stack: ExitStack | None = None
-        self._fh = None
+        self._sink: pa.NativeFile | None = None
         self._names: list[str] | None = None
         self._parquet: pa_pq.ParquetWriter | None = None
 
     def __enter__(self) -> "ChunkWriter":
         if self._stack is not None:
             raise RuntimeError("ChunkWriter is already open")
-        stack = ExitStack()
-        self._fh = stack.enter_context(atomic_output(self.path))
-        self._stack = stack
+        with ExitStack() as stack:
+            tmp = stack.enter_context(atomic_path(self.path))
+            self._sink = stack.enter_context(pa.OSFile(str(tmp), "w"))
+            self._stack = stack.pop_all()
         return self
 
-    def write(self, df) -> None:
-        """Append the rows of ``df`` (a DataFrame, its index not written, or what
-        :meth:`encode` made of one).
+    def write(self, chunk) -> None:
+        """Append the rows of ``chunk``: a DataFrame (its index not written) or what
+        :meth:`encode` made of one.
 
         Every chunk needs the columns of the first, in the same order; for Parquet also
         the same types (or types that convert without loss).
         """
-        if self._fh is None:
+        if self._sink is None:
             raise RuntimeError("ChunkWriter.write() outside its with block")
-        names = [str(c) for c in (df.column_names if isinstance(df, pa.Table) else df.columns)]
+        if isinstance(chunk, pd.DataFrame):
+            chunk = self.encode(chunk)
+        names = [str(c) for c in chunk.column_names]
+        header = b""
         if self._names is None:
             self._names = names
-            if self.format == "csv":
-                self._fh.write(tabular._csv_header(names))
+            header = tabular._csv_header(chunk.frame.columns) if self.format == "csv" else b""
         elif names != self._names:
             raise ValueError(f"{self.path}: chunk columns {names} differ from the first chunk's {self._names}")
         if self.format == "csv":
-            self._write_csv(df)
+            self._write_csv(chunk, header)
         else:
-            self._write_parquet(df if isinstance(df, pa.Table) else self.encode(df))
-        self.rows += len(df)
+            self._write_parquet(chunk)
+        self.rows += chunk.num_rows
 
-    def encode(self, df):
-        """The chunk as :meth:`write` will need it: for Parquet an Arrow table, for CSV ``df``
-        itself. A pipeline can encode in one thread and :meth:`write` the result in another
-        (:meth:`write` takes either)."""
-        return tabular._arrow_table(df) if self.format == "parquet" and not isinstance(df, pa.Table) else df
+    def encode(self, df: pd.DataFrame):
+        """The chunk as :meth:`write` writes it (for Parquet an Arrow table). A pipeline
+        can encode in one thread and :meth:`write` the result in another."""
+        if self.format == "parquet":
+            return tabular._arrow_table(df)
+        return _CsvChunk(tabular._csv_table(df), df)
 
-    def _write_csv(self, df: pd.DataFrame) -> None:
-        body = tabular._csv_body(df)
-        if body is None:  # pyarrow cannot write these values: pandas does, as in write_table
-            text = io.TextIOWrapper(self._fh, encoding="utf-8", newline="")
-            df.to_csv(text, index=False, header=False, lineterminator="\n")
-            text.flush()
-            text.detach()
-            return
-        for piece in body:
-            self._fh.write(piece)
+    def _write_csv(self, chunk: "_CsvChunk", header: bytes) -> None:
+        if chunk.table is None or not tabular._write_csv_rows(chunk.table, self._sink, header):
+            # pyarrow cannot convert or print these values: pandas does, as in write_table
+            self._sink.write(header)
+            tabular._write_csv_with_pandas(chunk.frame, self._sink, header=False)
 
     def _write_parquet(self, table: pa.Table) -> None:
         if self._parquet is None:
-            self._parquet = pa_pq.ParquetWriter(self._fh, table.schema, **tabular._parquet_options(table.schema))
+            self._parquet = pa_pq.ParquetWriter(self._sink, table.schema, **tabular._parquet_options(table.schema))
         elif not table.schema.equals(self._parquet.schema, check_metadata=False):
             try:
                 table = table.cast(self._parquet.schema)
@@ -797,7 +798,7 @@ class ChunkWriter:
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         stack, self._stack = self._stack, None
-        parquet, self._parquet, self._fh = self._parquet, None, None
+        parquet, self._parquet, self._sink = self._parquet, None, None
         if exc_type is not None:
             self._pending = []
             if parquet is not None:
@@ -819,3 +820,20 @@ class ChunkWriter:
                 raise
             return False
         return bool(stack.__exit__(None, None, None))
+
+
+@dataclass(frozen=True)
+class _CsvChunk:
+    """A chunk encoded for CSV: the Arrow table pyarrow prints (None if pyarrow cannot
+    convert the frame), and the frame, which pandas prints if pyarrow cannot."""
+
+    table: pa.Table | None
+    frame: pd.DataFrame
+
+    @property
+    def column_names(self) -> list:
+        return list(self.frame.columns)
+
+    @property
+    def num_rows(self) -> int:
+        return len(self.frame)

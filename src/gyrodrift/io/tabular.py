@@ -17,7 +17,7 @@ optionally followed by ``, column 'name'``. Parts that do not apply are left out
 :mod:`gyrodrift.io.chunked` reads and writes the same tables in chunks; it shares the
 per-frame checks and conversions of this module (:func:`_normalise_frame`), the CSV
 reading options (:func:`_csv_convert_options`) and the CSV formatting
-(:func:`_csv_header`, :func:`_csv_body`), so both paths give identical results.
+(:func:`_csv_header`, :func:`_write_csv_rows`), so both paths give identical results.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ from gyrodrift.conventions import (
     TRUE_BIAS_Z,
     wrap_360,
 )
-from gyrodrift._atomic import atomic_output
+from gyrodrift._atomic import atomic_path
 from gyrodrift.errors import ConfigError, LogFormatError
 
 __all__ = ["read_log", "write_table", "check_output_path"]
@@ -1078,7 +1078,7 @@ def _text_data(lines: pa.Array) -> pa.Buffer:
 
 
 def _csv_lines(table: pa.Table) -> list:
-    """The CSV data lines of ``table`` built column by column (see :func:`_csv_body`)."""
+    """The CSV data lines of ``table`` built column by column (see :func:`_write_csv_rows`)."""
     fields = [_quoted_column(column) for column in table.columns]
     comma, nothing, line_end = (pa.scalar(c, pa.large_string()) for c in (",", "", "\n"))
     lines = pa_compute.binary_join_element_wise(*fields, comma)
@@ -1086,46 +1086,67 @@ def _csv_lines(table: pa.Table) -> list:
     return [_text_data(chunk) for chunk in lines.chunks]
 
 
-def _csv_body(df: pd.DataFrame) -> list | None:
-    """The CSV data lines of ``df`` (no header) as byte buffers to write in order, or
-    None if pyarrow cannot write it.
-
-    Numbers and other values are printed by pyarrow (shortest round-trip floats, NaN as
-    an empty cell); text is quoted only where needed. Every line depends on its own row
-    only, so the lines of a table split in chunks are the lines of the whole table.
-    pyarrow's own writer is used when no text needs quoting (it would quote every text
-    value otherwise); the column-by-column path prints the same values the same way.
-    """
+def _csv_table(df: pd.DataFrame) -> pa.Table | None:
+    """``df`` as the Arrow table :func:`_write_csv_rows` prints, or None if pyarrow cannot
+    convert it (pandas writes it then)."""
     try:
-        table = _arrow_table(df)
-        if table.num_rows == 0:
-            return []
-        if not _needs_quoting(table):
-            body = pa.BufferOutputStream()
-            pa_csv.write_csv(table, body, pa_csv.WriteOptions(include_header=False, quoting_style="none"))
-            return [body.getvalue()]
-        return _csv_lines(table) if table.num_columns else None
+        return _arrow_table(df)
     except _ARROW_WRITE_ERRORS:
         return None
 
 
-def _write_csv(df: pd.DataFrame, fh) -> None:
+#: pyarrow's CSV settings for the data lines: the header and any quoting are gyrodrift's.
+_CSV_ROWS = pa_csv.WriteOptions(include_header=False, quoting_style="none")
+
+
+def _write_csv_rows(table: pa.Table, sink, header: bytes = b"") -> bool:
+    """Write ``header`` and the CSV data lines of ``table`` to ``sink``; False, with nothing
+    written, if pyarrow cannot print a column type of ``table`` (pandas writes it then).
+
+    Numbers and other values are printed by pyarrow (shortest round-trip floats, NaN as
+    an empty cell); text is quoted only where needed. Every line depends on its own row
+    only, so the lines of a table split in chunks are the lines of the whole table.
+    pyarrow's own writer prints straight into ``sink`` when no text needs quoting (it
+    would quote every text value otherwise); the column-by-column path (:func:`_csv_lines`)
+    prints the same values the same way. ``sink`` is best a :class:`pyarrow.NativeFile`:
+    pyarrow then writes without holding Python's GIL and without the text in memory.
+    """
+    if table.num_rows:
+        try:
+            quoted = _csv_lines(table) if _needs_quoting(table) else None
+            # no rows and no header: nothing is written, but a type pyarrow cannot print is refused
+            pa_csv.write_csv(table.slice(0, 0), sink, _CSV_ROWS)
+        except _ARROW_WRITE_ERRORS:
+            return False
+    sink.write(header)
+    if not table.num_rows:
+        return True
+    if quoted is None:
+        pa_csv.write_csv(table, sink, _CSV_ROWS)
+    else:
+        for piece in quoted:
+            sink.write(piece)
+    return True
+
+
+def _write_csv_with_pandas(df: pd.DataFrame, sink, *, header: bool) -> None:
+    """Write ``df`` as CSV with pandas to a binary ``sink`` (for values pyarrow cannot print)."""
+    text = io.TextIOWrapper(sink, encoding="utf-8", newline="")
+    df.to_csv(text, index=False, header=header, lineterminator="\n")
+    text.flush()
+    text.detach()  # leave ``sink`` open for the caller
+
+
+def _write_csv(df: pd.DataFrame, sink) -> None:
     """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats, NaN as an empty
     cell) to a binary file.
 
     pyarrow formats the values (about ten times faster than pandas), see
-    :func:`_csv_body`; pandas writes tables pyarrow cannot convert.
+    :func:`_write_csv_rows`; pandas writes tables pyarrow cannot convert or print.
     """
-    body = _csv_body(df)
-    if body is not None:
-        fh.write(_csv_header(df.columns))
-        for piece in body:
-            fh.write(piece)
-        return
-    text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
-    df.to_csv(text, index=False, lineterminator="\n")
-    text.flush()
-    text.detach()  # leave ``fh`` open for the caller
+    table = _csv_table(df)
+    if table is None or not _write_csv_rows(table, sink, _csv_header(df.columns)):
+        _write_csv_with_pandas(df, sink, header=True)
 
 
 def _parquet_dictionary_columns(schema: pa.Schema) -> list[str]:
@@ -1147,10 +1168,10 @@ def _parquet_options(schema: pa.Schema) -> dict:
     return {"use_dictionary": _parquet_dictionary_columns(schema), "write_statistics": stats}
 
 
-def _write_parquet(df: pd.DataFrame, fh) -> None:
+def _write_parquet(df: pd.DataFrame, sink) -> None:
     """Write ``df`` as Parquet (no index) to a binary file."""
     table = _arrow_table(df)
-    pa_pq.write_table(table, fh, **_parquet_options(table.schema))
+    pa_pq.write_table(table, sink, **_parquet_options(table.schema))
 
 
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
@@ -1178,8 +1199,8 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     path = Path(path)
     table_fmt = _table_format(path, fmt, _WRITE_SUFFIXES)
     writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
-    with atomic_output(path) as fh:
-        writer(df, fh)
+    with atomic_path(path) as tmp, pa.OSFile(str(tmp), "w") as sink:  # pyarrow's file: no GIL, no copy
+        writer(df, sink)
 
 
 def check_output_path(in_path, out_path) -> None:
