@@ -424,7 +424,11 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
-    with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, ChunkWriter(output_path) as writer:
+    # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
+    # (gathered into bigger groups, it idled and then held up the compute thread, and
+    # the last group was encoded after the compute had finished).
+    with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, \
+            ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
         reader = _Ahead(chunks)
         behind = _Behind(writer.write)
         try:
