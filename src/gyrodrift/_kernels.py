@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from gyrodrift import _fusion_kernels as FZ
+from gyrodrift._common_kernels import cap_covariance, correct, wrap180, wrap360
 
 # ---------------------------------------------------------------- state layouts
 
@@ -134,21 +135,6 @@ def _ring_slope(bins, head, n):
     return sxy / sxx
 
 
-# -------------------------------------------------------------------- angles
-
-
-@njit(cache=True, nogil=True)
-def wrap360(x):
-    """Mirror of :func:`gyrodrift.conventions.wrap_360` (an angle already in range is returned as is,
-    which is what ``np.mod`` gives for it)."""
-    if 0.0 <= x < 360.0:
-        return x
-    out = np.mod(x, 360.0)
-    if out >= 360.0:
-        out -= 360.0
-    return out
-
-
 @njit(cache=True, nogil=True)
 def prepare_kernel(t, g, T, heading, t_prev, first_chunk, max_gap_s, gap):
     """Per-row checks of a chunk (the reference ``compensate_arrays`` set-up), reading only.
@@ -203,50 +189,7 @@ def wrap_kernel(heading, out):
         out[i] = wrap360(h) if math.isfinite(h) else math.nan
 
 
-@njit(cache=True, nogil=True)
-def wrap180(x):
-    return wrap360(x + 180.0) - 180.0
-
-
 # -------------------------------------------------------------------- Kalman
-
-
-@njit(cache=True, nogil=True)
-def cap_covariance(P, max_var):
-    """Mirror of :func:`gyrodrift.estimators._kalman.cap_covariance`."""
-    n = P.shape[0]
-    scale = np.sqrt(max_var)
-    M = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            M[i, j] = P[i, j] / (scale[i] * scale[j])
-    tr = 0.0
-    for i in range(n):
-        tr += M[i, i]
-    if tr <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
-        return P.copy()
-    Ms = 0.5 * (M + M.T)
-    lam, V = np.linalg.eigh(Ms)
-    if lam[n - 1] <= 1.0:
-        return P.copy()
-    C = np.ascontiguousarray(V * np.minimum(lam, 1.0)) @ np.ascontiguousarray(V.T)
-    out = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            out[i, j] = C[i, j] * (scale[i] * scale[j])
-    return 0.5 * (out + out.T)
-
-
-@njit(cache=True, nogil=True)
-def correct(x, P, y, H, R):
-    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P."""
-    Ht = np.ascontiguousarray(H.T)
-    S = H @ P @ Ht + R
-    K = np.ascontiguousarray(np.linalg.solve(S, H @ P).T)
-    innovation = y - H @ x
-    A = np.eye(x.size) - K @ H
-    P_post = A @ P @ np.ascontiguousarray(A.T) + K @ R @ np.ascontiguousarray(K.T)
-    return x + K @ innovation, 0.5 * (P_post + P_post.T)
 
 
 @njit(cache=True, nogil=True)

@@ -1,0 +1,153 @@
+"""Compiled helpers shared by the kernels of the fast engine (numba; see :mod:`gyrodrift._engine`).
+
+Mirrors of :func:`gyrodrift.conventions.wrap_360` / ``wrap_180``, of the Kalman steps
+of :mod:`gyrodrift.estimators._kalman` (``correct``, ``cap_covariance``), and of
+numpy's summation (:func:`pairwise_sum`, the order ``np.sum`` and ``np.mean`` add in),
+so that a kernel that mirrors numpy code can give the same bits. A leaf module:
+:mod:`gyrodrift._kernels` and :mod:`gyrodrift._adaptive_kernels` both use it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# numpy's block size of the pairwise summation (numpy/_core/src/umath/loops_utils.h.src)
+_PW_BLOCKSIZE = 128
+
+
+@njit(cache=True, nogil=True)
+def wrap360(x):
+    """Mirror of :func:`gyrodrift.conventions.wrap_360` (an angle already in range is returned as is,
+    which is what ``np.mod`` gives for it)."""
+    if 0.0 <= x < 360.0:
+        return x
+    out = np.mod(x, 360.0)
+    if out >= 360.0:
+        out -= 360.0
+    return out
+
+
+@njit(cache=True, nogil=True)
+def wrap180(x):
+    """Mirror of :func:`gyrodrift.conventions.wrap_180`."""
+    return wrap360(x + 180.0) - 180.0
+
+
+@njit(cache=True, nogil=True)
+def _block_sum(a, lo, n):
+    """numpy's sum of at most 128 numbers (``pairwise_sum`` without the split)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    stop = n - (n % 8)
+    while i < stop:
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True)
+def pairwise_sum(a, lo, n):
+    """Sum of ``a[lo:lo + n]`` in the order of numpy's ``np.add.reduce`` on a float64 array.
+
+    numpy adds fewer than 8 numbers one after the other; up to 128 in 8 interleaved
+    partial sums; more by halves (split at a multiple of 8), recursively. ``np.sum(x)``
+    and ``np.mean(x) * n`` of the same numbers then have the same bits (``np.mean``
+    divides this sum by n), and so does each row of ``x.reshape(-1, m).mean(axis=1)``.
+    The recursion is unrolled on an explicit stack (numba cannot cache a recursive
+    function).
+    """
+    if n <= _PW_BLOCKSIZE:
+        return _block_sum(a, lo, n)
+    # post-order walk of the halving tree: (lo, n, combine?) to do, partial sums done
+    todo = np.empty((128, 3), dtype=np.int64)
+    done = np.empty(128)
+    n_todo = 1
+    n_done = 0
+    todo[0, 0], todo[0, 1], todo[0, 2] = lo, n, 0
+    while n_todo > 0:
+        n_todo -= 1
+        lo_, n_, combine = todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2]
+        if combine == 1:  # left + right, as numpy returns them
+            n_done -= 1
+            done[n_done - 1] = done[n_done - 1] + done[n_done]
+        elif n_ <= _PW_BLOCKSIZE:
+            done[n_done] = _block_sum(a, lo_, n_)
+            n_done += 1
+        else:
+            n2 = n_ // 2
+            n2 -= n2 % 8
+            todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2] = lo_, n_, 1
+            todo[n_todo + 1, 0], todo[n_todo + 1, 1], todo[n_todo + 1, 2] = lo_ + n2, n_ - n2, 0
+            todo[n_todo + 2, 0], todo[n_todo + 2, 1], todo[n_todo + 2, 2] = lo_, n2, 0
+            n_todo += 3
+    return done[0]
+
+
+@njit(cache=True, nogil=True)
+def mean(a):
+    """``np.mean`` of a 1-d float64 array, the same bits."""
+    return pairwise_sum(a, 0, a.size) / a.size
+
+
+@njit(cache=True, nogil=True)
+def std(a):
+    """``np.std`` of a 1-d float64 array (population, ddof 0), the same bits."""
+    d = a - mean(a)
+    return np.sqrt(pairwise_sum(d * d, 0, d.size) / d.size)
+
+
+@njit(cache=True, nogil=True)
+def cap_covariance(P, max_var):
+    """Mirror of :func:`gyrodrift.estimators._kalman.cap_covariance`."""
+    n = P.shape[0]
+    scale = np.sqrt(max_var)
+    M = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            M[i, j] = P[i, j] / (scale[i] * scale[j])
+    tr = 0.0
+    for i in range(n):
+        tr += M[i, i]
+    if tr <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
+        return P.copy()
+    Ms = 0.5 * (M + M.T)
+    lam, V = np.linalg.eigh(Ms)
+    if lam[n - 1] <= 1.0:
+        return P.copy()
+    C = np.ascontiguousarray(V * np.minimum(lam, 1.0)) @ np.ascontiguousarray(V.T)
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = C[i, j] * (scale[i] * scale[j])
+    return 0.5 * (out + out.T)
+
+
+@njit(cache=True, nogil=True)
+def correct(x, P, y, H, R):
+    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P."""
+    Ht = np.ascontiguousarray(H.T)
+    S = H @ P @ Ht + R
+    K = np.ascontiguousarray(np.linalg.solve(S, H @ P).T)
+    innovation = y - H @ x
+    A = np.eye(x.size) - K @ H
+    P_post = A @ P @ np.ascontiguousarray(A.T) + K @ R @ np.ascontiguousarray(K.T)
+    return x + K @ innovation, 0.5 * (P_post + P_post.T)
