@@ -19,16 +19,16 @@ from test_compensate import complex_log  # noqa: E402
 
 ESTIMATORS = ("stkf", "stkf-s1", "kf", "adaptive")
 
-#: The ``adaptive`` settings the compiled engine implements: Zhou's recursive fading, a
-#: fixed reference temperature, no stationarity updates, stacked measurements (the
-#: defaults run on the reference engine).
-COMPILED_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, edge_s=0.0, recentre=False, normalised=False,
-                                   softening=1.0, slope_q_per_rtc=0.0)
+#: ``adaptive`` with Zhou's recursive fading, a fixed reference temperature, no stationarity
+#: updates and stacked measurements (the default settings and every fix of issue 6:
+#: test_engine_adaptive.py).
+ZHOU_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, edge_s=0.0, recentre=False, normalised=False,
+                               softening=1.0, slope_q_per_rtc=0.0)
 
 
 def config(estimator: str, **kw) -> CompensatorConfig:
-    """Settings of ``estimator`` that the compiled engine runs."""
-    return CompensatorConfig(estimator=estimator, adaptive=COMPILED_ADAPTIVE, **kw)
+    """Settings of ``estimator`` (``adaptive``: :data:`ZHOU_ADAPTIVE`)."""
+    return CompensatorConfig(estimator=estimator, adaptive=ZHOU_ADAPTIVE, **kw)
 
 
 def assert_close(fast: pd.DataFrame, ref: pd.DataFrame, atol: float = 1e-8) -> None:
@@ -131,16 +131,13 @@ def test_engine_choice():
 
     cfg = CompensatorConfig()
     assert _engine.supports(cfg, make_estimator("stkf", config=KalmanConfig()))
-    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig(), settings=COMPILED_ADAPTIVE))
-    # Stationarity updates and unstacked measurements are not compiled: the reference engine runs them.
-    assert not _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
-    assert not _engine.supports(cfg, make_estimator("adaptive", settings=AdaptiveConfig(zaru=False)))
-    unstacked = replace(COMPILED_ADAPTIVE, stacked=False)
-    assert _engine.supports(CompensatorConfig(stack_depth=1), make_estimator("adaptive", settings=unstacked))
+    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig(), settings=ZHOU_ADAPTIVE))
+    # every adaptive setting is compiled (test_engine_adaptive.py)
+    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
     for fix in ("recentre", "normalised", "zaru"):
-        est = make_estimator("adaptive", settings=replace(COMPILED_ADAPTIVE, **{fix: True}))
-        assert not _engine.supports(cfg, est), fix
-    assert not _engine.supports(cfg, make_estimator("adaptive", settings=replace(COMPILED_ADAPTIVE, edge_s=2.0)))
+        est = make_estimator("adaptive", settings=replace(ZHOU_ADAPTIVE, **{fix: True}))
+        assert _engine.supports(cfg, est), fix
+    assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("adaptive"))
     assert not _engine.supports(cfg, Watched(KalmanConfig()))
     assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("stkf"))
     assert not _engine.supports(cfg, make_estimator("lsm"))

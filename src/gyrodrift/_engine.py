@@ -3,15 +3,30 @@
 :func:`gyrodrift.compensate.compensate_arrays` runs the reference engine (numpy per
 update interval, the same arithmetic as the streaming :class:`~gyrodrift.compensate.Compensator`)
 or this one. This one runs the whole log, filter updates included, in one compiled
-loop (:mod:`gyrodrift._kernels`, numba), for the Kalman-family estimators (``stkf``,
-``stkf-s1``, ``kf``, ``adaptive``) with the paper's ``endpoints`` measurement. It is
-resumable: :class:`ChunkEngine` takes the log in chunks and returns the rows of each,
-with the same numbers whatever the chunk sizes (the basis of the constant-memory file
-path). Its numbers agree with the reference engine to rounding (the T' bin means and
-the small-matrix products are summed in a different order); the tests hold both to that.
+loop (numba), for the Kalman-family estimators (``stkf``, ``stkf-s1``, ``kf``, and
+``adaptive`` with every setting of :class:`~gyrodrift.estimators.AdaptiveConfig`) with
+the paper's ``endpoints`` measurement (:func:`supports`):
+
+* :mod:`gyrodrift._kernels`: the row loop (``Compensator._step``), the interval decision
+  (``_Aiding.begin``/``close``) and the fixed-fading filter of eq. (10);
+* :mod:`gyrodrift._adaptive_kernels`: what ``adaptive`` adds, one function per function
+  of the reference (the compass window, edge means, ZARU, ``AdaptiveKalman.update`` and
+  ``hold`` with the twin filter and the outage anchor);
+* :mod:`gyrodrift._common_kernels`: angle wrapping, the Kalman correction and the cap,
+  numpy's pairwise summation.
+
+It is resumable: :class:`ChunkEngine` takes the log in chunks and returns the rows of
+each, with the same numbers whatever the chunk sizes (the basis of the constant-memory
+file path). Its numbers agree with the reference engine to rounding (the T' bin means
+and the integrals are summed in a different order); the tests hold both to that, with
+the same decisions (tests/test_engine.py, tests/test_engine_adaptive.py).
 
 numba is an optional dependency (``pip install 'gyrodrift[fast]'``); without it the
-reference engine runs.
+reference engine runs. The kernels are compiled on first use (about a minute) and
+cached in ``__pycache__``. numba's cache checks only the file that defines a function:
+after editing :mod:`gyrodrift._adaptive_kernels`, :mod:`gyrodrift._common_kernels` or
+:mod:`gyrodrift._fusion_kernels` alone, delete ``src/gyrodrift/__pycache__/_kernels.*.nb*``
+(or touch ``_kernels.py``), else the row loop keeps the old code of those it calls.
 """
 
 from __future__ import annotations
@@ -39,24 +54,18 @@ def available() -> bool:
 def supports(config, estimator) -> bool:
     """True when the fast engine implements this configuration and estimator.
 
-    The estimator must provide ``engine_state`` in the same class that defines its
-    ``update`` and ``hold`` (a subclass overriding those runs on the reference engine).
+    Implemented: the ``endpoints`` measurement (eqs. 4–6; not ``slope``) with an
+    estimator whose ``update``, ``hold`` and ``engine_state`` are defined in one class
+    (a subclass overriding those runs on the reference engine) and whose drift is the
+    linear one of eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`): the Kalman
+    family ``stkf``, ``stkf-s1``, ``kf`` and ``adaptive`` with any
+    :class:`~gyrodrift.estimators.AdaptiveConfig` (every fix of issue 6 on or off:
+    edge averaging, ZARU and its hold, recentring, slope random walk, normalised or
+    Zhou fading test, outage memory, one or stacked measurements).
     """
     if config.measurement != "endpoints":
         return False
-    from gyrodrift.estimators.adaptive import AdaptiveConfig
     from gyrodrift.estimators.base import LinearDrift
-
-    settings = getattr(estimator, "settings", None)
-    if isinstance(settings, AdaptiveConfig):
-        # Not compiled (the reference engine runs these): any fix of issue 6 beyond
-        # Zhou's recursive fading (AdaptiveConfig: ZARU, edge averaging, moving
-        # reference temperature, slope random walk, normalised fading test, one
-        # measurement per interval where the compensator would stack several).
-        if (settings.zaru or settings.edge_s > 0.0 or settings.recentre or settings.slope_q_per_rtc != 0.0
-                or settings.softening != 1.0 or settings.normalised
-                or (not settings.stacked and config.stack_depth > 1)):
-            return False
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)
               for name in ("update", "hold", "engine_state", "drift")}
@@ -209,7 +218,6 @@ class ChunkEngine:
             i = int(compass[-1])
             fs[K.F_S1:K.F_S1 + 6] = (t[i], heading[i], I_raw[i], I_T[i], I_Tp[i], I_bias[i])
             ist[K.I_S1_OK] = 1
-        K._begin(float(t[e]), fs, ist, float(cfg.gate.compass_max_age_s))
         ist[K.I_STACK_N] = len(aid.stack)
         self._stack = np.zeros((cfg.stack_depth, 5))
         for j, m in enumerate(aid.stack):
@@ -221,21 +229,20 @@ class ChunkEngine:
         self._lb[:n_lb, 0] = t[lo : e + 1]
         self._lb[:n_lb, 1] = I_rate[lo:]
         ist[K.I_LB_HEAD], ist[K.I_LB_N] = 0, n_lb
-        # estimator
+        # estimator: the linear filter x, P, or the adaptive state (x, P unused)
         st = self.est.engine_state()
         self._x = np.array(st["x"], dtype=float)
         self._P = np.array(st["P"], dtype=float)
         self._Q = np.array(st["Q"], dtype=float)
         self._max_var = np.array(st["max_var"], dtype=float)
         self._active = np.array(st["active"], dtype=np.int64)
-        self._V = np.zeros((cfg.stack_depth, cfg.stack_depth))
-        if st.get("V") is not None:
-            V = np.asarray(st["V"], dtype=float)
-            self._V[: V.shape[0], : V.shape[1]] = V
-            ist[K.I_V_N] = V.shape[0]
-        if st.get("temp_ref_c") is not None:
-            fs[K.F_TREF] = st["temp_ref_c"]
-            ist[K.I_TREF_SET] = 1
+        adaptive = st["mode"] == "adaptive"
+        AK = importlib.import_module("gyrodrift._adaptive_kernels")
+        self._ak = AK.new_state(aid.depth, st["innovation_window"] if adaptive else 1)
+        if adaptive:
+            AK.load(self._ak, self.est, aid)
+        # the compass window of _Aiding.add (empty: the init rows are not added)
+        self._win = np.zeros((256 if aid.collects else 1, 6))
         self._cfg = np.zeros(K.N_CFG)
         self._cfg[K.C_INTERVAL] = cfg.update_interval_s
         self._cfg[K.C_COMPASS_SD] = cfg.compass_sigma_deg
@@ -245,16 +252,14 @@ class ChunkEngine:
         self._cfg[K.C_INTERF] = cfg.gate.interference_deg
         self._cfg[K.C_MAX_AGE] = cfg.gate.compass_max_age_s
         self._cfg[K.C_FADING] = st["fading"]
-        self._cfg[K.C_LAMBDA_MAX] = st.get("lambda_max", 1.0)
-        self._cfg[K.C_RHO] = st.get("rho", 0.5)
         self._cfg[K.C_PRIOR_A] = cfg.kalman.p0_sd[0]
         self._cfg[K.C_PRIOR_B] = cfg.kalman.p0_sd[1]
         self._kcfg = np.zeros(K.N_KCFG, dtype=np.int64)
         self._kcfg[K.K_RELOCK] = cfg.gate.relock_intervals
-        self._kcfg[K.K_MODE] = K.MODE_ZHOU if st["mode"] == "zhou" else K.MODE_FIXED
-        self._kcfg[K.K_CENTRED] = int(bool(st.get("centred", False)))
-        self._kcfg[K.K_DEPTH] = cfg.stack_depth
-        self._Cabs = K.absolute(self._x, self._P, bool(self._kcfg[K.K_CENTRED]), fs[K.F_TREF], fs)
+        self._kcfg[K.K_MODE] = K.MODE_ADAPTIVE if adaptive else K.MODE_FIXED
+        self._kcfg[K.K_DEPTH] = aid.depth
+        K._begin(float(t[e]), fs, ist, self._cfg, self._win, self._ak)
+        self._Cabs = K.in_force(self._x, self._P, fs, self._kcfg[K.K_MODE], self._ak)
         ist[K.I_UNOBS] = K._unobservable_code(self._Cabs, self._cfg[K.C_PRIOR_A], self._cfg[K.C_PRIOR_B])
         self._aid = aid
         return self._run(t, g, T, Tp, heading, gap, norm, dip, i0=e + 1, out=out)
@@ -272,7 +277,7 @@ class ChunkEngine:
             i = K.compensate_kernel(
                 t, g, T, Tp, heading, gap, field, i,
                 self._fs, self._ist, self._cfg, self._kcfg, self._x, self._P, self._Q, self._max_var,
-                self._active, self._V, self._stack, self._refused, self._lb, self._Cabs,
+                self._active, self._stack, self._refused, self._lb, self._win, self._ak, self._Cabs,
                 out["bias_z"], out["rate_z"], out["heading"], out["a"], out["b"], out["c"], out["update"], out["reason"],
                 out["bias_sd"], out["unobs"], self._acc,
                 self._fusion.st, self._fusion.cfg, bool(self.cfg.fusion.magnetic_gates),
@@ -287,6 +292,13 @@ class ChunkEngine:
                 lb[:n] = self._lb[order]
                 self._lb = lb
                 self._ist[K.I_LB_HEAD] = 0
+            if self._ist[K.I_WIN_N] >= self._win.shape[0]:  # grow the compass window ring alike
+                head, n = int(self._ist[K.I_WIN_HEAD]), int(self._ist[K.I_WIN_N])
+                order = (head + np.arange(n)) % self._win.shape[0]
+                win = np.zeros((2 * self._win.shape[0], self._win.shape[1]))
+                win[:n] = self._win[order]
+                self._win = win
+                self._ist[K.I_WIN_HEAD] = 0
             if self._ist[K.I_N_ACC] >= self._acc.shape[0]:
                 self._flush_accepted()
         out["t"] = t
@@ -322,14 +334,10 @@ class ChunkEngine:
             )
         self._flush_accepted()
         K = self.K
-        st = {"x": self._x, "P": self._P}
-        if self._ist[K.I_TREF_SET]:
-            st["temp_ref_c"] = float(self._fs[K.F_TREF])
-        if self._ist[K.I_V_N]:
-            n = int(self._ist[K.I_V_N])
-            st["V"] = self._V[:n, :n].copy()
-        st["last_lambda"] = float(self._fs[K.F_LAMBDA]) if self._kcfg[K.K_MODE] == K.MODE_ZHOU else None
-        self.est.set_engine_state(st)
+        if self._kcfg[K.K_MODE] == K.MODE_ADAPTIVE:
+            self.est.set_engine_state(importlib.import_module("gyrodrift._adaptive_kernels").export(self._ak))
+        else:
+            self.est.set_engine_state({"x": self._x, "P": self._P})
         init = np.array([(tt, m.m, m.h[0], m.h[1], m.r) for tt, m in self._accepted_init]).reshape(-1, 5)
         return np.concatenate([init] + self._accepted)
 

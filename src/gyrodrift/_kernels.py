@@ -9,6 +9,10 @@ agree. They are resumable: each takes its state arrays, updates them in place an
 can stop early (returning the next row to do) when an output buffer is full, so a
 log may be fed in chunks of any size with identical results.
 
+The ``adaptive`` estimator and its aiding are in :mod:`gyrodrift._adaptive_kernels`
+(called from :func:`_close`, :func:`_begin` and the row loop), the helpers both use in
+:mod:`gyrodrift._common_kernels`.
+
 Importing this module imports numba (about 0.5 s); :mod:`gyrodrift._engine` does it
 only when the fast engine runs.
 """
@@ -20,6 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
+from gyrodrift import _adaptive_kernels as AK
 from gyrodrift import _fusion_kernels as FZ
 from gyrodrift._common_kernels import cap_covariance, correct, wrap180, wrap360
 
@@ -31,24 +36,29 @@ F_IRAW, F_IT, F_ITP, F_IBIAS, F_IRATE = 6, 7, 8, 9, 10
 F_K, F_TSTART, F_ANCHOR = 11, 12, 13
 F_S0 = 14  # start snap: t, heading, I_raw, I_T, I_Tp, I_bias (6 values)
 F_S1 = 20  # last compass snap: same 6 values
-F_TREF, F_LAMBDA = 26, 27
-F_PA, F_PB, F_PC = 28, 29, 30  # absolute a, b, c in force
-N_FSTATE = 31
+F_PA, F_PB, F_PC = 26, 27, 28  # absolute a, b, c in force
+F_E0 = 29  # start edge (``_Aiding.start_edge``, adaptive edge averaging): a snap (6 values)
+F_E0_VAR = 35  # and its compass variance, deg²
+N_FSTATE = 36
 
 # Integer state of the main kernel.
 I_S0_OK, I_S1_OK, I_STICKY, I_AFTER_INT = 0, 1, 2, 3
-I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_V_N, I_TREF_SET, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9, 10, 11
-N_ISTATE = 12
+I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9
+I_WIN_HEAD, I_WIN_N, I_E0_OK, I_STILL_CHAIN = 10, 11, 12, 13  # compass window ring, start edge, still chain
+N_ISTATE = 14
 
 # Settings (float) of the main kernel.
 C_INTERVAL, C_COMPASS_SD, C_GYRO_NOISE, C_TURN_RATE, C_TURN_WIN = 0, 1, 2, 3, 4
-C_INTERF, C_MAX_AGE, C_FADING, C_LAMBDA_MAX, C_RHO, C_PRIOR_A, C_PRIOR_B = 5, 6, 7, 8, 9, 10, 11
-N_CFG = 12
+C_INTERF, C_MAX_AGE, C_FADING, C_PRIOR_A, C_PRIOR_B = 5, 6, 7, 8, 9
+N_CFG = 10
 
-# Integer settings.
-K_RELOCK, K_MODE, K_CENTRED, K_DEPTH = 0, 1, 2, 3
-N_KCFG = 4
-MODE_FIXED, MODE_ZHOU = 0, 1
+# Integer settings: lock-out recovery intervals, estimator, measurements per update
+# (``_Aiding.depth``).
+K_RELOCK, K_MODE, K_DEPTH = 0, 1, 2
+N_KCFG = 3
+#: MODE_FIXED: the linear drift filter with a fixed fading factor (``stkf``, ``stkf-s1``,
+#: ``kf``; state x, P); MODE_ADAPTIVE: :mod:`gyrodrift._adaptive_kernels` (state ``ak``).
+MODE_FIXED, MODE_ADAPTIVE = 0, 1
 
 # Reason codes (gate_reason categories, in this order).
 R_NONE, R_INIT, R_GAP, R_NO_COMPASS, R_FIELD, R_TURNING, R_INTERFERENCE = 0, 1, 2, 3, 4, 5, 6
@@ -219,58 +229,22 @@ def hold(P, Q, max_var, active):
 
 
 @njit(cache=True, nogil=True)
-def kalman_update(x, P, Q, max_var, active, y, H, R, fading, mode, centred, lambda_max, rho, V, fs, ist):
-    """One accepted update of the linear drift filter; x, P (and V, T_ref, λ) in place.
-
-    ``mode`` MODE_FIXED: ``P- = cap(s P + Q)`` (eq. 10, ``stkf``/``stkf-s1``/``kf``);
-    MODE_ZHOU: the innovation-based fading factor of :class:`~gyrodrift.estimators.adaptive.AdaptiveKalman`,
-    with temperature centred on T_ref (``centred``).
-    """
+def kalman_update(x, P, Q, max_var, active, y, H, R, fading):
+    """One accepted update of the linear drift filter (``KalmanDrift.update``): ``P- = cap(s P + Q)``
+    (eq. 10, ``stkf``/``stkf-s1``/``kf``), then the Joseph-form correction; x, P in place."""
     m = y.size
-    Hc = H.copy()
-    if centred:
-        if ist[I_TREF_SET] == 0:
-            s = 0.0
-            for r in range(m):
-                s += H[r, 0]
-            tref = s / m
-            fs[F_TREF] = tref
-            ist[I_TREF_SET] = 1
-            x[2] = x[2] + x[0] * tref
-        for r in range(m):
-            Hc[r, 0] -= fs[F_TREF]
     na = active.size
     Ha = np.empty((m, na))
     for r in range(m):
         for j in range(na):
-            Ha[r, j] = Hc[r, active[j]]
+            Ha[r, j] = H[r, active[j]]
     xa = np.empty(na)
     for j in range(na):
         xa[j] = x[active[j]]
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
     mv = max_var[active]
-    lam = fading
-    if mode == MODE_ZHOU:
-        gamma = y - Ha @ xa
-        if ist[I_V_N] != m:
-            for i in range(m):
-                for j in range(m):
-                    V[i, j] = gamma[i] * gamma[j]
-            ist[I_V_N] = m
-        else:
-            for i in range(m):
-                for j in range(m):
-                    V[i, j] = (rho * V[i, j] + gamma[i] * gamma[j]) / (1.0 + rho)
-        Hat = np.ascontiguousarray(Ha.T)
-        N = V[:m, :m] - Ha @ Qa @ Hat - R
-        M = Ha @ Pa @ Hat
-        trN = np.trace(N)
-        trM = np.trace(M)
-        lam = trN / trM if trM > 0 else 1.0
-        lam = min(max(1.0, lam), lambda_max)
-        fs[F_LAMBDA] = lam
-    P_prior = cap_covariance(lam * Pa + Qa, mv)
+    P_prior = cap_covariance(fading * Pa + Qa, mv)
     xa, P_post = correct(xa, P_prior, y, Ha, R)
     _put(P, active, cap_covariance(P_post, mv))
     for j in range(na):
@@ -278,15 +252,19 @@ def kalman_update(x, P, Q, max_var, active, y, H, R, fading, mode, centred, lamb
 
 
 @njit(cache=True, nogil=True)
-def absolute(x, P, centred, tref, fs):
-    """Absolute [a, b, c] into ``fs`` and the absolute covariance (``J P Jᵀ`` when centred)."""
-    if centred:
-        fs[F_PA] = x[0]
-        fs[F_PB] = x[1]
-        fs[F_PC] = x[2] - x[0] * tref
-        J = np.eye(3)
-        J[2, 0] = -tref
-        return J @ P @ np.ascontiguousarray(J.T)
+def in_force(x, P, fs, mode, ak):
+    """The parameters in force into ``fs`` (F_PA..F_PC: the estimator's ``params``) and its
+    covariance ``cov`` of the absolute [a, b, c], which bias_sd and ``unobservable`` report.
+
+    ``adaptive``: the outage anchor while one is set, and ``J P Jᵀ`` of the centred states.
+    """
+    if mode == MODE_ADAPTIVE:
+        z, Pa, V, nis, af, ai, Q, max_var, fset, bset = ak
+        p = AK.params(z[AK.MAIN], af[AK.MAIN], ai[AK.MAIN])
+        fs[F_PA] = p[0]
+        fs[F_PB] = p[1]
+        fs[F_PC] = p[2]
+        return AK.cov(Pa[AK.MAIN], af[AK.MAIN])
     fs[F_PA] = x[0]
     fs[F_PB] = x[1]
     fs[F_PC] = x[2]
@@ -322,7 +300,7 @@ def _row_condition(gap, field, resid, mean_rate, turn_rate, interf):
 @njit(cache=True, nogil=True)
 def compensate_kernel(
     t, g, T, Tp, heading, gap, field, i0,
-    fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, lb,
+    fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refused, lb, win, ak,
     Cabs,
     out_bias, out_rate, out_heading, out_a, out_b, out_c, out_update, out_reason, out_bias_sd, out_unobs,
     acc, fst, fcfg, fuse_interference, out_hf, out_hf_sd, out_h_sd,
@@ -333,8 +311,14 @@ def compensate_kernel(
     ``fcfg``) is computed on the same pass; the compass of a row is refused to it for
     ``field``, and for ``interference`` when ``fuse_interference``.
 
+    The estimator is the linear filter ``x, P`` (``kcfg[K_MODE]`` MODE_FIXED) or the
+    ``adaptive`` one, state ``ak`` (:mod:`gyrodrift._adaptive_kernels`), whose aiding
+    keeps the compass samples of the last ``max(zaru_window_s, edge_s)`` in the ring
+    ``win`` (``_Aiding.add``) when it needs them (``_Aiding.collects``).
+
     Returns the next row to do: ``t.size`` when done, less when the turn-window ring
-    ``lb`` or the accepted-measurement buffer ``acc`` is full (grow it and call again).
+    ``lb``, the compass ring ``win`` or the accepted-measurement buffer ``acc`` is full
+    (grow it and call again).
 
     The per-row state lives in local variables (kept in registers) and goes back to
     ``fs``/``ist`` around each interval decision and at the end.
@@ -349,6 +333,9 @@ def compensate_kernel(
     depth = kcfg[K_DEPTH]
     lb_cap = lb.shape[0]
     acc_cap = acc.shape[0]
+    win_cap = win.shape[0]
+    collects = ak[9][AK.BS_COLLECTS] == 1
+    window_s = ak[8][AK.FS_WINDOW_S]
     # carry
     c_t, c_g, c_T, c_Tp, c_bias, c_rate = fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE]
     I_raw, I_T, I_Tp, I_bias, I_rate = fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE]
@@ -360,6 +347,7 @@ def compensate_kernel(
     after_int = ist[I_AFTER_INT] == 1
     unobs = ist[I_UNOBS]
     lb_head, lb_n = ist[I_LB_HEAD], ist[I_LB_N]
+    win_head, win_n = ist[I_WIN_HEAD], ist[I_WIN_N]
     C00, C01, C02 = Cabs[0, 0], Cabs[0, 1], Cabs[0, 2]
     C10, C11, C12 = Cabs[1, 0], Cabs[1, 1], Cabs[1, 2]
     C20, C21, C22 = Cabs[2, 0], Cabs[2, 1], Cabs[2, 2]
@@ -369,7 +357,7 @@ def compensate_kernel(
     fR, fN2, ftau, fgate, frelock = fcfg[0], fcfg[1], fcfg[2], fcfg[3], fcfg[4]
     stop = t.size
     for i in range(i0, t.size):
-        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap:
+        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or win_n >= win_cap:
             stop = i
             break
         t_s = t[i]
@@ -395,6 +383,8 @@ def compensate_kernel(
             fs[F_S1 + 4] = I_Tp
             fs[F_S1 + 5] = I_bias
             ist[I_S1_OK] = 1
+            if collects:
+                win_head, win_n = AK.add(win, win_head, win_n, t_s, h, I_raw, I_T, I_Tp, I_bias, window_s)
         # 1-s mean compensated rate, from the oldest row inside the window
         window_start = t_s - turn_win
         while lb_n > 1 and lb[lb_head, 0] < window_start:
@@ -445,8 +435,10 @@ def compensate_kernel(
             k_cur = k
             ist[I_STICKY] = sticky
             ist[I_AFTER_INT] = 1 if after_int else 0
-            update, reason = _close(t_s, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, acc, depth)
-            C = absolute(x, P, kcfg[K_CENTRED] == 1, fs[F_TREF], fs)
+            ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
+            update, reason = _close(t_s, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refused, acc, depth,
+                                    win, Cabs, ak)
+            C = in_force(x, P, fs, kcfg[K_MODE], ak)
             for r in range(3):
                 for c in range(3):
                     Cabs[r, c] = C[r, c]
@@ -454,7 +446,7 @@ def compensate_kernel(
             C10, C11, C12 = C[1, 0], C[1, 1], C[1, 2]
             C20, C21, C22 = C[2, 0], C[2, 1], C[2, 2]
             unobs = _unobservable_code(C, cfg[C_PRIOR_A], cfg[C_PRIOR_B])
-            _begin(t_s, fs, ist, max_age)
+            _begin(t_s, fs, ist, cfg, win, ak)
             pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
             s0_heading, s0_Iraw, s0_Ibias = fs[F_S0 + 1], fs[F_S0 + 2], fs[F_S0 + 5]
             s0_ok = ist[I_S0_OK] == 1
@@ -478,6 +470,7 @@ def compensate_kernel(
     ist[I_AFTER_INT] = 1 if after_int else 0
     ist[I_UNOBS] = unobs
     ist[I_LB_HEAD], ist[I_LB_N] = lb_head, lb_n
+    ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
     fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED] = f_psi, f_P, f_tp, f_rp, f_started
     fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T] = f_t0, f_isd, f_sdp, f_rej
     return stop
@@ -492,9 +485,10 @@ def _near_boundary(t_start, k_cur, interval):
 
 
 @njit(cache=True, nogil=True)
-def _begin(t_boundary, fs, ist, max_age):
-    """Open the next interval at a boundary row (``_Aiding.begin``)."""
-    if ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > max_age):
+def _begin(t_boundary, fs, ist, cfg, win, ak):
+    """Open the next interval at a boundary row (``_Aiding.begin``): the start snap, and its
+    edge mean when ``adaptive`` averages the compass at the interval edges (``start_edge``)."""
+    if ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE]):
         for j in range(6):
             fs[F_S0 + j] = fs[F_S1 + j]
         ist[I_S0_OK] = 1
@@ -502,13 +496,31 @@ def _begin(t_boundary, fs, ist, max_age):
     else:
         ist[I_S0_OK] = 0
         ist[I_STICKY] = R_NO_COMPASS
+    fset, bset = ak[8], ak[9]
+    ist[I_E0_OK] = 0
+    if ist[I_S0_OK] == 1 and bset[AK.BS_ON] == 1 and bset[AK.BS_EDGE] == 1:
+        edge, var = AK._edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], fs[F_S0:F_S0 + 6], fset[AK.FS_EDGE_S],
+                             cfg[C_INTERVAL], cfg[C_COMPASS_SD])
+        for j in range(6):
+            fs[F_E0 + j] = edge[j]
+        fs[F_E0_VAR] = var
+        ist[I_E0_OK] = 1
 
 
 @njit(cache=True, nogil=True)
-def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, refused, acc, depth):
-    """Decide the interval ending at a boundary row (``_Aiding.close``); returns (update, reason)."""
+def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refused, acc, depth, win, Cabs, ak):
+    """Decide the interval ending at a boundary row (``_Aiding.close``); returns (update, reason).
+
+    With the ``adaptive`` estimator: the compass measurement between edge means
+    (``start_edge``), the stationarity (ZARU) measurement, which replaces it when the
+    unit is still, and :func:`gyrodrift._adaptive_kernels.update`/``hold``. ``Cabs`` and
+    ``fs[F_PA:F_PC+1]`` are the estimator's ``cov`` and ``params`` before this interval.
+    """
+    adaptive = kcfg[K_MODE] == MODE_ADAPTIVE
     reason = ist[I_STICKY]
     end_ok = ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE])
+    s0 = fs[F_S0:F_S0 + 6]
+    s1 = fs[F_S1:F_S1 + 6]
     have_meas = False
     m = 0.0
     h0 = 0.0
@@ -520,10 +532,25 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, r
             reason = R_NO_COMPASS
         else:
             m, h0, h1, r, resid = _measurement(fs, cfg)
+            if ist[I_E0_OK] == 1:
+                end_edge, end_var = AK._edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], s1, ak[8][AK.FS_EDGE_S],
+                                             cfg[C_INTERVAL], cfg[C_COMPASS_SD])
+                m, h0, h1, r, resid = AK._compass_measurement(fs[F_E0:F_E0 + 6], end_edge, cfg[C_COMPASS_SD],
+                                                              cfg[C_GYRO_NOISE], fs[F_E0_VAR], end_var, True)
             have_meas = True
             if abs(resid) > cfg[C_INTERF]:
                 reason = R_INTERFERENCE
-    if reason == R_INTERFERENCE and ist[I_S0_OK] == 1 and end_ok:
+    zaru = False
+    if adaptive and (reason == NO_STICKY or reason == R_INTERFERENCE) and ist[I_S0_OK] == 1 and end_ok:
+        zaru, zm, zh0, zh1, zr, chain = AK._zaru_measurement(
+            win, ist[I_WIN_HEAD], ist[I_WIN_N], s0, s1, fs[F_PA], fs[F_PB], fs[F_PC], Cabs,
+            ist[I_STILL_CHAIN] == 1, cfg[C_GYRO_NOISE], cfg[C_COMPASS_SD], ak[8], ak[9],
+        )
+        ist[I_STILL_CHAIN] = 1 if chain else 0
+        if zaru:  # still: the drift moved, not the heading; no lock-out
+            m, h0, h1, r = zm, zh0, zh1, zr
+            reason = NO_STICKY
+    if not zaru and reason == R_INTERFERENCE and ist[I_S0_OK] == 1 and end_ok:
         if not have_meas:
             m, h0, h1, r, resid = _measurement(fs, cfg)
             have_meas = True
@@ -559,25 +586,25 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, V, stack, r
             H[j, 1] = stack[j, 2]
             H[j, 2] = stack[j, 3]
             R[j, j] = stack[j, 4]
-        kalman_update(x, P, Q, max_var, active, y, H, R, cfg[C_FADING], kcfg[K_MODE], kcfg[K_CENTRED] == 1,
-                      cfg[C_LAMBDA_MAX], cfg[C_RHO], V, fs, ist)
+        if adaptive:
+            AK.update_both(ak, y, H, R)
+        else:
+            kalman_update(x, P, Q, max_var, active, y, H, R, cfg[C_FADING])
         ist[I_AFTER_INT] = 0
         return 1, R_NONE
-    hold(P, Q, max_var, active)
+    if adaptive:
+        AK.hold(ak)
+    else:
+        hold(P, Q, max_var, active)
     ist[I_AFTER_INT] = 1 if reason == R_INTERFERENCE else 0
     return 0, reason
 
 
 @njit(cache=True, nogil=True)
 def _measurement(fs, cfg):
-    """Eqs. (4)–(6) between the start and end snaps (``_compass_measurement``)."""
-    dt = fs[F_S1] - fs[F_S0]
-    d_diff = wrap180((fs[F_S1 + 2] - fs[F_S1 + 1]) - (fs[F_S0 + 2] - fs[F_S0 + 1]))
-    m = d_diff / dt
-    h0 = (fs[F_S1 + 3] - fs[F_S0 + 3]) / dt
-    h1 = (fs[F_S1 + 4] - fs[F_S0 + 4]) / dt
-    r = 2.0 * cfg[C_COMPASS_SD] ** 2 / dt**2 + cfg[C_GYRO_NOISE] ** 2 / dt
-    return m, h0, h1, r, d_diff - (fs[F_S1 + 5] - fs[F_S0 + 5])
+    """Eqs. (4)–(6) between the start and end snaps (``_compass_measurement`` without ``end_var``)."""
+    return AK._compass_measurement(fs[F_S0:F_S0 + 6], fs[F_S1:F_S1 + 6], cfg[C_COMPASS_SD], cfg[C_GYRO_NOISE],
+                                   0.0, 0.0, False)
 
 
 @njit(cache=True, nogil=True)

@@ -343,13 +343,22 @@ class AdaptiveKalman(LinearDrift):
         return self.params
 
     def engine_state(self) -> dict:
-        """State and settings for the compiled engine (:mod:`gyrodrift._engine`)."""
-        return {"mode": "zhou", "fading": 1.0, "lambda_max": self.lambda_max, "rho": self.rho, "centred": True,
+        """State and settings for the compiled engine (:mod:`gyrodrift._engine`): the whole
+        filter (:mod:`gyrodrift._adaptive_kernels` mirrors :meth:`update` and :meth:`hold`),
+        with the twin's under ``"twin"``."""
+        s = self.settings
+        slope_q = s.slope_q_per_rtc if (s.slope_q_per_rtc > 0.0 and s.q_sd is not None) else 0.0
+        return {"mode": "adaptive", "fading": 1.0, "lambda_max": self.lambda_max, "rho": self.rho, "centred": True,
+                "softening": float(s.softening), "normalised": bool(s.normalised), "recentre": bool(s.recentre),
+                "slope_q": float(slope_q), "innovation_window": int(s.innovation_window),
                 "x": self._z, "P": self._P, "Q": self._Q, "max_var": self._max_var, "active": (0, 1, 2),
-                "V": self._V, "temp_ref_c": self.temp_ref_c}
+                "V": self._V, "temp_ref_c": self.temp_ref_c, "last_lambda": self.last_lambda,
+                "last_temp_c": self._last_temp_c, "last_h": self._last_h, "anchor": self._anchor,
+                "nis": list(self._nis), "twin": None if self._twin is None else self._twin.engine_state()}
 
     def set_engine_state(self, state: dict) -> None:
-        """Take back the state the compiled engine ended with."""
+        """Take back the state the compiled engine ended with (keys of :meth:`engine_state`;
+        absent ones are left as they are)."""
         self._z = np.array(state["x"], dtype=float)
         self._P = np.array(state["P"], dtype=float)
         if state.get("V") is not None:
@@ -358,3 +367,13 @@ class AdaptiveKalman(LinearDrift):
             self.temp_ref_c = float(state["temp_ref_c"])
         if state.get("last_lambda") is not None:
             self.last_lambda = float(state["last_lambda"])
+        if "last_temp_c" in state:
+            self._last_temp_c = None if state["last_temp_c"] is None else float(state["last_temp_c"])
+        if "last_h" in state:
+            self._last_h = None if state["last_h"] is None else tuple(float(v) for v in state["last_h"])
+        if "anchor" in state:
+            self._anchor = None if state["anchor"] is None else np.array(state["anchor"], dtype=float)
+        if "nis" in state:
+            self._nis = deque((float(v) for v in state["nis"]), maxlen=self.settings.innovation_window)
+        if state.get("twin") is not None and self._twin is not None:
+            self._twin.set_engine_state(state["twin"])
