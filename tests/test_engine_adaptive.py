@@ -268,3 +268,16 @@ def test_default_estimator_settings_round_trip():
     copy = build_estimator(config(AdaptiveConfig()))
     copy.set_engine_state(est.engine_state())
     _assert_identical(copy.engine_state(), est.engine_state())
+
+
+def test_common_kernels_sum_like_numpy():
+    """The mirror's means and standard deviations have numpy's bits (pairwise summation),
+    above and below its 8- and 128-number blocks."""
+    from gyrodrift._common_kernels import mean, pairwise_sum, std
+
+    rng = np.random.default_rng(11)
+    for n in [1, 2, 7, 8, 9, 15, 16, 17, 127, 128, 129, 255, 600, 1001, 4099, 70001]:
+        x = rng.standard_normal(n + 3) * 10.0 ** rng.uniform(-3, 3, n + 3)
+        assert pairwise_sum(x, 3, n) == np.sum(x[3:]), n
+        y = x[:n].copy()
+        assert mean(y) == np.mean(y) and std(y) == np.std(y), n

@@ -327,7 +327,6 @@ def compensate_kernel(
     turn_win = cfg[C_TURN_WIN]
     turn_rate = cfg[C_TURN_RATE]
     interf = cfg[C_INTERF]
-    max_age = cfg[C_MAX_AGE]
     t_start = fs[F_TSTART]
     anchor = fs[F_ANCHOR]
     depth = kcfg[K_DEPTH]
