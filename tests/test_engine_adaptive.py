@@ -26,7 +26,7 @@ pytest.importorskip("numba")
 
 from gyrodrift import _engine  # noqa: E402
 from gyrodrift.compensate import CompensatorConfig, _Aiding, build_estimator, compensate, compensate_arrays  # noqa: E402
-from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
+from gyrodrift.estimators import AdaptiveConfig, KalmanConfig  # noqa: E402
 from gyrodrift.estimators.adaptive import AdaptiveKalman  # noqa: E402
 from gyrodrift.montecarlo import BEFORE_ISSUE_6, ablation_variants, draw_case, simulate_case  # noqa: E402
 from test_compensate import complex_log  # noqa: E402
@@ -135,6 +135,28 @@ def test_fast_engine_equals_reference(family, variant):
     for col in m_ref.columns:
         y = m_ref[col].to_numpy()
         np.testing.assert_allclose(m_fast[col].to_numpy(), y, rtol=RTOL, atol=RTOL * np.max(np.abs(y)), err_msg=col)
+    assert_same_state(est_fast.engine_state(), est_ref.engine_state())
+
+
+#: Settings off the ablation's path: an edge longer than the stillness window, a window of
+#: one innovation, stacked Zhou fading with β = 2 over 2 rows, the shared process noise with
+#: another ρ and λ_max, no fading, another update interval and prior.
+ODD_SETTINGS = {
+    "long edge": (AdaptiveConfig(edge_s=120.0, zaru_window_s=30.0, innovation_window=1), {}),
+    "stacked zhou": (AdaptiveConfig(stacked=True, normalised=False, softening=2.0), {"stack_depth": 2}),
+    "shared noise": (AdaptiveConfig(q_sd=None, rho=0.3, lambda_max=3.0), {"update_interval_s": 7.0, "init_s": 20.0}),
+    "plain": (AdaptiveConfig(fading=False, recentre=False, zaru_hold=False), {"kalman": KalmanConfig(x0=(0.01, 0.5, 0.2))}),
+}
+
+
+@pytest.mark.parametrize("name", list(ODD_SETTINGS))
+@pytest.mark.parametrize("family", ["static", "soak"])
+def test_fast_engine_equals_reference_with_other_settings(family, name):
+    settings, kw = ODD_SETTINGS[name]
+    cfg = config(settings, **kw)
+    fast, est_fast = run(family_log(family), cfg, "fast")
+    ref, est_ref = run(family_log(family), cfg, "reference")
+    assert_agree(fast, ref)
     assert_same_state(est_fast.engine_state(), est_ref.engine_state())
 
 
