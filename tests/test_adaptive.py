@@ -218,3 +218,29 @@ def test_stillness_holds_through_slowly_wandering_interference():
         late = (log["t"] > 900.0).to_numpy()
         err[hold] = float(np.sqrt(np.mean((out["bias_z"] - log["true_bias_z"]).to_numpy()[late] ** 2)))
     assert err[True] < 0.8 * err[False]
+
+
+def test_a_still_unit_whose_compass_moved_keeps_the_compass_from_the_fused_heading():
+    """ZARU held on a wandering compass (the compass moved, not the unit): the next interval's
+    rows are labelled interference and, with magnetic gates, the fused heading follows the gyro."""
+    from gyrodrift.fusion import FusionConfig
+    from gyrodrift.montecarlo import draw_case, simulate_case
+
+    log, _ = simulate_case(draw_case("interference-wander", 0, duration_scale=0.3), calibration=False)
+    cfg = CompensatorConfig(estimator="adaptive", fusion=FusionConfig(magnetic_gates=True, bias_corr_s=30.0,
+                                                                      relock_s=float("inf")))
+    outs = {e: compensate(log, cfg, engine=e) for e in ("reference", "fast")}
+    out = outs["reference"]
+    flagged = (out["gate_reason"] == "interference").to_numpy()
+    update = out["update"].to_numpy() == 1
+    # an accepted interval followed by one labelled interference from its first row: only
+    # a ZARU held on a moving compass does that (after any other acceptance the label clears)
+    assert np.sum(update[:-1] & flagged[1:]) > 10
+    assert (outs["fast"]["gate_reason"] == out["gate_reason"]).all()
+    # on flagged rows the fused heading only integrates the compensated rate
+    t, rate, hf = (out[c].to_numpy() for c in ("t", "rate_z", "heading_fused"))
+    step = np.diff(hf)
+    expected = 0.5 * (rate[1:] + rate[:-1]) * np.diff(t)
+    rows = flagged[1:] & np.isfinite(step)
+    assert rows.sum() > 100
+    np.testing.assert_allclose((step[rows] - expected[rows] + 180.0) % 360.0 - 180.0, 0.0, atol=1e-9)

@@ -295,16 +295,17 @@ def _zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_
     (``_Aiding._zaru_measurement``, fixes 3 and 4).
 
     ``a, b, c`` are the parameters in force (``estimator.drift``), ``cov`` the covariance
-    (``estimator.cov``). Returns (found, m, h_T, h_T', r, still_chain): the mean gyro rate
+    (``estimator.cov``). Returns (found, m, h_T, h_T', r, still_chain, held): the mean gyro rate
     over the interval measures the drift (eq. 1 with zero true rate), variance ``N²/Δt``
-    (plus the squared slope standard error of a verified flat compass).
+    (plus the squared slope standard error of a verified flat compass); ``held``: found by
+    ``zaru_hold`` with a compass that is not flat (the compass moved, not the unit).
     """
     if bset[BS_ZARU] == 0:
-        return False, 0.0, 0.0, 0.0, 0.0, still_chain
+        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
     w = _take(win, head, n, math.nan, end[W_T], True)
     size = w.shape[0]
     if size < 10 or end[W_T] - w[0, W_T] < 0.8 * fset[FS_ZARU_WINDOW_S]:
-        return False, 0.0, 0.0, 0.0, 0.0, False
+        return False, 0.0, 0.0, 0.0, 0.0, False, False
     t = np.ascontiguousarray(w[:, W_T])
     rates = np.diff(np.ascontiguousarray(w[:, W_IRAW])) / np.diff(t)
     dt = end[W_T] - start[W_T]
@@ -321,14 +322,14 @@ def _zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_
     # explain. A wobble the Allan test sees only skips this interval.
     still_chain = still_chain and consistent
     if not still:
-        return False, 0.0, 0.0, 0.0, 0.0, still_chain
+        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
     slope_se = _flat_compass(np.ascontiguousarray(w[:, W_HEADING]), t, compass_sd,
                              fset[FS_ZARU_SLOPE_K], fset[FS_ZARU_RESID_K])
     if slope_se >= 0.0:
-        return True, m, h[0], h[1], r + slope_se**2, True
+        return True, m, h[0], h[1], r + slope_se**2, True, False
     if bset[BS_ZARU_HOLD] == 1 and still_chain:
-        return True, m, h[0], h[1], r, still_chain
-    return False, 0.0, 0.0, 0.0, 0.0, still_chain
+        return True, m, h[0], h[1], r, still_chain, True
+    return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
 
 
 @njit(cache=True, nogil=True)

@@ -540,8 +540,9 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refu
             if abs(resid) > cfg[C_INTERF]:
                 reason = R_INTERFERENCE
     zaru = False
+    compass_moved = False
     if adaptive and (reason == NO_STICKY or reason == R_INTERFERENCE) and ist[I_S0_OK] == 1 and end_ok:
-        zaru, zm, zh0, zh1, zr, chain = AK._zaru_measurement(
+        zaru, zm, zh0, zh1, zr, chain, compass_moved = AK._zaru_measurement(
             win, ist[I_WIN_HEAD], ist[I_WIN_N], s0, s1, fs[F_PA], fs[F_PB], fs[F_PC], Cabs,
             ist[I_STILL_CHAIN] == 1, cfg[C_GYRO_NOISE], cfg[C_COMPASS_SD], ak[8], ak[9],
         )
@@ -589,7 +590,8 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refu
             AK.update_both(ak, y, H, R)
         else:
             kalman_update(x, P, Q, max_var, active, y, H, R, cfg[C_FADING])
-        ist[I_AFTER_INT] = 0
+        # a still unit whose compass moved: the compass is suspect for the next interval
+        ist[I_AFTER_INT] = 1 if compass_moved else 0
         return 1, R_NONE
     if adaptive:
         AK.hold(ak)

@@ -349,6 +349,8 @@ class _Aiding:
         self.window: deque[_Snap] = deque()
         #: Still since the last compass-verified stationarity update (``zaru_hold``).
         self.still_chain = False
+        #: The last ZARU measurement was held on a compass that is not flat (the compass moved).
+        self.compass_moved = False
         self.stack: deque[_Meas] = deque(maxlen=cfg.stack_depth)
         self.start: _Snap | None = None
         self.sticky: str | None = None
@@ -423,6 +425,7 @@ class _Aiding:
                 if abs(meas.residual_deg) > self.cfg.gate.interference_deg:
                     reason = gating.INTERFERENCE
         zaru = None
+        self.compass_moved = False
         if reason in (None, gating.INTERFERENCE) and self.start is not None and end is not None:
             zaru = self._zaru_measurement(end)
         if zaru is not None:  # still: the drift moved, not the heading; no lock-out
@@ -437,7 +440,9 @@ class _Aiding:
             self.stack.appendleft(meas)
             self.accepted.append((t_boundary, meas))
             self.estimator.update(self._observation(t_boundary, n_new=1))
-            self.after_interference = False
+            # A still unit whose compass moved (ZARU held on a compass that is not flat): the
+            # compass is suspect, as after interference, until an interval clears it.
+            self.after_interference = zaru is not None and self.compass_moved
         else:
             self.estimator.hold()
             self.after_interference = reason == gating.INTERFERENCE
@@ -554,6 +559,7 @@ class _Aiding:
             self.still_chain = True
             return _Meas(m, h, r + slope_se**2, 0.0)
         if st.zaru_hold and self.still_chain:
+            self.compass_moved = True
             return _Meas(m, h, r, 0.0)
         return None
 

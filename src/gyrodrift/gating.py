@@ -19,7 +19,10 @@ reason          meaning
                 change since the start of the interval by more than
                 ``interference_deg`` at some compass sample; the gyro does not feel
                 magnetic fields (Section 4.1). Also shown on the rows after a
-                refusal for interference until an interval is accepted again.
+                refusal for interference until an interval is accepted again,
+                and (``adaptive``) on the rows after a still interval whose
+                compass moved: the zero-rate update was held (``zaru_hold``)
+                while the compass heading was not flat.
 ==============  ================================================================
 """
 
