@@ -58,8 +58,8 @@ def test_slope_measurement_streaming_equals_batch_and_is_less_noisy():
     assert_same(compensate(log, cfg), stream(log, cfg))
     # Static, constant bias, noisy compass: the slope averages the compass noise.
     noisy = synthetic_log(duration_s=1800.0, gyro_noise_dps=0.05, compass_noise_deg=1.0, seed=8)
-    ends = compensate(noisy, CompensatorConfig(stack_depth=1)).attrs["measurements"]
-    slope = compensate(noisy, CompensatorConfig(stack_depth=1, measurement="slope")).attrs["measurements"]
+    ends = compensate(noisy, CompensatorConfig(estimator="stkf", stack_depth=1)).attrs["measurements"]
+    slope = compensate(noisy, CompensatorConfig(estimator="stkf", stack_depth=1, measurement="slope")).attrs["measurements"]
     assert slope["m"].std() < 0.5 * ends["m"].std()
     assert slope["m"].mean() == pytest.approx(0.3, abs=0.01)
 

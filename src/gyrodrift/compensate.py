@@ -77,7 +77,7 @@ __all__ = ["CompensatorConfig", "build_estimator", "CompensatedSample", "Compens
 
 @dataclass(frozen=True, kw_only=True)
 class CompensatorConfig:
-    """All settings of the compensator, with the paper's structure as defaults.
+    """All settings of the compensator: the paper's structure, with the ``adaptive`` estimator.
 
     Attributes
     ----------
@@ -92,7 +92,9 @@ class CompensatorConfig:
     gyro_noise_dps_rthz : float
         Gyro white-noise density, deg/s/√Hz (ADXRS623: 0.04).
     estimator : str
-        Name of the drift estimator (see :mod:`gyrodrift.estimators`).
+        Name of the drift estimator (see :mod:`gyrodrift.estimators`). Default
+        ``adaptive`` (issue 6: the paper's model and filter with its weak points fixed;
+        ``docs/results.md``); ``stkf`` is the paper's strong tracking Kalman filter.
     measurement : {"endpoints", "slope"}
         How an interval measures the drift: ``endpoints`` is the paper's eq. (4)/(6),
         one compass sample at each end; ``slope`` is the least-squares slope of
@@ -117,7 +119,7 @@ class CompensatorConfig:
     stack_depth: int = 3
     compass_sigma_deg: float = 0.5
     gyro_noise_dps_rthz: float = 0.04
-    estimator: str = "stkf"
+    estimator: str = "adaptive"
     measurement: str = "endpoints"
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     temp_rate: TempRateConfig = field(default_factory=TempRateConfig)

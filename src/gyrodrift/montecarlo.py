@@ -119,8 +119,9 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
     }
 )
 
-#: Methods of the comparison by default: ours, then the paper's and PX4's baselines.
-DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3")
+#: Methods of the comparison by default: ours, the paper's and PX4's baselines, then our
+#: non-causal smoother for recorded logs (:mod:`gyrodrift.smooth`), beside the non-causal MLR.
+DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3", "smoothed")
 
 #: The method the others are counted against in :func:`summarise`.
 REFERENCE_METHOD = "adaptive"

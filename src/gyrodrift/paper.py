@@ -37,6 +37,7 @@ import pandas as pd
 
 from gyrodrift.compare import CAUSAL, METHODS, run_methods
 from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.fusion import FusionConfig
 from gyrodrift.conventions import REF_HEADING, wrap_360
 from gyrodrift.metrics import (
     bias_error,
@@ -73,15 +74,16 @@ class PaperSettings:
         ``smoothed`` (not in the paper).
     config : CompensatorConfig
         Compensator settings shared by every method. The default pins the paper's
-        estimator (``stkf``), whatever the package default is: the measurements MLR fits
-        are then the paper's too.
+        estimator (``stkf``, with the fused-heading settings that suit it), whatever the
+        package default is: the measurements MLR fits are then the paper's too.
     """
 
     seed: int = 1
     fs_hz: float = 10.0
     duration_scale: float = 1.0
     methods: tuple[str, ...] = tuple(m for m in METHODS if m != "smoothed")
-    config: CompensatorConfig = field(default_factory=lambda: CompensatorConfig(estimator="stkf"))
+    config: CompensatorConfig = field(
+        default_factory=lambda: CompensatorConfig(estimator="stkf", fusion=FusionConfig.tolerant()))
 
 
 @dataclass

@@ -272,6 +272,12 @@ class AdaptiveKalman(LinearDrift):
         return np.array([a, b, c_ref - a * t_ref])
 
     @property
+    def centred_cov(self) -> np.ndarray:
+        """Covariance of the filter's own states [a, b, c'] (centred on ``temp_ref_c``): the
+        matrix the cap (``KalmanConfig.max_sd``, default the prior) bounds."""
+        return self._P.copy()
+
+    @property
     def cov(self) -> np.ndarray:
         """Covariance of the absolute [a, b, c] (transformed from the centred states)."""
         J = np.eye(3)
