@@ -15,7 +15,6 @@ from gyrodrift.compensate import (
 )
 from gyrodrift.conventions import OUTPUT_COLS, wrap_180
 from gyrodrift.errors import GyroDriftError
-from gyrodrift.estimators import KalmanConfig
 from gyrodrift.gating import GateConfig
 from gyrodrift.io import read_log
 from gyrodrift.model import temp_rate
