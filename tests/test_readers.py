@@ -622,3 +622,23 @@ def test_yaw_of_a_quaternion_that_is_not_normalised():
     q = Rotation.from_euler("ZYX", [123.0, 10.0, -20.0], degrees=True).as_quat()  # x, y, z, w
     x, y, z, w = 3.0 * q
     assert float(_align.yaw_deg(w, x, y, z)) == pytest.approx(123.0)
+
+
+def test_enu_and_rad_per_s_convert_the_x_y_truth_like_their_gyros(tmp_path):
+    """true_bias_x/y follow gyro_x/y: scaled to deg/s, and y flips from FLU to FRD."""
+    import math
+
+    import pandas as pd
+
+    from gyrodrift.io import read_log
+
+    df = pd.DataFrame({"t": [0.0, 0.1], "gyro_x": [0.01, 0.01], "gyro_y": [0.02, 0.02], "gyro_z": [0.03, 0.03],
+                       "temp": [25.0, 25.0], "heading": [10.0, 10.0], "true_bias_x": [0.01, 0.01],
+                       "true_bias_y": [0.02, 0.02], "true_bias_z": [0.03, 0.03]})
+    path = tmp_path / "enu.csv"
+    df.to_csv(path, index=False)
+    log = read_log(path, gyro_unit="rad/s", frame="enu")
+    k = 180.0 / math.pi
+    for axis, sign in (("x", 1.0), ("y", -1.0), ("z", -1.0)):
+        assert log[f"true_bias_{axis}"].tolist() == pytest.approx([sign * k * df[f"true_bias_{axis}"][0]] * 2)
+        assert log[f"true_bias_{axis}"].tolist() == log[f"gyro_{axis}"].tolist()

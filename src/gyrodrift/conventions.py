@@ -44,6 +44,8 @@ __all__ = [
     "ACC_COLS",
     "REF_HEADING",
     "TRUE_BIAS_Z",
+    "TRUE_BIAS_X",
+    "TRUE_BIAS_Y",
     "REQUIRED_COLS",
     "OUTPUT_COLS",
     "GYRO_UNITS",
@@ -64,6 +66,9 @@ MAG_COLS = ("mag_x", "mag_y", "mag_z")
 ACC_COLS = ("acc_x", "acc_y", "acc_z")
 REF_HEADING = "ref_heading"
 TRUE_BIAS_Z = "true_bias_z"
+#: Simulation truth of the x and y drift, deg/s (evaluation only; FRD signs like gyro_x, gyro_y).
+TRUE_BIAS_X = "true_bias_x"
+TRUE_BIAS_Y = "true_bias_y"
 
 REQUIRED_COLS = (T, GYRO_Z, TEMP)
 

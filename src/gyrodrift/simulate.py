@@ -86,7 +86,9 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compass import tilt_compensated_heading
-from gyrodrift.conventions import (
+from gyrodrift.conventions import (  # TRUE_BIAS_X/Y: the x/y drift truth of simulate(..., triad=...)
+    TRUE_BIAS_X,
+    TRUE_BIAS_Y,
     ACC_COLS,
     GYRO_Z,
     HEADING,
@@ -141,9 +143,6 @@ __all__ = [
 #: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
 TRUE_SF = "true_sf"
 
-#: Truth columns of the x and y drift (deg/s), written with ``simulate(..., triad=...)``.
-TRUE_BIAS_X = "true_bias_x"
-TRUE_BIAS_Y = "true_bias_y"
 
 #: Scale-factor coefficients (:class:`DeviceModel` ``sf_*`` fields) of each scenario
 #: that sets them; a device coefficient left ``None`` takes this value (else 0).

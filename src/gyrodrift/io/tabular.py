@@ -53,6 +53,8 @@ from gyrodrift.conventions import (
     T,
     TEMP,
     TEMP_RANGE_C,
+    TRUE_BIAS_X,
+    TRUE_BIAS_Y,
     TRUE_BIAS_Z,
     wrap_360,
 )
@@ -79,11 +81,11 @@ _NUMERIC_COLS = (
     (T, GYRO_Z, GYRO_X, GYRO_Y, TEMP, HEADING)
     + MAG_COLS
     + ACC_COLS
-    + (REF_HEADING, TRUE_BIAS_Z)
+    + (REF_HEADING, TRUE_BIAS_Z, TRUE_BIAS_X, TRUE_BIAS_Y)
 )
 _MAG_FORM_COLS = MAG_COLS + ACC_COLS
 #: Columns whose sign flips from ROS FLU body axes to FRD (180 deg rotation about x).
-_FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
+_FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Y, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
 #: Columns holding a heading (deg, clockwise from north in NED).
 _HEADING_COLS = (HEADING, REF_HEADING)
 #: Cells pyarrow's CSV reader takes for "no value" (its defaults, for every column).
@@ -825,11 +827,11 @@ def _compass_form(columns, with_values: frozenset[str], src: _Source) -> str:
 
 
 def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
-    """Multiply the gyro rate columns (and ``true_bias_z``) by ``scale``."""
+    """Multiply the gyro rate columns (and the ``true_bias_*`` truth) by ``scale``."""
     if scale == 1.0:
         return frame
     out = frame.copy(deep=False)  # columns are replaced, never changed in place
-    for col in _GYRO_COLS + (TRUE_BIAS_Z,):
+    for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
         if col in out.columns:
             out[col] = out[col] * scale
     return out
@@ -950,12 +952,13 @@ def read_log(
         Table format; overrides the file-name ending.
     gyro_unit : {"deg/s", "dps", "rad/s"}, default "deg/s"
         Unit of the gyro columns ``gyro_x``, ``gyro_y``, ``gyro_z`` in the file (and of
-        ``true_bias_z``, the bias of ``gyro_z``). Output is always deg/s.
+        their simulated biases ``true_bias_x``, ``true_bias_y``, ``true_bias_z``). Output is
+        always deg/s.
     frame : {"ned", "enu"}, default "ned"
         Axis convention of the file. ``"enu"`` (ROS REP-103, body FLU) is converted to
         NED/FRD: ``heading`` and ``ref_heading`` become ``wrap_360(90 - value)``; the y
-        and z components (``gyro_y``, ``gyro_z``, ``true_bias_z``, ``mag_y``, ``mag_z``,
-        ``acc_y``, ``acc_z``) change sign.
+        and z components (``gyro_y``, ``gyro_z``, ``true_bias_y``, ``true_bias_z``,
+        ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign.
     column_map : mapping of str to str, optional
         ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
 
@@ -964,7 +967,7 @@ def read_log(
     pandas.DataFrame
         All input columns in file order (renamed per ``column_map``, names stripped of
         surrounding spaces). Numeric contract columns (``t``, ``gyro_*``, ``temp``,
-        ``heading``, ``mag_*``, ``acc_*``, ``ref_heading``, ``true_bias_z``) are float64,
+        ``heading``, ``mag_*``, ``acc_*``, ``ref_heading``, ``true_bias_*``) are float64,
         with empty cells as NaN; headings are wrapped to [0, 360). Other columns pass
         through as read. ``df.attrs`` holds ``source``, ``format``, ``gyro_unit``,
         ``frame`` and ``compass`` (``"heading"``, ``"mag"`` or ``"both"``: the compass
