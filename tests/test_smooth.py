@@ -25,14 +25,18 @@ def _measurements(rng, n, *, same_time_first=3, interval=10.0, truth=(0.02, 3.0,
     return pd.DataFrame({"t": t, "m": m, "temp": temp, "temp_rate": temp_rate, "r": r})
 
 
-def _whole_system(meas, cfg):
+def _whole_system(meas, cfg, epochs=None):
     """The same model solved at once: weighted least squares over every state z_0..z_{K-1}
-    (prior, random-walk transitions with the moving T_ref, measurements)."""
+    (prior, random-walk transitions with the moving T_ref, measurements); ``epochs`` adds
+    states at (t, temp) without measurements."""
     st = cfg.adaptive
     Q = np.diag(np.square(st.q_sd))
-    groups = [g for _, g in meas.groupby("t", sort=True)]
+    groups = [(t, g["temp"].mean(), g) for t, g in meas.groupby("t", sort=True)]
+    if epochs is not None:
+        groups += [(t, T, meas.iloc[:0]) for t, T in zip(*epochs) if t not in set(meas["t"])]
+        groups.sort(key=lambda g: g[0])
     K = len(groups)
-    tref = np.array([g["temp"].mean() for g in groups])
+    tref = np.array([g[1] for g in groups])
     rows, rhs, w = [], [], []
 
     def put(block_coeffs, value, var):
@@ -49,12 +53,12 @@ def _whole_system(meas, cfg):
     for k in range(1, K):
         J = np.eye(3)
         J[2, 0] = tref[k] - tref[k - 1]
-        n = max(round((groups[k]["t"].iloc[0] - groups[k - 1]["t"].iloc[0]) / cfg.update_interval_s), 1)
+        n = (groups[k][0] - groups[k - 1][0]) / cfg.update_interval_s
         Qk = n * Q
         Qk[0, 0] += st.slope_q_per_rtc**2 * abs(tref[k] - tref[k - 1])
         for j in range(3):  # z_k - J z_{k-1} = w_k, Q diagonal
             put([(k, np.eye(3)[j]), (k - 1, -J[j])], 0.0, Qk[j, j])
-    for k, g in enumerate(groups):
+    for k, (_, _, g) in enumerate(groups):
         for _, e in g.iterrows():
             put([(k, np.array([e["temp"] - tref[k], e["temp_rate"], 1.0]))], e["m"], e["r"])
     A = np.array(rows)
@@ -74,6 +78,17 @@ def test_rts_equals_the_whole_linear_system_solved_at_once(seed):
     np.testing.assert_allclose(sm.params, expected, rtol=1e-7, atol=1e-9)
     # the last smoothed state is the forward filter's
     np.testing.assert_allclose(sm.params[-1], sm.filtered[-1], rtol=1e-12, atol=1e-12)
+
+
+def test_epochs_without_measurements_follow_the_temperature_through_an_outage():
+    rng = np.random.default_rng(7)
+    meas = _measurements(rng, 12)
+    meas.loc[6:, "t"] += 600.0  # a 10-minute outage
+    epochs = (meas["t"].iloc[5] + 10.0 * np.arange(1, 61), 20.0 + 0.5 * np.arange(1, 61) / 6.0)
+    cfg = CompensatorConfig(adaptive=AdaptiveConfig(q_sd=(2e-4, 0.05, 3e-3), slope_q_per_rtc=0.05))
+    sm = smooth_drift(meas, cfg, epochs=epochs)
+    assert sm.t.size == len(set(meas["t"])) + 60
+    np.testing.assert_allclose(sm.params, _whole_system(meas, cfg, epochs), rtol=1e-7, atol=1e-9)
 
 
 def test_without_process_noise_every_state_is_the_full_least_squares_fit():

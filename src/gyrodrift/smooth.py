@@ -11,14 +11,17 @@ Model (units deg/s, degC, s)
 ----------------------------
 The states are those of the ``adaptive`` estimator (:mod:`gyrodrift.estimators.adaptive`):
 ``z = [a, b, c']`` with the temperature centred on a reference ``T_ref`` that moves to
-the temperature of each measurement (``c' = a*T_ref + c``, the drift at ``T_ref``; the
-paper's model, eq. 2, is unchanged). Between two measurements ``k-1`` and ``k``::
+the temperature of each epoch (``c' = a*T_ref + c``, the drift at ``T_ref``; the
+paper's model, eq. 2, is unchanged). The epochs are the times of the accepted
+measurements and, on recorded logs, every update interval in between (refused ones
+too, at the mean temperature of the interval), so that through an outage the states
+follow the temperature path. Between two epochs ``k-1`` and ``k``::
 
     z_k = J_k z_{k-1} + w_k,   J_k = I with J[2, 0] = T_k - T_{k-1}   (move T_ref)
     w_k ~ N(0, n_k Q + diag(q_T² |T_k - T_{k-1}|, 0, 0))
 
-``n_k`` is the number of update intervals between them (so a refused interval adds
-``Q`` as the filter's ``hold`` does), ``Q = diag(q_sd²)`` and ``q_T`` is
+``n_k = (t_k - t_{k-1}) / update_interval_s`` (so a refused interval adds ``Q`` as
+the filter's ``hold`` does), ``Q = diag(q_sd²)`` and ``q_T`` is
 ``AdaptiveConfig.slope_q_per_rtc`` (the slope random walk in temperature); without the
 ``adaptive`` process noise (``q_sd = None``) ``KalmanConfig.q_sd`` and no slope term.
 A measurement (eq. 6, or a zero-rate one) is ``m = [T - T_k, T', 1] z_k + v`` with
@@ -37,7 +40,8 @@ which is the minimum-variance estimate of every ``z_k`` from all ``K`` measureme
 (the tests check it against the solution of the whole linear system at once).
 
 A measurement at time ``t_k`` is the drift over the interval ending at ``t_k``, so the
-rows in ``(t_{k-1}, t_k]`` are compensated with ``z̃_k``.
+rows in ``(t_{k-1}, t_k]`` are compensated with ``z̃_k``, and the rows after the last
+epoch with the last.
 """
 
 from __future__ import annotations
@@ -83,22 +87,35 @@ def _process_noise(config) -> tuple[np.ndarray, float]:
     return np.diag(np.square(np.asarray(config.kalman.q_sd, dtype=float))), 0.0
 
 
-def _groups(meas: pd.DataFrame):
-    """Measurements grouped by time: (t, m, temp, temp_rate, r) arrays per distinct time."""
+def _groups(meas: pd.DataFrame, epochs=None):
+    """Measurements grouped by time, merged with the extra epochs.
+
+    Returns a list of ``(t, T_ref, m, temp, temp_rate, r)`` in time order: ``T_ref`` the
+    mean temperature of the group's measurements, or the epoch's temperature for an epoch
+    without measurements (empty arrays).
+    """
     t = meas["t"].to_numpy(float)
     cols = [meas[c].to_numpy(float) for c in ("m", "temp", "temp_rate", "r")]
     if not np.all(np.isfinite(t)) or any(not np.all(np.isfinite(c)) for c in cols):
         raise ConfigError("smoothing needs finite measurements; got NaN or inf in the accepted measurements")
     if np.any(np.diff(t) < 0):
         raise ConfigError("smoothing needs measurements in time order")
-    if t.size == 0:
-        return []
-    starts = np.flatnonzero(np.r_[True, np.diff(t) > 0])
-    ends = np.r_[starts[1:], t.size]
-    return [(t[s], *(c[s:e] for c in cols)) for s, e in zip(starts, ends)]
+    groups = []
+    if t.size:
+        starts = np.flatnonzero(np.r_[True, np.diff(t) > 0])
+        ends = np.r_[starts[1:], t.size]
+        groups = [(t[s], float(np.mean(cols[1][s:e])), *(c[s:e] for c in cols)) for s, e in zip(starts, ends)]
+    if epochs is not None:
+        e_t, e_temp = (np.asarray(v, dtype=float) for v in epochs)
+        have = {g[0] for g in groups}
+        empty = np.empty(0)
+        groups += [(float(a), float(b), empty, empty, empty, empty)
+                   for a, b in zip(e_t, e_temp) if a not in have and np.isfinite(a) and np.isfinite(b)]
+        groups.sort(key=lambda g: g[0])
+    return groups
 
 
-def smooth_drift(measurements: pd.DataFrame, config=None) -> SmoothedDrift:
+def smooth_drift(measurements: pd.DataFrame, config=None, epochs=None) -> SmoothedDrift:
     """Rauch–Tung–Striebel smoothing of the drift parameters over every accepted measurement.
 
     Parameters
@@ -108,10 +125,15 @@ def smooth_drift(measurements: pd.DataFrame, config=None) -> SmoothedDrift:
         ``t`` (s), ``m`` (deg/s), ``temp`` (degC), ``temp_rate`` (degC/s), ``r`` ((deg/s)²).
     config : CompensatorConfig, optional
         Prior (``kalman``), process noise (``adaptive``) and ``update_interval_s``.
+    epochs : (t_s, temp_c) pair of arrays, optional
+        Extra times (s) with their temperatures (degC) at which to estimate the
+        parameters although nothing was measured there (refused intervals): the smoother
+        then carries the temperature path through an outage instead of jumping over it.
 
     Returns
     -------
     SmoothedDrift
+        One entry per measurement time and per extra epoch, in time order.
 
     Raises
     ------
@@ -121,8 +143,8 @@ def smooth_drift(measurements: pd.DataFrame, config=None) -> SmoothedDrift:
     from gyrodrift.compensate import CompensatorConfig
 
     config = config or CompensatorConfig()
-    groups = _groups(measurements)
-    if not groups:
+    groups = _groups(measurements, epochs)
+    if not any(g[2].size for g in groups):
         raise ConfigError("smoothing needs at least one accepted drift measurement; the log had none "
                           "(every interval was refused: see gate_reason)")
     Q, q_T = _process_noise(config)
@@ -136,27 +158,27 @@ def smooth_drift(measurements: pd.DataFrame, config=None) -> SmoothedDrift:
     P_post = np.empty((K, 3, 3))
     J = np.empty((K, 3, 3))
     z = None
-    for k, (t_k, m, temp, temp_rate, r) in enumerate(groups):
-        T_k = float(np.mean(temp))
+    for k, (t_k, T_k, m, temp, temp_rate, r) in enumerate(groups):
         Jk = np.eye(3)
         if z is None:
             z = np.array([a0, b0, c0 + a0 * T_k])
             Pk = P.copy()
         else:
             Jk[2, 0] = T_k - tref[k - 1]
-            n = max(round((t_k - groups[k - 1][0]) / config.update_interval_s), 1)
-            Qk = n * Q
+            Qk = (t_k - groups[k - 1][0]) / config.update_interval_s * Q
             Qk[0, 0] += q_T**2 * abs(T_k - tref[k - 1])
             z = Jk @ z
             Pk = Jk @ P @ Jk.T + Qk
         tref[k], J[k], z_prior[k], P_prior[k] = T_k, Jk, z, Pk
-        H = np.column_stack([temp - T_k, temp_rate, np.ones(m.size)])
-        S = H @ Pk @ H.T + np.diag(r)
-        gain = np.linalg.solve(S, H @ Pk).T
-        A = np.eye(3) - gain @ H
-        z = z + gain @ (m - H @ z)
-        P = A @ Pk @ A.T + gain @ np.diag(r) @ gain.T
-        P = 0.5 * (P + P.T)
+        P = Pk
+        if m.size:
+            H = np.column_stack([temp - T_k, temp_rate, np.ones(m.size)])
+            S = H @ Pk @ H.T + np.diag(r)
+            gain = np.linalg.solve(S, H @ Pk).T
+            A = np.eye(3) - gain @ H
+            z = z + gain @ (m - H @ z)
+            P = A @ Pk @ A.T + gain @ np.diag(r) @ gain.T
+            P = 0.5 * (P + P.T)
         z_post[k], P_post[k] = z, P
     z_s = z_post.copy()
     P_s = P_post.copy()
@@ -221,9 +243,10 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
         raise ConfigError("smoothing needs the accepted measurements (attrs['measurements'] of compensate())")
     if "temp" not in out.columns:
         raise ConfigError("smoothing needs the input 'temp' column (degC) in the compensated table")
-    sm = smooth_drift(meas, config)
     t = out["t"].to_numpy(float)
     T = _held(out["temp"].to_numpy(float))
+    sm = smooth_drift(meas, config, epochs=_interval_epochs(meas["t"].to_numpy(float), t, T,
+                                                            config.update_interval_s))
     Tp = out["temp_rate"].to_numpy(float)
     k = np.minimum(np.searchsorted(sm.t, t, side="left"), sm.t.size - 1)
     a, b, c = sm.params[k, 0], sm.params[k, 1], sm.params[k, 2]
@@ -248,6 +271,25 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     res.attrs = dict(out.attrs)
     res.attrs["smoothed"] = sm
     return res
+
+
+def _interval_epochs(t_meas: np.ndarray, t: np.ndarray, T: np.ndarray, interval_s: float):
+    """Epochs every ``interval_s`` from the first measurement to the last row, except within
+    half an interval of a measurement, each with the mean temperature (degC) of the rows
+    of the interval it ends."""
+    if t_meas.size == 0 or t.size == 0:
+        return np.empty(0), np.empty(0)
+    grid = t_meas[0] + interval_s * np.arange(1, int((t[-1] - t_meas[0]) // interval_s) + 1)
+    near = np.searchsorted(t_meas, grid)
+    gap = np.minimum(np.abs(grid - t_meas[np.minimum(near, t_meas.size - 1)]),
+                     np.abs(grid - t_meas[np.maximum(near - 1, 0)]))
+    grid = grid[gap >= 0.5 * interval_s]
+    cum = np.r_[0.0, np.cumsum(T)]
+    hi = np.searchsorted(t, grid, side="right")
+    lo = np.searchsorted(t, grid - interval_s, side="right")
+    ok = hi > lo
+    temp = np.where(ok, (cum[hi] - cum[lo]) / np.maximum(hi - lo, 1), np.nan)
+    return grid[ok], temp[ok]
 
 
 def _heading_sd(out: pd.DataFrame, t: np.ndarray, bias_sd: np.ndarray, config) -> np.ndarray:
