@@ -189,3 +189,19 @@ def test_smoothed_is_a_non_causal_compare_method():
     assert CAUSAL["smoothed"] is False
     assert "smoothed" in out.attrs
     assert np.all(np.isfinite(out["bias_z"])) and np.all(np.isfinite(out["heading"]))
+
+
+def test_cli_smooth_writes_the_smoothed_table(tmp_path):
+    from gyrodrift.cli import main
+    from gyrodrift.io import read_log
+
+    log = simulate("static", seed=3, duration_s=900.0, fs_hz=10.0)
+    src = tmp_path / "in.csv"
+    log.to_csv(src, index=False)
+    assert main(["compensate", str(src), "-o", str(tmp_path / "s.csv"), "--smooth", "-q"]) == 0
+    assert main(["compensate", str(src), "-o", str(tmp_path / "f.csv"), "-q"]) == 0
+    smoothed, causal = pd.read_csv(tmp_path / "s.csv"), pd.read_csv(tmp_path / "f.csv")
+    expected = smooth_output(compensate(read_log(src)), CompensatorConfig())
+    np.testing.assert_allclose(smoothed["bias_z"], expected["bias_z"], rtol=1e-12, atol=1e-15)
+    assert (smoothed["gate_reason"].fillna("") == causal["gate_reason"].fillna("")).all()
+    assert not np.allclose(smoothed["bias_z"], causal["bias_z"])

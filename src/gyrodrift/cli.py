@@ -101,7 +101,8 @@ def _cmd_compensate(args) -> int:
     if args.profile:
         cfg = warm_config(load_profile(args.profile), cfg)
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
-                            progress=_bar("compensating"), scale_factor=args.scale_factor)
+                            progress=_bar("compensating"), scale_factor=args.scale_factor,
+                            smooth=args.smooth)
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
@@ -314,6 +315,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale-factor", action="store_true",
         help="also estimate the gyro scale factor over turns (paper Sec. 4.3; gyrodrift.scale_factor) and add "
         "sf, sf_sd, rate_sf and heading_sf (runs in memory)",
+    )
+    c.add_argument(
+        "--smooth", action="store_true",
+        help="recorded logs: smooth the drift over the whole log, before and after each row (not causal; "
+        "gyrodrift.smooth; runs in memory). a, b, c, bias_z, rate_z, heading, bias_sd and heading_sd "
+        "then come from the smoother",
     )
     add_input_options(c)
     _add_method_options(c)

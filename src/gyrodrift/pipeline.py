@@ -213,6 +213,7 @@ def compensate_file(
     stream: bool | None = None,
     progress=None,
     scale_factor: bool = False,
+    smooth: bool = False,
 ) -> RunStats:
     """Compensate the log at ``input_path`` and write the output table to ``output_path``.
 
@@ -237,6 +238,10 @@ def compensate_file(
         (:func:`gyrodrift.scale_factor.estimate_scale_factor`: updated at every accepted
         rotation, frozen in between) and add its columns ``sf``, ``sf_sd``, ``rate_sf``,
         ``heading_sf`` after ``heading_sd``. It needs the whole output, so the run is in memory.
+    smooth : bool
+        Recompensate with the drift smoothed over the whole log, before and after each
+        row (:func:`gyrodrift.smooth.smooth_output`; non-causal, for recorded logs). Runs
+        in memory.
 
     Returns
     -------
@@ -262,13 +267,18 @@ def compensate_file(
             f"{input_path}: cannot stream this run (needs a CSV or Parquet log, numba, and a Kalman-family "
             "estimator with endpoint measurements)"
         )
-    if stream and scale_factor:
-        raise ConfigError(f"{input_path}: the scale-factor estimate needs the whole log in memory; do not force streaming")
+    if stream and (scale_factor or smooth):
+        raise ConfigError(f"{input_path}: the scale-factor estimate and smoothing need the whole log in memory; "
+                          "do not force streaming")
     if stream is None:
-        stream = can_stream and not scale_factor
+        stream = can_stream and not (scale_factor or smooth)
     if not stream:
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
+        if smooth:
+            from gyrodrift.smooth import smooth_output
+
+            out = smooth_output(out, cfg)
         if scale_factor:
             out = _with_scale_factor(out)
         write_table(out, output_path)
