@@ -245,3 +245,34 @@ def test_streamed_file_equals_in_memory_file_with_x_and_y(tmp_path):
     assert (tmp_path / "parts.csv").read_bytes() == (tmp_path / "whole.csv").read_bytes()
     out = pd.read_csv(tmp_path / "parts.csv")
     assert set(TRIAD_COLUMNS) <= set(out.columns)
+
+
+@pytest.mark.parametrize("estimator", ["adaptive", "stkf"])
+def test_streaming_compensator_gives_the_x_y_axes_of_the_batch(estimator):
+    """Compensator.push with gyro_x, gyro_y and acc: the same x/y numbers as compensate()."""
+    from gyrodrift.compensate import Compensator
+
+    log = simulate("vehicle", seed=5, duration_s=240.0, fs_hz=10.0, triad=TriadModel())
+    log.loc[log.index[700:703], "gyro_x"] = np.nan  # held cells refuse their interval in both
+    cfg = CompensatorConfig(estimator=estimator)
+    batch = compensate(log, cfg, engine="reference")
+    comp = Compensator(cfg)
+    rows = []
+    for r in log.itertuples(index=False):
+        rows += comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading, acc=(r.acc_x, r.acc_y, r.acc_z),
+                          gyro_x_dps=r.gyro_x, gyro_y_dps=r.gyro_y)
+    streamed = pd.DataFrame([vars(s) for s in rows])
+    assert len(streamed) == len(batch)
+    for col in ("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated", "rate_z", "heading"):
+        assert np.array_equal(streamed[col].to_numpy(), batch[col].to_numpy(), equal_nan=True), col
+    assert streamed["tilt_gated"].sum() > 0 and np.isfinite(streamed["bias_x"].iloc[-1])
+
+
+def test_streaming_without_x_y_inputs_leaves_the_x_y_fields_empty():
+    from gyrodrift.compensate import Compensator
+
+    comp = Compensator()
+    rows = []
+    for i in range(400):
+        rows += comp.push(i * 0.1, 0.2, 30.0, heading_deg=90.0)
+    assert rows and all(math.isnan(r.rate_x) and r.tilt_gated == 0 for r in rows)

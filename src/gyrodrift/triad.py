@@ -560,8 +560,8 @@ def add_triad_columns(out: pd.DataFrame, log: pd.DataFrame, config=None, tc: Tri
 
     ``tc`` continues a run chunk by chunk (:func:`gyrodrift.pipeline.compensate_file`);
     None compensates these rows as a whole log. The x/y estimators are built from
-    ``config`` (``config.estimator``), also when the z axis was given an estimator
-    instance. Returns ``out``.
+    ``config`` (their name from :attr:`TriadConfig.estimator`), also when the z axis was
+    given an estimator instance. Returns ``out``.
     """
     tc = tc or TriadCompensator(config)
     for name, col in tc.feed(*triad_inputs(out, log)).items():
