@@ -39,9 +39,15 @@ arrays, the tuple ``ak = (z, P, V, nis, af, ai, Q, max_var, fset, bset)``:
 * ``Q`` (2, 3, 3), ``max_var`` (2, 3): process noise and cap of each filter;
 * ``fset`` (N_FSET) floats and ``bset`` (N_BSET) integers: the settings (``FS_*``, ``BS_*``).
 
-The compass window of ``_Aiding.window`` is a ring of rows (t, heading, I_raw, I_T,
-I_Tp, I_bias) (a snap, as :class:`gyrodrift.compensate._Snap`), given as the ring,
-its head and its length.
+The compass window of ``_Aiding.window`` is a buffer ``win`` of ``N_WIN`` rows and
+``cap`` columns, one column per compass sample, oldest first, given with its head
+(first column in use) and its length: rows (t, heading, I_raw, I_T, I_Tp, I_bias) (a
+snap, as :class:`gyrodrift.compensate._Snap`), then the time step and the mean gyro
+rate from the sample before (``np.diff`` of t and ``np.diff(I_raw) / np.diff(t)`` of
+:func:`_zaru_measurement`, computed once as the sample comes). A window of it is a
+range of columns (times increase), so each of its rows is a contiguous array, read
+in place. :func:`add` moves the samples in use to the front when the end is reached
+(the engine keeps ``cap`` at least twice the length).
 """
 
 from __future__ import annotations
@@ -51,7 +57,7 @@ import math
 import numpy as np
 from numba import njit
 
-from gyrodrift._common_kernels import cap_covariance, correct, mean, pairwise_sum, std, wrap180
+from gyrodrift._common_kernels import cap_covariance, correct, pairwise_sum, std_of, wrap180
 
 # ------------------------------------------------------------------ layouts
 
@@ -76,9 +82,12 @@ N_FSET = 10
 BS_ON, BS_NORMALISED, BS_RECENTRE, BS_TWIN, BS_ZARU, BS_ZARU_HOLD, BS_EDGE, BS_COLLECTS = 0, 1, 2, 3, 4, 5, 6, 7
 N_BSET = 8
 
-#: Columns of a snap (ring row, start/end of a measurement).
+#: Values of a snap (start/end of a measurement; rows of the window buffer).
 W_T, W_HEADING, W_IRAW, W_IT, W_ITP, W_IBIAS = 0, 1, 2, 3, 4, 5
 N_SNAP = 6
+#: Rows of the window buffer after the snap: time step and mean gyro rate from the sample before.
+W_DT, W_RATE = 6, 7
+N_WIN = 8
 
 #: χ²₁ at 99 %: the ZARU consistency threshold of ``_zaru_measurement``.
 ZARU_NIS = 6.63
@@ -174,49 +183,54 @@ def export(ak: tuple) -> dict:
 
 @njit(cache=True, nogil=True)
 def add(win, head, n, t, heading, I_raw, I_T, I_Tp, I_bias, window_s):
-    """Append a compass sample to the ring, drop those older than ``window_s`` before it
-    (``_Aiding.add``); returns the new (head, n). The ring must have room for one more."""
-    cap = win.shape[0]
+    """Append a compass sample to the window, drop those older than ``window_s`` before it
+    (``_Aiding.add``); returns the new (head, n). The buffer must have room for one more
+    (``n < cap``); the samples in use move to the front when its end is reached."""
+    cap = win.shape[1]
     pos = head + n
     if pos >= cap:
-        pos -= cap
-    win[pos, W_T] = t
-    win[pos, W_HEADING] = heading
-    win[pos, W_IRAW] = I_raw
-    win[pos, W_IT] = I_T
-    win[pos, W_ITP] = I_Tp
-    win[pos, W_IBIAS] = I_bias
+        for c in range(N_WIN):
+            for j in range(n):
+                win[c, j] = win[c, head + j]
+        head = 0
+        pos = n
+    win[W_T, pos] = t
+    win[W_HEADING, pos] = heading
+    win[W_IRAW, pos] = I_raw
+    win[W_IT, pos] = I_T
+    win[W_ITP, pos] = I_Tp
+    win[W_IBIAS, pos] = I_bias
+    if n > 0:  # np.diff(t) and np.diff(I_raw) / np.diff(t) of the window, at this sample
+        step = t - win[W_T, pos - 1]
+        win[W_DT, pos] = step
+        win[W_RATE, pos] = (I_raw - win[W_IRAW, pos - 1]) / step
+    else:  # the first sample: never the second of a pair in a window
+        win[W_DT, pos] = math.nan
+        win[W_RATE, pos] = math.nan
     n += 1
-    while win[head, W_T] < t - window_s:
+    while win[W_T, head] < t - window_s:
         head += 1
-        if head == cap:
-            head = 0
         n -= 1
     return head, n
 
 
 @njit(cache=True, nogil=True)
-def _take(win, head, n, t_lo, t_hi, strict_lo):
-    """The ring rows with ``t_lo < t <= t_hi`` (``t_lo <= t`` when not ``strict_lo``; no
-    lower bound for NaN), oldest first, as a (k, 6) array."""
-    cap = win.shape[0]
-    first = n
-    last = n
-    for j in range(n):
-        tj = win[(head + j) % cap, W_T]
-        inside = tj <= t_hi and (math.isnan(t_lo) or (tj > t_lo if strict_lo else tj >= t_lo))
-        if inside:
-            if first == n:
-                first = j
-            last = j + 1
-    if first == n:
-        return np.empty((0, N_SNAP))
-    out = np.empty((last - first, N_SNAP))
-    for j in range(first, last):
-        row = (head + j) % cap
-        for c in range(N_SNAP):
-            out[j - first, c] = win[row, c]
-    return out
+def _span(win, head, n, t_lo, t_hi, strict_lo):
+    """The columns ``lo:hi`` of the window with ``t_lo < t <= t_hi`` (``t_lo <= t`` when not
+    ``strict_lo``; no lower bound for NaN), found from the newest (times increase)."""
+    hi = head + n
+    while hi > head and win[W_T, hi - 1] > t_hi:
+        hi -= 1
+    if math.isnan(t_lo):
+        return head, hi
+    lo = hi
+    if strict_lo:
+        while lo > head and win[W_T, lo - 1] > t_lo:
+            lo -= 1
+    else:
+        while lo > head and win[W_T, lo - 1] >= t_lo:
+            lo -= 1
+    return lo, hi
 
 
 # -------------------------------------------------------------- measurements
@@ -243,25 +257,27 @@ def _compass_measurement(s0, s1, compass_sd, gyro_noise, var0, var1, end_var):
 def _edge(win, head, n, snap, edge_s, interval_s, compass_sd):
     """The compass averaged over the ``edge_s`` seconds up to ``snap`` and its variance
     (``_Aiding._edge``, fix 1): returns (edge snap (6,), variance deg²)."""
-    w = _take(win, head, n, snap[W_T] - edge_s, snap[W_T], True)
-    if w.shape[0] == 0 or w[w.shape[0] - 1, W_T] != snap[W_T]:  # the window must end at this sample
-        w = np.empty((1, N_SNAP))
+    lo, hi = _span(win, head, n, snap[W_T] - edge_s, snap[W_T], True)
+    src = win
+    if hi == lo or win[W_T, hi - 1] != snap[W_T]:  # the window must end at this sample
+        src = np.empty((N_WIN, 1))
         for c in range(N_SNAP):
-            w[0, c] = snap[c]
-    k = w.shape[0]
+            src[c, 0] = snap[c]
+        lo = 0
+        hi = 1
+    k = hi - lo
     d_ref = snap[W_IRAW] - snap[W_HEADING]
     d = np.empty(k)
     for j in range(k):
-        d[j] = wrap180(w[j, W_IRAW] - w[j, W_HEADING] - d_ref)
-    d = d + d_ref
-    I_raw = mean(np.ascontiguousarray(w[:, W_IRAW]))
+        d[j] = wrap180(src[W_IRAW, lo + j] - src[W_HEADING, lo + j] - d_ref) + d_ref
+    I_raw = pairwise_sum(src[W_IRAW], lo, k) / k
     edge = np.empty(N_SNAP)
-    edge[W_T] = mean(np.ascontiguousarray(w[:, W_T]))
-    edge[W_HEADING] = I_raw - mean(d)
+    edge[W_T] = pairwise_sum(src[W_T], lo, k) / k
+    edge[W_HEADING] = I_raw - pairwise_sum(d, 0, k) / k
     edge[W_IRAW] = I_raw
-    edge[W_IT] = mean(np.ascontiguousarray(w[:, W_IT]))
-    edge[W_ITP] = mean(np.ascontiguousarray(w[:, W_ITP]))
-    edge[W_IBIAS] = mean(np.ascontiguousarray(w[:, W_IBIAS]))
+    edge[W_IT] = pairwise_sum(src[W_IT], lo, k) / k
+    edge[W_ITP] = pairwise_sum(src[W_ITP], lo, k) / k
+    edge[W_IBIAS] = pairwise_sum(src[W_IBIAS], lo, k) / k
     return edge, _edge_variance(win, head, n, snap, d_ref, k, interval_s, compass_sd)
 
 
@@ -269,21 +285,34 @@ def _edge(win, head, n, snap, edge_s, interval_s, compass_sd):
 def _edge_variance(win, head, n, snap, d_ref, k, interval_s, compass_sd):
     """Variance (deg²) of an edge mean of ``k`` compass samples, from the compass scatter
     over the last update interval (``_Aiding._edge_variance``): ``σ_w²/k + σ_s²``."""
-    w = _take(win, head, n, snap[W_T] - interval_s, snap[W_T], True)
-    size = w.shape[0]
+    lo, hi = _span(win, head, n, snap[W_T] - interval_s, snap[W_T], True)
+    size = hi - lo
     if size < 10:
         return compass_sd**2 / k
-    t = np.ascontiguousarray(w[:, W_T])
-    d = np.empty(size)
+    buf = np.empty((3, size))
+    d = buf[0]
+    tc = buf[1]
+    dm = buf[2]
     for j in range(size):
-        d[j] = wrap180(w[j, W_IRAW] - w[j, W_HEADING] - d_ref)
-    tc = t - mean(t)
-    slope = np.dot(tc, d - mean(d)) / np.dot(tc, tc)
-    resid = d - mean(d) - slope * tc
-    total = np.dot(resid, resid) / (size - 2)
-    hf = np.diff(d)
-    dev = hf - mean(hf)
-    white = 0.5 * np.dot(dev, dev) / (hf.size - 1)
+        d[j] = wrap180(win[W_IRAW, lo + j] - win[W_HEADING, lo + j] - d_ref)
+    t_mean = pairwise_sum(win[W_T], lo, size) / size
+    for j in range(size):
+        tc[j] = win[W_T, lo + j] - t_mean
+    d_mean = pairwise_sum(d, 0, size) / size
+    for j in range(size):
+        dm[j] = d[j] - d_mean
+    slope = np.dot(tc, dm) / np.dot(tc, tc)
+    for j in range(size):  # the residuals, over d - mean(d)
+        dm[j] = dm[j] - slope * tc[j]
+    total = np.dot(dm, dm) / (size - 2)
+    hf = buf[1, : size - 1]  # np.diff(d), over tc
+    for j in range(size - 1):
+        hf[j] = d[j + 1] - d[j]
+    hf_mean = pairwise_sum(hf, 0, size - 1) / (size - 1)
+    dev = buf[2, : size - 1]
+    for j in range(size - 1):
+        dev[j] = hf[j] - hf_mean
+    white = 0.5 * np.dot(dev, dev) / (size - 2)
     if total < white:  # min(white, total)
         white = total
     return white / k + (total - white)
@@ -299,15 +328,13 @@ def _zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_
     over the interval measures the drift (eq. 1 with zero true rate), variance ``N²/Δt``
     (plus the squared slope standard error of a verified flat compass); ``held``: found by
     ``zaru_hold`` with a compass that is not flat (the compass moved, not the unit).
+    The window is read in place (its columns ``lo:hi``), its rates as :func:`add` stored them.
     """
     if bset[BS_ZARU] == 0:
         return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
-    w = _take(win, head, n, math.nan, end[W_T], True)
-    size = w.shape[0]
-    if size < 10 or end[W_T] - w[0, W_T] < 0.8 * fset[FS_ZARU_WINDOW_S]:
+    lo, hi = _span(win, head, n, math.nan, end[W_T], True)
+    if hi - lo < 10 or end[W_T] - win[W_T, lo] < 0.8 * fset[FS_ZARU_WINDOW_S]:
         return False, 0.0, 0.0, 0.0, 0.0, False, False
-    t = np.ascontiguousarray(w[:, W_T])
-    rates = np.diff(np.ascontiguousarray(w[:, W_IRAW])) / np.diff(t)
     dt = end[W_T] - start[W_T]
     m = (end[W_IRAW] - start[W_IRAW]) / dt
     h = np.empty(3)
@@ -317,14 +344,13 @@ def _zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_
     r = gyro_noise**2 / dt
     gamma = m - (a * h[0] + b * h[1] + c)
     consistent = gamma * gamma <= ZARU_NIS * (np.dot(np.dot(h, cov), h) + r)
-    still = _gyro_still(rates, t, start[W_T], fset[FS_STILL_STD], fset[FS_ZARU_RESID_K])
+    still = _gyro_still(win, lo, hi, start[W_T], fset[FS_STILL_STD], fset[FS_ZARU_RESID_K])
     # The chain of stillness breaks on evidence of rotation: a mean rate the drift does not
     # explain. A wobble the Allan test sees only skips this interval.
     still_chain = still_chain and consistent
     if not still:
         return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
-    slope_se = _flat_compass(np.ascontiguousarray(w[:, W_HEADING]), t, compass_sd,
-                             fset[FS_ZARU_SLOPE_K], fset[FS_ZARU_RESID_K])
+    slope_se = _flat_compass(win, lo, hi, compass_sd, fset[FS_ZARU_SLOPE_K], fset[FS_ZARU_RESID_K])
     if slope_se >= 0.0:
         return True, m, h[0], h[1], r + slope_se**2, True, False
     if bset[BS_ZARU_HOLD] == 1 and still_chain:
@@ -333,26 +359,43 @@ def _zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_
 
 
 @njit(cache=True, nogil=True)
-def _flat_compass(heading, t, compass_sd, slope_k, resid_k):
+def _flat_compass(win, lo, hi, compass_sd, slope_k, resid_k):
     """Standard error (deg/s) of the slope of a flat compass heading over the stillness
-    window, or -1 when it is not flat (``compensate._flat_compass``, which returns None)."""
-    size = heading.size
-    d = np.empty(size)
+    window (columns ``lo:hi``), or -1 when it is not flat (``compensate._flat_compass``,
+    which returns None). The scatter and slope tests come before the white-noise one, which
+    needs another two passes (the same answer: the three are tested together there)."""
+    size = hi - lo
+    buf = np.empty((3, size))
+    d = buf[0]
+    tc = buf[1]
+    dm = buf[2]
+    h0 = win[W_HEADING, lo]
     for j in range(size):
-        d[j] = wrap180(heading[j] - heading[0])
-    tc = t - mean(t)
+        d[j] = wrap180(win[W_HEADING, lo + j] - h0)
+    t_mean = pairwise_sum(win[W_T], lo, size) / size
+    for j in range(size):
+        tc[j] = win[W_T, lo + j] - t_mean
     sxx = np.dot(tc, tc)
-    slope = np.dot(tc, d - mean(d)) / sxx
-    resid = d - mean(d) - slope * tc
+    d_mean = pairwise_sum(d, 0, size) / size
+    for j in range(size):
+        dm[j] = d[j] - d_mean
+    slope = np.dot(tc, dm) / sxx
+    for j in range(size):  # the residuals, over d - mean(d)
+        dm[j] = dm[j] - slope * tc[j]
     dof = max(size - 2, 1)
-    resid_var = np.dot(resid, resid) / dof
+    resid_var = np.dot(dm, dm) / dof
     slope_se = math.sqrt(resid_var / sxx)
-    hf = np.diff(d)
-    dev = hf - mean(hf)
-    noise_var = 0.5 * np.dot(dev, dev) / max(hf.size - 1, 1)
-    if (resid_var > (2.0 * compass_sd) ** 2
-            or resid_var > noise_var * (1.0 + resid_k * math.sqrt(2.0 / dof))
-            or abs(slope) > slope_k * slope_se):
+    if resid_var > (2.0 * compass_sd) ** 2 or abs(slope) > slope_k * slope_se:
+        return -1.0
+    hf = buf[1, : size - 1]  # np.diff(d), over tc
+    for j in range(size - 1):
+        hf[j] = d[j + 1] - d[j]
+    hf_mean = pairwise_sum(hf, 0, size - 1) / (size - 1)
+    dev = buf[2, : size - 1]
+    for j in range(size - 1):
+        dev[j] = hf[j] - hf_mean
+    noise_var = 0.5 * np.dot(dev, dev) / max(size - 2, 1)
+    if resid_var > noise_var * (1.0 + resid_k * math.sqrt(2.0 / dof)):
         return -1.0
     return slope_se
 
@@ -368,40 +411,53 @@ def _median(x):
 
 
 @njit(cache=True, nogil=True)
-def _allan(rates, m):
-    """``allan(m)`` of ``_gyro_still``: half the mean squared difference of successive
-    means of ``m`` rates."""
-    nb = rates.size // m
-    means = np.empty(nb)
+def _allan(rates, lo, size, m):
+    """``allan(m)`` of ``_gyro_still`` over ``rates[lo:lo + size]``: half the mean squared
+    difference of successive means of ``m`` rates."""
+    nb = size // m
+    d = np.empty(nb)
     for j in range(nb):
-        means[j] = pairwise_sum(rates, j * m, m) / m
-    d = np.diff(means)
-    return 0.5 * np.dot(d, d) / d.size
+        d[j] = pairwise_sum(rates, lo + j * m, m) / m
+    for j in range(nb - 1):  # np.diff of the means, in place
+        d[j] = d[j + 1] - d[j]
+    dd = d[: nb - 1]
+    return 0.5 * np.dot(dd, dd) / (nb - 1)
 
 
 @njit(cache=True, nogil=True)
-def _gyro_still(rates, t, interval_start_s, max_std_dps, k):
-    """Whether the gyro saw no motion over the stillness window (``compensate._gyro_still``):
-    the rates of this interval vary less than ``max_std_dps`` and the Allan variance at 2 s
-    is within ``k`` standard errors of a quarter of that at 0.5 s (white noise)."""
-    count = 0
-    for j in range(rates.size):
-        if t[j + 1] > interval_start_s:
-            count += 1
-    inside = np.empty(count)
-    count = 0
-    for j in range(rates.size):
-        if t[j + 1] > interval_start_s:
-            inside[count] = rates[j]
-            count += 1
-    if inside.size >= 2 and std(inside) > max_std_dps:
+def _gyro_still(win, lo, hi, interval_start_s, max_std_dps, k):
+    """Whether the gyro saw no motion over the stillness window, columns ``lo:hi``
+    (``compensate._gyro_still``): the rates of this interval vary less than ``max_std_dps``
+    and the Allan variance at 2 s is within ``k`` standard errors of a quarter of that at
+    0.5 s (white noise). The rates are ``win[W_RATE, lo + 1:hi]`` (stored by :func:`add`)."""
+    nr = hi - lo - 1
+    r0 = lo + 1
+    # rates[t[1:] > interval_start_s]: a run at the end (times increase)
+    j0 = nr
+    while j0 > 0 and win[W_T, lo + j0] > interval_start_s:
+        j0 -= 1
+    if nr - j0 >= 2 and std_of(win[W_RATE], r0 + j0, nr - j0) > max_std_dps:
         return False
-    small = max(1, int(np.rint(0.5 / _median(np.diff(t)))))
+    # round(0.5 / median(np.diff(t))): the same for every time step between the smallest
+    # and the largest when those two give the same (division and rounding are monotonic)
+    lo_dt = math.inf
+    hi_dt = -math.inf
+    for j in range(r0, hi):
+        step = win[W_DT, j]
+        if step < lo_dt:
+            lo_dt = step
+        if step > hi_dt:
+            hi_dt = step
+    steps = np.rint(0.5 / hi_dt)
+    if np.rint(0.5 / lo_dt) != steps:
+        steps = np.rint(0.5 / _median(win[W_DT, r0:hi]))
+    small = max(1, int(steps))
     big = 4 * small
-    nb = rates.size // big
+    nb = nr // big
     if nb < 6:
         return True
-    return _allan(rates, big) <= 0.25 * _allan(rates, small) * (1.0 + k * math.sqrt(2.0 / (nb - 1)))
+    rates = win[W_RATE]
+    return _allan(rates, r0, nr, big) <= 0.25 * _allan(rates, r0, nr, small) * (1.0 + k * math.sqrt(2.0 / (nb - 1)))
 
 
 # ------------------------------------------------------------------- the filter

@@ -103,16 +103,87 @@ def pairwise_sum(a, lo, n):
 
 
 @njit(cache=True, nogil=True)
+def _block_sqdev(a, lo, n, mu):
+    """:func:`_block_sum` of ``(a - mu)²`` (each term as numpy's ``d = a - mu; d * d``)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            d = a[lo + i] - mu
+            res += d * d
+        return res
+    d0, d1, d2, d3 = a[lo] - mu, a[lo + 1] - mu, a[lo + 2] - mu, a[lo + 3] - mu
+    d4, d5, d6, d7 = a[lo + 4] - mu, a[lo + 5] - mu, a[lo + 6] - mu, a[lo + 7] - mu
+    r0, r1, r2, r3, r4, r5, r6, r7 = d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5, d6 * d6, d7 * d7
+    i = 8
+    stop = n - (n % 8)
+    while i < stop:
+        j = lo + i
+        d0, d1, d2, d3 = a[j] - mu, a[j + 1] - mu, a[j + 2] - mu, a[j + 3] - mu
+        d4, d5, d6, d7 = a[j + 4] - mu, a[j + 5] - mu, a[j + 6] - mu, a[j + 7] - mu
+        r0 += d0 * d0
+        r1 += d1 * d1
+        r2 += d2 * d2
+        r3 += d3 * d3
+        r4 += d4 * d4
+        r5 += d5 * d5
+        r6 += d6 * d6
+        r7 += d7 * d7
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        d = a[lo + i] - mu
+        res += d * d
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True)
+def pairwise_sqdev(a, lo, n, mu):
+    """Sum of ``(a[lo:lo + n] - mu)²`` in numpy's order (:func:`pairwise_sum` of the squares,
+    without making the array of them)."""
+    if n <= _PW_BLOCKSIZE:
+        return _block_sqdev(a, lo, n, mu)
+    todo = np.empty((128, 3), dtype=np.int64)
+    done = np.empty(128)
+    n_todo = 1
+    n_done = 0
+    todo[0, 0], todo[0, 1], todo[0, 2] = lo, n, 0
+    while n_todo > 0:
+        n_todo -= 1
+        lo_, n_, combine = todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2]
+        if combine == 1:
+            n_done -= 1
+            done[n_done - 1] = done[n_done - 1] + done[n_done]
+        elif n_ <= _PW_BLOCKSIZE:
+            done[n_done] = _block_sqdev(a, lo_, n_, mu)
+            n_done += 1
+        else:
+            n2 = n_ // 2
+            n2 -= n2 % 8
+            todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2] = lo_, n_, 1
+            todo[n_todo + 1, 0], todo[n_todo + 1, 1], todo[n_todo + 1, 2] = lo_ + n2, n_ - n2, 0
+            todo[n_todo + 2, 0], todo[n_todo + 2, 1], todo[n_todo + 2, 2] = lo_, n2, 0
+            n_todo += 3
+    return done[0]
+
+
+@njit(cache=True, nogil=True)
 def mean(a):
     """``np.mean`` of a 1-d float64 array, the same bits."""
     return pairwise_sum(a, 0, a.size) / a.size
 
 
 @njit(cache=True, nogil=True)
+def std_of(a, lo, n):
+    """``np.std`` of ``a[lo:lo + n]`` (population, ddof 0), the same bits, read in place."""
+    mu = pairwise_sum(a, lo, n) / n
+    return np.sqrt(pairwise_sqdev(a, lo, n, mu) / n)
+
+
+@njit(cache=True, nogil=True)
 def std(a):
     """``np.std`` of a 1-d float64 array (population, ddof 0), the same bits."""
-    d = a - mean(a)
-    return np.sqrt(pairwise_sum(d * d, 0, d.size) / d.size)
+    return std_of(a, 0, a.size)
 
 
 @njit(cache=True, nogil=True)

@@ -242,7 +242,7 @@ class ChunkEngine:
         if adaptive:
             AK.load(self._ak, self.est, aid)
         # the compass window of _Aiding.add (empty: the init rows are not added)
-        self._win = np.zeros((256 if aid.collects else 1, 6))
+        self._win = np.zeros((AK.N_WIN, 256 if aid.collects else 1))
         self._cfg = np.zeros(K.N_CFG)
         self._cfg[K.C_INTERVAL] = cfg.update_interval_s
         self._cfg[K.C_COMPASS_SD] = cfg.compass_sigma_deg
@@ -292,11 +292,10 @@ class ChunkEngine:
                 lb[:n] = self._lb[order]
                 self._lb = lb
                 self._ist[K.I_LB_HEAD] = 0
-            if self._ist[K.I_WIN_N] >= self._win.shape[0]:  # grow the compass window ring alike
+            if 2 * self._ist[K.I_WIN_N] >= self._win.shape[1]:  # the compass window: keep it at most half full
                 head, n = int(self._ist[K.I_WIN_HEAD]), int(self._ist[K.I_WIN_N])
-                order = (head + np.arange(n)) % self._win.shape[0]
-                win = np.zeros((2 * self._win.shape[0], self._win.shape[1]))
-                win[:n] = self._win[order]
+                win = np.zeros((self._win.shape[0], 2 * self._win.shape[1]))
+                win[:, :n] = self._win[:, head:head + n]
                 self._win = win
                 self._ist[K.I_WIN_HEAD] = 0
             if self._ist[K.I_N_ACC] >= self._acc.shape[0]:

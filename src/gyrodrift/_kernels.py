@@ -39,13 +39,16 @@ F_S1 = 20  # last compass snap: same 6 values
 F_PA, F_PB, F_PC = 26, 27, 28  # absolute a, b, c in force
 F_E0 = 29  # start edge (``_Aiding.start_edge``, adaptive edge averaging): a snap (6 values)
 F_E0_VAR = 35  # and its compass variance, deg²
-N_FSTATE = 36
+F_E1 = 36  # the end edge of the interval just closed (the next start edge): a snap (6 values)
+F_E1_VAR = 42  # and its compass variance, deg²
+N_FSTATE = 43
 
 # Integer state of the main kernel.
 I_S0_OK, I_S1_OK, I_STICKY, I_AFTER_INT = 0, 1, 2, 3
 I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9
-I_WIN_HEAD, I_WIN_N, I_E0_OK, I_STILL_CHAIN = 10, 11, 12, 13  # compass window ring, start edge, still chain
-N_ISTATE = 14
+I_WIN_HEAD, I_WIN_N, I_E0_OK, I_STILL_CHAIN = 10, 11, 12, 13  # compass window, start edge, still chain
+I_E1_OK = 14  # F_E1 holds the edge of the last compass snap, computed at this boundary by _close
+N_ISTATE = 15
 
 # Settings (float) of the main kernel.
 C_INTERVAL, C_COMPASS_SD, C_GYRO_NOISE, C_TURN_RATE, C_TURN_WIN = 0, 1, 2, 3, 4
@@ -313,12 +316,13 @@ def compensate_kernel(
 
     The estimator is the linear filter ``x, P`` (``kcfg[K_MODE]`` MODE_FIXED) or the
     ``adaptive`` one, state ``ak`` (:mod:`gyrodrift._adaptive_kernels`), whose aiding
-    keeps the compass samples of the last ``max(zaru_window_s, edge_s)`` in the ring
-    ``win`` (``_Aiding.add``) when it needs them (``_Aiding.collects``).
+    keeps the compass samples of the last ``max(zaru_window_s, edge_s)`` in the buffer
+    ``win`` (``_Aiding.add``; layout in :mod:`gyrodrift._adaptive_kernels`) when it
+    needs them (``_Aiding.collects``).
 
     Returns the next row to do: ``t.size`` when done, less when the turn-window ring
-    ``lb``, the compass ring ``win`` or the accepted-measurement buffer ``acc`` is full
-    (grow it and call again).
+    ``lb`` or the accepted-measurement buffer ``acc`` is full, or the compass window
+    ``win`` half full (grow it and call again).
 
     The per-row state lives in local variables (kept in registers) and goes back to
     ``fs``/``ist`` around each interval decision and at the end.
@@ -332,7 +336,7 @@ def compensate_kernel(
     depth = kcfg[K_DEPTH]
     lb_cap = lb.shape[0]
     acc_cap = acc.shape[0]
-    win_cap = win.shape[0]
+    win_cap = win.shape[1]
     collects = ak[9][AK.BS_COLLECTS] == 1
     window_s = ak[8][AK.FS_WINDOW_S]
     # carry
@@ -356,7 +360,7 @@ def compensate_kernel(
     fR, fN2, ftau, fgate, frelock = fcfg[0], fcfg[1], fcfg[2], fcfg[3], fcfg[4]
     stop = t.size
     for i in range(i0, t.size):
-        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or win_n >= win_cap:
+        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or 2 * win_n >= win_cap:
             stop = i
             break
         t_s = t[i]
@@ -498,12 +502,18 @@ def _begin(t_boundary, fs, ist, cfg, win, ak):
     fset, bset = ak[8], ak[9]
     ist[I_E0_OK] = 0
     if ist[I_S0_OK] == 1 and bset[AK.BS_ON] == 1 and bset[AK.BS_EDGE] == 1:
-        edge, var = AK._edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], fs[F_S0:F_S0 + 6], fset[AK.FS_EDGE_S],
-                             cfg[C_INTERVAL], cfg[C_COMPASS_SD])
-        for j in range(6):
-            fs[F_E0 + j] = edge[j]
-        fs[F_E0_VAR] = var
+        if ist[I_E1_OK] == 1:  # the end edge _close just computed: the same snap and window
+            for j in range(6):
+                fs[F_E0 + j] = fs[F_E1 + j]
+            fs[F_E0_VAR] = fs[F_E1_VAR]
+        else:
+            edge, var = AK._edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], fs[F_S0:F_S0 + 6], fset[AK.FS_EDGE_S],
+                                 cfg[C_INTERVAL], cfg[C_COMPASS_SD])
+            for j in range(6):
+                fs[F_E0 + j] = edge[j]
+            fs[F_E0_VAR] = var
         ist[I_E0_OK] = 1
+    ist[I_E1_OK] = 0
 
 
 @njit(cache=True, nogil=True)
@@ -517,6 +527,7 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refu
     """
     adaptive = kcfg[K_MODE] == MODE_ADAPTIVE
     reason = ist[I_STICKY]
+    ist[I_E1_OK] = 0
     end_ok = ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE])
     s0 = fs[F_S0:F_S0 + 6]
     s1 = fs[F_S1:F_S1 + 6]
@@ -534,6 +545,10 @@ def _close(t_boundary, fs, ist, cfg, kcfg, x, P, Q, max_var, active, stack, refu
             if ist[I_E0_OK] == 1:
                 end_edge, end_var = AK._edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], s1, ak[8][AK.FS_EDGE_S],
                                              cfg[C_INTERVAL], cfg[C_COMPASS_SD])
+                for j in range(6):  # kept for _begin, whose start snap this is
+                    fs[F_E1 + j] = end_edge[j]
+                fs[F_E1_VAR] = end_var
+                ist[I_E1_OK] = 1
                 m, h0, h1, r, resid = AK._compass_measurement(fs[F_E0:F_E0 + 6], end_edge, cfg[C_COMPASS_SD],
                                                               cfg[C_GYRO_NOISE], fs[F_E0_VAR], end_var, True)
             have_meas = True
