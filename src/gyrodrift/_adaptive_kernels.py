@@ -24,8 +24,11 @@ here                          reference
 ``_Aiding.close`` itself is :func:`gyrodrift._kernels._close`, which calls these.
 
 Numbers: means are numpy's pairwise sums (:func:`gyrodrift._common_kernels.pairwise_sum`)
-and dot products are ``np.dot`` (the same BLAS call as numpy's), so on this data the
-mirror usually gives the reference's bits; the tests hold it to rounding.
+and the dot products of the window statistics ``np.dot`` (the same BLAS call as
+numpy's), so the stillness and edge tests usually give the reference's bits; the
+filter's 3×3 algebra is plain loops (:func:`gyrodrift._common_kernels.matmul` and
+``solve``: a BLAS call costs more than the product), equal to numpy's to the last
+bits. The tests hold the mirror to rounding.
 
 State
 -----
@@ -57,7 +60,8 @@ import math
 import numpy as np
 from numba import njit
 
-from gyrodrift._common_kernels import cap_covariance, correct, pairwise_sum, std_of, wrap180
+from gyrodrift._common_kernels import (cap_covariance, correct, matmul, matmul_t, matvec, pairwise_sum, solve, std_of,
+                                      wrap180)
 
 # ------------------------------------------------------------------ layouts
 
@@ -486,7 +490,7 @@ def cov(P, af):
     """Covariance of the absolute [a, b, c] (``AdaptiveKalman.cov``): ``J P Jᵀ``."""
     J = np.eye(3)
     J[2, 0] = -af[AF_TREF]
-    return J @ P @ np.ascontiguousarray(J.T)
+    return matmul_t(matmul(J, P), J)
 
 
 @njit(cache=True, nogil=True)
@@ -494,9 +498,21 @@ def _recentre(z, P, af, temp_c):
     """Move T_ref to ``temp_c`` (``AdaptiveKalman._recentre``; the drift model is unchanged)."""
     J = np.eye(3)
     J[2, 0] = temp_c - af[AF_TREF]
-    z[:] = J @ z
-    P[:, :] = J @ P @ np.ascontiguousarray(J.T)
+    z[:] = matvec(J, z)
+    P[:, :] = matmul_t(matmul(J, P), J)
     af[AF_TREF] = temp_c
+
+
+@njit(cache=True, nogil=True)
+def _column_mean(H, c):
+    """``np.mean(H[:, c])`` (numpy adds fewer than 8 numbers one after the other)."""
+    m = H.shape[0]
+    if m >= 8:
+        return pairwise_sum(np.ascontiguousarray(H[:, c]), 0, m) / m
+    total = 0.0
+    for r in range(m):
+        total += H[r, c]
+    return total / m
 
 
 @njit(cache=True, nogil=True)
@@ -504,7 +520,7 @@ def _centre(z, af, ai, H):
     """H with T centred on T_ref, which the first observation sets (``AdaptiveKalman._centre``)."""
     m = H.shape[0]
     if ai[AI_TREF_SET] == 0:
-        af[AF_TREF] = pairwise_sum(np.ascontiguousarray(H[:, 0]), 0, m) / m
+        af[AF_TREF] = _column_mean(H, 0)
         ai[AI_TREF_SET] = 1
         z[2] = z[2] + z[0] * af[AF_TREF]  # z is still the prior x0 here
     Hc = H.copy()
@@ -523,7 +539,7 @@ def update(z, P, V, nis, af, ai, Q, max_var, slope_q, y, H, R, fset, bset):
     random walk in temperature to Q (0 for the twin).
     """
     m = y.size
-    temp_c = pairwise_sum(np.ascontiguousarray(H[:, 0]), 0, m) / m
+    temp_c = _column_mean(H, 0)
     Qk = Q
     if ai[AI_LAST_T_SET] == 1 and slope_q > 0.0:
         Qk = Q.copy()
@@ -531,19 +547,22 @@ def update(z, P, V, nis, af, ai, Q, max_var, slope_q, y, H, R, fset, bset):
     af[AF_LAST_T] = temp_c
     ai[AI_LAST_T_SET] = 1
     af[AF_LAST_H_T] = temp_c
-    af[AF_LAST_H_TP] = pairwise_sum(np.ascontiguousarray(H[:, 1]), 0, m) / m
+    af[AF_LAST_H_TP] = _column_mean(H, 1)
     ai[AI_LAST_H_SET] = 1
     ai[AI_ANCHOR_SET] = 0
     if bset[BS_RECENTRE] == 1 and ai[AI_TREF_SET] == 1:
         _recentre(z, P, af, temp_c)
     Hc = _centre(z, af, ai, H)
-    Hct = np.ascontiguousarray(Hc.T)
-    gamma = y - Hc @ z
-    M = Hc @ P @ Hct
+    gamma = y - matvec(Hc, z)
+    M = matmul_t(matmul(Hc, P), Hc)
     trM = np.trace(M)
     if bset[BS_NORMALISED] == 1:
-        S = M + Hc @ Qk @ Hct + R
-        value = np.dot(gamma, np.linalg.solve(S, gamma)) / m
+        S = M + matmul_t(matmul(Hc, Qk), Hc) + R
+        x = solve(S, gamma)
+        value = gamma[0] * x[0]
+        for j in range(1, m):
+            value += gamma[j] * x[j]
+        value /= m
         w = nis.size
         n = ai[AI_NIS_N]
         if n < w:
@@ -570,7 +589,7 @@ def update(z, P, V, nis, af, ai, Q, max_var, slope_q, y, H, R, fset, bset):
             for i in range(m):
                 for j in range(m):
                     V[i, j] = (rho * V[i, j] + gamma[i] * gamma[j]) / (1.0 + rho)
-        N = V[:m, :m] - Hc @ Qk @ Hct - fset[FS_SOFTENING] * R
+        N = V[:m, :m] - matmul_t(matmul(Hc, Qk), Hc) - fset[FS_SOFTENING] * R
         lam = np.trace(N) / trM if trM > 0 else 1.0
     # min(max(1, λ), λ_max) as Python evaluates it
     if not lam > 1.0:

@@ -1,9 +1,10 @@
 """Compiled helpers shared by the kernels of the fast engine (numba; see :mod:`gyrodrift._engine`).
 
 Mirrors of :func:`gyrodrift.conventions.wrap_360` / ``wrap_180``, of the Kalman steps
-of :mod:`gyrodrift.estimators._kalman` (``correct``, ``cap_covariance``), and of
-numpy's summation (:func:`pairwise_sum`, the order ``np.sum`` and ``np.mean`` add in),
-so that a kernel that mirrors numpy code can give the same bits. A leaf module:
+of :mod:`gyrodrift.estimators._kalman` (``correct``, ``cap_covariance``), of numpy's
+summation (:func:`pairwise_sum`, the order ``np.sum`` and ``np.mean`` add in), so that
+a kernel that mirrors numpy code can give the same bits, and the small-matrix products
+and solves of the filters as loops (:func:`matmul`, :func:`solve`). A leaf module:
 :mod:`gyrodrift._kernels` and :mod:`gyrodrift._adaptive_kernels` both use it.
 """
 
@@ -213,12 +214,113 @@ def cap_covariance(P, max_var):
 
 
 @njit(cache=True, nogil=True)
+def matmul(A, B):
+    """``A @ B`` of small matrices, as plain loops (no BLAS call: the sizes here are 1 to 3;
+    the sums go in index order, so the last bit may differ from BLAS)."""
+    p, q = A.shape
+    r = B.shape[1]
+    out = np.empty((p, r))
+    for i in range(p):
+        for j in range(r):
+            acc = A[i, 0] * B[0, j]
+            for k in range(1, q):
+                acc += A[i, k] * B[k, j]
+            out[i, j] = acc
+    return out
+
+
+@njit(cache=True, nogil=True)
+def matmul_t(A, B):
+    """``A @ B.T`` of small matrices (see :func:`matmul`)."""
+    p, q = A.shape
+    r = B.shape[0]
+    out = np.empty((p, r))
+    for i in range(p):
+        for j in range(r):
+            acc = A[i, 0] * B[j, 0]
+            for k in range(1, q):
+                acc += A[i, k] * B[j, k]
+            out[i, j] = acc
+    return out
+
+
+@njit(cache=True, nogil=True)
+def matvec(A, x):
+    """``A @ x`` of a small matrix and vector (see :func:`matmul`)."""
+    p, q = A.shape
+    out = np.empty(p)
+    for i in range(p):
+        acc = A[i, 0] * x[0]
+        for k in range(1, q):
+            acc += A[i, k] * x[k]
+        out[i] = acc
+    return out
+
+
+@njit(cache=True, nogil=True)
+def solve(S, B):
+    """``np.linalg.solve(S, B)`` of a small system (S (m, m), B (m, k) or (m,)): LU with
+    partial pivoting as LAPACK's ``dgesv``, dividing through reciprocals of the pivots as
+    OpenBLAS does (for m = 1, ``B * (1 / S)``)."""
+    m = S.shape[0]
+    A = S.copy()
+    X = B.copy()
+    k = X.size // m
+    Xv = X.reshape((m, k))
+    for c in range(m):
+        p = c
+        big = abs(A[c, c])
+        for r in range(c + 1, m):
+            if abs(A[r, c]) > big:
+                big = abs(A[r, c])
+                p = r
+        if p != c:
+            for j in range(m):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+            for j in range(k):
+                Xv[c, j], Xv[p, j] = Xv[p, j], Xv[c, j]
+        inv = 1.0 / A[c, c]
+        for r in range(c + 1, m):
+            f = A[r, c] * inv
+            for j in range(c + 1, m):
+                A[r, j] -= f * A[c, j]
+            for j in range(k):
+                Xv[r, j] -= f * Xv[c, j]
+    for c in range(m - 1, -1, -1):
+        inv = 1.0 / A[c, c]
+        for j in range(k):
+            acc = Xv[c, j]
+            for r in range(c + 1, m):
+                acc -= A[c, r] * Xv[r, j]
+            Xv[c, j] = acc * inv
+    return X
+
+
+@njit(cache=True, nogil=True)
 def correct(x, P, y, H, R):
-    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P."""
-    Ht = np.ascontiguousarray(H.T)
-    S = H @ P @ Ht + R
-    K = np.ascontiguousarray(np.linalg.solve(S, H @ P).T)
-    innovation = y - H @ x
-    A = np.eye(x.size) - K @ H
-    P_post = A @ P @ np.ascontiguousarray(A.T) + K @ R @ np.ascontiguousarray(K.T)
-    return x + K @ innovation, 0.5 * (P_post + P_post.T)
+    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P.
+
+    The same formulas in the same order, with the products as plain loops
+    (:func:`matmul`, :func:`solve`): the result agrees with numpy's to rounding."""
+    n = x.size
+    m = y.size
+    HP = matmul(H, P)
+    S = matmul_t(HP, H) + R
+    K = np.ascontiguousarray(solve(S, HP).T)  # P H^T S^-1, as P and S are symmetric
+    Hx = matvec(H, x)
+    innovation = np.empty(m)
+    for r in range(m):
+        innovation[r] = y[r] - Hx[r]
+    A = -matmul(K, H)
+    for i in range(n):
+        A[i, i] += 1.0
+    P_post = matmul_t(matmul(A, P), A) + matmul_t(matmul(K, R), K)
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.5 * (P_post[i, j] + P_post[j, i])
+    Ki = matvec(K, innovation)
+    x_post = np.empty(n)
+    for i in range(n):
+        x_post[i] = x[i] + Ki[i]
+    return x_post, out
