@@ -8,6 +8,8 @@ import os
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -401,6 +403,28 @@ def test_chunk_writer_log_round_trip(tmp_path):
                 out.write(chunk)
         pd.testing.assert_frame_equal(read_log(tmp_path / name), read_log(tmp_path / f"whole_{name}"), check_exact=True)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "whole_a.csv").read_bytes()
+
+
+def test_chunk_writer_csv_values_pyarrow_cannot_print(tmp_path):
+    """Columns pyarrow's CSV writer refuses (lists) are printed by pandas, as write_table prints them."""
+    listed = pd.DataFrame({"t": [0.0, 1.0, 2.0], "l": [[1], [2, 3], []]})
+    write_table(listed, tmp_path / "listed.csv")
+    _write_chunks(tmp_path / "listed_chunks.csv", listed, [1, 2])
+    assert (tmp_path / "listed_chunks.csv").read_bytes() == (tmp_path / "listed.csv").read_bytes()
+    assert (tmp_path / "listed.csv").read_text() == 't,l\n0.0,[1]\n1.0,"[2, 3]"\n2.0,[]\n'
+
+
+@pytest.mark.parametrize("sync_every_s", [None, 0.001])
+def test_chunk_writer_syncing_while_writing(tmp_path, sync_every_s):
+    frame = _output_frame(2000)
+    write_table(frame, tmp_path / "whole.csv")
+    with ChunkWriter(tmp_path / "chunks.csv", sync_every_s=sync_every_s) as out:
+        for start in range(0, len(frame), 100):
+            out.write(frame.iloc[start : start + 100])
+            time.sleep(0.002)  # the sync thread runs in between
+    assert (tmp_path / "chunks.csv").read_bytes() == (tmp_path / "whole.csv").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chunks.csv", "whole.csv"]
+    assert not any(t.name == "gyrodrift-sync" for t in threading.enumerate())
 
 
 @pytest.mark.parametrize("name", ["out.csv", "out.parquet"])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import secrets
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -66,7 +67,7 @@ def atomic_output(path):
 
 
 @contextmanager
-def atomic_path(path):
+def atomic_path(path, *, sync_every_s: float | None = None):
     """:func:`atomic_output` for writers that open the file by its name: yield the path
     of the hidden temporary file (created, empty).
 
@@ -74,15 +75,49 @@ def atomic_path(path):
     which a Python file object passed to pyarrow needs for every write. The writer must
     close its file before the block ends; the file is then synced and moved onto
     ``path``. Errors and clean-up as for :func:`atomic_output`.
+
+    With ``sync_every_s``, a background thread also syncs what has been written so far
+    at that interval, so that the disk writes overlap the writing instead of all waiting
+    for the end (for a file written over seconds, e.g. by a pipeline).
     """
     path = Path(path)
     fd, tmp = _create_temporary(path)
     with _replacing(path, tmp):
         try:
-            yield tmp
+            with _Syncing(fd, sync_every_s):
+                yield tmp
             os.fsync(fd)  # any descriptor of the file syncs what was written through another
         finally:
             os.close(fd)
+
+
+class _Syncing:
+    """Context manager: sync the file ``fd`` every ``interval_s`` seconds in a background
+    thread while the block runs (nothing when ``interval_s`` is None)."""
+
+    def __init__(self, fd: int, interval_s: float | None) -> None:
+        self._fd, self._interval_s = fd, interval_s
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> "_Syncing":
+        if self._interval_s is not None:
+            self._thread = threading.Thread(target=self._run, name="gyrodrift-sync", daemon=True)
+            self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        sync = getattr(os, "fdatasync", os.fsync)
+        while not self._stop.wait(self._interval_s):
+            try:
+                sync(self._fd)
+            except OSError:
+                return  # the final sync reports the problem
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
 
 
 def write_bytes_atomic(path, data: bytes) -> None:

@@ -40,6 +40,9 @@ __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
 #: Rows per chunk of the streaming path: small enough to overlap reading, compensating and writing and to bound memory.
 CHUNK_ROWS = 250_000
+#: Chunks the reader thread reads ahead of the compensation: it reads on while numba loads the
+#: compiled kernels (about 0.7 s, mostly holding the GIL), so the second core is not idle then.
+READ_AHEAD = 4
 
 
 @dataclass
@@ -439,7 +442,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     # the last group was encoded after the compute had finished).
     with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, \
             ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
-        reader = _Ahead(chunks)
+        reader = _Ahead(chunks, depth=READ_AHEAD)
         behind = _Behind(writer.write)
         try:
             for log in reader:

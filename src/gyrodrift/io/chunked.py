@@ -684,7 +684,9 @@ class ChunkWriter:
 
     The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the
     concatenated chunks: for CSV byte for byte (one header, the same number formatting
-    and quoting); for Parquet reading back equal, with chunks gathered into row groups of
+    and quoting; but where pyarrow cannot convert some chunks of a column, e.g. an object
+    column holding a list in one chunk, pandas prints those chunks, and prints numbers
+    its own way); for Parquet reading back equal, with chunks gathered into row groups of
     at least ``row_group_rows`` rows. Categorical columns (e.g. ``gate_reason``) are
     written as their values, as for text columns.
 
@@ -697,6 +699,10 @@ class ChunkWriter:
     row_group_rows : int
         Parquet: rows gathered before a row group is written (pyarrow's default row
         group size); the last one may be smaller.
+    sync_every_s : float or None
+        Sync what has been written to disk at this interval, in a background thread,
+        while the chunks are written (None: only at the end). The file is synced before it
+        replaces ``path`` either way; syncing as it grows leaves little to wait for then.
 
     Attributes
     ----------
@@ -712,9 +718,12 @@ class ChunkWriter:
                 out.write(process(chunk))
     """
 
-    def __init__(self, path, *, fmt: str | None = None, row_group_rows: int = 1 << 20) -> None:
+    def __init__(
+        self, path, *, fmt: str | None = None, row_group_rows: int = 1 << 20, sync_every_s: float | None = 0.5
+    ) -> None:
         self.path = Path(path)
         self.row_group_rows = int(row_group_rows)
+        self.sync_every_s = sync_every_s
         self._pending: list[pa.Table] = []
         self.format = tabular._table_format(self.path, fmt, tabular._WRITE_SUFFIXES)
         self.rows = 0
@@ -727,7 +736,7 @@ class ChunkWriter:
         if self._stack is not None:
             raise RuntimeError("ChunkWriter is already open")
         with ExitStack() as stack:
-            tmp = stack.enter_context(atomic_path(self.path))
+            tmp = stack.enter_context(atomic_path(self.path, sync_every_s=self.sync_every_s))
             self._sink = stack.enter_context(pa.OSFile(str(tmp), "w"))
             self._stack = stack.pop_all()
         return self
