@@ -358,6 +358,11 @@ def compensate_kernel(
     f_psi, f_P, f_tp, f_rp, f_started = fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED]
     f_t0, f_isd, f_sdp, f_rej = fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T]
     fR, fN2, ftau, fgate, frelock = fcfg[0], fcfg[1], fcfg[2], fcfg[3], fcfg[4]
+    # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
+    m_T = math.nan
+    m_Tp = math.nan
+    m_bias = 0.0
+    m_sd = 0.0
     stop = t.size
     for i in range(i0, t.size):
         if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or 2 * win_n >= win_cap:
@@ -368,7 +373,17 @@ def compensate_kernel(
         Ti = T[i]
         Tpi = Tp[i]
         h = heading[i]
-        bias = pa * Ti + pb * Tpi + pc
+        if Ti != m_T or Tpi != m_Tp:
+            m_T = Ti
+            m_Tp = Tpi
+            m_bias = pa * Ti + pb * Tpi + pc
+            # bias_sd with the covariance in force for this row
+            var = ((C00 * Ti + C01 * Tpi + C02) * Ti
+                   + (C10 * Ti + C11 * Tpi + C12) * Tpi
+                   + (C20 * Ti + C21 * Tpi + C22))
+            m_sd = math.sqrt(max(var, 0.0))
+        bias = m_bias
+        bias_sd = m_sd
         rate = gi - bias
         dt = t_s - c_t
         I_raw = I_raw + 0.5 * (gi + c_g) * dt
@@ -408,7 +423,13 @@ def compensate_kernel(
             if has_compass and s0_ok:
                 d = wrap180((I_raw - h) - (s0_Iraw - s0_heading))
                 resid = d - (I_bias - s0_Ibias)
-            mean_rate = (I_rate - lb_I0) / (t_s - lb_t0)
+            # |mean rate| > turn_rate: 0 stands for a rate clearly below it (no division; exact)
+            num = abs(I_rate - lb_I0)
+            lim = turn_rate * (t_s - lb_t0)
+            if num < lim * (1.0 - 1e-12):
+                mean_rate = 0.0
+            else:
+                mean_rate = (I_rate - lb_I0) / (t_s - lb_t0)
             sticky = _row_condition(gap[i], field[i], resid, mean_rate, turn_rate, interf)
         update = 0
         if sticky != NO_STICKY:
@@ -417,11 +438,6 @@ def compensate_kernel(
             reason = R_INTERFERENCE
         else:
             reason = R_NONE
-        # bias_sd with the covariance in force for this row
-        var = ((C00 * Ti + C01 * Tpi + C02) * Ti
-               + (C10 * Ti + C11 * Tpi + C12) * Tpi
-               + (C20 * Ti + C21 * Tpi + C22))
-        bias_sd = math.sqrt(max(var, 0.0))
         out_bias_sd[i] = bias_sd
         out_bias[i] = bias
         out_rate[i] = rate
@@ -456,6 +472,7 @@ def compensate_kernel(
             sticky = ist[I_STICKY]
             after_int = ist[I_AFTER_INT] == 1
             t_near = _near_boundary(t_start, k_cur, interval)
+            m_T = math.nan  # new parameters and covariance: recompute
         out_update[i] = update
         out_reason[i] = reason
         allow = reason != R_FIELD and not (fuse_interference and reason == R_INTERFERENCE)
