@@ -185,7 +185,7 @@ def export(ak: tuple) -> dict:
 # ----------------------------------------------------------------- the window
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def add(win, head, n, t, heading, I_raw, I_T, I_Tp, I_bias, window_s):
     """Append a compass sample to the window, drop those older than ``window_s`` before it
     (``_Aiding.add``); returns the new (head, n). The buffer must have room for one more

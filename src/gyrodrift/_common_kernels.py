@@ -19,7 +19,7 @@ from numba import njit
 _PW_BLOCKSIZE = 128
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def wrap360(x):
     """Mirror of :func:`gyrodrift.conventions.wrap_360` (an angle already in range is returned as is,
     which is what ``np.mod`` gives for it)."""
@@ -31,7 +31,7 @@ def wrap360(x):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def wrap180(x):
     """Mirror of :func:`gyrodrift.conventions.wrap_180`."""
     return wrap360(x + 180.0) - 180.0

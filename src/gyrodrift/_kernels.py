@@ -287,7 +287,7 @@ def _unobservable_code(C, prior_a, prior_b):
     return code
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _row_condition(gap, field, resid, mean_rate, turn_rate, interf):
     if gap:
         return R_GAP
