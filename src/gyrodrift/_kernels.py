@@ -368,11 +368,12 @@ def compensate_kernel(
         if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or 2 * win_n >= win_cap:
             stop = i
             break
-        t_s = t[i]
-        gi = g[i]
-        Ti = T[i]
-        Tpi = Tp[i]
-        h = heading[i]
+        ix = np.uint64(i)  # an unsigned index: no negative-index fix-up on every access
+        t_s = t[ix]
+        gi = g[ix]
+        Ti = T[ix]
+        Tpi = Tp[ix]
+        h = heading[ix]
         if Ti != m_T or Tpi != m_Tp:
             m_T = Ti
             m_Tp = Tpi
@@ -405,18 +406,18 @@ def compensate_kernel(
                 win_head, win_n = AK.add(win, win_head, win_n, t_s, h, I_raw, I_T, I_Tp, I_bias, window_s)
         # 1-s mean compensated rate, from the oldest row inside the window
         window_start = t_s - turn_win
-        while lb_n > 1 and lb[lb_head, 0] < window_start:
+        while lb_n > 1 and lb[np.uint64(lb_head), 0] < window_start:
             lb_head += 1
             if lb_head == lb_cap:
                 lb_head = 0
             lb_n -= 1
-        lb_t0 = lb[lb_head, 0]
-        lb_I0 = lb[lb_head, 1]
+        lb_t0 = lb[np.uint64(lb_head), 0]
+        lb_I0 = lb[np.uint64(lb_head), 1]
         pos = lb_head + lb_n
         if pos >= lb_cap:
             pos -= lb_cap
-        lb[pos, 0] = t_s
-        lb[pos, 1] = I_rate
+        lb[np.uint64(pos), 0] = t_s
+        lb[np.uint64(pos), 1] = I_rate
         lb_n += 1
         if sticky == NO_STICKY:
             resid = math.nan
@@ -430,7 +431,7 @@ def compensate_kernel(
                 mean_rate = 0.0
             else:
                 mean_rate = (I_rate - lb_I0) / (t_s - lb_t0)
-            sticky = _row_condition(gap[i], field[i], resid, mean_rate, turn_rate, interf)
+            sticky = _row_condition(gap[ix], field[ix], resid, mean_rate, turn_rate, interf)
         update = 0
         if sticky != NO_STICKY:
             reason = sticky
@@ -438,14 +439,14 @@ def compensate_kernel(
             reason = R_INTERFERENCE
         else:
             reason = R_NONE
-        out_bias_sd[i] = bias_sd
-        out_bias[i] = bias
-        out_rate[i] = rate
-        out_heading[i] = wrap360(anchor + I_rate)
-        out_a[i] = pa
-        out_b[i] = pb
-        out_c[i] = pc
-        out_unobs[i] = unobs
+        out_bias_sd[ix] = bias_sd
+        out_bias[ix] = bias
+        out_rate[ix] = rate
+        out_heading[ix] = wrap360(anchor + I_rate)
+        out_a[ix] = pa
+        out_b[ix] = pb
+        out_c[ix] = pc
+        out_unobs[ix] = unobs
         # the interval number floor((t - t_start)/interval), computed only near a boundary
         k = k_cur
         if t_s >= t_near:
@@ -473,16 +474,16 @@ def compensate_kernel(
             after_int = ist[I_AFTER_INT] == 1
             t_near = _near_boundary(t_start, k_cur, interval)
             m_T = math.nan  # new parameters and covariance: recompute
-        out_update[i] = update
-        out_reason[i] = reason
+        out_update[ix] = update
+        out_reason[ix] = reason
         allow = reason != R_FIELD and not (fuse_interference and reason == R_INTERFERENCE)
         f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, hf, hf_sd, h_sd = FZ.step(
             f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, t_s, rate, h, allow, bias_sd,
             fR, fN2, ftau, fgate, frelock,
         )
-        out_hf[i] = hf
-        out_hf_sd[i] = hf_sd
-        out_h_sd[i] = h_sd
+        out_hf[ix] = hf
+        out_hf_sd[ix] = hf_sd
+        out_h_sd[ix] = h_sd
     fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE] = I_raw, I_T, I_Tp, I_bias, I_rate
     fs[F_K] = k_cur
