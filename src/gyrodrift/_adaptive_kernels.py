@@ -218,7 +218,7 @@ def add(win, head, n, t, heading, I_raw, I_T, I_Tp, I_bias, window_s):
     return head, n
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _span(win, head, n, t_lo, t_hi, strict_lo):
     """The columns ``lo:hi`` of the window with ``t_lo < t <= t_hi`` (``t_lo <= t`` when not
     ``strict_lo``; no lower bound for NaN), found from the newest (times increase)."""
@@ -257,7 +257,7 @@ def _compass_measurement(s0, s1, compass_sd, gyro_noise, var0, var1, end_var):
     return m, h0, h1, r, d_diff - (s1[W_IBIAS] - s0[W_IBIAS])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _wrap180_diff(x, y, lo, ref, out, single=False):
     """``out[j] = wrap180(x[lo + j] - y[lo + j] - ref)`` (``wrap180(x[lo + j] - ref)`` when
     ``single``) for every j of ``out`` whose angle is already in range, which is what
@@ -496,7 +496,7 @@ def _gyro_still(win, lo, hi, interval_start_s, max_std_dps, k):
 # ------------------------------------------------------------------- the filter
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _own_params(z, af):
     """The filter's absolute [a, b, c] (``AdaptiveKalman._own_params``): c = c' − a T_ref."""
     out = np.empty(3)
@@ -532,7 +532,7 @@ def _recentre(z, P, af, temp_c):
     af[AF_TREF] = temp_c
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _column_mean(H, c):
     """``np.mean(H[:, c])`` (numpy adds fewer than 8 numbers one after the other)."""
     m = H.shape[0]

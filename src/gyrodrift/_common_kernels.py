@@ -37,7 +37,7 @@ def wrap180(x):
     return wrap360(x + 180.0) - 180.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _block_sum(a, lo, n):
     """numpy's sum of at most 128 numbers (``pairwise_sum`` without the split)."""
     if n < 8:
@@ -67,7 +67,7 @@ def _block_sum(a, lo, n):
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def pairwise_sum(a, lo, n):
     """Sum of ``a[lo:lo + n]`` in the order of numpy's ``np.add.reduce`` on a float64 array.
 
@@ -80,6 +80,12 @@ def pairwise_sum(a, lo, n):
     """
     if n <= _PW_BLOCKSIZE:
         return _block_sum(a, lo, n)
+    return _pairwise_tree(a, lo, n)
+
+
+@njit(cache=True, nogil=True)
+def _pairwise_tree(a, lo, n):
+    """:func:`pairwise_sum` of more than 128 numbers (out of line: the callers inline the rest)."""
     # post-order walk of the halving tree: (lo, n, combine?) to do, partial sums done
     todo = np.empty((128, 3), dtype=np.int64)
     done = np.empty(128)
@@ -105,7 +111,7 @@ def pairwise_sum(a, lo, n):
     return done[0]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _block_sqdev(a, lo, n, mu):
     """:func:`_block_sum` of ``(a - mu)²`` (each term as numpy's ``d = a - mu; d * d``)."""
     if n < 8:
@@ -140,12 +146,18 @@ def _block_sqdev(a, lo, n, mu):
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def pairwise_sqdev(a, lo, n, mu):
     """Sum of ``(a[lo:lo + n] - mu)²`` in numpy's order (:func:`pairwise_sum` of the squares,
     without making the array of them)."""
     if n <= _PW_BLOCKSIZE:
         return _block_sqdev(a, lo, n, mu)
+    return _sqdev_tree(a, lo, n, mu)
+
+
+@njit(cache=True, nogil=True)
+def _sqdev_tree(a, lo, n, mu):
+    """:func:`pairwise_sqdev` of more than 128 numbers."""
     todo = np.empty((128, 3), dtype=np.int64)
     done = np.empty(128)
     n_todo = 1
@@ -283,7 +295,7 @@ def cap_covariance(P, max_var):
     return sym
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def matmul(A, B):
     """``A @ B`` of small matrices, as plain loops (no BLAS call: the sizes here are 1 to 3;
     the sums go in index order, so the last bit may differ from BLAS)."""
@@ -299,7 +311,7 @@ def matmul(A, B):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def matmul_t(A, B):
     """``A @ B.T`` of small matrices (see :func:`matmul`)."""
     p, q = A.shape
@@ -314,7 +326,7 @@ def matmul_t(A, B):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def matvec(A, x):
     """``A @ x`` of a small matrix and vector (see :func:`matmul`)."""
     p, q = A.shape
