@@ -358,6 +358,7 @@ def compensate_kernel(
     f_psi, f_P, f_tp, f_rp, f_started = fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED]
     f_t0, f_isd, f_sdp, f_rej = fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T]
     fR, fN2, ftau, fgate, frelock = fcfg[0], fcfg[1], fcfg[2], fcfg[3], fcfg[4]
+    seg = i0  # first row whose a, b, c and unobservable code are still to write (_fill_params)
     # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
     m_T = math.nan
     m_Tp = math.nan
@@ -443,15 +444,13 @@ def compensate_kernel(
         out_bias[ix] = bias
         out_rate[ix] = rate
         out_heading[ix] = wrap360(anchor + I_rate)
-        out_a[ix] = pa
-        out_b[ix] = pb
-        out_c[ix] = pc
-        out_unobs[ix] = unobs
         # the interval number floor((t - t_start)/interval), computed only near a boundary
         k = k_cur
         if t_s >= t_near:
             k = math.floor((t_s - t_start) / interval)
         if k > k_cur:
+            _fill_params(out_a, out_b, out_c, out_unobs, seg, i + 1, pa, pb, pc, unobs)
+            seg = i + 1
             k_cur = k
             ist[I_STICKY] = sticky
             ist[I_AFTER_INT] = 1 if after_int else 0
@@ -484,6 +483,7 @@ def compensate_kernel(
         out_hf[ix] = hf
         out_hf_sd[ix] = hf_sd
         out_h_sd[ix] = h_sd
+    _fill_params(out_a, out_b, out_c, out_unobs, seg, stop, pa, pb, pc, unobs)
     fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     fs[F_IRAW], fs[F_IT], fs[F_ITP], fs[F_IBIAS], fs[F_IRATE] = I_raw, I_T, I_Tp, I_bias, I_rate
     fs[F_K] = k_cur
@@ -495,6 +495,20 @@ def compensate_kernel(
     fst[FZ.PSI], fst[FZ.P], fst[FZ.TPREV], fst[FZ.RPREV], fst[FZ.STARTED] = f_psi, f_P, f_tp, f_rp, f_started
     fst[FZ.T0], fst[FZ.ISD], fst[FZ.SDPREV], fst[FZ.REJ_T] = f_t0, f_isd, f_sdp, f_rej
     return stop
+
+
+@njit(cache=True, nogil=True)
+def _fill_params(out_a, out_b, out_c, out_unobs, lo, hi, pa, pb, pc, unobs):
+    """The parameters in force and the unobservable code of rows ``lo:hi`` (constant
+    through an interval: written at its end, each column in one pass)."""
+    for j in range(lo, hi):
+        out_a[j] = pa
+    for j in range(lo, hi):
+        out_b[j] = pb
+    for j in range(lo, hi):
+        out_c[j] = pc
+    for j in range(lo, hi):
+        out_unobs[j] = unobs
 
 
 @njit(cache=True, nogil=True)
