@@ -132,17 +132,25 @@ def _ring_slope(bins, head, n):
     cap = bins.shape[0]
     st = 0.0
     sT = 0.0
-    for j in range(n):
-        st += bins[(head + j) % cap, 1]
-        sT += bins[(head + j) % cap, 2]
+    r = head
+    for _ in range(n):  # oldest first, the ring's wrap without a division per row
+        st += bins[r, 1]
+        sT += bins[r, 2]
+        r += 1
+        if r == cap:
+            r = 0
     mt = st / n
     mT = sT / n
     sxx = 0.0
     sxy = 0.0
-    for j in range(n):
-        dt = bins[(head + j) % cap, 1] - mt
+    r = head
+    for _ in range(n):
+        dt = bins[r, 1] - mt
         sxx += dt * dt
-        sxy += dt * (bins[(head + j) % cap, 2] - mT)
+        sxy += dt * (bins[r, 2] - mT)
+        r += 1
+        if r == cap:
+            r = 0
     if sxx <= 0.0:
         return 0.0
     return sxy / sxx
