@@ -160,9 +160,9 @@ def test_fresh_pages_made_ahead_change_nothing(monkeypatch):
         started = []
         populate = _engine._populate_in_background
 
-        def watched(columns, row0, n):
-            helper = populate(columns, row0, n)
-            started.append(helper)
+        def watched(columns, n):
+            helper = populate(columns, n)
+            started.append((len(columns), helper))
             return helper
 
         with monkeypatch.context() as m:
@@ -172,6 +172,16 @@ def test_fresh_pages_made_ahead_change_nothing(monkeypatch):
             m.setattr(_engine, "_populate_in_background", watched)
             helped = compensate(log, cfg, engine="fast")
         pd.testing.assert_frame_equal(plain, helped, check_exact=True)
-        assert len(started) == 2  # T' and gap flags, then the output columns
+        assert [k for k, _ in started] == [15]  # one chunk: gap flags, T', 13 output columns
         if sys.platform.startswith("linux"):
-            assert all(h is not None for h in started)
+            assert all(h is not None for _, h in started)
+    # fed in chunks: the init rows buffered over several chunks, then one helper a chunk
+    cfg = config("adaptive")
+    whole, m_whole, _ = feed_in_chunks(log, cfg, [len(log)], "adaptive")
+    with monkeypatch.context() as m:
+        m.setattr(_engine, "_POPULATE_MIN_BYTES", 0)
+        m.setattr(_engine, "_SMALL_PAGES_MIN_BYTES", 0)
+        m.setattr(_engine, "_POPULATE_ROWS", 97)
+        parts, m_parts, _ = feed_in_chunks(log, cfg, [1, 7, 250, 3000] + [5000] * 20 + [len(log)], "adaptive")
+    pd.testing.assert_frame_equal(whole, parts, check_exact=True)
+    assert np.array_equal(m_whole, m_parts)

@@ -129,7 +129,7 @@ class ChunkEngine:
         self._fusion = FusionState(config.fusion, config.gyro_noise_dps_rthz)
 
     # ------------------------------------------------------------------ input
-    def _prepare(self, t, g, T, heading, norm, dip):
+    def _prepare(self, t, g, T, heading, norm, dip, gap, Tp):
         K = self.K
         t = np.ascontiguousarray(t, dtype=float)
         g = np.ascontiguousarray(g, dtype=float)
@@ -142,29 +142,23 @@ class ChunkEngine:
                 raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
             self._t0 = float(t[0])
             self._t_start = float(t[0]) + self.cfg.init_s
-        gap = _small_pages(np.empty(n, dtype=np.bool_))
-        Tp = _small_pages(np.empty(n))
-        helper = _populate_in_background([gap, Tp], 0, n)  # while the kernels below run
-        try:
-            bad, fix = K.prepare_kernel(t, g, T, heading, self._t_last, first, float(self.cfg.gate.max_gap_s), gap)
-            if bad >= 0:
-                raise LogFormatError(
-                    f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing"
-                )
-            g_out, T_out, h_out = g, T, heading
-            if fix & 1:  # empty or infinite cells hold the previous value (and refuse the interval)
-                g_out = np.empty(n)
-                K.hold_kernel(g, self._g_last, gap, g_out)
-            if fix & 2:
-                T_out = np.empty(n)
-                K.hold_kernel(T, self._T_last, gap, T_out)
-            if fix & 4:
-                h_out = np.empty(n)
-                K.wrap_kernel(heading, h_out)
-            tr = self.cfg.temp_rate
-            K.temp_rate_kernel(t, T_out, tr.window_bins, float(tr.bin_s), self._tf, self._ti, self._bins, Tp)
-        finally:
-            _join(helper)
+        bad, fix = K.prepare_kernel(t, g, T, heading, self._t_last, first, float(self.cfg.gate.max_gap_s), gap)
+        if bad >= 0:
+            raise LogFormatError(
+                f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing"
+            )
+        g_out, T_out, h_out = g, T, heading
+        if fix & 1:  # empty or infinite cells hold the previous value (and refuse the interval)
+            g_out = np.empty(n)
+            K.hold_kernel(g, self._g_last, gap, g_out)
+        if fix & 2:
+            T_out = np.empty(n)
+            K.hold_kernel(T, self._T_last, gap, T_out)
+        if fix & 4:
+            h_out = np.empty(n)
+            K.wrap_kernel(heading, h_out)
+        tr = self.cfg.temp_rate
+        K.temp_rate_kernel(t, T_out, tr.window_bins, float(tr.bin_s), self._tf, self._ti, self._bins, Tp)
         self._t_last, self._g_last, self._T_last = float(t[-1]), float(g_out[-1]), float(T_out[-1])
         self.rows_in += n
         return t, g_out, T_out, Tp, h_out, gap, norm, dip
@@ -175,17 +169,31 @@ class ChunkEngine:
         ``norm``/``dip`` of the raw field, NaN when absent); return the finished rows."""
         if len(t) == 0:
             return None
-        cols = self._prepare(t, g, T, heading, norm, dip)
-        if self._buf is not None:
-            self._buf.append(cols)
-            if not cols[0][-1] - self._t_start >= 0:
-                return None
-            cols = tuple(_concat(c) for c in zip(*self._buf)) if len(self._buf) > 1 else self._buf[0]
-            self._buf = None
-            return self._initialise(*cols)
-        return self._run(*cols, i0=0, out=None)
+        n = len(t)
+        gap = _small_pages(np.empty(n, dtype=np.bool_))
+        Tp = _small_pages(np.empty(n))
+        # the output columns now when this chunk's rows come out of this call (all of them)
+        t_start = self._t_start if self._t0 is not None else float(t[0]) + self.cfg.init_s
+        whole = self._buf is None or (not self._buf and float(t[-1]) - t_start >= 0)
+        out = _alloc(n) if whole else None
+        helper = _populate_in_background([gap, Tp] + ([out[k] for k in _ROW_COLUMNS] if whole else []), n)
+        try:
+            cols = self._prepare(t, g, T, heading, norm, dip, gap, Tp)
+            if self._buf is not None:
+                self._buf.append(cols)
+                if not cols[0][-1] - self._t_start >= 0:
+                    return None
+                if len(self._buf) > 1:
+                    cols, out = tuple(_concat(c) for c in zip(*self._buf)), None
+                else:
+                    cols = self._buf[0]
+                self._buf = None
+                return self._initialise(*cols, out=out)
+            return self._run(*cols, i0=0, out=out)
+        finally:
+            _join(helper)
 
-    def _initialise(self, t, g, T, Tp, heading, gap, norm, dip) -> dict:
+    def _initialise(self, t, g, T, Tp, heading, gap, norm, dip, *, out: dict | None = None) -> dict:
         C = importlib.import_module("gyrodrift.compensate")  # the module; the package exports a function of that name
         K, cfg = self.K, self.cfg
         e = int(np.searchsorted(t, self._t_start, "left"))  # first row with t >= t_start (t increases)
@@ -196,7 +204,8 @@ class ChunkEngine:
         self._field_ref = None if norm is None else C._field_reference(norm[sl], dip[sl])
         bias, rate, I_raw, I_T, I_Tp, I_bias, I_rate, carry = C._rows(None, t[sl], g[sl], T[sl], Tp[sl], self.est.drift)
         self._accepted_init = [(tt, m) for tt, m in aid.accepted]
-        out = _alloc(t.size)
+        if out is None:
+            out = _alloc(t.size)
         out["bias_z"][sl] = bias
         out["rate_z"][sl] = rate
         anchor = float(heading[anchor_row] - I_rate[anchor_row])
@@ -277,11 +286,7 @@ class ChunkEngine:
             field = gating.field_anomaly(norm, dip, *self._field_ref, self.cfg.gate)
         else:
             field = np.zeros(t.size, dtype=bool)
-        helper = _populate_in_background([out[k] for k in _ROW_COLUMNS], i0, t.size)  # while the loop runs
-        try:
-            self._loop(t, g, T, Tp, heading, gap, field, i0, out)
-        finally:
-            _join(helper)
+        self._loop(t, g, T, Tp, heading, gap, field, i0, out)
         out["t"] = t
         out["temp_rate"] = Tp
         out["compass_heading"] = heading
@@ -439,19 +444,22 @@ def _small_pages(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def _populate_in_background(columns, row0: int, n: int):
-    """Fault in rows ``row0:n`` of the fresh 1-d ``columns`` in a helper thread, in row order
-    across the columns; returns the thread (for :func:`_join`), or None when they are small
-    or the system cannot (the loop then faults the pages in itself)."""
+def _populate_in_background(columns, n: int):
+    """Fault in the ``n`` rows of the fresh 1-d ``columns`` in a helper thread, in the order the
+    kernels write them: the gap flags and T' (the first two, written by the checks and the T'
+    kernel in turn), then the output columns in row order; returns the thread (for
+    :func:`_join`), or None when they are small or the system cannot (the kernels then fault
+    the pages in themselves)."""
     if sum(c.nbytes for c in columns) < _POPULATE_MIN_BYTES or not _load_madvise():
         return None
 
     def populate(columns=columns):  # holds the columns until done
-        for lo in range(row0, n, _POPULATE_ROWS):
-            hi = min(lo + _POPULATE_ROWS, n)
-            for c in columns:
-                if _madvise(*_span(c, lo, hi), _MADV_POPULATE_WRITE) != 0:
-                    return  # not supported (Linux < 5.14): the loop faults the pages in itself
+        for group in (columns[:2], columns[2:]):
+            for lo in range(0, n, _POPULATE_ROWS):
+                hi = min(lo + _POPULATE_ROWS, n)
+                for c in group:
+                    if _madvise(*_span(c, lo, hi), _MADV_POPULATE_WRITE) != 0:
+                        return  # not supported (Linux < 5.14): the kernels fault the pages in themselves
 
     helper = threading.Thread(target=populate, name="gyrodrift-pages", daemon=True)
     helper.start()
