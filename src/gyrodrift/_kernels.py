@@ -509,14 +509,14 @@ def compensate_kernel(
 def _fill_params(out_a, out_b, out_c, out_unobs, lo, hi, pa, pb, pc, unobs):
     """The parameters in force and the unobservable code of rows ``lo:hi`` (constant
     through an interval: written at its end, each column in one pass)."""
+    for j in range(lo, hi):  # unsigned indices: plain vector stores (signed ones vectorise as scatters)
+        out_a[np.uint64(j)] = pa
     for j in range(lo, hi):
-        out_a[j] = pa
+        out_b[np.uint64(j)] = pb
     for j in range(lo, hi):
-        out_b[j] = pb
+        out_c[np.uint64(j)] = pc
     for j in range(lo, hi):
-        out_c[j] = pc
-    for j in range(lo, hi):
-        out_unobs[j] = unobs
+        out_unobs[np.uint64(j)] = unobs
 
 
 @njit(cache=True, nogil=True)
