@@ -40,8 +40,8 @@ __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
 #: Rows per chunk of the streaming path: small enough to overlap reading, compensating and writing and to bound memory.
 CHUNK_ROWS = 250_000
-#: Chunks the reader thread reads ahead of the compensation: it reads on while numba loads the
-#: compiled kernels (about 0.7 s, mostly holding the GIL), so the second core is not idle then.
+#: Chunks the reader thread reads ahead of the compensation: it reads on while numba starts,
+#: so the second core is not idle then.
 READ_AHEAD = 4
 
 
@@ -377,20 +377,6 @@ class _Behind:
             raise self.error
 
 
-def _warm_up(cfg: CompensatorConfig) -> None:
-    """Load the compiled kernels (numba's start-up, about 1 s) on a tiny log, so that the
-    first chunk does not wait for them; runs while the first chunk is read."""
-    from gyrodrift._engine import ChunkEngine
-
-    t = np.arange(0.0, cfg.init_s + 2.0 * cfg.update_interval_s, 0.5)
-    heading = np.full(t.size, 10.0)
-    try:
-        engine = ChunkEngine(cfg, build_estimator(cfg), "warm-up")
-        engine.feed(t, np.zeros(t.size), np.full(t.size, 20.0), heading, None, None)
-    except Exception:  # noqa: BLE001 - only a warm-up; the real run reports any problem
-        pass
-
-
 #: Columns of :func:`gyrodrift.scale_factor.estimate_scale_factor` added by ``scale_factor=True``.
 SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
 
@@ -428,12 +414,9 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
-    warm = threading.Thread(target=_warm_up, args=(cfg,), name="gyrodrift-warm-up", daemon=True)
-    warm.start()
     source = str(input_path)
     stats = RunStats(source, streamed=True)
     est = build_estimator(cfg)
-    engine = ChunkEngine(cfg, est, source)
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
@@ -445,6 +428,10 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
         reader = _Ahead(chunks, depth=READ_AHEAD)
         behind = _Behind(writer.write)
         try:
+            # numba's start-up (importing it, loading the compiled kernels from its cache:
+            # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
+            # the reader thread reads the first chunks
+            engine = ChunkEngine(cfg, est, source)
             for log in reader:
                 has_mag = check_input_columns(log, source)
                 n = len(log)
@@ -456,7 +443,6 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 else:
                     heading, norm, dip = heading_in, None, None
                 pending.append(log)
-                warm.join()
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
                                    heading, norm, dip)
                 if cols is None:
@@ -474,10 +460,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             engine.finish()
         finally:
             reader.close()
-            try:
-                behind.close()
-            finally:
-                warm.join()
+            behind.close()
         stats.compass = chunks.compass or "?"
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats
