@@ -548,7 +548,7 @@ def _apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: _Sou
                     src.name,
                     f"column map {new}={old}: there is no column {old!r};"
                     f" columns found: {_show_names(found)}",
-                    "fix the --map NEW=OLD option",
+                    "fix the --map NEW=OLD option (column_map in Python)",
                 )
             )
     renamed = [next((n for n, o in column_map.items() if o == c), c) for c in found]
@@ -572,7 +572,8 @@ def _check_required_columns(frame: pd.DataFrame, src: _Source) -> None:
             src,
             f"missing required column(s) {_show_names(missing)};"
             f" columns found: {_show_names(frame.columns)}",
-            "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz)",
+            "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz;"
+            " column_map={'gyro_z': 'gz'} in Python)",
         )
 
 
@@ -589,7 +590,7 @@ def _check_compass_columns(frame: pd.DataFrame, src: _Source) -> None:
         src,
         f"no compass data: need a {HEADING!r} column or all of {', '.join(_MAG_FORM_COLS)}{detail};"
         f" columns found: {_show_names(frame.columns)}",
-        "add the compass columns or rename them with --map NEW=OLD",
+        "add the compass columns or rename them with --map NEW=OLD (column_map in Python)",
     )
 
 
@@ -733,7 +734,7 @@ def _check_required_values(first: Mapping[str, int | None], src: _Source) -> Non
             raise _format_error(
                 src,
                 f"required column {col!r} is empty in every row",
-                "check the file, or map the right input column with --map NEW=OLD",
+                "check the file, or map the right input column with --map NEW=OLD (column_map in Python)",
             )
     for col in (GYRO_Z, TEMP):
         pos = first[col]
@@ -788,7 +789,7 @@ def _check_temperature(frame: pd.DataFrame, src: _Source) -> None:
             src,
             f"temperature {float(temp_c[pos])!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
             "check the unit and the column (Kelvin? raw sensor counts?)"
-            " and map the right one with --map NEW=OLD",
+            " and map the right one with --map NEW=OLD (column_map in Python)",
             where=_cell_label(src, pos, TEMP),
         )
 
@@ -817,7 +818,7 @@ def _compass_form(columns, with_values: frozenset[str], src: _Source) -> str:
     raise _format_error(
         src,
         f"the compass column(s) hold no values (empty in every row: {', '.join(empty)})",
-        "give a log with compass samples, or map the right columns with --map NEW=OLD",
+        "give a log with compass samples, or map the right columns with --map NEW=OLD (column_map in Python)",
     )
 
 
