@@ -100,3 +100,53 @@ def test_scale_factor_columns_run_in_memory(tmp_path):
     assert any(line.startswith("heading_sf error") for line in stats.result_lines())
     with pytest.raises(ConfigError, match="scale-factor"):
         compensate_file(tmp_path / "sf.csv", tmp_path / "o2.csv", scale_factor=True, stream=True)
+
+
+def _late_type_change_log(n: int = 40_000, *, late_text_in_numbers: bool = False) -> pd.DataFrame:
+    """A log past the reader's first 1-MiB block, with two pass-through columns whose cells
+    change type after it: ``flag`` empty, then text; ``count`` whole numbers, then a fraction
+    (and, if asked, then text)."""
+    log = synthetic_log(duration_s=n / 10.0, gyro_noise_dps=0.05, compass_noise_deg=0.3, seed=3)
+    log = log[["t", "gyro_z", "temp", "heading"]].copy()
+    m = len(log)
+    flag = np.full(m, "", dtype=object)
+    flag[int(0.9 * m):] = "late text"
+    count = np.array([str(k % 5) for k in range(m)], dtype=object)
+    count[int(0.5 * m)] = "2.5"
+    if late_text_in_numbers:
+        count[int(0.97 * m)] = "many"
+    log["flag"], log["count"] = flag, count
+    return log
+
+
+def test_a_column_that_changes_type_late_is_read_again_with_its_type(tmp_path):
+    src = tmp_path / "late.csv"
+    _late_type_change_log().to_csv(src, index=False)
+    assert src.stat().st_size > 2 * (1 << 20)  # both changes after the first block
+    before = src.read_bytes()
+    for suffix in ("csv", "parquet"):
+        whole, parts = tmp_path / f"whole.{suffix}", tmp_path / f"parts.{suffix}"
+        s_whole = compensate_file(src, whole, stream=False)
+        s_parts = compensate_file(src, parts, stream=True, chunk_rows=5000)
+        if suffix == "csv":
+            assert parts.read_bytes() == whole.read_bytes()
+        else:
+            pd.testing.assert_frame_equal(pd.read_parquet(parts), pd.read_parquet(whole), check_dtype=False)
+        assert s_parts.streamed and not s_whole.notes
+        notes = "\n".join(s_parts.notes)
+        assert "'flag' read as text" in notes and "'count' read as numbers" in notes
+        assert [line for line in s_parts.result_lines() if line.startswith("note: ")] == [f"note: {n}" for n in s_parts.notes]
+    assert src.read_bytes() == before
+    assert pd.read_csv(tmp_path / "parts.csv", dtype=str)["flag"].iloc[-1] == "late text"
+
+
+def test_a_number_column_that_later_holds_text_is_read_as_text(tmp_path):
+    src = tmp_path / "late.csv"
+    _late_type_change_log(late_text_in_numbers=True).to_csv(src, index=False)
+    whole, parts = tmp_path / "whole.csv", tmp_path / "parts.csv"
+    compensate_file(src, whole, stream=False)
+    stats = compensate_file(src, parts, stream=True, chunk_rows=5000)  # read 3 times: 'count' numbers, then text
+    assert parts.read_bytes() == whole.read_bytes()
+    assert any("'count' read as text" in n and "'many'" in n for n in stats.notes)
+    assert not any("'count' read as numbers" in n for n in stats.notes)
+    assert "many" in set(pd.read_csv(parts, dtype=str)["count"])

@@ -1326,5 +1326,5 @@ def append_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:
         if col in (T, HEADING):
             continue
         name = col if col not in out.columns else f"in_{col}"
-        out[name] = log[col].to_numpy()
+        out[name] = log[col].array  # by position; keeps the column's type (a text column of empty cells stays text)
     return out

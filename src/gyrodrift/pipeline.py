@@ -63,6 +63,8 @@ class RunStats:
     final_cov: np.ndarray | None = None
     estimator: str = ""
     streamed: bool = False
+    #: Things the run had to do that the user may want to know (e.g. a column read again with another type).
+    notes: list = field(default_factory=list)
     # accuracy accumulators (sum of squares, max |error|, count)
     _heading: list = field(default_factory=lambda: [0.0, 0.0, 0, 0.0, 0.0])  # raw ss, ss, n, raw max, max
     _bias: list = field(default_factory=lambda: [0.0, 0.0, 0])  # raw ss, ss, n
@@ -144,6 +146,7 @@ class RunStats:
         ) or "never"
         a, b, c = (float(v) for v in self.final_params)
         lines = [
+            *(f"note: {n}" for n in self.notes),
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
             f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
         ]
@@ -400,15 +403,40 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
     # (pyarrow and the kernels release it): with Python's default 5-ms switch interval a
     # thread coming back from C code waits for the GIL; the 10-million-row Parquet run took
     # 7.2 s instead of 5.1 s (measured with the interval at 5 and 0.2 ms). Restored on return.
+    from gyrodrift.io.chunked import ColumnTypeChanged
+
     switch = sys.getswitchinterval()
     sys.setswitchinterval(min(switch, 0.0005))
+    # A pass-through CSV column whose cells change type after the first block (empty, then
+    # text; whole numbers, then a fraction) stops the read at that row. The run starts over
+    # with that column's type given (numbers, or text when its cell is not a number or a
+    # column given as numbers fails again), at most twice per column; nothing was written
+    # yet (the output appears atomically at the end).
+    column_types: dict[str, str] = {}
+    notes: dict[str, str] = {}  # column -> what was done, the last word on it
     try:
-        return _stream_threads(input_path, output_path, cfg, opts, chunk_rows)
+        while True:
+            try:
+                stats = _stream_threads(input_path, output_path, cfg, opts, chunk_rows, column_types)
+            except ColumnTypeChanged as exc:
+                pinned = column_types.get(exc.column)
+                if pinned == "string":
+                    raise
+                kind = "string" if pinned == "float64" else exc.suggested_type  # numbers, then text: text
+                column_types[exc.column] = kind
+                notes[exc.column] = (
+                    f"column {exc.column!r} read as {'numbers' if kind == 'float64' else 'text'}: its cells change "
+                    f"type after the start of the file ({exc.value!r}); the file was read again"
+                )
+                continue
+            stats.notes = list(notes.values())
+            return stats
     finally:
         sys.setswitchinterval(switch)
 
 
-def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
+def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
+                    column_types: dict[str, str]) -> RunStats:
     from gyrodrift._engine import ChunkEngine
     from gyrodrift.compensate import _compass_arrays, _fast_frame
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
@@ -423,7 +451,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
     # (gathered into bigger groups, it idled and then held up the compute thread, and
     # the last group was encoded after the compute had finished).
-    with iter_log_chunks(input_path, chunk_rows=chunk_rows, **table_opts) as chunks, \
+    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks, \
             ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
         reader = _Ahead(chunks, depth=READ_AHEAD)
         behind = _Behind(writer.write)

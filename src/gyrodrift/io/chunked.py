@@ -24,8 +24,10 @@ What a chunked reader cannot know in advance, and what it does about it:
   columns): ``read_log`` lets pyarrow infer them from the whole file; the chunked
   reader infers them from the first ``block_size_bytes`` (1 MiB) of the file. A later value
   that does not fit (an integer column holding ``1.5`` on line 3 000 000, or a column
-  empty at the start) raises :class:`~gyrodrift.errors.LogFormatError` naming the line
-  and column and asking for the ``column_types`` option; with it the chunks equal
+  empty at the start) raises :class:`ColumnTypeChanged` (a
+  :class:`~gyrodrift.errors.LogFormatError`) naming the line and column and asking for
+  the ``column_types`` option (:func:`gyrodrift.pipeline.compensate_file` reads the file
+  again with the type it suggests, and says so); with it the chunks equal
   ``read_log`` whenever the type given is the one pyarrow infers from the whole file.
   An integer column with empty cells only in later chunks comes out int64 in the
   first chunks and float64 in the others (``pd.concat`` gives ``read_log``'s float64);
@@ -68,7 +70,34 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import tabular
 from gyrodrift.io.tabular import _Source
 
-__all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary"]
+__all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary", "ColumnTypeChanged"]
+
+
+class ColumnTypeChanged(LogFormatError):
+    """A cell of a pass-through CSV column does not fit the type the first block gave it.
+
+    Attributes
+    ----------
+    column : str
+        The column's name (after the column map).
+    value : str
+        The cell's text.
+    suggested_type : str
+        ``"float64"`` when the cell is a number (a column of whole numbers that turns
+        out to have fractions), else ``"string"``: a ``column_types`` entry that reads
+        the whole column.
+    """
+
+    def __init__(self, message: str, column: str, value: str):
+        super().__init__(message)
+        self.column = column
+        self.value = value
+        try:
+            float(value)
+            self.suggested_type = "float64"
+        except ValueError:
+            self.suggested_type = "string"
+
 
 #: Bytes pyarrow reads from a CSV at a time; the types of pass-through columns are
 #: inferred from the first block.
@@ -275,13 +304,14 @@ class _CsvBatches:
             return tabular._csv_parse_error(self.src, exc)
         name = self._names[int(found["col"])].strip()
         name = next((new for new, old in self._renames.items() if old == name), name)
-        return tabular._format_error(
+        plain = tabular._format_error(
             self.src,
             f"{tabular._show_text(found['value'])} does not fit the type {found['type']} that the first"
             f" {self._block_size} bytes of the file gave this column (a file read in chunks cannot look ahead)",
             f"give the column's type with the column_types option, e.g. column_types={{{name!r}: 'string'}}",
             where=f"line {self.src.line_of(int(found['row']))}, column {name!r}",
         )
+        return ColumnTypeChanged(str(plain), name, str(found["value"]))
 
     def _other_column_failed(self, exc: pa.ArrowInvalid) -> bool:
         """True if pyarrow names a cell of a column that is not a number column."""
