@@ -53,3 +53,33 @@ def test_bad_toml_file_names_the_file(tmp_path, capsys):
         load_config(path)
     assert main(["demo", "--config", str(path), "-o", str(tmp_path / "o.csv")]) == 2
     assert "bad.toml" in capsys.readouterr().err
+
+
+def test_fused_heading_settings_suit_the_estimator():
+    from dataclasses import replace
+
+    from gyrodrift.compensate import CompensatorConfig
+    from gyrodrift.fusion import FusionConfig
+
+    assert CompensatorConfig().fusion is None
+    assert CompensatorConfig().fusion_settings == FusionConfig()  # (B) for adaptive
+    for name in ("stkf", "kf", "lsm"):
+        assert CompensatorConfig(estimator=name).fusion_settings == FusionConfig.tolerant()  # (A)
+        assert replace(CompensatorConfig(), estimator=name).fusion_settings == FusionConfig.tolerant()
+    explicit = FusionConfig(nis_gate=4.0)
+    assert CompensatorConfig(estimator="stkf", fusion=explicit).fusion_settings is explicit
+    with pytest.raises(ConfigError, match="fusion must be a FusionConfig"):
+        CompensatorConfig(fusion={"nis_gate": 4.0})
+
+
+def test_toml_fusion_table_changes_the_settings_that_suit_the_estimator(tmp_path):
+    from gyrodrift.fusion import FusionConfig
+
+    path = tmp_path / "a.toml"
+    path.write_text('estimator = "stkf"\n[fusion]\nnis_gate = 4.0\n')
+    assert load_config(path).fusion_settings == FusionConfig.tolerant(nis_gate=4.0)
+    path.write_text("[fusion]\nnis_gate = 4.0\n")
+    assert load_config(path).fusion_settings == FusionConfig(nis_gate=4.0)
+    path.write_text('estimator = "nope"\n[fusion]\nnis_gate = 4.0\n')
+    with pytest.raises(ConfigError, match="nope"):
+        load_config(path)

@@ -120,3 +120,33 @@ def test_a_compass_refused_for_relock_s_is_taken_again():
     assert abs(h[int(120 / 0.1)] - 50.0) < 0.5  # still refusing 20 s after the step
     assert abs(h[int(131 / 0.1)] - 70.0) < 1e-6  # re-anchored at 130 s
     assert abs(h[-1] - 70.0) < 1e-6
+
+
+@pytest.mark.parametrize("engine", ["reference", "fast"])
+def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default(engine):
+    """Without a ``fusion`` setting, ``stkf`` runs the fused heading with (A), ``adaptive`` with (B):
+    every engine and the streaming compensator read ``CompensatorConfig.fusion_settings``."""
+    from dataclasses import replace
+
+    from gyrodrift.compensate import Compensator, CompensatorConfig
+    from test_compensate import complex_log
+
+    if engine == "fast":
+        pytest.importorskip("numba")
+    log = complex_log(False)  # interference for 2 min, a compass outage, turns
+    stkf = CompensatorConfig(estimator="stkf")
+
+    def fused(cfg):
+        return compensate(log, cfg, engine=engine)["heading_fused"].to_numpy()
+
+    auto = fused(stkf)
+    assert np.array_equal(auto, fused(replace(stkf, fusion=FusionConfig.tolerant())), equal_nan=True)
+    assert not np.allclose(auto, fused(replace(stkf, fusion=FusionConfig())), equal_nan=True)  # it matters here
+    assert np.array_equal(fused(CompensatorConfig()), fused(CompensatorConfig(fusion=FusionConfig())), equal_nan=True)
+    if engine == "reference":  # the streaming compensator, on the first 6 minutes
+        part = log[log["t"] < 360.0]
+        comp = Compensator(stkf)
+        rows = [r for t, g, T, h in part[["t", "gyro_z", "temp", "heading"]].itertuples(index=False)
+                for r in comp.push(t, g, T, heading_deg=h)]
+        want = compensate(part, stkf, engine="reference")["heading_fused"].to_numpy()
+        assert np.array_equal(np.array([r.heading_fused for r in rows]), want, equal_nan=True)

@@ -126,7 +126,7 @@ class ChunkEngine:
         self._aid = None
         from gyrodrift.fusion import FusionState
 
-        self._fusion = FusionState(config.fusion, config.gyro_noise_dps_rthz)
+        self._fusion = FusionState(config.fusion_settings, config.gyro_noise_dps_rthz)
 
     # ------------------------------------------------------------------ input
     def _prepare(self, t, g, T, heading, norm, dip, gap, Tp):
@@ -216,7 +216,7 @@ class ChunkEngine:
         out["unobs"][sl] = C.UNOBSERVABLE.index(aid.unobservable)
         out["bias_sd"][sl] = C._bias_sd(aid.cov, T[sl], Tp[sl])
         # the fused heading of the init rows (the kernel continues from this state)
-        allowed = C.fusion_allowed(out["reason"][sl], cfg.fusion)
+        allowed = C.fusion_allowed(out["reason"][sl], cfg.fusion_settings)
         out["heading_fused"][sl], out["heading_fused_sd"][sl], out["heading_sd"][sl] = self._fusion.rows(
             t[sl], rate, heading[sl], allowed, out["bias_sd"][sl]
         )
@@ -302,7 +302,7 @@ class ChunkEngine:
                 self._active, self._stack, self._refused, self._lb, self._win, self._ak, self._Cabs,
                 out["bias_z"], out["rate_z"], out["heading"], out["a"], out["b"], out["c"], out["update"], out["reason"],
                 out["bias_sd"], out["unobs"], self._acc,
-                self._fusion.st, self._fusion.cfg, bool(self.cfg.fusion.magnetic_gates),
+                self._fusion.st, self._fusion.cfg, bool(self.cfg.fusion_settings.magnetic_gates),
                 out["heading_fused"], out["heading_fused_sd"], out["heading_sd"],
             )
             if i >= t.size:

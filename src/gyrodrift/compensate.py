@@ -106,8 +106,9 @@ class CompensatorConfig:
         How T' is computed (see :mod:`gyrodrift.model`).
     gate : GateConfig
         Thresholds of the aiding gates (see :mod:`gyrodrift.gating`).
-    fusion : FusionConfig
-        The fused heading (``heading_fused``; see :mod:`gyrodrift.fusion`).
+    fusion : FusionConfig or None
+        The fused heading (``heading_fused``; see :mod:`gyrodrift.fusion`). None
+        (default): the settings that suit ``estimator`` (:attr:`fusion_settings`).
     adaptive : AdaptiveConfig
         Settings of the ``adaptive`` estimator, each fix of issue 6 switchable
         (:class:`gyrodrift.estimators.AdaptiveConfig`); used only when ``estimator`` is
@@ -124,8 +125,24 @@ class CompensatorConfig:
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     temp_rate: TempRateConfig = field(default_factory=TempRateConfig)
     gate: GateConfig = field(default_factory=GateConfig)
-    fusion: FusionConfig = field(default_factory=FusionConfig)
+    fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
+
+    @property
+    def fusion_settings(self) -> FusionConfig:
+        """The fused-heading settings in force: ``fusion`` when given, else those that suit the
+        estimator. ``adaptive``: :class:`FusionConfig` defaults (B), which trust its
+        interference refusals. Every other estimator: :meth:`FusionConfig.tolerant` (A),
+        which re-anchors on the compass after 60 s of refusals. The paper's filter refuses
+        for good once its gate locks out; with (B) the fused heading then follows the gyro
+        alone. Measured on 10 seeds per Monte Carlo family (mean heading_fused RMS, deg):
+        soak ``stkf`` 23.1 with (B) against 8.1 with (A), ``kf`` 41.5 against 8.9; vehicle
+        ``stkf`` 1.11 against 1.35; the other four families within 0.05. ``adaptive``: soak
+        2.05 with (B) against 6.20 with (A), vehicle 1.08 against 1.27.
+        """
+        if self.fusion is not None:
+            return self.fusion
+        return FusionConfig() if self.estimator == "adaptive" else FusionConfig.tolerant()
 
     def __post_init__(self):
         for name in ("update_interval_s", "init_s", "compass_sigma_deg", "gyro_noise_dps_rthz"):
@@ -140,6 +157,8 @@ class CompensatorConfig:
             raise ConfigError(f"init_s={self.init_s} s is too short for {self.stack_depth} sub-windows")
         if not isinstance(self.adaptive, AdaptiveConfig):
             raise ConfigError(f"adaptive must be an AdaptiveConfig, got {type(self.adaptive).__name__}")
+        if self.fusion is not None and not isinstance(self.fusion, FusionConfig):
+            raise ConfigError(f"fusion must be a FusionConfig or None, got {type(self.fusion).__name__}")
         try:
             build_estimator(self)  # validates the name
         except TypeError:
@@ -715,8 +734,8 @@ class Compensator:
         self._anchor = 0.0  # heading = anchor + I_rate
         self._lookback: deque[tuple[float, float]] = deque()
         self._t_start: float | None = None
-        self._fusion = FusionState(self.config.fusion, self.config.gyro_noise_dps_rthz)
-        self._fusion_refused = fusion_refused(self.config.fusion)
+        self._fusion = FusionState(self.config.fusion_settings, self.config.gyro_noise_dps_rthz)
+        self._fusion_refused = fusion_refused(self.config.fusion_settings)
         self._triad = None  # TriadCompensator once the first sample brought gyro_x, gyro_y, acc
         self._triad_started = False
         self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
@@ -1129,8 +1148,8 @@ def compensate_arrays(
             update[b], reason[b] = aid.close(snap_at(b), float(t[b]))
 
     reason_code = pd.Categorical(reason, categories=gating.REASONS).codes
-    fused = FusionState(cfg.fusion, cfg.gyro_noise_dps_rthz).rows(
-        t, out_rate, heading, fusion_allowed(reason_code, cfg.fusion), out_bias_sd
+    fused = FusionState(cfg.fusion_settings, cfg.gyro_noise_dps_rthz).rows(
+        t, out_rate, heading, fusion_allowed(reason_code, cfg.fusion_settings), out_bias_sd
     )
     out = _output_frame(
         t, out_rate, out_bias, wrap_360(anchor + out_I_rate), tuple(out_params.T), update, reason_code, Tp, heading,

@@ -5,7 +5,8 @@ the tables ``[kalman]``, ``[gate]``, ``[temp_rate]``, ``[adaptive]`` and ``[fusi
 hold the fields of :class:`~gyrodrift.estimators.KalmanConfig`,
 :class:`~gyrodrift.gating.GateConfig`, :class:`~gyrodrift.model.TempRateConfig`,
 :class:`~gyrodrift.estimators.AdaptiveConfig` and :class:`~gyrodrift.fusion.FusionConfig`.
-Anything left out keeps its default::
+Anything left out keeps its default; a ``[fusion]`` table changes the fused-heading
+settings that suit the estimator (``CompensatorConfig.fusion_settings``)::
 
     update_interval_s = 10.0
     init_s = 30.0
@@ -66,7 +67,11 @@ def config_from_dict(values: dict, *, where: str = "config", base: CompensatorCo
         if name in values:
             if not isinstance(values[name], dict):
                 raise ConfigError(f"{where}: [{name}] must be a table of settings")
-            nested[name] = apply_settings(getattr(base, name), values[name], f"{where} [{name}]")
+            if name == "fusion":  # settings given change those that suit the estimator chosen
+                start = apply_settings(base, {k: v for k, v in top.items() if k == "estimator"}, where).fusion_settings
+            else:
+                start = getattr(base, name)
+            nested[name] = apply_settings(start, values[name], f"{where} [{name}]")
     return apply_settings(base, {**top, **nested}, where)
 
 

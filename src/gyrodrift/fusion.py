@@ -99,7 +99,8 @@ class FusionConfig:
     def tolerant(cls, **overrides) -> "FusionConfig":
         """Settings (A): the compensator's interference refusals ignored, re-anchoring on
         the compass after 60 s of refusals, τ_b = 300 s. For estimators whose refusals
-        cannot be trusted (``stkf`` and the other baselines)."""
+        cannot be trusted (``stkf`` and the other baselines): what
+        ``CompensatorConfig.fusion_settings`` gives them when ``fusion`` is not set."""
         settings = {"bias_corr_s": 300.0, "relock_s": 60.0, "magnetic_gates": False}
         settings.update(overrides)
         return cls(**settings)

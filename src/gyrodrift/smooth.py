@@ -303,6 +303,6 @@ def _heading_sd(out: pd.DataFrame, t: np.ndarray, bias_sd: np.ndarray, config) -
     i0 = int(np.argmax(started))
     tt = t[i0:]
     integral = _cumtrapz(bias_sd[i0:], tt)
-    var = (config.fusion.heading_sigma_deg**2 + config.gyro_noise_dps_rthz**2 * (tt - tt[0]) + integral**2)
+    var = (config.fusion_settings.heading_sigma_deg**2 + config.gyro_noise_dps_rthz**2 * (tt - tt[0]) + integral**2)
     sd[i0:] = np.sqrt(var)
     return sd
