@@ -244,3 +244,68 @@ def test_a_still_unit_whose_compass_moved_keeps_the_compass_from_the_fused_headi
     rows = flagged[1:] & np.isfinite(step)
     assert rows.sum() > 100
     np.testing.assert_allclose((step[rows] - expected[rows] + 180.0) % 360.0 - 180.0, 0.0, atol=1e-9)
+
+
+def _quadratic_truth(T):
+    """A curved drift: 0.1 + 0.01 (T − 25) + 5e-4 (T − 25)² deg/s."""
+    return 0.1 + 0.01 * (T - 25.0) + 5e-4 * (T - 25.0) ** 2
+
+
+def _full_model(est, T):
+    """The quadratic filter's own drift at T (T' = 0), from its four states."""
+    a, _, c_ref, a2 = est._z
+    d = np.asarray(T, dtype=float) - est.temp_ref_c
+    return c_ref + a * d + a2 * d * d
+
+
+def test_quadratic_term_learns_a_curved_drift_the_linear_model_cannot_follow():
+    quiet = dict(slope_q_per_rtc=0.0, fading=False, q_sd=(0.0, 0.0, 0.0), zaru=False, outage_memory=False)
+    quad = AdaptiveKalman(settings=AdaptiveConfig(quadratic=True, a2_sd=(1e-2, 0.0), **quiet))
+    lin = AdaptiveKalman(settings=AdaptiveConfig(**quiet))
+    temps = 20.0 + 0.1 * np.arange(301)  # a ramp 20 -> 50 degC, one measurement per 0.1 degC
+    for T in temps[:-1]:
+        H = np.array([[T, 0.0, 1.0]])
+        for est in (quad, lin):
+            est.update(obs(H, np.array([_quadratic_truth(T)]), r=1e-10))
+    assert quad._z[3] == pytest.approx(5e-4, rel=1e-3)  # the curvature, deg/s/degC²
+    T_next = temps[-1]
+    assert float(quad.drift(np.array([T_next]), np.zeros(1))[0]) == pytest.approx(_quadratic_truth(T_next), abs=1e-5)
+    linear_miss = abs(float(lin.drift(np.array([T_next]), np.zeros(1))[0]) - _quadratic_truth(T_next))
+    assert linear_miss > 0.01  # one a over the whole ramp: off by more than 0.01 deg/s at its end
+    # the reported a, b, c are the tangent at T_ref: slope a + 2 a2 (T_ref − 25)
+    assert quad.params[0] == pytest.approx(0.01 + 2 * 5e-4 * (quad.temp_ref_c - 25.0), rel=1e-3)
+    assert quad.cov.shape == (3, 3) and quad.centred_cov.shape == (4, 4)
+
+
+def test_quadratic_recentring_keeps_the_drift_model():
+    est = AdaptiveKalman(settings=AdaptiveConfig(quadratic=True))
+    for T in (30.0, 32.0, 35.0, 36.0):
+        est.update(obs(np.array([[T, 0.0, 1.0]]), np.array([_quadratic_truth(T)]), r=1e-4))
+    T = np.array([20.0, 35.0, 60.0])
+    before, P_before = _full_model(est, T), est.centred_cov
+    est._recentre(50.0)
+    np.testing.assert_allclose(_full_model(est, T), before, rtol=1e-12)
+    assert est.temp_ref_c == 50.0
+    assert np.all(np.linalg.eigvalsh(est.centred_cov) > 0) and not np.allclose(est.centred_cov, P_before)
+
+
+def test_quadratic_option_runs_on_the_reference_engine_and_streams_alike():
+    from gyrodrift import _engine
+    from gyrodrift.compensate import build_estimator
+
+    cfg = CompensatorConfig(adaptive=AdaptiveConfig(quadratic=True))
+    assert not _engine.supports(cfg, build_estimator(cfg))
+    assert _engine.supports(CompensatorConfig(), build_estimator(CompensatorConfig()))
+    log = synthetic_log(duration_s=1200.0, fs_hz=10.0, temp_c=lambda t: 20.0 + t / 60.0,
+                        drift_dps=lambda t, T: _quadratic_truth(T), gyro_noise_dps=0.02, compass_noise_deg=0.2, seed=4)
+    out = compensate(log, cfg)
+    assert_same(out, stream(log, cfg))
+    assert np.isfinite(out["bias_z"]).all()
+    err = out["bias_z"].to_numpy() - log["true_bias_z"].to_numpy()
+    assert np.sqrt(np.mean(err[log["t"].to_numpy() > 600.0] ** 2)) < 0.01
+
+
+@pytest.mark.parametrize("bad", [{"quadratic": 1}, {"a2_sd": (0.0, 1e-5)}, {"a2_sd": (1e-3, -1.0)}, {"a2_sd": (1e-3,)}])
+def test_quadratic_settings_are_validated(bad):
+    with pytest.raises(ConfigError, match="quadratic|a2_sd"):
+        AdaptiveConfig(**bad)

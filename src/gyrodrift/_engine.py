@@ -63,10 +63,13 @@ def supports(config, estimator) -> bool:
     family ``stkf``, ``stkf-s1``, ``kf`` and ``adaptive`` with any
     :class:`~gyrodrift.estimators.AdaptiveConfig` (every fix of issue 6 on or off:
     edge averaging, ZARU and its hold, recentring, slope random walk, normalised or
-    Zhou fading test, outage memory, one or stacked measurements).
+    Zhou fading test, outage memory, one or stacked measurements), except the quadratic
+    temperature term.
     """
     if config.measurement != "endpoints":
         return False
+    if getattr(getattr(estimator, "settings", None), "quadratic", False):
+        return False  # AdaptiveConfig.quadratic: a fourth state, in the reference engine only
     from gyrodrift.estimators.base import LinearDrift
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)

@@ -142,6 +142,17 @@ class AdaptiveConfig:
         changes with temperature, not with time: on a temperature plateau ``a`` keeps its
         memory (and through an outage on a ramp it is not made noisier by the length of
         the outage), while on a ramp it follows the local slope.
+    quadratic : bool
+        Fix 2, a higher-order temperature term (off by default): a fourth state ``a2``,
+        the drift's curvature in temperature (deg/s/degC²), so the filter's drift is
+        ``c' + a (T − T_ref) + a2 (T − T_ref)² + b T'``. Moving the reference by d
+        (``recentre``) carries it into the others (``c' += a d + a2 d²``, ``a += 2 a2 d``),
+        which is how it is learned. The parameters reported (``params``, the ``a, b, c``
+        columns, eq. 2) are the linear model tangent at ``T_ref``, which the drift of the
+        next interval uses. Not in the compiled engine: logs run on the reference engine.
+    a2_sd : tuple of 2 floats
+        Prior standard deviation of ``a2`` (deg/s/degC², also its cap) and its random
+        walk per update interval.
     outage_memory : bool
         Fix 2, well-posed extrapolation: a twin of the filter without the slope random
         walk (long memory of a and b) runs on the same measurements. Through refused
@@ -167,6 +178,8 @@ class AdaptiveConfig:
     q_sd: tuple[float, float, float] | None = (1e-4, 0.05, 5e-3)
     slope_q_per_rtc: float = 0.06
     outage_memory: bool = True
+    quadratic: bool = False
+    a2_sd: tuple[float, float] = (1e-3, 1e-5)
 
     def __post_init__(self):
         if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
@@ -190,6 +203,15 @@ class AdaptiveConfig:
                 ok = False
             if not ok:
                 raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
+        if not isinstance(self.quadratic, bool):
+            raise ConfigError(f"adaptive setting quadratic must be true or false, got {self.quadratic!r}")
+        try:
+            ok = len(self.a2_sd) == 2 and float(self.a2_sd[0]) > 0 and float(self.a2_sd[1]) >= 0 and all(
+                math.isfinite(float(e)) for e in self.a2_sd)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ConfigError(f"adaptive a2_sd must be a prior sd > 0 and a random walk >= 0, got {self.a2_sd!r}")
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
     FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "zaru_hold", "fading",
@@ -246,6 +268,12 @@ class AdaptiveKalman(LinearDrift):
         self._P, self._max_var, self._Q = config.matrices()
         if settings.q_sd is not None:
             self._Q = np.diag(np.square(np.array(settings.q_sd, dtype=float)))
+        if settings.quadratic:  # a fourth state a2, after [a, b, c']
+            prior_sd, walk_sd = (float(v) for v in settings.a2_sd)
+            self._z = np.append(self._z, 0.0)
+            self._P = _with_diagonal(self._P, prior_sd**2)
+            self._Q = _with_diagonal(self._Q, walk_sd**2)
+            self._max_var = np.append(self._max_var, prior_sd**2)
         self._V: np.ndarray | None = None
         self._last_temp_c: float | None = None
         self._last_h: tuple[float, float] | None = None
@@ -267,14 +295,15 @@ class AdaptiveKalman(LinearDrift):
         return self._own_params()
 
     def _own_params(self) -> np.ndarray:
-        a, b, c_ref = self._z
+        a, b, c_ref = self._z[:3]  # with ``quadratic``, the linear model tangent at T_ref
         t_ref = self.temp_ref_c or 0.0
         return np.array([a, b, c_ref - a * t_ref])
 
     @property
     def centred_cov(self) -> np.ndarray:
         """Covariance of the filter's own states [a, b, c'] (centred on ``temp_ref_c``): the
-        matrix the cap (``KalmanConfig.max_sd``, default the prior) bounds."""
+        matrix the cap (``KalmanConfig.max_sd``, default the prior) bounds; with
+        ``quadratic`` it has a fourth row and column, for ``a2``."""
         return self._P.copy()
 
     @property
@@ -282,21 +311,27 @@ class AdaptiveKalman(LinearDrift):
         """Covariance of the absolute [a, b, c] (transformed from the centred states)."""
         J = np.eye(3)
         J[2, 0] = -(self.temp_ref_c or 0.0)
-        return J @ self._P @ J.T
+        return J @ self._P[:3, :3] @ J.T
 
     def _centre(self, obs: Observation) -> np.ndarray:
         if self.temp_ref_c is None:
             self.temp_ref_c = float(np.mean(obs.H[:, 0]))
             a, b, c = self._x_abs0
-            self._z = np.array([a, b, c + a * self.temp_ref_c])
+            self._z[:3] = a, b, c + a * self.temp_ref_c
         H = obs.H.copy()
         H[:, 0] -= self.temp_ref_c
+        if self.settings.quadratic:  # the interval's mean (T - T_ref)², from its mean T
+            H = np.column_stack([H, H[:, 0] ** 2])
         return H
 
     def _recentre(self, temp_c: float) -> None:
         """Move the reference temperature to ``temp_c`` (the drift model is unchanged)."""
-        J = np.eye(3)
-        J[2, 0] = temp_c - self.temp_ref_c
+        d = temp_c - self.temp_ref_c
+        J = np.eye(self._z.size)
+        J[2, 0] = d
+        if self.settings.quadratic:
+            J[2, 3] = d * d  # c' += a d + a2 d²
+            J[0, 3] = 2.0 * d  # a += 2 a2 d
         self._z = J @ self._z
         self._P = J @ self._P @ J.T
         self.temp_ref_c = temp_c
@@ -349,7 +384,8 @@ class AdaptiveKalman(LinearDrift):
         return self.params
 
     def engine_state(self) -> dict:
-        """State and settings for the compiled engine (:mod:`gyrodrift._engine`): the whole
+        """State and settings for the compiled engine (not with ``quadratic``, which
+        :func:`gyrodrift._engine.supports` sends to the reference engine) (:mod:`gyrodrift._engine`): the whole
         filter (:mod:`gyrodrift._adaptive_kernels` mirrors :meth:`update` and :meth:`hold`),
         with the twin's under ``"twin"``."""
         s = self.settings
@@ -383,3 +419,12 @@ class AdaptiveKalman(LinearDrift):
             self._nis = deque((float(v) for v in state["nis"]), maxlen=self.settings.innovation_window)
         if state.get("twin") is not None and self._twin is not None:
             self._twin.set_engine_state(state["twin"])
+
+
+def _with_diagonal(M: np.ndarray, value: float) -> np.ndarray:
+    """``M`` bordered by one more row and column: zeros, and ``value`` on the diagonal."""
+    n = M.shape[0]
+    out = np.zeros((n + 1, n + 1))
+    out[:n, :n] = M
+    out[n, n] = value
+    return out
