@@ -328,3 +328,50 @@ def test_batch_pass_rejects_time_going_back():
             estimate_scale_factor(out, causal=causal)
     with pytest.raises(LogFormatError, match="no rows"):
         estimate_scale_factor(out.iloc[:0], causal=True)
+
+
+# ------------------------------------------------------------------ the Compensator
+
+
+def test_compensator_scale_factor_equals_batch():
+    from dataclasses import asdict
+
+    from gyrodrift.compensate import CompensatorConfig, Compensator
+
+    log = simulate("scale-factor", seed=1, duration_s=1500.0, fs_hz=10.0)
+    log.loc[log["t"].between(1074.0, 1074.3), "temp"] = np.nan  # held; a gap refusal before a turn
+    log.loc[log["t"].between(362.0, 365.0), "heading"] = np.nan  # a turn without compass
+    cfg, sf_cfg = CompensatorConfig(), ScaleFactorConfig()
+    batch = compensate(log, cfg, engine="reference")
+    sf = estimate_scale_factor(batch, sf_cfg, causal=True)
+
+    comp = Compensator(cfg, scale_factor=sf_cfg)
+    rows = []
+    for r in log.itertuples(index=False):
+        rows += comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading)
+    streamed = pd.DataFrame([asdict(s) for s in rows])
+    assert len(streamed) == len(batch)
+    for col in ("rate_z", "heading", "gate_reason", "compass_heading"):
+        np.testing.assert_array_equal(streamed[col], batch[col])
+    for col in ("sf", "sf_sd", "rate_sf", "heading_sf"):
+        assert np.array_equal(streamed[col].to_numpy(), sf[col].to_numpy(), equal_nan=True), col
+    turns = sf.attrs["turns"]
+    assert {"", "no_compass", "gap"} <= set(turns["reason"])
+    assert comp.scale_factor.n_updates == int(sf["sf_update"].sum()) >= 6
+    np.testing.assert_array_equal(comp.scale_factor.params, sf.attrs["final_params"])
+    assert streamed["sf"].nunique() > 100  # the SF moves with the temperature after updates
+
+
+def test_compensator_without_scale_factor_is_unchanged():
+    from dataclasses import asdict
+
+    from gyrodrift.compensate import CompensatedSample, CompensatorConfig, Compensator
+
+    comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
+    rows = []
+    for i in range(500):
+        rows += comp.push(i * 0.01, gyro_z_dps=0.2, temp_c=30.0, heading_deg=90.0)
+    assert comp.scale_factor is None
+    assert all(type(r) is CompensatedSample for r in rows)
+    assert math.isnan(rows[-1].sf) and math.isnan(rows[-1].heading_sf)
+    assert "sf" not in asdict(rows[-1])  # the columns of compensate(), as before

@@ -203,6 +203,15 @@ class CompensatedSample:
     bias_x: float = math.nan
     bias_y: float = math.nan
     tilt_gated: int = 0
+    #: Scale factor (Sec. 4.3): NaN here. A :class:`Compensator` given ``scale_factor`` returns
+    #: :class:`gyrodrift.scale_factor.CompensatedSFSample`, a subclass in which these four are
+    #: fields: SF in force (unitless), its standard deviation, ``rate_z / sf`` (deg/s) and the
+    #: SF-compensated heading (deg). Class attributes, not fields, so that ``asdict`` and
+    #: ``fields`` of a sample without a scale factor give the columns of :func:`compensate`.
+    sf = math.nan
+    sf_sd = math.nan
+    rate_sf = math.nan
+    heading_sf = math.nan
 
 
 # --------------------------------------------------------------------------- rows
@@ -710,6 +719,15 @@ class Compensator:
     100-Hz vehicle log (2-core machine): about 15 µs per sample for the heading axis alone,
     about 115 µs with the x and y axes (their compensator runs once per row).
 
+    With ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`), every row
+    also carries ``sf``, ``sf_sd``, ``rate_sf`` and ``heading_sf`` of the online scale-factor
+    estimate (Sec. 4.3, :class:`gyrodrift.scale_factor.ScaleFactorTracker`, fed each row
+    as it is output, with the held temperature): the same numbers as
+    ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
+    fields are NaN and no work is done for them. Measured on a simulated 100-Hz
+    ``scale-factor`` log, 100k pushes (2-core machine, busy): the tracker adds about 5 µs per
+    sample (11.3–13.0 µs against 6.8–12.0 µs without; the tracker alone 4.7–4.9 µs a row).
+
     Examples
     --------
     >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
@@ -720,7 +738,8 @@ class Compensator:
     (0.2, 90.0)
     """
 
-    def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream"):
+    def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
+                 scale_factor: "ScaleFactorConfig | None" = None):
         self.config = config or CompensatorConfig()
         self.source = source
         est = estimator if estimator is not None else build_estimator(self.config)
@@ -743,11 +762,23 @@ class Compensator:
 
         drift_owner = next((k for k in type(est).__mro__ if "drift" in k.__dict__), None)
         self._linear_drift = drift_owner is LinearDrift
+        self._sf = None  # ScaleFactorTracker when a scale factor was asked for
+        if scale_factor is not None:
+            from gyrodrift.scale_factor import CompensatedSFSample, ScaleFactorTracker
+
+            self._sf = ScaleFactorTracker(scale_factor, source=source)
+            self._sf_sample = CompensatedSFSample
 
     # -- public state
     @property
     def initialised(self) -> bool:
         return self._carry is not None
+
+    @property
+    def scale_factor(self):
+        """The :class:`gyrodrift.scale_factor.ScaleFactorTracker` (its ``params``, ``cov``,
+        ``n_updates``), or None without ``scale_factor``."""
+        return self._sf
 
     @property
     def params(self) -> np.ndarray:
@@ -865,8 +896,15 @@ class Compensator:
         reason[-1] = ""
         bias_sd = _bias_sd(self._aid.cov, T, Tp)
         fused = self._fusion.rows(t, rate, heading, np.ones(n, dtype=bool), bias_sd)
-        return _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading,
+        rows = _samples(t, rate, bias, self._anchor + I_rate, params, update, reason, Tp, heading,
                         self._aid.unobservable, bias_sd, fused)
+        if self._sf is None:
+            return rows
+        out = []
+        for r, temp in zip(rows, T.tolist()):
+            sf = self._sf.push(r.t, r.rate_z, temp, r.compass_heading, r.gate_reason)
+            out.append(self._sf_sample.of(r, sf))
+        return out
 
     def _step(self, row) -> CompensatedSample:
         """One row after initialisation, in plain floats.
@@ -917,9 +955,16 @@ class Compensator:
         var = ((P[0] * T + P[1] * Tp + P[2]) * T + (P[3] * T + P[4] * Tp + P[5]) * Tp + (P[6] * T + P[7] * Tp + P[8]))
         bias_sd = math.sqrt(var) if var > 0.0 else (0.0 if var <= 0.0 else math.nan)
         fused = self._fusion.row(t_s, rate, heading, reason not in self._fusion_refused, bias_sd)
-        return CompensatedSample(
+        if self._sf is None:
+            return CompensatedSample(
+                t_s, rate, bias, _wrap_360_float(self._anchor + c.I_rate), a, b, c0,
+                update, int(reason != ""), reason, Tp, heading, unobservable, bias_sd, *fused,
+            )
+        sf = self._sf.push(t_s, rate, T, heading, reason)
+        return self._sf_sample(
             t_s, rate, bias, _wrap_360_float(self._anchor + c.I_rate), a, b, c0,
             update, int(reason != ""), reason, Tp, heading, unobservable, bias_sd, *fused,
+            sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf,
         )
 
 

@@ -127,7 +127,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import NamedTuple
 
 import numpy as np
@@ -135,6 +135,7 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 
 from gyrodrift import gating
+from gyrodrift.compensate import CompensatedSample
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_180, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.estimators._kalman import cap_covariance, correct, predict
@@ -151,6 +152,7 @@ __all__ = [
     "ScaleFactorTracker",
     "ScaleFactorRow",
     "TRACKER_COLUMNS",
+    "CompensatedSFSample",
     "scale_factor_experiment",
     "REJECT_GATES",
 ]
@@ -760,6 +762,25 @@ class ScaleFactorRow(NamedTuple):
 
 #: Columns of :class:`ScaleFactorTracker` output, in order.
 TRACKER_COLUMNS = ScaleFactorRow._fields
+
+
+@dataclass(frozen=True)
+class CompensatedSFSample(CompensatedSample):
+    """A :class:`gyrodrift.compensate.CompensatedSample` with the scale factor of Sec. 4.3, as
+    :class:`gyrodrift.compensate.Compensator` returns it when given ``scale_factor``: ``sf``
+    (unitless), ``sf_sd``, ``rate_sf`` (deg/s) and ``heading_sf`` (deg) of
+    :class:`ScaleFactorTracker`."""
+
+    sf: float = math.nan
+    sf_sd: float = math.nan
+    rate_sf: float = math.nan
+    heading_sf: float = math.nan
+
+    @classmethod
+    def of(cls, sample: CompensatedSample, row: ScaleFactorRow) -> "CompensatedSFSample":
+        """``sample`` with the SF columns of ``row``."""
+        base = {f.name: getattr(sample, f.name) for f in fields(CompensatedSample)}
+        return cls(**base, sf=row.sf, sf_sd=row.sf_sd, rate_sf=row.rate_sf, heading_sf=row.heading_sf)
 
 
 def _wrap_360_f(angle_deg: float) -> float:
