@@ -276,3 +276,29 @@ def test_streaming_without_x_y_inputs_leaves_the_x_y_fields_empty():
     for i in range(400):
         rows += comp.push(i * 0.1, 0.2, 30.0, heading_deg=90.0)
     assert rows and all(math.isnan(r.rate_x) and r.tilt_gated == 0 for r in rows)
+
+
+@pytest.mark.parametrize("acc_unit_mps2", [False, True])
+def test_row_by_row_equals_whole_bit_for_bit(acc_unit_mps2):
+    """One row at a time (the streaming compensator's case, a path of its own on floats) gives
+    the bits of one call over the whole log: held cells, unusable accelerometer rows, a gap."""
+    log = simulate("vehicle", seed=6, duration_s=300.0, fs_hz=10.0, triad=TriadModel())
+    log.loc[400, "gyro_x"] = np.nan
+    log.loc[401:403, "gyro_y"] = np.nan
+    log.loc[900:905, "acc_z"] = np.nan
+    log.loc[1200, "temp"] = np.nan
+    log.loc[log.index >= 2000, "t"] += 5.0  # a 5-s gap: the interval is refused
+    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy() * (9.80665 if acc_unit_mps2 else 1.0)
+    t = log["t"].to_numpy()
+    Tp = temp_rate(t, log["temp"].ffill().to_numpy())
+    Tp[700] = np.nan
+    args = (t, log["gyro_x"].to_numpy(), log["gyro_y"].to_numpy(), log["temp"].to_numpy(), Tp, acc,
+            np.sin(t / 7.0))
+    whole = TriadCompensator().feed(*args)
+    tc = TriadCompensator()
+    rows = [tc.feed(*(a[i:i + 1] for a in args)) for i in range(len(t))]
+    for c in TRIAD_COLUMNS:
+        joined = np.concatenate([r[c] for r in rows])
+        assert joined.dtype == whole[c].dtype
+        np.testing.assert_array_equal(joined, whole[c])
+    assert tc.updates["x"] > 5 and tc.reasons["gap"] >= 1

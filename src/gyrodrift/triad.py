@@ -307,6 +307,9 @@ class TriadCompensator:
         cols = [np.asarray(v, dtype=float) for v in (gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps)]
         acc = np.asarray(acc, dtype=float).reshape(n, 3)
         rz = np.zeros(n) if rate_z_dps is None else np.asarray(rate_z_dps, dtype=float)
+        if n == 1:  # the streaming compensator's case: the same arithmetic on Python floats
+            out = self._feed_one(float(t[0]), *(float(c[0]) for c in cols), acc[0], float(rz[0]))
+            return {c: np.array([v], dtype=np.int8 if c == "tilt_gated" else float) for c, v in zip(TRIAD_COLUMNS, out)}
         if n <= _BLOCK_ROWS:
             return self._feed(t, *cols, acc, rz)
         # blocks of cache size: the result does not depend on them, the speed does
@@ -397,6 +400,65 @@ class TriadCompensator:
             "bias_y": out_bias_y,
             "tilt_gated": out_gated,
         }
+
+    def _feed_one(self, t: float, gx: float, gy: float, T: float, Tp: float, acc, rz: float) -> tuple:
+        """:meth:`_feed` for one row, on Python floats: the same operations in the same order
+        (so the same bits), without numpy's per-call cost. Returns the values of
+        :data:`TRIAD_COLUMNS` for the row."""
+        rz = rz if math.isfinite(rz) else 0.0
+        if not (math.isfinite(t) and t > self._t_last):
+            raise GyroDriftError("triad: time must be finite and strictly increasing")
+        if self._t0 is None:
+            if not math.isfinite(T):
+                raise GyroDriftError("triad: the first row needs a temp value")
+            self._t0 = t
+            self._k = 0.0
+        h = self._held
+        bad_gx, bad_gy, bad_T = not math.isfinite(gx), not math.isfinite(gy), not math.isfinite(T)
+        gx = h["gx"] if bad_gx else gx
+        gy = h["gy"] if bad_gy else gy
+        T = h["T"] if bad_T else T
+        Tp = h["Tp"] if not math.isfinite(Tp) else Tp
+        h["gx"], h["gy"], h["T"], h["Tp"] = gx, gy, T, Tp
+        gx_ok, gy_ok = math.isfinite(gx), math.isfinite(gy)
+        gx0 = gx if gx_ok else 0.0
+        gy0 = gy if gy_ok else 0.0
+        dt = t - (t if self._prev is None else self._t_last)
+        bad = bad_gx or bad_gy or bad_T or dt > self.config.gate.max_gap_s or not gx_ok or not gy_ok
+
+        ax, ay, az = (float(v) for v in acc)
+        if self._scale is None:
+            norm_raw = math.sqrt(ax * ax + ay * ay + az * az)
+            if math.isfinite(norm_raw) and norm_raw > 0.05:
+                self._scale = 1.0 / _G_MPS2 if norm_raw > 3.0 else 1.0
+        scale = self._scale if self._scale is not None else math.nan
+        f0, f1, f2 = ax * scale, ay * scale, az * scale
+        norm = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+        ok = math.isfinite(norm) and 0.5 < norm < 1.5
+        if not ok:
+            f0, f1, f2 = 0.0, 0.0, -1.0
+        yz = math.sqrt(f1 * f1 + f2 * f2)
+        sphi, cphi, tth = -f1 / yz, -f2 / yz, f0 / yz
+        k1 = tth * sphi
+        u = (gx0 + tth * (gy0 * sphi + rz * cphi), gy0 * cphi - rz * sphi, T, Tp, k1, cphi, gx0, gy0, rz)
+        prev = u if self._prev is None else self._prev.tolist()
+        I = [0.5 * (ui + pi) * dt + Ii for ui, pi, Ii in zip(u, prev, self._I.tolist())]
+        self._I, self._prev, self._t_last = np.array(I), np.array(u), t
+        row = np.array([[t, *I, f0, f1, f2, float(ok)]])
+
+        k = math.floor((t - self._t0) / self.config.update_interval_s)
+        closes = k > self._k
+        self._k = float(k)
+        bias_x, bias_y = self.est_x.drift(T, Tp), self.est_y.drift(T, Tp)
+        gated = self._gated
+        self._buf.append(row)
+        self._bad = self._bad or bad
+        if closes:  # the boundary row keeps the old parameters and shows the decision
+            self._close()
+            gated = self._gated
+            self._buf = [row]
+            self._bad = False
+        return gx - bias_x, gy - bias_y, bias_x, bias_y, gated
 
     # ------------------------------------------------------------------ intervals
     def _window(self, buf: np.ndarray) -> dict | None:
