@@ -241,14 +241,16 @@ def test_causal_and_default_pass_differ_only_as_documented(sim_out):
     np.testing.assert_array_equal(nc["sf"].to_numpy()[same], ca["sf"].to_numpy()[same])
 
 
-def test_empty_temperature_cells_are_held():
+@pytest.mark.parametrize("causal", [True, False])
+def test_empty_temperature_cells_are_held(causal):
     out = hard_log()
     held = out.copy()
     held["temp"] = held["temp"].ffill()
-    a = estimate_scale_factor(out, HARD, causal=True)
-    b = estimate_scale_factor(held, HARD, causal=True)
+    a = estimate_scale_factor(out, HARD, causal=causal)
+    b = estimate_scale_factor(held, HARD, causal=causal)
     assert out["temp"].isna().any()
     assert_same_bits(a, b)
+    assert np.isfinite(a["sf"]).all() and np.isfinite(a.attrs["final_params"]).all()
 
 
 def test_heading_is_empty_until_the_first_compass_heading():

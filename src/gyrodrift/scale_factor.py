@@ -365,7 +365,8 @@ def _check_rows(t_s: np.ndarray, rate_dps: np.ndarray, source: str = "scale-fact
 
 def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate") -> np.ndarray:
     """Each non-finite temperature replaced by the previous finite one (degC), as the drift
-    compensator holds an empty temperature cell (causal pass and tracker)."""
+    compensator holds an empty temperature cell (both passes and the tracker; the default pass
+    gave NaN SF from such a cell on, and NaN parameters for good when it fell in a rotation)."""
     ok = np.isfinite(temp_c)
     if ok.all():
         return temp_c
@@ -377,15 +378,14 @@ def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate")
 
 
 def _columns(out: pd.DataFrame, causal: bool):
-    """``t`` (s), ``rate_z`` (deg/s), ``temp`` (degC; held over gaps when causal), the compass
-    heading (deg, NaN = none) and the drift gate reasons of a compensate() table, checked."""
+    """``t`` (s), ``rate_z`` (deg/s), ``temp`` (degC; an empty cell holds the previous value,
+    as in the drift compensator), the compass heading (deg, NaN = none) and the drift gate
+    reasons of a compensate() table, checked. (``causal`` no longer changes them.)"""
     _require(out, (T, "rate_z", TEMP, "compass_heading"))
     t = out[T].to_numpy(float)
     rate = out["rate_z"].to_numpy(float)
     _check_rows(t, rate)
-    temp = out[TEMP].to_numpy(float)
-    if causal:
-        temp = _held_temperature(temp)
+    temp = _held_temperature(out[TEMP].to_numpy(float))
     compass = out["compass_heading"].to_numpy(float)
     gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else np.full(t.size, "")
     return t, rate, temp, compass, gates
@@ -681,8 +681,8 @@ def estimate_scale_factor(
     ------
     LogFormatError
         A column is missing, the table is empty, time is not finite or does not
-        increase, ``rate_z`` is not finite; default pass: no compass heading at all;
-        causal: the first temperature is empty.
+        increase, ``rate_z`` is not finite, the first temperature is empty; default pass:
+        no compass heading at all.
     """
     turns = turn_measurements(out, config, causal=causal)
     params, covs = sf_filter(turns, config)
