@@ -384,10 +384,10 @@ class AdaptiveKalman(LinearDrift):
         return self.params
 
     def engine_state(self) -> dict:
-        """State and settings for the compiled engine (not with ``quadratic``, which
-        :func:`gyrodrift._engine.supports` sends to the reference engine) (:mod:`gyrodrift._engine`): the whole
+        """State and settings for the compiled engine (:mod:`gyrodrift._engine`): the whole
         filter (:mod:`gyrodrift._adaptive_kernels` mirrors :meth:`update` and :meth:`hold`),
-        with the twin's under ``"twin"``."""
+        with the twin's under ``"twin"``. Not used with ``quadratic``, which
+        :func:`gyrodrift._engine.supports` sends to the reference engine."""
         s = self.settings
         slope_q = s.slope_q_per_rtc if (s.slope_q_per_rtc > 0.0 and s.q_sd is not None) else 0.0
         return {"mode": "adaptive", "fading": 1.0, "lambda_max": self.lambda_max, "rho": self.rho, "centred": True,
