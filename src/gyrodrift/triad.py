@@ -308,7 +308,7 @@ class TriadCompensator:
         acc = np.asarray(acc, dtype=float).reshape(n, 3)
         rz = np.zeros(n) if rate_z_dps is None else np.asarray(rate_z_dps, dtype=float)
         if n == 1:  # the streaming compensator's case: the same arithmetic on Python floats
-            out = self._feed_one(float(t[0]), *(float(c[0]) for c in cols), acc[0], float(rz[0]))
+            out = self.feed_row(float(t[0]), *(float(c[0]) for c in cols), acc[0], float(rz[0]))
             return {c: np.array([v], dtype=np.int8 if c == "tilt_gated" else float) for c, v in zip(TRIAD_COLUMNS, out)}
         if n <= _BLOCK_ROWS:
             return self._feed(t, *cols, acc, rz)
@@ -401,10 +401,11 @@ class TriadCompensator:
             "tilt_gated": out_gated,
         }
 
-    def _feed_one(self, t: float, gx: float, gy: float, T: float, Tp: float, acc, rz: float) -> tuple:
-        """:meth:`_feed` for one row, on Python floats: the same operations in the same order
-        (so the same bits), without numpy's per-call cost. Returns the values of
-        :data:`TRIAD_COLUMNS` for the row."""
+    def feed_row(self, t: float, gx: float, gy: float, T: float, Tp: float, acc, rz: float = 0.0) -> tuple:
+        """:meth:`feed` for one row, on Python floats (the streaming compensator's case): the
+        same operations in the same order as for a chunk, so the same bits, without numpy's
+        per-call cost. Arguments as for :meth:`feed`, one value each (``acc`` three); returns
+        the values of :data:`TRIAD_COLUMNS` for the row, as floats and an int."""
         rz = rz if math.isfinite(rz) else 0.0
         if not (math.isfinite(t) and t > self._t_last):
             raise GyroDriftError("triad: time must be finite and strictly increasing")
@@ -458,7 +459,7 @@ class TriadCompensator:
             gated = self._gated
             self._buf = [row]
             self._bad = False
-        return gx - bias_x, gy - bias_y, bias_x, bias_y, gated
+        return float(gx - bias_x), float(gy - bias_y), float(bias_x), float(bias_y), int(gated)
 
     # ------------------------------------------------------------------ intervals
     def _window(self, buf: np.ndarray) -> dict | None:
