@@ -302,3 +302,34 @@ def test_row_by_row_equals_whole_bit_for_bit(acc_unit_mps2):
         assert joined.dtype == whole[c].dtype
         np.testing.assert_array_equal(joined, whole[c])
     assert tc.updates["x"] > 5 and tc.reasons["gap"] >= 1
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), acc_mps2=st.booleans(), nan_share=st.sampled_from([0.0, 0.01, 0.1]),
+       gap_at=st.integers(50, 900))
+def test_row_by_row_equals_whole_on_random_logs(seed, acc_mps2, nan_share, gap_at):
+    """Random still-and-tilting logs with empty cells in every input, and a time gap: one row at a
+    time gives the bits of one call (the float path against the array path)."""
+    rng = np.random.default_rng(seed)
+    n = 1000
+    t = np.cumsum(rng.uniform(0.05, 0.15, n))
+    t[gap_at:] += rng.uniform(0.0, 3.0)
+    tilt = np.radians(rng.uniform(-20, 20)) + 0.0005 * np.cumsum(rng.normal(0, 1, n))
+    acc = np.column_stack([np.sin(tilt), 0.002 * rng.normal(size=n), -np.cos(tilt)]) * (9.80665 if acc_mps2 else 1.0)
+    cols = [rng.normal(0.1, 0.3, n), rng.normal(-0.2, 0.3, n), 25.0 + np.cumsum(rng.normal(0, 0.01, n)),
+            rng.normal(0, 0.01, n)]
+    for c in [*cols, acc[:, 1]]:
+        c[1:][rng.random(n - 1) < nan_share] = np.nan  # the first temperature must be there
+    rz = rng.normal(0, 0.3, n)
+    rz[rng.random(n) < nan_share] = np.nan
+    args = (t, *cols, acc, rz)
+    cfg = CompensatorConfig(update_interval_s=2.0)
+    whole = TriadCompensator(cfg, TriadConfig(edge_s=0.5)).feed(*args)
+    tc = TriadCompensator(cfg, TriadConfig(edge_s=0.5))
+    rows = [tc.feed_row(t[i], cols[0][i], cols[1][i], cols[2][i], cols[3][i], acc[i], rz[i]) for i in range(n)]
+    for k, c in enumerate(TRIAD_COLUMNS):
+        np.testing.assert_array_equal(np.array([r[k] for r in rows], dtype=whole[c].dtype), whole[c])
