@@ -83,3 +83,16 @@ def test_toml_fusion_table_changes_the_settings_that_suit_the_estimator(tmp_path
     path.write_text('estimator = "nope"\n[fusion]\nnis_gate = 4.0\n')
     with pytest.raises(ConfigError, match="nope"):
         load_config(path)
+
+
+def test_cli_estimator_chooses_the_fused_settings_a_fusion_table_adjusts(tmp_path):
+    from gyrodrift.cli import _config, build_parser
+    from gyrodrift.fusion import FusionConfig
+
+    path = tmp_path / "f.toml"
+    path.write_text("[fusion]\nnis_gate = 4.0\n")
+    args = build_parser().parse_args(["compensate", "in.csv", "-o", "out.csv", "--config", str(path), "--estimator", "stkf"])
+    cfg = _config(args)
+    assert cfg.estimator == "stkf" and cfg.fusion_settings == FusionConfig.tolerant(nis_gate=4.0)
+    args = build_parser().parse_args(["compensate", "in.csv", "-o", "out.csv", "--config", str(path)])
+    assert _config(args).fusion_settings == FusionConfig(nis_gate=4.0)

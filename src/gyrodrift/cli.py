@@ -12,7 +12,7 @@ from pathlib import Path
 from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, parse_map, read_input
 from gyrodrift.compensate import CompensatorConfig
-from gyrodrift.config import load_config
+from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import ESTIMATORS
 from gyrodrift.io import check_output_path
@@ -48,7 +48,13 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
 
 
 def _config(args) -> CompensatorConfig:
-    base = load_config(args.config) if args.config else CompensatorConfig()
+    if args.config:  # --estimator first, so that a [fusion] table adjusts the settings of that estimator
+        values = load_toml(args.config)
+        if args.estimator is not None:
+            values = {**values, "estimator": args.estimator}
+        base = config_from_dict(values, where=str(args.config))
+    else:
+        base = CompensatorConfig()
     kalman = base.kalman
     if args.fading is not None:
         kalman = replace(kalman, fading=args.fading)
