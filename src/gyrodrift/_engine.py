@@ -366,25 +366,15 @@ def _concat(parts):
     return None if parts[0] is None else np.concatenate(parts)
 
 
+#: Output columns the kernel writes row by row; the int8 codes among them start at 0.
+_ROW_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "update", "reason", "bias_sd", "unobs",
+                "heading_fused", "heading_fused_sd", "heading_sd")
+_CODE_COLUMNS = ("update", "reason", "unobs")
+
+
 def _alloc(n: int) -> dict:
-    out = {
-        "bias_z": np.empty(n),
-        "rate_z": np.empty(n),
-        "heading": np.empty(n),
-        "a": np.empty(n),
-        "b": np.empty(n),
-        "c": np.empty(n),
-        "update": np.zeros(n, dtype=np.int8),
-        "reason": np.zeros(n, dtype=np.int8),
-        "bias_sd": np.empty(n),
-        "unobs": np.zeros(n, dtype=np.int8),
-        "heading_fused": np.empty(n),
-        "heading_fused_sd": np.empty(n),
-        "heading_sd": np.empty(n),
-    }
-    for col in out.values():
-        _small_pages(col)
-    return out
+    """The output columns of :data:`_ROW_COLUMNS` for ``n`` rows (the codes zeroed), on 4-KB pages."""
+    return {k: _small_pages(np.zeros(n, dtype=np.int8) if k in _CODE_COLUMNS else np.empty(n)) for k in _ROW_COLUMNS}
 
 
 # ------------------------------------------------------------ fresh memory
@@ -394,14 +384,12 @@ def _alloc(n: int) -> dict:
 # transparent huge pages that is cheap on memory the process just freed (0.07 s per GB)
 # but on a VM whose host takes free memory back (Firecracker, free page reporting) it
 # costs about 2 s per GB, and the first large call of a process runs on such memory.
-# 4-KB pages come from memory freed recently, at about 0.35 s per GB in either case; a
-# helper thread faults them in ahead of the compiled loop (MADV_POPULATE_WRITE, which
-# leaves the contents alone), off the critical path when a second core is free. 10M
-# rows of make_log, adaptive, first call in a fresh process: 1.5-2.6 s -> 0.4-1.2 s.
+# 4-KB pages more often come from memory that is still backed (faulting 0.88 GB of them
+# took 0.29-0.52 s, once 2.7 s); a helper thread faults them in ahead of the compiled
+# loop (MADV_POPULATE_WRITE, which leaves the contents alone), off the critical path when
+# a second core is free. 10M rows of make_log, adaptive, first call in a fresh process:
+# 1.5-2.6 s -> 0.4-1.2 s (huge pages against 4-KB pages; see benchmarks/README.md).
 
-#: Output columns the kernel writes row by row.
-_ROW_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "update", "reason", "bias_sd", "unobs",
-                "heading_fused", "heading_fused_sd", "heading_sd")
 #: ``madvise`` advice (Linux): fault pages in writable, keeping the contents (5.14); no huge pages.
 _MADV_POPULATE_WRITE = 23
 _MADV_NOHUGEPAGE = 15
