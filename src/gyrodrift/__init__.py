@@ -24,6 +24,7 @@ from gyrodrift.compensate import (
     CompensatorConfig,
     compensate,
     compensate_arrays,
+    OutputBuffers,
 )
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import KalmanConfig
@@ -37,6 +38,7 @@ __all__ = [
     "CompensatorConfig",
     "compensate",
     "compensate_arrays",
+    "OutputBuffers",
     "ConfigError",
     "GyroDriftError",
     "LogFormatError",

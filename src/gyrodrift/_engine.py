@@ -42,7 +42,7 @@ from gyrodrift import gating
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import GyroDriftError, LogFormatError
 
-__all__ = ["available", "supports", "ChunkEngine"]
+__all__ = ["available", "supports", "ChunkEngine", "OutputBuffers"]
 
 # The kernel's reason codes index gating.REASONS; its unobservable codes (1 for a + 2
 # for b) index compensate.UNOBSERVABLE.
@@ -167,19 +167,27 @@ class ChunkEngine:
         return t, g_out, T_out, Tp, h_out, gap, norm, dip
 
     # ------------------------------------------------------------------- feed
-    def feed(self, t, g, T, heading, norm, dip) -> dict | None:
+    def feed(self, t, g, T, heading, norm, dip, buffers: OutputBuffers | None = None) -> dict | None:
         """Add a chunk of rows (arrays of equal length; ``heading`` NaN = no compass sample,
-        ``norm``/``dip`` of the raw field, NaN when absent); return the finished rows."""
+        ``norm``/``dip`` of the raw field, NaN when absent); return the finished rows.
+
+        ``buffers``: memory for the output columns (:class:`OutputBuffers`), used when all
+        the rows of this chunk come out of this call, as in a whole-log call; the returned
+        columns are then views of it."""
         if len(t) == 0:
             return None
         n = len(t)
-        gap = _small_pages(np.empty(n, dtype=np.bool_))
-        Tp = _small_pages(np.empty(n))
         # the output columns now when this chunk's rows come out of this call (all of them)
         t_start = self._t_start if self._t0 is not None else float(t[0]) + self.cfg.init_s
         whole = self._buf is None or (not self._buf and float(t[-1]) - t_start >= 0)
-        out = _alloc(n) if whole else None
-        helper = _populate_in_background([gap, Tp] + ([out[k] for k in _ROW_COLUMNS] if whole else []), n)
+        if whole and buffers is not None:
+            out, gap, Tp = buffers.take(n)
+            helper = None  # pages touched when the buffers were made
+        else:
+            gap = _small_pages(np.empty(n, dtype=np.bool_))
+            Tp = _small_pages(np.empty(n))
+            out = _alloc(n) if whole else None
+            helper = _populate_in_background([gap, Tp] + ([out[k] for k in _ROW_COLUMNS] if whole else []), n)
         try:
             cols = self._prepare(t, g, T, heading, norm, dip, gap, Tp)
             if self._buf is not None:
@@ -375,6 +383,57 @@ _CODE_COLUMNS = ("update", "reason", "unobs")
 def _alloc(n: int) -> dict:
     """The output columns of :data:`_ROW_COLUMNS` for ``n`` rows (the codes zeroed), on 4-KB pages."""
     return {k: _small_pages(np.zeros(n, dtype=np.int8) if k in _CODE_COLUMNS else np.empty(n)) for k in _ROW_COLUMNS}
+
+
+class OutputBuffers:
+    """Memory for the output columns of a whole-log call, kept from call to call.
+
+    :func:`gyrodrift.compensate.compensate_arrays` writes about 90 bytes of output per
+    row (13 columns, T', the gap flags). New memory costs a page fault per 4 KB on its
+    first write, which on a virtual machine can take longer than the compensation itself
+    (``benchmarks/README.md``). Code that compensates many logs of similar length in one
+    process (a Monte Carlo, a parameter sweep, a service) can make one ``OutputBuffers``
+    and pass it to every call as ``buffers=``: the pages are faulted in once, here.
+
+    The table a call returns *views* this memory: the next call with the same buffers
+    overwrites it. Copy what must outlive that call (``out.copy()``).
+
+    Parameters
+    ----------
+    rows : int
+        Largest number of rows of a call that will use these buffers.
+
+    Examples
+    --------
+    >>> buffers = OutputBuffers(1_000)
+    >>> buffers.rows
+    1000
+    """
+
+    def __init__(self, rows: int):
+        rows = int(rows)
+        if rows < 1:
+            raise GyroDriftError(f"OutputBuffers needs at least one row, not {rows}")
+        self.rows = rows
+        self._columns = _alloc(rows)
+        self._gap = np.empty(rows, dtype=np.bool_)
+        self._temp_rate = np.empty(rows)
+        self.gated = np.empty(rows, dtype=np.bool_)
+        for a in (*self._columns.values(), self._gap, self._temp_rate, self.gated):
+            a.fill(0)  # fault every page in now, not in the calls
+
+    def take(self, n: int) -> tuple[dict, np.ndarray, np.ndarray]:
+        """Views of the first ``n`` rows: the output columns of :data:`_ROW_COLUMNS` (the
+        codes zeroed, as :func:`_alloc` gives them), the gap flags and T'."""
+        if n > self.rows:
+            raise GyroDriftError(
+                f"the log has {n} rows but the OutputBuffers were made for {self.rows}: "
+                f"make them with OutputBuffers({n}) or more, or leave buffers out"
+            )
+        out = {k: v[:n] for k, v in self._columns.items()}
+        for k in _CODE_COLUMNS:
+            out[k].fill(0)
+        return out, self._gap[:n], self._temp_rate[:n]
 
 
 # ------------------------------------------------------------ fresh memory

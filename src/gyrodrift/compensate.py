@@ -66,13 +66,17 @@ from gyrodrift.conventions import (
     wrap_180,
     wrap_360,
 )
+from gyrodrift._engine import OutputBuffers
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, Observation, make_estimator
 from gyrodrift.fusion import FusionConfig, FusionState
 from gyrodrift.gating import GateConfig
 from gyrodrift.model import TempRateConfig, TempRateTracker, temp_rate
 
-__all__ = ["CompensatorConfig", "build_estimator", "CompensatedSample", "Compensator", "compensate", "compensate_arrays"]
+__all__ = [
+    "CompensatorConfig", "build_estimator", "CompensatedSample", "Compensator", "compensate", "compensate_arrays",
+    "OutputBuffers",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -1047,6 +1051,7 @@ def compensate_arrays(
     source: str = "arrays",
     progress=None,
     engine: str = "auto",
+    buffers: OutputBuffers | None = None,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -1074,6 +1079,10 @@ def compensate_arrays(
         (bit for bit). ``fast``: the compiled engine of :mod:`gyrodrift._engine` (needs
         numba; Kalman-family estimators, ``endpoints`` measurement), equal to the
         reference to rounding. ``auto`` (default): ``fast`` when it can run.
+    buffers : OutputBuffers, optional
+        Memory for the output columns, kept between calls (see :class:`OutputBuffers`):
+        the returned table then views it, and the next call with the same buffers
+        overwrites it. Used by the compiled engine; the reference engine allocates.
     """
     cfg = config or CompensatorConfig()
     t = np.asarray(t_s, dtype=float)
@@ -1101,9 +1110,10 @@ def compensate_arrays(
             heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
             norm = dip = None
         eng = ChunkEngine(cfg, est, source)
-        cols = eng.feed(t, g_in, T_in, heading, norm, dip)
+        cols = eng.feed(t, g_in, T_in, heading, norm, dip, buffers)
         accepted = eng.finish()
-        return _with_attrs(_fast_frame(cols), pd.DataFrame(accepted, columns=list(MEASUREMENT_COLUMNS)), est)
+        gated = None if buffers is None else buffers.gated[:n]
+        return _with_attrs(_fast_frame(cols, gated), pd.DataFrame(accepted, columns=list(MEASUREMENT_COLUMNS)), est)
 
     if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
         raise LogFormatError(f"{source}: time must be finite and strictly increasing")
@@ -1273,19 +1283,21 @@ def fusion_allowed(reason_code, config: FusionConfig) -> np.ndarray:
     return ~np.isin(np.asarray(reason_code), codes)
 
 
-def _fast_frame(cols: dict) -> pd.DataFrame:
+def _fast_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:
     """The output table from the columns of :class:`gyrodrift._engine.ChunkEngine`."""
     return _output_frame(
         cols["t"], cols["rate_z"], cols["bias_z"], cols["heading"], (cols["a"], cols["b"], cols["c"]),
         cols["update"], cols["reason"], cols["temp_rate"], cols["compass_heading"], cols["unobs"], cols["bias_sd"],
-        (cols["heading_fused"], cols["heading_fused_sd"], cols["heading_sd"]),
+        (cols["heading_fused"], cols["heading_fused_sd"], cols["heading_sd"]), gated,
     )
 
 
-def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compass, unobservable_code, bias_sd, fused):
+def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compass, unobservable_code, bias_sd, fused,
+                  gated=None):
     """The output table (``params``: the a, b and c columns; ``fused``: heading_fused, its σ and
     the σ of ``heading``); ``gate_reason`` and ``unobservable`` as categoricals from their codes
-    (indices into :data:`gyrodrift.gating.REASONS` and :data:`UNOBSERVABLE`). No column is copied."""
+    (indices into :data:`gyrodrift.gating.REASONS` and :data:`UNOBSERVABLE`). No column is copied;
+    ``gated`` (bool, one per row) receives the ``gated`` column if given."""
     reason_code = np.asarray(reason_code, dtype=np.int8)
     return pd.DataFrame(
         {
@@ -1297,7 +1309,7 @@ def _output_frame(t, rate, bias, heading, params, update, reason_code, Tp, compa
             "b": params[1],
             "c": params[2],
             "update": np.asarray(update, dtype=np.int8),
-            "gated": np.not_equal(reason_code, 0).view(np.int8),  # bool and int8 share one byte
+            "gated": np.not_equal(reason_code, 0, out=gated).view(np.int8),  # bool and int8 share one byte
             # codes made here are in range: no validation pass over the rows
             "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS), validate=False),
             "temp_rate": Tp,
