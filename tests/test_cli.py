@@ -164,3 +164,16 @@ def test_progress_bar_only_on_a_terminal():
     assert pipe.getvalue() == ""
     assert list(progress_iter(range(5), 5, "x", stream=tty)) == list(range(5))
     assert "5/5" in tty.getvalue() or "100%" in tty.getvalue()
+
+
+def test_out_of_memory_is_one_clear_line(small_log, tmp_path, monkeypatch, capsys):
+    import gyrodrift.pipeline
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(gyrodrift.pipeline, "compensate_file", exhausted)
+    assert main(["compensate", str(small_log), "-o", str(tmp_path / "out.csv")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("gyrodrift: error: compensate: out of memory") and "Traceback" not in err
+    assert "stream in constant memory" in err and len(err.strip().splitlines()) == 1

@@ -150,3 +150,44 @@ def test_a_number_column_that_later_holds_text_is_read_as_text(tmp_path):
     assert any("'count' read as text" in n and "'many'" in n for n in stats.notes)
     assert not any("'count' read as numbers" in n for n in stats.notes)
     assert "many" in set(pd.read_csv(parts, dtype=str)["count"])
+
+
+@pytest.mark.parametrize("kind", ["csv", "parquet"])
+def test_row_estimate_is_close_to_the_rows(logs, kind):
+    from gyrodrift.pipeline import _estimated_rows
+
+    rows = len(pd.read_csv(logs["csv"]))
+    assert abs(_estimated_rows(logs[kind]) - rows) <= 0.02 * rows
+
+
+@pytest.mark.parametrize(
+    "options, expected",
+    [
+        ({"smooth": True}, r"--smooth needs the whole log in memory.*Drop --smooth to stream it"),
+        ({"scale_factor": True, "smooth": True}, r"--scale-factor and --smooth needs .*Drop --scale-factor and --smooth"),
+        ({"config": CompensatorConfig(estimator="lsm")}, r"cannot stream .*pip install 'gyrodrift\[fast\]'"),
+    ],
+)
+def test_a_log_that_cannot_fit_in_memory_is_refused_before_reading(logs, tmp_path, monkeypatch, options, expected):
+    from gyrodrift import pipeline
+
+    rows = len(pd.read_csv(logs["csv"]))
+    available = rows * pipeline.IN_MEMORY_MIN_BYTES_PER_ROW // 2
+    monkeypatch.setattr(pipeline, "_available_memory_bytes", lambda: available)
+    monkeypatch.setattr("gyrodrift.io.read_log", lambda *a, **k: pytest.fail("read before the check"))
+    out = tmp_path / "out.csv"
+    with pytest.raises(GyroDriftError, match=expected) as info:
+        compensate_file(logs["parquet"], out, **options)
+    assert f"{rows / 1e6:.1f} million rows" in str(info.value) and "split the log" in str(info.value)
+    assert not out.exists()
+    monkeypatch.undo()  # this machine's memory: the same run goes through
+    compensate_file(logs["parquet"], out, **options)
+    assert out.exists()
+
+
+def test_streaming_needs_no_memory_check(logs, tmp_path, monkeypatch):
+    from gyrodrift import pipeline
+
+    monkeypatch.setattr(pipeline, "_available_memory_bytes", lambda: 1)
+    compensate_file(logs["csv"], tmp_path / "out.csv")  # streams: constant memory, never refused
+    assert (tmp_path / "out.csv").exists()

@@ -430,3 +430,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("gyrodrift: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        print(
+            f"gyrodrift: error: {args.command}: out of memory (an output file is written whole or not at all). "
+            "Logs longer than memory "
+            "stream in constant memory from CSV or Parquet with a Kalman-family estimator, without --smooth "
+            "or --scale-factor (gyrodrift compensate); otherwise split the log",
+            file=sys.stderr,
+        )
+        return 1

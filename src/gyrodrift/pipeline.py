@@ -35,6 +35,7 @@ from gyrodrift.compensate import (
     compensate,
 )
 from gyrodrift.conventions import GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
+from gyrodrift.errors import GyroDriftError
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -279,6 +280,8 @@ def compensate_file(
     if stream is None:
         stream = can_stream and not (scale_factor or smooth)
     if not stream:
+        if table:
+            _check_fits_in_memory(input_path, scale_factor=scale_factor, smooth=smooth, forced=can_stream)
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
@@ -382,6 +385,65 @@ class _Behind:
 
 #: Columns of :func:`gyrodrift.scale_factor.estimate_scale_factor` added by ``scale_factor=True``.
 SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
+
+
+#: Least memory the in-memory path takes per row of the log, bytes: a floor, so that
+#: :func:`_check_fits_in_memory` refuses only logs that cannot fit. Measured peaks (2M-row
+#: Parquet log of benchmarks/bench_throughput.py, VmHWM less the 150 MiB of a started
+#: process): about 360 B/row for ``--estimator lsm``, 510 with ``--scale-factor``, 650 with
+#: ``--smooth``.
+IN_MEMORY_MIN_BYTES_PER_ROW = 300
+
+
+def _available_memory_bytes() -> int | None:
+    """``MemAvailable`` plus ``SwapFree`` of /proc/meminfo, bytes; None where there is none."""
+    try:
+        with open("/proc/meminfo") as f:
+            fields = dict(line.split(":", 1) for line in f if ":" in line)
+        return sum(int(fields[k].split()[0]) * 1024 for k in ("MemAvailable", "SwapFree") if k in fields)
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _estimated_rows(path: Path) -> int | None:
+    """Rows of a CSV or Parquet log, cheaply: the Parquet footer, or the CSV size over the
+    mean line length of its first MiB (of the compressed size for a compressed CSV: fewer
+    rows than there are); None when it cannot tell."""
+    try:
+        if _table_format(path, None) == "parquet":
+            import pyarrow.parquet as pq
+
+            return int(pq.ParquetFile(path).metadata.num_rows)
+        with open(path, "rb") as f:
+            head = f.read(1 << 20)
+        lines = head.count(b"\n")
+        return int(path.stat().st_size * lines / len(head)) if lines else None
+    except Exception:  # the reader gives the real error about an unreadable file
+        return None
+
+
+def _check_fits_in_memory(path: Path, *, scale_factor: bool, smooth: bool, forced: bool) -> None:
+    """Refuse, before reading, a table log the in-memory path cannot hold (Linux; elsewhere
+    the run goes on). ``forced``: the run could stream but ``scale_factor``, ``smooth`` or the
+    caller keeps it in memory."""
+    rows, available = _estimated_rows(path), _available_memory_bytes()
+    if rows is None or available is None:
+        return
+    need = rows * IN_MEMORY_MIN_BYTES_PER_ROW
+    if need <= available:
+        return
+    if forced and (scale_factor or smooth):
+        what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
+        why, advice = f"{what} needs the whole log in memory", f"drop {what} to stream it in constant memory"
+    elif forced:
+        why, advice = "this run is kept in memory (stream=False)", "let it stream (stream=None)"
+    else:
+        why = "this run cannot stream (it needs numba and a Kalman-family estimator with endpoint measurements)"
+        advice = "install the fast extra (pip install 'gyrodrift[fast]') and use --estimator adaptive, stkf or kf"
+    raise GyroDriftError(
+        f"{path}: about {rows / 1e6:.1f} million rows; {why}: at least {need / 2**30:.1f} GiB, and this "
+        f"machine has {available / 2**30:.1f} GiB available. {advice[0].upper()}{advice[1:]}, or split the log"
+    )
 
 
 def _with_scale_factor(out: pd.DataFrame) -> pd.DataFrame:
