@@ -153,18 +153,31 @@ def test_a_number_column_that_later_holds_text_is_read_as_text(tmp_path):
 
 
 @pytest.mark.parametrize("kind", ["csv", "parquet"])
-def test_row_estimate_is_close_to_the_rows(logs, kind):
+def test_row_estimate_is_close_to_the_rows(logs, tmp_path, kind):
     from gyrodrift.pipeline import _estimated_rows
 
     rows = len(pd.read_csv(logs["csv"]))
     assert abs(_estimated_rows(logs[kind]) - rows) <= 0.02 * rows
+    odd = tmp_path / "log.dat"  # the format named, not told by the ending
+    odd.write_bytes(logs[kind].read_bytes())
+    assert abs(_estimated_rows(odd, kind) - rows) <= 0.02 * rows
+
+
+def test_no_row_estimate_for_a_compressed_csv(logs, tmp_path):
+    import gzip
+
+    from gyrodrift.pipeline import _estimated_rows
+
+    packed = tmp_path / "log.csv.gz"
+    packed.write_bytes(gzip.compress(logs["csv"].read_bytes()))
+    assert _estimated_rows(packed) is None
 
 
 @pytest.mark.parametrize(
     "options, expected",
     [
         ({"smooth": True}, r"--smooth needs the whole log in memory.*Drop --smooth to stream it"),
-        ({"scale_factor": True, "smooth": True}, r"--scale-factor and --smooth needs .*Drop --scale-factor and --smooth"),
+        ({"scale_factor": True, "smooth": True}, r"--scale-factor and --smooth need the whole .*Drop --scale-factor and --smooth"),
         ({"config": CompensatorConfig(estimator="lsm")}, r"cannot stream .*pip install 'gyrodrift\[fast\]'"),
     ],
 )

@@ -281,7 +281,8 @@ def compensate_file(
         stream = can_stream and not (scale_factor or smooth)
     if not stream:
         if table:
-            _check_fits_in_memory(input_path, scale_factor=scale_factor, smooth=smooth, forced=can_stream)
+            _check_fits_in_memory(input_path, opts.get("fmt"), scale_factor=scale_factor, smooth=smooth,
+                                  forced=can_stream)
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
@@ -405,15 +406,20 @@ def _available_memory_bytes() -> int | None:
         return None
 
 
-def _estimated_rows(path: Path) -> int | None:
+#: Endings of compressed files, whose rows :func:`_estimated_rows` does not guess.
+_COMPRESSED_SUFFIXES = (".gz", ".bz2", ".xz", ".zst", ".zip")
+
+
+def _estimated_rows(path: Path, fmt: str | None = None) -> int | None:
     """Rows of a CSV or Parquet log, cheaply: the Parquet footer, or the CSV size over the
-    mean line length of its first MiB (of the compressed size for a compressed CSV: fewer
-    rows than there are); None when it cannot tell."""
+    mean line length of its first MiB; None when it cannot tell (a compressed CSV)."""
     try:
-        if _table_format(path, None) == "parquet":
+        if _table_format(path, fmt) == "parquet":
             import pyarrow.parquet as pq
 
             return int(pq.ParquetFile(path).metadata.num_rows)
+        if path.suffix.lower() in _COMPRESSED_SUFFIXES:
+            return None
         with open(path, "rb") as f:
             head = f.read(1 << 20)
         lines = head.count(b"\n")
@@ -422,11 +428,11 @@ def _estimated_rows(path: Path) -> int | None:
         return None
 
 
-def _check_fits_in_memory(path: Path, *, scale_factor: bool, smooth: bool, forced: bool) -> None:
+def _check_fits_in_memory(path: Path, fmt: str | None, *, scale_factor: bool, smooth: bool, forced: bool) -> None:
     """Refuse, before reading, a table log the in-memory path cannot hold (Linux; elsewhere
     the run goes on). ``forced``: the run could stream but ``scale_factor``, ``smooth`` or the
     caller keeps it in memory."""
-    rows, available = _estimated_rows(path), _available_memory_bytes()
+    rows, available = _estimated_rows(path, fmt), _available_memory_bytes()
     if rows is None or available is None:
         return
     need = rows * IN_MEMORY_MIN_BYTES_PER_ROW
@@ -434,7 +440,8 @@ def _check_fits_in_memory(path: Path, *, scale_factor: bool, smooth: bool, force
         return
     if forced and (scale_factor or smooth):
         what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
-        why, advice = f"{what} needs the whole log in memory", f"drop {what} to stream it in constant memory"
+        verb = "need" if scale_factor and smooth else "needs"
+        why, advice = f"{what} {verb} the whole log in memory", f"drop {what} to stream it in constant memory"
     elif forced:
         why, advice = "this run is kept in memory (stream=False)", "let it stream (stream=None)"
     else:
