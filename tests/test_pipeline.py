@@ -8,6 +8,7 @@ pytest.importorskip("numba")
 
 from conftest import synthetic_log  # noqa: E402
 from gyrodrift.compensate import CompensatorConfig  # noqa: E402
+from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
 from gyrodrift.io import write_table  # noqa: E402
 from gyrodrift.pipeline import compensate_file  # noqa: E402
@@ -178,7 +179,9 @@ def test_no_row_estimate_for_a_compressed_csv(logs, tmp_path):
     [
         ({"smooth": True}, r"--smooth needs the whole log in memory.*Drop --smooth to stream it"),
         ({"scale_factor": True, "smooth": True}, r"--scale-factor and --smooth need the whole .*Drop --scale-factor and --smooth"),
-        ({"config": CompensatorConfig(estimator="lsm")}, r"cannot stream .*pip install 'gyrodrift\[fast\]'"),
+        ({"config": CompensatorConfig(estimator="lsm")}, r"does not implement estimator 'lsm'.*Use --estimator adaptive"),
+        ({"config": CompensatorConfig(adaptive=AdaptiveConfig(quadratic=True))}, r"quadratic term.*Turn the quadratic"),
+        ({"stream": False}, r"kept in memory \(stream=False\).*Let it stream"),
     ],
 )
 def test_a_log_that_cannot_fit_in_memory_is_refused_before_reading(logs, tmp_path, monkeypatch, options, expected):

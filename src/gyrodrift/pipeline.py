@@ -281,8 +281,7 @@ def compensate_file(
         stream = can_stream and not (scale_factor or smooth)
     if not stream:
         if table:
-            _check_fits_in_memory(input_path, opts.get("fmt"), scale_factor=scale_factor, smooth=smooth,
-                                  forced=can_stream)
+            _check_fits_in_memory(input_path, opts.get("fmt"), *_why_in_memory(cfg, can_stream, scale_factor, smooth))
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
@@ -428,25 +427,36 @@ def _estimated_rows(path: Path, fmt: str | None = None) -> int | None:
         return None
 
 
-def _check_fits_in_memory(path: Path, fmt: str | None, *, scale_factor: bool, smooth: bool, forced: bool) -> None:
+def _why_in_memory(cfg: CompensatorConfig, can_stream: bool, scale_factor: bool, smooth: bool) -> tuple[str, str]:
+    """Why a CSV or Parquet run is kept in memory, and how it could stream instead."""
+    from gyrodrift import _engine
+
+    if can_stream and (scale_factor or smooth):
+        what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
+        verb = "need" if scale_factor and smooth else "needs"
+        return f"{what} {verb} the whole log in memory", f"drop {what} to stream it in constant memory"
+    if can_stream:
+        return "this run is kept in memory (stream=False)", "let it stream (stream=None)"
+    if not _engine.available():
+        return "this run cannot stream without numba", "install the fast extra (pip install 'gyrodrift[fast]')"
+    if cfg.measurement != "endpoints":
+        return (f"the streaming engine does not implement the {cfg.measurement!r} measurement",
+                "use the endpoints measurement")
+    if cfg.estimator == "adaptive" and cfg.adaptive.quadratic:
+        return "the streaming engine does not implement the quadratic term", "turn the quadratic term off"
+    return (f"the streaming engine does not implement estimator {cfg.estimator!r}",
+            "use --estimator adaptive, stkf or kf")
+
+
+def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) -> None:
     """Refuse, before reading, a table log the in-memory path cannot hold (Linux; elsewhere
-    the run goes on). ``forced``: the run could stream but ``scale_factor``, ``smooth`` or the
-    caller keeps it in memory."""
+    the run goes on); ``why`` it is in memory and the ``advice`` (:func:`_why_in_memory`)."""
     rows, available = _estimated_rows(path, fmt), _available_memory_bytes()
     if rows is None or available is None:
         return
     need = rows * IN_MEMORY_MIN_BYTES_PER_ROW
     if need <= available:
         return
-    if forced and (scale_factor or smooth):
-        what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
-        verb = "need" if scale_factor and smooth else "needs"
-        why, advice = f"{what} {verb} the whole log in memory", f"drop {what} to stream it in constant memory"
-    elif forced:
-        why, advice = "this run is kept in memory (stream=False)", "let it stream (stream=None)"
-    else:
-        why = "this run cannot stream (it needs numba and a Kalman-family estimator with endpoint measurements)"
-        advice = "install the fast extra (pip install 'gyrodrift[fast]') and use --estimator adaptive, stkf or kf"
     raise GyroDriftError(
         f"{path}: about {rows / 1e6:.1f} million rows; {why}: at least {need / 2**30:.1f} GiB, and this "
         f"machine has {available / 2**30:.1f} GiB available. {advice[0].upper()}{advice[1:]}, or split the log"
