@@ -263,9 +263,10 @@ def compensate_file(
     input_path, output_path = Path(input_path), Path(output_path)
     table = _table_format(input_path, opts.get("fmt")) in ("csv", "parquet")
     ulog_or_ros = {k: v for k, v in opts.items() if k not in ("fmt", "gyro_unit", "frame", "column_map")}
+    table_options = not any(v not in (None, 0) for v in ulog_or_ros.values())  # else the reader refuses them
     can_stream = (
         table
-        and not any(v not in (None, 0) for v in ulog_or_ros.values())
+        and table_options
         and _engine.available()
         and _engine.supports(cfg, build_estimator(cfg))
     )
@@ -280,7 +281,7 @@ def compensate_file(
     if stream is None:
         stream = can_stream and not (scale_factor or smooth)
     if not stream:
-        if table:
+        if table and table_options:
             _check_fits_in_memory(input_path, opts.get("fmt"), *_why_in_memory(cfg, can_stream, scale_factor, smooth))
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
