@@ -42,7 +42,7 @@ from gyrodrift import gating
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import GyroDriftError, LogFormatError
 
-__all__ = ["available", "supports", "ChunkEngine", "OutputBuffers"]
+__all__ = ["available", "supports", "unsupported", "ChunkEngine", "OutputBuffers"]
 
 # The kernel's reason codes index gating.REASONS; its unobservable codes (1 for a + 2
 # for b) index compensate.UNOBSERVABLE.
@@ -66,19 +66,28 @@ def supports(config, estimator) -> bool:
     Zhou fading test, outage memory, one or stacked measurements), except the quadratic
     temperature term.
     """
+    return unsupported(config, estimator) is None
+
+
+def unsupported(config, estimator) -> tuple[str, str] | None:
+    """What of this configuration the fast engine does not implement, and the change that
+    would let it run (for messages); None when it implements all of it (:func:`supports`)."""
     if config.measurement != "endpoints":
-        return False
+        return f"the {config.measurement!r} measurement", "use the endpoints measurement"
     if getattr(getattr(estimator, "settings", None), "quadratic", False):
-        return False  # AdaptiveConfig.quadratic: a fourth state, in the reference engine only
+        # AdaptiveConfig.quadratic: a fourth state, in the reference engine only
+        return "the quadratic term", "turn the quadratic term off"
     from gyrodrift.estimators.base import LinearDrift
 
     owners = {name: next((c for c in type(estimator).__mro__ if name in c.__dict__), None)
               for name in ("update", "hold", "engine_state", "drift")}
-    return (
+    if (
         owners["engine_state"] is not None
         and owners["update"] is owners["engine_state"] is owners["hold"]
         and owners["drift"] is LinearDrift
-    )
+    ):
+        return None
+    return f"estimator {estimator.name!r}", "use --estimator adaptive, stkf or kf"
 
 
 class ChunkEngine:

@@ -433,9 +433,8 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print(
             f"gyrodrift: error: {args.command}: out of memory (an output file is written whole or not at all). "
-            "Logs longer than memory "
-            "stream in constant memory from CSV or Parquet with a Kalman-family estimator, without --smooth "
-            "or --scale-factor (gyrodrift compensate); otherwise split the log",
+            "Logs longer than memory stream in constant memory from CSV or Parquet with a Kalman-family "
+            "estimator, without --smooth or --scale-factor (gyrodrift compensate); otherwise split the log",
             file=sys.stderr,
         )
         return 1

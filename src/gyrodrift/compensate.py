@@ -1231,7 +1231,7 @@ def _use_fast(engine: str, cfg: CompensatorConfig, est) -> bool:
     ok = _engine.available() and _engine.supports(cfg, est)
     if engine == "fast" and not ok:
         why = "numba is not installed (pip install 'gyrodrift[fast]')" if not _engine.available() else (
-            f"it does not implement estimator {est.name!r} with measurement {cfg.measurement!r}"
+            f"it does not implement {_engine.unsupported(cfg, est)[0]}"
         )
         raise ConfigError(f"the fast engine cannot run: {why}; use engine='reference'")
     return ok

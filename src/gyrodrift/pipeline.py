@@ -440,13 +440,8 @@ def _why_in_memory(cfg: CompensatorConfig, can_stream: bool, scale_factor: bool,
         return "this run is kept in memory (stream=False)", "let it stream (stream=None)"
     if not _engine.available():
         return "this run cannot stream without numba", "install the fast extra (pip install 'gyrodrift[fast]')"
-    if cfg.measurement != "endpoints":
-        return (f"the streaming engine does not implement the {cfg.measurement!r} measurement",
-                "use the endpoints measurement")
-    if cfg.estimator == "adaptive" and cfg.adaptive.quadratic:
-        return "the streaming engine does not implement the quadratic term", "turn the quadratic term off"
-    return (f"the streaming engine does not implement estimator {cfg.estimator!r}",
-            "use --estimator adaptive, stkf or kf")
+    what, advice = _engine.unsupported(cfg, build_estimator(cfg))
+    return f"the streaming engine does not implement {what}", advice
 
 
 def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) -> None:
