@@ -389,10 +389,10 @@ SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
 
 
 #: Least memory the in-memory path takes per row of the log, bytes: a floor, so that
-#: :func:`_check_fits_in_memory` refuses only logs that cannot fit. Measured peaks (2M-row
-#: Parquet log of benchmarks/bench_throughput.py, VmHWM less the 150 MiB of a started
-#: process): about 360 B/row for ``--estimator lsm``, 510 with ``--scale-factor``, 650 with
-#: ``--smooth``.
+#: :func:`_check_fits_in_memory` refuses only logs that cannot fit. Measured on a 2M-row
+#: Parquet log of benchmarks/bench_throughput.py (peak RSS from GNU time, less the 118 MiB
+#: of ``python -m gyrodrift --version``): about 390 B/row for ``--estimator lsm``, 540 with
+#: ``--scale-factor``, 680 with ``--smooth``.
 IN_MEMORY_MIN_BYTES_PER_ROW = 300
 
 
