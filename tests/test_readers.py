@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 from conftest import SHARED_DATA
 from gyrodrift.compass import tilt_compensated_heading
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.io import _align, read_log, read_rosbag, read_ulog
+from gyrodrift.io import align as _align, read_log, read_rosbag, read_ulog
 from gyrodrift.io import ulog as ulog_module
 
 pyulog = pytest.importorskip("pyulog")

@@ -49,7 +49,7 @@ import pandas as pd
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.io._align import (
+from gyrodrift.io.align import (
     Stream,
     check_temperature,
     contract_frame,

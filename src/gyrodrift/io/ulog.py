@@ -68,7 +68,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.io._align import (
+from gyrodrift.io.align import (
     Stream,
     check_temperature,
     contract_frame,
