@@ -205,7 +205,7 @@ def describe_log(log: pd.DataFrame, source) -> str:
 
 
 def _table_format(path: Path, fmt: str | None) -> str | None:
-    from gyrodrift.io import _log_format
+    from gyrodrift.io import log_format as _log_format
 
     return _log_format(path, fmt)
 

@@ -8,7 +8,8 @@
 * ``.bag``, ``.db3``, ``.mcap`` or a directory holding ``metadata.yaml`` (rosbag):
   :mod:`gyrodrift.io.rosbag`.
 
-See :mod:`gyrodrift.io.tabular` for the checks and the error-message style shared by all.
+See :mod:`gyrodrift.io.validate` for the checks of the table readers and the error-message
+style shared by all.
 """
 
 from __future__ import annotations
@@ -20,53 +21,25 @@ import pandas as pd
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
+from gyrodrift.io.formats import FORMATS, log_format
 from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.ulog import read_ulog
+from gyrodrift.io.validate import message
 
-__all__ = ["FORMATS", "read_log", "read_ulog", "read_rosbag", "write_table", "check_output_path"]
+__all__ = [
+    "FORMATS",
+    "log_format",
+    "read_log",
+    "read_ulog",
+    "read_rosbag",
+    "write_table",
+    "check_output_path",
+]
 
-#: Formats :func:`read_log` accepts for ``fmt``.
-FORMATS = ("csv", "parquet", "ulog", "rosbag")
-_ULOG_SUFFIXES = (".ulg",)
-_ROSBAG_SUFFIXES = (".bag", ".db3", ".mcap")
 #: Option values that mean "the file is already in contract units and frames".
 _NEUTRAL_UNITS = ("deg/s", "dps")
 _NEUTRAL_FRAME = "ned"
-
-
-def _format_from_path(path: Path) -> str | None:
-    """"ulog" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
-    name = path.name.lower()
-    if name.endswith(_ULOG_SUFFIXES):
-        return "ulog"
-    if name.endswith(_ROSBAG_SUFFIXES) or (path.is_dir() and (path / "metadata.yaml").is_file()):
-        return "rosbag"
-    for suffix, table_fmt in tabular._READ_SUFFIXES.items():
-        if name.endswith(suffix):
-            return table_fmt
-    return None
-
-
-def _log_format(path: Path, fmt: str | None) -> str | None:
-    """The format named by ``fmt`` or by the path (None: let the table reader decide)."""
-    if fmt is not None:
-        key = str(fmt).strip().lower()
-        if key not in FORMATS:
-            raise ConfigError(tabular._one_line(f"unknown log format {fmt!r}; use one of: {', '.join(FORMATS)}"))
-        return key
-    found = _format_from_path(path)
-    if found is None and path.is_file():
-        endings = sorted(tabular._READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ROSBAG_SUFFIXES)
-        raise ConfigError(
-            tabular._message(
-                str(path),
-                f"cannot tell the log format from the file name (accepted endings: {', '.join(endings)};"
-                " or a ROS 2 bag directory)",
-                f"rename the file or give the format explicitly ({', '.join(FORMATS)})",
-            )
-        )
-    return found
 
 
 def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None:
@@ -75,7 +48,7 @@ def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None
         return
     option, value = next(iter(options.items()))
     raise ConfigError(
-        tabular._message(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
+        message(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
     )
 
 
@@ -91,7 +64,7 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
     if changed:
         option, value = next(iter(changed.items()))
         raise ConfigError(
-            tabular._message(
+            message(
                 str(path),
                 f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
                 " frames and the reader converts them (to deg/s, NED/FRD)",
@@ -147,7 +120,7 @@ def read_log(
         to the format; a reader's own option errors; a missing optional package.
     """
     path = Path(path)
-    log_fmt = _log_format(path, fmt)
+    log_fmt = log_format(path, fmt)
     ulog_options = {"instance": instance, "mag_instance": mag_instance}
     ros_options = {"imu_topic": imu_topic, "temp_topic": temp_topic, "mag_topic": mag_topic}
     set_ulog = {k: v for k, v in ulog_options.items() if v is not None and not (k == "instance" and v == 0)}

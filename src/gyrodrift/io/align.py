@@ -34,7 +34,7 @@ from gyrodrift.conventions import (
     wrap_360,
 )
 from gyrodrift.errors import LogFormatError
-from gyrodrift.io.tabular import _message
+from gyrodrift.io.validate import message
 
 __all__ = [
     "Stream",
@@ -194,7 +194,7 @@ def check_temperature(name: str, where: str, temp_c: np.ndarray) -> None:
     if outside.size:
         value = float(temp_c[outside[0]])
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"temperature {value!r} degC (sample {int(outside[0]) + 1}) is outside"
                 f" the plausible range {lo:g}..{hi:g} degC",

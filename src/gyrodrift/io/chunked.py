@@ -52,9 +52,6 @@ import codecs
 import gzip
 import io
 import re
-import sys
-from contextlib import ExitStack
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping, NamedTuple
 
@@ -64,11 +61,10 @@ import pyarrow as pa
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pa_pq
 
-from gyrodrift._atomic import atomic_path
 from gyrodrift.conventions import T
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.io import tabular
-from gyrodrift.io.tabular import _Source
+from gyrodrift.io import csvfile, formats, parquetfile, validate
+from gyrodrift.io.chunkwriter import ChunkWriter
 
 __all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary", "ColumnTypeChanged"]
 
@@ -126,10 +122,10 @@ class _CsvText(io.RawIOBase):
         self._check = check
         try:
             self._file = open(path, "rb")  # noqa: SIM115 - closed in close()
-            self._gzip = self._file.read(2) == tabular._GZIP_MAGIC
+            self._gzip = self._file.read(2) == csvfile.GZIP_MAGIC
             self._file.seek(0)
         except OSError as exc:
-            raise tabular._read_error(path, exc) from exc
+            raise validate.read_error(path, exc) from exc
         self._source = gzip.GzipFile(fileobj=self._file, mode="rb") if self._gzip else self._file
         self._decoder = codecs.getincrementaldecoder("utf-8")()
         self._lines_before = 0  # "\n" handed out so far, for error lines
@@ -146,19 +142,19 @@ class _CsvText(io.RawIOBase):
             return b""
         try:
             piece = self._source.read(size)
-        except tabular._GZIP_ERRORS as exc:
+        except csvfile.GZIP_ERRORS as exc:
             if self._gzip:
-                raise tabular._gzip_error(self._name, exc) from exc
-            raise tabular._read_error(self._name, exc) from exc
+                raise csvfile.gzip_error(self._name, exc) from exc
+            raise validate.read_error(self._name, exc) from exc
         if not self._started:  # the first read asks for at least _READ_PIECE_BYTES
             self._started = True
-            if piece.startswith(tabular._UTF8_BOM):
-                piece = piece[len(tabular._UTF8_BOM) :]
+            if piece.startswith(csvfile.UTF8_BOM):
+                piece = piece[len(csvfile.UTF8_BOM) :]
                 if not piece:
                     return self._next_piece(size)
         self._at_end = not piece
         if self._check:
-            tabular._check_csv_text(
+            csvfile.check_csv_text(
                 piece, self._name, lines_before=self._lines_before, decoder=self._decoder, final=self._at_end
             )
         self._lines_before += piece.count(b"\n")
@@ -184,11 +180,11 @@ class _CsvText(io.RawIOBase):
         raising ``read_log``'s error for a file with no text."""
         while True:
             if self._ahead.strip():
-                line = tabular._header_line(self._ahead, at_end=self._at_end)
+                line = csvfile.header_line(self._ahead, at_end=self._at_end)
                 if line is not None:
                     return line
             elif self._at_end:
-                raise tabular._empty_file_error(self._name, tabular._CSV_EMPTY_ADVICE)
+                raise validate.empty_file_error(self._name, csvfile.CSV_EMPTY_ADVICE)
             self._ahead += self._next_piece(_READ_PIECE_BYTES)
 
     def pieces(self) -> Iterator[bytes]:
@@ -211,7 +207,7 @@ def _csv_line_of(path: Path):
 
     def line_of(nonempty_index: int) -> int:
         with _CsvText(path, check=False) as text:
-            return tabular._physical_line(text.pieces(), nonempty_index)
+            return validate.physical_line(text.pieces(), nonempty_index)
 
     return line_of
 
@@ -262,11 +258,11 @@ class _CsvBatches:
 
     def __init__(self, path: Path, renames: Mapping[str, str], column_types, block_size_bytes: int) -> None:
         self.path = path
-        self.src = _Source(str(path), "csv", _csv_line_of(path))
+        self.src = validate.Source(str(path), "csv", _csv_line_of(path))
         self._renames = renames
         self._block_size = int(block_size_bytes)
         with _CsvText(path) as text:
-            self._names = tabular._csv_header_names(text.header_line())
+            self._names = csvfile.csv_header_names(text.header_line())
         self._pinned = self._raw_types(column_types or {})
 
     def _raw_types(self, column_types: Mapping[str, object]) -> dict[str, pa.DataType]:
@@ -278,16 +274,16 @@ class _CsvBatches:
             raws = [raw for raw, new in final.items() if new == name]
             if not raws:
                 raise ConfigError(
-                    tabular._message(
+                    validate.message(
                         self.src.name,
                         f"column_types names column {name!r}, which the file does not have;"
-                        f" columns found: {tabular._show_names(final.values())}",
+                        f" columns found: {validate.show_names(final.values())}",
                         "name columns as they are after the column map",
                     )
                 )
-            if name in tabular._NUMERIC_COLS:
+            if name in validate.NUMERIC_COLS:
                 raise ConfigError(
-                    tabular._message(
+                    validate.message(
                         self.src.name,
                         f"column_types names {name!r}, a number column of the input contract, which is always read"
                         " as numbers",
@@ -301,12 +297,12 @@ class _CsvBatches:
         """The error for a cell that does not fit the type of its (pass-through) column."""
         found = _CONVERSION_ERROR.search(str(exc))
         if found is None or int(found["col"]) >= len(self._names):
-            return tabular._csv_parse_error(self.src, exc)
+            return csvfile.csv_parse_error(self.src, exc)
         name = self._names[int(found["col"])].strip()
         name = next((new for new, old in self._renames.items() if old == name), name)
-        plain = tabular._format_error(
+        plain = validate.format_error(
             self.src,
-            f"{tabular._show_text(found['value'])} does not fit the type {found['type']} that the first"
+            f"{validate.show_text(found['value'])} does not fit the type {found['type']} that the first"
             f" {self._block_size} bytes of the file gave this column (a file read in chunks cannot look ahead)",
             f"give the column's type with the column_types option, e.g. column_types={{{name!r}: 'string'}}",
             where=f"line {self.src.line_of(int(found['row']))}, column {name!r}",
@@ -318,7 +314,7 @@ class _CsvBatches:
         found = _CONVERSION_ERROR.search(str(exc))
         if found is None or int(found["col"]) >= len(self._names):
             return False
-        return self._names[int(found["col"])] not in tabular._numeric_raw_names(self._names, self._renames)
+        return self._names[int(found["col"])] not in csvfile.numeric_raw_names(self._names, self._renames)
 
     def __iter__(self) -> Iterator[pa.RecordBatch]:
         numbers_as_text = False
@@ -336,12 +332,12 @@ class _CsvBatches:
                         text,
                         read_options=pa_csv.ReadOptions(use_threads=False, block_size=self._block_size),
                         parse_options=pa_csv.ParseOptions(invalid_row_handler=on_invalid_row),
-                        convert_options=tabular._csv_convert_options(
+                        convert_options=csvfile.csv_convert_options(
                             self._names, self._renames, numbers_as_text=numbers_as_text, column_types=self._pinned
                         ),
                     )
                     # later readers keep the types the first block gave the other columns
-                    numeric = tabular._numeric_raw_names(self._names, self._renames)
+                    numeric = csvfile.numeric_raw_names(self._names, self._renames)
                     for field in reader.schema:
                         if field.name not in numeric:
                             self._pinned.setdefault(field.name, field.type)
@@ -359,13 +355,13 @@ class _CsvBatches:
                     raise  # from the text checks
                 except pa.ArrowInvalid as exc:
                     if ragged:
-                        raise tabular._ragged_row_error(self.src, ragged[0]) from exc
+                        raise csvfile.ragged_row_error(self.src, ragged[0]) from exc
                     if not numbers_as_text and not self._other_column_failed(exc):
                         numbers_as_text = True  # a number column holds text: read on from this row as text
                         continue
                     raise self._type_error(exc) from exc
                 except (pa.ArrowException, ValueError) as exc:
-                    raise tabular._csv_parse_error(self.src, exc) from exc
+                    raise csvfile.csv_parse_error(self.src, exc) from exc
 
 
 class _ParquetBatches:
@@ -374,8 +370,8 @@ class _ParquetBatches:
 
     def __init__(self, path: Path, batch_rows: int) -> None:
         self.path = path
-        self.src = _Source(str(path), "parquet", None)
-        tabular._check_parquet_size(path)
+        self.src = validate.Source(str(path), "parquet", None)
+        parquetfile.check_parquet_size(path)
         self._batch_rows = batch_rows
         try:
             # pre_buffer=False: otherwise pyarrow buffers the byte ranges of every row group
@@ -393,9 +389,9 @@ class _ParquetBatches:
                 field.name: self._all_categories(field.name) for field in schema if pa.types.is_dictionary(field.type)
             }
         except (pa.ArrowException, OSError, ValueError) as exc:
-            raise tabular._parquet_error(self.src, exc) from exc
+            raise parquetfile.parquet_error(self.src, exc) from exc
         if self._file.metadata.num_rows == 0:
-            raise tabular._no_data_rows_error(self.src)
+            raise validate.no_data_rows_error(self.src)
 
     def _any_null(self, name: str) -> bool:
         """True if column ``name`` has an empty cell (statistics, else read the column)."""
@@ -420,7 +416,7 @@ class _ParquetBatches:
         try:
             yield from self._file.iter_batches(self._batch_rows)
         except (pa.ArrowException, OSError, ValueError) as exc:
-            raise tabular._parquet_error(self.src, exc) from exc
+            raise parquetfile.parquet_error(self.src, exc) from exc
 
     def fix_frame(self, frame: pd.DataFrame, names: list[str]) -> pd.DataFrame:
         """Give a chunk's pass-through columns the dtypes of the whole file (``names``:
@@ -477,7 +473,7 @@ class LogChunks:
         else:
             if column_types:
                 raise ConfigError(
-                    tabular._message(self.source, "column_types applies to CSV files only", "Parquet files state their column types: leave it out")
+                    validate.message(self.source, "column_types applies to CSV files only", "Parquet files state their column types: leave it out")
                 )
             self._batches = _ParquetBatches(path, chunk_rows)
         self._tables = _rechunk(iter(self._batches), chunk_rows)
@@ -488,8 +484,8 @@ class LogChunks:
         """The ``attrs`` of every chunk: ``source``, ``format``, ``gyro_unit``, ``frame``."""
         return {"source": self.source, "format": self.format, "gyro_unit": self.gyro_unit, "frame": self.frame}
 
-    def _frame(self, table: pa.Table, src: _Source) -> pd.DataFrame:
-        frame = tabular._table_to_frame(table, src)
+    def _frame(self, table: pa.Table, src: validate.Source) -> pd.DataFrame:
+        frame = validate.table_to_frame(table, src)
         if isinstance(self._batches, _ParquetBatches):
             frame = self._batches.fix_frame(frame, table.column_names)
         return frame
@@ -497,12 +493,12 @@ class LogChunks:
     def _first_values(self, frame: pd.DataFrame) -> dict[str, int | None]:
         """First value of each required column in the whole file; reads on when the
         first chunk holds none (the check then fails: ``read_log``'s message needs it)."""
-        first = tabular._first_values(frame)
+        first = validate.first_value_rows(frame)
         row0 = len(frame)
         for table in self._tables if None in first.values() else ():
             src = self._batches.src.at(row0)
-            later = tabular._convert_numeric(tabular._apply_column_map(self._frame(table, src), self._opts.renames, src), src)
-            for col, pos in tabular._first_values(later).items():
+            later = validate.convert_numeric(validate.apply_column_map(self._frame(table, src), self._opts.renames, src), src)
+            for col, pos in validate.first_value_rows(later).items():
                 if first[col] is None and pos is not None:
                     first[col] = row0 + pos
             row0 += len(later)
@@ -524,7 +520,7 @@ class LogChunks:
         with_values: frozenset[str] = frozenset()
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found = tabular._normalise_frame(
+            df, found = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
@@ -538,8 +534,8 @@ class LogChunks:
             self.rows += len(df)
             yield df
         if self.rows == 0:
-            raise tabular._no_data_rows_error(src)
-        self.compass = tabular._compass_form(columns, with_values, src)
+            raise validate.no_data_rows_error(src)
+        self.compass = validate.compass_form(columns, with_values, src)
 
     def __iter__(self) -> "LogChunks":
         return self
@@ -562,18 +558,16 @@ class LogChunks:
 
 def _chunk_format(path: Path, fmt: str | None) -> str:
     """"csv" or "parquet" from ``fmt`` or the file name; ULog and ROS bags are refused."""
-    from gyrodrift.io import _format_from_path
-
-    named = str(fmt).strip().lower() if fmt is not None else _format_from_path(path)
+    named = str(fmt).strip().lower() if fmt is not None else formats.format_from_path(path)
     if named in ("ulog", "rosbag"):
         raise ConfigError(
-            tabular._message(
+            validate.message(
                 str(path),
                 f"a {named} log cannot be read in chunks (only CSV and Parquet tables)",
                 "read it whole with gyrodrift.io.read_log",
             )
         )
-    return tabular._table_format(path, fmt, tabular._READ_SUFFIXES)
+    return formats.table_format(path, fmt, formats.READ_SUFFIXES)
 
 
 def iter_log_chunks(
@@ -632,12 +626,12 @@ def iter_log_chunks(
         As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
     """
     path = Path(path)
-    opts = tabular._read_options(gyro_unit, frame, column_map)
+    opts = validate.read_options(gyro_unit, frame, column_map)
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, (int, np.integer)) or chunk_rows < 1:
         raise ConfigError(f"chunk_rows must be a positive whole number of rows, got {chunk_rows!r}")
     if isinstance(block_size_bytes, bool) or not isinstance(block_size_bytes, (int, np.integer)) or block_size_bytes < 1024:
         raise ConfigError(f"block_size_bytes must be a whole number of bytes, at least 1024, got {block_size_bytes!r}")
-    tabular._check_input_path(path)
+    validate.check_input_path(path)
     table_fmt = _chunk_format(path, fmt)
     return LogChunks(path, table_fmt, opts, int(chunk_rows), column_types, int(block_size_bytes))
 
@@ -670,16 +664,16 @@ def log_summary(path, *, fmt: str | None = None, column_map: Mapping[str, str] |
     LogSummary
     """
     path = Path(path)
-    renames = tabular._check_column_map(column_map)
-    tabular._check_input_path(path)
+    renames = validate.check_column_map(column_map)
+    validate.check_input_path(path)
     if _chunk_format(path, fmt) == "csv":
         return LogSummary(None, None, None)
-    src = _Source(str(path), "parquet", None)
-    tabular._check_parquet_size(path)
+    src = validate.Source(str(path), "parquet", None)
+    parquetfile.check_parquet_size(path)
     try:
         meta = pa_pq.ParquetFile(path).metadata
     except (pa.ArrowException, OSError, ValueError) as exc:
-        raise tabular._parquet_error(src, exc) from exc
+        raise parquetfile.parquet_error(src, exc) from exc
     time_name = renames.get(T, T)
     names = [meta.schema.column(i).path.strip() for i in range(meta.num_columns)]
     lows, highs = [], []
@@ -695,184 +689,3 @@ def log_summary(path, *, fmt: str | None = None, column_map: Mapping[str, str] |
             lows.append(float(stats.min) + 0.0)  # Parquet stores a zero minimum as -0.0
             highs.append(float(stats.max))
     return LogSummary(meta.num_rows, min(lows) if lows else None, max(highs) if highs else None)
-
-
-# ---------------------------------------------------------------------------
-# writing
-# ---------------------------------------------------------------------------
-
-
-class ChunkWriter:
-    """Write a table chunk by chunk to CSV or Parquet, atomically.
-
-    Use it as a context manager: chunks go to a hidden temporary file beside ``path``,
-    which replaces ``path`` when the ``with`` block ends normally
-    (:func:`gyrodrift._atomic.atomic_path`); if the block raises, the temporary file
-    is removed and ``path`` is left as it was. pyarrow writes the file itself (a
-    :class:`pyarrow.OSFile`), without holding Python's GIL, so another thread can run
-    Python code meanwhile.
-
-    The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the
-    concatenated chunks: for CSV byte for byte (one header, the same number formatting
-    and quoting; but where pyarrow cannot convert some chunks of a column, e.g. an object
-    column holding a list in one chunk, pandas prints those chunks, and prints numbers
-    its own way); for Parquet reading back equal, with chunks gathered into row groups of
-    at least ``row_group_rows`` rows. Categorical columns (e.g. ``gate_reason``) are
-    written as their values, as for text columns.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Destination; its ending (``.csv``, ``.parquet``, ``.pq``) picks the format.
-    fmt : {"csv", "parquet"}, optional
-        Table format; overrides the file-name ending.
-    row_group_rows : int
-        Parquet: rows gathered before a row group is written (pyarrow's default row
-        group size); the last one may be smaller.
-    sync_every_s : float or None
-        Sync what has been written to disk at this interval, in a background thread,
-        while the chunks are written (None: only at the end). The file is synced before it
-        replaces ``path`` either way; syncing as it grows leaves little to wait for then.
-
-    Attributes
-    ----------
-    rows : int
-        Data rows written so far.
-
-    Examples
-    --------
-    ::
-
-        with ChunkWriter("out.parquet") as out:
-            for chunk in iter_log_chunks("in.csv"):
-                out.write(process(chunk))
-    """
-
-    def __init__(
-        self, path, *, fmt: str | None = None, row_group_rows: int = 1 << 20, sync_every_s: float | None = 0.5
-    ) -> None:
-        self.path = Path(path)
-        self.row_group_rows = int(row_group_rows)
-        self.sync_every_s = sync_every_s
-        self._pending: list[pa.Table] = []
-        self.format = tabular._table_format(self.path, fmt, tabular._WRITE_SUFFIXES)
-        self.rows = 0
-        self._stack: ExitStack | None = None
-        self._sink: pa.NativeFile | None = None
-        self._names: list[str] | None = None
-        self._parquet: pa_pq.ParquetWriter | None = None
-
-    def __enter__(self) -> "ChunkWriter":
-        if self._stack is not None:
-            raise RuntimeError("ChunkWriter is already open")
-        with ExitStack() as stack:
-            tmp = stack.enter_context(atomic_path(self.path, sync_every_s=self.sync_every_s))
-            self._sink = stack.enter_context(pa.OSFile(str(tmp), "w"))
-            self._stack = stack.pop_all()
-        return self
-
-    def write(self, chunk) -> None:
-        """Append the rows of ``chunk``: a DataFrame (its index not written) or what
-        :meth:`encode` made of one.
-
-        Every chunk needs the columns of the first, in the same order; for Parquet also
-        the same types (or types that convert without loss).
-        """
-        if self._sink is None:
-            raise RuntimeError("ChunkWriter.write() outside its with block")
-        if isinstance(chunk, pd.DataFrame):
-            chunk = self.encode(chunk)
-        names = [str(c) for c in chunk.column_names]
-        header = b""
-        if self._names is None:
-            self._names = names
-            header = tabular._csv_header(chunk.frame.columns) if self.format == "csv" else b""
-        elif names != self._names:
-            raise ValueError(f"{self.path}: chunk columns {names} differ from the first chunk's {self._names}")
-        if self.format == "csv":
-            self._write_csv(chunk, header)
-        else:
-            self._write_parquet(chunk)
-        self.rows += chunk.num_rows
-
-    def encode(self, df: pd.DataFrame):
-        """The chunk as :meth:`write` writes it (for Parquet an Arrow table). A pipeline
-        can encode in one thread and :meth:`write` the result in another."""
-        if self.format == "parquet":
-            return tabular._arrow_table(df)
-        return _CsvChunk(tabular._csv_table(df), df)
-
-    def _write_csv(self, chunk: "_CsvChunk", header: bytes) -> None:
-        if chunk.table is None or not tabular._write_csv_rows(chunk.table, self._sink, header):
-            # pyarrow cannot convert or print these values: pandas does, as in write_table
-            self._sink.write(header)
-            tabular._write_csv_with_pandas(chunk.frame, self._sink, header=False)
-
-    def _write_parquet(self, table: pa.Table) -> None:
-        if self._parquet is None:
-            self._parquet = pa_pq.ParquetWriter(self._sink, table.schema, **tabular._parquet_options(table.schema))
-        elif not table.schema.equals(self._parquet.schema, check_metadata=False):
-            try:
-                table = table.cast(self._parquet.schema)
-            except (pa.ArrowInvalid, pa.ArrowNotImplementedError, pa.ArrowTypeError) as exc:
-                raise ConfigError(
-                    tabular._message(
-                        str(self.path),
-                        f"the chunk from row {self.rows} has column types {table.schema.types} but the file was"
-                        f" started with {self._parquet.schema.types} ({tabular._one_line(str(exc))})",
-                        "give every chunk the same column types (e.g. read the input column as float64 with the"
-                        " column_types option)",
-                    )
-                ) from exc
-        if table.num_rows:
-            self._pending.append(table)
-            if sum(t.num_rows for t in self._pending) >= self.row_group_rows:
-                self._flush_parquet()
-
-    def _flush_parquet(self) -> None:
-        if self._pending:
-            table = pa.concat_tables(self._pending)
-            self._pending = []
-            self._parquet.write_table(table, row_group_size=table.num_rows)
-
-    def __exit__(self, exc_type, exc, tb) -> bool:
-        stack, self._stack = self._stack, None
-        parquet, self._parquet, self._sink = self._parquet, None, None
-        if exc_type is not None:
-            self._pending = []
-            if parquet is not None:
-                try:
-                    parquet.close()
-                except Exception:  # noqa: BLE001 - the file is discarded; the first error counts
-                    pass
-            return bool(stack.__exit__(exc_type, exc, tb))  # removes the temporary file
-        try:
-            if self._names is None:
-                raise ConfigError(f"{self.path}: no chunk was written; nothing to save")
-            if parquet is not None:
-                self._parquet = parquet
-                self._flush_parquet()
-                self._parquet = None
-                parquet.close()
-        except BaseException:
-            if not stack.__exit__(*sys.exc_info()):
-                raise
-            return False
-        return bool(stack.__exit__(None, None, None))
-
-
-@dataclass(frozen=True)
-class _CsvChunk:
-    """A chunk encoded for CSV: the Arrow table pyarrow prints (None if pyarrow cannot
-    convert the frame), and the frame, which pandas prints if pyarrow cannot."""
-
-    table: pa.Table | None
-    frame: pd.DataFrame
-
-    @property
-    def column_names(self) -> list:
-        return list(self.frame.columns)
-
-    @property
-    def num_rows(self) -> int:
-        return len(self.frame)

@@ -60,7 +60,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
-from gyrodrift.io.tabular import _message, _one_line
+from gyrodrift.io.validate import message, one_line
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 
@@ -125,12 +125,12 @@ def _check_bag_path(path: Path) -> None:
     name = str(path)
     if not path.exists():
         raise LogFormatError(
-            _message(name, "input file does not exist", "check the path and the current directory")
+            message(name, "input file does not exist", "check the path and the current directory")
         )
     if path.is_dir():
         if not (path / "metadata.yaml").is_file():
             raise LogFormatError(
-                _message(
+                message(
                     name,
                     "is a directory without metadata.yaml, so not a ROS 2 bag",
                     "give a ROS 2 bag directory, a .db3/.mcap file or a ROS 1 .bag file",
@@ -138,12 +138,12 @@ def _check_bag_path(path: Path) -> None:
             )
         return
     if path.stat().st_size == 0:
-        raise LogFormatError(_message(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag"))
+        raise LogFormatError(message(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag"))
 
 
 def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
     """The error for a bag the rosbags library cannot read."""
-    detail = _one_line(str(exc)) or type(exc).__name__
+    detail = one_line(str(exc)) or type(exc).__name__
     kinds = {p.suffix.lower() for p in ([path] if path.is_file() else path.iterdir())}
     repair = ""
     if ".bag" in kinds:
@@ -151,7 +151,7 @@ def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
     elif ".mcap" in kinds:
         repair = ", or repair a truncated file with 'mcap recover'"
     return LogFormatError(
-        _message(
+        message(
             str(path),
             f"is not a readable ROS bag ({detail})",
             f"check that the bag is complete and was closed properly (copy it again){repair}",
@@ -180,7 +180,7 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
     if given is not None:
         if given not in topics:
             raise ConfigError(
-                _message(
+                message(
                     name,
                     f"there is no topic {given!r} in the bag; {role.msgtype} topics: {_show_topics(of_type)}",
                     f"fix {role.option}",
@@ -188,7 +188,7 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
             )
         if topics[given] != role.msgtype:
             raise ConfigError(
-                _message(
+                message(
                     name,
                     f"topic {given!r} has type {topics[given]}, not {role.msgtype};"
                     f" {role.msgtype} topics: {_show_topics(of_type)}",
@@ -200,7 +200,7 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
         return next(iter(of_type))
     if not of_type:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
                 f" topics found: {_show_topics(topics)}",
@@ -208,7 +208,7 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
             )
         )
     raise ConfigError(
-        _message(
+        message(
             name,
             f"{len(of_type)} {role.msgtype} topics: {_show_topics(of_type)}",
             f"choose one with {role.option}",
@@ -311,7 +311,7 @@ def _temperature(name: str, stream: Stream) -> Stream:
     if not ok.any() or not np.any(temp[ok] != 0.0):
         what = "exactly 0 degC" if ok.any() else "NaN"
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"the temperature is {what} in all {temp.size} messages (not measured)",
                 "gyrodrift needs the gyro temperature: give the topic of an IMU that reports it (temp_topic)",
@@ -341,7 +341,7 @@ def _check_counts(name: str, streams: dict[str, Stream]) -> None:
         need = _MIN_IMU_SAMPLES if role == "imu" else 1
         if stream.t.size < need:
             raise LogFormatError(
-                _message(
+                message(
                     name,
                     f"too few messages ({stream.t.size}) on {stream.label}",
                     f"give a bag with at least {need} message(s) on it",
@@ -392,7 +392,7 @@ def _streams(name: str, chosen: dict[str, str], raw: dict[str, _Raw]) -> tuple[d
     streams["imu"], dropped = increasing(streams["imu"])
     if streams["imu"].t.size < _MIN_IMU_SAMPLES:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"too few Imu messages with distinct times ({streams['imu'].t.size}) on {streams['imu'].label}",
                 "give a longer bag",
@@ -452,7 +452,7 @@ def read_rosbag(
     mag_rows, mag_count = on_following_rows(t, mag.t, mag.values * _FLU_TO_FRD)
     if mag_count == 0:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"no magnetometer message of {mag.label} falls within the Imu record"
                 f" (t = {t[0]:.3f}..{t[-1]:.3f} s)",

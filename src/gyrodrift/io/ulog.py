@@ -53,7 +53,7 @@ enum) are supported; others raise :class:`LogFormatError`. Calibration offsets a
 scales are *not* applied: those topics stay raw.
 
 Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
-:mod:`gyrodrift.io.tabular`.
+:mod:`gyrodrift.io.validate`.
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
-from gyrodrift.io.tabular import _message, _one_line
+from gyrodrift.io.validate import message, one_line
 
 __all__ = ["read_ulog", "FASTER"]
 
@@ -151,23 +151,23 @@ def _read_file(path: Path) -> bytes:
     """Return the file's bytes, or raise a one-line :class:`LogFormatError`."""
     name = str(path)
     if path.is_dir():
-        raise LogFormatError(_message(name, "is a directory, not a ULog file", "give the path of a .ulg log"))
+        raise LogFormatError(message(name, "is a directory, not a ULog file", "give the path of a .ulg log"))
     if not path.exists():
         raise LogFormatError(
-            _message(name, "input file does not exist", "check the path and the current directory")
+            message(name, "input file does not exist", "check the path and the current directory")
         )
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"cannot read the input file ({exc.strerror or type(exc).__name__})",
                 "check that it is a readable file",
             )
         ) from exc
     if not data:
-        raise LogFormatError(_message(name, "file is empty", "give a PX4 .ulg log"))
+        raise LogFormatError(message(name, "file is empty", "give a PX4 .ulg log"))
     return data
 
 
@@ -175,7 +175,7 @@ def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatE
     """The error for a message that runs past the end of the file."""
     if in_header:
         return LogFormatError(
-            _message(
+            message(
                 name,
                 f"the file ends inside the ULog header section (message at byte {start}, file size {total} bytes):"
                 " the file is truncated",
@@ -183,7 +183,7 @@ def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatE
             )
         )
     return LogFormatError(
-        _message(
+        message(
             name,
             f"the file is truncated: its last message starts at byte {start} but the file ends at byte {total}",
             "copy the complete .ulg from the vehicle again, or keep only the complete messages"
@@ -205,7 +205,7 @@ def _check_framing(data: bytes, name: str) -> bool:
     """
     if len(data) < _FILE_HEADER_SIZE or not data.startswith(_MAGIC):
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 "is not a ULog file (it does not start with the ULog header bytes)",
                 "give a PX4 .ulg flight log, or name the right format",
@@ -224,7 +224,7 @@ def _check_framing(data: bytes, name: str) -> bool:
         if kind not in known and (kind == 0 or size == 0 or size > _MAX_UNKNOWN_SIZE):
             if in_header:
                 raise LogFormatError(
-                    _message(
+                    message(
                         name,
                         f"the ULog header section is corrupt at byte {pos}",
                         "copy the .ulg from the vehicle again; this file cannot be read",
@@ -236,7 +236,7 @@ def _check_framing(data: bytes, name: str) -> bool:
         pos += _MSG_HEADER_SIZE + size
     if in_header:
         raise LogFormatError(
-            _message(name, "holds only the ULog header, no logged data", "give a log that recorded data")
+            message(name, "holds only the ULog header, no logged data", "give a log that recorded data")
         )
     return False
 
@@ -253,9 +253,9 @@ def _parse(ulog_class, data: bytes, name: str):
             return ulog_class(io.BytesIO(data), message_name_filter_list=list(_TOPICS))
     except Exception as exc:  # any failure of a third-party parser on an untrusted file
         raise LogFormatError(
-            _message(
+            message(
                 name,
-                f"cannot be parsed as a ULog file ({_one_line(str(exc))})",
+                f"cannot be parsed as a ULog file ({one_line(str(exc))})",
                 "check that it is a complete PX4 .ulg log",
             )
         ) from exc
@@ -281,7 +281,7 @@ def _fields(ds, names, name: str, where: str) -> np.ndarray:
     missing = [f for f in names if f not in ds.data]
     if missing:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
                 "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
@@ -317,7 +317,7 @@ def _pick_instance(ulog, topic: str, instance: int, name: str, option: str):
     found = _instances(ulog, topic)
     if not found:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"no '{topic}' topic in the log",
                 f"log '{topic}' (PX4 logger profile) or convert the log to CSV",
@@ -326,7 +326,7 @@ def _pick_instance(ulog, topic: str, instance: int, name: str, option: str):
     if instance not in found:
         present = ", ".join(str(k) for k in sorted(found))
         raise ConfigError(
-            _message(
+            message(
                 name,
                 f"there is no {topic} instance {instance}; instances present: {present}",
                 f"choose one of them ({option}=N)",
@@ -365,7 +365,7 @@ def _rotation(number: int, param: str, name: str) -> np.ndarray:
     """Matrix of PX4 rotation ``number`` (read from parameter ``param``)."""
     if not 0 <= number < len(_ROTATIONS):
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"parameter {param}={number} is a sensor rotation this reader does not support"
                 f" (supported: 0..{len(_ROTATIONS) - 1})",
@@ -454,7 +454,7 @@ def _temperature_stream(ulog, instance: int, name: str) -> Stream:
     if len(candidates) == 1:
         reasons.append("no sensor_accel of the same chip")
     raise LogFormatError(
-        _message(
+        message(
             name,
             f"no gyro temperature in this log: {'; '.join(reasons)}",
             "gyrodrift needs the gyro temperature: use a log from an IMU that reports it"
@@ -478,7 +478,7 @@ def _acc_stream(ulog, instance: int, name: str) -> Stream:
     acc_id, acc = _same_chip(ulog, "sensor_accel", device, instance)
     if acc is None:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 "no accelerometer: neither sensor_combined.accelerometer_m_s2"
                 " nor a sensor_accel of the gyro's chip",
@@ -533,7 +533,7 @@ def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream:
             return Stream(label, t_vehicle, _fields(vehicle, _MAG_VEHICLE, name, label))
     if chosen is None:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 "no magnetometer: neither 'sensor_mag' nor 'vehicle_magnetometer' is in the log",
                 "gyrodrift needs a compass; log sensor_mag or vehicle_magnetometer",
@@ -561,7 +561,7 @@ def _check_instance(value, option: str, allow_none: bool = False) -> None:
     if value is None and allow_none:
         return
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise ConfigError(_one_line(f"{option} must be a non-negative integer, got {value!r}"))
+        raise ConfigError(one_line(f"{option} must be a non-negative integer, got {value!r}"))
 
 
 def _summary(
@@ -635,7 +635,7 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
                 f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples",
@@ -649,7 +649,7 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     mag_on_rows, mag_rows = on_following_rows(t, mag.t, mag.values)
     if mag_rows == 0:
         raise LogFormatError(
-            _message(
+            message(
                 name,
                 f"no magnetometer sample of {mag.label} falls within the gyro record"
                 f" (t = {t[0]:.3f}..{t[-1]:.3f} s)",

@@ -1,0 +1,700 @@
+"""Checks and conversions shared by the table readers, and the message style of all readers.
+
+The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
+(:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
+contract with :func:`normalise_frame`: column map, required and compass columns, numeric
+conversion, time and temperature checks, gyro unit (deg/s) and frame (NED/FRD, headings
+in [0, 360)). Every step works row by row, so the chunks of a file come out as the rows
+of the whole file.
+
+Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
+:class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
+form::
+
+    <file>: <location>: <problem>; <what to do>
+
+where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the header
+is line 1) or ``data row N`` for Parquet (1-based, the first data row is ``data row 1``),
+optionally followed by ``, column 'name'``. Parts that do not apply are left out.
+:func:`message` builds such a message; :class:`Source`, :func:`row_label` and
+:func:`cell_label` name the rows and cells. The ULog and ROS bag readers use the same
+style.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Iterable, Mapping, NamedTuple
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.compute as pa_compute
+import pyarrow.csv as pa_csv
+
+from gyrodrift.conventions import (
+    ACC_COLS,
+    FRAMES,
+    GYRO_UNITS,
+    GYRO_X,
+    GYRO_Y,
+    GYRO_Z,
+    HEADING,
+    MAG_COLS,
+    REF_HEADING,
+    REQUIRED_COLS,
+    T,
+    TEMP,
+    TEMP_RANGE_C,
+    TRUE_BIAS_X,
+    TRUE_BIAS_Y,
+    TRUE_BIAS_Z,
+    wrap_360,
+)
+from gyrodrift.errors import ConfigError, LogFormatError
+
+__all__ = [
+    "NUMERIC_COLS",
+    "Source",
+    "one_line",
+    "message",
+    "format_error",
+    "show_text",
+    "show_names",
+    "physical_line",
+    "row_label",
+    "cell_label",
+    "check_column_map",
+    "ReadOptions",
+    "read_options",
+    "check_input_path",
+    "read_error",
+    "empty_file_error",
+    "no_data_rows_error",
+    "table_to_frame",
+    "apply_column_map",
+    "convert_numeric",
+    "first_value_rows",
+    "compass_form",
+    "normalise_frame",
+]
+
+
+#: Contract columns that must hold numbers (in file order of checking).
+NUMERIC_COLS = (
+    (T, GYRO_Z, GYRO_X, GYRO_Y, TEMP, HEADING)
+    + MAG_COLS
+    + ACC_COLS
+    + (REF_HEADING, TRUE_BIAS_Z, TRUE_BIAS_X, TRUE_BIAS_Y)
+)
+#: Gyro rate columns (converted to deg/s).
+_GYRO_COLS = (GYRO_X, GYRO_Y, GYRO_Z)
+_MAG_FORM_COLS = MAG_COLS + ACC_COLS
+#: Columns whose sign flips from ROS FLU body axes to FRD (180 deg rotation about x).
+_FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Y, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
+#: Columns holding a heading (deg, clockwise from north in NED).
+_HEADING_COLS = (HEADING, REF_HEADING)
+#: Cells pyarrow's CSV reader takes for "no value" (its defaults, for every column).
+_CSV_NULL_VALUES = tuple(pa_csv.ConvertOptions().null_values)
+#: Text that means "no value" in a numeric column stored as text (compared stripped and in
+#: lower case); it includes every CSV null value, so a cell is empty whether the CSV reader
+#: or the text conversion decides.
+_NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"} | {v.lower() for v in _CSV_NULL_VALUES})
+_MAX_NAMES_SHOWN = 30
+_MAX_TEXT_SHOWN = 40
+
+
+class Source(NamedTuple):
+    """Where a table came from: enough to name rows the way a user sees them."""
+
+    name: str  #: the path as the user gave it
+    fmt: str  #: "csv" or "parquet"
+    #: CSV: maps the 1-based index of a non-empty line (header = 1) to the line an
+    #: editor shows (called on error only); None for Parquet
+    line_of: Callable[[int], int] | None
+    #: index in the whole file of the frame's first data row (0 unless read in chunks)
+    row0: int = 0
+
+    def at(self, row0: int) -> "Source":
+        """The same source for a frame whose first row is data row ``row0`` of the file."""
+        return self._replace(row0=row0)
+
+
+# ---------------------------------------------------------------------------
+# message helpers
+# ---------------------------------------------------------------------------
+
+
+def one_line(text: str) -> str:
+    """Collapse any line breaks so a message stays on one line."""
+    return " ".join(str(text).split())
+
+
+def message(name: str, problem: str, advice: str, where: str = "") -> str:
+    """Build ``<file>: [<where>: ]<problem>; <advice>`` on one line."""
+    head = f"{name}: {where}: " if where else f"{name}: "
+    return one_line(f"{head}{problem}; {advice}")
+
+
+def format_error(src: Source, problem: str, advice: str, where: str = "") -> LogFormatError:
+    """Return a :class:`LogFormatError` for ``src`` with a one-line message."""
+    return LogFormatError(message(src.name, problem, advice, where))
+
+
+def show_text(value: object) -> str:
+    """Quote a cell's text for a message, shortened and without line breaks."""
+    text = str(value)
+    if len(text) > _MAX_TEXT_SHOWN:
+        text = text[: _MAX_TEXT_SHOWN - 3] + "..."
+    return repr(text)
+
+
+def show_names(names) -> str:
+    """List column names for a message (at most ``_MAX_NAMES_SHOWN`` of them)."""
+    names = [repr(str(n)) for n in names]
+    if not names:
+        return "(none)"
+    if len(names) > _MAX_NAMES_SHOWN:
+        extra = len(names) - _MAX_NAMES_SHOWN
+        names = names[:_MAX_NAMES_SHOWN] + [f"... ({extra} more)"]
+    return ", ".join(names)
+
+
+def physical_line(blocks: Iterable[bytes], nonempty_index: int) -> int:
+    """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
+
+    pyarrow skips empty lines, so its row counts are counts of non-empty lines
+    (1-based, header included); this maps one back to what an editor shows. ``blocks``
+    are the file's bytes in order, in pieces of any size (line ends ``\n``, ``\r\n``
+    or ``\r``, as :meth:`bytes.splitlines` splits them).
+    """
+    count = 0
+    line_no = 0
+    carry = b""
+    for block in blocks:
+        lines = (carry + block).splitlines(keepends=True)
+        # the last piece may be an unfinished line, or a "\r" whose "\n" is in the next block
+        carry = lines.pop() if lines and (lines[-1].endswith(b"\r") or not lines[-1].endswith(b"\n")) else b""
+        for line in lines:
+            line_no += 1
+            if line.rstrip(b"\r\n"):
+                count += 1
+                if count == nonempty_index:
+                    return line_no
+    if carry:
+        line_no += 1
+        if carry.rstrip(b"\r\n") and count + 1 == nonempty_index:
+            return line_no
+    return nonempty_index
+
+
+def row_label(src: Source, row: int) -> str:
+    """Name data row ``row`` of the frame (0-based; negative: rows before it) as the user
+    sees it: ``line N`` (CSV) or ``data row N`` (Parquet), counted in the whole file."""
+    row = src.row0 + row
+    if src.fmt == "csv" and src.line_of is not None:
+        # header is non-empty line 1, data row 0 is non-empty line 2
+        return f"line {src.line_of(row + 2)}"
+    return f"data row {row + 1}"
+
+
+def cell_label(src: Source, row: int, column: str) -> str:
+    """Name one cell: ``line N, column 'x'``."""
+    return f"{row_label(src, row)}, column {column!r}"
+
+
+# ---------------------------------------------------------------------------
+# option checks
+# ---------------------------------------------------------------------------
+
+
+def _gyro_scale(gyro_unit: str) -> tuple[str, float]:
+    """Return the canonical gyro unit name and its multiplier to deg/s."""
+    key = str(gyro_unit).strip().lower()
+    if key not in GYRO_UNITS:
+        raise ConfigError(
+            one_line(f"unknown gyro unit {gyro_unit!r}; use one of: {', '.join(GYRO_UNITS)}")
+        )
+    return key, GYRO_UNITS[key]
+
+
+def _frame_name(frame: str) -> str:
+    """Return the canonical frame name, or raise :class:`ConfigError`."""
+    key = str(frame).strip().lower()
+    if key not in FRAMES:
+        raise ConfigError(one_line(f"unknown frame {frame!r}; use one of: {', '.join(FRAMES)}"))
+    return key
+
+
+def check_column_map(column_map: Mapping[str, str] | None) -> dict[str, str]:
+    """Return ``column_map`` as a plain NEW -> OLD dict of strings."""
+    if column_map is None:
+        return {}
+    if not isinstance(column_map, Mapping):
+        raise ConfigError(
+            f"column map must be a mapping NEW -> OLD, got {type(column_map).__name__}"
+        )
+    out = {}
+    for new, old in column_map.items():
+        if not isinstance(new, str) or not isinstance(old, str) or not new or not old:
+            raise ConfigError(
+                one_line(f"column map entry {new!r}={old!r} is invalid; use NEW=OLD column names")
+            )
+        out[new.strip()] = old.strip()
+    olds = list(out.values())
+    dup = sorted({o for o in olds if olds.count(o) > 1})
+    if dup:
+        raise ConfigError(
+            one_line(f"column map renames column {dup[0]!r} twice; map each input column once")
+        )
+    return out
+
+
+class ReadOptions(NamedTuple):
+    """The table options of :func:`gyrodrift.io.tabular.read_log`, checked."""
+
+    gyro_unit: str  #: canonical unit name of the gyro columns in the file
+    scale: float  #: multiplier from that unit to deg/s
+    frame: str  #: "ned" or "enu"
+    renames: dict[str, str]  #: column map NEW -> OLD
+
+
+def read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None) -> ReadOptions:
+    """Check the table options (raising :class:`ConfigError`) and return them canonical."""
+    unit_name, scale = _gyro_scale(gyro_unit)
+    frame_name = _frame_name(frame)
+    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map))
+
+
+# ---------------------------------------------------------------------------
+# file-level errors
+# ---------------------------------------------------------------------------
+
+
+def check_input_path(path: Path) -> None:
+    """Raise :class:`LogFormatError` if ``path`` is not an existing regular file."""
+    if path.is_dir():
+        raise LogFormatError(
+            message(str(path), "is a directory, not a log file", "give the path of a .csv or .parquet log")
+        )
+    if not path.exists():
+        raise LogFormatError(
+            message(str(path), "input file does not exist", "check the path and the current directory")
+        )
+
+
+def read_error(path, exc: OSError) -> LogFormatError:
+    """The error for an input file the operating system cannot read."""
+    reason = exc.strerror or type(exc).__name__
+    return LogFormatError(message(str(path), f"cannot read the input file ({reason})", "check that it is a readable file"))
+
+
+def empty_file_error(name: str, advice: str) -> LogFormatError:
+    """The error for a file with no content at all."""
+    return LogFormatError(message(name, "file is empty", advice))
+
+
+def no_data_rows_error(src: Source) -> LogFormatError:
+    """The error for a table without data rows."""
+    problem = "has a header row but no data rows" if src.fmt == "csv" else "has no data rows"
+    return format_error(src, problem, "give a log with at least one data row")
+
+
+def table_to_frame(table: pa.Table, src: Source) -> pd.DataFrame:
+    """Convert to pandas, with column names stripped of spaces and checked for duplicates."""
+    names = [str(n).strip() for n in table.column_names]
+    seen = set()
+    for col in names:
+        if col in seen:
+            where = f"line {src.line_of(1)}" if src.line_of is not None else ""  # the header line
+            raise format_error(
+                src,
+                f"column {col!r} appears more than once in the header",
+                "rename or remove the duplicate column",
+                where=where,
+            )
+        seen.add(col)
+    frame = table.rename_columns(names).to_pandas(ignore_metadata=True)
+    return frame.reset_index(drop=True)
+
+
+# ---------------------------------------------------------------------------
+# column checks (each takes the frame and the source, returns nothing or a new frame)
+# ---------------------------------------------------------------------------
+
+
+def apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: Source) -> pd.DataFrame:
+    """Rename OLD -> NEW columns, refusing missing OLD names and duplicate results."""
+    if not column_map:
+        return frame
+    found = list(frame.columns)
+    for new, old in column_map.items():
+        if old not in frame.columns:
+            raise ConfigError(
+                message(
+                    src.name,
+                    f"column map {new}={old}: there is no column {old!r};"
+                    f" columns found: {show_names(found)}",
+                    "fix the --map NEW=OLD option (column_map in Python)",
+                )
+            )
+    renamed = [next((n for n, o in column_map.items() if o == c), c) for c in found]
+    for col in set(renamed):
+        if renamed.count(col) > 1:
+            raise ConfigError(
+                message(
+                    src.name,
+                    f"column map would give two columns named {col!r}",
+                    "map each contract name from one input column only, or drop the other column",
+                )
+            )
+    return frame.set_axis(renamed, axis=1)
+
+
+def _check_required_columns(frame: pd.DataFrame, src: Source) -> None:
+    """Raise if any of t, gyro_z, temp is missing."""
+    missing = [c for c in REQUIRED_COLS if c not in frame.columns]
+    if missing:
+        raise format_error(
+            src,
+            f"missing required column(s) {show_names(missing)};"
+            f" columns found: {show_names(frame.columns)}",
+            "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz;"
+            " column_map={'gyro_z': 'gz'} in Python)",
+        )
+
+
+def _check_compass_columns(frame: pd.DataFrame, src: Source) -> None:
+    """Raise unless ``heading`` or the full mag_* + acc_* set is present."""
+    if HEADING in frame.columns:
+        return
+    missing = [c for c in _MAG_FORM_COLS if c not in frame.columns]
+    if not missing:
+        return
+    partial = len(missing) < len(_MAG_FORM_COLS)
+    detail = f" (missing: {', '.join(missing)})" if partial else ""
+    raise format_error(
+        src,
+        f"no compass data: need a {HEADING!r} column or all of {', '.join(_MAG_FORM_COLS)}{detail};"
+        f" columns found: {show_names(frame.columns)}",
+        "add the compass columns or rename them with --map NEW=OLD (column_map in Python)",
+    )
+
+
+def _is_plain_numeric(series: pd.Series) -> bool:
+    """True for integer/float (not boolean) dtypes, which convert to float64 safely."""
+    return pd.api.types.is_numeric_dtype(series.dtype) and not pd.api.types.is_bool_dtype(series.dtype)
+
+
+def _objects_to_numbers(values: pd.Series) -> tuple[np.ndarray | None, int | None]:
+    """Convert cells that are Python objects (numbers, text, e.g. ``Decimal``) one by one.
+
+    Returns ``(values, None)`` or ``(None, pos)`` with the first cell that is not a number.
+    Slow, but only reached for object columns that are not all text.
+    """
+    out = np.empty(len(values), dtype=np.float64)
+    for pos, cell in enumerate(values.astype(object)):
+        if cell is None or (isinstance(cell, float) and np.isnan(cell)):
+            out[pos] = np.nan
+            continue
+        if isinstance(cell, (bool, np.bool_)):
+            return None, pos
+        text = str(cell).strip()
+        if text.lower() in _NAN_TEXT:
+            out[pos] = np.nan
+            continue
+        try:
+            out[pos] = float(cell) if not isinstance(cell, str) else float(text)
+        except (TypeError, ValueError):
+            return None, pos
+    return out, None
+
+
+_NAN_TEXT_ARRAY = pa.array(sorted(_NAN_TEXT), pa.string())
+
+
+def _canonical_nan(values: np.ndarray) -> np.ndarray:
+    """``values`` with every NaN as the one NaN numpy uses (not a sign or payload a
+    parser may leave), so that equal cells give equal bits whichever path read them."""
+    nan = np.isnan(values)
+    return np.where(nan, np.nan, values) if nan.any() else values
+
+
+def _parse_text_numbers(series: pd.Series) -> tuple[np.ndarray | None, int | None]:
+    """Convert text cells to float64 with pyarrow's number parser, cell by cell.
+
+    A cell is stripped of white space; one whose lower-case text is in :data:`_NAN_TEXT`
+    is empty (NaN). Returns ``(values, None)``, or ``(None, pos)`` with the position of
+    the first cell that is not a number, or ``(None, None)`` when some cells are not text
+    at all. pyarrow's CSV reader parses numbers with the same parser, so a cell has the
+    same value whether its column was read as numbers or as text (and whether the file
+    was read whole or in chunks).
+    """
+    try:
+        text = pa.array(series.astype(object), type=pa.string(), from_pandas=True)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        return None, None
+    text = pa_compute.utf8_trim_whitespace(text)
+    blank = pa_compute.is_in(pa_compute.utf8_lower(text), value_set=_NAN_TEXT_ARRAY)
+    text = pa_compute.if_else(blank, pa.scalar(None, pa.string()), text)
+    try:
+        return pa_compute.cast(text, pa.float64()).to_numpy(zero_copy_only=False), None
+    except pa.ArrowInvalid:
+        pass
+    lo, hi = 0, len(text)  # the first bad cell is in [lo, hi)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        try:
+            pa_compute.cast(text.slice(lo, mid - lo), pa.float64())
+            lo = mid
+        except pa.ArrowInvalid:
+            hi = mid
+    return None, lo
+
+
+def _numeric_column(series: pd.Series, col: str, src: Source) -> np.ndarray:
+    """Return a contract column as float64, or raise naming the first non-number."""
+    if isinstance(series.dtype, pd.CategoricalDtype):  # dictionary-encoded Parquet column
+        series = series.astype(object)
+    if _is_plain_numeric(series):
+        return _canonical_nan(series.to_numpy(dtype=np.float64, na_value=np.nan))
+    if series.isna().all():
+        return np.full(len(series), np.nan)
+    if pd.api.types.is_string_dtype(series.dtype) or series.dtype == object:
+        values, pos = _parse_text_numbers(series)
+        if values is not None:
+            return _canonical_nan(values)
+        if pos is None:  # cells that are not all text (e.g. Decimal objects)
+            values, pos = _objects_to_numbers(series)
+            if values is not None:
+                return _canonical_nan(values)
+    else:
+        # booleans, dates, timestamps, nested values: report the first non-empty cell
+        pos = int(np.flatnonzero(series.notna().to_numpy())[0])
+    raise format_error(
+        src,
+        f"{show_text(series.iloc[pos])} is not a number",
+        f"column {col!r} must hold numbers only: fix the value or leave the cell empty",
+        where=cell_label(src, pos, col),
+    )
+
+
+def convert_numeric(frame: pd.DataFrame, src: Source) -> pd.DataFrame:
+    """Convert every numeric contract column to float64 and reject inf values."""
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    for col in NUMERIC_COLS:
+        if col not in out.columns:
+            continue
+        values = _numeric_column(out[col], col, src)
+        infinite = np.flatnonzero(np.isinf(values))
+        if infinite.size:
+            pos = int(infinite[0])
+            raise format_error(
+                src,
+                f"value {float(values[pos])!r} is not finite",
+                "replace it with a number or leave the cell empty",
+                where=cell_label(src, pos, col),
+            )
+        out[col] = values
+    return out
+
+
+def _first_value_pos(values: np.ndarray) -> int | None:
+    """Position of the first non-NaN value, or None if all are NaN."""
+    idx = np.flatnonzero(~np.isnan(values))
+    return int(idx[0]) if idx.size else None
+
+
+def first_value_rows(frame: pd.DataFrame) -> dict[str, int | None]:
+    """Row of the first value (None: none) of each required column, after conversion."""
+    return {col: _first_value_pos(frame[col].to_numpy()) for col in REQUIRED_COLS}
+
+
+def _check_required_values(first: Mapping[str, int | None], src: Source) -> None:
+    """Reject entirely empty required columns and leading empty gyro_z/temp cells.
+
+    ``first`` maps each required column to the row of its first value in the whole
+    file (None: empty in every row), see :func:`first_value_rows`.
+    """
+    for col in REQUIRED_COLS:
+        if first[col] is None:
+            raise format_error(
+                src,
+                f"required column {col!r} is empty in every row",
+                "check the file, or map the right input column with --map NEW=OLD (column_map in Python)",
+            )
+    for col in (GYRO_Z, TEMP):
+        pos = first[col]
+        if pos is not None and pos > 0:
+            raise format_error(
+                src,
+                f"the first data row has no {col} value (the first one is on {row_label(src, pos)})",
+                f"drop the leading rows without {col} data",
+                where=cell_label(src, 0, col),
+            )
+
+
+def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None) -> None:
+    """Reject empty time stamps and times that do not strictly increase.
+
+    ``prev_t_s`` is the time of the row just before the frame (chunked reading), so
+    that a step back across two chunks is caught too.
+    """
+    t = frame[T].to_numpy()
+    empty = np.flatnonzero(np.isnan(t))
+    if empty.size:
+        pos = int(empty[0])
+        raise format_error(
+            src,
+            "time is empty",
+            "every row needs a time stamp in seconds: fill in t or drop the row",
+            where=cell_label(src, pos, T),
+        )
+    before = 0 if prev_t_s is None else 1
+    t_all = t if prev_t_s is None else np.concatenate(([prev_t_s], t))
+    bad = np.flatnonzero(~(np.diff(t_all) > 0.0))
+    if bad.size:
+        pos = int(bad[0]) + 1 - before  # row in the frame; pos - 1 may be the row before it
+        raise format_error(
+            src,
+            f"time is not strictly increasing: t={float(t[pos])!r} follows t={float(t_all[pos - 1 + before])!r}"
+            f" on {row_label(src, pos - 1)}",
+            "sort the log by time and remove duplicate samples",
+            where=cell_label(src, pos, T),
+        )
+
+
+def _check_temperature(frame: pd.DataFrame, src: Source) -> None:
+    """Reject temperatures outside :data:`TEMP_RANGE_C`."""
+    lo, hi = TEMP_RANGE_C
+    temp_c = frame[TEMP].to_numpy()
+    with np.errstate(invalid="ignore"):
+        outside = np.flatnonzero((temp_c < lo) | (temp_c > hi))
+    if outside.size:
+        pos = int(outside[0])
+        raise format_error(
+            src,
+            f"temperature {float(temp_c[pos])!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
+            "check the unit and the column (Kelvin? raw sensor counts?)"
+            " and map the right one with --map NEW=OLD (column_map in Python)",
+            where=cell_label(src, pos, TEMP),
+        )
+
+
+def _compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
+    """The compass columns (``heading``, ``mag_*``, ``acc_*``) that hold at least one value."""
+    return frozenset(c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns and frame[c].notna().any())
+
+
+def compass_form(columns, with_values: frozenset[str], src: Source) -> str:
+    """Return "heading", "mag" or "both": the compass forms that hold data.
+
+    ``columns`` are the frame's columns, ``with_values`` the compass columns holding a
+    value somewhere in the file (:func:`_compass_columns_with_values`, united over chunks).
+    """
+    heading = HEADING in with_values
+    mag = all(c in with_values for c in _MAG_FORM_COLS)
+    if heading and mag:
+        return "both"
+    if heading:
+        return "heading"
+    if mag:
+        return "mag"
+    present = [c for c in (HEADING,) + _MAG_FORM_COLS if c in columns]
+    empty = [c for c in present if c not in with_values]
+    raise format_error(
+        src,
+        f"the compass column(s) hold no values (empty in every row: {', '.join(empty)})",
+        "give a log with compass samples, or map the right columns with --map NEW=OLD (column_map in Python)",
+    )
+
+
+# ---------------------------------------------------------------------------
+# unit and frame conversion (pure: frame in, new frame out)
+# ---------------------------------------------------------------------------
+
+
+def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
+    """Multiply the gyro rate columns (and the ``true_bias_*`` truth) by ``scale``."""
+    if scale == 1.0:
+        return frame
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
+        if col in out.columns:
+            out[col] = out[col] * scale
+    return out
+
+
+def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
+    """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    for col in _HEADING_COLS:
+        if col in out.columns:
+            out[col] = wrap_360(90.0 - out[col].to_numpy())
+    for col in _FLU_TO_FRD_FLIP:
+        if col in out.columns:
+            out[col] = -out[col]
+    return out
+
+
+def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
+    """Wrap ``heading`` and ``ref_heading`` to [0, 360) deg (NaN stays NaN)."""
+    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    for col in _HEADING_COLS:
+        if col in out.columns:
+            out[col] = wrap_360(out[col].to_numpy())
+    return out
+
+
+# ---------------------------------------------------------------------------
+# one frame: checks and conversions shared by the whole-file and the chunked reader
+# ---------------------------------------------------------------------------
+
+
+def normalise_frame(
+    frame: pd.DataFrame,
+    src: Source,
+    opts: ReadOptions,
+    *,
+    prev_t_s: float | None = None,
+    first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = first_value_rows,
+) -> tuple[pd.DataFrame, frozenset[str]]:
+    """Check a frame of a table and bring it into the input contract.
+
+    The whole file (:func:`gyrodrift.io.tabular.read_log`) or one chunk of it
+    (:mod:`gyrodrift.io.chunked`) goes through here; every step is row by row, so the
+    chunks of a file come out as the rows of the whole.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Rows as read (:func:`table_to_frame`), names stripped.
+    src : Source
+        Where the rows are; ``src.row0`` is the file row of the frame's first row.
+    opts : ReadOptions
+    prev_t_s : float, optional
+        Time (s) of the file row just before the frame, for the strictly-increasing check.
+    first_values : callable, optional
+        ``first_values(converted_frame)`` gives the file row of the first value of each
+        required column (:func:`first_value_rows`); None skips that check (later chunks).
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        Numeric contract columns float64 in deg/s and NED, headings in [0, 360).
+    with_values : frozenset of str
+        Compass columns holding a value in this frame (for :func:`compass_form`).
+    """
+    df = apply_column_map(frame, opts.renames, src)
+    _check_required_columns(df, src)
+    _check_compass_columns(df, src)
+    df = convert_numeric(df, src)
+    if first_values is not None:
+        _check_required_values(first_values(df), src)
+    _check_time(df, src, prev_t_s)
+    _check_temperature(df, src)
+    with_values = _compass_columns_with_values(df)
+    df = _to_deg_per_s(df, opts.scale)
+    if opts.frame == "enu":
+        df = _enu_to_ned(df)
+    return _wrap_headings(df), with_values
