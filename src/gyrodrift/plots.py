@@ -59,6 +59,7 @@ __all__ = [
     "fig_scale_factor",
     "save_png",
     "png_base64",
+    "require_matplotlib",
 ]
 
 #: Most points drawn per line; longer series are reduced to a min/max envelope.
@@ -94,7 +95,7 @@ _WIDTH_IN = 10.0
 # ----------------------------------------------------------------------- helpers
 
 
-def _require_matplotlib():
+def require_matplotlib():
     """The Figure class and the Agg canvas, or a ConfigError naming the extra to install."""
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -106,7 +107,7 @@ def _require_matplotlib():
 
 def _figure(height_in: float, nrows: int = 1, *, sharex: bool = True):
     """A new Agg figure with ``nrows`` stacked axes (no pyplot); returns (fig, axes list)."""
-    Figure, FigureCanvasAgg = _require_matplotlib()
+    Figure, FigureCanvasAgg = require_matplotlib()
     fig = Figure(figsize=(_WIDTH_IN, height_in), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(nrows, 1, sharex=sharex, squeeze=False)[:, 0]

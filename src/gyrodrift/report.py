@@ -583,9 +583,9 @@ def build_report(
     outputs = dict(outputs)
     from gyrodrift import __version__
 
-    from gyrodrift.plots import _require_matplotlib
+    from gyrodrift.plots import require_matplotlib
 
-    _require_matplotlib()
+    require_matplotlib()
     plan = _figure_plan(log, outputs, config)
     parts = []
     for entry in _progress(plan, len(plan), "report figures"):
@@ -632,9 +632,9 @@ def write_report(path, html: str) -> None:
         The folder does not exist (named in the message), ``path`` is a folder, or
         writing fails.
     """
-    from gyrodrift.plots import _atomic_write
+    from gyrodrift._atomic import write_bytes_atomic
 
-    _atomic_write(Path(path), html.encode("utf-8"))
+    write_bytes_atomic(Path(path), html.encode("utf-8"))
 
 
 # ----------------------------------------------------------------------- command
@@ -675,9 +675,9 @@ def report_command(args: argparse.Namespace) -> int:
     from gyrodrift.config import load_config
     from gyrodrift._cliargs import read_input
     from gyrodrift.io import check_output_path
-    from gyrodrift.plots import _require_matplotlib
+    from gyrodrift.plots import require_matplotlib
 
-    _require_matplotlib()  # before the long work, not after it
+    require_matplotlib()  # before the long work, not after it
     out_path = Path(args.output)
     check_output_path(args.input, out_path)
     if getattr(args, "calibration", None):
