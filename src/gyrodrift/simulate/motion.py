@@ -21,6 +21,8 @@ __all__ = [
     "hold_s",
     "smooth_step",
     "smooth_step_slope",
+    "ramp_slice",
+    "sum_of_steps",
     "static_temperature",
     "vehicle_temperature",
     "calibration_temperature",
@@ -35,15 +37,122 @@ _HOLD_S = 60.0
 
 
 def smooth_step(x):
-    """Raised-cosine step: 0 for x <= 0, 1 for x >= 1, C1 in between."""
+    """Raised-cosine step: 0 for x <= 0, 1 for x >= 1, C1 in between.
+
+    Parameters
+    ----------
+    x : array_like
+        Position in the ramp (0 = start, 1 = end).
+
+    Returns
+    -------
+    ndarray
+        ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0.0 for ``x <= 0`` and exactly 1.0
+        for ``x >= 1``.
+
+    Examples
+    --------
+    >>> smooth_step(np.array([-2.0, 0.0, 1.0, 3.0])).tolist()
+    [0.0, 0.0, 1.0, 1.0]
+    >>> round(float(smooth_step(0.5)), 12)
+    0.5
+    """
     x = np.clip(x, 0.0, 1.0)
     return 0.5 - 0.5 * np.cos(np.pi * x)
 
 
 def smooth_step_slope(x):
-    """Derivative of :func:`smooth_step` with respect to x."""
+    """Derivative of :func:`smooth_step` with respect to x.
+
+    Parameters
+    ----------
+    x : array_like
+        Position in the ramp.
+
+    Returns
+    -------
+    ndarray
+        The slope; exactly 0.0 outside ``0 < x < 1``.
+    """
     inside = (x > 0.0) & (x < 1.0)
     return np.where(inside, 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0.0, 1.0)), 0.0)
+
+
+def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
+    """The samples of a ramp or pulse that lasts from ``start_s`` to ``end_s``.
+
+    Covers ``[start_s, end_s]`` and a margin of ``1e-6 * (1 + |start_s| + |end_s|)``
+    on both sides, many times the rounding error of ``t - start_s`` or ``t - end_s``:
+    a raised-cosine ramp (:func:`smooth_step` of ``(t - start_s) / (end_s - start_s)``,
+    or a pulse made of two of them) is exactly at its start value before the slice and
+    exactly at its end value after it. A scenario with one event every minute then
+    evaluates each event on its own samples, not on the whole run.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Sample times, s, increasing.
+    start_s, end_s : float
+        Start and end of the ramp, s.
+
+    Returns
+    -------
+    slice
+
+    Examples
+    --------
+    >>> ramp_slice(np.arange(10.0), 2.5, 4.0)
+    slice(3, 5, None)
+    """
+    pad = 1e-6 * (1.0 + abs(start_s) + abs(end_s))
+    lo = int(np.searchsorted(t_s, start_s - pad, side="left"))
+    hi = int(np.searchsorted(t_s, end_s + pad, side="right"))
+    return slice(lo, max(lo, hi))
+
+
+def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
+    """Sum of raised-cosine steps at the sample times, each step evaluated on its ramp only.
+
+    The result is, bit for bit, that of adding ``delta * smooth_step((t_s - t0) / dur)``
+    over the whole run for each step in turn: before a step's ramp that term is
+    ``±0.0``, which leaves every partial sum unchanged (a partial sum starting at +0.0
+    is never -0.0), and after it the term is exactly ``delta``. So a sample gets the
+    ramp values of the steps whose ramps it lies in, and ``delta`` of each step whose
+    ramp it is past, in the order of ``steps``; the cost is linear in ``len(t_s)``
+    plus the samples inside the ramps.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Sample times, s, increasing.
+    steps : iterable of (t0_s, dur_s, delta)
+        Steps in the order they are added: ramp start, ramp length (> 0), size.
+
+    Returns
+    -------
+    ndarray
+        The sum at ``t_s``.
+
+    Examples
+    --------
+    >>> t = np.arange(8.0)
+    >>> sum_of_steps(t, [(1.0, 2.0, 4.0), (4.0, 2.0, -4.0)]).round(12).tolist()
+    [0.0, 0.0, 2.0, 4.0, 4.0, 2.0, 0.0, 0.0]
+    """
+    out = np.zeros(t_s.size)
+    level = 0.0  # sum of the deltas of the steps added so far: the value past all their ramps
+    done = 0  # out[:done] holds the partial sums; every later sample is past all ramps so far
+    for t0, dur, delta in steps:
+        ramp = ramp_slice(t_s, t0, t0 + dur)
+        lo, hi = ramp.start, ramp.stop
+        if done < hi:
+            out[done:hi] = level
+        out[lo:hi] += delta * smooth_step((t_s[lo:hi] - t0) / dur)
+        out[hi:done] += delta  # samples past this ramp that an earlier, longer ramp reached
+        level = level + delta
+        done = max(done, hi)
+    out[done:] = level
+    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -90,7 +199,23 @@ class Motion:
 
 
 def hold_s(duration_s: float) -> float:
-    """Still, constant-temperature start: 60 s, or 10 % of a short run."""
+    """Length of the still, constant-temperature start of a run: 60 s, or 10 % of a short run.
+
+    Parameters
+    ----------
+    duration_s : float
+        Run length, s.
+
+    Returns
+    -------
+    float
+        Hold time, s.
+
+    Examples
+    --------
+    >>> hold_s(3600.0), hold_s(120.0)
+    (60.0, 12.0)
+    """
     return min(_HOLD_S, 0.1 * duration_s)
 
 

@@ -28,11 +28,13 @@ from gyrodrift.simulate.motion import (
     cold_start_temperature,
     hold_s,
     hysteresis_temperature,
+    ramp_slice,
     smooth_step,
     smooth_step_slope,
     soak_ramps,
     soak_temperature,
     static_temperature,
+    sum_of_steps,
     vehicle_temperature,
 )
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, triad_columns
@@ -162,14 +164,17 @@ def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion
     """
     t = np.asarray(t_s, dtype=float)
     plan = _vehicle_plan(duration_s, rng)
-    speed = np.zeros(t.size)
+    # Every event is evaluated on its own samples only (ramp_slice): outside them it
+    # adds exactly zero (accel, rate) or its full step (speed, sum_of_steps).
+    speed = sum_of_steps(t, plan.speed_steps)
     accel = np.zeros(t.size)
     for t0, dur, delta in plan.speed_steps:
-        speed += delta * smooth_step((t - t0) / dur)
-        accel += delta * smooth_step_slope((t - t0) / dur) / dur
+        ramp = ramp_slice(t, t0, t0 + dur)
+        accel[ramp] += delta * smooth_step_slope((t[ramp] - t0) / dur) / dur
     rate = np.zeros(t.size)
     for t0, dur, sign in plan.turns:
-        rate += _turn_rate(t, t0, dur, sign)
+        turn = ramp_slice(t, t0, t0 + dur)
+        rate[turn] += _turn_rate(t[turn], t0, dur, sign)
     wander = sum(a * np.cos(2 * np.pi * t / p + ph) for a, p, ph in plan.wander)
     rate = rate + wander * speed / plan.cruise_mps
     temp, temp_rate = vehicle_temperature(t, duration_s)
@@ -190,13 +195,18 @@ _SF_TURN_PEAK_DPS = (30.0, 90.0)
 _SF_TURN_DEG = 360.0
 
 
+def _rotation_s(angle_deg: float, peak_dps: float, ramp_s: float) -> float:
+    """Duration of one rotation of :func:`_rotation_rate`, s."""
+    return abs(angle_deg) / peak_dps + ramp_s
+
+
 def _rotation_rate(t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float, ramp_s: float) -> np.ndarray:
     """Rate of one rotation by ``angle_deg`` (signed), deg/s: raised-cosine ramps, plateau ``peak_dps``.
 
     Lasts ``|angle_deg|/peak_dps + ramp_s``; the ramp pair integrates to
     ``peak_dps * (duration - ramp_s) = |angle_deg|``.
     """
-    dur = abs(angle_deg) / peak_dps + ramp_s
+    dur = _rotation_s(angle_deg, peak_dps, ramp_s)
     up = smooth_step((t_s - t0) / ramp_s)
     down = smooth_step((t_s - (t0 + dur - ramp_s)) / ramp_s)
     return math.copysign(peak_dps, angle_deg) * (up - down)
@@ -237,8 +247,9 @@ def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> M
     t = np.asarray(t_s, dtype=float)
     temp, temp_rate = static_temperature(t, duration_s)
     rate = np.zeros(t.size)
-    for t0, angle, peak in rotation_plan(duration_s, rng):
-        rate += _rotation_rate(t, t0, angle, peak, _SF_TURN_RAMP_S)
+    for t0, angle, peak in rotation_plan(duration_s, rng):  # each on its own samples, zero elsewhere
+        turn = ramp_slice(t, t0, t0 + _rotation_s(angle, peak, _SF_TURN_RAMP_S))
+        rate[turn] += _rotation_rate(t[turn], t0, angle, peak, _SF_TURN_RAMP_S)
     zero = np.zeros(t.size)
     return Motion(
         temp_c=temp,
