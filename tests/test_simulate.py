@@ -626,3 +626,62 @@ def test_random_device_and_compass():
     assert 0.3 <= comp.noise_deg <= 0.6 and 0.0 <= comp.deviation_deg <= 3.0
     df = simulate("hysteresis", seed=1, duration_s=600.0, fs_hz=10.0, device=hyst, compass=comp)
     assert df.attrs["device"]["lag_tau_s"] == hyst.lag_tau_s  # the drawn memory, not the scenario's
+
+
+# ------------------------------------------------------------------ cost linear in the run length
+
+
+@pytest.mark.parametrize("scenario", list(SCENARIOS))
+def test_ramps_are_evaluated_near_their_own_time_only(scenario, monkeypatch):
+    """The raised-cosine ramps (turns, rotations, speed changes, interference) cost O(n) in total.
+
+    Every sample handed to ``smooth_step``/``smooth_step_slope`` is counted. A scenario
+    that evaluated each of its events over the whole run (as many events as minutes)
+    would count about ``events × n`` samples, a number that grows with the run length
+    per sample; evaluating each event near its own time keeps the count per sample
+    the same for a 2-h and an 8-h run.
+    """
+    from gyrodrift.simulate import motion, scenarios, sensors
+
+    counted = [0]
+
+    def counting(func):
+        def wrapper(x):
+            counted[0] += np.size(x)
+            return func(x)
+
+        return wrapper
+
+    for name in ("smooth_step", "smooth_step_slope"):
+        real = getattr(motion, name)
+        for module in (motion, scenarios, sensors):
+            if hasattr(module, name):
+                monkeypatch.setattr(module, name, counting(real))
+    per_sample = {}
+    for hours in (2.0, 8.0):
+        counted[0] = 0
+        n = len(simulate(scenario, seed=0, duration_s=hours * 3600.0, fs_hz=1.0, compass=CompassModel(rate_hz=1.0)))
+        per_sample[hours] = counted[0] / n
+    assert per_sample[8.0] <= 1.5 * per_sample[2.0] + 1.0, per_sample
+    assert per_sample[8.0] <= 20.0, per_sample
+
+
+def test_sum_of_steps_is_bitwise_the_sum_over_the_whole_run():
+    """Each step on its own ramp gives exactly the full-length sum, also for unordered, overlapping steps."""
+    from gyrodrift.simulate.motion import ramp_slice, smooth_step, smooth_step_slope, sum_of_steps
+
+    rng = np.random.default_rng(3)
+    t = np.arange(20001) / 7.0
+    for ordered in (True, False):
+        t0 = rng.uniform(-50.0, t[-1] + 50.0, size=60)
+        t0 = np.sort(t0) if ordered else t0
+        steps = list(zip(t0, rng.uniform(0.05, 300.0, size=60), rng.choice([-8.0, 8.0, 0.37, -1e-3], size=60)))
+        full = np.zeros(t.size)
+        pulse_full, pulse = np.zeros(t.size), np.zeros(t.size)
+        for start, dur, delta in steps:
+            full += delta * smooth_step((t - start) / dur)
+            pulse_full += delta * smooth_step_slope((t - start) / dur) / dur
+            ramp = ramp_slice(t, start, start + dur)
+            pulse[ramp] += delta * smooth_step_slope((t[ramp] - start) / dur) / dur
+        assert np.array_equal(sum_of_steps(t, steps).view(np.uint64), full.view(np.uint64))
+        assert np.array_equal(pulse.view(np.uint64), pulse_full.view(np.uint64))

@@ -1,0 +1,335 @@
+"""True motion of a simulated run: the :class:`Motion` record and the temperature profiles.
+
+A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what really happens to the
+unit as a :class:`Motion`: the true die temperature and its exact rate, the true
+heading rate, the mounting attitude and the kinematic acceleration, sampled at the log
+times. The temperature profiles here all start with a still hold at constant
+temperature (:func:`hold_s`) and then follow knots placed at fractions of the rest of
+the run, so a shorter run keeps the shape. :func:`smooth_step` is the raised-cosine
+ramp of every turn, speed change and interference window.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "Motion",
+    "hold_s",
+    "smooth_step",
+    "smooth_step_slope",
+    "ramp_slice",
+    "sum_of_steps",
+    "static_temperature",
+    "vehicle_temperature",
+    "calibration_temperature",
+    "hysteresis_temperature",
+    "cold_start_temperature",
+    "soak_temperature",
+    "soak_ramps",
+]
+
+#: Longest time the unit stands still at constant temperature at the start, s.
+_HOLD_S = 60.0
+
+
+def smooth_step(x):
+    """Raised-cosine step: 0 for x <= 0, 1 for x >= 1, C1 in between.
+
+    Parameters
+    ----------
+    x : array_like
+        Position in the ramp (0 = start, 1 = end).
+
+    Returns
+    -------
+    ndarray
+        ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0.0 for ``x <= 0`` and exactly 1.0
+        for ``x >= 1``.
+
+    Examples
+    --------
+    >>> smooth_step(np.array([-2.0, 0.0, 1.0, 3.0])).tolist()
+    [0.0, 0.0, 1.0, 1.0]
+    >>> round(float(smooth_step(0.5)), 12)
+    0.5
+    """
+    x = np.clip(x, 0.0, 1.0)
+    return 0.5 - 0.5 * np.cos(np.pi * x)
+
+
+def smooth_step_slope(x):
+    """Derivative of :func:`smooth_step` with respect to x.
+
+    Parameters
+    ----------
+    x : array_like
+        Position in the ramp.
+
+    Returns
+    -------
+    ndarray
+        The slope; exactly 0.0 outside ``0 < x < 1``.
+    """
+    inside = (x > 0.0) & (x < 1.0)
+    return np.where(inside, 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0.0, 1.0)), 0.0)
+
+
+def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
+    """The samples of a ramp or pulse that lasts from ``start_s`` to ``end_s``.
+
+    Covers ``[start_s, end_s]`` and a margin of ``1e-6 * (1 + |start_s| + |end_s|)``
+    on both sides, many times the rounding error of ``t - start_s`` or ``t - end_s``:
+    a raised-cosine ramp (:func:`smooth_step` of ``(t - start_s) / (end_s - start_s)``,
+    or a pulse made of two of them) is exactly at its start value before the slice and
+    exactly at its end value after it. A scenario with one event every minute then
+    evaluates each event on its own samples, not on the whole run.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Sample times, s, increasing.
+    start_s, end_s : float
+        Start and end of the ramp, s.
+
+    Returns
+    -------
+    slice
+
+    Examples
+    --------
+    >>> ramp_slice(np.arange(10.0), 2.5, 4.0)
+    slice(3, 5, None)
+    """
+    pad = 1e-6 * (1.0 + abs(start_s) + abs(end_s))
+    lo = int(np.searchsorted(t_s, start_s - pad, side="left"))
+    hi = int(np.searchsorted(t_s, end_s + pad, side="right"))
+    return slice(lo, max(lo, hi))
+
+
+def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
+    """Sum of raised-cosine steps at the sample times, each step evaluated on its ramp only.
+
+    The result is, bit for bit, that of adding ``delta * smooth_step((t_s - t0) / dur)``
+    over the whole run for each step in turn: before a step's ramp that term is
+    ``±0.0``, which leaves every partial sum unchanged (a partial sum starting at +0.0
+    is never -0.0), and after it the term is exactly ``delta``. So a sample gets the
+    ramp values of the steps whose ramps it lies in, and ``delta`` of each step whose
+    ramp it is past, in the order of ``steps``; the cost is linear in ``len(t_s)``
+    plus the samples inside the ramps.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Sample times, s, increasing.
+    steps : iterable of (t0_s, dur_s, delta)
+        Steps in the order they are added: ramp start, ramp length (> 0), size.
+
+    Returns
+    -------
+    ndarray
+        The sum at ``t_s``.
+
+    Examples
+    --------
+    >>> t = np.arange(8.0)
+    >>> sum_of_steps(t, [(1.0, 2.0, 4.0), (4.0, 2.0, -4.0)]).round(12).tolist()
+    [0.0, 0.0, 2.0, 4.0, 4.0, 2.0, 0.0, 0.0]
+    """
+    out = np.zeros(t_s.size)
+    level = 0.0  # sum of the deltas of the steps added so far: the value past all their ramps
+    done = 0  # out[:done] holds the partial sums; every later sample is past all ramps so far
+    for t0, dur, delta in steps:
+        ramp = ramp_slice(t_s, t0, t0 + dur)
+        lo, hi = ramp.start, ramp.stop
+        if done < hi:
+            out[done:hi] = level
+        out[lo:hi] += delta * smooth_step((t_s[lo:hi] - t0) / dur)
+        out[hi:done] += delta  # samples past this ramp that an earlier, longer ramp reached
+        level = level + delta
+        done = max(done, hi)
+    out[done:] = level
+    return out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Motion:
+    """True motion and environment of one scenario, sampled at the log times.
+
+    Attributes
+    ----------
+    temp_c : ndarray
+        True die temperature, degC.
+    temp_rate_cps : ndarray
+        Its exact time derivative, degC/s.
+    heading_rate_dps : ndarray
+        True heading rate, deg/s (positive = clockwise from above).
+    heading0_deg : float
+        True heading at the first sample, deg.
+    roll_deg, pitch_deg : float
+        Constant mounting attitude, deg (the body rate about z is the heading rate
+        times ``cos(roll)*cos(pitch)``).
+    accel_fwd_mps2, accel_lat_mps2 : ndarray
+        Kinematic acceleration along the forward and right level axes, m/s².
+    interference : tuple of (start_s, duration_s, offset_deg)
+        Magnetic interference windows of the scenario.
+    interference_offset_deg : ndarray or None
+        A further time-varying compass heading offset at the log times, deg (magnetic
+        interference that wanders, which constant windows cannot describe); added to
+        the windows' offset, in the simulated field as well. None = none.
+    compass_dropouts : tuple of (start_s, duration_s)
+        Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
+        ``start_s <= t < start_s + duration_s``).
+    """
+
+    temp_c: np.ndarray
+    temp_rate_cps: np.ndarray
+    heading_rate_dps: np.ndarray
+    heading0_deg: float
+    roll_deg: float = 0.0
+    pitch_deg: float = 0.0
+    accel_fwd_mps2: np.ndarray | None = None
+    accel_lat_mps2: np.ndarray | None = None
+    interference: tuple[tuple[float, float, float], ...] = field(default=())
+    interference_offset_deg: np.ndarray | None = None
+    compass_dropouts: tuple[tuple[float, float], ...] = field(default=())
+
+
+def hold_s(duration_s: float) -> float:
+    """Length of the still, constant-temperature start of a run: 60 s, or 10 % of a short run.
+
+    Parameters
+    ----------
+    duration_s : float
+        Run length, s.
+
+    Returns
+    -------
+    float
+        Hold time, s.
+
+    Examples
+    --------
+    >>> hold_s(3600.0), hold_s(120.0)
+    (60.0, 12.0)
+    """
+    return min(_HOLD_S, 0.1 * duration_s)
+
+
+def _knot_profile(t_s, duration_s: float, knots_u, knots_c):
+    """Temperature (degC) and its exact rate (degC/s) through knots.
+
+    Flat at ``knots_c[0]`` for the hold time, then a monotone C1 cubic (PCHIP) through
+    ``knots_c`` at fractions ``knots_u`` (0 → end of hold, 1 → end of run).
+    """
+    hold = hold_s(duration_s)
+    knot_t = np.concatenate([[0.0], hold + (duration_s - hold) * np.asarray(knots_u, dtype=float)])
+    knot_c = np.concatenate([[knots_c[0]], np.asarray(knots_c, dtype=float)])
+    from scipy.interpolate import PchipInterpolator  # here, not at the top: scipy costs 0.4 s at start-up
+
+    spline = PchipInterpolator(knot_t, knot_c, extrapolate=True)
+    t = np.asarray(t_s, dtype=float)
+    return spline(t), spline.derivative()(t)
+
+
+def static_temperature(t_s, duration_s: float):
+    """Static heating run (Fig. 1): 23 degC, fast rise, slower rise to 58, plateau, cooling.
+
+    Shape in fractions of the run after the hold: 23 → 46 degC by 0.16 (fast),
+    → 58 by 0.40 (slower), plateau to 0.52, then exponential cooling towards 23 degC
+    with a time constant of 0.15 of the run (about 24.4 degC at the end).
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    cool_u = 0.52 + 0.48 * np.arange(1, 9) / 8.0
+    knots_u = [0.0, 0.04, 0.10, 0.16, 0.28, 0.40, 0.52, *cool_u]
+    knots_c = [23.0, 29.0, 39.0, 46.0, 53.0, 58.0, 58.0, *(23.0 + 35.0 * np.exp(-(cool_u - 0.52) / 0.15))]
+    return _knot_profile(t_s, duration_s, knots_u, knots_c)
+
+
+def vehicle_temperature(t_s, duration_s: float):
+    """Vehicle run (Fig. 7): 26 → 37 degC, fast at first and levelling off.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    u = np.linspace(0.0, 1.0, 9)
+    c = 26.0 + 11.0 * (1.0 - np.exp(-u / 0.5)) / (1.0 - math.exp(-2.0))
+    return _knot_profile(t_s, duration_s, u, c)
+
+
+def calibration_temperature(t_s, duration_s: float):
+    """Calibration heating run: -10 → 60 degC, a nearly uniform slow ramp.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    return _knot_profile(t_s, duration_s, [0.0, 0.05, 0.95, 1.0], [-10.0, -8.25, 58.25, 60.0])
+
+
+def hysteresis_temperature(t_s, duration_s: float):
+    """Heating and cooling cycle of ``hysteresis``: 10 → 70 → 10 degC, then 10 → 45 → 20 degC.
+
+    Shape in fractions of the run after the hold: 10 → 70 degC by 0.25, plateau to
+    0.32, cooling to 10 degC by 0.60, plateau to 0.66, a minor loop up to 45 degC by
+    0.80, plateau to 0.84 and cooling to 20 degC at the end. Every temperature between
+    20 and 45 degC is passed four times, twice heating and twice cooling.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    knots_u = [0.0, 0.25, 0.32, 0.60, 0.66, 0.80, 0.84, 1.0]
+    knots_c = [10.0, 70.0, 70.0, 10.0, 10.0, 45.0, 45.0, 20.0]
+    return _knot_profile(t_s, duration_s, knots_u, knots_c)
+
+
+def cold_start_temperature(t_s, duration_s: float):
+    """Warm-up after a cold soak: -20 degC held, then up to +60 degC, fast at first.
+
+    ``T = -20 + 80 * (1 - exp(-u/0.25)) / (1 - exp(-4))`` through 9 knots, ``u`` the
+    fraction of the run after the hold: half of the 80 degC rise comes in the first
+    18 % of the run (for the default 2-h run about 0.04 degC/s at first), and the
+    profile ends at exactly +60 degC.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    u = np.linspace(0.0, 1.0, 9)
+    c = -20.0 + 80.0 * (1.0 - np.exp(-u / 0.25)) / (1.0 - math.exp(-4.0))
+    return _knot_profile(t_s, duration_s, u, c)
+
+
+#: Soak profile: knots (fraction of the run after the hold, degC); ramps between unequal knots.
+_SOAK_KNOTS_U = (0.0, 0.08, 0.20, 0.33, 0.50, 0.62, 0.75, 0.86, 0.95, 1.0)
+_SOAK_KNOTS_C = (20.0, 20.0, 45.0, 45.0, 5.0, 5.0, 35.0, 35.0, 20.0, 20.0)
+
+def soak_temperature(t_s, duration_s: float):
+    """Thermal soak of ``soak``: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC.
+
+    Knots (fraction of the run after the hold → degC): 0.08 → 20, 0.20 → 45,
+    0.33 → 45, 0.50 → 5, 0.62 → 5, 0.75 → 35, 0.86 → 35, 0.95 → 20, flat to the end.
+    For the default 12-h run the ramps take 1.1–2.0 h (at most about 0.01 degC/s).
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
+    """
+    return _knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
+
+
+def soak_ramps(duration_s: float) -> tuple[tuple[float, float], ...]:
+    """The temperature ramps of ``soak``: ``(start_s, end_s)`` each, in run time."""
+    hold = hold_s(duration_s)
+    at = [hold + (duration_s - hold) * u for u in _SOAK_KNOTS_U]
+    return tuple(
+        (at[i], at[i + 1]) for i in range(len(at) - 1) if _SOAK_KNOTS_C[i] != _SOAK_KNOTS_C[i + 1]
+    )

@@ -1,0 +1,627 @@
+"""The named scenarios and :func:`simulate`, which turns a scenario into a log.
+
+A scenario is a motion builder ``f(t_s, duration_s, rng) -> Motion``
+(:data:`SCENARIOS`): the temperature profile of :mod:`gyrodrift.simulate.motion`, the
+heading rate (still, vehicle loops, turntable turns, sway), the mounting attitude and
+the magnetic environment (interference windows, wandering interference, compass
+dropouts). :func:`simulate` samples it, integrates the true heading and applies the
+gyro (:mod:`gyrodrift.simulate.device`) and compass (:mod:`gyrodrift.simulate.sensors`)
+error models, each from its own random stream.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
+from gyrodrift.errors import ConfigError
+from gyrodrift.simulate.checks import positive
+from gyrodrift.simulate.device import DeviceModel, TriadModel, gauss_markov, random_walk, temperature_reading
+from gyrodrift.simulate.motion import (
+    Motion,
+    calibration_temperature,
+    cold_start_temperature,
+    hold_s,
+    hysteresis_temperature,
+    ramp_slice,
+    smooth_step,
+    smooth_step_slope,
+    soak_ramps,
+    soak_temperature,
+    static_temperature,
+    sum_of_steps,
+    vehicle_temperature,
+)
+from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, triad_columns
+
+__all__ = [
+    "TRUE_SF",
+    "SCENARIOS",
+    "DEFAULT_DURATION_S",
+    "simulate",
+    "interference_windows_static",
+    "interference_windows_wander",
+    "wander_offset",
+    "soak_outages",
+    "rotation_plan",
+    "scenario_static",
+    "scenario_static_outages",
+    "scenario_vehicle",
+    "scenario_calibration",
+    "scenario_scale_factor",
+    "scenario_interference_wander",
+    "scenario_hysteresis",
+    "scenario_cold_start",
+    "scenario_soak",
+]
+
+#: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
+TRUE_SF = "true_sf"
+
+
+def interference_windows_static(duration_s: float) -> tuple[tuple[float, float, float], ...]:
+    """The three interference windows of ``static-outages`` (Fig. 5), scaled to the run.
+
+    For the default 3-h run: 300 s from 2160 s (rising, +20 deg), 300 s from 4860 s
+    (plateau, -15 deg) and 600 s from 7560 s (cooling, +30 deg).
+    """
+    scale = duration_s / DEFAULT_DURATION_S["static"]
+    return (
+        (0.20 * duration_s, 300.0 * scale, 20.0),
+        (0.45 * duration_s, 300.0 * scale, -15.0),
+        (0.70 * duration_s, 600.0 * scale, 30.0),
+    )
+
+
+def _still(t_s, temp_c, temp_rate_cps, heading0_deg, roll_deg, pitch_deg, interference=()) -> Motion:
+    zero = np.zeros(np.shape(t_s))
+    return Motion(
+        temp_c=temp_c,
+        temp_rate_cps=temp_rate_cps,
+        heading_rate_dps=zero,
+        heading0_deg=heading0_deg,
+        roll_deg=roll_deg,
+        pitch_deg=pitch_deg,
+        accel_fwd_mps2=zero,
+        accel_lat_mps2=zero,
+        interference=interference,
+    )
+
+
+def scenario_static(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Motionless at 40 deg on a slightly tilted bench, heated 23 → 58 degC and cooled."""
+    temp, rate = static_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+
+
+def scenario_static_outages(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """``static`` with magnetic interference in three windows (300, 300, 600 s)."""
+    temp, rate = static_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 40.0, 0.8, -1.2, interference_windows_static(duration_s))
+
+
+def scenario_calibration(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Motionless at 200 deg, heated slowly from -10 to 60 degC (calibration run)."""
+    temp, rate = calibration_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 200.0, -0.5, 0.7)
+
+
+@dataclass(frozen=True, kw_only=True)
+class _VehiclePlan:
+    """Timed events of a vehicle run: speed steps (t0, dur, delta_mps), turns (t0, dur, sign)."""
+
+    speed_steps: tuple[tuple[float, float, float], ...]
+    turns: tuple[tuple[float, float, int], ...]
+    wander: tuple[tuple[float, float, float], ...]  # (amplitude deg/s, period s, phase rad)
+    cruise_mps: float
+
+
+def _vehicle_plan(duration_s: float, rng: np.random.Generator) -> _VehiclePlan:
+    """Rectangular loops after a still start: legs 30–120 s, 90° turns, occasional stops."""
+    cruise, ramp = 8.0, 6.0
+    t = hold_s(duration_s)
+    steps = [(t, ramp, cruise)]
+    turns = []
+    t += ramp
+    while t < duration_s:
+        sign = 1 if rng.random() < 0.75 else -1  # mostly clockwise loops
+        long_leg, short_leg = rng.uniform(30.0, 120.0, size=2)
+        for leg in (long_leg, short_leg, long_leg, short_leg):
+            t += leg * rng.uniform(0.95, 1.05)
+            if rng.random() < 0.15:  # stop: brake, stand, pull away
+                steps.append((t, ramp, -cruise))
+                t += ramp + rng.uniform(10.0, 40.0)
+                steps.append((t, ramp, cruise))
+                t += ramp
+            dur = rng.uniform(5.5, 7.5)
+            turns.append((t, dur, sign))
+            t += dur
+    wander = tuple(
+        (float(rng.uniform(0.04, 0.10)), float(rng.uniform(6.0, 40.0)), float(rng.uniform(0.0, 2 * np.pi)))
+        for _ in range(3)
+    )
+    return _VehiclePlan(speed_steps=tuple(steps), turns=tuple(turns), wander=wander, cruise_mps=cruise)
+
+
+def _turn_rate(t_s: np.ndarray, t0: float, dur: float, sign: int) -> np.ndarray:
+    """Rate of one smooth 90° turn, deg/s: raised-cosine ramps of 0.3*dur, plateau between."""
+    ramp = 0.3 * dur
+    peak = 90.0 / (dur - ramp)  # each ramp pair integrates to peak*(dur - ramp)
+    return sign * peak * (smooth_step((t_s - t0) / ramp) - smooth_step((t_s - (t0 + dur - ramp)) / ramp))
+
+
+def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """A car on a flat road: still 60 s, then rectangular loops with 90° turns.
+
+    Straight legs of 30–120 s with a small yaw wander (at most 0.3 deg/s, scaled by
+    speed), 90° turns of 5.5–7.5 s (peak 17–23 deg/s), stops of 10–40 s after 15 % of
+    the legs, cruise 8 m/s, loops mostly clockwise; temperature 26 → 37 degC.
+    """
+    t = np.asarray(t_s, dtype=float)
+    plan = _vehicle_plan(duration_s, rng)
+    # Every event is evaluated on its own samples only (ramp_slice): outside them it
+    # adds exactly zero (accel, rate) or its full step (speed, sum_of_steps).
+    speed = sum_of_steps(t, plan.speed_steps)
+    accel = np.zeros(t.size)
+    for t0, dur, delta in plan.speed_steps:
+        ramp = ramp_slice(t, t0, t0 + dur)
+        accel[ramp] += delta * smooth_step_slope((t[ramp] - t0) / dur) / dur
+    rate = np.zeros(t.size)
+    for t0, dur, sign in plan.turns:
+        turn = ramp_slice(t, t0, t0 + dur)
+        rate[turn] += _turn_rate(t[turn], t0, dur, sign)
+    wander = sum(a * np.cos(2 * np.pi * t / p + ph) for a, p, ph in plan.wander)
+    rate = rate + wander * speed / plan.cruise_mps
+    temp, temp_rate = vehicle_temperature(t, duration_s)
+    return Motion(
+        temp_c=temp,
+        temp_rate_cps=temp_rate,
+        heading_rate_dps=rate,
+        heading0_deg=30.0,
+        accel_fwd_mps2=accel,
+        accel_lat_mps2=speed * np.radians(rate),
+    )
+
+
+#: Rotation schedule of ``scale-factor``: period (s), ramp time (s), peak rate range (deg/s).
+_SF_TURN_PERIOD_S = 120.0
+_SF_TURN_RAMP_S = 2.0
+_SF_TURN_PEAK_DPS = (30.0, 90.0)
+_SF_TURN_DEG = 360.0
+
+
+def _rotation_s(angle_deg: float, peak_dps: float, ramp_s: float) -> float:
+    """Duration of one rotation of :func:`_rotation_rate`, s."""
+    return abs(angle_deg) / peak_dps + ramp_s
+
+
+def _rotation_rate(t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float, ramp_s: float) -> np.ndarray:
+    """Rate of one rotation by ``angle_deg`` (signed), deg/s: raised-cosine ramps, plateau ``peak_dps``.
+
+    Lasts ``|angle_deg|/peak_dps + ramp_s``; the ramp pair integrates to
+    ``peak_dps * (duration - ramp_s) = |angle_deg|``.
+    """
+    dur = _rotation_s(angle_deg, peak_dps, ramp_s)
+    up = smooth_step((t_s - t0) / ramp_s)
+    down = smooth_step((t_s - (t0 + dur - ramp_s)) / ramp_s)
+    return math.copysign(peak_dps, angle_deg) * (up - down)
+
+
+def rotation_plan(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float, float], ...]:
+    """The rotations of ``scale-factor``: ``(start_s, angle_deg, peak_dps)`` each.
+
+    One full turn (±360°, so the compass deviation is the same before and after) every
+    120 s, the first 60 s after the still start, alternating clockwise and
+    anticlockwise, plateau rate uniform in 30–90 deg/s (from ``rng``), raised-cosine
+    ramps of 2 s; the unit stands still between turns. A turn that would not end 10 s
+    before the end of the run is left out.
+    """
+    turns = []
+    t0 = hold_s(duration_s) + 0.5 * _SF_TURN_PERIOD_S
+    sign = 1.0
+    while True:
+        peak = float(rng.uniform(*_SF_TURN_PEAK_DPS))
+        if t0 + _SF_TURN_DEG / peak + _SF_TURN_RAMP_S + 10.0 > duration_s:
+            break
+        turns.append((t0, sign * _SF_TURN_DEG, peak))
+        t0 += _SF_TURN_PERIOD_S
+        sign = -sign
+    return tuple(turns)
+
+
+def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Section 4.3: the static heating run on a level turntable with repeated full turns.
+
+    The temperature profile of ``static`` (23 → 58 degC and back), a stable magnetic
+    field (no interference windows) and the turns of :func:`rotation_plan`: the
+    heading change of the gyro over a turn against the compass measures the scale
+    factor, the still periods between turns the drift. The unit turns about its own
+    axis (no kinematic acceleration); the gyro scale factor comes from
+    ``SCENARIO_SCALE_FACTOR_PPM['scale-factor']`` unless the device sets its own.
+    """
+    t = np.asarray(t_s, dtype=float)
+    temp, temp_rate = static_temperature(t, duration_s)
+    rate = np.zeros(t.size)
+    for t0, angle, peak in rotation_plan(duration_s, rng):  # each on its own samples, zero elsewhere
+        turn = ramp_slice(t, t0, t0 + _rotation_s(angle, peak, _SF_TURN_RAMP_S))
+        rate[turn] += _rotation_rate(t[turn], t0, angle, peak, _SF_TURN_RAMP_S)
+    zero = np.zeros(t.size)
+    return Motion(
+        temp_c=temp,
+        temp_rate_cps=temp_rate,
+        heading_rate_dps=rate,
+        heading0_deg=40.0,
+        accel_fwd_mps2=zero,
+        accel_lat_mps2=zero,
+    )
+
+
+# --------------------------------------------------------------------------- beyond the paper
+
+#: Soak outages, one in the middle of each temperature ramp: (duration in s of the
+#: 12-h run, offset deg or None = compass missing).
+_SOAK_OUTAGES = ((900.0, None), (1200.0, 30.0), (900.0, None), (600.0, -25.0))
+
+
+def soak_outages(duration_s: float):
+    """The compass outages of ``soak``, one centred in each temperature ramp.
+
+    For the default 12-h run: 900 s without compass (first ramp, heating), 1200 s of
+    +30 deg interference (second ramp, cooling), 900 s without compass (third,
+    heating) and 600 s of -25 deg interference (fourth, cooling); durations scale with
+    the run.
+
+    Returns
+    -------
+    dropouts : tuple of (start_s, duration_s)
+        Windows without compass samples.
+    interference : tuple of (start_s, duration_s, offset_deg)
+        Magnetic interference windows.
+    """
+    scale = duration_s / (12 * 3600.0)
+    dropouts, interference = [], []
+    for (start, end), (dur, offset) in zip(soak_ramps(duration_s), _SOAK_OUTAGES):
+        dur *= scale
+        t0 = 0.5 * (start + end) - 0.5 * dur
+        if offset is None:
+            dropouts.append((t0, dur))
+        else:
+            interference.append((t0, dur, offset))
+    return tuple(dropouts), tuple(interference)
+
+
+def interference_windows_wander(duration_s: float) -> tuple[tuple[float, float], ...]:
+    """Where the interference of ``interference-wander`` acts: ``(start_s, duration_s)`` each.
+
+    For the default 3-h run: 900 s from 1296 s (early rise), 1200 s from 3456 s (top
+    of the rise), 900 s from 5940 s (plateau) and 1500 s from 8424 s (cooling); start
+    and length scale with the run.
+    """
+    scale = duration_s / (3 * 3600.0)
+    return tuple((f * duration_s, d * scale) for f, d in ((0.12, 900.0), (0.32, 1200.0), (0.55, 900.0), (0.78, 1500.0)))
+
+
+#: Wandering interference: ramp in/out (s), mean offset (deg), sinusoid amplitudes (deg)
+#: and periods (s) of the three components of each window.
+_WANDER_RAMP_S = 120.0
+_WANDER_MEAN_DEG = (2.0, 6.0)
+_WANDER_AMP_DEG = (1.0, 3.0)
+_WANDER_PERIOD_S = (180.0, 900.0)
+
+
+def wander_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Slowly wandering compass heading offset of ``interference-wander``, deg.
+
+    In each window of :func:`interference_windows_wander` the offset is a mean of
+    2–6 deg (random sign) plus three sinusoids of 1–3 deg amplitude and 3–15 min
+    period (random phases), faded in and out with raised-cosine ramps of
+    ``min(120 s, window/4)``; 0 outside the windows. For a window longer than 8 min the
+    offset changes by at most about 0.35 deg/s (typically 0.05–0.15 deg/s): too slow
+    for a 10-s disagreement gate of 3 deg to notice, so it pulls the compass along
+    with it. Periods are absolute (minutes), not scaled with the run.
+
+    Parameters
+    ----------
+    t_s : array_like
+        Times, s.
+    duration_s : float
+        Run length, s.
+    rng : numpy.random.Generator
+        Source of the offsets, amplitudes, periods and phases (a fixed number of
+        draws per window).
+
+    Returns
+    -------
+    ndarray
+        Offset, deg.
+    """
+    t = np.asarray(t_s, dtype=float)
+    out = np.zeros(t.shape)
+    for start, dur in interference_windows_wander(duration_s):
+        mean = rng.choice([-1.0, 1.0]) * rng.uniform(*_WANDER_MEAN_DEG)
+        amp = rng.uniform(*_WANDER_AMP_DEG, size=3)
+        period = rng.uniform(*_WANDER_PERIOD_S, size=3)
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+        ramp = min(_WANDER_RAMP_S, dur / 4.0)
+        envelope = smooth_step((t - start) / ramp) - smooth_step((t - (start + dur - ramp)) / ramp)
+        inside = envelope > 0.0
+        x = t[inside] - start
+        wave = mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
+        out[inside] = out[inside] + envelope[inside] * wave
+    return out
+
+
+def scenario_interference_wander(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """``static`` with magnetic interference that wanders slowly in four windows.
+
+    The bench, attitude and temperature of ``static`` (23 → 58 degC and back); the
+    compass offset of :func:`wander_offset` (a few degrees, changing over minutes) in
+    the windows of :func:`interference_windows_wander`.
+    """
+    temp, rate = static_temperature(t_s, duration_s)
+    still = _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    return replace(still, interference_offset_deg=wander_offset(t_s, duration_s, rng))
+
+
+def scenario_hysteresis(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """A strongly nonlinear device with hysteresis, motionless at 120 deg, heated and cooled.
+
+    The temperature cycle of :func:`hysteresis_temperature` (10 → 70 → 10 degC, then a
+    minor loop 10 → 45 → 20 degC) spans 60 degC of the cubic drift, and the scenario's
+    device (:data:`~gyrodrift.simulate.device.SCENARIO_MEMORY`) adds a 120-s thermal
+    lag and a 0.15 deg/s backlash hysteresis: the drift at one temperature differs
+    between heating and cooling, also when the temperature has stopped changing.
+    """
+    temp, rate = hysteresis_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 120.0, -0.6, 1.0)
+
+
+def scenario_cold_start(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """Cold start: motionless at 300 deg, warming from -20 to +60 degC after a cold soak."""
+    temp, rate = cold_start_temperature(t_s, duration_s)
+    return _still(t_s, temp, rate, 300.0, 1.1, 0.4)
+
+
+#: Yaw sway of ``soak``: (amplitude range deg, period range s) of its two components.
+_SWAY = (((10.0, 20.0), (180.0, 600.0)), ((2.0, 5.0), (60.0, 180.0)))
+
+
+def scenario_soak(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """A 12-h soak: slow yaw sway, temperature ramps, long compass outages during the ramps.
+
+    The unit sways about heading 70 deg (a moored boat, a vehicle on a rocking
+    platform): a 10–20 deg sinusoid of 3–10 min period plus a 2–5 deg one of 1–3 min
+    (random amplitudes, periods and phases), faded in over ``min(120 s, 10 %)`` after
+    the hold; at most about 1.2 deg/s, below the 2 deg/s turning gate. Temperature of
+    :func:`soak_temperature`; the outages of :func:`soak_outages` (compass missing, or
+    interference of 25–30 deg) in the middle of the ramps, where the drift changes
+    fastest.
+    """
+    t = np.asarray(t_s, dtype=float)
+    temp, temp_rate = soak_temperature(t, duration_s)
+    hold = hold_s(duration_s)
+    fade = min(120.0, 0.1 * duration_s)
+    env = smooth_step((t - hold) / fade)
+    env_rate = smooth_step_slope((t - hold) / fade) / fade
+    sway = np.zeros(t.size)
+    sway_rate = np.zeros(t.size)
+    for amp_range, period_range in _SWAY:
+        amp = rng.uniform(*amp_range)
+        omega = 2.0 * np.pi / rng.uniform(*period_range)
+        phase = rng.uniform(0.0, 2.0 * np.pi)
+        sway += amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
+        sway_rate += amp * omega * np.cos(omega * (t - hold) + phase)
+    dropouts, interference = soak_outages(duration_s)
+    zero = np.zeros(t.size)
+    return Motion(
+        temp_c=temp,
+        temp_rate_cps=temp_rate,
+        heading_rate_dps=env_rate * sway + env * sway_rate,
+        heading0_deg=70.0,
+        roll_deg=0.5,
+        pitch_deg=-0.8,
+        accel_fwd_mps2=zero,
+        accel_lat_mps2=zero,
+        interference=interference,
+        compass_dropouts=dropouts,
+    )
+
+
+#: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion``.
+SCENARIOS: dict[str, Callable[[np.ndarray, float, np.random.Generator], Motion]] = {
+    "static": scenario_static,
+    "static-outages": scenario_static_outages,
+    "vehicle": scenario_vehicle,
+    "calibration": scenario_calibration,
+    "scale-factor": scenario_scale_factor,
+    "interference-wander": scenario_interference_wander,
+    "hysteresis": scenario_hysteresis,
+    "cold-start": scenario_cold_start,
+    "soak": scenario_soak,
+}
+
+#: Default run length of each scenario, s.
+DEFAULT_DURATION_S: dict[str, float] = {
+    "static": 3 * 3600.0,
+    "static-outages": 3 * 3600.0,
+    "vehicle": 40 * 60.0,
+    "calibration": 2 * 3600.0,
+    "scale-factor": 3 * 3600.0,
+    "interference-wander": 3 * 3600.0,
+    "hysteresis": 4 * 3600.0,
+    "cold-start": 2 * 3600.0,
+    "soak": 12 * 3600.0,
+}
+
+
+# --------------------------------------------------------------------------- assembly
+
+
+def _streams(seed: int) -> dict[str, np.random.Generator]:
+    """Independent generators of one seed, one per random source."""
+    # Appended names only: child i of a SeedSequence does not depend on how many are spawned.
+    names = ("trajectory", "white", "bias", "rrw", "temp", "compass",
+             "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
+    children = np.random.SeedSequence(seed).spawn(len(names))
+    return {name: np.random.default_rng(child) for name, child in zip(names, children)}
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+def _check_args(scenario, seed, duration_s, fs_hz, device, compass) -> float:
+    if scenario not in SCENARIOS:
+        raise ConfigError(f"unknown scenario {scenario!r}; valid scenarios: {', '.join(SCENARIOS)}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ConfigError(f"seed must be a non-negative integer, got {seed!r}")
+    fs = positive("fs_hz", fs_hz, "simulate")
+    duration = DEFAULT_DURATION_S[scenario] if duration_s is None else positive("duration_s", duration_s, "simulate")
+    if duration * fs < 2:
+        raise ConfigError(f"simulate.duration_s must give at least 3 samples at {fs:g} Hz, got {duration_s!r}")
+    if not isinstance(device, DeviceModel):
+        raise ConfigError(f"device must be a DeviceModel, got {type(device).__name__}")
+    if not isinstance(compass, CompassModel):
+        raise ConfigError(f"compass must be a CompassModel, got {type(compass).__name__}")
+    if compass.rate_hz > fs:
+        raise ConfigError(f"CompassModel.rate_hz ({compass.rate_hz:g}) must not exceed fs_hz ({fs:g})")
+    return duration
+
+
+def simulate(
+    scenario: str,
+    *,
+    seed: int = 0,
+    duration_s: float | None = None,
+    fs_hz: float = 50.0,
+    device: DeviceModel | None = None,
+    compass: CompassModel | None = None,
+    raw_mag: bool = False,
+    triad: TriadModel | None = None,
+) -> pd.DataFrame:
+    """Simulate a log in the gyrodrift input contract, with truth columns.
+
+    Parameters
+    ----------
+    scenario : str
+        One of :data:`SCENARIOS`: ``static``, ``static-outages``, ``vehicle``,
+        ``calibration``, ``scale-factor``, ``interference-wander``, ``hysteresis``,
+        ``cold-start``, ``soak``.
+    seed : int
+        Seed of all randomness (trajectory details and every noise term); the same
+        seed gives an identical DataFrame.
+    duration_s : float, optional
+        Run length, s (default :data:`DEFAULT_DURATION_S`). Temperature profiles and
+        interference windows scale with it, so a short run keeps the shape (with
+        proportionally faster temperature rates); vehicle legs keep their length.
+    fs_hz : float
+        Gyro and temperature sample rate, Hz.
+    device : DeviceModel, optional
+        Gyro error model (default :class:`DeviceModel`). Scale-factor coefficients
+        and memory fields left ``None`` take the scenario's values
+        (:data:`~gyrodrift.simulate.device.SCENARIO_SCALE_FACTOR_PPM`,
+        :data:`~gyrodrift.simulate.device.SCENARIO_MEMORY`).
+    compass : CompassModel, optional
+        Compass error model (default :class:`CompassModel`); the scenario's own
+        interference windows are added to its ``interference``.
+    raw_mag : bool
+        Also write ``mag_x, mag_y, mag_z`` (µT, FRD, NaN off compass rows) and
+        ``acc_x, acc_y, acc_z`` (g, FRD specific force, every row).
+    triad : TriadModel, optional
+        Also write ``gyro_x, gyro_y`` (deg/s, own drift and noise), their truth
+        ``true_bias_x, true_bias_y`` and the accelerometer ``acc_x..z`` (g, with the
+        triad's noise). None (default): none of these (the other columns do not change).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, then
+        ``true_sf`` in the ``scale-factor`` scenario or whenever the scale factor is
+        not ≡ 1 (+ raw columns); ``attrs`` holds ``scenario``, ``seed``,
+        ``duration_s``, ``fs_hz``, and the effective ``device`` (scale-factor
+        coefficients and memory fields resolved) and ``compass`` models as plain
+        dicts, and ``compass_dropouts`` (list of ``[start_s, duration_s]``) when the
+        scenario has windows without compass samples (``soak``).
+
+    Raises
+    ------
+    ConfigError
+        Unknown scenario or an invalid argument.
+    """
+    device = DeviceModel() if device is None else device
+    compass = CompassModel() if compass is None else compass
+    duration = _check_args(scenario, seed, duration_s, fs_hz, device, compass)
+    device = device.with_scenario_scale_factor(scenario).with_scenario_memory(scenario)
+    fs = float(fs_hz)
+    n = int(math.floor(duration * fs + 1e-9)) + 1
+    t = np.arange(n) / fs
+    dt = 1.0 / fs
+    rng = _streams(int(seed))
+
+    motion = SCENARIOS[scenario](t, duration, rng["trajectory"])
+    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
+
+    heading_true = motion.heading0_deg + cumulative_trapezoid(motion.heading_rate_dps, t, initial=0.0)
+    body_rate = motion.heading_rate_dps * (
+        math.cos(math.radians(motion.roll_deg)) * math.cos(math.radians(motion.pitch_deg))
+    )
+
+    bias = (
+        device.drift_series(t, motion.temp_c, motion.temp_rate_cps)
+        + gauss_markov(n, dt, device.bias_instability_dps, device.bias_tau_s, rng["bias"])
+        + random_walk(n, dt, device.rate_random_walk_dps_rts, rng["rrw"])
+    )
+    sigma = device.white_sigma_dps(fs)
+    white = sigma * rng["white"].standard_normal(n) if sigma > 0 else np.zeros(n)
+    true_sf = device.scale_factor(motion.temp_c)  # exactly 1.0 unless an sf_* is non-zero
+    gyro = true_sf * body_rate + bias + white
+    temp = temperature_reading(motion.temp_c, device, rng["temp"])
+
+    mask = compass_rows(t, compass.rate_hz)
+    heading, mag, acc = compass_columns(t, heading_true, motion, compass, mask, rng["compass"])
+    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
+        out = (t >= start) & (t < start + dur)
+        heading[out] = np.nan
+        mag[out] = np.nan
+
+    columns = {
+        T: t,
+        GYRO_Z: gyro,
+        TEMP: temp,
+        HEADING: heading,
+        REF_HEADING: wrap_360(heading_true),
+        TRUE_BIAS_Z: bias,
+    }
+    if scenario == "scale-factor" or device.has_scale_factor_error():
+        columns[TRUE_SF] = true_sf
+    if triad is not None:
+        columns.update(triad_columns(t, dt, motion, triad, scenario, acc, rng))
+        acc = np.column_stack([columns.pop(name) for name in ACC_COLS])
+    if raw_mag:
+        columns.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
+    if raw_mag or triad is not None:
+        columns.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
+    df = pd.DataFrame(columns)
+    effective = replace(compass, interference=compass.interference + motion.interference)
+    df.attrs = {
+        "scenario": scenario,
+        "seed": int(seed),
+        "duration_s": float(duration),
+        "fs_hz": fs,
+        "device": _jsonable(asdict(device)),
+        "compass": _jsonable(asdict(effective)),
+    }
+    if triad is not None:
+        df.attrs["triad"] = _jsonable(asdict(triad))
+    if motion.compass_dropouts:
+        df.attrs["compass_dropouts"] = _jsonable(motion.compass_dropouts)
+    return df
