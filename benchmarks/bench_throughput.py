@@ -89,7 +89,7 @@ def timed(fn, repeat: int = 1):
 def warm_up() -> float:
     """Run the compiled engine once on a small log (loads or, the first time, compiles its
     numba kernels into the on-disk cache); returns the seconds it took."""
-    from gyrodrift.compensate import compensate_arrays
+    from gyrodrift.compensator import compensate_arrays
 
     small = make_log(20_000)
     return timed(lambda: compensate_arrays(small["t"], small["gyro_z"], small["temp"], small["heading"]))[0]
@@ -98,7 +98,7 @@ def warm_up() -> float:
 def bench_core(cols, repeat: int, buffers=None):
     """``compensate_arrays`` on the log: best time (s) and the output table. ``buffers``: an
     :class:`gyrodrift.OutputBuffers` the calls write into (None: new output memory each call)."""
-    from gyrodrift.compensate import compensate_arrays
+    from gyrodrift.compensator import compensate_arrays
 
     return timed(lambda: compensate_arrays(cols["t"], cols["gyro_z"], cols["temp"], cols["heading"], buffers=buffers),
                  repeat)
@@ -238,7 +238,7 @@ def bench_startup() -> float:
 
 def bench_inprocess(in_path: Path, out_path: Path) -> dict[str, float]:
     """Breakdown of the end-to-end run in this process: read_log, compensate, write_table (s)."""
-    from gyrodrift.compensate import compensate
+    from gyrodrift.compensator import compensate
     from gyrodrift.io import read_log, write_table
 
     t_read, log = timed(lambda: read_log(in_path))
@@ -249,7 +249,7 @@ def bench_inprocess(in_path: Path, out_path: Path) -> dict[str, float]:
 
 def bench_stream(cols, m: int) -> float:
     """µs per sample of ``Compensator.push`` over the first ``m`` rows."""
-    from gyrodrift.compensate import Compensator
+    from gyrodrift.compensator import Compensator
 
     t, g, T, h = (cols[k][:m].tolist() for k in ("t", "gyro_z", "temp", "heading"))
     comp = Compensator()

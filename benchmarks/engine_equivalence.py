@@ -79,8 +79,13 @@ def main(argv=None) -> int:
     for col, d in sorted(worst.items()):
         print(f"{col:18s} max |after - before| = {d:.3g}")
     print(f"{len(before)} columns compared, {len(bad)} above {args.tol:g}")
-    for line in bad[:40]:
-        print("  " + line)
+    by_what: dict[str, list[str]] = {}
+    for line in bad:
+        key = line.split(":")[0]
+        what = key.split("/")[-2] + "/" + key.split("/")[-1] if key.count("/") >= 2 else key
+        by_what.setdefault(what, []).append(line)
+    for what, lines in sorted(by_what.items()):
+        print(f"  {what}: {len(lines)} runs, e.g. {lines[0]}")
     return 1 if bad else 0
 
 

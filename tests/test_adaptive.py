@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import AdaptiveKalman, Observation, make_estimator
 from test_compensate import assert_same, complex_log, stream
@@ -161,7 +161,7 @@ def test_normalised_fading_ignores_one_outlier_but_follows_a_jump():
 
 def test_zaru_not_fooled_by_a_yaw_wander_the_compass_cannot_see():
     """A ±0.08 deg/s yaw wander of 20-s period moves the heading by only ±0.25 deg."""
-    from gyrodrift.compensate import _gyro_still
+    from gyrodrift.compensator import _gyro_still
 
     rng = np.random.default_rng(1)
     t = np.arange(0.0, 60.0 + 1e-9, 0.1)
@@ -291,7 +291,7 @@ def test_quadratic_recentring_keeps_the_drift_model():
 
 def test_quadratic_option_runs_on_the_reference_engine_and_streams_alike():
     from gyrodrift import _engine
-    from gyrodrift.compensate import build_estimator
+    from gyrodrift.compensator import build_estimator
 
     cfg = CompensatorConfig(adaptive=AdaptiveConfig(quadratic=True))
     assert not _engine.supports(cfg, build_estimator(cfg))

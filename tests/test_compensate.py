@@ -1,22 +1,17 @@
 import math
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift.compensate import (
-    CompensatorConfig,
-    Compensator,
-    _compass_measurement,
-    _Snap,
-    compensate,
-)
+from gyrodrift.compensator import CompensatorConfig, Compensator, compensate
 from gyrodrift.conventions import OUTPUT_COLS, wrap_180
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.gating import GateConfig
 from gyrodrift.io import read_log
+from gyrodrift.kernels.aiding import compass_measurement
 from gyrodrift.model import temp_rate
 
 
@@ -102,18 +97,19 @@ def test_eq6_sign_constant_bias_drives_c_to_the_bias():
 
 def test_measurement_sign_by_hand():
     """The gyro gained 3 deg on the compass in 10 s: the drift measurement is +0.3 deg/s."""
-    cfg = CompensatorConfig()
-    s0 = _Snap(t=0.0, heading=10.0, I_raw=0.0, I_T=0.0, I_Tp=0.0, I_bias=0.0)
-    s1 = _Snap(t=10.0, heading=15.0, I_raw=8.0, I_T=300.0, I_Tp=0.1, I_bias=1.0)
-    meas = _compass_measurement(s0, s1, cfg)
-    assert meas.m == pytest.approx(0.3)
-    np.testing.assert_allclose(meas.h, [30.0, 0.01, 1.0])
-    assert meas.residual_deg == pytest.approx(2.0)  # 3 deg minus the 1 deg already removed
-    assert meas.r == pytest.approx(2 * 0.5**2 / 100 + 0.04**2 / 10)
+    # snaps: t, heading, ∫gyro, ∫T, ∫T', ∫bias
+    s0 = np.array([0.0, 10.0, 0.0, 0.0, 0.0, 0.0])
+    s1 = np.array([10.0, 15.0, 8.0, 300.0, 0.1, 1.0])
+    m, h_T, h_Tp, r, residual = compass_measurement(s0, s1, 0.5, 0.04, 0.0, 0.0, False)
+    assert m == pytest.approx(0.3)
+    np.testing.assert_allclose([h_T, h_Tp], [30.0, 0.01])
+    assert residual == pytest.approx(2.0)  # 3 deg minus the 1 deg already removed
+    assert r == pytest.approx(2 * 0.5**2 / 100 + 0.04**2 / 10)
+    # edge means: their own compass variances
+    assert compass_measurement(s0, s1, 0.5, 0.04, 0.01, 0.02, True)[3] == pytest.approx(0.03 / 100 + 0.04**2 / 10)
     # Across north: 359 -> 1 is +2 deg of compass change.
-    s0w = replace(s0, heading=359.0)
-    s1w = replace(s1, heading=1.0, I_raw=2.0)
-    assert _compass_measurement(s0w, s1w, cfg).m == pytest.approx(0.0)
+    s0[1], s1[1], s1[2] = 359.0, 1.0, 2.0
+    assert compass_measurement(s0, s1, 0.5, 0.04, 0.0, 0.0, False)[0] == pytest.approx(0.0)
 
 
 def turning_heading(t):
@@ -154,7 +150,7 @@ def complex_log(raw_mag: bool = False) -> pd.DataFrame:
 def test_streaming_equals_batch(raw_mag):
     log = complex_log(raw_mag)
     cfg = CompensatorConfig()
-    batch = compensate(log, cfg, engine="reference")
+    batch = compensate(log, cfg)
     streamed = stream(log, cfg, raw_mag=raw_mag)
     assert_same(batch, streamed)
     reasons = set(batch["gate_reason"])
@@ -325,7 +321,7 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     # adaptive's zero-rate updates on the still unit keep it from locking out in the first place
     assert (compensate(log)["gate_reason"] == "interference").mean() < 0.25
     cfg = CompensatorConfig()
-    assert_same(compensate(log, engine="reference"), stream(log, cfg))
+    assert_same(compensate(log), stream(log, cfg))
 
 
 def test_bias_sd_does_not_understate_the_error():

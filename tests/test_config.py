@@ -58,7 +58,7 @@ def test_bad_toml_file_names_the_file(tmp_path, capsys):
 def test_fused_heading_settings_suit_the_estimator():
     from dataclasses import replace
 
-    from gyrodrift.compensate import CompensatorConfig
+    from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.fusion import FusionConfig
 
     assert CompensatorConfig().fusion is None

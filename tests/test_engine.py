@@ -11,7 +11,7 @@ pytest.importorskip("numba")
 
 from conftest import synthetic_log  # noqa: E402
 from gyrodrift import _engine  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
+from gyrodrift.compensator import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, make_estimator  # noqa: E402
 from gyrodrift.estimators.kalman import KalmanDrift  # noqa: E402

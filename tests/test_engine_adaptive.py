@@ -25,7 +25,7 @@ import pytest
 pytest.importorskip("numba")
 
 from gyrodrift import _engine  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig, _Aiding, build_estimator, compensate, compensate_arrays  # noqa: E402
+from gyrodrift.compensator import CompensatorConfig, _Aiding, build_estimator, compensate, compensate_arrays  # noqa: E402
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig  # noqa: E402
 from gyrodrift.estimators.adaptive import AdaptiveKalman  # noqa: E402
 from gyrodrift.montecarlo import BEFORE_ISSUE_6, ablation_variants, draw_case, simulate_case  # noqa: E402

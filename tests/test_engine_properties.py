@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 pytest.importorskip("numba")
 
 from gyrodrift import _engine  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
+from gyrodrift.compensator import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
 from gyrodrift.errors import GyroDriftError  # noqa: E402
 from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
 from gyrodrift.montecarlo import ablation_variants  # noqa: E402

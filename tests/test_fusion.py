@@ -5,7 +5,7 @@ import pytest
 
 from conftest import synthetic_log
 from gyrodrift import _fusion_kernels
-from gyrodrift.compensate import compensate
+from gyrodrift.compensator import compensate
 from gyrodrift.conventions import wrap_180
 from gyrodrift.errors import ConfigError
 from gyrodrift.fusion import FusionConfig, FusionState, fuse_rows
@@ -128,7 +128,7 @@ def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default(engine):
     every engine and the streaming compensator read ``CompensatorConfig.fusion_settings``."""
     from dataclasses import replace
 
-    from gyrodrift.compensate import Compensator, CompensatorConfig
+    from gyrodrift.compensator import Compensator, CompensatorConfig
     from test_compensate import complex_log
 
     if engine == "fast":

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.metrics import (
     PAPER_METHODS,

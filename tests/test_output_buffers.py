@@ -7,7 +7,7 @@ import pytest
 pytest.importorskip("numba")
 
 from gyrodrift import OutputBuffers  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig, compensate_arrays  # noqa: E402
+from gyrodrift.compensator import CompensatorConfig, compensate_arrays  # noqa: E402
 from gyrodrift.errors import GyroDriftError  # noqa: E402
 from test_compensate import complex_log  # noqa: E402
 

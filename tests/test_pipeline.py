@@ -7,7 +7,7 @@ import pytest
 pytest.importorskip("numba")
 
 from conftest import synthetic_log  # noqa: E402
-from gyrodrift.compensate import CompensatorConfig  # noqa: E402
+from gyrodrift.compensator import CompensatorConfig  # noqa: E402
 from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
 from gyrodrift.io import write_table  # noqa: E402

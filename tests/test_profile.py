@@ -5,7 +5,7 @@ import pytest
 
 from conftest import synthetic_log
 from gyrodrift.cli import main
-from gyrodrift.compensate import compensate
+from gyrodrift.compensator import compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
 

@@ -33,7 +33,7 @@ from hypothesis import strategies as st
 
 from test_compensate import _without_empty_triad
 from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
-from gyrodrift.compensate import Compensator, CompensatorConfig, compensate
+from gyrodrift.compensator import Compensator, CompensatorConfig, compensate
 from gyrodrift.conventions import wrap_180, wrap_360
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.estimators import KalmanConfig

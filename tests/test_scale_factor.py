@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from gyrodrift.compensate import compensate
+from gyrodrift.compensator import compensate
 from gyrodrift.conventions import wrap_180, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.scale_factor import (

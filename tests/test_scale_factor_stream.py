@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from gyrodrift.compensate import compensate
+from gyrodrift.compensator import compensate
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.scale_factor import (
@@ -338,7 +338,7 @@ def test_batch_pass_rejects_time_going_back():
 def test_compensator_scale_factor_equals_batch():
     from dataclasses import asdict
 
-    from gyrodrift.compensate import CompensatorConfig, Compensator
+    from gyrodrift.compensator import CompensatorConfig, Compensator
 
     log = simulate("scale-factor", seed=1, duration_s=1500.0, fs_hz=10.0)
     log.loc[log["t"].between(1074.0, 1074.3), "temp"] = np.nan  # held; a gap refusal before a turn
@@ -367,7 +367,7 @@ def test_compensator_scale_factor_equals_batch():
 def test_compensator_without_scale_factor_is_unchanged():
     from dataclasses import asdict
 
-    from gyrodrift.compensate import CompensatedSample, CompensatorConfig, Compensator
+    from gyrodrift.compensator import CompensatedSample, CompensatorConfig, Compensator
 
     comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
     rows = []

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, fit_linear_drift
 from gyrodrift.metrics import bias_error

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.compensate import Compensator, CompensatorConfig, compensate
+from gyrodrift.compensator import Compensator, CompensatorConfig, compensate
 from gyrodrift.estimators import KalmanConfig
 from gyrodrift.estimators.base import Observation
 from gyrodrift.estimators.kalman import KalmanDrift

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.estimators import KalmanDrift
 from gyrodrift.model import temp_rate
 from gyrodrift.simulate import TriadModel, simulate
@@ -250,7 +250,7 @@ def test_streamed_file_equals_in_memory_file_with_x_and_y(tmp_path):
 @pytest.mark.parametrize("estimator", ["adaptive", "stkf"])
 def test_streaming_compensator_gives_the_x_y_axes_of_the_batch(estimator):
     """Compensator.push with gyro_x, gyro_y and acc: the same x/y numbers as compensate()."""
-    from gyrodrift.compensate import Compensator
+    from gyrodrift.compensator import Compensator
 
     log = simulate("vehicle", seed=5, duration_s=240.0, fs_hz=10.0, triad=TriadModel())
     log.loc[log.index[700:703], "gyro_x"] = np.nan  # held cells refuse their interval in both
@@ -269,7 +269,7 @@ def test_streaming_compensator_gives_the_x_y_axes_of_the_batch(estimator):
 
 
 def test_streaming_without_x_y_inputs_leaves_the_x_y_fields_empty():
-    from gyrodrift.compensate import Compensator
+    from gyrodrift.compensator import Compensator
 
     comp = Compensator()
     rows = []

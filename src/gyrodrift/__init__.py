@@ -18,7 +18,7 @@ The gyro reads ``true rate + drift``; ``drift = a*T + b*T' + c`` and
 
 __version__ = "0.1.0"
 
-from gyrodrift.compensate import (
+from gyrodrift.compensator import (
     CompensatedSample,
     Compensator,
     CompensatorConfig,

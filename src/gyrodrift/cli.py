@@ -11,7 +11,7 @@ from pathlib import Path
 
 from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, parse_map, read_input
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import ESTIMATORS

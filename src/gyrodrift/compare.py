@@ -34,17 +34,11 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compensate import CompensatorConfig, compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators import (
-    ESTIMATORS,
-    CubicCalibration,
-    FixedParams,
-    Poly3Calibration,
-    fit_linear_drift,
-    fit_poly3,
-)
+from gyrodrift.estimators import ESTIMATORS, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
+from gyrodrift.fusion import FusionState
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
@@ -76,24 +70,36 @@ def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
     return fit_poly3(log["temp"].to_numpy(float), log["gyro_z"].to_numpy(float))
 
 
-def _oracle(log: pd.DataFrame, config: CompensatorConfig) -> pd.DataFrame:
-    """Compensation with the true drift; heading from the same anchor as the others."""
-    if TRUE_BIAS_Z not in log.columns:
-        raise ConfigError("the oracle needs a true_bias_z column (simulated logs have one)")
-    out = compensate(log, config, estimator=FixedParams())  # same gates, columns and anchor row
-    truth = log[TRUE_BIAS_Z].to_numpy(float)
-    rate = log["gyro_z"].to_numpy(float) - truth
-    integral = np.r_[0.0, np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(out["t"].to_numpy()))]
+def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.ndarray) -> pd.DataFrame:
+    """The log compensated with a drift known for every row (deg/s), no filter: the oracle
+    (the true drift) and ``poly3`` (an offline calibration). The heading starts from the
+    same anchor as the filters' (the first compass sample) and integrates the same way;
+    the fused heading uses every compass sample; no gate applies."""
+    out = compensate(log, config, estimator=FixedParams())  # the columns and the anchor row
+    t = out["t"].to_numpy()
+    rate = log["gyro_z"].ffill().to_numpy(float) - drift_dps
+    integral = np.r_[0.0, np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))]
     compass = out["compass_heading"].to_numpy()
     anchor = int(np.flatnonzero(np.isfinite(compass))[0])
     out["rate_z"] = rate
-    out["bias_z"] = truth
+    out["bias_z"] = drift_dps
     out["heading"] = wrap_360(compass[anchor] + integral - integral[anchor])
     out[["a", "b", "c"]] = np.nan
-    out["update"] = 0  # no filter: gates do not apply
+    out["update"] = 0
     out["gated"] = 0
     out["gate_reason"] = ""
+    out["bias_sd"] = 0.0
+    fused = FusionState(config.fusion_settings, config.gyro_noise_dps_rthz).rows(
+        t, rate, compass, np.ones(t.size, dtype=bool), np.zeros(t.size))
+    out["heading_fused"], out["heading_fused_sd"], out["heading_sd"] = fused
     return out
+
+
+def _oracle(log: pd.DataFrame, config: CompensatorConfig) -> pd.DataFrame:
+    """Compensation with the true drift (the limit set by sensor noise alone)."""
+    if TRUE_BIAS_Z not in log.columns:
+        raise ConfigError("the oracle needs a true_bias_z column (simulated logs have one)")
+    return _known_drift(log, config, log[TRUE_BIAS_Z].to_numpy(float))
 
 
 def run_method(
@@ -136,7 +142,7 @@ def run_method(
             raise ConfigError("poly3 needs a calibration run of the same device: give --calibration FILE")
         if isinstance(calibration, pd.DataFrame):
             calibration = calibration_from_log(calibration)
-        return compensate(log, config, estimator=CubicCalibration(calibration))
+        return _known_drift(log, config, calibration.drift(log["temp"].ffill().to_numpy(float)))
     if name == "oracle":
         return _oracle(log, config)
     raise ConfigError(f"unknown method {name!r}; choose from: {_valid_methods()}")

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["roll_pitch_deg", "tilt_compensated_heading", "field_norm_dip"]
+from gyrodrift.conventions import wrap_360
+
+__all__ = ["roll_pitch_deg", "tilt_compensated_heading", "field_norm_dip", "compass_columns"]
 
 
 def roll_pitch_deg(acc_x, acc_y, acc_z):
@@ -92,3 +94,36 @@ def field_norm_dip(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
     hx, hy, vert = _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
     horiz = np.hypot(hx, hy)
     return np.sqrt(horiz**2 + vert**2), np.degrees(np.arctan2(vert, horiz))
+
+
+def compass_columns(n: int, heading_deg=None, mag=None, acc=None):
+    """The compass of every row of a log: heading (deg in [0, 360), NaN = no sample), field
+    strength and dip (NaN without a raw magnetometer).
+
+    Parameters
+    ----------
+    n : int
+        Number of rows.
+    heading_deg : (n,) array_like, optional
+        A given compass heading, deg; NaN = no sample.
+    mag, acc : (n, 3) array_like, optional
+        Raw FRD magnetometer and accelerometer: a tilt-compensated heading where
+        ``heading_deg`` has none, and the field strength and dip of every row.
+
+    Returns
+    -------
+    heading_deg, norm, dip_deg : (n,) ndarray
+    """
+    heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float).copy()
+    norm = np.full(n, np.nan)
+    dip = np.full(n, np.nan)
+    if mag is not None and acc is not None:
+        mag = np.asarray(mag, dtype=float)
+        acc = np.asarray(acc, dtype=float)
+        with np.errstate(invalid="ignore"):
+            norm, dip = field_norm_dip(*mag.T, *acc.T)
+            from_mag = tilt_compensated_heading(*mag.T, *acc.T)
+        heading = np.where(np.isfinite(heading), heading, from_mag)
+    with np.errstate(invalid="ignore"):
+        heading = np.where(np.isfinite(heading), wrap_360(heading), np.nan)
+    return heading, norm, dip

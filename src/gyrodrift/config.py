@@ -1,6 +1,6 @@
 """Compensator settings from a TOML file (``gyrodrift compensate --config FILE``).
 
-Top-level keys are the fields of :class:`~gyrodrift.compensate.CompensatorConfig`;
+Top-level keys are the fields of :class:`~gyrodrift.compensator.CompensatorConfig`;
 the tables ``[kalman]``, ``[gate]``, ``[temp_rate]``, ``[adaptive]`` and ``[fusion]``
 hold the fields of :class:`~gyrodrift.estimators.KalmanConfig`,
 :class:`~gyrodrift.gating.GateConfig`, :class:`~gyrodrift.model.TempRateConfig`,
@@ -30,7 +30,7 @@ import sys
 from dataclasses import fields, replace
 from pathlib import Path
 
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 
 if sys.version_info >= (3, 11):

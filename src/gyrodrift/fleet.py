@@ -1,7 +1,7 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
 ``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) reads
-every log, compensates it with :func:`gyrodrift.compensate.compensate`, writes
+every log, compensates it with :func:`gyrodrift.compensator.compensate`, writes
 ``OUTDIR/<stem>_out.parquet`` (or ``.csv``) atomically, and returns one summary row per
 log. A log that cannot be processed (bad file, too short, no compass, even an
 unexpected exception in a reader) gives a row with ``status = "error"`` and a one-line
@@ -207,7 +207,7 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet") -> d
         ``status = "error"`` and a one-line ``error``; what was learned before the
         failure (rows, duration, temperatures) is kept.
     """
-    from gyrodrift.compensate import compensate
+    from gyrodrift.compensator import compensate
     from gyrodrift.io import check_output_path, read_log, write_table
     from gyrodrift.profile import profile_from_run
 

@@ -39,9 +39,8 @@ the filter also re-anchors on the compass after that long: a lasting change of h
 error cannot lock it out, but an interference longer than that is followed. The filter starts at the first compass
 sample (ψ = compass, P = σ_c²); rows before it have NaN.
 
-The row update is one function, run as plain Python per sample by the streaming
-:class:`~gyrodrift.compensate.Compensator` and compiled (numba, when installed) over
-arrays in batch: both give the same bits.
+The row update is one function, :func:`gyrodrift.kernels.fusion.step`, run by the
+compensator's row loop for every entry point (streaming, batch, chunked).
 """
 
 from __future__ import annotations
@@ -52,6 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrodrift.errors import ConfigError
+from gyrodrift.kernels import fusion as fusion_kernel
 
 __all__ = ["FusionConfig", "FusionState", "fuse_rows"]
 
@@ -121,30 +121,29 @@ class FusionConfig:
 
 
 class FusionState:
-    """Streaming state of the fused heading (one per log).
+    """State of the fused heading of one log, fed rows in time order.
 
-    The row function lives in :mod:`gyrodrift._fusion_kernels` (compiled when numba is
-    installed); :meth:`row` and :meth:`rows` run the same code.
+    The filter is :func:`gyrodrift.kernels.fusion.step`, the function the compensator's
+    row loop runs: :meth:`rows` gives the numbers of ``heading_fused`` for any rows.
     """
 
     def __init__(self, config: FusionConfig, gyro_noise_dps_rthz: float):
-        from gyrodrift import _fusion_kernels
-
-        self._k = _fusion_kernels
         self.cfg = config.vector(gyro_noise_dps_rthz)
-        self.st = np.zeros(_fusion_kernels.N_STATE)
+        self.st = np.zeros(9)
 
     def row(self, t: float, rate: float, compass: float, allow: bool, bias_sd: float) -> tuple[float, float, float]:
         """One row: (heading_fused deg, heading_fused_sd deg, heading_sd deg)."""
-        return self._k.fuse_row(self.st, t, rate, compass, allow, bias_sd, self.cfg)
+        h, sd, gsd = self.rows(np.array([t]), np.array([rate]), np.array([compass]), np.array([allow]),
+                               np.array([bias_sd]))
+        return float(h[0]), float(sd[0]), float(gsd[0])
 
     def rows(self, t, rate, compass, allow, bias_sd) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Many rows at once (the same numbers as :meth:`row` on each)."""
         n = len(t)
         out = np.empty((3, n))
-        self._k.fuse_rows(self.st, np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(rate, dtype=float),
-                          np.ascontiguousarray(compass, dtype=float), np.ascontiguousarray(allow, dtype=np.bool_),
-                          np.ascontiguousarray(bias_sd, dtype=float), self.cfg, out[0], out[1], out[2])
+        fusion_kernel.fuse_rows(self.st, np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(rate, dtype=float),
+               np.ascontiguousarray(compass, dtype=float), np.ascontiguousarray(allow, dtype=np.bool_),
+               np.ascontiguousarray(bias_sd, dtype=float), self.cfg, out[0], out[1], out[2])
         return out[0], out[1], out[2]
 
 

@@ -83,7 +83,7 @@ def _rms(x) -> float:
 
 
 def accuracy(out: pd.DataFrame) -> Accuracy:
-    """Accuracy of a :func:`gyrodrift.compensate.compensate` output table.
+    """Accuracy of a :func:`gyrodrift.compensator.compensate` output table.
 
     The raw-gyro heading starts at the same heading as the compensated one; the raw
     bias error is the whole drift (no compensation).
@@ -144,7 +144,7 @@ def bias_error(out: pd.DataFrame, *, average_s: float | None = None) -> np.ndarr
     Parameters
     ----------
     out : DataFrame
-        Output table of :func:`gyrodrift.compensate.compensate`.
+        Output table of :func:`gyrodrift.compensator.compensate`.
     average_s : float, optional
         Average the error over consecutive non-overlapping windows of this many
         seconds, starting at the first row; only complete windows count.
@@ -258,7 +258,7 @@ def table2(
     Parameters
     ----------
     out_by_method : mapping of str to DataFrame
-        Output table of :func:`gyrodrift.compensate.compensate` per method name;
+        Output table of :func:`gyrodrift.compensator.compensate` per method name;
         the columns keep this order.
     kind : {"static", "dynamic"}
         ``static``: bias drift error (deg/s, :func:`bias_error`) of motionless

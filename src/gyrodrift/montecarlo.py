@@ -47,7 +47,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compare import METHODS, run_method
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats, markdown_table

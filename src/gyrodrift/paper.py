@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compare import CAUSAL, METHODS, run_methods
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.conventions import REF_HEADING, wrap_360
 from gyrodrift.metrics import (

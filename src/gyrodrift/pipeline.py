@@ -1,13 +1,13 @@
 """File in, file out: read a log, compensate it, write the result — in constant memory when it can.
 
 :func:`compensate_file` is what ``gyrodrift compensate`` runs. For CSV and Parquet logs
-with the compiled engine (:mod:`gyrodrift._engine`; numba installed, a Kalman-family
-estimator, ``endpoints`` measurement) it streams: the log is read in chunks
-(:func:`gyrodrift.io.chunked.iter_log_chunks`), each chunk is compensated where the
-last one stopped and written out (:class:`gyrodrift.io.chunked.ChunkWriter`), so memory
-does not grow with the log. The output file is the same as the in-memory path
-(``read_log`` → :func:`~gyrodrift.compensate.compensate` → ``write_table``) gives.
-Other formats (ULog, ROS bags) and other estimators run in memory.
+it streams: the log is read in chunks (:func:`gyrodrift.io.chunked.iter_log_chunks`),
+each chunk is compensated where the last one stopped
+(:class:`gyrodrift.compensator.ChunkEngine`) and written out
+(:class:`gyrodrift.io.chunked.ChunkWriter`), so memory does not grow with the log. The
+output file is the same as the in-memory path (``read_log`` →
+:func:`~gyrodrift.compensator.compensate` → ``write_table``) gives. Other formats (ULog,
+ROS bags), ``--smooth`` and ``--scale-factor`` run in memory.
 
 :class:`RunStats` gathers, chunk by chunk, what the command prints at the end: the
 log's span and temperature range, the share of refused rows, the final drift model
@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift import gating
-from gyrodrift.compensate import (
+from gyrodrift.compensator import (
     CompensatorConfig,
     append_input_columns,
     build_estimator,
@@ -254,7 +254,6 @@ def compensate_file(
     -------
     RunStats
     """
-    from gyrodrift import _engine
     from gyrodrift.errors import ConfigError
     from gyrodrift.io import read_log, write_table
 
@@ -264,17 +263,9 @@ def compensate_file(
     table = _table_format(input_path, opts.get("fmt")) in ("csv", "parquet")
     ulog_or_ros = {k: v for k, v in opts.items() if k not in ("fmt", "gyro_unit", "frame", "column_map")}
     table_options = not any(v not in (None, 0) for v in ulog_or_ros.values())  # else the reader refuses them
-    can_stream = (
-        table
-        and table_options
-        and _engine.available()
-        and _engine.supports(cfg, build_estimator(cfg))
-    )
+    can_stream = table and table_options
     if stream and not can_stream:
-        raise ConfigError(
-            f"{input_path}: cannot stream this run (needs a CSV or Parquet log, numba, and a Kalman-family "
-            "estimator with endpoint measurements)"
-        )
+        raise ConfigError(f"{input_path}: cannot stream this run (needs a CSV or Parquet log)")
     if stream and (scale_factor or smooth):
         raise ConfigError(f"{input_path}: the scale-factor estimate and smoothing need the whole log in memory; "
                           "do not force streaming")
@@ -282,7 +273,7 @@ def compensate_file(
         stream = can_stream and not (scale_factor or smooth)
     if not stream:
         if table and table_options:
-            _check_fits_in_memory(input_path, opts.get("fmt"), *_why_in_memory(cfg, can_stream, scale_factor, smooth))
+            _check_fits_in_memory(input_path, opts.get("fmt"), *_why_in_memory(scale_factor, smooth))
         log = read_log(input_path, **opts)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
@@ -428,20 +419,13 @@ def _estimated_rows(path: Path, fmt: str | None = None) -> int | None:
         return None
 
 
-def _why_in_memory(cfg: CompensatorConfig, can_stream: bool, scale_factor: bool, smooth: bool) -> tuple[str, str]:
+def _why_in_memory(scale_factor: bool, smooth: bool) -> tuple[str, str]:
     """Why a CSV or Parquet run is kept in memory, and how it could stream instead."""
-    from gyrodrift import _engine
-
-    if can_stream and (scale_factor or smooth):
+    if scale_factor or smooth:
         what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
         verb = "need" if scale_factor and smooth else "needs"
         return f"{what} {verb} the whole log in memory", f"drop {what} to stream it in constant memory"
-    if can_stream:
-        return "this run is kept in memory (stream=False)", "let it stream (stream=None)"
-    if not _engine.available():
-        return "this run cannot stream without numba", "install the fast extra (pip install 'gyrodrift[fast]')"
-    what, advice = _engine.unsupported(cfg, build_estimator(cfg))
-    return f"the streaming engine does not implement {what}", advice
+    return "this run is kept in memory (stream=False)", "let it stream (stream=None)"
 
 
 def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) -> None:
@@ -512,8 +496,8 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
 
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
                     column_types: dict[str, str]) -> RunStats:
-    from gyrodrift._engine import ChunkEngine
-    from gyrodrift.compensate import _compass_arrays, _fast_frame
+    from gyrodrift.compass import compass_columns
+    from gyrodrift.compensator import ChunkEngine, output_frame
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
@@ -540,7 +524,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 n = len(log)
                 heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
                 if has_mag:
-                    heading, norm, dip = _compass_arrays(
+                    heading, norm, dip = compass_columns(
                         n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
                     )
                 else:
@@ -553,7 +537,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 rows = pd.concat(pending) if len(pending) > 1 else pending[0]
                 pending = []
                 rows = rows.reset_index(drop=True)
-                out = _fast_frame(cols)
+                out = output_frame(cols)
                 if has_triad_inputs(rows.columns):
                     triad = triad or TriadCompensator(cfg)
                     add_triad_columns(out, rows, tc=triad)

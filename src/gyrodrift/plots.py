@@ -1,6 +1,6 @@
 """Figures of a compensated log, after Figures 1–9 of Feng, Li, Zhang (Sensors 2015).
 
-Every ``fig_*`` function takes output tables of :func:`gyrodrift.compensate.compensate`
+Every ``fig_*`` function takes output tables of :func:`gyrodrift.compensator.compensate`
 (or :func:`gyrodrift.compare.run_methods`) or arrays and returns a new
 :class:`matplotlib.figure.Figure` drawn with the Agg renderer. pyplot is never
 used, so no global figure state is created or changed: the caller owns the figure

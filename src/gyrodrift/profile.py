@@ -25,9 +25,9 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators._kalman import cap_covariance
+from gyrodrift.kernels.numeric import cap_covariance
 
 __all__ = ["FORMAT", "VERSION", "Profile", "profile_from_run", "save_profile", "load_profile", "warm_config"]
 
@@ -82,7 +82,7 @@ class Profile:
 
 
 def profile_from_run(out) -> Profile:
-    """The profile of a run: a :func:`gyrodrift.compensate.compensate` output table, or the
+    """The profile of a run: a :func:`gyrodrift.compensator.compensate` output table, or the
     :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`."""
     if hasattr(out, "final_params") and not hasattr(out, "attrs"):  # RunStats
         final_params, final_cov, estimator = out.final_params, out.final_cov, out.estimator

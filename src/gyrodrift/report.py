@@ -42,7 +42,7 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._cliargs import add_input_options
 from gyrodrift._progress import progress_iter as _progress

@@ -8,7 +8,7 @@ gives no equations; this module is gyrodrift's design in the spirit of Section 3
 
 Model
 -----
-After the drift compensation of :func:`gyrodrift.compensate.compensate`
+After the drift compensation of :func:`gyrodrift.compensator.compensate`
 (``rate_z = gyro_z - bias_z``, eqs. 1, 2, 5), the gyro still reads
 
     rate_z = SF(T) * true_rate + (drift residual) + noise,
@@ -17,9 +17,9 @@ After the drift compensation of :func:`gyrodrift.compensate.compensate`
 with ``T`` the measured gyro temperature (degC) and ``T_ref`` = ``t_ref_c``. The
 parameters ``x = [s0 (unitless), s1 (1/degC)]`` are the states of a strong tracking
 Kalman filter modelled as constant between updates (Φ = Γ = I, Section 3.2): at each
-accepted measurement ``P- = s*P + Q`` then a Joseph-form correction (eq. 10, the
-kernels of :mod:`gyrodrift.estimators._kalman`), and P is capped at the prior
-``P0`` (:func:`~gyrodrift.estimators._kalman.cap_covariance`). The SF compensated rate
+accepted measurement ``P- = s*P + Q`` then a Joseph-form correction (eq. 10,
+:func:`gyrodrift.kernels.numeric.correct`), and P is capped at the prior ``P0``
+(:func:`gyrodrift.kernels.numeric.cap_covariance`). The SF compensated rate
 is ``rate_sf = rate_z / SF(T)``.
 
 Measurement: one per rotation
@@ -68,7 +68,7 @@ that rotation's result retroactively.
 
 ``estimate_scale_factor(..., causal=True)``, and :class:`ScaleFactorTracker`, which
 computes the same numbers row by row or in chunks with bounded memory (for
-:class:`gyrodrift.compensate.Compensator` and streaming), make every row depend only on
+:class:`gyrodrift.compensator.Compensator` and streaming), make every row depend only on
 itself and the rows before it. The rotations and their measurements are the same; what
 differs:
 
@@ -135,10 +135,10 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 
 from gyrodrift import gating
-from gyrodrift.compensate import CompensatedSample
+from gyrodrift.compensator import CompensatedSample
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_180, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.estimators._kalman import cap_covariance, correct, predict
+from gyrodrift.kernels.numeric import cap_covariance, correct
 
 __all__ = [
     "ScaleFactorConfig",
@@ -419,7 +419,7 @@ def turn_measurements(
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensate.compensate`: ``t`` (s), ``rate_z``
+        Output of :func:`gyrodrift.compensator.compensate`: ``t`` (s), ``rate_z``
         (deg/s), ``temp`` (degC), ``compass_heading`` (deg, NaN off compass rows)
         and, if present, ``gate_reason``.
     config : ScaleFactorConfig
@@ -596,9 +596,9 @@ def _sf_correct(x: np.ndarray, P: np.ndarray, sf_meas: float, temp_dev_c: float,
     """
     Q = np.diag(np.square(config.q_sd))
     cap = np.square(np.array(config.p0_sd))
-    H = np.array([[1.0, temp_dev_c]])
-    P_prior = cap_covariance(predict(P, Q, config.fading), cap)
-    x, P_post, _, _ = correct(x, P_prior, np.array([sf_meas]), H, np.array([[r]]))
+    H = np.array([[1.0, float(temp_dev_c)]])
+    P_prior = cap_covariance(float(config.fading) * P + Q, cap)
+    x, P_post = correct(np.asarray(x, dtype=float), P_prior, np.array([float(sf_meas)]), H, np.array([[float(r)]]))
     return x, cap_covariance(P_post, cap)
 
 
@@ -645,7 +645,7 @@ def estimate_scale_factor(
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensate.compensate` (columns ``t, rate_z,
+        Output of :func:`gyrodrift.compensator.compensate` (columns ``t, rate_z,
         temp, compass_heading``, optionally ``gate_reason``).
     config : ScaleFactorConfig
     causal : bool
@@ -766,8 +766,8 @@ TRACKER_COLUMNS = ScaleFactorRow._fields
 
 @dataclass(frozen=True)
 class CompensatedSFSample(CompensatedSample):
-    """A :class:`gyrodrift.compensate.CompensatedSample` with the scale factor of Sec. 4.3, as
-    :class:`gyrodrift.compensate.Compensator` returns it when given ``scale_factor``: ``sf``
+    """A :class:`gyrodrift.compensator.CompensatedSample` with the scale factor of Sec. 4.3, as
+    :class:`gyrodrift.compensator.Compensator` returns it when given ``scale_factor``: ``sf``
     (unitless), ``sf_sd``, ``rate_sf`` (deg/s) and ``heading_sf`` (deg) of
     :class:`ScaleFactorTracker`."""
 
@@ -793,8 +793,8 @@ def _wrap_360_f(angle_deg: float) -> float:
 class ScaleFactorTracker:
     """The causal SF estimate (Sec. 4.3, module notes) fed one compensated row at a time.
 
-    Feed the rows of :func:`gyrodrift.compensate.compensate` (or of
-    :class:`gyrodrift.compensate.Compensator`) in time order with :meth:`push` (one row),
+    Feed the rows of :func:`gyrodrift.compensator.compensate` (or of
+    :class:`gyrodrift.compensator.Compensator`) in time order with :meth:`push` (one row),
     :meth:`push_arrays` or :meth:`push_frame` (chunks of any size); every row comes back at
     once with the SF in force. The numbers are those of
     ``estimate_scale_factor(out, config, causal=True)`` on the whole table, bit for bit,
@@ -1152,7 +1152,7 @@ def scale_factor_experiment(
     """Section 4.3 on simulated data: drift compensation, then fixed and adaptive SF.
 
     Simulates the ``scale-factor`` scenario (:func:`gyrodrift.simulate.simulate`),
-    compensates the drift (:func:`gyrodrift.compensate.compensate`) and estimates the
+    compensates the drift (:func:`gyrodrift.compensator.compensate`) and estimates the
     scale factor (:func:`estimate_scale_factor`).
 
     Parameters
@@ -1203,7 +1203,7 @@ def scale_factor_experiment(
     over a 3-h run it is of the same order as the SF errors and adds to or cancels
     them by chance. ``sf_heading_*`` isolates the SF's share.
     """
-    from gyrodrift.compensate import compensate
+    from gyrodrift.compensator import compensate
     from gyrodrift.simulate import TRUE_SF, simulate
 
     config = config or ScaleFactorConfig()

@@ -1,6 +1,6 @@
 """Fixed-interval smoothing of the drift estimate, for recorded logs (non-causal).
 
-The compensator (:mod:`gyrodrift.compensate`) is causal: the drift of a row is what the
+The compensator (:mod:`gyrodrift.compensator`) is causal: the drift of a row is what the
 filter knew *then*, so on a recorded log the first minutes, and the rows before an
 outage, are compensated with less than the log tells. On a recorded log the whole of
 it is available. This module re-estimates the drift from every accepted measurement,
@@ -121,7 +121,7 @@ def smooth_drift(measurements: pd.DataFrame, config=None, epochs=None) -> Smooth
     Parameters
     ----------
     measurements : DataFrame
-        ``out.attrs["measurements"]`` of :func:`gyrodrift.compensate.compensate`: columns
+        ``out.attrs["measurements"]`` of :func:`gyrodrift.compensator.compensate`: columns
         ``t`` (s), ``m`` (deg/s), ``temp`` (degC), ``temp_rate`` (degC/s), ``r`` ((deg/s)²).
     config : CompensatorConfig, optional
         Prior (``kalman``), process noise (``adaptive``) and ``update_interval_s``.
@@ -140,7 +140,7 @@ def smooth_drift(measurements: pd.DataFrame, config=None, epochs=None) -> Smooth
     ConfigError
         No measurement, or non-finite ones.
     """
-    from gyrodrift.compensate import CompensatorConfig
+    from gyrodrift.compensator import CompensatorConfig
 
     config = config or CompensatorConfig()
     groups = _groups(measurements, epochs)
@@ -214,7 +214,7 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensate.compensate` on a recorded log (with its
+        Output of :func:`gyrodrift.compensator.compensate` on a recorded log (with its
         ``attrs["measurements"]`` and the input ``temp`` column).
     config : CompensatorConfig, optional
         The settings ``out`` was compensated with.
@@ -235,7 +235,8 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     recomputed as the compensator does (:mod:`gyrodrift.fusion`) with the smoothed
     ``bias_sd``.
     """
-    from gyrodrift.compensate import UNOBSERVABLE_SD_FRACTION, CompensatorConfig
+    from gyrodrift.compensator import CompensatorConfig
+    from gyrodrift.kernels.layout import UNOBSERVABLE_SD_FRACTION
 
     config = config or CompensatorConfig()
     meas = out.attrs.get("measurements")

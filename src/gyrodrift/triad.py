@@ -1,6 +1,6 @@
 """The x and y gyro axes: the same temperature drift model, aided by gravity when quasi-static.
 
-The heading axis (``gyro_z``) is aided by the compass (:mod:`gyrodrift.compensate`). The
+The heading axis (``gyro_z``) is aided by the compass (:mod:`gyrodrift.compensator`). The
 two level axes have no compass, but when the unit is quasi-static the accelerometer
 measures the gravity direction, i.e. roll and pitch, and their change over an update
 interval plays the part the compass heading change plays for z.
@@ -96,6 +96,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import Observation
@@ -240,8 +241,6 @@ class TriadCompensator:
     """
 
     def __init__(self, config=None, triad: TriadConfig | None = None, *, estimators=None):
-        from gyrodrift.compensate import CompensatorConfig, build_estimator
-
         self.config = config or CompensatorConfig()
         self.triad = triad or TriadConfig()
         if self.triad.edge_s > 0.5 * self.config.update_interval_s:

@@ -3,15 +3,17 @@
 ===========  ==================================================================
 name         estimator
 ===========  ==================================================================
-``stkf``     strong tracking Kalman filter over [a, b, c], eqs. (3)–(10) (default)
+``stkf``     strong tracking Kalman filter over [a, b, c], eqs. (3)–(10)
 ``stkf-s1``  the same filter with s = 1 (plain Kalman filter over [a, b, c])
 ``kf``       the paper's KF baseline: plain Kalman filter on a constant bias only
 ``lsm``      the paper's "modified LSM": a, b, c refitted over a sliding window
 ``fixed``    fixed a, b, c (with a whole-log fit: the paper's MLR, non-causal)
-``poly3``    PX4-style cubic thermal calibration from a separate heating run
 ``adaptive`` centred temperature, Zhou fading, ZARU, per-parameter Q (beyond the paper;
-             :class:`AdaptiveConfig`)
+             :class:`AdaptiveConfig`; the default)
 ===========  ==================================================================
+
+The PX4-style cubic calibration (``poly3``, :func:`fit_poly3`) is a baseline of
+:mod:`gyrodrift.compare`: its drift is not eq. (2), so it does not run in the engine.
 """
 
 from gyrodrift.estimators.base import (
@@ -25,7 +27,7 @@ from gyrodrift.estimators.base import (
 from gyrodrift.estimators.adaptive import AdaptiveConfig, AdaptiveKalman
 from gyrodrift.estimators.kalman import BiasKalman, KalmanConfig, KalmanDrift, PlainKalmanDrift
 from gyrodrift.estimators.lsq import FixedParams, WindowedLsm, fit_linear_drift
-from gyrodrift.estimators.poly import CubicCalibration, Poly3Calibration, fit_poly3
+from gyrodrift.estimators.poly import Poly3Calibration, fit_poly3
 
 __all__ = [
     "ESTIMATORS",
@@ -43,7 +45,6 @@ __all__ = [
     "WindowedLsm",
     "FixedParams",
     "fit_linear_drift",
-    "CubicCalibration",
     "Poly3Calibration",
     "fit_poly3",
 ]

@@ -1,7 +1,7 @@
 """The one interface every drift estimator implements, and the registry of estimators.
 
 An estimator owns the drift-model parameters ``x = [a, b, c]`` (eq. 2) and nothing else.
-The compensator (:mod:`gyrodrift.compensate`) turns compass aiding into
+The compensator (:mod:`gyrodrift.compensator`) turns compass aiding into
 :class:`Observation` objects, linear in x, and tells the estimator about every
 update interval: :meth:`DriftEstimator.update` when the aiding was accepted,
 :meth:`DriftEstimator.hold` when it was refused (outage).

@@ -1,20 +1,12 @@
-"""The strong tracking Kalman filter of Feng et al. (2015), and its s = 1 twin (plain KF).
+"""The strong tracking Kalman filter of Feng et al. (2015), its s = 1 twin, and the KF baseline.
 
 States ``x = [a, b, c]`` of the drift model (eq. 2), modelled as constant between
-updates (Φ = Γ = I, Section 3.2). At every accepted update interval:
-``P- = s*P + Q`` then a Joseph-form correction (eq. 10).
-
-Bounded covariance
-------------------
-Two things would make P grow without limit, and both are stopped:
-
-* during an outage (no accepted aiding) the filter does not fade: fading discounts
-  old *measurements*, and there are none; only Q is added (``P <- P + Q``);
-* a direction the measurements do not see (T' ≡ 0 leaves b unobservable; a flat
-  temperature confounds a with c) grows as ``s**N`` under fading. P is therefore
-  capped, by default at the prior ``P0 = diag(p0_sd**2)``: in no direction of the
-  parameter space are we less sure than before the first measurement. Only the
-  directions above the cap shrink, and P stays symmetric positive definite.
+updates (Φ = Γ = I, Section 3.2). At every accepted update interval
+``P- = s*P + Q`` then a Joseph-form correction (eq. 10); over a refused interval only Q
+is added, and P is capped (by default at the prior) so that directions the
+measurements do not see stay bounded. The equations are those of
+:mod:`gyrodrift.kernels.kalman`; the classes here hold the settings and the state
+arrays and give them the :class:`~gyrodrift.estimators.base.DriftEstimator` interface.
 """
 
 from __future__ import annotations
@@ -26,10 +18,11 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators._kalman import cap_covariance, correct, predict
 from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.kernels import kalman as kernel
+from gyrodrift.kernels import layout as L
 
-__all__ = ["KalmanConfig", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
+__all__ = ["KalmanConfig", "KernelFilter", "filter_arrays", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -80,6 +73,8 @@ class KalmanConfig:
             v = getattr(self, name)
             if v is not None and not all(float(e) > 0 for e in v):
                 raise ConfigError(f"{name} must be positive, got {v!r}")
+        if not all(float(e) >= 0 for e in self.q_sd):
+            raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
         if self.p0_cov is not None:
             try:
                 P = np.array(self.p0_cov, dtype=float)
@@ -98,12 +93,85 @@ class KalmanConfig:
             P0 = np.diag(np.square(np.array(self.p0_sd, dtype=float)))
         max_var = np.square(np.array(self.max_sd or self.p0_sd, dtype=float))
         return P0, max_var, np.diag(np.square(np.array(self.q_sd, dtype=float)))
-        if not all(float(e) >= 0 for e in self.q_sd):
-            raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
+
+
+def filter_arrays(*, adaptive: bool, x0, P0, Q, max_var, active=(0, 1, 2), fading: float = 1.0, depth: int = 1,
+                  nis_window: int = 1, twin: bool = False, normalised: bool = False, recentre: bool = False,
+                  softening: float = 1.0, lambda_max: float = 1.0, rho: float = 0.5, slope_q: float = 0.0):
+    """The estimator arrays ``(ef, ei)`` of :mod:`gyrodrift.kernels.kalman` for a prior.
+
+    Both filters (MAIN and TWIN) start from the prior ``x0`` (absolute [a, b, c]), ``P0``,
+    with process noise ``Q`` and cap ``max_var``; ``depth`` is the largest number of rows
+    of one observation and ``nis_window`` the innovations of the normalised test.
+    """
+    ef = np.zeros(L.ef_size(depth, nis_window))
+    ei = np.zeros(L.N_EI, dtype=np.int64)
+    z, P, Qv, mv, af, V, nis, ai = kernel.views(ef, _ei_with(ei, depth, nis_window))
+    for row in (L.MAIN, L.TWIN):
+        z[row] = x0
+        P[row] = P0
+        Qv[row] = Q
+        mv[row] = max_var
+        af[row, L.AF_LAMBDA] = 1.0
+    ei[L.EI_MODE] = L.MODE_ADAPTIVE if adaptive else L.MODE_FIXED
+    ei[L.EI_TWIN] = int(twin)
+    ei[L.EI_NORMALISED] = int(normalised)
+    ei[L.EI_RECENTRE] = int(recentre)
+    ei[L.EI_N_ACTIVE] = len(active)
+    ei[L.EI_ACTIVE:L.EI_ACTIVE + len(active)] = active
+    ef[L.EF_SET + L.ES_FADING] = fading
+    ef[L.EF_SET + L.ES_SOFTENING] = softening
+    ef[L.EF_SET + L.ES_LAMBDA_MAX] = lambda_max
+    ef[L.EF_SET + L.ES_RHO] = rho
+    ef[L.EF_SET + L.ES_SLOPE_Q] = slope_q
+    return ef, ei
+
+
+def _ei_with(ei: np.ndarray, depth: int, nis_window: int) -> np.ndarray:
+    ei[L.EI_DEPTH] = depth
+    ei[L.EI_NIS_W] = nis_window
+    return ei
+
+
+class KernelFilter(LinearDrift):
+    """A drift filter whose state is the estimator arrays of :mod:`gyrodrift.kernels.kalman`.
+
+    :attr:`kernel_arrays` are updated in place by :meth:`update` and :meth:`hold`, here or
+    inside the compiled row loop (:class:`gyrodrift.compensator.ChunkEngine`), which reads
+    and writes the same arrays.
+    """
+
+    causal: ClassVar[bool] = True
+
+    def __init__(self, ef: np.ndarray, ei: np.ndarray):
+        self._ef = ef
+        self._ei = ei
+
+    @property
+    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(ef, ei)``: the state, read and written in place by the kernels."""
+        return self._ef, self._ei
+
+    @property
+    def params(self) -> np.ndarray:
+        return kernel.params(self._ef, self._ei)
+
+    @property
+    def cov(self) -> np.ndarray:
+        return kernel.cov(self._ef, self._ei)
+
+    def update(self, obs: Observation) -> np.ndarray:
+        kernel.update(self._ef, self._ei, np.ascontiguousarray(obs.y, dtype=float),
+                      np.ascontiguousarray(obs.H, dtype=float), np.ascontiguousarray(obs.R, dtype=float))
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        kernel.hold(self._ef, self._ei)
+        return self.params
 
 
 @register
-class KalmanDrift(LinearDrift):
+class KalmanDrift(KernelFilter):
     """Strong tracking Kalman filter over [a, b, c] (``stkf``), eqs. (3)–(10).
 
     Examples
@@ -117,49 +185,16 @@ class KalmanDrift(LinearDrift):
     """
 
     name: ClassVar[str] = "stkf"
-    causal: ClassVar[bool] = True
 
-    def __init__(self, config: KalmanConfig = KalmanConfig()):
+    def __init__(self, config: KalmanConfig = KalmanConfig(), *, depth: int = 3):
         self.config = config
-        self._x = np.array(config.x0, dtype=float)
-        self._P, self._max_var, self._Q = config.matrices()
-        #: Innovation and its covariance of the last update (diagnostics).
-        self.last_innovation: np.ndarray | None = None
-        self.last_S: np.ndarray | None = None
+        P0, max_var, Q = config.matrices()
+        super().__init__(*filter_arrays(adaptive=False, x0=config.x0, P0=P0, Q=Q, max_var=max_var,
+                                        fading=config.fading, depth=depth))
 
     @property
     def fading(self) -> float:
         return self.config.fading
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
-
-    @property
-    def cov(self) -> np.ndarray:
-        return self._P.copy()
-
-    def update(self, obs: Observation) -> np.ndarray:
-        P_prior = cap_covariance(predict(self._P, self._Q, self.fading), self._max_var)
-        self._x, P_post, self.last_innovation, self.last_S = correct(
-            self._x, P_prior, obs.y, obs.H, obs.R
-        )
-        self._P = cap_covariance(P_post, self._max_var)
-        return self.params
-
-    def hold(self) -> np.ndarray:
-        self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
-        return self.params
-
-    def engine_state(self) -> dict:
-        """State and settings for the compiled engine (:mod:`gyrodrift._engine`)."""
-        return {"mode": "fixed", "fading": float(self.fading), "x": self._x, "P": self._P, "Q": self._Q,
-                "max_var": self._max_var, "active": (0, 1, 2)}
-
-    def set_engine_state(self, state: dict) -> None:
-        """Take back the state the compiled engine ended with."""
-        self._x = np.array(state["x"], dtype=float)
-        self._P = np.array(state["P"], dtype=float)
 
 
 @register
@@ -168,16 +203,17 @@ class PlainKalmanDrift(KalmanDrift):
 
     name: ClassVar[str] = "stkf-s1"
 
-    def __init__(self, config: KalmanConfig = KalmanConfig()):
-        super().__init__(replace(config, fading=1.0))
+    def __init__(self, config: KalmanConfig = KalmanConfig(), *, depth: int = 3):
+        super().__init__(replace(config, fading=1.0), depth=depth)
 
 
 @register
-class BiasKalman(LinearDrift):
+class BiasKalman(KernelFilter):
     """The paper's KF baseline (``kf``): a plain Kalman filter on a constant bias c alone.
 
-    Same kernels, one state, s = 1; a and b stay 0, so through an outage the last bias
-    is held and the temperature is ignored (Section 4, Figs. 4, 5 and 9).
+    The filter of :class:`KalmanDrift` with s = 1 and only c active; a and b stay 0, so
+    through an outage the last bias is held and the temperature is ignored (Section 4,
+    Figs. 4, 5 and 9).
 
     Parameters
     ----------
@@ -191,47 +227,15 @@ class BiasKalman(LinearDrift):
     """
 
     name: ClassVar[str] = "kf"
-    causal: ClassVar[bool] = True
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), bias_q_sd: float = 0.02):
+    def __init__(self, config: KalmanConfig = KalmanConfig(), bias_q_sd: float = 0.02, *, depth: int = 3):
         if not (math.isfinite(bias_q_sd) and bias_q_sd >= 0):
             raise ConfigError(f"bias_q_sd must be >= 0 deg/s, got {bias_q_sd!r}")
         self.config = config
-        self._x = np.array([config.x0[2]], dtype=float)
-        self._P = np.array([[config.p0_sd[2] ** 2]])
-        self._Q = np.array([[bias_q_sd**2]])
-        self._max_var = np.array([(config.max_sd or config.p0_sd)[2] ** 2])
-
-    @property
-    def params(self) -> np.ndarray:
-        return np.array([0.0, 0.0, self._x[0]])
-
-    @property
-    def cov(self) -> np.ndarray:
-        P = np.zeros((3, 3))
-        P[2, 2] = self._P[0, 0]
-        return P
-
-    def update(self, obs: Observation) -> np.ndarray:
-        P_prior = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
-        self._x, P_post, _, _ = correct(self._x, P_prior, obs.y, obs.H[:, 2:3], obs.R)
-        self._P = cap_covariance(P_post, self._max_var)
-        return self.params
-
-    def hold(self) -> np.ndarray:
-        self._P = cap_covariance(predict(self._P, self._Q, 1.0), self._max_var)
-        return self.params
-
-    def engine_state(self) -> dict:
-        """State and settings for the compiled engine: the 3-state form with only c active."""
-        P = np.zeros((3, 3))
-        P[2, 2] = self._P[0, 0]
+        P0 = np.zeros((3, 3))
+        P0[2, 2] = config.p0_sd[2] ** 2
         Q = np.zeros((3, 3))
-        Q[2, 2] = self._Q[0, 0]
-        return {"mode": "fixed", "fading": 1.0, "x": np.array([0.0, 0.0, self._x[0]]), "P": P, "Q": Q,
-                "max_var": np.array([1.0, 1.0, self._max_var[0]]), "active": (2,)}
-
-    def set_engine_state(self, state: dict) -> None:
-        """Take back the state the compiled engine ended with."""
-        self._x = np.array([state["x"][2]], dtype=float)
-        self._P = np.array([[state["P"][2, 2]]], dtype=float)
+        Q[2, 2] = bias_q_sd**2
+        max_var = np.array([1.0, 1.0, (config.max_sd or config.p0_sd)[2] ** 2])
+        super().__init__(*filter_arrays(adaptive=False, x0=(0.0, 0.0, config.x0[2]), P0=P0, Q=Q, max_var=max_var,
+                                        active=(2,), depth=depth))

@@ -10,14 +10,12 @@ range (no extrapolation). There is no T' term and no adaptation.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
 
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import Unaided, register
 
-__all__ = ["Poly3Calibration", "fit_poly3", "CubicCalibration"]
+__all__ = ["Poly3Calibration", "fit_poly3"]
 
 
 @dataclass(frozen=True)
@@ -69,28 +67,3 @@ def fit_poly3(temp_c, gyro_z_dps, *, median_window: int = 31, order: int = 3) ->
     t_ref = 0.5 * (t_min + t_max)
     coeffs = np.polyfit(temp_c - t_ref, rate, order)
     return Poly3Calibration(tuple(float(c) for c in coeffs), t_ref, t_min, t_max)
-
-
-@register
-class CubicCalibration(Unaided):
-    """Offline cubic thermal calibration (``poly3``); ignores compass observations.
-
-    :attr:`params` reports the cubic's tangent at ``T_ref`` as (a, b=0, c).
-    """
-
-    name: ClassVar[str] = "poly3"
-    causal: ClassVar[bool] = True
-
-    def __init__(self, calibration: Poly3Calibration):
-        if not isinstance(calibration, Poly3Calibration):
-            raise ConfigError("poly3 needs a calibration fitted on a separate heating run (fit_poly3)")
-        self.calibration = calibration
-        slope = calibration.coeffs[-2]
-        self._x = np.array([slope, 0.0, calibration.coeffs[-1] - slope * calibration.temp_ref_c])
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
-
-    def drift(self, temp_c, temp_rate_cps):
-        return self.calibration.drift(temp_c)

@@ -1,38 +1,26 @@
-"""Row function of the fused heading (:mod:`gyrodrift.fusion`), compiled when numba is installed.
+"""The fused heading: the compensated gyro and the compass in a one-state Kalman filter.
 
-Without numba the same functions run as plain Python; either way streaming (one row at
-a time) and batch (:func:`fuse_rows`) execute the same operations in the same order.
+See :mod:`gyrodrift.fusion` for the filter and its settings. :func:`step` is one row on
+scalars, called by the row loop (:mod:`gyrodrift.kernels.loop`) and by
+:func:`fuse_rows` (a whole log, for the fused heading of other methods' outputs).
 """
 
 from __future__ import annotations
 
 import math
 
-try:
-    from numba import njit
+from gyrodrift.kernels import jit
 
-    _jit = njit(cache=True, nogil=True)
-    #: The row function, inlined into the loops that call it (numba IR inlining: a call to
-    #: another compiled function is not inlined by LLVM, and this one passes 20 numbers in
-    #: and 12 out through memory).
-    _jit_inline = njit(cache=True, nogil=True, inline="always")
-except ImportError:  # pragma: no cover - exercised only without numba
-    def _jit(f):
-        return f
-
-    _jit_inline = _jit
-
-# state layout
-PSI, P, TPREV, RPREV, STARTED, T0, ISD, SDPREV, REJ_T = range(9)
-N_STATE = 9
+__all__ = ["step", "fuse_rows"]
 
 
-@_jit_inline
-def wrap180(x):
+@jit(inline=True)
+def _wrap180(x):
+    """The innovation wrapped to [-180, 180), deg."""
     return x - 360.0 * math.floor((x + 180.0) / 360.0)
 
 
-@_jit_inline
+@jit(inline=True)
 def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, compass, allow, bias_sd,
          R, N2, tau, gate, relock):
     """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`) on scalars.
@@ -56,7 +44,7 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
     P = P + (N2 + tau * bias_sd * bias_sd) * dt
     isd = isd + 0.5 * (bias_sd + sd_prev) * dt
     if allow and not math.isnan(compass):
-        nu = wrap180(compass - psi)
+        nu = _wrap180(compass - psi)
         S = P + R
         if nu * nu / S <= gate:
             k = P / S
@@ -79,20 +67,12 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
     return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
 
 
-@_jit
-def fuse_row(st, t, rate, compass, allow, bias_sd, cfg):
-    """:func:`step` with the state in the array ``st`` (updated); returns (ψ, σ_ψ, σ_gyro)."""
-    r = step(st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T],
-             t, rate, compass, allow, bias_sd, cfg[0], cfg[1], cfg[2], cfg[3], cfg[4])
-    st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T] = r[:9]
-    return r[9], r[10], r[11]
-
-
-@_jit
+@jit
 def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, out_h, out_sd, out_gyro_sd):
-    """:func:`step` over arrays (outputs written in place; the state stays in registers)."""
-    psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t = (st[PSI], st[P], st[TPREV], st[RPREV],
-                                                                st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T])
+    """:func:`step` over arrays: state ``st`` (9 values, the order of :func:`step`'s first
+    nine arguments; updated), settings ``cfg`` = [R, N², τ, gate, relock]; outputs
+    written in place."""
+    psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t = st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8]
     R, N2, tau, gate, relock = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     for i in range(t.size):
         psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, h, sd, gsd = step(
@@ -102,5 +82,5 @@ def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, out_h, out_sd, out_gyro
         out_h[i] = h
         out_sd[i] = sd
         out_gyro_sd[i] = gsd
-    st[PSI], st[P], st[TPREV], st[RPREV], st[STARTED], st[T0], st[ISD], st[SDPREV], st[REJ_T] = (
+    st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8] = (
         psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t)

@@ -1,11 +1,14 @@
-"""Compiled helpers shared by the kernels of the fast engine (numba; see :mod:`gyrodrift._engine`).
+"""Numbers the kernels share: angle wrapping, sums, small-matrix algebra, the Kalman
+correction and the covariance cap.
 
-Mirrors of :func:`gyrodrift.conventions.wrap_360` / ``wrap_180``, of the Kalman steps
-of :mod:`gyrodrift.estimators._kalman` (``correct``, ``cap_covariance``), of numpy's
-summation (:func:`pairwise_sum`, the order ``np.sum`` and ``np.mean`` add in), so that
-a kernel that mirrors numpy code can give the same bits, and the small-matrix products
-and solves of the filters as loops (:func:`matmul`, :func:`solve`). A leaf module:
-:mod:`gyrodrift._kernels` and :mod:`gyrodrift._adaptive_kernels` both use it.
+* :func:`wrap360`, :func:`wrap180`: angles to [0, 360) and [-180, 180) (the scalar forms
+  of :func:`gyrodrift.conventions.wrap_360` and ``wrap_180``).
+* :func:`pairwise_sum`, :func:`pairwise_sqdev`, :func:`std_of`: sums in numpy's pairwise
+  order (window means and standard deviations of the aiding tests).
+* :func:`matmul`, :func:`matmul_t`, :func:`matvec`, :func:`solve`: products and solves of
+  the 1x1 to 3x3 matrices of the filters, as loops (no BLAS call for such sizes).
+* :func:`correct`: the measurement update of eq. (10) in Joseph form;
+  :func:`cap_covariance`: the bound on the covariance (see :mod:`gyrodrift.kernels.kalman`).
 """
 
 from __future__ import annotations
@@ -13,16 +16,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-# numpy's block size of the pairwise summation (numpy/_core/src/umath/loops_utils.h.src)
+from gyrodrift.kernels import jit
+
+__all__ = ["wrap360", "wrap180", "near_boundary", "pairwise_sum", "pairwise_sqdev", "std_of", "sym_eig", "cap_covariance",
+           "matmul", "matmul_t", "matvec", "solve", "correct"]
+
+# numpy's block size of the pairwise summation
 _PW_BLOCKSIZE = 128
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def wrap360(x):
-    """Mirror of :func:`gyrodrift.conventions.wrap_360` (an angle already in range is returned as is,
-    which is what ``np.mod`` gives for it)."""
+    """``x`` (deg) wrapped to [0, 360); an angle already in range is returned as is."""
     if 0.0 <= x < 360.0:
         return x
     out = np.mod(x, 360.0)
@@ -31,13 +37,13 @@ def wrap360(x):
     return out
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def wrap180(x):
-    """Mirror of :func:`gyrodrift.conventions.wrap_180`."""
+    """``x`` (deg) wrapped to [-180, 180)."""
     return wrap360(x + 180.0) - 180.0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def _block_sum(a, lo, n):
     """numpy's sum of at most 128 numbers (``pairwise_sum`` without the split)."""
     if n < 8:
@@ -67,7 +73,7 @@ def _block_sum(a, lo, n):
     return res
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def pairwise_sum(a, lo, n):
     """Sum of ``a[lo:lo + n]`` in the order of numpy's ``np.add.reduce`` on a float64 array.
 
@@ -83,7 +89,7 @@ def pairwise_sum(a, lo, n):
     return _pairwise_tree(a, lo, n)
 
 
-@njit(cache=True, nogil=True)
+@jit
 def _pairwise_tree(a, lo, n):
     """:func:`pairwise_sum` of more than 128 numbers (out of line: the callers inline the rest)."""
     # post-order walk of the halving tree: (lo, n, combine?) to do, partial sums done
@@ -111,7 +117,7 @@ def _pairwise_tree(a, lo, n):
     return done[0]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def _block_sqdev(a, lo, n, mu):
     """:func:`_block_sum` of ``(a - mu)²`` (each term as numpy's ``d = a - mu; d * d``)."""
     if n < 8:
@@ -146,7 +152,7 @@ def _block_sqdev(a, lo, n, mu):
     return res
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def pairwise_sqdev(a, lo, n, mu):
     """Sum of ``(a[lo:lo + n] - mu)²`` in numpy's order (:func:`pairwise_sum` of the squares,
     without making the array of them)."""
@@ -155,7 +161,7 @@ def pairwise_sqdev(a, lo, n, mu):
     return _sqdev_tree(a, lo, n, mu)
 
 
-@njit(cache=True, nogil=True)
+@jit
 def _sqdev_tree(a, lo, n, mu):
     """:func:`pairwise_sqdev` of more than 128 numbers."""
     todo = np.empty((128, 3), dtype=np.int64)
@@ -182,26 +188,14 @@ def _sqdev_tree(a, lo, n, mu):
     return done[0]
 
 
-@njit(cache=True, nogil=True)
-def mean(a):
-    """``np.mean`` of a 1-d float64 array, the same bits."""
-    return pairwise_sum(a, 0, a.size) / a.size
-
-
-@njit(cache=True, nogil=True)
+@jit
 def std_of(a, lo, n):
     """``np.std`` of ``a[lo:lo + n]`` (population, ddof 0), the same bits, read in place."""
     mu = pairwise_sum(a, lo, n) / n
     return np.sqrt(pairwise_sqdev(a, lo, n, mu) / n)
 
 
-@njit(cache=True, nogil=True)
-def std(a):
-    """``np.std`` of a 1-d float64 array (population, ddof 0), the same bits."""
-    return std_of(a, 0, a.size)
-
-
-@njit(cache=True, nogil=True)
+@jit
 def sym_eig(A):
     """Eigenvalues and eigenvectors (columns) of a small symmetric matrix: cyclic Jacobi
     rotations until the off-diagonal part is below rounding (``np.linalg.eigh`` to the
@@ -256,10 +250,16 @@ def sym_eig(A):
     return lam, V
 
 
-@njit(cache=True, nogil=True)
+@jit
 def cap_covariance(P, max_var):
-    """Mirror of :func:`gyrodrift.estimators._kalman.cap_covariance` (eigen-decomposition by
-    :func:`sym_eig`: the same result to rounding)."""
+    """P limited to at most ``diag(max_var)`` in every direction (``P <= P_max``).
+
+    In coordinates where ``P_max`` is the identity, eigenvalues of P above 1 are clipped
+    to 1; directions already known better than the cap keep their variance (clipping each
+    variance on its own would not: with a and c strongly correlated it would inflate the
+    variance of the well-known combination ``a*T + c``). P stays symmetric positive
+    definite. Returns a new matrix.
+    """
     n = P.shape[0]
     scale = np.sqrt(max_var)
     M = np.empty((n, n))
@@ -295,7 +295,7 @@ def cap_covariance(P, max_var):
     return sym
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def matmul(A, B):
     """``A @ B`` of small matrices, as plain loops (no BLAS call: the sizes here are 1 to 3;
     the sums go in index order, so the last bit may differ from BLAS)."""
@@ -311,7 +311,7 @@ def matmul(A, B):
     return out
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def matmul_t(A, B):
     """``A @ B.T`` of small matrices (see :func:`matmul`)."""
     p, q = A.shape
@@ -326,7 +326,7 @@ def matmul_t(A, B):
     return out
 
 
-@njit(cache=True, nogil=True, inline="always")
+@jit(inline=True)
 def matvec(A, x):
     """``A @ x`` of a small matrix and vector (see :func:`matmul`)."""
     p, q = A.shape
@@ -339,7 +339,7 @@ def matvec(A, x):
     return out
 
 
-@njit(cache=True, nogil=True)
+@jit
 def solve(S, B):
     """``np.linalg.solve(S, B)`` of a small system (S (m, m), B (m, k) or (m,)): LU with
     partial pivoting as LAPACK's ``dgesv``, dividing through reciprocals of the pivots as
@@ -378,12 +378,12 @@ def solve(S, B):
     return X
 
 
-@njit(cache=True, nogil=True)
+@jit
 def correct(x, P, y, H, R):
-    """Mirror of :func:`gyrodrift.estimators._kalman.correct` (Joseph form): x, P.
+    """Measurement update of eq. (10) in Joseph form: returns (x⁺, P⁺).
 
-    The same formulas in the same order, with the products as plain loops
-    (:func:`matmul`, :func:`solve`): the result agrees with numpy's to rounding."""
+    ``K = P Hᵀ S⁻¹`` with ``S = H P Hᵀ + R``, ``x⁺ = x + K (y − H x)``,
+    ``P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ``, symmetrised."""
     n = x.size
     m = y.size
     HP = matmul(H, P)
@@ -406,3 +406,12 @@ def correct(x, P, y, H, R):
     for i in range(n):
         x_post[i] = x[i] + Ki[i]
     return x_post, out
+
+
+@jit
+def near_boundary(t_start, k_cur, width):
+    """A time safely before the start of bin ``k_cur + 1`` of a grid ``t_start + k width``:
+    below it ``floor((t - t_start) / width)`` cannot have passed ``k_cur`` (the margin
+    covers the rounding of the division), so the division can be skipped."""
+    t_next = t_start + (k_cur + 1.0) * width
+    return t_next - 1e-9 * (abs(t_next) + abs(t_start) + width)

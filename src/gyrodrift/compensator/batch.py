@@ -1,0 +1,155 @@
+"""A whole log at once: :func:`compensate` (a DataFrame) and :func:`compensate_arrays`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.compass import compass_columns
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.engine import ChunkEngine
+from gyrodrift.compensator.memory import OutputBuffers
+from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
+from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
+from gyrodrift.errors import GyroDriftError, LogFormatError
+from gyrodrift.triad import add_triad_columns, has_triad_inputs
+
+__all__ = ["compensate", "compensate_arrays"]
+
+#: Rows per chunk when a progress display is asked for.
+PROGRESS_ROWS = 1 << 20
+
+
+def compensate_arrays(
+    t_s,
+    gyro_z_dps,
+    temp_c,
+    heading_deg=None,
+    mag=None,
+    acc=None,
+    config: CompensatorConfig | None = None,
+    *,
+    estimator=None,
+    source: str = "arrays",
+    progress=None,
+    buffers: OutputBuffers | None = None,
+) -> pd.DataFrame:
+    """Compensate a whole log given as arrays; see :func:`compensate` for the output.
+
+    Parameters
+    ----------
+    t_s, gyro_z_dps, temp_c : (N,) array_like
+        Time (s, strictly increasing), raw heading-axis rate (deg/s), temperature (degC).
+        NaN in gyro or temperature holds the previous value (``gap``).
+    heading_deg : (N,) array_like, optional
+        Compass heading, deg clockwise from north; NaN = no sample.
+    mag, acc : (N, 3) array_like, optional
+        Raw FRD magnetometer and accelerometer (compass when ``heading_deg`` is
+        None or NaN; field-anomaly gate).
+    config : CompensatorConfig, optional
+    estimator : DriftEstimator, optional
+        A fresh estimator instance to use instead of ``config.estimator``.
+    source : str
+        Name used in error messages (the file name).
+    progress : callable, optional
+        ``progress(iterable, total)`` wraps the loop over chunks of
+        :data:`PROGRESS_ROWS` rows (e.g. a progress bar); it must yield the same items.
+    buffers : OutputBuffers, optional
+        Memory for the output columns, kept between calls (see :class:`OutputBuffers`):
+        the returned table then views it, and the next call with the same buffers
+        overwrites it.
+    """
+    cfg = config or CompensatorConfig()
+    t = np.asarray(t_s, dtype=float)
+    n = t.size
+    g = np.asarray(gyro_z_dps, dtype=float)
+    T_in = np.asarray(temp_c, dtype=float)
+    if n == 0:
+        raise LogFormatError(f"{source}: the log has no samples")
+    if not (np.isfinite(g[0]) and np.isfinite(T_in[0])):
+        raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
+    need = cfg.init_s + cfg.update_interval_s
+    if t[-1] - t[0] < need:
+        raise GyroDriftError(
+            f"{source}: the log is {t[-1] - t[0]:.1f} s long; initialisation needs at least "
+            f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
+        )
+    est = estimator if estimator is not None else build_estimator(cfg)
+    if mag is not None and acc is not None:
+        heading, norm, dip = compass_columns(n, heading_deg, mag, acc)
+    else:  # the engine wraps the heading itself
+        heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
+        norm = dip = None
+    engine = ChunkEngine(cfg, est, source)
+    if progress is None or n <= PROGRESS_ROWS:
+        cols = engine.feed(t, g, T_in, heading, norm, dip, buffers)
+        accepted = engine.finish()
+        return with_attrs(output_frame(cols, None if buffers is None else buffers.gated[:n]), accepted, est)
+    parts = []
+    starts = range(0, n, PROGRESS_ROWS)
+    for lo in progress(starts, len(starts)):
+        sl = slice(lo, lo + PROGRESS_ROWS)
+        cols = engine.feed(t[sl], g[sl], T_in[sl], heading[sl], None if norm is None else norm[sl],
+                           None if dip is None else dip[sl])
+        if cols is not None:
+            parts.append(cols)
+    accepted = engine.finish()
+    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    return with_attrs(output_frame(cols), accepted, est)
+
+
+def compensate(
+    log: pd.DataFrame,
+    config: CompensatorConfig | None = None,
+    *,
+    estimator=None,
+    source: str | None = None,
+    progress=None,
+) -> pd.DataFrame:
+    """Compensate a log in the input contract; return the output table.
+
+    Parameters
+    ----------
+    log : DataFrame
+        Columns ``t`` (s), ``gyro_z`` (deg/s), ``temp`` (degC) and a compass:
+        ``heading`` (deg) or ``mag_x..z`` + ``acc_x..z`` (see
+        :mod:`gyrodrift.conventions`). As returned by :func:`gyrodrift.io.read_log`.
+    config : CompensatorConfig, optional
+    estimator : DriftEstimator, optional
+        A fresh estimator instance overriding ``config.estimator``.
+    source : str, optional
+        Name for error messages; defaults to ``log.attrs["source"]``.
+    progress : callable, optional
+        See :func:`compensate_arrays`.
+
+    Returns
+    -------
+    DataFrame
+        ``t, rate_z, bias_z, heading, a, b, c, update, gated, gate_reason`` (the output
+        contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
+        compass used; empty where there was no sample), ``unobservable`` (``a``, ``b``
+        or ``a+b``: drift parameters the data have not yet determined, e.g. while the
+        temperature is flat; empty when all are), ``bias_sd`` (deg/s, the filter's
+        standard deviation of ``bias_z``), ``heading_fused``, ``heading_fused_sd``,
+        ``heading_sd`` (deg; :mod:`gyrodrift.fusion`) and every other input column (the
+        input ``heading`` is ``compass_heading``). When the log has ``gyro_x``,
+        ``gyro_y`` and ``acc_x..z``, ``rate_x, rate_y, bias_x, bias_y`` (deg/s) and
+        ``tilt_gated`` come before the input columns (:mod:`gyrodrift.triad`).
+    """
+    source = source or log.attrs.get("source", "log")
+    has_mag = check_input_columns(log, source)
+    out = compensate_arrays(
+        log[T].to_numpy(float),
+        log[GYRO_Z].to_numpy(float),
+        log[TEMP].to_numpy(float),
+        heading_deg=log[HEADING].to_numpy(float) if HEADING in log.columns else None,
+        mag=log[list(MAG_COLS)].to_numpy(float) if has_mag else None,
+        acc=log[list(ACC_COLS)].to_numpy(float) if has_mag else None,
+        config=config,
+        estimator=estimator,
+        source=source,
+        progress=progress,
+    )
+    if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
+        add_triad_columns(out, log, config)
+    return append_input_columns(out, log)

@@ -1,0 +1,370 @@
+"""The engine: one log compensated chunk by chunk, with the same numbers whatever the chunks.
+
+:class:`ChunkEngine` is what every entry point runs: :func:`gyrodrift.compensate` (one
+chunk, the whole log), the chunked file path (:mod:`gyrodrift.pipeline`) and the
+streaming :class:`gyrodrift.Compensator` (one row at a time). It owns the state arrays
+of :mod:`gyrodrift.kernels.layout`, calls :func:`gyrodrift.kernels.loop.prepare` and
+:func:`~gyrodrift.kernels.loop.run_chunk` on each chunk, grows their ring buffers, and
+runs the initialisation once the init window is complete (its rows are held back
+until then).
+
+The estimator: a Kalman-family one (``stkf``, ``stkf-s1``, ``kf``, ``adaptive``) is
+updated inside the row loop, on its own arrays; any other estimator with the linear
+drift of eq. (2) (``lsm``, ``fixed``, one of the user's) is updated here, in Python, at
+the end of each update interval (``MODE_EXTERNAL``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
+from gyrodrift.estimators import AdaptiveConfig, Observation
+from gyrodrift.estimators.base import LinearDrift
+from gyrodrift.kernels import aiding, loop
+from gyrodrift.kernels import layout as L
+from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
+
+__all__ = ["ChunkEngine", "settings_arrays"]
+
+#: Rows of the accepted-measurement buffer to start with (it grows).
+_ACC_ROWS = 64
+_NO_FIELD = np.empty(0)
+
+
+def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
+    """The kernels' float and integer settings (``cfg``, ``icfg``) for a configuration and
+    estimator (the ``adaptive`` estimator's aiding switches come from its settings)."""
+    st = getattr(estimator, "settings", None)
+    st = st if isinstance(st, AdaptiveConfig) else None
+    gate, fusion = config.gate, config.fusion_settings
+    cfg = np.zeros(L.N_CFG)
+    cfg[L.C_INTERVAL] = config.update_interval_s
+    cfg[L.C_COMPASS_SD] = config.compass_sigma_deg
+    cfg[L.C_GYRO_NOISE] = config.gyro_noise_dps_rthz
+    cfg[L.C_TURN_RATE] = gate.turn_rate_dps
+    cfg[L.C_TURN_WIN] = gate.turn_window_s
+    cfg[L.C_INTERF] = gate.interference_deg
+    cfg[L.C_MAX_AGE] = gate.compass_max_age_s
+    cfg[L.C_PRIOR_A] = config.kalman.p0_sd[0]
+    cfg[L.C_PRIOR_B] = config.kalman.p0_sd[1]
+    cfg[L.C_MAX_GAP] = gate.max_gap_s
+    cfg[L.C_TP_BIN_S] = config.temp_rate.bin_s
+    cfg[L.C_FIELD_NORM_TOL] = gate.field_norm_tol
+    cfg[L.C_DIP_TOL] = gate.dip_tol_deg
+    cfg[L.C_STILL_STD] = gate.still_std_dps
+    cfg[L.C_STILL_HEADING] = gate.still_heading_deg
+    cfg[L.C_FUSION_R:L.C_FUSION_RELOCK + 1] = fusion.vector(config.gyro_noise_dps_rthz)
+    icfg = np.zeros(L.N_KCFG, dtype=np.int64)
+    icfg[L.K_RELOCK] = gate.relock_intervals
+    icfg[L.K_DEPTH] = config.stack_depth if st is None or st.stacked else 1
+    icfg[L.K_TP_WINDOW_BINS] = config.temp_rate.window_bins
+    icfg[L.K_FUSE_INTERFERENCE] = int(bool(fusion.magnetic_gates))
+    arrays = getattr(estimator, "kernel_arrays", None)
+    icfg[L.K_MODE] = L.MODE_EXTERNAL if arrays is None else int(arrays[1][L.EI_MODE])
+    if st is not None:
+        cfg[L.C_EDGE_S] = st.edge_s
+        cfg[L.C_WINDOW_S] = max(st.zaru_window_s, st.edge_s)
+        cfg[L.C_ZARU_WINDOW_S] = st.zaru_window_s
+        cfg[L.C_ZARU_SLOPE_K] = st.zaru_slope_k
+        cfg[L.C_ZARU_RESID_K] = st.zaru_resid_k
+        icfg[L.K_ZARU] = int(st.zaru)
+        icfg[L.K_ZARU_HOLD] = int(st.zaru_hold)
+        icfg[L.K_EDGE] = int(st.edge_s > 0.0)
+        icfg[L.K_COLLECTS] = int(st.zaru or st.edge_s > 0.0)
+    return cfg, icfg
+
+
+class ChunkEngine:
+    """Resumable compensation of one log, chunk by chunk.
+
+    Parameters
+    ----------
+    config : CompensatorConfig
+    estimator : DriftEstimator
+        A fresh estimator whose drift is eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`);
+        it is updated in place and holds the final state at the end.
+    source : str
+        Name used in error messages.
+
+    Notes
+    -----
+    :meth:`feed` returns the output columns of the rows that became available (none
+    until the initialisation window is complete, then all of its rows at once);
+    :meth:`finish` checks the log was long enough and returns the accepted measurements.
+    Rows are numbered from 0 across chunks in error messages.
+    """
+
+    def __init__(self, config, estimator, source: str = "arrays"):
+        owner = next((k for k in type(estimator).__mro__ if "drift" in k.__dict__), None)
+        if owner is not LinearDrift:
+            raise ConfigError(f"estimator {estimator.name!r}: its drift is not a*T + b*T' + c (eq. 2), which the "
+                              "engine compensates with; run it as a baseline of gyrodrift.compare")
+        self.cfg = config
+        self.est = estimator
+        self.source = source
+        arrays = getattr(estimator, "kernel_arrays", None)
+        if arrays is None:
+            arrays = (np.zeros(L.ef_size(1, 1)), np.zeros(L.N_EI, dtype=np.int64))
+            arrays[1][L.EI_DEPTH] = arrays[1][L.EI_NIS_W] = 1
+        elif arrays[1][L.EI_DEPTH] < config.stack_depth:
+            raise ConfigError(f"estimator {estimator.name!r} was built for {arrays[1][L.EI_DEPTH]} stacked "
+                              f"measurements, the settings stack {config.stack_depth}; build it with "
+                              "gyrodrift.compensator.build_estimator")
+        self._ef, self._ei = arrays
+        self._set, self._iset = settings_arrays(config, estimator)
+        self._external = self._iset[L.K_MODE] == L.MODE_EXTERNAL
+        self._fs = np.zeros(L.N_FSTATE)
+        self._fs[L.F_FIELD_NORM] = self._fs[L.F_FIELD_DIP] = math.nan
+        self._ist = np.zeros(L.N_ISTATE, dtype=np.int64)
+        self._ist[L.I_INIT_END] = -1
+        self._ist[L.I_ANCHOR_ROW] = -1
+        self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
+        self._lb = np.zeros((64, 2))
+        self._win = np.zeros((L.N_WIN, 256 if self._iset[L.K_COLLECTS] else 1))
+        self._stack = np.zeros((config.stack_depth, L.N_MEAS))
+        self._refused = np.zeros(max(config.gate.relock_intervals, 1))
+        self._acc = np.zeros((_ACC_ROWS, L.N_MEAS))
+        self._accepted: list[np.ndarray] = []
+        self._t0: float | None = None
+        self._held: list[tuple] | None = []  # prepared chunks of the init window, until it is complete
+        self._row: _RowMemory | None = None
+
+    # ---------------------------------------------------------------- state
+    @property
+    def initialised(self) -> bool:
+        """True once the init window is complete (rows come out as they go in)."""
+        return self._held is None
+
+    @property
+    def rows_in(self) -> int:
+        """Rows taken so far."""
+        return int(self._ist[L.I_ROWS])
+
+    @property
+    def t_start(self) -> float:
+        """End of the init window, s (NaN before the first row)."""
+        return math.nan if self._t0 is None else float(self._fs[L.F_TSTART])
+
+    # ----------------------------------------------------------------- feed
+    def feed(self, t, g, T, heading, norm=None, dip=None, buffers: OutputBuffers | None = None) -> dict | None:
+        """Add a chunk of rows; return the output columns of the rows that became available.
+
+        Parameters
+        ----------
+        t, g, T, heading : (n,) array_like
+            Time (s, strictly increasing across chunks), raw heading-axis rate (deg/s),
+            temperature (degC), compass heading (deg; NaN = no sample). An empty or
+            infinite gyro or temperature cell holds the previous value (``gap``).
+        norm, dip : (n,) array_like, optional
+            Field strength and dip of the raw magnetometer (field-anomaly gate).
+        buffers : OutputBuffers, optional
+            Memory for the output, used when all the rows of this chunk come out of this
+            call (a whole log); the returned columns are then views of it.
+
+        Returns
+        -------
+        dict or None
+            Columns ``t, bias_z, rate_z, heading, a, b, c, bias_sd, heading_fused,
+            heading_fused_sd, heading_sd, temp_rate, compass_heading`` (float) and
+            ``update, reason, unobs`` (int8 codes), or None while the init window fills.
+        """
+        n = len(t)
+        if n == 0:
+            return None
+        t = np.ascontiguousarray(t, dtype=float)
+        g = np.ascontiguousarray(g, dtype=float)
+        T = np.ascontiguousarray(T, dtype=float)
+        heading = np.ascontiguousarray(heading, dtype=float)
+        norm = _NO_FIELD if norm is None else np.ascontiguousarray(norm, dtype=float)
+        dip = _NO_FIELD if dip is None else np.ascontiguousarray(dip, dtype=float)
+        if self._t0 is None:
+            if not (np.isfinite(g[0]) and np.isfinite(T[0])):
+                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
+            self._t0 = float(t[0])
+            self._fs[L.F_TSTART] = self._t0 + self.cfg.init_s
+        whole = self._held is None or (not self._held and float(t[-1]) - self._fs[L.F_TSTART] >= 0)
+        helper = None
+        if whole and buffers is not None:
+            cols = buffers.take(n)
+        else:
+            cols, helper = new_columns(n)
+        try:
+            rows_before = self.rows_in
+            bad, fix = loop.prepare(t, g, T, heading, self._fs, self._ist, self._set, self._iset, self._bins,
+                                    cols.g_held, cols.T_held, cols.h_wrapped, cols.column(L.O_TEMP_RATE),
+                                    cols.code(L.OC_GAP).view(np.bool_))
+            if bad >= 0:
+                raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+            inputs = (t, cols.g_held if fix & 1 else g, cols.T_held if fix & 2 else T,
+                      cols.h_wrapped if fix & 4 else heading, norm, dip)
+            if self._held is not None:
+                self._held.append((inputs, cols))
+                if not t[-1] - self._fs[L.F_TSTART] >= 0:
+                    return None
+                inputs, cols = _joined(self._held) if len(self._held) > 1 else self._held[0]
+                self._held = None
+                self._initialise(inputs, cols.column(L.O_TEMP_RATE))
+            return self._run(inputs, cols)
+        finally:
+            join(helper)
+
+    def _initialise(self, inputs, Tp) -> None:
+        """The init window's measurements, the estimator's first update and the field reference."""
+        t, g, T, heading, norm, dip = inputs
+        cfg = self.cfg
+        e = int(np.searchsorted(t, self._fs[L.F_TSTART], "left"))  # first row with t >= t_start
+        found, anchor = aiding.init_measurements(t, g, T, Tp, heading, e, cfg.stack_depth, float(cfg.init_s),
+                                                 self._set, self._ist, self._stack, self._acc, cfg.stack_depth)
+        if anchor < 0:
+            raise GyroDriftError(
+                f"{self.source}: no compass heading in the first {cfg.init_s:g} s (init window), "
+                "so the heading cannot be anchored; check the heading/mag columns or raise --init-s"
+            )
+        if norm.size:
+            self._fs[L.F_FIELD_NORM], self._fs[L.F_FIELD_DIP] = aiding.field_reference(norm, dip, e + 1)
+        if found:
+            y, H, R = aiding.stacked(self._stack, int(self._ist[L.I_STACK_N]))
+            self.est.update(Observation(t=float(t[e]), y=y, H=H, R=R, n_new=int(found)))
+        self._in_force()
+        self._ist[L.I_INIT_END] = e
+        self._ist[L.I_INIT_UPDATED] = int(found > 0)
+        self._ist[L.I_ANCHOR_ROW] = anchor
+
+    def _in_force(self) -> None:
+        """The estimator's parameters, covariance and unobservable code into the state."""
+        if not self._external:
+            aiding.in_force(self._fs, self._ist, self._set, self._ef, self._ei)
+            return
+        C = np.ascontiguousarray(self.est.cov, dtype=float).reshape(3, 3)
+        self._fs[L.F_PA:L.F_PC + 1] = self.est.params
+        self._fs[L.F_COV:L.F_COV + 9] = C.ravel()
+        self._ist[L.I_UNOBS] = aiding.unobservable_code(C, self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
+
+    def _run(self, inputs, cols: Columns) -> dict:
+        t, g, T, heading, norm, dip = inputs
+        Tp = cols.column(L.O_TEMP_RATE)
+        gap = cols.code(L.OC_GAP).view(np.bool_)
+        i = 0
+        while i < t.size:
+            i = loop.run_chunk(t, g, T, Tp, heading, gap, norm, dip, i, self._fs, self._ist, self._set, self._iset,
+                               self._lb, self._win, self._stack, self._refused, self._acc, self._ef, self._ei,
+                               cols.out, cols.codes, cols.n)
+            self._after_stop()
+        columns = {
+            "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
+            "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
+            "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
+            "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
+            "temp_rate": Tp, "compass_heading": heading, "update": cols.code(L.OC_UPDATE),
+            "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
+        }
+        return columns
+
+    def _after_stop(self) -> None:
+        """What the row loop stopped for: the external estimator's update, or a full buffer."""
+        ist = self._ist
+        pending = ist[L.I_PENDING]
+        if pending != L.PENDING_NONE:
+            ist[L.I_PENDING] = L.PENDING_NONE
+            if pending == L.PENDING_UPDATE:
+                n = int(ist[L.I_STACK_N])
+                y, H, R = aiding.stacked(self._stack, n)
+                self.est.update(Observation(t=float(self._acc[ist[L.I_N_ACC] - 1, 0]), y=y, H=H, R=R, n_new=1))
+            else:
+                self.est.hold()
+            self._in_force()
+        if ist[L.I_LB_N] >= self._lb.shape[0]:  # grow the turning ring, oldest first
+            head, n = int(ist[L.I_LB_HEAD]), int(ist[L.I_LB_N])
+            order = (head + np.arange(n)) % self._lb.shape[0]
+            lb = np.zeros((2 * self._lb.shape[0], 2))
+            lb[:n] = self._lb[order]
+            self._lb = lb
+            ist[L.I_LB_HEAD] = 0
+        if 2 * ist[L.I_WIN_N] >= self._win.shape[1]:  # the compass window: keep it at most half full
+            head, n = int(ist[L.I_WIN_HEAD]), int(ist[L.I_WIN_N])
+            win = np.zeros((L.N_WIN, 2 * self._win.shape[1]))
+            win[:, :n] = self._win[:, head:head + n]
+            self._win = win
+            ist[L.I_WIN_HEAD] = 0
+        if ist[L.I_N_ACC] >= self._acc.shape[0]:
+            self._flush_accepted()
+
+    def _flush_accepted(self) -> None:
+        n = int(self._ist[L.I_N_ACC])
+        self._accepted.append(self._acc[:n].copy())
+        self._ist[L.I_N_ACC] = 0
+        if self._acc.shape[0] < 4096:
+            self._acc = np.zeros((2 * self._acc.shape[0], L.N_MEAS))
+
+    def feed_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
+                 dip: float = math.nan) -> tuple[list, list, float]:
+        """One row after initialisation, on floats (the streaming path; the same kernels as
+        :meth:`feed`). Returns the N_OUT float outputs and the N_CODES codes of the row, as
+        lists in the order of :mod:`gyrodrift.kernels.layout`, and the compass heading used."""
+        r = self._row
+        if r is None:
+            r = self._row = _RowMemory()
+        r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
+        cols = r.cols
+        cols.codes[:] = 0
+        rows_before = self.rows_in
+        bad, fix = loop.prepare(r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins,
+                                cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        if bad >= 0:
+            raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+        h = cols.h_wrapped if fix & 4 else r.heading
+        g_in, T_in = cols.g_held if fix & 1 else r.g, cols.T_held if fix & 2 else r.T
+        done = 0
+        while done < 1:  # 0: a ring was full before the row (grown by _after_stop)
+            done = loop.run_chunk(r.t, g_in, T_in, r.Tp, h, r.gap, r.norm, r.dip, 0, self._fs, self._ist, self._set,
+                                  self._iset, self._lb, self._win, self._stack, self._refused, self._acc, self._ef,
+                                  self._ei, cols.out, cols.codes, 1)
+            self._after_stop()
+        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
+
+    # --------------------------------------------------------------- finish
+    def finish(self) -> np.ndarray:
+        """End of the log: check its length; return the accepted measurements, an (M, 5)
+        array of (time s, m deg/s, mean T degC, mean T' degC/s, r (deg/s)²)."""
+        cfg = self.cfg
+        need = cfg.init_s + cfg.update_interval_s
+        if self._t0 is None:
+            raise LogFormatError(f"{self.source}: the log has no samples")
+        span = self._fs[L.F_LAST_T] - self._t0
+        if self._held is not None or span < need:
+            raise GyroDriftError(
+                f"{self.source}: the log is {span:.1f} s long; initialisation needs at least "
+                f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
+            )
+        return self.accepted()
+
+    def accepted(self) -> np.ndarray:
+        """The accepted measurements so far (see :meth:`finish`)."""
+        self._flush_accepted()
+        return np.concatenate(self._accepted) if self._accepted else np.zeros((0, L.N_MEAS))
+
+
+def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
+    """The prepared chunks of the init window as one: inputs (with T') and fresh columns."""
+    n = sum(cols.n for _, cols in held)
+    joined, helper = new_columns(n)
+    join(helper)
+    inputs = tuple(np.concatenate([part[0][k] for part in held]) if held[0][0][k].size else held[0][0][k]
+                   for k in range(6))
+    joined.column(L.O_TEMP_RATE)[:] = np.concatenate([cols.column(L.O_TEMP_RATE) for _, cols in held])
+    joined.code(L.OC_GAP)[:] = np.concatenate([cols.code(L.OC_GAP) for _, cols in held])
+    return inputs, joined
+
+
+class _RowMemory:
+    """One-row inputs and outputs, reused by :meth:`ChunkEngine.feed_row`."""
+
+    def __init__(self):
+        self.t, self.g, self.T, self.heading, self.norm, self.dip = (np.zeros(1) for _ in range(6))
+        self.cols = Columns(np.zeros(L.N_OUT), np.zeros(L.N_CODES, dtype=np.int8), np.zeros(1), np.zeros(1),
+                            np.zeros(1), 1)
+        self.Tp = self.cols.column(L.O_TEMP_RATE)
+        self.gap = self.cols.code(L.OC_GAP).view(np.bool_)

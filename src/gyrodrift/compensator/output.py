@@ -1,0 +1,138 @@
+"""What the compensator gives back: one row (:class:`CompensatedSample`) or a table.
+
+The output table (:func:`output_frame`) has the columns of the output contract
+(:data:`gyrodrift.conventions.OUTPUT_COLS`), then ``temp_rate``, ``compass_heading``,
+``unobservable``, ``bias_sd``, ``heading_fused``, ``heading_fused_sd``, ``heading_sd``;
+``gate_reason`` and ``unobservable`` are categoricals (:data:`gyrodrift.gating.REASONS`,
+:data:`UNOBSERVABLE`). Its ``attrs`` carry the accepted drift measurements
+(:data:`MEASUREMENT_COLUMNS`), the estimator's name and its final parameters and
+covariance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift import gating
+from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
+from gyrodrift.errors import LogFormatError
+
+__all__ = ["CompensatedSample", "UNOBSERVABLE", "MEASUREMENT_COLUMNS", "output_frame", "with_attrs",
+           "check_input_columns", "append_input_columns"]
+
+#: Every value of the ``unobservable`` column, in a fixed order (its categories).
+UNOBSERVABLE = ("", "a", "b", "a+b")
+
+#: Columns of ``attrs["measurements"]``: time (s), drift measurement m (deg/s), interval
+#: means of T (degC) and T' (degC/s), variance r ((deg/s)²).
+MEASUREMENT_COLUMNS = ("t", "m", "temp", "temp_rate", "r")
+
+
+@dataclass(frozen=True)
+class CompensatedSample:
+    """One output row (the output contract of ``gyrodrift compensate``)."""
+
+    t: float
+    rate_z: float
+    bias_z: float
+    heading: float
+    a: float
+    b: float
+    c: float
+    update: int
+    gated: int
+    gate_reason: str
+    temp_rate: float
+    compass_heading: float
+    unobservable: str
+    bias_sd: float
+    heading_fused: float
+    heading_fused_sd: float
+    heading_sd: float
+    #: x and y axes (deg/s; :mod:`gyrodrift.triad`), when the samples carry ``gyro_x_dps``,
+    #: ``gyro_y_dps`` and ``acc``; NaN (and ``tilt_gated`` 0) otherwise.
+    rate_x: float = math.nan
+    rate_y: float = math.nan
+    bias_x: float = math.nan
+    bias_y: float = math.nan
+    tilt_gated: int = 0
+    #: Scale factor (Sec. 4.3): NaN here. A :class:`Compensator` given ``scale_factor`` returns
+    #: :class:`gyrodrift.scale_factor.CompensatedSFSample`, a subclass in which these four are
+    #: fields: SF in force (unitless), its standard deviation, ``rate_z / sf`` (deg/s) and the
+    #: SF-compensated heading (deg). Class attributes, not fields, so that ``asdict`` and
+    #: ``fields`` of a sample without a scale factor give the columns of :func:`compensate`.
+    sf = math.nan
+    sf_sd = math.nan
+    rate_sf = math.nan
+    heading_sf = math.nan
+
+
+
+def output_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:
+    """The output table from the columns of :meth:`gyrodrift.compensator.ChunkEngine.feed`
+    (``reason`` and ``unobs``: the codes of ``gate_reason`` and ``unobservable``). No
+    column is copied; ``gated`` (bool, one per row) receives the ``gated`` column if given."""
+    reason_code = cols["reason"]
+    return pd.DataFrame(
+        {
+            "t": cols["t"],
+            "rate_z": cols["rate_z"],
+            "bias_z": cols["bias_z"],
+            "heading": cols["heading"],
+            "a": cols["a"],
+            "b": cols["b"],
+            "c": cols["c"],
+            "update": cols["update"],
+            "gated": np.not_equal(reason_code, 0, out=gated).view(np.int8),  # bool and int8 share one byte
+            # codes made by the kernels are in range: no validation pass over the rows
+            "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS), validate=False),
+            "temp_rate": cols["temp_rate"],
+            "compass_heading": cols["compass_heading"],
+            "unobservable": pd.Categorical.from_codes(cols["unobs"], categories=list(UNOBSERVABLE), validate=False),
+            "bias_sd": cols["bias_sd"],
+            "heading_fused": cols["heading_fused"],
+            "heading_fused_sd": cols["heading_fused_sd"],
+            "heading_sd": cols["heading_sd"],
+        },
+        copy=False,
+    )
+
+
+def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est) -> pd.DataFrame:
+    """``out`` with its ``attrs``: the accepted measurements ``(M, 5)``, the estimator's name,
+    final parameters and covariance."""
+    out.attrs["measurements"] = pd.DataFrame(np.asarray(accepted, dtype=float).reshape(-1, 5),
+                                             columns=list(MEASUREMENT_COLUMNS))
+    out.attrs["estimator"] = est.name
+    out.attrs["final_params"] = est.params
+    out.attrs["final_cov"] = est.cov
+    return out
+
+
+def check_input_columns(log: pd.DataFrame, source: str) -> bool:
+    """Check a log (or chunk) has the contract's required columns and a compass; return
+    whether the raw magnetometer form (``mag_*`` and ``acc_*``) is complete."""
+    missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
+    if missing:
+        raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
+    has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
+    if HEADING not in log.columns and not has_mag:
+        raise LogFormatError(
+            f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
+        )
+    return has_mag
+
+
+def append_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:
+    """Add every input column but ``t`` and ``heading`` to the output (``in_NAME`` where the
+    output already has ``NAME``), row for row."""
+    for col in log.columns:
+        if col in (T, HEADING):
+            continue
+        name = col if col not in out.columns else f"in_{col}"
+        out[name] = log[col].array  # by position; keeps the column's type (a text column of empty cells stays text)
+    return out

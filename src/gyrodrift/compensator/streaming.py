@@ -1,0 +1,221 @@
+"""The streaming compensator: samples in, compensated rows out (:class:`Compensator`)."""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import replace
+
+import numpy as np
+
+from gyrodrift import gating
+from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.engine import ChunkEngine
+from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
+from gyrodrift.errors import GyroDriftError
+from gyrodrift.kernels import layout as L
+
+__all__ = ["Compensator"]
+
+_REASONS = gating.REASONS
+
+
+class Compensator:
+    """Streaming compensator: feed samples in time order, get compensated rows back.
+
+    :meth:`push` returns a list of :class:`CompensatedSample`: empty while the
+    initialisation window fills, all its rows at once when it ends, then one row per
+    sample. It runs the engine of :func:`gyrodrift.compensate` (the same kernels), so it
+    gives the same numbers, bit for bit, on the same data.
+
+    The x and y axes (``rate_x``, ``bias_x``, ...; :mod:`gyrodrift.triad`) are compensated
+    too when the first sample gives ``gyro_x_dps``, ``gyro_y_dps`` and ``acc``, with the
+    same numbers as :func:`gyrodrift.compensate` on a log with those columns.
+
+    With ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`), every row
+    also carries ``sf``, ``sf_sd``, ``rate_sf`` and ``heading_sf`` of the online scale-factor
+    estimate (Sec. 4.3, :class:`gyrodrift.scale_factor.ScaleFactorTracker`, fed each row
+    as it is output, with the held temperature): the same numbers as
+    ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
+    fields are NaN and no work is done for them.
+
+    Examples
+    --------
+    >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
+    >>> out = []
+    >>> for i in range(500):
+    ...     out += comp.push(i * 0.01, gyro_z_dps=0.2, temp_c=30.0, heading_deg=90.0)
+    >>> round(out[-1].bias_z, 3), round(out[-1].heading, 3)
+    (0.2, 90.0)
+    """
+
+    def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
+                 scale_factor=None):
+        self.config = config or CompensatorConfig()
+        self.source = source
+        self._est = estimator if estimator is not None else build_estimator(self.config)
+        self._engine = ChunkEngine(self.config, self._est, source)
+        self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
+        self._triad = None  # TriadCompensator once the first sample brought gyro_x, gyro_y, acc
+        self._triad_started = False
+        self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
+        self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
+        self._sf = None  # ScaleFactorTracker when a scale factor was asked for
+        if scale_factor is not None:
+            from gyrodrift.scale_factor import CompensatedSFSample, ScaleFactorTracker
+
+            self._sf = ScaleFactorTracker(scale_factor, source=source)
+            self._sf_sample = CompensatedSFSample
+
+    # -- public state
+    @property
+    def initialised(self) -> bool:
+        return self._engine.initialised
+
+    @property
+    def scale_factor(self):
+        """The :class:`gyrodrift.scale_factor.ScaleFactorTracker` (its ``params``, ``cov``,
+        ``n_updates``), or None without ``scale_factor``."""
+        return self._sf
+
+    @property
+    def params(self) -> np.ndarray:
+        """[a (deg/s/degC), b (deg), c (deg/s)] now in force."""
+        return self._est.params
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Covariance of :attr:`params`."""
+        return self._est.cov
+
+    def push(self, t_s, gyro_z_dps, temp_c, heading_deg=math.nan, mag=None, acc=None, gyro_x_dps=None,
+             gyro_y_dps=None):
+        """Add one sample; return the rows that became available.
+
+        Parameters
+        ----------
+        t_s : float
+            Sample time, s (strictly increasing).
+        gyro_z_dps : float
+            Raw heading-axis rate, deg/s (NED: positive = heading increases).
+            NaN: hold the previous value (the interval is refused as ``gap``).
+        temp_c : float
+            Gyro temperature, degC (NaN: hold the previous value).
+        heading_deg : float, optional
+            Compass heading, deg clockwise from magnetic north; NaN = no sample.
+        mag, acc : 3-sequences, optional
+            Raw FRD magnetometer and accelerometer (used when ``heading_deg`` is NaN
+            to compute a tilt-compensated heading, and to detect field anomalies); ``acc`` also
+            aids the x and y axes.
+        gyro_x_dps, gyro_y_dps : float, optional
+            Raw roll- and pitch-axis rates, deg/s (FRD; NaN: hold). Given with ``acc`` on
+            the first sample, every row gets ``rate_x, rate_y, bias_x, bias_y`` and
+            ``tilt_gated``; later samples without them hold the last values.
+        """
+        t_s, g, T = float(t_s), float(gyro_z_dps), float(temp_c)
+        if not math.isfinite(t_s):
+            raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
+        if self._prev is None:
+            if not (math.isfinite(g) and math.isfinite(T)):
+                raise GyroDriftError(f"{self.source}: the first sample needs gyro_z and temp values")
+        else:
+            if not t_s > self._prev[0]:
+                raise GyroDriftError(
+                    f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}"
+                )
+            if not math.isfinite(T):
+                T = self._prev[2]
+        self._prev = (t_s, g, T)
+        heading, norm, dip = _compass_values(heading_deg, mag, acc)
+        if not self._triad_started:
+            self._start_triad(gyro_x_dps, gyro_y_dps, acc)
+        if self._triad is not None:
+            ax = (math.nan,) * 3 if acc is None else tuple(float(v) for v in acc)
+            self._triad_in.append((t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax))
+        if self._sf is not None:
+            self._held_T.append(T)
+        if self._engine.initialised:
+            out, codes, compass = self._engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
+            return self._with_triad([self._sample(t_s, out, codes, compass)])
+        cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
+                                 np.array([norm]), np.array([dip]))
+        if cols is None:
+            return []
+        rows = [
+            self._sample(t, out, codes, compass)
+            for t, out, codes, compass in zip(
+                cols["t"].tolist(),
+                zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
+                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
+                cols["compass_heading"].tolist(),
+            )
+        ]
+        return self._with_triad(rows)
+
+    def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
+        """One output row from the engine's float outputs and codes (layout order)."""
+        reason = _REASONS[codes[L.OC_REASON]]
+        values = (t, out[L.O_RATE], out[L.O_BIAS], out[L.O_HEADING], out[L.O_A], out[L.O_B], out[L.O_C],
+                  codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
+                  UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
+                  out[L.O_HEADING_SD])
+        if self._sf is None:
+            return CompensatedSample(*values)
+        sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, reason)
+        return self._sf_sample(*values, sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf)
+
+    def _start_triad(self, gyro_x_dps, gyro_y_dps, acc) -> None:
+        """Decided on the first sample: x/y axes when it has gyro_x, gyro_y and acc."""
+        self._triad_started = True
+        if gyro_x_dps is not None and gyro_y_dps is not None and acc is not None:
+            from gyrodrift.triad import TriadCompensator
+
+            self._triad = TriadCompensator(self.config)
+
+    def _with_triad(self, rows: list[CompensatedSample]) -> list[CompensatedSample]:
+        """The x/y columns of these rows (:class:`gyrodrift.triad.TriadCompensator`)."""
+        if self._triad is None or not rows:
+            return rows
+        if len(rows) == 1:  # one push after initialisation: floats in, floats out
+            t, gx, gy, T, acc = self._triad_in.popleft()
+            row = rows[0]
+            values = self._triad.feed_row(t, gx, gy, T, row.temp_rate, acc, row.rate_z)
+            for name, value in zip(("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated"), values):
+                object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
+            return rows
+        inputs = [self._triad_in.popleft() for _ in rows]
+        t, gx, gy, T, acc = (np.array(v, dtype=float) for v in zip(*inputs))
+        cols = self._triad.feed(t, gx, gy, T, np.array([r.temp_rate for r in rows]), acc,
+                                np.array([r.rate_z for r in rows]))
+        return [
+            replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
+                    bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
+                    tilt_gated=int(cols["tilt_gated"][i]))
+            for i, r in enumerate(rows)
+        ]
+
+
+#: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
+_FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
+                  "heading_sd", "temp_rate")
+_CODE_COLUMNS = ("update", "reason", "unobs")
+
+
+def _compass_values(heading_deg, mag, acc) -> tuple[float, float, float]:
+    """Heading (deg, NaN = none) and field strength and dip of one sample."""
+    heading = float(heading_deg) if heading_deg is not None else math.nan
+    norm = dip = math.nan
+    if mag is not None and acc is not None:
+        mag = [float(v) for v in mag]
+        acc = [float(v) for v in acc]
+        if all(math.isfinite(v) for v in mag + acc):
+            norm, dip = (float(v) for v in field_norm_dip(*mag, *acc))
+            if not math.isfinite(heading):
+                heading = float(tilt_compensated_heading(*mag, *acc))
+    return heading, norm, dip
+
+
+def _float(v) -> float:
+    """A float from an optional number (None: NaN)."""
+    return math.nan if v is None else float(v)

@@ -1,0 +1,56 @@
+"""The equations of gyrodrift, written once, compiled with numba.
+
+Every equation the compensator runs lives in this package, once: the streaming
+:class:`gyrodrift.Compensator`, :func:`gyrodrift.compensate` and the chunked file path
+all call the same functions, so they give the same bits by construction.
+
+==================  ============================================================
+module              what it holds
+==================  ============================================================
+:mod:`.layout`      the state and settings arrays: index names, reason codes
+:mod:`.numeric`     angle wrapping, small-matrix algebra, the Kalman correction
+                    (Joseph form) and the covariance cap
+:mod:`.kalman`      the drift filters: eq. (10) with a fixed fading factor
+                    (``stkf``, ``stkf-s1``, ``kf``) and the ``adaptive`` filter
+:mod:`.drift`       eq. (2)/(5) and the T' estimate
+:mod:`.aiding`      eqs. (4)–(6): compass and zero-rate measurements, the gates,
+                    lock-out recovery, initialisation
+:mod:`.fusion`      the fused heading (one-state Kalman filter)
+:mod:`.loop`        the row loop: input checks, compensation, integration,
+                    gating, interval decisions, fused heading
+==================  ============================================================
+
+The functions are compiled on first use and cached on disk (``cache=True``); with
+``NUMBA_DISABLE_JIT=1`` the same source runs as plain Python (slow; for debugging,
+and as an oracle in the tests). :func:`cached` says whether a compiled copy is on
+disk, so a command line can say why the first run pauses.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from numba import njit
+
+__all__ = ["jit", "cached"]
+
+
+def jit(fn=None, *, inline: bool = False):
+    """Compile ``fn`` with numba (nopython, cached on disk, releasing the GIL).
+
+    No ``fastmath``: IEEE arithmetic in the order written. ``inline=True`` inlines the
+    function into its callers at numba's IR level (small helpers called per row).
+    """
+    options = {"cache": True, "nogil": True}
+    if inline:
+        options["inline"] = "always"
+    if fn is None:
+        return njit(**options)
+    return njit(**options)(fn)
+
+
+def cached() -> bool:
+    """True when the compiled row loop is in numba's cache next to this package (the
+    first run after an install compiles it, about a minute)."""
+    cache_dir = Path(__file__).parent / "__pycache__"
+    return any(cache_dir.glob("loop.run_chunk-*.nbi"))

@@ -1,0 +1,115 @@
+"""The drift model, eq. (2)/(5) ``B_d = a T + b T' + c``, and the T' estimate.
+
+T' (degC/s) of a sample is the least-squares slope of the 1-s temperature means (bins of
+``bin_s`` seconds aligned on the first sample) over the trailing window of
+``window_bins`` bins before the sample's own bin (see :mod:`gyrodrift.model`): causal,
+and robust to quantised temperature. The tracker's state is in ``fs``/``ist`` (``F_TP_*``,
+``I_TP_*``) and the ring of closed bins ``bins`` (bin number, mean time, mean
+temperature; at least ``window_bins + 2`` rows).
+"""
+
+from __future__ import annotations
+
+import math
+
+from gyrodrift.kernels import jit
+from gyrodrift.kernels.layout import (
+    F_TP_RATE, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_T0, I_TP_BIN, I_TP_HEAD, I_TP_LEN, I_TP_N, I_TP_STARTED,
+)
+from gyrodrift.kernels.numeric import near_boundary
+
+__all__ = ["bias", "bias_sd", "temp_rate_chunk"]
+
+
+@jit(inline=True)
+def bias(a, b, c, temp_c, temp_rate_cps):
+    """Eq. (2)/(5): the drift (deg/s) at T (degC) and T' (degC/s)."""
+    return a * temp_c + b * temp_rate_cps + c
+
+
+@jit(inline=True)
+def bias_sd(C00, C01, C02, C10, C11, C12, C20, C21, C22, temp_c, temp_rate_cps):
+    """Standard deviation (deg/s) of the drift ``h x``, ``h = [T, T', 1]``: ``sqrt(h C hᵀ)``
+    with C the covariance of [a, b, c] (0 where rounding makes the variance negative)."""
+    var = ((C00 * temp_c + C01 * temp_rate_cps + C02) * temp_c
+           + (C10 * temp_c + C11 * temp_rate_cps + C12) * temp_rate_cps
+           + (C20 * temp_c + C21 * temp_rate_cps + C22))
+    return math.sqrt(max(var, 0.0))
+
+
+@jit
+def temp_rate_chunk(t, temp, window_bins, bin_s, fs, ist, bins, out):
+    """T' (degC/s) of every sample of a chunk into ``out``, resumable across chunks.
+
+    Until two bins have closed T' is 0. The tracker's state lives in locals during the
+    loop and goes back to ``fs``/``ist`` at the end.
+    """
+    cap = bins.shape[0]
+    if t.size and ist[I_TP_STARTED] == 0:
+        fs[F_TP_T0] = t[0]
+        ist[I_TP_STARTED] = 1
+        ist[I_TP_BIN] = math.floor((t[0] - fs[F_TP_T0]) / bin_s)
+    t0 = fs[F_TP_T0]
+    sum_t, sum_T, rate = fs[F_TP_SUM_T], fs[F_TP_SUM_TEMP], fs[F_TP_RATE]
+    cur, count, head, length = ist[I_TP_BIN], ist[I_TP_N], ist[I_TP_HEAD], ist[I_TP_LEN]
+    t_near = near_boundary(t0, float(cur), bin_s)
+    for i in range(t.size):
+        ti = t[i]
+        b = cur
+        if ti >= t_near:
+            b = math.floor((ti - t0) / bin_s)
+        if count > 0 and b != cur:
+            # close the bin: its mean time and temperature
+            pos = (head + length) % cap
+            bins[pos, 0] = cur
+            bins[pos, 1] = sum_t / count
+            bins[pos, 2] = sum_T / count
+            length += 1
+            while bins[head, 0] < cur - window_bins:
+                head = (head + 1) % cap
+                length -= 1
+            rate = _ring_slope(bins, head, length)
+            sum_t = 0.0
+            sum_T = 0.0
+            count = 0
+        if b != cur:
+            cur = b
+            t_near = near_boundary(t0, float(cur), bin_s)
+        sum_t += ti
+        sum_T += temp[i]
+        count += 1
+        out[i] = rate
+    fs[F_TP_SUM_T], fs[F_TP_SUM_TEMP], fs[F_TP_RATE] = sum_t, sum_T, rate
+    ist[I_TP_BIN], ist[I_TP_N], ist[I_TP_HEAD], ist[I_TP_LEN] = cur, count, head, length
+
+
+@jit
+def _ring_slope(bins, head, n):
+    """Least-squares slope of column 2 against column 1 over ``n`` ring rows; 0 if undetermined."""
+    if n < 2:
+        return 0.0
+    cap = bins.shape[0]
+    st = 0.0
+    sT = 0.0
+    r = head
+    for _ in range(n):
+        st += bins[r, 1]
+        sT += bins[r, 2]
+        r += 1
+        if r == cap:
+            r = 0
+    mt = st / n
+    mT = sT / n
+    sxx = 0.0
+    sxy = 0.0
+    r = head
+    for _ in range(n):
+        dt = bins[r, 1] - mt
+        sxx += dt * dt
+        sxy += dt * (bins[r, 2] - mT)
+        r += 1
+        if r == cap:
+            r = 0
+    if sxx <= 0.0:
+        return 0.0
+    return sxy / sxx

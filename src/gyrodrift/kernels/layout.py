@@ -1,0 +1,150 @@
+"""Layout of the arrays the kernels share: index names, codes, sizes.
+
+The engine's state is a handful of flat arrays (few arguments make a cheap call from
+Python, which the streaming path pays on every sample):
+
+* ``fs`` float state and ``ist`` integer state of one log (``F_*``, ``I_*``);
+* ``cfg`` float and ``icfg`` integer settings (``C_*``, ``K_*``);
+* ring buffers: ``bins`` (T' bins), ``lb`` (the turning window), ``win`` (the
+  compass window of the ``adaptive`` aiding), ``stack`` (measurements of eq. 3),
+  ``refused`` (lock-out recovery), ``acc`` (accepted measurements, for the caller);
+* the estimator's ``ef`` floats and ``ei`` integers (``EF_*``, ``EI_*``): two filters
+  of three states side by side (the ``adaptive`` estimator and its long-memory twin; the
+  fixed-fading filters use the first);
+* the outputs ``out`` (float columns ``O_*``, each ``cap`` long, one after the other)
+  and ``codes`` (int8 columns ``OC_*``).
+"""
+
+from __future__ import annotations
+
+__all__: list[str] = []  # index names only; import the module
+
+# --------------------------------------------------------------- reason codes
+
+#: ``gate_reason`` codes: indices into :data:`gyrodrift.gating.REASONS`.
+R_NONE, R_INIT, R_GAP, R_NO_COMPASS, R_FIELD, R_TURNING, R_INTERFERENCE = 0, 1, 2, 3, 4, 5, 6
+#: No refusal seen yet in the current interval.
+NO_STICKY = -1
+
+#: ``unobservable`` codes: 1 for ``a`` plus 2 for ``b`` (indices into
+#: :data:`gyrodrift.compensator.output.UNOBSERVABLE`).
+UNOBS_A, UNOBS_B = 1, 2
+#: A parameter is not observable while its standard deviation is above this fraction of
+#: its prior one: the measurements have not pinned it down (a flat temperature leaves a
+#: confounded with c; T' ≡ 0 leaves b free).
+UNOBSERVABLE_SD_FRACTION = 0.5
+
+#: Estimator modes: fixed fading (``stkf``, ``stkf-s1``, ``kf``), ``adaptive``, or a
+#: Python estimator updated by the caller at interval ends (:data:`PENDING_UPDATE`).
+MODE_FIXED, MODE_ADAPTIVE, MODE_EXTERNAL = 0, 1, 2
+#: ``ist[I_PENDING]`` after an interval end in MODE_EXTERNAL: what the caller must do.
+PENDING_NONE, PENDING_UPDATE, PENDING_HOLD = 0, 1, 2
+
+#: Status returned by :func:`gyrodrift.kernels.loop.run_chunk` below 0: a row whose time
+#: is not finite or does not increase is at ``-(status) - 1``.
+STATUS_BAD_TIME = -1
+
+# ---------------------------------------------------------------- float state
+
+F_T, F_G, F_TEMP, F_TP, F_BIAS, F_RATE = 0, 1, 2, 3, 4, 5  # the previous row
+F_IRAW, F_IT, F_ITP, F_IBIAS, F_IRATE = 6, 7, 8, 9, 10  # trapezoid integrals to it
+F_K, F_TSTART, F_ANCHOR = 11, 12, 13  # interval number, start of interval 0, heading anchor
+#: A snap: (t, heading, I_raw, I_T, I_Tp, I_bias) at a compass sample.
+N_SNAP = 6
+S_T, S_HEADING, S_IRAW, S_IT, S_ITP, S_IBIAS = 0, 1, 2, 3, 4, 5
+F_S0 = 14  # snap at the start of the interval
+F_S1 = 20  # the last compass snap
+F_PA, F_PB, F_PC = 26, 27, 28  # a, b, c in force
+F_E0 = 29  # start edge (edge averaging): a snap, then its compass variance at F_E0 + 6
+F_E1 = 36  # the end edge of the interval just closed (the next start edge), same layout
+F_COV = 43  # covariance of the a, b, c in force (3x3, row-major)
+F_TP_T0, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_RATE = 52, 53, 54, 55  # T' tracker
+F_FUSION = 56  # fused-heading state (FZ_* offsets)
+F_LAST_T, F_LAST_G, F_LAST_TEMP = 65, 66, 67  # last input row (time check, held cells)
+F_FIELD_NORM, F_FIELD_DIP = 68, 69  # reference field of the init window (NaN: none)
+N_FSTATE = 70
+
+#: Fused-heading state, from F_FUSION.
+FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
+N_FZ = 9
+
+# -------------------------------------------------------------- integer state
+
+I_S0_OK, I_S1_OK, I_STICKY, I_AFTER_INT = 0, 1, 2, 3
+I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9
+I_WIN_HEAD, I_WIN_N, I_E0_OK, I_STILL_CHAIN, I_E1_OK = 10, 11, 12, 13, 14
+I_TP_BIN, I_TP_N, I_TP_HEAD, I_TP_LEN, I_TP_STARTED = 15, 16, 17, 18, 19
+I_ROWS = 20  # rows taken so far (0: the next is the first of the log)
+I_INIT_END = 21  # last row of the init window in this call (-1: none)
+I_INIT_UPDATED = 22  # the init window gave a measurement
+I_ANCHOR_ROW = 23  # first compass row of the init window
+I_PENDING = 24  # PENDING_* for the caller (MODE_EXTERNAL)
+N_ISTATE = 25
+
+# ----------------------------------------------------------- float settings
+
+C_INTERVAL, C_COMPASS_SD, C_GYRO_NOISE, C_TURN_RATE, C_TURN_WIN = 0, 1, 2, 3, 4
+C_INTERF, C_MAX_AGE, C_PRIOR_A, C_PRIOR_B, C_MAX_GAP = 5, 6, 7, 8, 9
+C_TP_BIN_S, C_FIELD_NORM_TOL, C_DIP_TOL, C_STILL_STD, C_STILL_HEADING = 10, 11, 12, 13, 14
+C_FUSION_R, C_FUSION_N2, C_FUSION_TAU, C_FUSION_GATE, C_FUSION_RELOCK = 15, 16, 17, 18, 19
+C_EDGE_S, C_WINDOW_S, C_ZARU_WINDOW_S, C_ZARU_SLOPE_K, C_ZARU_RESID_K = 20, 21, 22, 23, 24
+N_CFG = 25
+
+# --------------------------------------------------------- integer settings
+
+K_RELOCK, K_MODE, K_DEPTH, K_TP_WINDOW_BINS, K_FUSE_INTERFERENCE = 0, 1, 2, 3, 4
+K_ZARU, K_ZARU_HOLD, K_EDGE, K_COLLECTS = 5, 6, 7, 8
+N_KCFG = 9
+
+# ----------------------------------------------------------------- estimator
+
+#: The two filters (rows) of the estimator arrays.
+MAIN, TWIN = 0, 1
+#: Floats: states (2, 3), covariances (2, 3, 3), process noise (2, 3, 3), caps (2, 3),
+#: scalars (2, N_AF), settings, then Zhou's innovation covariance V (2, d, d) and the last
+#: normalised innovations (2, w), d and w from ``ei``.
+EF_Z, EF_P, EF_Q, EF_MAX_VAR, EF_AF, EF_SET, EF_V = 0, 6, 24, 42, 48, 64, 72
+#: Scalars per filter: T_ref, last λ, last measurement's T, the last interval means
+#: (T, T'), the outage parameters a, b, c.
+AF_TREF, AF_LAMBDA, AF_LAST_T, AF_LAST_H_T, AF_LAST_H_TP, AF_ANCHOR = 0, 1, 2, 3, 4, 5
+N_AF = 8
+#: Settings (from EF_SET): fading factor s (fixed mode), β, λ_max, ρ, slope random walk.
+ES_FADING, ES_SOFTENING, ES_LAMBDA_MAX, ES_RHO, ES_SLOPE_Q = 0, 1, 2, 3, 4
+#: Integers: mode, d (rows of V), w (innovation window), twin, normalised test,
+#: recentre, number of active states, the active states (fixed mode), then per filter
+#: the flags and counts AI_* (2, N_AI).
+EI_MODE, EI_DEPTH, EI_NIS_W, EI_TWIN, EI_NORMALISED, EI_RECENTRE, EI_N_ACTIVE, EI_ACTIVE = 0, 1, 2, 3, 4, 5, 6, 7
+EI_AI = 10
+#: Per filter: T_ref set, rows of V in use, last T set, last (T, T') set, outage anchor
+#: set, number of normalised innovations held.
+AI_TREF_SET, AI_V_N, AI_LAST_T_SET, AI_LAST_H_SET, AI_ANCHOR_SET, AI_NIS_N = 0, 1, 2, 3, 4, 5
+N_AI = 6
+N_EI = EI_AI + 2 * N_AI
+
+
+def ef_size(depth: int, nis_window: int) -> int:
+    """Length of ``ef`` for measurements of up to ``depth`` rows and a NIS window ``nis_window``."""
+    return EF_V + 2 * depth * depth + 2 * nis_window
+
+
+# ------------------------------------------------------------- ring buffers
+
+#: Rows of the compass window ``win`` (one column per compass sample): a snap, then the
+#: time step and the mean gyro rate from the sample before.
+W_T, W_HEADING, W_IRAW, W_IT, W_ITP, W_IBIAS, W_DT, W_RATE = 0, 1, 2, 3, 4, 5, 6, 7
+N_WIN = 8
+#: Columns of a stacked or accepted measurement: m, mean T, mean T', 1, r (``stack``);
+#: time, m, mean T, mean T', r (``acc``).
+N_MEAS = 5
+
+# ------------------------------------------------------------------ outputs
+
+#: Float output columns, each ``cap`` long in ``out``.
+O_BIAS, O_RATE, O_HEADING, O_A, O_B, O_C, O_BIAS_SD, O_FUSED, O_FUSED_SD, O_HEADING_SD, O_TEMP_RATE = range(11)
+N_OUT = 11
+#: int8 output columns in ``codes``: update, reason, unobservable, gap.
+OC_UPDATE, OC_REASON, OC_UNOBS, OC_GAP = 0, 1, 2, 3
+N_CODES = 4
+
+#: χ²₁ at 99 %: the consistency test of a zero-rate measurement.
+ZARU_NIS = 6.63
