@@ -1,4 +1,4 @@
-"""The experimental ``adaptive`` estimator and the ``slope`` measurement (issue: beyond the paper)."""
+"""The ``adaptive`` estimator (beyond the paper): its filter and the aiding it adds."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,11 @@ from conftest import synthetic_log
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import AdaptiveKalman, Observation, make_estimator
+from gyrodrift.kernels.aiding import add, gyro_still
+from gyrodrift.kernels.kalman import _recentre, views
+from gyrodrift.kernels.layout import MAIN, N_WIN, TWIN
 from test_compensate import assert_same, complex_log, stream
+from test_engine import InPython
 
 
 def obs(H, y, r=1e-4):
@@ -48,23 +52,9 @@ def test_settings_are_validated():
         AdaptiveKalman(lambda_max=0.5)
     with pytest.raises(ConfigError, match="rho"):
         AdaptiveKalman(rho=1.0)
-    with pytest.raises(ConfigError, match="measurement"):
-        CompensatorConfig(measurement="median")
 
 
-def test_slope_measurement_streaming_equals_batch_and_is_less_noisy():
-    cfg = CompensatorConfig(measurement="slope", estimator="adaptive")
-    log = complex_log()
-    assert_same(compensate(log, cfg), stream(log, cfg))
-    # Static, constant bias, noisy compass: the slope averages the compass noise.
-    noisy = synthetic_log(duration_s=1800.0, gyro_noise_dps=0.05, compass_noise_deg=1.0, seed=8)
-    ends = compensate(noisy, CompensatorConfig(estimator="stkf", stack_depth=1)).attrs["measurements"]
-    slope = compensate(noisy, CompensatorConfig(estimator="stkf", stack_depth=1, measurement="slope")).attrs["measurements"]
-    assert slope["m"].std() < 0.5 * ends["m"].std()
-    assert slope["m"].mean() == pytest.approx(0.3, abs=0.01)
-
-
-# ------------------------------------------------------------------ issue 6 fixes
+# ------------------------------------------------------------------ the fixes
 
 from gyrodrift.estimators import AdaptiveConfig  # noqa: E402
 
@@ -81,7 +71,7 @@ def test_default_adaptive_streaming_equals_batch():
     """ZARU and one measurement per interval: the streaming compensator gives the same bits."""
     cfg = CompensatorConfig(estimator="adaptive")
     for log in (complex_log(), still_log()):
-        batch = compensate(log, cfg, engine="reference")
+        batch = compensate(log, cfg)
         assert_same(batch, stream(log, cfg))
 
 
@@ -107,12 +97,9 @@ def test_one_measurement_per_interval_unless_stacked():
     log = still_log()
     seen = {}
     for stacked in (False, True):
-        est = make_estimator("adaptive", settings=AdaptiveConfig(zaru=False, stacked=stacked))
-        sizes = []
-        update = est.update
-        est.update = lambda obs, _u=update: (sizes.append(len(obs.y)), _u(obs))[1]
-        compensate(log, CompensatorConfig(estimator="adaptive"), estimator=est, engine="reference")
-        seen[stacked] = sizes
+        est = InPython(make_estimator("adaptive", settings=AdaptiveConfig(zaru=False, stacked=stacked)))
+        compensate(log, CompensatorConfig(estimator="adaptive"), estimator=est)
+        seen[stacked] = [len(o.y) for o in est.observations]
     assert seen[False][0] == 3 and set(seen[False][1:]) == {1}  # init sub-windows, then one each
     assert set(seen[True][3:]) == {3}
 
@@ -130,7 +117,8 @@ def test_adaptive_settings_validated_and_ablated():
     assert base.ablated("recentre").recentre is False and base.ablated("process_noise").slope_q_per_rtc == 0.0
     with pytest.raises(ConfigError, match="unknown fix"):
         base.ablated("magic")
-    assert make_estimator("adaptive", settings=base.ablated("fading")).lambda_max == 1.0
+    for fix in AdaptiveConfig.FIXES:  # each switch is a setting the kernels read
+        assert base.ablated(fix) != base
 
 
 def test_recentring_keeps_the_drift_model():
@@ -138,8 +126,10 @@ def test_recentring_keeps_the_drift_model():
     H = np.array([[30.0, 0.001, 1.0]])
     for T in (30.0, 32.0, 35.0):
         est.update(obs(np.array([[T, 0.001, 1.0]]), 0.02 * T - 0.3, r=1e-4))
+    assert est.temp_ref_c == 35.0  # moved to each new measurement's temperature
     before, cov = est.params.copy(), est.cov.copy()
-    est._recentre(50.0)
+    z, P, Q, max_var, af, V, nis, ai = views(*est.kernel_arrays)
+    _recentre(z[MAIN], P[MAIN], af[MAIN], 50.0)
     np.testing.assert_allclose(est.params, before, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(est.cov, cov, rtol=1e-9, atol=1e-15)
     assert est.temp_ref_c == 50.0 and H.shape == (1, 3)
@@ -161,15 +151,13 @@ def test_normalised_fading_ignores_one_outlier_but_follows_a_jump():
 
 def test_zaru_not_fooled_by_a_yaw_wander_the_compass_cannot_see():
     """A ±0.08 deg/s yaw wander of 20-s period moves the heading by only ±0.25 deg."""
-    from gyrodrift.compensator import _gyro_still
-
     rng = np.random.default_rng(1)
     t = np.arange(0.0, 60.0 + 1e-9, 0.1)
     g = 0.3 + rng.normal(0.0, 0.1, t.size)
     for wander, expect in ((0.0, True), (0.08, False)):
         rate = g + wander * np.sin(2 * np.pi * t / 20.0)
         trap = 0.5 * (rate[1:] + rate[:-1])  # rates between samples, as from the trapezoid integral
-        assert _gyro_still(trap + 0.001 * t[1:], t, 50.0, 1.0, 3.0) is expect  # a slowly moving drift is fine
+        assert still(t, trap + 0.001 * t[1:], 50.0) is expect  # a slowly moving drift is fine
 
 
 def test_edge_averaging_lowers_the_compass_noise_and_keeps_telescoping():
@@ -177,7 +165,7 @@ def test_edge_averaging_lowers_the_compass_noise_and_keeps_telescoping():
     out = {}
     for edge in (0.0, 2.0):
         cfg = CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(edge_s=edge))
-        out[edge] = compensate(log, cfg, engine="reference")  # streaming gives the reference engine's bits
+        out[edge] = compensate(log, cfg)
         assert_same(out[edge], stream(log, cfg))
     m0, m2 = (out[e].attrs["measurements"].iloc[3:] for e in (0.0, 2.0))
     assert m2["r"].median() < 0.2 * m0["r"].median()
@@ -198,10 +186,13 @@ def test_outage_memory_extrapolates_with_the_long_memory_slope():
     tracked = est.drift(np.array([40.0]), np.array([0.002]))[0]
     est.hold()  # outage: the long-memory a and b, anchored at the drift last tracked
     assert est.drift(np.array([40.0]), np.array([0.002]))[0] == pytest.approx(tracked, abs=1e-12)
-    assert est.params[0] == pytest.approx(est._twin.params[0])
+    z, P, Q, max_var, af, V, nis, ai = views(*est.kernel_arrays)
+    assert est.params[0] == pytest.approx(z[TWIN, 0])  # the twin's slope
     assert abs(est.params[0] - 0.02) < 0.003
     no_twin = make_estimator("adaptive", settings=AdaptiveConfig(outage_memory=False))
-    assert no_twin._twin is None
+    no_twin.update(obs(np.array([[30.0, 0.0, 1.0]]), 0.3))
+    no_twin.hold()
+    assert no_twin.params[0] == pytest.approx(no_twin.kernel_arrays[0][0])  # its own slope
 
 
 def test_stillness_holds_through_slowly_wandering_interference():
@@ -212,7 +203,7 @@ def test_stillness_holds_through_slowly_wandering_interference():
     err = {}
     for hold in (True, False):
         cfg = CompensatorConfig(estimator="adaptive", adaptive=AdaptiveConfig(zaru_hold=hold))
-        out = compensate(log, cfg, engine="reference")  # streaming gives the reference engine's bits
+        out = compensate(log, cfg)
         if hold:
             assert_same(out, stream(log, cfg))
         late = (log["t"] > 900.0).to_numpy()
@@ -229,14 +220,12 @@ def test_a_still_unit_whose_compass_moved_keeps_the_compass_from_the_fused_headi
     log, _ = simulate_case(draw_case("interference-wander", 0, duration_scale=0.3), calibration=False)
     cfg = CompensatorConfig(estimator="adaptive", fusion=FusionConfig(magnetic_gates=True, bias_corr_s=30.0,
                                                                       relock_s=float("inf")))
-    outs = {e: compensate(log, cfg, engine=e) for e in ("reference", "fast")}
-    out = outs["reference"]
+    out = compensate(log, cfg)
     flagged = (out["gate_reason"] == "interference").to_numpy()
     update = out["update"].to_numpy() == 1
     # an accepted interval followed by one labelled interference from its first row: only
     # a ZARU held on a moving compass does that (after any other acceptance the label clears)
     assert np.sum(update[:-1] & flagged[1:]) > 10
-    assert (outs["fast"]["gate_reason"] == out["gate_reason"]).all()
     # on flagged rows the fused heading only integrates the compensated rate
     t, rate, hf = (out[c].to_numpy() for c in ("t", "rate_z", "heading_fused"))
     step = np.diff(hf)
@@ -246,66 +235,12 @@ def test_a_still_unit_whose_compass_moved_keeps_the_compass_from_the_fused_headi
     np.testing.assert_allclose((step[rows] - expected[rows] + 180.0) % 360.0 - 180.0, 0.0, atol=1e-9)
 
 
-def _quadratic_truth(T):
-    """A curved drift: 0.1 + 0.01 (T − 25) + 5e-4 (T − 25)² deg/s."""
-    return 0.1 + 0.01 * (T - 25.0) + 5e-4 * (T - 25.0) ** 2
-
-
-def _full_model(est, T):
-    """The quadratic filter's own drift at T (T' = 0), from its four states."""
-    a, _, c_ref, a2 = est._z
-    d = np.asarray(T, dtype=float) - est.temp_ref_c
-    return c_ref + a * d + a2 * d * d
-
-
-def test_quadratic_term_learns_a_curved_drift_the_linear_model_cannot_follow():
-    quiet = dict(slope_q_per_rtc=0.0, fading=False, q_sd=(0.0, 0.0, 0.0), zaru=False, outage_memory=False)
-    quad = AdaptiveKalman(settings=AdaptiveConfig(quadratic=True, a2_sd=(1e-2, 0.0), **quiet))
-    lin = AdaptiveKalman(settings=AdaptiveConfig(**quiet))
-    temps = 20.0 + 0.1 * np.arange(301)  # a ramp 20 -> 50 degC, one measurement per 0.1 degC
-    for T in temps[:-1]:
-        H = np.array([[T, 0.0, 1.0]])
-        for est in (quad, lin):
-            est.update(obs(H, np.array([_quadratic_truth(T)]), r=1e-10))
-    assert quad._z[3] == pytest.approx(5e-4, rel=1e-3)  # the curvature, deg/s/degC²
-    T_next = temps[-1]
-    assert float(quad.drift(np.array([T_next]), np.zeros(1))[0]) == pytest.approx(_quadratic_truth(T_next), abs=1e-5)
-    linear_miss = abs(float(lin.drift(np.array([T_next]), np.zeros(1))[0]) - _quadratic_truth(T_next))
-    assert linear_miss > 0.01  # one a over the whole ramp: off by more than 0.01 deg/s at its end
-    # the reported a, b, c are the tangent at T_ref: slope a + 2 a2 (T_ref − 25)
-    assert quad.params[0] == pytest.approx(0.01 + 2 * 5e-4 * (quad.temp_ref_c - 25.0), rel=1e-3)
-    assert quad.cov.shape == (3, 3) and quad.centred_cov.shape == (4, 4)
-
-
-def test_quadratic_recentring_keeps_the_drift_model():
-    est = AdaptiveKalman(settings=AdaptiveConfig(quadratic=True))
-    for T in (30.0, 32.0, 35.0, 36.0):
-        est.update(obs(np.array([[T, 0.0, 1.0]]), np.array([_quadratic_truth(T)]), r=1e-4))
-    T = np.array([20.0, 35.0, 60.0])
-    before, P_before = _full_model(est, T), est.centred_cov
-    est._recentre(50.0)
-    np.testing.assert_allclose(_full_model(est, T), before, rtol=1e-12)
-    assert est.temp_ref_c == 50.0
-    assert np.all(np.linalg.eigvalsh(est.centred_cov) > 0) and not np.allclose(est.centred_cov, P_before)
-
-
-def test_quadratic_option_runs_on_the_reference_engine_and_streams_alike():
-    from gyrodrift import _engine
-    from gyrodrift.compensator import build_estimator
-
-    cfg = CompensatorConfig(adaptive=AdaptiveConfig(quadratic=True))
-    assert not _engine.supports(cfg, build_estimator(cfg))
-    assert _engine.supports(CompensatorConfig(), build_estimator(CompensatorConfig()))
-    log = synthetic_log(duration_s=1200.0, fs_hz=10.0, temp_c=lambda t: 20.0 + t / 60.0,
-                        drift_dps=lambda t, T: _quadratic_truth(T), gyro_noise_dps=0.02, compass_noise_deg=0.2, seed=4)
-    out = compensate(log, cfg)
-    assert_same(out, stream(log, cfg))
-    assert np.isfinite(out["bias_z"]).all()
-    err = out["bias_z"].to_numpy() - log["true_bias_z"].to_numpy()
-    assert np.sqrt(np.mean(err[log["t"].to_numpy() > 600.0] ** 2)) < 0.01
-
-
-@pytest.mark.parametrize("bad", [{"quadratic": 1}, {"a2_sd": (0.0, 1e-5)}, {"a2_sd": (1e-3, -1.0)}, {"a2_sd": (1e-3,)}])
-def test_quadratic_settings_are_validated(bad):
-    with pytest.raises(ConfigError, match="quadratic|a2_sd"):
-        AdaptiveConfig(**bad)
+def still(t, rates, interval_start_s):
+    """:func:`gyrodrift.kernels.aiding.gyro_still` of gyro ``rates`` (deg/s) between compass
+    samples at times ``t`` (one more than the rates), through the compass window."""
+    win = np.zeros((N_WIN, 2 * t.size))
+    head = n = 0
+    I_raw = np.r_[0.0, np.cumsum(rates * np.diff(t))]
+    for ti, Ii in zip(t, I_raw):
+        head, n = add(win, head, n, ti, 0.0, Ii, 0.0, 0.0, 0.0, 1e9)
+    return bool(gyro_still(win, head, head + n, interval_start_s, 1.0, 3.0))

@@ -1,164 +1,286 @@
-"""The compiled engine (gyrodrift._engine) against the reference engine, and fed in chunks."""
+"""The engine (gyrodrift.compensator.ChunkEngine over gyrodrift.kernels): one implementation
+run three ways, and run without the compiler.
 
+* Fed in chunks of any size, one row at a time (the streaming Compensator) or all at once,
+  a log gives the same bits: it is the same code.
+* The same source with numba's JIT off (plain Python) gives the same numbers: the compiled
+  code does what the source says.
+* A Python estimator updated by the engine at interval ends (MODE_EXTERNAL) sees exactly the
+  observations the compiled filters see: wrapping a compiled filter in Python changes no bit.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
 import sys
-from dataclasses import replace
+import textwrap
+from dataclasses import asdict
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-pytest.importorskip("numba")
+from conftest import synthetic_log
+from gyrodrift.compass import compass_columns
+from gyrodrift.compensator import (ChunkEngine, Compensator, CompensatorConfig, build_estimator, compensate,
+                                   compensate_arrays, output_frame)
+from gyrodrift.compensator import memory
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
+from gyrodrift.estimators import AdaptiveConfig, make_estimator
+from gyrodrift.estimators.base import LinearDrift
+from gyrodrift.gating import GateConfig
+from gyrodrift.montecarlo import ablation_variants, draw_case, simulate_case
+from test_compensate import complex_log
 
-from conftest import synthetic_log  # noqa: E402
-from gyrodrift import _engine  # noqa: E402
-from gyrodrift.compensator import CompensatorConfig, _compass_arrays, _fast_frame, build_estimator, compensate  # noqa: E402
-from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError  # noqa: E402
-from gyrodrift.estimators import AdaptiveConfig, KalmanConfig, make_estimator  # noqa: E402
-from gyrodrift.estimators.kalman import KalmanDrift  # noqa: E402
-from gyrodrift.gating import GateConfig  # noqa: E402
-from test_compensate import complex_log  # noqa: E402
-
-ESTIMATORS = ("stkf", "stkf-s1", "kf", "adaptive")
-
-#: ``adaptive`` with Zhou's recursive fading, a fixed reference temperature, no stationarity
-#: updates and stacked measurements (the default settings and every fix of issue 6:
-#: test_engine_adaptive.py).
-ZHOU_ADAPTIVE = AdaptiveConfig(zaru=False, stacked=True, edge_s=0.0, recentre=False, normalised=False,
-                               softening=1.0, slope_q_per_rtc=0.0)
+ESTIMATORS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm")
+VARIANTS = ablation_variants()
 
 
-def config(estimator: str, **kw) -> CompensatorConfig:
-    """Settings of ``estimator`` (``adaptive``: :data:`ZHOU_ADAPTIVE`)."""
-    return CompensatorConfig(estimator=estimator, adaptive=ZHOU_ADAPTIVE, **kw)
+@functools.lru_cache(maxsize=None)
+def family_log(family: str, scale: float) -> pd.DataFrame:
+    log, _ = simulate_case(draw_case(family, 0, duration_scale=scale), calibration=False)
+    return log
 
 
-def assert_close(fast: pd.DataFrame, ref: pd.DataFrame, atol: float = 1e-8) -> None:
-    """Same rows, same decisions (update, gate_reason, unobservable), numbers equal to rounding."""
-    assert list(fast.columns) == list(ref.columns)
-    assert len(fast) == len(ref)
-    for col in fast.columns:
-        a, b = fast[col], ref[col]
-        if a.dtype.kind == "f":
-            x, y = a.to_numpy(), b.to_numpy()
-            if col == "heading":  # compare angles across the 0/360 seam
-                x, y = np.unwrap(np.radians(x)), np.unwrap(np.radians(y))
-            np.testing.assert_allclose(x, y, rtol=1e-9, atol=atol, err_msg=col)
+def feed_in_chunks(log: pd.DataFrame, cfg: CompensatorConfig, sizes, estimator=None):
+    """The output table, the accepted measurements and the estimator of a log fed in chunks."""
+    t = log["t"].to_numpy(float)
+    raw = "mag_x" in log.columns
+    heading, norm, dip = compass_columns(
+        t.size, log["heading"].to_numpy(float) if "heading" in log.columns else None,
+        log[["mag_x", "mag_y", "mag_z"]].to_numpy(float) if raw else None,
+        log[["acc_x", "acc_y", "acc_z"]].to_numpy(float) if raw else None)
+    est = estimator or build_estimator(cfg)
+    eng = ChunkEngine(cfg, est, "chunks")
+    parts, start = [], 0
+    for size in sizes:
+        sl = slice(start, start + size)
+        part = eng.feed(t[sl], log["gyro_z"].to_numpy(float)[sl], log["temp"].to_numpy(float)[sl], heading[sl],
+                        norm[sl] if raw else None, dip[sl] if raw else None)
+        if part is not None:
+            parts.append(output_frame(part))
+        start += size
+        if start >= t.size:
+            break
+    return pd.concat(parts, ignore_index=True), eng.finish(), est
+
+
+def engine_columns(out: pd.DataFrame) -> pd.DataFrame:
+    """The engine's columns of a :func:`compensate` table (not the input columns after them)."""
+    return out[list(out.columns[: list(out.columns).index("heading_sd") + 1])]
+
+
+def streamed(log: pd.DataFrame, cfg: CompensatorConfig, estimator=None) -> pd.DataFrame:
+    comp = Compensator(cfg, estimator=estimator)
+    raw = "mag_x" in log.columns
+    rows = []
+    for r in log.itertuples(index=False):
+        kw = {"mag": (r.mag_x, r.mag_y, r.mag_z), "acc": (r.acc_x, r.acc_y, r.acc_z)} if raw else {}
+        rows += comp.push(r.t, r.gyro_z, r.temp, heading_deg=np.nan if raw else r.heading, **kw)
+    return pd.DataFrame([asdict(s) for s in rows])
+
+
+def assert_identical(batch: pd.DataFrame, other: pd.DataFrame) -> None:
+    """Every column of ``other`` equal to ``batch``'s, bit for bit (codes as text)."""
+    assert len(batch) == len(other)
+    for col in other.columns:
+        if col not in batch.columns:
+            continue
+        a, b = batch[col], other[col]
+        if a.dtype.kind in "fiu" and b.dtype.kind in "fiu":
+            assert np.array_equal(a.to_numpy(float), b.to_numpy(float), equal_nan=True), col
         else:
-            assert (a.astype(str).to_numpy() == b.astype(str).to_numpy()).all(), col
+            assert list(a.astype(str)) == list(b.astype(str)), col
+
+
+# ---------------------------------------------------------------- three ways
 
 
 @pytest.mark.parametrize("estimator", ESTIMATORS)
 @pytest.mark.parametrize("raw_mag", [False, True])
-def test_fast_engine_equals_reference(estimator, raw_mag):
-    """Turns, an interference window, a compass outage, empty cells, a time gap, field anomaly."""
+def test_chunks_rows_and_whole_log_give_the_same_bits(estimator, raw_mag):
+    """Turns, interference, a compass outage, empty cells, a time gap, a field anomaly; a 5-s
+    turn window that makes the ring grow; chunk ends inside the init window and at single rows."""
     log = complex_log(raw_mag)
-    cfg = config(estimator)
-    fast = compensate(log, cfg, engine="fast")
-    ref = compensate(log, cfg, engine="reference")
-    assert_close(fast, ref)
-    reasons = set(fast["gate_reason"].astype(str))
+    cfg = CompensatorConfig(estimator=estimator, gate=GateConfig(turn_window_s=5.0))
+    whole = compensate(log, cfg)
+    reasons = set(whole["gate_reason"].astype(str))
     assert {"init", "turning", "no_compass", "gap", "interference"} <= reasons
-    np.testing.assert_allclose(fast.attrs["final_params"], ref.attrs["final_params"], rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(fast.attrs["final_cov"], ref.attrs["final_cov"], rtol=1e-8, atol=1e-15)
-    np.testing.assert_allclose(fast.attrs["measurements"].to_numpy(), ref.attrs["measurements"].to_numpy(),
-                               rtol=1e-9, atol=1e-12)
-
-
-def test_fast_engine_lock_out_recovery_and_paper_gate():
-    """The lock-out recovery decisions (and their absence, relock 0) match the reference."""
-    from gyrodrift.simulate import simulate
-
-    log = simulate("static", seed=2, fs_hz=10.0, duration_s=1200.0)
-    for relock in (0, 3):
-        cfg = CompensatorConfig(gate=GateConfig(relock_intervals=relock))
-        assert_close(compensate(log, cfg, engine="fast"), compensate(log, cfg, engine="reference"))
-
-
-def feed_in_chunks(log: pd.DataFrame, cfg: CompensatorConfig, sizes, estimator="stkf"):
-    t = log["t"].to_numpy(float)
-    heading, norm, dip = _compass_arrays(t.size, log["heading"].to_numpy(float), None, None)
-    eng = _engine.ChunkEngine(cfg, build_estimator(cfg), "chunks")
-    parts, start = [], 0
-    for size in sizes:
-        sl = slice(start, start + size)
-        part = eng.feed(t[sl], log["gyro_z"].to_numpy(float)[sl], log["temp"].to_numpy(float)[sl],
-                        heading[sl], norm[sl], dip[sl])
-        if part is not None:
-            parts.append(_fast_frame(part))
-        start += size
-        if start >= t.size:
-            break
-    measurements = eng.finish()
-    return pd.concat(parts, ignore_index=True), measurements, eng.est
-
-
-@pytest.mark.parametrize("estimator", ESTIMATORS)
-def test_chunks_of_any_size_give_identical_results(estimator):
-    """Chunk boundaries inside the init window and at single rows, empty cells held across
-    chunks, a 5-s turn window that makes the ring grow: bit for bit the same as one chunk."""
-    log = complex_log(False)
-    cfg = config(estimator, gate=GateConfig(turn_window_s=5.0))
-    whole, m_whole, est_whole = feed_in_chunks(log, cfg, [len(log)], estimator)
+    assert ("field" in reasons) == raw_mag
     rng = np.random.default_rng(3)
     sizes = [1, 1, 7, 250, 1] + list(rng.integers(1, 3000, size=200)) + [len(log)]
-    parts, m_parts, est_parts = feed_in_chunks(log, cfg, sizes, estimator)
+    parts, m_parts, est_parts = feed_in_chunks(log, cfg, sizes)
+    assert_identical(engine_columns(whole), parts)
+    assert np.array_equal(whole.attrs["measurements"].to_numpy(), m_parts)
+    assert np.array_equal(whole.attrs["final_params"], est_parts.params)
+    assert np.array_equal(whole.attrs["final_cov"], est_parts.cov)
+    if estimator in ("adaptive", "lsm") and not raw_mag:
+        assert_identical(engine_columns(whole), streamed(log, cfg))
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_every_adaptive_setting_in_chunks(variant):
+    """Every setting of the ablation on a soak log (sway, ramps, dropouts: ZARU, its hold, the
+    outage anchor, edge means from a 10-Hz compass window that grows): chunks = whole."""
+    log = family_log("soak", 0.05)
+    cfg = CompensatorConfig(adaptive=VARIANTS[variant])
+    whole, m_whole, est_whole = feed_in_chunks(log, cfg, [len(log)])
+    assert whole["update"].sum() > 10
+    rng = np.random.default_rng(7)
+    sizes = [1, 1, 7, 250, 1, 3] + list(rng.integers(1, 40, size=150)) + list(rng.integers(1, 3000, size=40)) + [len(log)]
+    parts, m_parts, est_parts = feed_in_chunks(log, cfg, sizes)
     pd.testing.assert_frame_equal(whole, parts, check_exact=True)
     assert np.array_equal(m_whole, m_parts)
-    assert np.array_equal(est_whole.params, est_parts.params)
-    assert np.array_equal(est_whole.cov, est_parts.cov)
+    for a, b in zip(est_whole.kernel_arrays, est_parts.kernel_arrays):
+        assert np.array_equal(a, b)
+
+
+# ------------------------------------------------------- the Python estimator path
+
+
+class InPython(LinearDrift):
+    """A Python estimator (no kernel arrays) that forwards to a compiled filter."""
+
+    causal = True
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.name = inner.name
+        self.settings = getattr(inner, "settings", None)
+        self.observations = []
+
+    @property
+    def params(self):
+        return self.inner.params
+
+    @property
+    def cov(self):
+        return self.inner.cov
+
+    def update(self, obs):
+        self.observations.append(obs)
+        return self.inner.update(obs)
+
+    def hold(self):
+        return self.inner.hold()
+
+
+@pytest.mark.parametrize("estimator", ["stkf", "kf", "adaptive"])
+def test_a_python_estimator_sees_what_the_compiled_filter_sees(estimator):
+    log = complex_log(False)
+    cfg = CompensatorConfig(estimator=estimator)
+    compiled = compensate(log, cfg)
+    wrapped = InPython(build_estimator(cfg))
+    python = compensate(log, cfg, estimator=wrapped)
+    assert_identical(engine_columns(compiled), engine_columns(python))
+    meas = compiled.attrs["measurements"]
+    assert len(wrapped.observations) == int(compiled["update"].sum())
+    # every new measurement is the first row of its observation (eq. 3: the newest first)
+    news = np.concatenate([o.y[: o.n_new][::-1] for o in wrapped.observations])
+    assert np.array_equal(news, meas["m"].to_numpy())
+
+
+def test_an_estimator_whose_drift_is_not_eq2_is_refused():
+    class Curved(LinearDrift):
+        name = "curved"
+        causal = True
+        params = np.zeros(3)
+        cov = np.zeros((3, 3))
+
+        def drift(self, temp_c, temp_rate_cps):
+            return 0.001 * temp_c**2
+
+        def update(self, obs):
+            return self.params
+
+        def hold(self):
+            return self.params
+
+    with pytest.raises(ConfigError, match="not a\\*T \\+ b\\*T' \\+ c"):
+        compensate(synthetic_log(duration_s=120.0), estimator=Curved())
+
+
+# ------------------------------------------------------------- the JIT off
+
+
+_JIT_OFF_SCRIPT = textwrap.dedent("""
+    import sys
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    from test_compensate import complex_log
+    from gyrodrift.compensator import CompensatorConfig, compensate
+    log = complex_log({raw_mag}).iloc[:{rows}]
+    out = compensate(log, CompensatorConfig(estimator={estimator!r}))
+    cols = [c for c in out.columns[: list(out.columns).index("heading_sd") + 1] if out[c].dtype.kind in "fiu"]
+    np.savez({path!r}, **{{c: out[c].to_numpy(float) for c in cols}},
+             codes=out["gate_reason"].cat.codes.to_numpy(), meas=out.attrs["measurements"].to_numpy())
+""")
+
+
+@pytest.mark.parametrize("estimator,raw_mag", [("adaptive", False), ("stkf", True)])
+def test_the_source_without_the_compiler_gives_the_same_numbers(tmp_path, estimator, raw_mag):
+    """NUMBA_DISABLE_JIT=1 runs the kernels as plain Python; the compiled run agrees with it."""
+    rows = 9000  # 450 s at 20 Hz: init, turns, interference and its recovery, empty cells
+    path = tmp_path / "nojit.npz"
+    script = _JIT_OFF_SCRIPT.format(tests=str(Path(__file__).parent), raw_mag=raw_mag, rows=rows,
+                                    estimator=estimator, path=str(path))
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    plain = np.load(path)
+    out = compensate(complex_log(raw_mag).iloc[:rows], CompensatorConfig(estimator=estimator))
+    assert np.array_equal(plain["codes"], out["gate_reason"].cat.codes.to_numpy())
+    assert out["update"].sum() > 10
+    for col in plain.files:
+        if col in ("codes", "meas"):
+            continue
+        x, y = out[col].to_numpy(float), plain[col]
+        np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12 * max(np.nanmax(np.abs(y)), 1.0), err_msg=col)
+    np.testing.assert_allclose(out.attrs["measurements"].to_numpy(), plain["meas"], rtol=1e-12, atol=1e-15)
+
+
+# ------------------------------------------------------------------ errors
 
 
 def test_chunked_errors_name_the_row():
     log = synthetic_log(duration_s=120.0)
     t = log["t"].to_numpy(float).copy()
     g, T, h = (log[c].to_numpy(float) for c in ("gyro_z", "temp", "heading"))
-    eng = _engine.ChunkEngine(CompensatorConfig(), make_estimator("stkf"), "x.csv")
-    eng.feed(t[:100], g[:100], T[:100], h[:100], None, None)
+    eng = ChunkEngine(CompensatorConfig(), make_estimator("stkf"), "x.csv")
+    eng.feed(t[:100], g[:100], T[:100], h[:100])
     with pytest.raises(LogFormatError, match=r"x.csv: row 100: time must be finite and strictly increasing"):
-        eng.feed(t[99:200], g[99:200], T[99:200], h[99:200], None, None)  # repeats t[99]
-    short = _engine.ChunkEngine(CompensatorConfig(), make_estimator("stkf"), "y.csv")
-    short.feed(t[:200], g[:200], T[:200], h[:200], None, None)
+        eng.feed(t[99:200], g[99:200], T[99:200], h[99:200])  # repeats t[99]
+    short = ChunkEngine(CompensatorConfig(), make_estimator("stkf"), "y.csv")
+    short.feed(t[:200], g[:200], T[:200], h[:200])
     with pytest.raises(GyroDriftError, match="y.csv: the log is .* long"):
         short.finish()
+    with pytest.raises(LogFormatError, match="z: row 5: time must be finite"):
+        bad = t.copy()
+        bad[5] = np.nan
+        compensate_arrays(bad, g, T, h, source="z")
 
 
-def test_engine_choice():
-    """Subclasses that override update/hold, and the slope measurement, run on the reference engine;
-    asking for the fast engine where it cannot run is a clear error."""
+def test_an_estimator_built_for_fewer_stacked_measurements_is_refused():
+    with pytest.raises(ConfigError, match="built for 1 stacked measurements"):
+        ChunkEngine(CompensatorConfig(stack_depth=3), make_estimator("stkf", depth=1))
 
-    class Watched(KalmanDrift):
-        def update(self, obs):
-            return super().update(obs)
 
-    cfg = CompensatorConfig()
-    assert _engine.supports(cfg, make_estimator("stkf", config=KalmanConfig()))
-    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig(), settings=ZHOU_ADAPTIVE))
-    # every adaptive setting is compiled (test_engine_adaptive.py)
-    assert _engine.supports(cfg, make_estimator("adaptive", config=KalmanConfig()))
-    for fix in ("recentre", "normalised", "zaru"):
-        est = make_estimator("adaptive", settings=replace(ZHOU_ADAPTIVE, **{fix: True}))
-        assert _engine.supports(cfg, est), fix
-    assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("adaptive"))
-    assert not _engine.supports(cfg, Watched(KalmanConfig()))
-    assert not _engine.supports(CompensatorConfig(measurement="slope"), make_estimator("stkf"))
-    assert not _engine.supports(cfg, make_estimator("lsm"))
-    log = synthetic_log(duration_s=120.0)
-    with pytest.raises(ConfigError, match="fast engine cannot run"):
-        compensate(log, CompensatorConfig(measurement="slope"), engine="fast")
-    with pytest.raises(ConfigError, match="engine must be"):
-        compensate(log, engine="turbo")
+# ------------------------------------------------------------------ memory
 
 
 def test_fresh_pages_made_ahead_change_nothing(monkeypatch):
     """Large outputs go on 4-KB pages faulted in by a helper thread while the loop writes them
-    (``_engine._populate_in_background``): the same bits as without (thresholds lowered so
-    that this short log takes that path)."""
+    (``memory.populate_in_background``): the same bits as without (thresholds lowered so that
+    this short log takes that path)."""
     log = complex_log(False)
     for estimator in ("adaptive", "stkf"):
-        cfg = config(estimator)
-        plain = compensate(log, cfg, engine="fast")
+        cfg = CompensatorConfig(estimator=estimator)
+        plain = compensate(log, cfg)
         started = []
-        populate = _engine._populate_in_background
+        populate = memory.populate_in_background
 
         def watched(columns, n):
             helper = populate(columns, n)
@@ -166,22 +288,12 @@ def test_fresh_pages_made_ahead_change_nothing(monkeypatch):
             return helper
 
         with monkeypatch.context() as m:
-            m.setattr(_engine, "_POPULATE_MIN_BYTES", 0)
-            m.setattr(_engine, "_SMALL_PAGES_MIN_BYTES", 0)
-            m.setattr(_engine, "_POPULATE_ROWS", 97)
-            m.setattr(_engine, "_populate_in_background", watched)
-            helped = compensate(log, cfg, engine="fast")
+            m.setattr(memory, "_POPULATE_MIN_BYTES", 0)
+            m.setattr(memory, "_SMALL_PAGES_MIN_BYTES", 0)
+            m.setattr(memory, "_POPULATE_ROWS", 97)
+            m.setattr(memory, "populate_in_background", watched)
+            helped = compensate(log, cfg)
         pd.testing.assert_frame_equal(plain, helped, check_exact=True)
-        assert [k for k, _ in started] == [15]  # one chunk: gap flags, T', 13 output columns
+        assert [k for k, _ in started] == [12]  # one chunk: gap flags, T', 10 output columns
         if sys.platform.startswith("linux"):
             assert all(h is not None for _, h in started)
-    # fed in chunks: the init rows buffered over several chunks, then one helper a chunk
-    cfg = config("adaptive")
-    whole, m_whole, _ = feed_in_chunks(log, cfg, [len(log)], "adaptive")
-    with monkeypatch.context() as m:
-        m.setattr(_engine, "_POPULATE_MIN_BYTES", 0)
-        m.setattr(_engine, "_SMALL_PAGES_MIN_BYTES", 0)
-        m.setattr(_engine, "_POPULATE_ROWS", 97)
-        parts, m_parts, _ = feed_in_chunks(log, cfg, [1, 7, 250, 3000] + [5000] * 20 + [len(log)], "adaptive")
-    pd.testing.assert_frame_equal(whole, parts, check_exact=True)
-    assert np.array_equal(m_whole, m_parts)

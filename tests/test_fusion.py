@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift import _fusion_kernels
 from gyrodrift.compensator import compensate
 from gyrodrift.conventions import wrap_180
 from gyrodrift.errors import ConfigError
@@ -95,12 +94,13 @@ def test_row_by_row_equals_batch_and_python_equals_compiled():
     rows = np.array([one.row(*args) for args in zip(t, rate, compass, allow, sd)])
     for k in range(3):
         assert np.array_equal(rows[:, k], batch[k], equal_nan=True)
-    py = getattr(_fusion_kernels.fuse_row, "py_func", None)
-    if py is not None:  # compiled: the plain-Python function gives the same bits
-        st = np.zeros(_fusion_kernels.N_STATE)
-        vec = cfg.vector(0.04)
-        rows_py = np.array([py(st, *args, vec) for args in zip(t, rate, compass, allow, sd)])
-        assert np.array_equal(rows_py, rows, equal_nan=True)
+    from gyrodrift.kernels.fusion import fuse_rows as compiled
+
+    plain = compiled.py_func  # the same source run as plain Python gives the same bits
+    out = np.empty((3, n))
+    plain(np.zeros(9), t, rate, compass, allow, sd, cfg.vector(0.04), out[0], out[1], out[2])
+    for k in range(3):
+        assert np.array_equal(out[k], batch[k], equal_nan=True)
 
 
 def test_settings_are_checked():
@@ -122,31 +122,27 @@ def test_a_compass_refused_for_relock_s_is_taken_again():
     assert abs(h[-1] - 70.0) < 1e-6
 
 
-@pytest.mark.parametrize("engine", ["reference", "fast"])
-def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default(engine):
+def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default():
     """Without a ``fusion`` setting, ``stkf`` runs the fused heading with (A), ``adaptive`` with (B):
-    every engine and the streaming compensator read ``CompensatorConfig.fusion_settings``."""
+    the batch and the streaming compensator read ``CompensatorConfig.fusion_settings``."""
     from dataclasses import replace
 
     from gyrodrift.compensator import Compensator, CompensatorConfig
     from test_compensate import complex_log
 
-    if engine == "fast":
-        pytest.importorskip("numba")
     log = complex_log(False)  # interference for 2 min, a compass outage, turns
     stkf = CompensatorConfig(estimator="stkf")
 
     def fused(cfg):
-        return compensate(log, cfg, engine=engine)["heading_fused"].to_numpy()
+        return compensate(log, cfg)["heading_fused"].to_numpy()
 
     auto = fused(stkf)
     assert np.array_equal(auto, fused(replace(stkf, fusion=FusionConfig.tolerant())), equal_nan=True)
     assert not np.allclose(auto, fused(replace(stkf, fusion=FusionConfig())), equal_nan=True)  # it matters here
     assert np.array_equal(fused(CompensatorConfig()), fused(CompensatorConfig(fusion=FusionConfig())), equal_nan=True)
-    if engine == "reference":  # the streaming compensator, on the first 6 minutes
-        part = log[log["t"] < 360.0]
-        comp = Compensator(stkf)
-        rows = [r for t, g, T, h in part[["t", "gyro_z", "temp", "heading"]].itertuples(index=False)
-                for r in comp.push(t, g, T, heading_deg=h)]
-        want = compensate(part, stkf, engine="reference")["heading_fused"].to_numpy()
-        assert np.array_equal(np.array([r.heading_fused for r in rows]), want, equal_nan=True)
+    part = log[log["t"] < 360.0]  # the streaming compensator, on the first 6 minutes
+    comp = Compensator(stkf)
+    rows = [r for t, g, T, h in part[["t", "gyro_z", "temp", "heading"]].itertuples(index=False)
+            for r in comp.push(t, g, T, heading_deg=h)]
+    want = compensate(part, stkf)["heading_fused"].to_numpy()
+    assert np.array_equal(np.array([r.heading_fused for r in rows]), want, equal_nan=True)

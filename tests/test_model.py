@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from gyrodrift.model import TempRateConfig, TempRateTracker, drift, regressors, temp_rate
+from gyrodrift.model import TempRateConfig, drift, regressors, temp_rate
 
 
 def test_ramp_slope_is_exact_once_window_is_full():
@@ -12,14 +12,24 @@ def test_ramp_slope_is_exact_once_window_is_full():
     assert np.all(rate[t < 1.0] == 0.0)  # no closed bin yet
 
 
-def test_streaming_tracker_equals_batch_bit_for_bit():
+def test_matches_bin_means_and_a_least_squares_line_written_out():
+    """Irregular sampling, quantised temperature: each sample's T' is the slope of np.polyfit
+    through the means of the closed bins of the trailing window (bins counted by number)."""
     rng = np.random.default_rng(3)
-    t = np.cumsum(rng.uniform(0.005, 0.05, 20000))  # irregular sampling
+    t = np.cumsum(rng.uniform(0.005, 0.05, 6000))
     temp = np.round((30 + 5 * np.sin(t / 100) + rng.normal(0, 0.02, t.size)) / 0.0625) * 0.0625
     cfg = TempRateConfig(window_s=30.0, bin_s=0.5)
-    tracker = TempRateTracker(cfg)
-    streamed = np.array([tracker.push(ti, Ti) for ti, Ti in zip(t, temp)])
-    assert np.array_equal(streamed, temp_rate(t, temp, cfg))
+    got = temp_rate(t, temp, cfg)
+    k = np.floor((t - t[0]) / cfg.bin_s)
+    expected = np.zeros(t.size)
+    for i in range(t.size):
+        closed = np.unique(k[k < k[i]])
+        closed = closed[closed >= k[i] - 1 - cfg.window_bins]  # the newest closed bin and window_bins before it
+        if closed.size >= 2:
+            bt = np.array([t[k == b].mean() for b in closed])
+            bT = np.array([temp[k == b].mean() for b in closed])
+            expected[i] = np.polyfit(bt, bT, 1)[0]
+    np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-12)
 
 
 @pytest.mark.parametrize("quantum_c", [0.0625, 1.0])

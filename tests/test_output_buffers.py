@@ -4,12 +4,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-pytest.importorskip("numba")
-
-from gyrodrift import OutputBuffers  # noqa: E402
-from gyrodrift.compensator import CompensatorConfig, compensate_arrays  # noqa: E402
-from gyrodrift.errors import GyroDriftError  # noqa: E402
-from test_compensate import complex_log  # noqa: E402
+from gyrodrift import OutputBuffers
+from gyrodrift.compensator import CompensatorConfig, compensate_arrays
+from gyrodrift.errors import GyroDriftError
+from test_compensate import complex_log
 
 
 def run(log: pd.DataFrame, cfg: CompensatorConfig, **kw) -> pd.DataFrame:
@@ -30,41 +28,31 @@ def quiet_log() -> pd.DataFrame:
 def test_buffers_give_the_same_table(estimator):
     log = complex_log()
     cfg = CompensatorConfig(estimator=estimator)
-    fresh = run(log, cfg, engine="fast")
+    fresh = run(log, cfg)
     buffers = OutputBuffers(len(log) + 100)  # larger than the log: the first rows are used
-    pd.testing.assert_frame_equal(run(log, cfg, engine="fast", buffers=buffers), fresh)
+    pd.testing.assert_frame_equal(run(log, cfg, buffers=buffers), fresh)
     assert fresh["update"].sum() > 10 and fresh["gated"].sum() > 100  # the codes matter here
 
 
 def test_a_second_call_overwrites_the_first_and_starts_from_clean_codes():
     cfg, cfg_long_init = CompensatorConfig(), CompensatorConfig(init_s=120.0)
     busy, quiet = complex_log(), quiet_log()
-    expected_quiet = run(quiet, cfg_long_init, engine="fast")
-    expected_busy = run(busy, cfg, engine="fast")
+    expected_quiet = run(quiet, cfg_long_init)
+    expected_busy = run(busy, cfg)
     assert expected_busy.loc[expected_busy["t"] < 100.0, "update"].sum() > 3  # inside the second call's init
     buffers = OutputBuffers(len(busy))
-    first = run(busy, cfg, engine="fast", buffers=buffers)
+    first = run(busy, cfg, buffers=buffers)
     pd.testing.assert_frame_equal(first, expected_busy)
-    second = run(quiet, cfg_long_init, engine="fast", buffers=buffers)
+    second = run(quiet, cfg_long_init, buffers=buffers)
     pd.testing.assert_frame_equal(second, expected_quiet)
     # the first table views the same memory: its first rows are now the second call's
     np.testing.assert_array_equal(first["bias_z"].to_numpy()[: len(quiet)], second["bias_z"].to_numpy())
     assert not np.array_equal(first["bias_z"].to_numpy()[: len(quiet)], expected_busy["bias_z"].to_numpy()[: len(quiet)])
 
 
-def test_the_reference_engine_allocates_its_own():
-    log = complex_log()
-    cfg = CompensatorConfig()
-    buffers = OutputBuffers(len(log))
-    before = buffers.take(len(log))[0]["bias_z"].copy()
-    out = run(log, cfg, engine="reference", buffers=buffers)
-    pd.testing.assert_frame_equal(out, run(log, cfg, engine="reference"))
-    np.testing.assert_array_equal(buffers.take(len(log))[0]["bias_z"], before)
-
-
 def test_too_small_buffers_say_how_large_they_must_be():
     log = complex_log()
     with pytest.raises(GyroDriftError, match=rf"has {len(log)} rows but the OutputBuffers were made for 100"):
-        run(log, CompensatorConfig(), engine="fast", buffers=OutputBuffers(100))
+        run(log, CompensatorConfig(), buffers=OutputBuffers(100))
     with pytest.raises(GyroDriftError, match="at least one row"):
         OutputBuffers(0)

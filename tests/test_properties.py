@@ -349,7 +349,7 @@ def test_heading_is_invariant_to_mag_and_acc_scale(sample, k_mag, k_acc):
 def test_streaming_equals_batch(case, cfg):
     log, _ = case
     try:
-        batch = compensate(log, cfg, engine="reference")
+        batch = compensate(log, cfg)
     except GyroDriftError as err:
         event(f"batch refused: {_kind(err)}")
         return  # batch refuses the log (too short, no compass in the init window, ...)
@@ -363,7 +363,7 @@ def test_streaming_equals_batch(case, cfg):
 @given(st.sampled_from(["gyro_z", "temp"]), st.integers(31, 40))
 def test_streaming_equals_batch_with_infinite_cells(col, row):
     log = tiny_log(41, **{col: {row: math.inf}})
-    assert_same_columns(compensate(log, engine="reference"), stream(log, None))
+    assert_same_columns(compensate(log), stream(log, None))
 
 
 @settings(REPRO, max_examples=10)

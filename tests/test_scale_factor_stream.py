@@ -344,7 +344,7 @@ def test_compensator_scale_factor_equals_batch():
     log.loc[log["t"].between(1074.0, 1074.3), "temp"] = np.nan  # held; a gap refusal before a turn
     log.loc[log["t"].between(362.0, 365.0), "heading"] = np.nan  # a turn without compass
     cfg, sf_cfg = CompensatorConfig(), ScaleFactorConfig()
-    batch = compensate(log, cfg, engine="reference")
+    batch = compensate(log, cfg)
     sf = estimate_scale_factor(batch, sf_cfg, causal=True)
 
     comp = Compensator(cfg, scale_factor=sf_cfg)

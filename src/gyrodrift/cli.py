@@ -415,6 +415,20 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: Commands that run the compensator (whose kernels numba compiles on first use).
+_ENGINE_COMMANDS = frozenset({"compensate", "demo", "report", "compare", "batch", "paper", "montecarlo"})
+
+
+def _say_if_compiling(command: str) -> None:
+    """One line on stderr when the engine is not yet compiled: the first run after an install
+    pauses for about a minute while numba compiles and caches it."""
+    from gyrodrift.kernels import cached
+
+    if command in _ENGINE_COMMANDS and not cached():
+        print("gyrodrift: compiling the engine (numba, once after an install; about a minute) ...",
+              file=sys.stderr, flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit code (2 for bad input, with one line on stderr)."""
     parser = build_parser()
@@ -422,6 +436,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
+    _say_if_compiling(args.command)
     try:
         return args.func(args)
     except GyroDriftError as err:
@@ -433,8 +448,8 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         print(
             f"gyrodrift: error: {args.command}: out of memory (an output file is written whole or not at all). "
-            "Logs longer than memory stream in constant memory from CSV or Parquet with a Kalman-family "
-            "estimator, without --smooth or --scale-factor (gyrodrift compensate); otherwise split the log",
+            "Logs longer than memory stream in constant memory from CSV or Parquet, without --smooth or "
+            "--scale-factor (gyrodrift compensate); otherwise split the log",
             file=sys.stderr,
         )
         return 1

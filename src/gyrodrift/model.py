@@ -26,12 +26,11 @@ for coarser sensors.
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TempRateConfig", "TempRateTracker", "temp_rate", "drift", "regressors"]
+__all__ = ["TempRateConfig", "temp_rate", "drift", "regressors"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -63,60 +62,9 @@ class TempRateConfig:
             )
 
 
-def _bin_mean(t_s: np.ndarray, temp_c: np.ndarray) -> tuple[float, float]:
-    return float(np.mean(t_s)), float(np.mean(temp_c))
-
-
-def _ls_slope(bin_t_s: np.ndarray, bin_temp_c: np.ndarray) -> float:
-    """Least-squares slope (degC/s) of temperature against time; 0 if undetermined."""
-    if bin_t_s.size < 2:
-        return 0.0
-    dt = bin_t_s - np.mean(bin_t_s)
-    sxx = float(np.dot(dt, dt))
-    if sxx <= 0.0:
-        return 0.0
-    return float(np.dot(dt, bin_temp_c - np.mean(bin_temp_c))) / sxx
-
-
-class TempRateTracker:
-    """Streaming T' estimate: feed samples in time order, get T' (degC/s) for each.
-
-    Gives bit-for-bit the same values as :func:`temp_rate` on the same samples.
-    """
-
-    def __init__(self, config: TempRateConfig = TempRateConfig()):
-        self._cfg = config
-        self._t0: float | None = None
-        self._bin: int | None = None
-        self._cur_t: list[float] = []
-        self._cur_temp: list[float] = []
-        self._bins: deque[tuple[float, float]] = deque()
-        self._rate = 0.0
-
-    def push(self, t_s: float, temp_c: float) -> float:
-        """Add one sample; return T' (degC/s) in force for it."""
-        if self._t0 is None:
-            self._t0 = t_s
-        b = math.floor((t_s - self._t0) / self._cfg.bin_s)
-        if self._bin is not None and b != self._bin:
-            self._close_bin()
-        self._bin = b
-        self._cur_t.append(t_s)
-        self._cur_temp.append(temp_c)
-        return self._rate
-
-    def _close_bin(self) -> None:
-        tb, Tb = _bin_mean(np.array(self._cur_t), np.array(self._cur_temp))
-        self._cur_t, self._cur_temp = [], []
-        self._bins.append((self._bin, tb, Tb))
-        while self._bins[0][0] < self._bin - self._cfg.window_bins:
-            self._bins.popleft()
-        arr = np.array(self._bins)
-        self._rate = _ls_slope(arr[:, 1], arr[:, 2])
-
-
 def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndarray:
-    """T' (degC/s) for every sample, causal; see the module notes for the method.
+    """T' (degC/s) for every sample, causal; see the module notes for the method (the
+    compensator's own estimate, :func:`gyrodrift.kernels.drift.temp_rate_chunk`).
 
     Parameters
     ----------
@@ -139,24 +87,16 @@ def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndar
     >>> round(float(temp_rate(t, 20 + 0.01 * t)[-1]), 6)
     0.01
     """
-    t_s = np.asarray(t_s, dtype=float)
-    temp_c = np.asarray(temp_c, dtype=float)
+    from gyrodrift.kernels import layout
+    from gyrodrift.kernels.drift import temp_rate_chunk
+
+    t_s = np.ascontiguousarray(t_s, dtype=float)
+    temp_c = np.ascontiguousarray(temp_c, dtype=float)
     out = np.zeros(t_s.size)
-    if t_s.size == 0:
-        return out
-    bins = np.floor((t_s - t_s[0]) / config.bin_s)
-    starts = np.flatnonzero(np.r_[True, bins[1:] != bins[:-1]])
-    ends = np.r_[starts[1:], t_s.size]
-    bin_t = np.empty(starts.size)
-    bin_temp = np.empty(starts.size)
-    first = 0  # first bin inside the trailing window
-    rate = 0.0
-    for j, (s, e) in enumerate(zip(starts, ends)):
-        out[s:e] = rate
-        bin_t[j], bin_temp[j] = _bin_mean(t_s[s:e], temp_c[s:e])
-        while bins[starts[first]] < bins[s] - config.window_bins:
-            first += 1
-        rate = _ls_slope(bin_t[first : j + 1], bin_temp[first : j + 1])
+    fs = np.zeros(layout.N_FSTATE)
+    ist = np.zeros(layout.N_ISTATE, dtype=np.int64)
+    bins = np.zeros((config.window_bins + 3, 3))
+    temp_rate_chunk(t_s, temp_c, config.window_bins, float(config.bin_s), fs, ist, bins, out)
     return out
 
 

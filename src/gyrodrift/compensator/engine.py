@@ -31,7 +31,22 @@ __all__ = ["ChunkEngine", "settings_arrays"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
-_NO_FIELD = np.empty(0)
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a``: the kernels take their inputs read-only, one compiled
+    version whether the caller's arrays are writable or not (pandas gives read-only ones)."""
+    view = a.view()
+    view.flags.writeable = False
+    return view
+
+
+def _input(a) -> np.ndarray:
+    """A float64, contiguous, read-only view of an input column (a copy only when needed)."""
+    return _read_only(np.ascontiguousarray(a, dtype=float))
+
+
+_NO_FIELD = _read_only(np.empty(0))
 
 
 def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
@@ -174,12 +189,9 @@ class ChunkEngine:
         n = len(t)
         if n == 0:
             return None
-        t = np.ascontiguousarray(t, dtype=float)
-        g = np.ascontiguousarray(g, dtype=float)
-        T = np.ascontiguousarray(T, dtype=float)
-        heading = np.ascontiguousarray(heading, dtype=float)
-        norm = _NO_FIELD if norm is None else np.ascontiguousarray(norm, dtype=float)
-        dip = _NO_FIELD if dip is None else np.ascontiguousarray(dip, dtype=float)
+        t, g, T, heading = (_input(a) for a in (t, g, T, heading))
+        norm = _NO_FIELD if norm is None else _input(norm)
+        dip = _NO_FIELD if dip is None else _input(dip)
         if self._t0 is None:
             if not (np.isfinite(g[0]) and np.isfinite(T[0])):
                 raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
@@ -198,8 +210,8 @@ class ChunkEngine:
                                     cols.code(L.OC_GAP).view(np.bool_))
             if bad >= 0:
                 raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
-            inputs = (t, cols.g_held if fix & 1 else g, cols.T_held if fix & 2 else T,
-                      cols.h_wrapped if fix & 4 else heading, norm, dip)
+            inputs = (t, _read_only(cols.g_held) if fix & 1 else g, _read_only(cols.T_held) if fix & 2 else T,
+                      _read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip)
             if self._held is not None:
                 self._held.append((inputs, cols))
                 if not t[-1] - self._fs[L.F_TSTART] >= 0:
@@ -245,8 +257,8 @@ class ChunkEngine:
 
     def _run(self, inputs, cols: Columns) -> dict:
         t, g, T, heading, norm, dip = inputs
-        Tp = cols.column(L.O_TEMP_RATE)
-        gap = cols.code(L.OC_GAP).view(np.bool_)
+        Tp = _read_only(cols.column(L.O_TEMP_RATE))
+        gap = _read_only(cols.code(L.OC_GAP).view(np.bool_))
         i = 0
         while i < t.size:
             i = loop.run_chunk(t, g, T, Tp, heading, gap, norm, dip, i, self._fs, self._ist, self._set, self._iset,
@@ -258,7 +270,7 @@ class ChunkEngine:
             "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
             "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
             "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-            "temp_rate": Tp, "compass_heading": heading, "update": cols.code(L.OC_UPDATE),
+            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "update": cols.code(L.OC_UPDATE),
             "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
         }
         return columns
@@ -311,17 +323,17 @@ class ChunkEngine:
         cols = r.cols
         cols.codes[:] = 0
         rows_before = self.rows_in
-        bad, fix = loop.prepare(r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins,
-                                cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        bad, fix = loop.prepare(r.ro_t, r.ro_g, r.ro_T, r.ro_heading, self._fs, self._ist, self._set, self._iset,
+                                self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
         if bad >= 0:
             raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
-        h = cols.h_wrapped if fix & 4 else r.heading
-        g_in, T_in = cols.g_held if fix & 1 else r.g, cols.T_held if fix & 2 else r.T
+        h = r.ro_h_wrapped if fix & 4 else r.ro_heading
+        g_in, T_in = r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T
         done = 0
         while done < 1:  # 0: a ring was full before the row (grown by _after_stop)
-            done = loop.run_chunk(r.t, g_in, T_in, r.Tp, h, r.gap, r.norm, r.dip, 0, self._fs, self._ist, self._set,
-                                  self._iset, self._lb, self._win, self._stack, self._refused, self._acc, self._ef,
-                                  self._ei, cols.out, cols.codes, 1)
+            done = loop.run_chunk(r.ro_t, g_in, T_in, r.ro_Tp, h, r.ro_gap, r.ro_norm, r.ro_dip, 0, self._fs,
+                                  self._ist, self._set, self._iset, self._lb, self._win, self._stack, self._refused,
+                                  self._acc, self._ef, self._ei, cols.out, cols.codes, 1)
             self._after_stop()
         return cols.out.tolist(), cols.codes.tolist(), float(h[0])
 
@@ -352,7 +364,7 @@ def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
     n = sum(cols.n for _, cols in held)
     joined, helper = new_columns(n)
     join(helper)
-    inputs = tuple(np.concatenate([part[0][k] for part in held]) if held[0][0][k].size else held[0][0][k]
+    inputs = tuple(_read_only(np.concatenate([part[0][k] for part in held])) if held[0][0][k].size else held[0][0][k]
                    for k in range(6))
     joined.column(L.O_TEMP_RATE)[:] = np.concatenate([cols.column(L.O_TEMP_RATE) for _, cols in held])
     joined.code(L.OC_GAP)[:] = np.concatenate([cols.code(L.OC_GAP) for _, cols in held])
@@ -368,3 +380,8 @@ class _RowMemory:
                             np.zeros(1), 1)
         self.Tp = self.cols.column(L.O_TEMP_RATE)
         self.gap = self.cols.code(L.OC_GAP).view(np.bool_)
+        # the read-only views the kernels take (they see what is written to the arrays above)
+        for name in ("t", "g", "T", "heading", "norm", "dip", "Tp", "gap"):
+            setattr(self, "ro_" + name, _read_only(getattr(self, name)))
+        for name in ("g_held", "T_held", "h_wrapped"):
+            setattr(self, "ro_" + name, _read_only(getattr(self.cols, name)))
