@@ -178,7 +178,7 @@ def test_streaming_covariance_matches_batch_over_a_long_outage(estimator):
     log = soak_log(s)
     cfg = CompensatorConfig(estimator=estimator)
     comp = Compensator(cfg)
-    est = comp._aid.estimator
+    est = comp.estimator
     for r in log.itertuples(index=False):
         comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading)
         if comp.initialised and int(r.t) % 600 == 0:

@@ -80,9 +80,7 @@ def tilt_compensated_heading(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
     90.0
     """
     hx, hy, _ = _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
-    heading = np.degrees(np.arctan2(-hy, hx))
-    heading = np.mod(heading, 360.0)
-    return np.where(heading >= 360.0, heading - 360.0, heading)
+    return wrap_360(np.degrees(np.arctan2(-hy, hx)))
 
 
 def field_norm_dip(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):

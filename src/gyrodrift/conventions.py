@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from gyrodrift.kernels.numeric import wrap360_all
+
 __all__ = [
     "T",
     "GYRO_Z",
@@ -102,9 +104,11 @@ def wrap_360(angle_deg):
     >>> float(wrap_360(-90.0))
     270.0
     """
-    out = np.mod(angle_deg, 360.0)
-    # np.mod(-1e-17, 360.0) rounds to 360.0 exactly; keep the range half-open.
-    return np.where(out >= 360.0, out - 360.0, out)
+    x = np.asarray(angle_deg, dtype=float)
+    flat = np.ascontiguousarray(x).ravel()
+    out = np.empty_like(flat)
+    wrap360_all(flat, out)  # the kernels' wrap360, element by element
+    return out.reshape(x.shape)
 
 
 def wrap_180(angle_deg):

@@ -23,11 +23,12 @@ import numpy as np
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, Observation
 from gyrodrift.estimators.base import LinearDrift
+from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.kernels import aiding, loop
 from gyrodrift.kernels import layout as L
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -47,6 +48,16 @@ def _input(a) -> np.ndarray:
 
 
 _NO_FIELD = _read_only(np.empty(0))
+
+
+def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
+    """The state arrays of an estimator the row loop updates itself (a Kalman filter of
+    :mod:`gyrodrift.estimators` whose ``update`` and ``hold`` are the kernels'), or None: it
+    is updated in Python at interval ends (a subclass overriding them keeps its own)."""
+    cls = type(estimator)
+    if not isinstance(estimator, KernelFilter) or cls.update is not KernelFilter.update or cls.hold is not KernelFilter.hold:
+        return None
+    return estimator.kernel_arrays
 
 
 def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
@@ -77,7 +88,7 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     icfg[L.K_DEPTH] = config.stack_depth if st is None or st.stacked else 1
     icfg[L.K_TP_WINDOW_BINS] = config.temp_rate.window_bins
     icfg[L.K_FUSE_INTERFERENCE] = int(bool(fusion.magnetic_gates))
-    arrays = getattr(estimator, "kernel_arrays", None)
+    arrays = compiled_arrays(estimator)
     icfg[L.K_MODE] = L.MODE_EXTERNAL if arrays is None else int(arrays[1][L.EI_MODE])
     if st is not None:
         cfg[L.C_EDGE_S] = st.edge_s
@@ -120,7 +131,7 @@ class ChunkEngine:
         self.cfg = config
         self.est = estimator
         self.source = source
-        arrays = getattr(estimator, "kernel_arrays", None)
+        arrays = compiled_arrays(estimator)
         if arrays is None:
             arrays = (np.zeros(L.ef_size(1, 1)), np.zeros(L.N_EI, dtype=np.int64))
             arrays[1][L.EI_DEPTH] = arrays[1][L.EI_NIS_W] = 1

@@ -80,6 +80,11 @@ class Compensator:
         return self._sf
 
     @property
+    def estimator(self):
+        """The drift estimator (updated in place as samples come)."""
+        return self._est
+
+    @property
     def params(self) -> np.ndarray:
         """[a (deg/s/degC), b (deg), c (deg/s)] now in force."""
         return self._est.params

@@ -24,15 +24,45 @@ The functions are compiled on first use and cached on disk (``cache=True``); wit
 ``NUMBA_DISABLE_JIT=1`` the same source runs as plain Python (slow; for debugging,
 and as an oracle in the tests). :func:`cached` says whether a compiled copy is on
 disk, so a command line can say why the first run pauses.
+
+numba checks a cached function against its own file only, while the row loop inlines
+functions of the other modules here: importing this package therefore compares a digest
+of all their sources with the one the cache was made from, and empties the cache when
+they differ.
 """
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 from numba import njit
 
 __all__ = ["jit", "cached"]
+
+_HERE = Path(__file__).parent
+_CACHE = _HERE / "__pycache__"
+
+
+def _drop_stale_cache() -> None:
+    """Empty numba's cache of this package when any of its sources changed since it was made."""
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sorted(_HERE.glob("*.py")))).hexdigest()
+    stamp = _CACHE / "sources.sha256"
+    try:
+        if stamp.read_text() == digest:
+            return
+    except OSError:
+        pass
+    try:
+        for old in [*_CACHE.glob("*.nbi"), *_CACHE.glob("*.nbc")]:
+            old.unlink()
+        _CACHE.mkdir(exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:  # a read-only install: numba then caches elsewhere or not at all
+        pass
+
+
+_drop_stale_cache()
 
 
 def jit(fn=None, *, inline: bool = False):
@@ -52,5 +82,4 @@ def jit(fn=None, *, inline: bool = False):
 def cached() -> bool:
     """True when the compiled row loop is in numba's cache next to this package (the
     first run after an install compiles it, about a minute)."""
-    cache_dir = Path(__file__).parent / "__pycache__"
-    return any(cache_dir.glob("loop.run_chunk-*.nbi"))
+    return any(_CACHE.glob("loop.run_chunk-*.nbi"))

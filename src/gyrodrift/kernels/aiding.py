@@ -44,7 +44,7 @@ from gyrodrift.kernels.layout import (
     PENDING_UPDATE, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
     UNOBSERVABLE_SD_FRACTION, W_DT, W_HEADING, W_IBIAS, W_IRAW, W_IT, W_ITP, W_RATE, W_T, ZARU_NIS,
 )
-from gyrodrift.kernels.numeric import pairwise_sum, std_of, wrap180
+from gyrodrift.kernels.numeric import wrap180
 
 __all__ = ["add", "compass_measurement", "zaru_measurement", "flat_compass", "gyro_still", "row_condition",
            "field_anomaly", "field_reference", "unobservable_code", "begin", "close", "push_measurement", "stacked",
@@ -130,19 +130,34 @@ def compass_measurement(s0, s1, compass_sd, gyro_noise, var0, var1, end_var):
 
 
 @jit(inline=True)
-def _wrap180_diff(x, y, lo, ref, out, single=False):
+def _angle_diffs(x, y, lo, ref, out, single):
     """``out[j] = wrap180(x[lo + j] - y[lo + j] - ref)`` (``wrap180(x[lo + j] - ref)`` when
-    ``single``) for every j of ``out`` whose angle is already in range, which is what
-    :func:`wrap180` gives for it; returns True when some angle is not, and ``out`` must
-    then be made with :func:`wrap180` itself. (A loop with the general case inside is
-    vectorised with ``fmod`` called on every lane, whether needed or not: 20 times slower.)"""
+    ``single``). Angles already in range take a plain pass, vectorised (a loop with the
+    general case inside calls ``fmod`` on every lane: 20 times slower); the rest, if any,
+    are wrapped after."""
     bad = False
     for j in range(out.size):
         v = (x[lo + j] - ref) if single else (x[lo + j] - y[lo + j] - ref)
         a = v + 180.0
         bad |= not (0.0 <= a < 360.0)
         out[j] = a - 180.0
-    return bad
+    if bad:
+        for j in range(out.size):
+            out[j] = wrap180((x[lo + j] - ref) if single else (x[lo + j] - y[lo + j] - ref))
+
+
+@jit
+def _line_scatter(t, d):
+    """The least-squares line of ``d`` against ``t``: (slope, Σ(t − t̄)², Σ residual², and
+    Σ(Δd − mean Δd)² of the successive differences, in which slow motion cancels)."""
+    tc = t - np.mean(t)
+    dm = d - np.mean(d)
+    sxx = np.dot(tc, tc)
+    slope = np.dot(tc, dm) / sxx
+    resid = dm - slope * tc
+    step = d[1:] - d[:-1]
+    dev = step - np.mean(step)
+    return slope, sxx, np.dot(resid, resid), np.dot(dev, dev)
 
 
 @jit
@@ -166,19 +181,11 @@ def _edge(win, head, n, snap, edge_s, interval_s, compass_sd):
     k = hi - lo
     d_ref = snap[W_IRAW] - snap[W_HEADING]
     d = np.empty(k)
-    if _wrap180_diff(src[W_IRAW], src[W_HEADING], lo, d_ref, d):
-        for j in range(k):
-            d[j] = wrap180(src[W_IRAW, lo + j] - src[W_HEADING, lo + j] - d_ref)
-    for j in range(k):
-        d[j] = d[j] + d_ref
-    I_raw = pairwise_sum(src[W_IRAW], lo, k) / k
+    _angle_diffs(src[W_IRAW], src[W_HEADING], lo, d_ref, d, False)
     edge = np.empty(N_SNAP)
-    edge[W_T] = pairwise_sum(src[W_T], lo, k) / k
-    edge[W_HEADING] = I_raw - pairwise_sum(d, 0, k) / k
-    edge[W_IRAW] = I_raw
-    edge[W_IT] = pairwise_sum(src[W_IT], lo, k) / k
-    edge[W_ITP] = pairwise_sum(src[W_ITP], lo, k) / k
-    edge[W_IBIAS] = pairwise_sum(src[W_IBIAS], lo, k) / k
+    for c in (W_T, W_IRAW, W_IT, W_ITP, W_IBIAS):
+        edge[c] = np.mean(src[c, lo:hi])
+    edge[W_HEADING] = edge[W_IRAW] - (np.mean(d) + d_ref)
     return edge, _edge_variance(win, head, n, snap, d_ref, k, interval_s, compass_sd)
 
 
@@ -194,33 +201,11 @@ def _edge_variance(win, head, n, snap, d_ref, k, interval_s, compass_sd):
     size = hi - lo
     if size < 10:
         return compass_sd**2 / k
-    buf = np.empty((3, size))
-    d = buf[0]
-    tc = buf[1]
-    dm = buf[2]
-    if _wrap180_diff(win[W_IRAW], win[W_HEADING], lo, d_ref, d):
-        for j in range(size):
-            d[j] = wrap180(win[W_IRAW, lo + j] - win[W_HEADING, lo + j] - d_ref)
-    t_mean = pairwise_sum(win[W_T], lo, size) / size
-    for j in range(size):
-        tc[j] = win[W_T, lo + j] - t_mean
-    d_mean = pairwise_sum(d, 0, size) / size
-    for j in range(size):
-        dm[j] = d[j] - d_mean
-    slope = np.dot(tc, dm) / np.dot(tc, tc)
-    for j in range(size):  # the residuals, over d - mean(d)
-        dm[j] = dm[j] - slope * tc[j]
-    total = np.dot(dm, dm) / (size - 2)
-    hf = buf[1, : size - 1]  # np.diff(d), over tc
-    for j in range(size - 1):
-        hf[j] = d[j + 1] - d[j]
-    hf_mean = pairwise_sum(hf, 0, size - 1) / (size - 1)
-    dev = buf[2, : size - 1]
-    for j in range(size - 1):
-        dev[j] = hf[j] - hf_mean
-    white = 0.5 * np.dot(dev, dev) / (size - 2)
-    if total < white:  # min(white, total)
-        white = total
+    d = np.empty(size)
+    _angle_diffs(win[W_IRAW], win[W_HEADING], lo, d_ref, d, False)
+    _, _, resid_ss, step_ss = _line_scatter(win[W_T, lo:hi], d)
+    total = resid_ss / (size - 2)
+    white = min(0.5 * step_ss / (size - 2), total)
     return white / k + (total - white)
 
 
@@ -279,111 +264,51 @@ def flat_compass(win, lo, hi, compass_sd, slope_k, resid_k):
     two compass sigmas and not above the compass white noise (from successive
     differences, in which slow motion cancels) by more than ``resid_k`` standard errors of
     a variance ratio: a heading that wanders inside the window, even about a flat line,
-    fails. The white-noise test needs two more passes and comes last."""
+    fails."""
     size = hi - lo
-    buf = np.empty((3, size))
-    d = buf[0]
-    tc = buf[1]
-    dm = buf[2]
-    h0 = win[W_HEADING, lo]
-    if _wrap180_diff(win[W_HEADING], win[W_HEADING], lo, h0, d, True):
-        for j in range(size):
-            d[j] = wrap180(win[W_HEADING, lo + j] - h0)
-    t_mean = pairwise_sum(win[W_T], lo, size) / size
-    for j in range(size):
-        tc[j] = win[W_T, lo + j] - t_mean
-    sxx = np.dot(tc, tc)
-    d_mean = pairwise_sum(d, 0, size) / size
-    for j in range(size):
-        dm[j] = d[j] - d_mean
-    slope = np.dot(tc, dm) / sxx
-    for j in range(size):  # the residuals, over d - mean(d)
-        dm[j] = dm[j] - slope * tc[j]
+    d = np.empty(size)
+    _angle_diffs(win[W_HEADING], win[W_HEADING], lo, win[W_HEADING, lo], d, True)
+    slope, sxx, resid_ss, step_ss = _line_scatter(win[W_T, lo:hi], d)
     dof = max(size - 2, 1)
-    resid_var = np.dot(dm, dm) / dof
+    resid_var = resid_ss / dof
     slope_se = math.sqrt(resid_var / sxx)
-    if resid_var > (2.0 * compass_sd) ** 2 or abs(slope) > slope_k * slope_se:
-        return -1.0
-    hf = buf[1, : size - 1]  # np.diff(d), over tc
-    for j in range(size - 1):
-        hf[j] = d[j + 1] - d[j]
-    hf_mean = pairwise_sum(hf, 0, size - 1) / (size - 1)
-    dev = buf[2, : size - 1]
-    for j in range(size - 1):
-        dev[j] = hf[j] - hf_mean
-    noise_var = 0.5 * np.dot(dev, dev) / max(size - 2, 1)
-    if resid_var > noise_var * (1.0 + resid_k * math.sqrt(2.0 / dof)):
+    noise_var = 0.5 * step_ss / dof
+    if (resid_var > (2.0 * compass_sd) ** 2 or abs(slope) > slope_k * slope_se
+            or resid_var > noise_var * (1.0 + resid_k * math.sqrt(2.0 / dof))):
         return -1.0
     return slope_se
 
 
 @jit
-def _median(x):
-    """``np.median`` of a 1-d float64 array without NaN."""
-    s = np.sort(x)
-    n = s.size
-    if n % 2 == 1:
-        return s[n // 2]
-    return (s[n // 2 - 1] + s[n // 2]) / 2.0
-
-
-@jit
-def _allan(rates, lo, size, m):
-    """``allan(m)`` of ``gyro_still`` over ``rates[lo:lo + size]``: half the mean squared
-    difference of successive means of ``m`` rates."""
-    nb = size // m
-    d = np.empty(nb)
-    if m < 8:  # numpy adds fewer than 8 numbers one after the other
-        for j in range(nb):
-            b = lo + j * m
-            total = 0.0
-            for i in range(m):
-                total += rates[b + i]
-            d[j] = total / m
-    else:
-        for j in range(nb):
-            d[j] = pairwise_sum(rates, lo + j * m, m) / m
-    for j in range(nb - 1):  # np.diff of the means, in place
-        d[j] = d[j + 1] - d[j]
-    dd = d[: nb - 1]
-    return 0.5 * np.dot(dd, dd) / (nb - 1)
+def _allan(rates, m):
+    """Half the mean squared difference of successive means of ``m`` rates (the Allan
+    variance at ``m`` steps)."""
+    nb = rates.size // m
+    means = rates[: nb * m].reshape((nb, m)).sum(axis=1) / m
+    d = means[1:] - means[:-1]
+    return 0.5 * np.dot(d, d) / (nb - 1)
 
 
 @jit
 def gyro_still(win, lo, hi, interval_start_s, max_std_dps, k):
-    """Whether the gyro saw no motion over the stillness window, columns ``lo:hi``: the
-    rates of this interval vary less than ``max_std_dps`` and the Allan variance at 2 s is within ``k`` standard errors of a quarter of that at
-    0.5 s (white noise). The rates are ``win[W_RATE, lo + 1:hi]`` (stored by :func:`add`)."""
-    nr = hi - lo - 1
-    r0 = lo + 1
-    # rates[t[1:] > interval_start_s]: a run at the end (times increase)
-    j0 = nr
-    while j0 > 0 and win[W_T, lo + j0] > interval_start_s:
-        j0 -= 1
-    if nr - j0 >= 2 and std_of(win[W_RATE], r0 + j0, nr - j0) > max_std_dps:
+    """Whether the gyro saw no motion over the stillness window, columns ``lo:hi``.
+
+    Still: the rates of this interval (after ``interval_start_s``) vary less than
+    ``max_std_dps``, and the Allan variance of the rates at 2 s is no more than white
+    noise allows, a quarter of that at 0.5 s, within ``k`` standard errors of a variance
+    ratio (Allan variances ignore a slowly moving drift). A yaw wander of a few hundredths
+    of a deg/s that the compass cannot see fails this. The rates are
+    ``win[W_RATE, lo + 1:hi]`` (stored by :func:`add`)."""
+    rates = win[W_RATE, lo + 1:hi]
+    inside = rates[win[W_T, lo + 1:hi] > interval_start_s]
+    if inside.size >= 2 and np.std(inside) > max_std_dps:
         return False
-    # round(0.5 / median(np.diff(t))): the same for every time step between the smallest
-    # and the largest when those two give the same (division and rounding are monotonic)
-    lo_dt = math.inf
-    hi_dt = -math.inf
-    for j in range(r0, hi):
-        step = win[W_DT, j]
-        if step < lo_dt:
-            lo_dt = step
-        if step > hi_dt:
-            hi_dt = step
-    steps = np.rint(0.5 / hi_dt)
-    if np.rint(0.5 / lo_dt) != steps:
-        steps = np.rint(0.5 / _median(win[W_DT, r0:hi]))
-    small = max(1, int(steps))
+    small = max(1, int(np.rint(0.5 / np.median(win[W_DT, lo + 1:hi]))))
     big = 4 * small
-    nb = nr // big
+    nb = rates.size // big
     if nb < 6:
         return True
-    rates = win[W_RATE]
-    return _allan(rates, r0, nr, big) <= 0.25 * _allan(rates, r0, nr, small) * (1.0 + k * math.sqrt(2.0 / (nb - 1)))
-
-
+    return _allan(rates, big) <= 0.25 * _allan(rates, small) * (1.0 + k * math.sqrt(2.0 / (nb - 1)))
 
 
 # ------------------------------------------------------------------- gates
@@ -683,7 +608,7 @@ def init_measurements(t, g, T, Tp, heading, e, n_windows, init_s, cfg, ist, stac
             for k in range(compass.size):
                 rel[k] = wrap180(compass[k] - compass[0])
             turned = abs(np.median(rel[compass.size - third:]) - np.median(rel[:third]))
-        if std_of(g, r0, r1 + 1 - r0) <= cfg[C_STILL_STD] and turned <= cfg[C_STILL_HEADING]:
+        if np.std(g[r0:r1 + 1]) <= cfg[C_STILL_STD] and turned <= cfg[C_STILL_HEADING]:
             push_measurement(t[e], (I_raw[r1] - I_raw[r0]) / dt, (I_T[r1] - I_T[r0]) / dt,
                              (I_Tp[r1] - I_Tp[r0]) / dt, cfg[C_GYRO_NOISE] ** 2 / dt, ist, stack, acc, depth)
             found += 1

@@ -10,14 +10,9 @@ from __future__ import annotations
 import math
 
 from gyrodrift.kernels import jit
+from gyrodrift.kernels.numeric import wrap180, wrap360
 
 __all__ = ["step", "fuse_rows"]
-
-
-@jit(inline=True)
-def _wrap180(x):
-    """The innovation wrapped to [-180, 180), deg."""
-    return x - 360.0 * math.floor((x + 180.0) / 360.0)
 
 
 @jit(inline=True)
@@ -36,7 +31,7 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
         if math.isnan(compass):
             return (psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t,
                     math.nan, math.nan, math.nan)
-        psi = compass - 360.0 * math.floor(compass / 360.0)
+        psi = wrap360(compass)
         sr = math.sqrt(R)
         return psi, R, t, rate, 1.0, t, 0.0, bias_sd, math.nan, psi, sr, sr
     dt = t - t_prev
@@ -44,7 +39,7 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
     P = P + (N2 + tau * bias_sd * bias_sd) * dt
     isd = isd + 0.5 * (bias_sd + sd_prev) * dt
     if allow and not math.isnan(compass):
-        nu = _wrap180(compass - psi)
+        nu = wrap180(compass - psi)
         S = P + R
         if nu * nu / S <= gate:
             k = P / S
@@ -57,12 +52,7 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
             psi = compass
             P = R
             rej_t = math.nan
-    if psi >= 360.0:  # keep ψ in [0, 360): one turn at most per row, else the general rule
-        psi = psi - 360.0 if psi < 720.0 else psi - 360.0 * math.floor(psi / 360.0)
-    elif psi < 0.0:
-        psi = psi + 360.0 if psi >= -360.0 else psi - 360.0 * math.floor(psi / 360.0)
-        if psi >= 360.0:  # a tiny negative ψ rounds to 360 when a turn is added
-            psi = psi - 360.0
+    psi = wrap360(psi)
     gyro_var = R + N2 * (t - t0) + isd * isd
     return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
 

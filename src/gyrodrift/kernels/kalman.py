@@ -43,7 +43,7 @@ from gyrodrift.kernels.layout import (
     EI_AI, EI_DEPTH, EI_MODE, EI_N_ACTIVE, EI_NIS_W, EI_NORMALISED, EI_RECENTRE, EI_TWIN, ES_FADING,
     ES_LAMBDA_MAX, ES_RHO, ES_SLOPE_Q, ES_SOFTENING, MAIN, MODE_ADAPTIVE, N_AF, N_AI, TWIN,
 )
-from gyrodrift.kernels.numeric import cap_covariance, correct, matmul, matmul_t, matvec, pairwise_sum, solve
+from gyrodrift.kernels.numeric import cap_covariance, correct, matmul, matmul_t, matvec, solve
 
 __all__ = ["views", "update", "hold", "params", "cov"]
 
@@ -141,14 +141,11 @@ def _recentre(z, P, af, temp_c):
 
 @jit(inline=True)
 def _column_mean(H, c):
-    """Mean of column ``c`` of H (pairwise order from 8 rows, as the window means)."""
-    m = H.shape[0]
-    if m >= 8:
-        return pairwise_sum(np.ascontiguousarray(H[:, c]), 0, m) / m
+    """Mean of column ``c`` of H."""
     total = 0.0
-    for r in range(m):
+    for r in range(H.shape[0]):
         total += H[r, c]
-    return total / m
+    return total / H.shape[0]
 
 
 @jit

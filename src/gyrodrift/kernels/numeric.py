@@ -3,8 +3,6 @@ correction and the covariance cap.
 
 * :func:`wrap360`, :func:`wrap180`: angles to [0, 360) and [-180, 180) (the scalar forms
   of :func:`gyrodrift.conventions.wrap_360` and ``wrap_180``).
-* :func:`pairwise_sum`, :func:`pairwise_sqdev`, :func:`std_of`: sums in numpy's pairwise
-  order (window means and standard deviations of the aiding tests).
 * :func:`matmul`, :func:`matmul_t`, :func:`matvec`, :func:`solve`: products and solves of
   the 1x1 to 3x3 matrices of the filters, as loops (no BLAS call for such sizes).
 * :func:`correct`: the measurement update of eq. (10) in Joseph form;
@@ -13,22 +11,18 @@ correction and the covariance cap.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from gyrodrift.kernels import jit
 
-__all__ = ["wrap360", "wrap180", "near_boundary", "pairwise_sum", "pairwise_sqdev", "std_of", "sym_eig", "cap_covariance",
-           "matmul", "matmul_t", "matvec", "solve", "correct"]
-
-# numpy's block size of the pairwise summation
-_PW_BLOCKSIZE = 128
+__all__ = ["wrap360", "wrap360_all", "wrap180", "near_boundary", "cap_covariance", "matmul", "matmul_t", "matvec", "solve", "correct"]
 
 
 @jit(inline=True)
 def wrap360(x):
-    """``x`` (deg) wrapped to [0, 360); an angle already in range is returned as is."""
+    """``x`` (deg) wrapped to [0, 360); an angle already in range is returned as is, and
+    one that rounds to 360 after ``mod`` becomes 0 (the range stays half-open). NaN and
+    infinities give NaN."""
     if 0.0 <= x < 360.0:
         return x
     out = np.mod(x, 360.0)
@@ -37,217 +31,17 @@ def wrap360(x):
     return out
 
 
+@jit
+def wrap360_all(x, out):
+    """:func:`wrap360` of every element of the 1-d ``x``, into ``out``."""
+    for i in range(x.size):
+        out[i] = wrap360(x[i])
+
+
 @jit(inline=True)
 def wrap180(x):
     """``x`` (deg) wrapped to [-180, 180)."""
     return wrap360(x + 180.0) - 180.0
-
-
-@jit(inline=True)
-def _block_sum(a, lo, n):
-    """numpy's sum of at most 128 numbers (``pairwise_sum`` without the split)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[lo + i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    stop = n - (n % 8)
-    while i < stop:
-        j = lo + i
-        r0 += a[j]
-        r1 += a[j + 1]
-        r2 += a[j + 2]
-        r3 += a[j + 3]
-        r4 += a[j + 4]
-        r5 += a[j + 5]
-        r6 += a[j + 6]
-        r7 += a[j + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
-@jit(inline=True)
-def pairwise_sum(a, lo, n):
-    """Sum of ``a[lo:lo + n]`` in the order of numpy's ``np.add.reduce`` on a float64 array.
-
-    numpy adds fewer than 8 numbers one after the other; up to 128 in 8 interleaved
-    partial sums; more by halves (split at a multiple of 8), recursively. ``np.sum(x)``
-    and ``np.mean(x) * n`` of the same numbers then have the same bits (``np.mean``
-    divides this sum by n), and so does each row of ``x.reshape(-1, m).mean(axis=1)``.
-    The recursion is unrolled on an explicit stack (numba cannot cache a recursive
-    function).
-    """
-    if n <= _PW_BLOCKSIZE:
-        return _block_sum(a, lo, n)
-    return _pairwise_tree(a, lo, n)
-
-
-@jit
-def _pairwise_tree(a, lo, n):
-    """:func:`pairwise_sum` of more than 128 numbers (out of line: the callers inline the rest)."""
-    # post-order walk of the halving tree: (lo, n, combine?) to do, partial sums done
-    todo = np.empty((128, 3), dtype=np.int64)
-    done = np.empty(128)
-    n_todo = 1
-    n_done = 0
-    todo[0, 0], todo[0, 1], todo[0, 2] = lo, n, 0
-    while n_todo > 0:
-        n_todo -= 1
-        lo_, n_, combine = todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2]
-        if combine == 1:  # left + right, as numpy returns them
-            n_done -= 1
-            done[n_done - 1] = done[n_done - 1] + done[n_done]
-        elif n_ <= _PW_BLOCKSIZE:
-            done[n_done] = _block_sum(a, lo_, n_)
-            n_done += 1
-        else:
-            n2 = n_ // 2
-            n2 -= n2 % 8
-            todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2] = lo_, n_, 1
-            todo[n_todo + 1, 0], todo[n_todo + 1, 1], todo[n_todo + 1, 2] = lo_ + n2, n_ - n2, 0
-            todo[n_todo + 2, 0], todo[n_todo + 2, 1], todo[n_todo + 2, 2] = lo_, n2, 0
-            n_todo += 3
-    return done[0]
-
-
-@jit(inline=True)
-def _block_sqdev(a, lo, n, mu):
-    """:func:`_block_sum` of ``(a - mu)²`` (each term as numpy's ``d = a - mu; d * d``)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            d = a[lo + i] - mu
-            res += d * d
-        return res
-    d0, d1, d2, d3 = a[lo] - mu, a[lo + 1] - mu, a[lo + 2] - mu, a[lo + 3] - mu
-    d4, d5, d6, d7 = a[lo + 4] - mu, a[lo + 5] - mu, a[lo + 6] - mu, a[lo + 7] - mu
-    r0, r1, r2, r3, r4, r5, r6, r7 = d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5, d6 * d6, d7 * d7
-    i = 8
-    stop = n - (n % 8)
-    while i < stop:
-        j = lo + i
-        d0, d1, d2, d3 = a[j] - mu, a[j + 1] - mu, a[j + 2] - mu, a[j + 3] - mu
-        d4, d5, d6, d7 = a[j + 4] - mu, a[j + 5] - mu, a[j + 6] - mu, a[j + 7] - mu
-        r0 += d0 * d0
-        r1 += d1 * d1
-        r2 += d2 * d2
-        r3 += d3 * d3
-        r4 += d4 * d4
-        r5 += d5 * d5
-        r6 += d6 * d6
-        r7 += d7 * d7
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        d = a[lo + i] - mu
-        res += d * d
-        i += 1
-    return res
-
-
-@jit(inline=True)
-def pairwise_sqdev(a, lo, n, mu):
-    """Sum of ``(a[lo:lo + n] - mu)²`` in numpy's order (:func:`pairwise_sum` of the squares,
-    without making the array of them)."""
-    if n <= _PW_BLOCKSIZE:
-        return _block_sqdev(a, lo, n, mu)
-    return _sqdev_tree(a, lo, n, mu)
-
-
-@jit
-def _sqdev_tree(a, lo, n, mu):
-    """:func:`pairwise_sqdev` of more than 128 numbers."""
-    todo = np.empty((128, 3), dtype=np.int64)
-    done = np.empty(128)
-    n_todo = 1
-    n_done = 0
-    todo[0, 0], todo[0, 1], todo[0, 2] = lo, n, 0
-    while n_todo > 0:
-        n_todo -= 1
-        lo_, n_, combine = todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2]
-        if combine == 1:
-            n_done -= 1
-            done[n_done - 1] = done[n_done - 1] + done[n_done]
-        elif n_ <= _PW_BLOCKSIZE:
-            done[n_done] = _block_sqdev(a, lo_, n_, mu)
-            n_done += 1
-        else:
-            n2 = n_ // 2
-            n2 -= n2 % 8
-            todo[n_todo, 0], todo[n_todo, 1], todo[n_todo, 2] = lo_, n_, 1
-            todo[n_todo + 1, 0], todo[n_todo + 1, 1], todo[n_todo + 1, 2] = lo_ + n2, n_ - n2, 0
-            todo[n_todo + 2, 0], todo[n_todo + 2, 1], todo[n_todo + 2, 2] = lo_, n2, 0
-            n_todo += 3
-    return done[0]
-
-
-@jit
-def std_of(a, lo, n):
-    """``np.std`` of ``a[lo:lo + n]`` (population, ddof 0), the same bits, read in place."""
-    mu = pairwise_sum(a, lo, n) / n
-    return np.sqrt(pairwise_sqdev(a, lo, n, mu) / n)
-
-
-@jit
-def sym_eig(A):
-    """Eigenvalues and eigenvectors (columns) of a small symmetric matrix: cyclic Jacobi
-    rotations until the off-diagonal part is below rounding (``np.linalg.eigh`` to the
-    last bits, unsorted; for the 3×3 of :func:`cap_covariance` about 5 times faster than
-    the LAPACK call)."""
-    n = A.shape[0]
-    a = A.copy()
-    V = np.eye(n)
-    for _ in range(64):
-        off = 0.0
-        diag = 0.0
-        for p in range(n):
-            diag += a[p, p] * a[p, p]
-            for q in range(p + 1, n):
-                off += a[p, q] * a[p, q]
-        if off <= 1e-36 * diag:  # |off-diagonal| below 1e-18 of the norm: done
-            break
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                apq = a[p, q]
-                if apq == 0.0:
-                    continue
-                theta = (a[q, q] - a[p, p]) / (2.0 * apq)
-                if abs(theta) > 1e150:
-                    t = 0.5 / theta
-                else:
-                    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                    if theta < 0.0:
-                        t = -t
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for k in range(n):  # A <- A J
-                    akp = a[k, p]
-                    akq = a[k, q]
-                    a[k, p] = c * akp - s * akq
-                    a[k, q] = s * akp + c * akq
-                for k in range(n):  # A <- J^T A
-                    apk = a[p, k]
-                    aqk = a[q, k]
-                    a[p, k] = c * apk - s * aqk
-                    a[q, k] = s * apk + c * aqk
-                a[p, q] = 0.0
-                a[q, p] = 0.0
-                for k in range(n):  # V <- V J
-                    vkp = V[k, p]
-                    vkq = V[k, q]
-                    V[k, p] = c * vkp - s * vkq
-                    V[k, q] = s * vkp + c * vkq
-    lam = np.empty(n)
-    for p in range(n):
-        lam[p] = a[p, p]
-    return lam, V
 
 
 @jit
@@ -260,39 +54,15 @@ def cap_covariance(P, max_var):
     variance of the well-known combination ``a*T + c``). P stays symmetric positive
     definite. Returns a new matrix.
     """
-    n = P.shape[0]
     scale = np.sqrt(max_var)
-    M = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            M[i, j] = P[i, j] / (scale[i] * scale[j])
-    tr = 0.0
-    for i in range(n):
-        tr += M[i, i]
-    if tr <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
+    M = P / np.outer(scale, scale)
+    if np.trace(M) <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
         return P.copy()
-    Ms = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            Ms[i, j] = 0.5 * (M[i, j] + M[j, i])
-    lam, V = sym_eig(Ms)
-    top = lam[0]
-    for k in range(1, n):
-        top = max(top, lam[k])
-    if top <= 1.0:
+    lam, V = np.linalg.eigh(0.5 * (M + M.T))
+    if lam.max() <= 1.0:
         return P.copy()
-    out = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            acc = (V[i, 0] * min(lam[0], 1.0)) * V[j, 0]
-            for k in range(1, n):
-                acc += (V[i, k] * min(lam[k], 1.0)) * V[j, k]
-            out[i, j] = acc * (scale[i] * scale[j])
-    sym = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            sym[i, j] = 0.5 * (out[i, j] + out[j, i])
-    return sym
+    clipped = (V * np.minimum(lam, 1.0)) @ V.T * np.outer(scale, scale)
+    return 0.5 * (clipped + clipped.T)
 
 
 @jit(inline=True)
