@@ -158,6 +158,147 @@ def test_simulate_tables_must_be_tables(tmp_path, capsys):
     one_line_error(capsys.readouterr().err, "sim.toml", "[device]", "c0_dps")
 
 
+# --------------------------------------------------------------------------- device profiles
+
+
+def profile_json(**changes) -> dict:
+    """A valid profile as JSON values; ``changes`` replace top-level fields or, with a
+    ``params_`` prefix, entries of ``params``."""
+    data = {
+        "format": "gyrodrift-profile",
+        "version": 1,
+        "software": "gyrodrift 1.0.0",
+        "created": "2024-05-01T12:00:00+00:00",
+        "estimator": "adaptive",
+        "params": {"a_dps_per_c": 0.02, "b_deg": 3.0, "c_dps": -0.5},
+        "cov": [[1e-6, 0.0, -2e-5], [0.0, 0.5, 0.0], [-2e-5, 0.0, 1e-3]],
+        "temp_range_c": [20.0, 45.0],
+        "samples": 36000,
+        "updates": 170,
+    }
+    for key, value in changes.items():
+        if key.startswith("params_"):
+            if isinstance(data["params"], dict):
+                data["params"][key[len("params_"):]] = value
+        else:
+            data[key] = value
+    return data
+
+
+def write_profile(path: Path, data) -> Path:
+    path.write_text(json.dumps(data) if not isinstance(data, str) else data)
+    return path
+
+
+def test_the_valid_example_profile_loads(tmp_path):
+    prof = load_profile(write_profile(tmp_path / "p.json", profile_json()))
+    assert prof.params == (0.02, 3.0, -0.5) and prof.temp_range_c == (20.0, 45.0)
+
+
+@pytest.mark.parametrize(
+    "changes, field",
+    [
+        ({"params_c_dps": 1e308}, "c_dps"),
+        ({"params_c_dps": -51.0}, "c_dps"),
+        ({"params_a_dps_per_c": 2.0}, "a_dps_per_c"),
+        ({"params_b_deg": -5000.0}, "b_deg"),
+        ({"params_c_dps": True}, "c_dps"),
+        ({"params_c_dps": "0.1"}, "c_dps"),
+        ({"params_d": 1.0}, "params"),
+        ({"cov": [[0.0] * 3] * 3}, "cov"),
+        ({"cov": [[1e200, 0, 0], [0, 1, 0], [0, 0, 1]]}, "cov"),
+        ({"cov": [[1, 2, 0], [2, 1, 0], [0, 0, 1]]}, "cov"),
+        ({"cov": [[1e-6, 0, 0], [0, 0.5, 0], [1e-3, 0, 1e-3]]}, "cov"),
+        ({"cov": [[True, 0, 0], [0, 1, 0], [0, 0, 1]]}, "cov"),
+        ({"temp_range_c": [50.0, 20.0]}, "temp_range_c"),
+        ({"temp_range_c": [-500.0, 20.0]}, "temp_range_c"),
+        ({"temp_range_c": [20.0, 30.0, 40.0]}, "temp_range_c"),
+        ({"samples": -5}, "samples"),
+        ({"samples": True}, "samples"),
+        ({"samples": 1.5}, "samples"),
+        ({"updates": 10**6}, "updates"),
+        ({"estimator": 3}, "estimator"),
+        ({"estimator": ""}, "estimator"),
+        ({"created": "yesterday"}, "created"),
+        ({"software": ["gyrodrift"]}, "software"),
+        ({"version": True}, "version"),
+        ({"colour": "red"}, "colour"),
+    ],
+)
+def test_absurd_profiles_are_refused_naming_the_field(tmp_path, changes, field):
+    path = write_profile(tmp_path / "dev.json", profile_json(**changes))
+    with pytest.raises(ConfigError) as info:
+        load_profile(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and field in message and "\n" not in message, message
+
+
+@pytest.mark.parametrize(
+    "content",
+    ["[" * 100_000 + "]" * 100_000, '{"samples": ' + "9" * 5000 + "}", b"\xff\xfe{\x00}\x00", "", "null"],
+)
+def test_unreadable_profiles_are_config_errors(tmp_path, content):
+    path = tmp_path / "p.json"
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    with pytest.raises(ConfigError, match=r"p\.json: "):
+        load_profile(path)
+
+
+def test_cli_refuses_an_absurd_profile_before_running(tmp_path, tiny_log, capsys):
+    prof = write_profile(tmp_path / "dev.json", profile_json(params_c_dps=1e308))
+    out = tmp_path / "o.csv"
+    assert main(["compensate", str(tiny_log), "-o", str(out), "--profile", str(prof), "-q"]) == 2
+    one_line_error(capsys.readouterr().err, "dev.json", "c_dps")
+    assert not out.exists()
+
+
+def test_profile_notes_for_another_estimator_or_temperature_range():
+    from gyrodrift.profile import profile_notes
+
+    prof = Profile((0.02, 3.0, -0.5), ((1e-6, 0, 0), (0, 0.5, 0), (0, 0, 1e-3)), (20.0, 45.0), 10, 1,
+                   "stkf", "2024-05-01T12:00:00+00:00", "gyrodrift 1.0.0")
+    assert profile_notes(prof, estimator="stkf", temp_range_c=(21.0, 44.0)) == []
+    assert profile_notes(prof, estimator="stkf", temp_range_c=(19.0, 46.5)) == []  # within the margin
+    notes = profile_notes(prof, estimator="adaptive")
+    assert len(notes) == 1 and "'stkf'" in notes[0] and "'adaptive'" in notes[0]
+    notes = profile_notes(prof, estimator="stkf", temp_range_c=(30.0, 60.0))
+    assert len(notes) == 1 and "20.0 to 45.0 degC" in notes[0] and "60.0" in notes[0]
+    assert profile_notes(prof, temp_range_c=(math.inf, -math.inf)) == []  # no temperature seen
+
+
+def test_cli_warns_on_another_estimator_and_temperature_range(tmp_path, tiny_log, capsys):
+    # tiny_log runs at 25..26.2 degC (synthetic_log); the profile was learned at 0..5 degC by stkf
+    prof = write_profile(tmp_path / "dev.json", profile_json(estimator="stkf", temp_range_c=[0.0, 5.0]))
+    assert main(["compensate", str(tiny_log), "-o", str(tmp_path / "o.csv"), "--profile", str(prof), "-q"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and all(line.startswith("gyrodrift: warning: ") and "dev.json" in line for line in err)
+    assert "'stkf'" in err[0] and "'adaptive'" in err[0]
+    assert "0.0 to 5.0 degC" in err[1]
+    # a matching profile warns of nothing
+    ok = write_profile(tmp_path / "ok.json", profile_json(estimator="stkf", temp_range_c=[20.0, 40.0]))
+    assert main(["compensate", str(tiny_log), "-o", str(tmp_path / "o.csv"), "--profile", str(ok), "-q",
+                 "--estimator", "stkf"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    "params, cov, field",
+    [
+        ((0.02, 3.0, math.nan), ((1e-6, 0, 0), (0, 0.5, 0), (0, 0, 1e-3)), "c_dps"),
+        ((0.02, 3.0, 0.1), ((0.0, 0, 0), (0, 0.0, 0), (0, 0, 0.0)), "cov"),  # an estimator that learns nothing
+    ],
+)
+def test_save_profile_refuses_what_load_profile_refuses(tmp_path, params, cov, field):
+    bad = Profile(params, cov, (20.0, 45.0), 10, 1, "adaptive", "2024-05-01T12:00:00+00:00", "gyrodrift 1.0.0")
+    path = tmp_path / "dev.json"
+    with pytest.raises(ConfigError, match=f"dev.json: .*{field}.*nothing was saved"):
+        save_profile(bad, path)
+    assert not path.exists()
+
+
 # --------------------------------------------------------------------------- fuzzing
 
 #: Settings names the fuzzer draws keys from (with a few unknown ones).
@@ -270,3 +411,51 @@ def test_fuzz_config_from_dict(values):
         return
     _check_config(cfg)
 
+
+_json_scalars = st.one_of(
+    st.none(), st.booleans(), st.integers(min_value=-(2**80), max_value=2**80),
+    st.floats(allow_nan=True, allow_infinity=True), st.floats(min_value=-2.0, max_value=2.0), st.text(max_size=10),
+)
+_json_values = st.recursive(
+    _json_scalars, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
+    max_leaves=12,
+)
+_PROFILE_FIELDS = list(profile_json()) + ["params_a_dps_per_c", "params_b_deg", "params_c_dps", "extra"]
+
+
+def _check_profile_file(path: Path) -> None:
+    try:
+        prof = load_profile(path)
+    except ConfigError as err:
+        assert str(err).startswith(str(path)) and "\n" not in str(err), str(err)
+        return
+    assert isinstance(prof, Profile)
+    assert all(math.isfinite(v) for v in prof.params)
+    cov = np.array(prof.cov)
+    assert np.all(np.isfinite(cov)) and np.linalg.eigvalsh(0.5 * (cov + cov.T)).min() > 0
+    warm = warm_config(prof)
+    p0 = np.array(warm.kalman.p0_cov)
+    assert np.all(np.isfinite(p0)) and np.linalg.eigvalsh(p0).min() > 0
+    assert np.all(np.isfinite(warm.kalman.x0))
+
+
+@FUZZ
+@given(st.binary(max_size=400))
+def test_fuzz_profile_loader_bytes(data):
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "fuzz.json"
+        path.write_bytes(data)
+        _check_profile_file(path)
+
+
+@FUZZ
+@given(st.dictionaries(st.sampled_from(_PROFILE_FIELDS), _json_values, max_size=4),
+       st.lists(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=3, max_size=3), min_size=3,
+                max_size=3) | st.none())
+def test_fuzz_profile_loader_json(changes, cov):
+    data = profile_json(**changes)
+    if cov is not None:
+        data["cov"] = cov
+    with tempfile.TemporaryDirectory() as d:
+        path = write_profile(Path(d) / "fuzz.json", data)
+        _check_profile_file(path)

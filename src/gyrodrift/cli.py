@@ -97,18 +97,29 @@ def _bar(desc: str):
     return lambda iterable, total: progress_iter(iterable, total, desc)
 
 
+def _warn(source, notes) -> None:
+    """Print each note as one warning line on stderr, naming its ``source`` file."""
+    for note in notes:
+        print(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
+
+
 def _cmd_compensate(args) -> int:
-    from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
+    from gyrodrift.profile import load_profile, profile_from_run, profile_notes, save_profile, warm_config
 
     from gyrodrift.pipeline import compensate_file
 
     check_output_path(args.input, args.output)
     cfg = _config(args)
+    profile = None
     if args.profile:
-        cfg = warm_config(load_profile(args.profile), cfg)
+        profile = load_profile(args.profile)
+        _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
+        cfg = warm_config(profile, cfg)
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
                             smooth=args.smooth)
+    if profile is not None:  # the temperatures of the run are known once it is read
+        _warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
