@@ -299,6 +299,114 @@ def test_save_profile_refuses_what_load_profile_refuses(tmp_path, params, cov, f
     assert not path.exists()
 
 
+# --------------------------------------------------------------------------- temporary files
+
+TMP_NAME = re.compile(r"^\.(?P<name>.+)\.gyrodrift-tmp-(?P<host>[0-9a-f]{8})-(?P<pid>[0-9]+)-[0-9a-f]{12}$")
+
+_HOLDER = """
+import sys, time
+from gyrodrift._atomic import atomic_output
+with atomic_output(sys.argv[1]) as fh:
+    fh.write(b"partial")
+    fh.flush()
+    print("ready", flush=True)
+    time.sleep(120)
+"""
+
+
+def _child(code: str, *args: str) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env)
+    line = proc.stdout.readline()
+    if line.strip() != "ready":
+        proc.kill()
+        raise AssertionError(f"child did not start: {line!r} {proc.stderr.read()}")
+    return proc
+
+
+def _hidden(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+def test_temporary_file_names_the_output_and_the_process(tmp_path):
+    from gyrodrift._atomic import atomic_output
+
+    with atomic_output(tmp_path / "out.csv") as fh:
+        fh.write(b"x")
+        (name,) = _hidden(tmp_path)
+    match = TMP_NAME.match(name)
+    assert match and match["name"] == "out.csv" and int(match["pid"]) == os.getpid()
+    assert _hidden(tmp_path) == [] and (tmp_path / "out.csv").read_bytes() == b"x"
+
+
+def test_stale_temporary_of_a_killed_run_is_removed_by_the_next_write(tmp_path):
+    from gyrodrift._atomic import write_bytes_atomic
+
+    out = tmp_path / "out.csv"
+    proc = _child(_HOLDER, str(out))
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(30)
+    proc.stdout.close()
+    proc.stderr.close()
+    (stale,) = _hidden(tmp_path)  # SIGKILL cannot be caught: the temporary stays behind ...
+    assert int(TMP_NAME.match(stale)["pid"]) == proc.pid and (tmp_path / stale).read_bytes() == b"partial"
+    # ... beside one of a live process (this one) and one of another output, both to be kept
+    live = re.sub(r"-[0-9]+-([0-9a-f]{12})$", rf"-{os.getpid()}-\1", stale)
+    other = stale.replace(".out.csv.", ".other.csv.", 1)
+    for name in (live, other):
+        (tmp_path / name).write_bytes(b"keep")
+    write_bytes_atomic(out, b"whole")  # ... and the next write of the same output removes it
+    assert out.read_bytes() == b"whole"
+    assert _hidden(tmp_path) == sorted([live, other])
+
+
+def test_very_long_output_name_still_gets_a_temporary(tmp_path):
+    from gyrodrift._atomic import write_bytes_atomic
+
+    out = tmp_path / ("x" * 250 + ".csv")
+    write_bytes_atomic(out, b"ok")
+    assert out.read_bytes() == b"ok" and _hidden(tmp_path) == []
+
+
+_BLOCKING_CLI = """
+import sys, time
+import gyrodrift.io
+from gyrodrift._atomic import atomic_output
+from gyrodrift.cli import main
+
+
+def blocking_write(df, path, **kwargs):
+    with atomic_output(path) as fh:
+        fh.write(b"partial")
+        fh.flush()
+        print("ready", flush=True)
+        time.sleep(120)
+
+
+gyrodrift.io.write_table = blocking_write
+sys.exit(main(["simulate", "static", "-o", sys.argv[1], "--duration-s", "60", "--fs-hz", "10"]))
+"""
+
+
+@pytest.mark.parametrize("sig, code, word", [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")])
+def test_sigterm_cleans_up_like_sigint(tmp_path, sig, code, word):
+    out = tmp_path / "sim.csv"
+    proc = _child(_BLOCKING_CLI, str(out))
+    assert len(_hidden(tmp_path)) == 1
+    proc.send_signal(sig)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == code, stderr
+    assert stderr == f"gyrodrift: {word}\n"
+    assert _hidden(tmp_path) == [] and not out.exists()
+
+
+def test_main_restores_the_sigterm_handler(tmp_path, capsys):
+    before = signal.getsignal(signal.SIGTERM)
+    main(["simulate", "nope", "-o", str(tmp_path / "x.csv")])
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
 # --------------------------------------------------------------------------- fuzzing
 
 #: Settings names the fuzzer draws keys from (with a few unknown ones).

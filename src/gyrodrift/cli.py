@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 
+from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
@@ -426,18 +428,66 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received while :func:`main` runs.
+
+    A subclass of :class:`KeyboardInterrupt`, so that every clean-up that runs when the
+    user presses Ctrl-C (SIGINT) runs for SIGTERM too: temporary output files are
+    removed (:mod:`gyrodrift._atomic`), background threads and worker pools stop.
+    """
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
+
+@contextmanager
+def _sigterm_interrupts():
+    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread; the
+    handler in force before is restored afterwards. Nothing changes outside the main
+    thread (where Python cannot install handlers) or without SIGTERM."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except (ValueError, OSError, AttributeError):
+        yield
+        return
+    try:
+        yield
+    finally:
+        # None: a handler installed outside Python, which cannot be put back; the default then
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return the exit code (2 for bad input, with one line on stderr)."""
+    """Run the command line and return the exit code.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success; 2 for bad input or usage, with one ``gyrodrift: error:`` line on
+        stderr; 130 when interrupted (SIGINT) and 143 when terminated (SIGTERM), after
+        removing the partial output; 1 when out of memory (and as a command documents,
+        e.g. ``batch`` when some logs failed).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 2
     try:
-        return args.func(args)
+        with _sigterm_interrupts():
+            return args.func(args)
     except GyroDriftError as err:
         print(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
+    except Terminated:
+        print("gyrodrift: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("gyrodrift: interrupted", file=sys.stderr)
         return 130
