@@ -407,6 +407,46 @@ def test_main_restores_the_sigterm_handler(tmp_path, capsys):
     assert signal.getsignal(signal.SIGTERM) is before
 
 
+# --------------------------------------------------------------------------- batch summary
+
+
+def test_batch_summary_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypatch, capsys):
+    from gyrodrift.fleet import batch_command
+    from test_fleet import _parse
+
+    names = ["=1+2.csv", "+SUM(A1).csv", "-2+3.csv", "@cmd.csv", "plain.csv"]
+    for name in names:
+        (tmp_path / name).write_bytes(b"\x00\x01 not a log")
+    monkeypatch.chdir(tmp_path)
+    assert batch_command(_parse(["batch", "*.csv", "-o", "out", "--workers", "1"])) == 1
+    capsys.readouterr()
+    with open(tmp_path / "out" / "summary.csv", newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert sorted(r["file"] for r in rows) == sorted(
+        ("'" + n if n[0] in "=+-@" else n) for n in names
+    )
+    for row in rows:
+        for value in row.values():
+            assert not value or value[0] not in "=+-@", row
+        assert row["error"].startswith("'") == (row["file"] != "plain.csv")
+
+
+def test_summary_numbers_stay_numbers(tmp_path):
+    from gyrodrift.fleet import SUMMARY_COLUMNS, write_summary
+
+    row = {c: -1.5 for c in SUMMARY_COLUMNS}
+    row.update(file="=cmd|' /C calc'!A0", status="error", error="-bad: \t@x", rows=3, updates=None)
+    df = pd.DataFrame([row], columns=list(SUMMARY_COLUMNS))
+    df["rows"] = pd.array([3], dtype="Int64")
+    df["updates"] = pd.array([None], dtype="Int64")
+    write_summary(df, tmp_path / "summary.csv")
+    text = (tmp_path / "summary.csv").read_text(encoding="utf-8")
+    back = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False, na_values=[""])
+    assert back.loc[0, "file"] == "'=cmd|' /C calc'!A0" and back.loc[0, "error"] == "'-bad: \t@x"
+    assert back.loc[0, "a"] == -1.5 and back.loc[0, "rows"] == 3 and ",-1.5," in text
+    assert df.loc[0, "file"] == "=cmd|' /C calc'!A0"  # the table itself is left as it was
+
+
 # --------------------------------------------------------------------------- fuzzing
 
 #: Settings names the fuzzer draws keys from (with a few unknown ones).
