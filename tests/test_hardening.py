@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import synthetic_log
@@ -113,6 +113,11 @@ def test_utf8_bom_is_accepted(tmp_path):
         ("[gate]\nmax_gap_s = nan\n", ["[gate]", "max_gap_s", "nan"]),
         ("stack_depth = 99999999999999999999\n", ["stack_depth", "64-bit"]),
         ("[kalman]\nfadding = 1.1\n", ["[kalman]", "fadding", "unknown"]),
+        ("[kalman]\nx0 = [0.0, 0.0, 1e308]\n", ["[kalman]", "x0", "plausible"]),
+        ("[kalman]\np0_sd = [1e300, 5.0, 5.0]\n", ["[kalman]", "p0_sd", "plausible"]),
+        ("[kalman]\nq_sd = [1e-4, 2000.0, 1e-3]\n", ["[kalman]", "q_sd", "plausible"]),
+        ("[kalman]\np0_cov = [[1e300, 0, 0], [0, 1, 0], [0, 0, 1]]\n", ["[kalman]", "p0_cov", "plausible"]),
+        ("[adaptive]\nq_sd = [1e-4, 0.05, 60.0]\n", ["[adaptive]", "q_sd", "plausible"]),
         ("[\"kalman\"]\n\"fad\\nding\" = 1.1\n", ["[kalman]", "'fad\\nding'", "unknown"]),
     ],
 )
@@ -449,17 +454,19 @@ def test_summary_numbers_stay_numbers(tmp_path):
 
 # --------------------------------------------------------------------------- fuzzing
 
-#: Settings names the fuzzer draws keys from (with a few unknown ones).
-_TOP_KEYS = [
-    "update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "gyro_noise_dps_rthz",
-    "estimator", "measurement", "unknown_key",
-]
-_TABLE_KEYS = {
-    "kalman": ["fading", "x0", "p0_sd", "q_sd", "max_sd", "p0_cov"],
-    "gate": ["turn_rate_dps", "turn_window_s", "interference_deg", "max_gap_s", "relock_intervals"],
-    "temp_rate": ["window_s", "bin_s"],
-    "adaptive": ["stacked", "edge_s", "zaru", "lambda_max", "innovation_window", "q_sd", "a2_sd"],
-    "fusion": ["heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s", "magnetic_gates"],
+def _settings_defaults() -> dict:
+    """Table name (None: top level) -> the default settings object of that table."""
+    from gyrodrift.fusion import FusionConfig
+
+    cfg = CompensatorConfig()
+    return {None: cfg, "kalman": cfg.kalman, "gate": cfg.gate, "temp_rate": cfg.temp_rate,
+            "adaptive": cfg.adaptive, "fusion": FusionConfig()}
+
+
+#: Table name (None: top level) -> {setting: default}, the settings the fuzzer sets.
+_SETTINGS = {
+    table: {f: getattr(obj, f) for f in vars(obj) if table is not None or f not in _settings_defaults()}
+    for table, obj in _settings_defaults().items()
 }
 
 _scalars = st.one_of(
@@ -473,16 +480,46 @@ _scalars = st.one_of(
     st.datetimes(timezones=st.none() | st.just(dt.timezone.utc)),
     st.dates(),
 )
-_values = st.recursive(_scalars, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=5), inner, max_size=3), max_leaves=12)
+#: Any TOML-like value: scalars, arrays and inline tables.
+_values = st.recursive(
+    _scalars, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=5), inner, max_size=3),
+    max_leaves=12,
+)
+#: Numbers of every kind a number setting may meet, in range or not.
+_numbers = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.floats(min_value=1e-3, max_value=100.0),
+    st.integers(min_value=-3, max_value=100), st.sampled_from([0.0, 1.0, 1e-300, 1e300, -1.0]),
+)
+
+
+def _typed(default):
+    """Values of the type of a setting whose default is ``default`` (None: any value)."""
+    if isinstance(default, bool):
+        return st.booleans()
+    if isinstance(default, int):
+        return st.integers(min_value=-3, max_value=200) | st.integers(min_value=-(2**65), max_value=2**65)
+    if isinstance(default, float):
+        return _numbers
+    if isinstance(default, str):
+        return st.sampled_from(["adaptive", "stkf", "stkf-s1", "kf", "lsm", "fixed", "poly3", "endpoints",
+                                "slope"]) | st.text(max_size=8)
+    if isinstance(default, tuple) and all(isinstance(v, float) for v in default):
+        return st.lists(_numbers, min_size=len(default), max_size=len(default))
+    return st.lists(st.lists(_numbers, min_size=3, max_size=3), min_size=3, max_size=3) | _values
 
 
 @st.composite
 def toml_dicts(draw) -> dict:
-    """Dicts as tomllib returns them, with mostly known keys and any TOML-like values."""
-    out = {k: draw(_values) for k in draw(st.lists(st.sampled_from(_TOP_KEYS), max_size=4, unique=True))}
-    for table in draw(st.lists(st.sampled_from(list(_TABLE_KEYS)), max_size=3, unique=True)):
-        keys = draw(st.lists(st.sampled_from(_TABLE_KEYS[table] + ["nope"]), max_size=4, unique=True))
-        out[table] = {k: draw(_values) for k in keys} if draw(st.booleans()) or not keys else draw(_values)
+    """Dicts as tomllib returns them: known keys (and an unknown one now and then), most
+    values of the declared type (in range or not), the others any TOML-like value."""
+
+    def table(settings: dict) -> dict:
+        keys = draw(st.lists(st.sampled_from(sorted(settings) + ["nope"]), max_size=4, unique=True))
+        return {k: draw(_typed(settings.get(k)) if draw(st.integers(0, 9)) < 8 else _values) for k in keys}
+
+    out = table(_SETTINGS[None])
+    for name in draw(st.lists(st.sampled_from([t for t in _SETTINGS if t]), max_size=3, unique=True)):
+        out[name] = table(_SETTINGS[name]) if draw(st.integers(0, 9)) < 8 else draw(_values)
     return out
 
 
@@ -502,12 +539,22 @@ def _toml_value(v) -> str:
 
 
 def _toml_text(values: dict) -> str:
-    lines = [f"{k} = {_toml_value(v)}" for k, v in values.items() if not (k in _TABLE_KEYS and isinstance(v, dict))]
+    lines = [f"{k} = {_toml_value(v)}" for k, v in values.items() if not (k in _SETTINGS and isinstance(v, dict))]
     for k, v in values.items():
-        if k in _TABLE_KEYS and isinstance(v, dict):
+        if k in _SETTINGS and isinstance(v, dict):
             lines.append(f"[{k}]")
             lines += [f"{json.dumps(kk, ensure_ascii=False)} = {_toml_value(x)}" for kk, x in v.items()]
     return "\n".join(lines) + "\n"
+
+
+def _kind(err: ConfigError) -> str:
+    """The kind of a refusal, for hypothesis' statistics (file, values and numbers left out)."""
+    text = str(err).split(": ", 1)[-1]
+    for kind in ("not UTF-8", "not valid TOML", "unknown setting", "unknown field", "must be a table", "is refused",
+                 "must be a", "outside the plausible", "not positive definite", "not symmetric"):
+        if kind in text:
+            return f"refused: {kind}"
+    return "refused: " + re.sub(r"[0-9][-+0-9.e]*", "N", re.split(r"[;(]", text)[0])[:60]
 
 
 def _check_config(cfg) -> None:
@@ -532,13 +579,39 @@ def _load_config_bytes(data: bytes):
             cfg = load_config(path)
         except ConfigError as err:
             assert str(err).startswith(str(path)) and "\n" not in str(err), str(err)
+            event(_kind(err))
             return None
+    event("accepted")
     _check_config(cfg)
     return cfg
 
 
+@st.composite
+def edited(draw, text: str) -> bytes:
+    """``text`` as UTF-8 with a few bytes inserted, replaced or cut (a damaged file)."""
+    data = bytearray(text.encode("utf-8"))
+    for _ in range(draw(st.integers(0, 3))):
+        at = draw(st.integers(0, len(data)))
+        how = draw(st.sampled_from(["insert", "replace", "cut"]))
+        if how == "insert":
+            data[at:at] = draw(st.binary(min_size=1, max_size=3))
+        elif how == "replace" and at < len(data):
+            data[at] = draw(st.integers(0, 255))
+        else:
+            del data[at:at + draw(st.integers(1, 8))]
+    return bytes(data)
+
+
+#: Bytes of every kind: random, UTF-8 text, and damaged settings files.
+_config_bytes = st.one_of(
+    st.binary(max_size=400),
+    st.text(max_size=200).map(lambda t: t.encode("utf-8")),
+    toml_dicts().flatmap(lambda values: edited(_toml_text(values))),
+)
+
+
 @FUZZ
-@given(st.binary(max_size=400))
+@given(_config_bytes)
 def test_fuzz_config_loader_bytes(data):
     _load_config_bytes(data)
 
@@ -556,7 +629,9 @@ def test_fuzz_config_from_dict(values):
         cfg = config_from_dict(values, where="fuzz.toml")
     except ConfigError as err:
         assert str(err).startswith("fuzz.toml") and "\n" not in str(err), str(err)
+        event(_kind(err))
         return
+    event("accepted")
     _check_config(cfg)
 
 
@@ -564,11 +639,52 @@ _json_scalars = st.one_of(
     st.none(), st.booleans(), st.integers(min_value=-(2**80), max_value=2**80),
     st.floats(allow_nan=True, allow_infinity=True), st.floats(min_value=-2.0, max_value=2.0), st.text(max_size=10),
 )
+#: Any JSON value.
 _json_values = st.recursive(
     _json_scalars, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
     max_leaves=12,
 )
-_PROFILE_FIELDS = list(profile_json()) + ["params_a_dps_per_c", "params_b_deg", "params_c_dps", "extra"]
+
+
+@st.composite
+def _covariances(draw) -> list:
+    """3x3 matrices: ``L L^T`` of a random L (positive semi-definite, of any scale), then
+    perhaps one entry changed."""
+    scale = draw(st.sampled_from([1e-12, 1e-6, 1e-3, 1.0, 1e3, 1e6]))
+    L = np.tril(np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=9, max_size=9))).reshape(3, 3))
+    cov = (scale * (L @ L.T)).tolist()
+    if draw(st.booleans()):
+        cov[draw(st.integers(0, 2))][draw(st.integers(0, 2))] = draw(_numbers)
+    return cov
+
+
+#: Profile field -> values of its JSON type, in range or not (``params_x``: ``params.x``).
+_PROFILE_TYPED = {
+    "format": st.just("gyrodrift-profile") | st.text(max_size=20),
+    "version": st.integers(-1, 3) | st.just(1.0),
+    "software": st.text(max_size=30),
+    "created": st.datetimes().map(lambda t: t.isoformat()) | st.text(max_size=30),
+    "estimator": st.sampled_from(["adaptive", "stkf", "kf", "lsm", "fixed", ""]) | st.text(max_size=12),
+    "params": st.dictionaries(st.sampled_from(["a_dps_per_c", "b_deg", "c_dps", "d"]), _numbers, max_size=4),
+    "params_a_dps_per_c": _numbers | st.floats(-2.0, 2.0),
+    "params_b_deg": _numbers | st.floats(-2000.0, 2000.0),
+    "params_c_dps": _numbers | st.floats(-100.0, 100.0),
+    "cov": _covariances(),
+    "temp_range_c": st.lists(st.floats(-100.0, 200.0) | _numbers, min_size=1, max_size=3),
+    "samples": st.integers(-5, 10**7) | st.integers(min_value=-(2**70), max_value=2**70),
+    "updates": st.integers(-5, 10**5) | st.integers(min_value=-(2**70), max_value=2**70),
+    "extra": _json_values,
+}
+
+
+@st.composite
+def profile_dicts(draw) -> dict:
+    """The valid example profile with a few fields replaced: most by values of their
+    JSON type (in range or not), the others by any JSON value."""
+    changes = {}
+    for field in draw(st.lists(st.sampled_from(sorted(_PROFILE_TYPED)), max_size=3, unique=True)):
+        changes[field] = draw(_PROFILE_TYPED[field] if draw(st.integers(0, 9)) < 8 else _json_values)
+    return profile_json(**changes)
 
 
 def _check_profile_file(path: Path) -> None:
@@ -576,19 +692,31 @@ def _check_profile_file(path: Path) -> None:
         prof = load_profile(path)
     except ConfigError as err:
         assert str(err).startswith(str(path)) and "\n" not in str(err), str(err)
+        event(_kind(err))
         return
+    event("accepted")
     assert isinstance(prof, Profile)
     assert all(math.isfinite(v) for v in prof.params)
     cov = np.array(prof.cov)
-    assert np.all(np.isfinite(cov)) and np.linalg.eigvalsh(0.5 * (cov + cov.T)).min() > 0
+    sd = np.sqrt(np.diag(cov))
+    assert np.all(np.isfinite(cov)) and np.all(sd > 0)
+    assert np.linalg.eigvalsh(0.5 * (cov + cov.T) / np.outer(sd, sd)).min() > 0  # positive definite, scale-free
     warm = warm_config(prof)
     p0 = np.array(warm.kalman.p0_cov)
     assert np.all(np.isfinite(p0)) and np.linalg.eigvalsh(p0).min() > 0
     assert np.all(np.isfinite(warm.kalman.x0))
+    from gyrodrift.profile import profile_notes
+
+    assert all(isinstance(n, str) and "\n" not in n
+               for n in profile_notes(prof, estimator="adaptive", temp_range_c=(-60.0, 150.0)))
 
 
 @FUZZ
-@given(st.binary(max_size=400))
+@given(st.one_of(
+    st.binary(max_size=400),
+    st.text(max_size=200).map(lambda t: t.encode("utf-8")),
+    profile_dicts().flatmap(lambda data: edited(json.dumps(data))),
+))
 def test_fuzz_profile_loader_bytes(data):
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "fuzz.json"
@@ -597,13 +725,8 @@ def test_fuzz_profile_loader_bytes(data):
 
 
 @FUZZ
-@given(st.dictionaries(st.sampled_from(_PROFILE_FIELDS), _json_values, max_size=4),
-       st.lists(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=3, max_size=3), min_size=3,
-                max_size=3) | st.none())
-def test_fuzz_profile_loader_json(changes, cov):
-    data = profile_json(**changes)
-    if cov is not None:
-        data["cov"] = cov
+@given(profile_dicts())
+def test_fuzz_profile_loader_json(data):
     with tempfile.TemporaryDirectory() as d:
         path = write_profile(Path(d) / "fuzz.json", data)
         _check_profile_file(path)

@@ -31,8 +31,13 @@ setting declares before the settings classes check their ranges: a number settin
 takes an integer or a float (not ``true``/``false``, not ``nan``), a whole-number
 setting a 64-bit integer, a switch ``true`` or ``false``, a name a quoted string, and
 a triple such as ``p0_sd`` a list of exactly three numbers. Unknown keys are refused.
-Every problem is a :class:`~gyrodrift.errors.ConfigError` of one line that names the
-file, the table and the key.
+The settings in drift-model units are also checked against physics: ``[kalman]``
+``x0`` must lie within :data:`DRIFT_PARAM_BOUNDS` (``|a| <= 1`` deg/s/degC, ``|b| <=
+1000`` deg, ``|c| <= 50`` deg/s; the bounds of a device profile, see
+:mod:`gyrodrift.profile`), and the standard deviations ``p0_sd``, ``q_sd``, ``max_sd``
+(and those on the diagonal of ``p0_cov``; ``[adaptive] q_sd`` too) within the same
+bounds. Every problem is a :class:`~gyrodrift.errors.ConfigError` of one line that
+names the file, the table and the key.
 """
 
 from __future__ import annotations
@@ -57,12 +62,21 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["MAX_FILE_BYTES", "load_config", "config_from_dict", "load_toml", "apply_settings", "read_utf8"]
+__all__ = [
+    "MAX_FILE_BYTES", "DRIFT_PARAM_BOUNDS", "load_config", "config_from_dict", "load_toml", "apply_settings",
+    "read_utf8",
+]
 
 _TABLES = ("kalman", "gate", "temp_rate", "adaptive", "fusion")
 #: Largest settings or profile file read, bytes (such files are a few hundred bytes).
 MAX_FILE_BYTES = 1 << 20
 _INT64 = (-(2**63), 2**63 - 1)
+#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg) and
+#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
+#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`).
+DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
+#: Per table: the settings that are triples (a, b, c) of drift-model values.
+_DRIFT_TRIPLES = {"kalman": ("x0", "p0_sd", "q_sd", "max_sd"), "adaptive": ("q_sd",)}
 
 
 def _one_line(text) -> str:
@@ -255,7 +269,28 @@ def _declared_types(cls) -> dict:
         return {}
 
 
-def apply_settings(obj, values: dict, where: str):
+def _within_drift_bounds(table: str):
+    """A check for :func:`apply_settings`: the drift-model triples of ``table`` (and the
+    variances of ``[kalman] p0_cov``) within :data:`DRIFT_PARAM_BOUNDS`."""
+    unit = "|a| <= 1 deg/s/degC, |b| <= 1000 deg, |c| <= 50 deg/s"
+
+    def check(converted: dict, where: str) -> None:
+        for key in _DRIFT_TRIPLES.get(table, ()):
+            v = converted.get(key)
+            if v is not None and any(abs(x) > b for x, b in zip(v, DRIFT_PARAM_BOUNDS)):
+                raise ConfigError(f"{where}: {key} = {_show(v)} is outside the plausible drift model ({unit})")
+        p0 = converted.get("p0_cov") if table == "kalman" else None
+        if p0 is not None and len(p0) == 3 and all(len(row) == 3 for row in p0):
+            if any(abs(p0[i][i]) > b * b for i, b in enumerate(DRIFT_PARAM_BOUNDS)):
+                raise ConfigError(
+                    f"{where}: p0_cov = {_show(p0)} has a variance outside the plausible drift model "
+                    f"(standard deviations {unit})"
+                )
+
+    return check
+
+
+def apply_settings(obj, values: dict, where: str, check=None):
     """Copy of a frozen settings dataclass with ``values`` replaced.
 
     Parameters
@@ -266,6 +301,9 @@ def apply_settings(obj, values: dict, where: str):
         Setting name -> value, as read from TOML.
     where : str
         The file and table, for the messages (``"run.toml [kalman]"``).
+    check : callable, optional
+        ``check(converted, where)``, called with the values converted to their declared
+        types before the settings class sees them; raises :class:`ConfigError`.
 
     Returns
     -------
@@ -297,6 +335,8 @@ def apply_settings(obj, values: dict, where: str):
             now = getattr(obj, key)
             example = "" if now is None or dataclasses.is_dataclass(now) else f", e.g. {key} = {_show(now)}"
             raise ConfigError(f"{where}: {key} = {_show(value)} is refused: give {bad.expected}{example}") from None
+    if check is not None:
+        check(converted, where)
     try:
         return replace(obj, **converted)
     except ConfigError as err:
@@ -341,7 +381,7 @@ def config_from_dict(values: dict, *, where: str = "config", base: CompensatorCo
                 start = apply_settings(base, {k: v for k, v in top.items() if k == "estimator"}, where).fusion_settings
             else:
                 start = getattr(base, name)
-            nested[name] = apply_settings(start, values[name], f"{where} [{name}]")
+            nested[name] = apply_settings(start, values[name], f"{where} [{name}]", _within_drift_bounds(name))
     return apply_settings(base, {**top, **nested}, where)
 
 

@@ -26,8 +26,9 @@ field by field, on loading and before saving; anything else is a
   the bounds lie ten times and more above that, so that only corrupt or hand-edited
   values are refused (``a = 1`` is already 210 deg/s of drift across the accepted
   temperatures; ``b = 1000`` is 10 deg/s at a heating rate of 0.01 degC/s);
-* the covariance symmetric (to 1e-6 of ``sqrt(P_ii P_jj)``) and positive definite,
-  each standard deviation within the same bound as its parameter;
+* the covariance symmetric (to 1e-6 of ``sqrt(P_ii P_jj)``) and positive definite
+  (the smallest eigenvalue of its correlation matrix above 1e-12: no correlation of 1
+  to within rounding), each standard deviation within the same bound as its parameter;
 * the temperature range ordered and inside
   :data:`gyrodrift.conventions.TEMP_RANGE_C`; ``updates <= samples``; ``created`` an
   ISO 8601 date and time.
@@ -54,7 +55,7 @@ import numpy as np
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.compensate import CompensatorConfig
-from gyrodrift.config import read_utf8
+from gyrodrift.config import DRIFT_PARAM_BOUNDS, read_utf8
 from gyrodrift.conventions import TEMP_RANGE_C
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators._kalman import cap_covariance
@@ -69,7 +70,7 @@ VERSION = 1
 _WARM_SD_FACTOR = 2.0
 #: Largest plausible magnitude of each drift parameter, and of its standard deviation
 #: (module notes): a deg/s/degC, b deg, c deg/s, by their names in the file.
-PARAM_BOUNDS = {"a_dps_per_c": 1.0, "b_deg": 1000.0, "c_dps": 50.0}
+PARAM_BOUNDS = dict(zip(("a_dps_per_c", "b_deg", "c_dps"), DRIFT_PARAM_BOUNDS))
 #: How far (degC) a run's temperatures may reach beyond a profile's range before
 #: :func:`profile_notes` says so: readings of the same conditions differ by noise and
 #: quantisation (a few tenths of a degree).
@@ -78,6 +79,9 @@ _FIELDS = ("format", "version", "software", "created", "estimator", "params", "c
            "updates")
 _LONGEST_TEXT = 200  # characters of software, created and estimator
 _SYMMETRY_RTOL = 1e-6
+# smallest eigenvalue of the correlation matrix of a positive definite covariance: below,
+# a correlation is 1 to within rounding
+_MIN_CORR_EIGENVALUE = 1e-12
 _INT64_MAX = 2**63 - 1
 
 
@@ -261,10 +265,9 @@ def _covariance(v) -> tuple[tuple[float, float, float], ...]:
             raise _Refused(f"cov gives {name} a standard deviation of {s:g}, above the plausible {bound:g}")
     if not np.all(np.abs(cov - cov.T) <= _SYMMETRY_RTOL * np.outer(sd, sd)):
         raise _Refused("cov is not symmetric")
-    try:
-        np.linalg.cholesky(0.5 * (cov + cov.T))
-    except np.linalg.LinAlgError:
-        raise _Refused(not_pd) from None
+    corr = 0.5 * (cov + cov.T) / np.outer(sd, sd)  # scale-free: variances of 1e-12 and 1e3 side by side
+    if not np.linalg.eigvalsh(corr).min() > _MIN_CORR_EIGENVALUE:
+        raise _Refused(not_pd)
     return tuple(map(tuple, rows))
 
 
