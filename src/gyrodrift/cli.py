@@ -328,7 +328,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    c.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
+    c.add_argument(
+        "--profile", type=Path, metavar="DEV.json",
+        help="warm-start from a saved device profile (checked on loading; a warning on stderr, even with -q, "
+        "when it was saved by another estimator or the log's temperatures reach beyond its range)",
+    )
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
     c.add_argument(
         "--scale-factor", action="store_true",
@@ -431,9 +435,9 @@ def build_parser() -> argparse.ArgumentParser:
 class Terminated(KeyboardInterrupt):
     """SIGTERM received while :func:`main` runs.
 
-    A subclass of :class:`KeyboardInterrupt`, so that every clean-up that runs when the
-    user presses Ctrl-C (SIGINT) runs for SIGTERM too: temporary output files are
-    removed (:mod:`gyrodrift._atomic`), background threads and worker pools stop.
+    A subclass of :class:`KeyboardInterrupt`, so that every clean-up that runs on
+    Ctrl-C (SIGINT) runs for SIGTERM too; the partial output file is removed
+    (:mod:`gyrodrift._atomic`).
     """
 
 
