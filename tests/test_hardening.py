@@ -19,7 +19,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +31,7 @@ from conftest import synthetic_log
 from gyrodrift.cli import main
 from gyrodrift.compensate import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
-from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.errors import ConfigError
 from gyrodrift.profile import Profile, load_profile, save_profile, warm_config
 
 SRC = Path(__file__).resolve().parents[1] / "src"
