@@ -177,3 +177,25 @@ def test_out_of_memory_is_one_clear_line(small_log, tmp_path, monkeypatch, capsy
     err = capsys.readouterr().err
     assert err.startswith("gyrodrift: error: compensate: out of memory") and "Traceback" not in err
     assert "stream in constant memory" in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_settings_or_profile_file_is_one_line_from_the_real_command(small_log, tmp_path):
+    """Through ``python -m gyrodrift``: a non-UTF-8 --config and an absurd --profile each
+    give exit 2 and one stderr line naming the file, no traceback."""
+    cfg = tmp_path / "latin1.toml"
+    cfg.write_bytes("init_s = 20.0  # r\u00e9glage\n".encode("latin-1"))
+    res = run_module("compensate", str(small_log), "-o", str(tmp_path / "o.csv"), "--config", str(cfg))
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
+    assert "latin1.toml" in res.stderr and "UTF-8" in res.stderr
+    prof = tmp_path / "dev.json"
+    prof.write_text(
+        '{"format": "gyrodrift-profile", "version": 1, "software": "gyrodrift 1.0.0", '
+        '"created": "2024-05-01T12:00:00+00:00", "estimator": "adaptive", '
+        '"params": {"a_dps_per_c": 0.02, "b_deg": 3.0, "c_dps": 1e308}, '
+        '"cov": [[1e-6, 0, 0], [0, 0.5, 0], [0, 0, 1e-3]], "temp_range_c": [20.0, 45.0], '
+        '"samples": 100, "updates": 3}'
+    )
+    res = run_module("compensate", str(small_log), "-o", str(tmp_path / "o.csv"), "--profile", str(prof))
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
+    assert "dev.json" in res.stderr and "c_dps" in res.stderr
+    assert not (tmp_path / "o.csv").exists()

@@ -44,7 +44,7 @@ def test_round_trip_and_warm_start_helps(tmp_path):
         ("{not json", "cannot read it as JSON"),
         ('{"format": "something-else", "version": 1}', "'format' is not"),
         ('{"format": "gyrodrift-profile", "version": 99}', "version 99 is not supported"),
-        ('{"format": "gyrodrift-profile", "version": 1, "params": {}}', "missing or malformed"),
+        ('{"format": "gyrodrift-profile", "version": 1, "params": {}}', r"missing field\(s\) software"),
     ],
 )
 def test_bad_or_foreign_profile(tmp_path, content, match):

@@ -1,28 +1,118 @@
-"""Atomic output files: every file gyrodrift writes appears whole or not at all."""
+"""Atomic output files: every file gyrodrift writes appears whole or not at all.
+
+A file is written to a hidden temporary file beside it, then moved onto its name in one
+step. The temporary is named ``.NAME.gyrodrift-tmp-HOST-PID-RANDOM``: NAME the output's
+file name (shortened if the whole would exceed 255 bytes), HOST eight hex digits of a
+hash of this machine's host name, PID the writing process and RANDOM twelve hex digits.
+A failed write removes its temporary, and so does an interrupt (SIGINT, and SIGTERM
+with the command line, which turns it into the same exception). A process killed
+outright (SIGKILL, power loss) cannot; the next write of the same output on the same
+host therefore removes the temporaries of that output whose process is no longer
+alive (:func:`remove_stale_temporaries`). Temporaries of other outputs, of live
+processes and of other hosts (a shared file system) are left alone; so is everything
+on systems without POSIX process signals, where liveness is not checked.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import os
+import re
 import secrets
+import socket
 import threading
 from contextlib import contextmanager
+from functools import lru_cache
 from pathlib import Path
 
 from gyrodrift.errors import ConfigError
 
-__all__ = ["atomic_output", "atomic_path", "write_bytes_atomic"]
+__all__ = ["atomic_output", "atomic_path", "write_bytes_atomic", "remove_stale_temporaries"]
+
+_TAG = ".gyrodrift-tmp-"
+_NAME_MAX = 255  # bytes of a file name on common file systems
+# what follows NAME: the tag, host, a PID of up to 10 digits, random part and separators
+_SUFFIX_BYTES = len(_TAG) + 8 + 1 + 10 + 1 + 12
+_OWN_SUFFIX = re.compile(r"([0-9]{1,10})-[0-9a-f]{12}")
+
+
+@lru_cache(maxsize=1)
+def _host_tag() -> str:
+    """Eight hex digits that tell this host's temporaries from another's."""
+    return hashlib.blake2b(socket.gethostname().encode("utf-8", "surrogateescape"), digest_size=4).hexdigest()
+
+
+def _prefix(path: Path) -> str:
+    """``.NAME.gyrodrift-tmp-HOST-``: the start of every temporary of ``path`` on this host."""
+    name = path.name
+    while len(os.fsencode(name)) > _NAME_MAX - 1 - _SUFFIX_BYTES:
+        name = name[:-1]
+    return f".{name}{_TAG}{_host_tag()}-"
+
+
+def _pid_alive(pid: int) -> bool:
+    """False only when no process ``pid`` exists (POSIX); True when unsure."""
+    if os.name != "posix" or pid <= 0:
+        return True
+    try:
+        os.kill(pid, 0)  # signal 0: an existence check, nothing is sent
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # EPERM: it exists, another user's
+        return True
+    return True
+
+
+def remove_stale_temporaries(path) -> list[Path]:
+    """Remove the temporaries of ``path`` left by dead processes on this host.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file (not the temporary).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed. A temporary whose process is alive (or is a zombie not yet
+        reaped by its parent), of another output or another host, or that cannot be
+        removed, stays.
+    """
+    path = Path(path)
+    prefix = _prefix(path)
+    removed = []
+    try:
+        entries = list(os.scandir(path.parent))
+    except OSError:
+        return removed
+    for entry in entries:
+        if not entry.name.startswith(prefix):
+            continue
+        match = _OWN_SUFFIX.fullmatch(entry.name[len(prefix):])
+        if match is None or int(match[1]) == os.getpid() or _pid_alive(int(match[1])):
+            continue
+        try:
+            if entry.is_file(follow_symlinks=False):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        except OSError:  # removed meanwhile by another run, or not ours to remove
+            continue
+    return removed
 
 
 def _create_temporary(path: Path) -> tuple[int, Path]:
-    """Create a hidden temporary file beside ``path``; return its descriptor (open for
-    writing) and its path. Problems with ``path`` are a :class:`ConfigError` naming it."""
+    """Create the hidden temporary file of ``path`` (module notes), after removing stale
+    ones of earlier runs; return its descriptor (open for writing) and its path.
+    Problems with ``path`` are a :class:`ConfigError` naming it."""
     parent = path.parent
     if not parent.is_dir():
         raise ConfigError(f"{path}: output folder {str(parent)!r} does not exist; create it first or choose another path")
     if path.is_dir():
         raise ConfigError(f"{path}: output path is a folder; give a file name")
+    remove_stale_temporaries(path)
+    prefix = _prefix(path)
     while True:
-        tmp = parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+        tmp = parent / f"{prefix}{os.getpid()}-{secrets.token_hex(6)}"
         try:
             # mode 0o666: the process umask decides, as for any newly created file
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 
+from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
@@ -97,18 +99,29 @@ def _bar(desc: str):
     return lambda iterable, total: progress_iter(iterable, total, desc)
 
 
+def _warn(source, notes) -> None:
+    """Print each note as one warning line on stderr, naming its ``source`` file."""
+    for note in notes:
+        print(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
+
+
 def _cmd_compensate(args) -> int:
-    from gyrodrift.profile import load_profile, profile_from_run, save_profile, warm_config
+    from gyrodrift.profile import load_profile, profile_from_run, profile_notes, save_profile, warm_config
 
     from gyrodrift.pipeline import compensate_file
 
     check_output_path(args.input, args.output)
     cfg = _config(args)
+    profile = None
     if args.profile:
-        cfg = warm_config(load_profile(args.profile), cfg)
+        profile = load_profile(args.profile)
+        _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
+        cfg = warm_config(profile, cfg)
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
                             smooth=args.smooth)
+    if profile is not None:  # the temperatures of the run are known once it is read
+        _warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
@@ -315,7 +328,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    c.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
+    c.add_argument(
+        "--profile", type=Path, metavar="DEV.json",
+        help="warm-start from a saved device profile (checked on loading; a warning on stderr, even with -q, "
+        "when it was saved by another estimator or the log's temperatures reach beyond its range)",
+    )
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
     c.add_argument(
         "--scale-factor", action="store_true",
@@ -429,8 +446,52 @@ def _say_if_compiling(command: str) -> None:
               file=sys.stderr, flush=True)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received while :func:`main` runs.
+
+    A subclass of :class:`KeyboardInterrupt`, so that every clean-up that runs on
+    Ctrl-C (SIGINT) runs for SIGTERM too; the partial output file is removed
+    (:mod:`gyrodrift._atomic`).
+    """
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
+
+@contextmanager
+def _sigterm_interrupts():
+    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread; the
+    handler in force before is restored afterwards. Nothing changes outside the main
+    thread (where Python cannot install handlers) or without SIGTERM."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except (ValueError, OSError, AttributeError):
+        yield
+        return
+    try:
+        yield
+    finally:
+        # None: a handler installed outside Python, which cannot be put back; the default then
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return the exit code (2 for bad input, with one line on stderr)."""
+    """Run the command line and return the exit code.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success; 2 for bad input or usage, with one ``gyrodrift: error:`` line on
+        stderr; 130 when interrupted (SIGINT) and 143 when terminated (SIGTERM), after
+        removing the partial output; 1 when out of memory (and as a command documents,
+        e.g. ``batch`` when some logs failed).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
@@ -438,10 +499,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     _say_if_compiling(args.command)
     try:
-        return args.func(args)
+        with _sigterm_interrupts():
+            return args.func(args)
     except GyroDriftError as err:
         print(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
+    except Terminated:
+        print("gyrodrift: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("gyrodrift: interrupted", file=sys.stderr)
         return 130

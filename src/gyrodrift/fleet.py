@@ -38,6 +38,12 @@ column          unit      meaning
 ``c``           deg/s
 ``seconds``     s         wall time spent on this log (read, compensate, write)
 ==============  ========  =====================================================
+
+In ``summary.csv`` (:func:`write_summary`) a text cell that starts with ``=``, ``+``,
+``-``, ``@``, a tab or a carriage return (a file name, an error message) gets a leading
+``'``, so that a spreadsheet shows it as text instead of running it as a formula
+(OWASP's advice on CSV injection). Number cells are written as numbers; the table
+:func:`process_many` returns is not changed.
 """
 
 from __future__ import annotations
@@ -65,6 +71,7 @@ __all__ = [
     "process_one",
     "process_many",
     "summary_markdown",
+    "write_summary",
     "add_batch_parser",
     "batch_command",
 ]
@@ -385,6 +392,40 @@ def process_many(
 
 # --------------------------------------------------------------------------- command line
 
+#: First characters that make a spreadsheet read a cell as a formula (module notes).
+_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def _as_text_cell(value):
+    """``value`` with a leading ``'`` if it is text a spreadsheet would run as a formula."""
+    if isinstance(value, str) and value.startswith(_FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
+def write_summary(summary: pd.DataFrame, path) -> None:
+    """Write a summary table as CSV, atomically, safe to open in a spreadsheet.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        As :func:`process_many` returns it.
+    path : str or os.PathLike
+
+    Notes
+    -----
+    Text cells that start like a formula get a leading ``'`` (module notes); number
+    columns and ``summary`` itself are left as they are.
+    """
+    from gyrodrift.io import write_table
+
+    safe = summary.copy()
+    for col in safe.columns:
+        if safe[col].dtype == object or pd.api.types.is_string_dtype(safe[col].dtype):
+            safe[col] = safe[col].map(_as_text_cell)
+    write_table(safe, path, fmt="csv")
+
+
 
 def summary_markdown(summary: pd.DataFrame) -> str:
     """The summary table as Markdown: integers as integers, numbers to 4 significant digits."""
@@ -401,7 +442,8 @@ BATCH_EPILOG = """\
 output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically, and
 OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
 temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg), c (deg/s) final
-drift model, seconds (wall time per log).
+drift model, seconds (wall time per log). Text cells that start with = + - @ get a
+leading ' (shown as text, never run as a spreadsheet formula).
 
 exit status: 0 if every log was compensated, 1 if some logs failed (each one is
 reported in the table and in summary.csv; the others are still written), 2 for bad
@@ -449,7 +491,6 @@ def batch_command(args: argparse.Namespace) -> int:
     """Run ``gyrodrift batch``; return 0 (all ok), 1 (some logs failed) or 2 (bad usage)."""
     from gyrodrift._progress import progress_iter
     from gyrodrift.config import load_config
-    from gyrodrift.io import write_table
 
     try:
         paths = find_logs(args.logs)
@@ -466,7 +507,7 @@ def batch_command(args: argparse.Namespace) -> int:
             paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
             progress=lambda items, total: progress_iter(items, total, "logs"), out_format=args.format,
         )
-        write_table(summary, summary_path, fmt="csv")
+        write_summary(summary, summary_path)
     except GyroDriftError as err:
         print(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
