@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from conftest import synthetic_log
 from gyrodrift.cli import main
-from gyrodrift.compensate import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError
 from gyrodrift.profile import Profile, load_profile, save_profile, warm_config
