@@ -33,7 +33,7 @@ import numpy as np
 
 from gyrodrift.compare import run_method
 from gyrodrift.config import CompensatorConfig
-from gyrodrift.estimators._kalman import cap_covariance
+from gyrodrift.kernels.numeric import cap_covariance
 from gyrodrift.montecarlo import FAMILIES, draw_case, simulate_case
 from gyrodrift.smooth import _groups, _held
 

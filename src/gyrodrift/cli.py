@@ -437,11 +437,12 @@ _ENGINE_COMMANDS = frozenset({"compensate", "demo", "report", "compare", "batch"
 
 
 def _say_if_compiling(command: str) -> None:
-    """One line on stderr when the engine is not yet compiled: the first run after an install
-    pauses for about a minute while numba compiles and caches it."""
+    """One line on a terminal's stderr when the engine is not yet compiled: the first run after
+    an install pauses for about a minute while numba compiles and caches it. (Not when stderr
+    is a file or a pipe, whose readers expect one line per error.)"""
     from gyrodrift.kernels import cached
 
-    if command in _ENGINE_COMMANDS and not cached():
+    if command in _ENGINE_COMMANDS and sys.stderr.isatty() and not cached():
         print("gyrodrift: compiling the engine (numba, once after an install; about a minute) ...",
               file=sys.stderr, flush=True)
 

@@ -100,6 +100,7 @@ from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import Observation
+from gyrodrift.kernels.aiding import steady_disagreement
 
 __all__ = [
     "TriadConfig",
@@ -264,7 +265,9 @@ class TriadCompensator:
         self._edge: dict | None = None  # window means at the start of the open interval
         self._gated = 1
         self._started = False
-        self._relock: dict[str, list[float]] = {"x": [], "y": []}
+        #: Rates of the residual refusals in a row, per axis, and how many are held (lock-out recovery).
+        self._relock = {axis: np.zeros(max(self.config.gate.relock_intervals, 1)) for axis in ("x", "y")}
+        self._refusals = {"x": 0, "y": 0}
         #: Number of intervals refused for each reason of :data:`TRIAD_REASONS` (an
         #: interval refused for two reasons counts under the first).
         self.reasons = dict.fromkeys(TRIAD_REASONS, 0)
@@ -530,8 +533,7 @@ class TriadCompensator:
             self.est_x.hold()
             self.est_y.hold()
             self._gated = 1
-            for v in self._relock.values():
-                v.clear()
+            self._refusals = {"x": 0, "y": 0}
             return
         dt = end["t"] - start["t"]
         M_phi = (end["Iphi"] - start["Iphi"] - (end["roll"] - start["roll"])) / dt
@@ -565,19 +567,14 @@ class TriadCompensator:
         resid = (m - float(h @ est.params)) * dt
         s = float(h @ est.cov @ h) + var
         limit = max(self.triad.residual_deg, self.triad.residual_k * math.sqrt(max(s, 0.0)) * dt)
-        history = self._relock[axis]
         if abs(resid) <= limit:
-            history.clear()
+            self._refusals[axis] = 0
             return True
-        history.append(resid / dt)
-        need = self.config.gate.relock_intervals
-        if need and len(history) > need:
-            rates = np.array(history[-(need + 1):])
-            mean = float(np.mean(rates))
-            if np.all(np.sign(rates) == np.sign(mean)) and float(np.std(rates)) < 0.5 * abs(mean):
-                history.clear()
-                return True
-        return False
+        accept, self._refusals[axis] = steady_disagreement(resid / dt, self._relock[axis], self._refusals[axis],
+                                                           self.config.gate.relock_intervals)
+        if accept:
+            self._refusals[axis] = 0
+        return bool(accept)
 
 
 def compensate_triad(

@@ -5,7 +5,7 @@ drift: ``m = Δ(∫gyro − compass)/Δt`` with H the interval means of ``[T, T'
 (:func:`compass_measurement`). The interval is refused (:func:`row_condition`, first
 reason seen; :func:`close`) for a gap, a field anomaly, turning, or a compass that
 disagrees with the compensated gyro; refused intervals hold the parameters (eq. 5).
-Lock-out recovery (:func:`_drift_not_interference`) accepts an interval after a run of
+Lock-out recovery (:func:`steady_disagreement`) accepts an interval after a run of
 refusals whose compass-minus-gyro rates agree: the drift moved, not the compass.
 
 The ``adaptive`` estimator's aiding adds (settings ``K_ZARU``, ``K_EDGE``, ...):
@@ -47,7 +47,8 @@ from gyrodrift.kernels.layout import (
 from gyrodrift.kernels.numeric import wrap180
 
 __all__ = ["add", "compass_measurement", "zaru_measurement", "flat_compass", "gyro_still", "row_condition",
-           "field_anomaly", "field_reference", "unobservable_code", "begin", "close", "push_measurement", "stacked",
+           "field_anomaly", "field_reference", "unobservable_code", "steady_disagreement", "begin", "close",
+           "push_measurement", "stacked",
            "in_force", "init_measurements"]
 
 
@@ -362,42 +363,38 @@ def unobservable_code(C, prior_a, prior_b):
 
 
 @jit
-def _drift_not_interference(rate, ist, refused, n):
-    """Lock-out recovery: True when the last ``n`` intervals refused for interference and
-    this one agree on one steady compass-minus-gyro rate (same sign, spread below half
-    the mean): a drift change the filter has not followed, not a magnetic disturbance.
-    ``refused`` keeps the last rates; n = 0 turns the recovery off."""
+def steady_disagreement(rate, rates, held, n):
+    """Lock-out recovery: whether the last ``n`` refused intervals and this one agree on one
+    steady sensor-minus-gyro rate (same sign, spread below half the mean): a drift change
+    the filter has not followed, not a disturbance, so this interval is accepted.
+
+    ``rates`` keeps the rates of the refusals so far (``held`` of them, at most its size);
+    ``rate`` is added. Returns (accept, rates now held). ``n`` = 0 turns the recovery off.
+    """
     if n == 0:
-        return False
-    have = ist[I_REFUSED_N]
-    enough = have >= n
+        return False, held
+    enough = held >= n
+    last = np.empty(n + 1)
     if enough:
-        rates = np.empty(n + 1)
         for j in range(n):
-            rates[j] = refused[have - n + j] if have <= refused.size else refused[refused.size - n + j]
-        rates[n] = rate
-    # append, keeping only the last n
-    if have < refused.size:
-        refused[have] = rate
+            last[j] = rates[held - n + j] if held <= rates.size else rates[rates.size - n + j]
+        last[n] = rate
+    if held < rates.size:  # keep the newest rates.size rates
+        rates[held] = rate
     else:
-        for j in range(refused.size - 1):
-            refused[j] = refused[j + 1]
-        refused[refused.size - 1] = rate
-    ist[I_REFUSED_N] = min(have + 1, refused.size)
+        for j in range(rates.size - 1):
+            rates[j] = rates[j + 1]
+        rates[rates.size - 1] = rate
+    held = min(held + 1, rates.size)
     if not enough:
-        return False
-    total = 0.0
+        return False, held
+    mean = np.mean(last)
+    if np.std(last) >= 0.5 * abs(mean):
+        return False, held
     for j in range(n + 1):
-        total += rates[j]
-    mean = total / (n + 1)
-    ss = 0.0
-    for j in range(n + 1):
-        ss += abs(rates[j] - mean) ** 2
-    std = math.sqrt(ss / (n + 1))
-    for j in range(n + 1):
-        if np.sign(rates[j]) != np.sign(mean):
-            return False
-    return std < 0.5 * abs(mean)
+        if np.sign(last[j]) != np.sign(mean):
+            return False, held
+    return True, held
 
 
 # --------------------------------------------------------- interval decision
@@ -527,7 +524,9 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
         if not have_meas:
             m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], cfg[C_GYRO_NOISE], 0.0, 0.0, False)
             have_meas = True
-        if _drift_not_interference(resid / (fs[F_S1] - fs[F_S0]), ist, refused, icfg[K_RELOCK]):
+        accept, ist[I_REFUSED_N] = steady_disagreement(resid / (fs[F_S1] - fs[F_S0]), refused, ist[I_REFUSED_N],
+                                                       icfg[K_RELOCK])
+        if accept:
             reason = NO_STICKY
     if reason != R_INTERFERENCE:
         ist[I_REFUSED_N] = 0
