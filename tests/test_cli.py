@@ -199,3 +199,23 @@ def test_bad_settings_or_profile_file_is_one_line_from_the_real_command(small_lo
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
     assert "dev.json" in res.stderr and "c_dps" in res.stderr
     assert not (tmp_path / "o.csv").exists()
+
+
+def test_a_terminal_is_told_when_the_engine_compiles(monkeypatch, capsys):
+    """The first run after an install compiles the kernels for about a minute: on a terminal,
+    one line says so; not once they are cached, nor for a command that does not run them."""
+    import io
+
+    from gyrodrift import cli, kernels
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    for is_cached, command, said in ((False, "compensate", True), (True, "compensate", False),
+                                     (False, "simulate", False)):
+        err = Terminal()
+        monkeypatch.setattr(kernels, "cached", lambda: is_cached)
+        monkeypatch.setattr(cli.sys, "stderr", err)
+        cli._say_if_compiling(command)
+        assert ("compiling the engine" in err.getvalue()) is said, (is_cached, command)
