@@ -203,7 +203,7 @@ def test_ablation_runs_every_variant_on_the_same_cases():
 
     variants = ablation_variants()
     assert len(variants) == len(AdaptiveConfig.FIXES) + 2
-    assert variants["without zaru"].zaru is False and variants["before issue 6"].stacked is True
+    assert variants["without zaru"].zaru is False and variants["every fix off"].stacked is True
     df = run_ablation(["vehicle"], 1, duration_scale=TINY, workers=1)
     assert list(df["variant"]) == list(variants)
     assert (df["n"] == 1).all() and (df["failed"] == 0).all()

@@ -73,7 +73,7 @@ __all__ = [
     "run_monte_carlo",
     "summarise",
     "markdown",
-    "BEFORE_ISSUE_6",
+    "EVERY_FIX_OFF",
     "ablation_variants",
     "run_ablation",
 ]
@@ -98,7 +98,7 @@ class Family:
     description: str
 
 
-#: The six scenario families of issue 6, by name.
+#: The six scenario families, by name.
 FAMILIES: Mapping[str, Family] = MappingProxyType(
     {
         "static": Family("static", DEFAULT_DURATION_S["static"], "motionless, heated 23 -> 58 degC and cooled (3 h)"),
@@ -599,10 +599,10 @@ def markdown(summary: pd.DataFrame, *, tuned_on: str | None = None, floatfmt: st
 
 # --------------------------------------------------------------------------- ablation
 
-#: The ``adaptive`` estimator as it was before issue 6: the paper's stacked endpoint
+#: The ``adaptive`` estimator with every fix off: the paper's stacked endpoint
 #: measurements, a fixed reference temperature, Zhou's recursive fading, the shared
 #: process noise, no stationarity updates.
-BEFORE_ISSUE_6 = AdaptiveConfig(
+EVERY_FIX_OFF = AdaptiveConfig(
     stacked=True, edge_s=0.0, recentre=False, outage_memory=False, zaru=False, zaru_hold=False,
     normalised=False, softening=1.0, q_sd=None, slope_q_per_rtc=0.0,
 )
@@ -619,12 +619,12 @@ def ablation_variants(base: AdaptiveConfig | None = None) -> dict[str, AdaptiveC
     Examples
     --------
     >>> list(ablation_variants())[:2], list(ablation_variants())[-1]
-    (['all fixes', 'without one_measurement'], 'before issue 6')
+    (['all fixes', 'without one_measurement'], 'every fix off')
     """
     base = base or AdaptiveConfig()
     out = {"all fixes": base}
     out.update({f"without {fix}": base.ablated(fix) for fix in AdaptiveConfig.FIXES})
-    out["before issue 6"] = BEFORE_ISSUE_6
+    out["every fix off"] = EVERY_FIX_OFF
     return out
 
 
@@ -637,7 +637,7 @@ def run_ablation(
     base: AdaptiveConfig | None = None,
     fs_hz: float = 10.0,
 ) -> pd.DataFrame:
-    """Ablation of the ``adaptive`` fixes (issue 6): the Monte Carlo of ``adaptive`` alone per variant.
+    """Ablation of the ``adaptive`` fixes: the Monte Carlo of ``adaptive`` alone per variant.
 
     Each variant of :func:`ablation_variants` runs on the same cases (same seeds, so
     the same devices and logs). Returns one row per (variant, family) with the mean
