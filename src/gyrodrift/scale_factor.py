@@ -160,13 +160,20 @@ __all__ = [
 #: Drift-compensator refusals that also refuse an SF measurement over the same rows.
 REJECT_GATES = (gating.GAP, gating.FIELD, gating.INTERFERENCE)
 
-# Reasons a detected rotation is not used (the ``reason`` column of the turn table).
-_EDGE = "edge"
-_NOT_STILL = "not_still"
-_NO_COMPASS = "no_compass"
-_SMALL = "small_turn"
-_IMPLAUSIBLE = "implausible"
-_LONG = "long_turn"
+# Reasons a detected rotation is not used (the ``reason`` column of the turn table;
+# a drift gate of REJECT_GATES is a reason too).
+#: A still window falls outside the log, or (causal) the log ends before the decision.
+EDGE = "edge"
+#: The unit rotates within ``guard_s`` of a still window.
+NOT_STILL = "not_still"
+#: Too few compass samples in a still window, or a compass gap inside the span.
+NO_COMPASS = "no_compass"
+#: The compass turned by less than ``min_turn_deg``.
+SMALL_TURN = "small_turn"
+#: ``|y - 1| > max_sf_error``.
+IMPLAUSIBLE = "implausible"
+#: Causal pass and tracker: the rotating rows last longer than ``max_turn_s``.
+LONG_TURN = "long_turn"
 
 
 def _pair(name: str, value, *, positive: bool = False, nonneg: bool = False) -> tuple[float, float]:
@@ -334,7 +341,21 @@ def _window(t: np.ndarray, t0: float, t1: float) -> slice:
     return slice(int(np.searchsorted(t, t0, "left")), int(np.searchsorted(t, t1, "right")))
 
 
-def _require(out: pd.DataFrame, cols) -> None:
+def require_columns(out: pd.DataFrame, cols) -> None:
+    """Raise if ``out`` lacks any of ``cols``.
+
+    Parameters
+    ----------
+    out : DataFrame
+        A :func:`gyrodrift.compensator.compensate` table.
+    cols : iterable of str
+        Column names it must have.
+
+    Raises
+    ------
+    LogFormatError
+        Naming the missing columns.
+    """
     missing = [c for c in cols if c not in out.columns]
     if missing:
         raise LogFormatError(
@@ -377,11 +398,35 @@ def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate")
     return temp_c[last]
 
 
-def _columns(out: pd.DataFrame, causal: bool):
-    """``t`` (s), ``rate_z`` (deg/s), ``temp`` (degC; an empty cell holds the previous value,
-    as in the drift compensator), the compass heading (deg, NaN = none) and the drift gate
-    reasons of a compensate() table, checked. (``causal`` no longer changes them.)"""
-    _require(out, (T, "rate_z", TEMP, "compass_heading"))
+def compensated_columns(out: pd.DataFrame):
+    """The columns the SF estimate reads from a compensate() table, checked.
+
+    Parameters
+    ----------
+    out : DataFrame
+        Output of :func:`gyrodrift.compensator.compensate`.
+
+    Returns
+    -------
+    t : (N,) ndarray
+        Time, s.
+    rate : (N,) ndarray
+        ``rate_z``, deg/s.
+    temp : (N,) ndarray
+        Temperature, degC; an empty cell holds the previous value, as in the drift
+        compensator.
+    compass : (N,) ndarray
+        Compass heading, deg (NaN = no sample).
+    gates : (N,) ndarray of str
+        The drift compensator's ``gate_reason`` ('' when the column is absent).
+
+    Raises
+    ------
+    LogFormatError
+        See :func:`estimate_scale_factor` (a column missing, no rows, bad time or rate,
+        the first temperature empty).
+    """
+    require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
     t = out[T].to_numpy(float)
     rate = out["rate_z"].to_numpy(float)
     _check_rows(t, rate)
@@ -405,7 +450,7 @@ def _decision_row(t_s: np.ndarray, t_end_s: float, cfg: ScaleFactorConfig) -> in
     = end of the second still window); the centred test of the last row ``i`` there is known
     once a row at ``t_i + turn_window_s/2`` exists.
     """
-    lim = t_end_s + cfg.guard_s + cfg.still_s + cfg.guard_s  # a1 + guard_s, as in _one_turn
+    lim = t_end_s + cfg.guard_s + cfg.still_s + cfg.guard_s  # a1 + guard_s, as in measure_turn
     last = int(np.searchsorted(t_s, lim, "right")) - 1
     j = int(np.searchsorted(t_s, t_s[last] + 0.5 * cfg.turn_window_s, "left"))
     return j if j < t_s.size else -1
@@ -443,7 +488,7 @@ def turn_measurements(
         ``no_compass``, a drift gate of :data:`REJECT_GATES`, ``small_turn`` or
         ``implausible``).
     """
-    t, rate, temp, compass, gates = _columns(out, causal)
+    t, rate, temp, compass, gates = compensated_columns(out)
     cfg = config
 
     psi_g = cumulative_trapezoid(rate, t, initial=0.0)
@@ -458,13 +503,13 @@ def turn_measurements(
     for i0, i1 in _runs(moving):
         i0, i1 = int(i0), int(i1)
         if causal and t[i1] - t[i0] > cfg.max_turn_s:
-            rows.append(_unmeasured(float(t[i0]), float(t[i1]), _LONG))
+            rows.append(unmeasured_turn(float(t[i0]), float(t[i1]), LONG_TURN))
             continue
         j = _decision_row(t, float(t[i1]), cfg) if causal else 0
         if j < 0:
-            rows.append(_unmeasured(float(t[i0]), float(t[i1]), _EDGE))
+            rows.append(unmeasured_turn(float(t[i0]), float(t[i1]), EDGE))
             continue
-        row = _one_turn(
+        row = measure_turn(
             t, rate, temp, psi_g, psi_c, has_c, moving, gates, i0, i1, cfg,
             log_start_s=float(t[0]), log_end_s=float(t[-1]),
         )
@@ -479,8 +524,21 @@ def turn_measurements(
     return table.astype({"row_update": int, "accepted": bool})
 
 
-def _unmeasured(t_start_s: float, t_end_s: float, reason: str) -> dict:
-    """A turn-table row without a measurement."""
+def unmeasured_turn(t_start_s: float, t_end_s: float, reason: str) -> dict:
+    """A turn-table row (:func:`turn_measurements`) without a measurement.
+
+    Parameters
+    ----------
+    t_start_s, t_end_s : float
+        First and last rotating row of the rotation, s.
+    reason : str
+        Why it is not used ('' while the measurement is still to be made).
+
+    Returns
+    -------
+    dict
+        The turn-table columns: NaN measurement, ``row_update`` -1, not accepted.
+    """
     return {
         "t_start": t_start_s, "t_end": t_end_s, "t_update": math.nan, "row_update": -1,
         "angle_gyro_deg": math.nan, "angle_compass_deg": math.nan, "sf_meas": math.nan,
@@ -488,7 +546,7 @@ def _unmeasured(t_start_s: float, t_end_s: float, reason: str) -> dict:
     }
 
 
-def _one_turn(
+def measure_turn(
     t, rate, temp, psi_g, psi_c, has_c, moving, gates, i0, i1, cfg: ScaleFactorConfig, *,
     log_start_s: float, log_end_s: float,
 ) -> dict:
@@ -496,28 +554,51 @@ def _one_turn(
 
     The arrays may be a part of the log (the rows :class:`ScaleFactorTracker` keeps), as long
     as they hold every row from ``guard_s`` before the first still window to ``guard_s`` after
-    the second; ``log_start_s`` and ``log_end_s`` are the times of the log's first and last
-    rows (the edge test).
+    the second.
+
+    Parameters
+    ----------
+    t, rate, temp : (N,) ndarray
+        Time (s), ``rate_z`` (deg/s) and temperature (degC) of the rows.
+    psi_g, psi_c : (N,) ndarray
+        Gyro heading and compass heading unwrapped against it (NaN off compass rows), deg.
+    has_c : (N,) bool ndarray
+        Rows with a compass heading.
+    moving : (N,) bool ndarray
+        The rotation test (:func:`moving_mask`).
+    gates : (N,) ndarray of str
+        The drift compensator's ``gate_reason``.
+    i0, i1 : int
+        First and last rotating row, indices into the arrays.
+    cfg : ScaleFactorConfig
+    log_start_s, log_end_s : float
+        Times of the log's first and last rows (the edge test).
+
+    Returns
+    -------
+    dict
+        The turn-table row; ``row_update``/``t_update`` are the end of the second still
+        window (the default pass).
     """
     ts, te = float(t[i0]), float(t[i1])
     b0, b1 = ts - cfg.guard_s - cfg.still_s, ts - cfg.guard_s
     a0, a1 = te + cfg.guard_s, te + cfg.guard_s + cfg.still_s
-    row = _unmeasured(ts, te, "")
+    row = unmeasured_turn(ts, te, "")
     if b0 < log_start_s or a1 > log_end_s:
-        row["reason"] = _EDGE
+        row["reason"] = EDGE
         return row
     span = _window(t, b0, a1)
     row["row_update"] = span.stop - 1
     row["t_update"] = float(t[span.stop - 1])
     if moving[_window(t, b0 - cfg.guard_s, b1)].any() or moving[_window(t, a0, a1 + cfg.guard_s)].any():
-        row["reason"] = _NOT_STILL
+        row["reason"] = NOT_STILL
         return row
     before, after = _window(t, b0, b1), _window(t, a0, a1)
     cb = np.flatnonzero(has_c[before]) + before.start
     ca = np.flatnonzero(has_c[after]) + after.start
     c_span = np.flatnonzero(has_c[span]) + span.start
     if min(cb.size, ca.size) < cfg.min_compass_samples or np.diff(t[c_span]).max() > cfg.max_compass_gap_s:
-        row["reason"] = _NO_COMPASS
+        row["reason"] = NO_COMPASS
         return row
 
     d_gyro = float(np.mean(psi_g[ca]) - np.mean(psi_g[cb]))
@@ -540,9 +621,9 @@ def _one_turn(
     if refused:
         row["reason"] = refused[0]
     elif abs(d_compass) < cfg.min_turn_deg:
-        row["reason"] = _SMALL
+        row["reason"] = SMALL_TURN
     elif not abs(y - 1.0) <= cfg.max_sf_error:
-        row["reason"] = _IMPLAUSIBLE
+        row["reason"] = IMPLAUSIBLE
     else:
         row["accepted"] = True
     return row
@@ -581,18 +662,37 @@ def sf_filter(turns: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig
     P = np.diag(np.square(config.p0_sd))
     xs, Ps = [x], [P]
     for _, m in turns[turns["accepted"]].iterrows():
-        x, P = _sf_correct(x, P, float(m["sf_meas"]), float(m["temp_dev_c"]), float(m["r"]), config)
+        x, P = sf_correct(x, P, float(m["sf_meas"]), float(m["temp_dev_c"]), float(m["r"]), config)
         xs.append(x)
         Ps.append(P)
     return np.array(xs), np.array(Ps)
 
 
-def _sf_correct(x: np.ndarray, P: np.ndarray, sf_meas: float, temp_dev_c: float, r: float,
+def sf_correct(x: np.ndarray, P: np.ndarray, sf_meas: float, temp_dev_c: float, r: float,
                 config: ScaleFactorConfig):
     """One accepted rotation: ``P- = s*P + Q`` capped at ``P0``, then the Joseph-form
     correction of eq. (10) with ``H = [1, T - T_ref]`` (Sec. 3.2), capped again.
 
-    Returns the new ``[s0, s1]`` (unitless, 1/degC) and covariance.
+    Parameters
+    ----------
+    x : (2,) ndarray
+        ``[s0, s1]`` (unitless, 1/degC) before the rotation.
+    P : (2, 2) ndarray
+        Their covariance.
+    sf_meas : float
+        The measurement y (unitless).
+    temp_dev_c : float
+        Its mean ``T - T_ref``, degC.
+    r : float
+        Its variance.
+    config : ScaleFactorConfig
+
+    Returns
+    -------
+    x : (2,) ndarray
+        The new ``[s0, s1]``.
+    P : (2, 2) ndarray
+        The new covariance.
     """
     Q = np.diag(np.square(config.q_sd))
     cap = np.square(np.array(config.p0_sd))
@@ -624,8 +724,24 @@ def integrate_heading(t_s, rate_dps, anchor_row: int, anchor_heading_deg: float)
     return wrap_360(anchor_heading_deg + (angle - angle[anchor_row]))
 
 
-def _anchor(out: pd.DataFrame) -> tuple[int, float]:
-    """Row and value (deg) of the first compass heading, where the compensator anchors its heading."""
+def heading_anchor(out: pd.DataFrame) -> tuple[int, float]:
+    """Row and value of the first compass heading, where the compensator anchors its heading.
+
+    Parameters
+    ----------
+    out : DataFrame
+        A compensate() table with ``compass_heading``.
+
+    Returns
+    -------
+    row : int
+    heading_deg : float
+
+    Raises
+    ------
+    LogFormatError
+        No compass heading at all.
+    """
     rows = np.flatnonzero(out["compass_heading"].notna().to_numpy())
     if rows.size == 0:
         raise LogFormatError("scale-factor estimate: no compass heading to anchor the heading")
@@ -688,7 +804,7 @@ def estimate_scale_factor(
     params, covs = sf_filter(turns, config)
     sf_fixed = fixed_scale_factor(turns, config)
 
-    t, rate, temp, compass, _ = _columns(out, causal)
+    t, rate, temp, compass, _ = compensated_columns(out)
     dev = temp - config.t_ref_c
     update_rows = turns.loc[turns["accepted"], "row_update"].to_numpy(int)
     if causal:
@@ -709,7 +825,7 @@ def estimate_scale_factor(
     if causal:
         heading_sf, heading_fixed = _causal_heading(t, rate_sf, compass), _causal_heading(t, rate_fixed, compass)
     else:
-        anchor, anchor_deg = _anchor(out)
+        anchor, anchor_deg = heading_anchor(out)
         heading_sf = integrate_heading(t, rate_sf, anchor, anchor_deg)
         heading_fixed = integrate_heading(t, rate_fixed, anchor, anchor_deg)
     table = pd.DataFrame(
@@ -1026,7 +1142,7 @@ class ScaleFactorTracker:
     def push_frame(self, out: pd.DataFrame) -> pd.DataFrame:
         """Add a chunk of a compensate() table (``t, rate_z, temp, compass_heading`` and,
         if present, ``gate_reason``); return the :data:`TRACKER_COLUMNS` with its index."""
-        _require(out, (T, "rate_z", TEMP, "compass_heading"))
+        require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
         gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else None
         cols = self.push_arrays(out[T].to_numpy(float), out["rate_z"].to_numpy(float), out[TEMP].to_numpy(float),
                                 out["compass_heading"].to_numpy(float), gates)
@@ -1072,7 +1188,7 @@ class ScaleFactorTracker:
                     self._run_start, self._run_dropped = i, False
                 elif not self._run_dropped and ti - t[self._run_start - b] > cfg.max_turn_s:
                     self._run_dropped = True
-                    self._count(_unmeasured(t[self._run_start - b], ti, _LONG))
+                    self._count(unmeasured_turn(t[self._run_start - b], ti, LONG_TURN))
             elif self._run_start >= 0:
                 if not self._run_dropped:
                     te = t[i - 1 - b]
@@ -1085,7 +1201,7 @@ class ScaleFactorTracker:
         the filter if it is accepted; return 1 if it was."""
         b = self._base
         psi_c = np.array(self._psi_c)
-        row = _one_turn(
+        row = measure_turn(
             np.array(self._t), np.array(self._rate), np.array(self._temp), np.array(self._psi_g), psi_c,
             np.isfinite(psi_c), np.array(self._moving), np.array(self._gate), first - b, last - b, self.config,
             log_start_s=self._t_first, log_end_s=t_now,
@@ -1094,7 +1210,7 @@ class ScaleFactorTracker:
         self._count(row)
         if not row["accepted"]:
             return 0
-        self._x, self._P = _sf_correct(self._x, self._P, row["sf_meas"], row["temp_dev_c"], row["r"], self.config)
+        self._x, self._P = sf_correct(self._x, self._P, row["sf_meas"], row["temp_dev_c"], row["r"], self.config)
         self._floats()
         self.n_updates += 1
         return 1
@@ -1226,7 +1342,7 @@ def scale_factor_experiment(
             "sf_adaptive": sf["sf"].to_numpy(),
         }
     )
-    heading_ideal = integrate_heading(t, out["rate_z"].to_numpy(float) / true_sf, *_anchor(out))
+    heading_ideal = integrate_heading(t, out["rate_z"].to_numpy(float) / true_sf, *heading_anchor(out))
     headings = {
         "none": out["heading"].to_numpy(float),
         "fixed": sf["heading_sf_fixed"].to_numpy(),
