@@ -83,7 +83,7 @@ differs:
 * an empty temperature cell holds the previous value (the default pass lets it give a
   NaN SF on that row and a NaN ``heading_sf`` from there on).
 
-What the causal pass loses, on the 3-h experiment (:func:`scale_factor_experiment`,
+What the causal pass loses, on the 3-h experiment (:func:`gyrodrift.paper.scale_factor_experiment`,
 seed 0, 10 Hz, default settings; causal against default): SF RMS after the first update
 2.864e-4 against 2.845e-4 (max 1.379e-3 against 1.359e-3); the SF's share of the
 heading error (``sf_heading_rms_deg``) 3.28 against 0.32 deg RMS, and the whole heading
@@ -107,19 +107,6 @@ Where the paper is silent (choices made here)
   (as a calibration done before the run would be). 1.0 if no rotation was accepted.
 * The SF compensation does not feed back into the drift filter: the drift filter
   updates only when still, where the SF does not matter.
-
-Examples
---------
-The 3-h experiment at 10 Hz (about a second):
-
->>> res = scale_factor_experiment(seed=0, fs_hz=10.0)
->>> sorted(res)
-['config', 'fig10', 'fig11', 'log', 'out', 'sf', 'summary', 'turns']
->>> res["summary"]["sf_rms"]["adaptive"] < 1e-3 < res["summary"]["sf_rms"]["fixed"]
-True
->>> part = res["summary"]["sf_heading_rms_deg"]
->>> bool(part["adaptive"] < part["fixed"] < part["none"])
-True
 """
 
 from __future__ import annotations
@@ -136,7 +123,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from gyrodrift import gating
 from gyrodrift.compensator import CompensatedSample
-from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_180, wrap_360
+from gyrodrift.conventions import TEMP, T, wrap_180, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.kernels.numeric import cap_covariance, correct
 
@@ -153,7 +140,6 @@ __all__ = [
     "ScaleFactorRow",
     "TRACKER_COLUMNS",
     "CompensatedSFSample",
-    "scale_factor_experiment",
     "REJECT_GATES",
 ]
 
@@ -1240,144 +1226,3 @@ class ScaleFactorTracker:
 
 _TINY = float(np.finfo(float).tiny)
 
-
-# ---------------------------------------------------------------------- experiment
-
-
-def _rms(x) -> float:
-    x = np.asarray(x, dtype=float)
-    return float(np.sqrt(np.mean(np.square(x)))) if x.size else math.nan
-
-
-def _max_abs(x) -> float:
-    x = np.asarray(x, dtype=float)
-    return float(np.max(np.abs(x))) if x.size else math.nan
-
-
-def scale_factor_experiment(
-    seed: int = 0,
-    duration_s: float | None = None,
-    fs_hz: float = 50.0,
-    *,
-    device=None,
-    compass=None,
-    config: ScaleFactorConfig | None = None,
-    compensator_config=None,
-    causal: bool = False,
-) -> dict:
-    """Section 4.3 on simulated data: drift compensation, then fixed and adaptive SF.
-
-    Simulates the ``scale-factor`` scenario (:func:`gyrodrift.simulate.simulate`),
-    compensates the drift (:func:`gyrodrift.compensator.compensate`) and estimates the
-    scale factor (:func:`estimate_scale_factor`).
-
-    Parameters
-    ----------
-    seed : int
-        Seed of the simulation.
-    duration_s : float, optional
-        Run length, s (default: the scenario's 3 h).
-    fs_hz : float
-        Gyro sample rate, Hz.
-    device : DeviceModel, optional
-        Gyro model; scale-factor coefficients left ``None`` take the scenario's
-        (about 3 % over 23–58 degC).
-    compass : CompassModel, optional
-    config : ScaleFactorConfig, optional
-    compensator_config : CompensatorConfig, optional
-        Settings of the drift compensator.
-    causal : bool
-        Use the causal pass (``estimate_scale_factor(..., causal=True)``, what
-        :class:`ScaleFactorTracker` computes online) instead of the default one.
-
-    Returns
-    -------
-    dict
-        ``log`` (simulated), ``out`` (compensated), ``sf`` (:func:`estimate_scale_factor`),
-        ``turns`` (the rotation measurements); ``fig10``: ``t`` (s), ``temp`` (degC),
-        ``sf_ideal`` (true SF), ``sf_fixed``, ``sf_adaptive`` (unitless); ``fig11``:
-        ``t`` (s) and the heading errors against the reference ``err_none``,
-        ``err_fixed``, ``err_adaptive`` and ``err_ideal`` (compensated with the true
-        SF: what the drift compensation alone leaves), deg; ``summary``:
-
-        * ``heading_rms_deg``, ``heading_max_deg``: dicts none/fixed/adaptive/ideal
-          of the heading error over the whole run (Fig. 11);
-        * ``sf_heading_rms_deg``, ``sf_heading_max_deg``: dicts none/fixed/adaptive
-          of the heading minus the ideal heading, the part of the heading error due
-          to the SF estimate alone (the drift residual, common to all, cancels);
-        * ``sf_rms``, ``sf_max``: dicts none/fixed/adaptive of the SF error against
-          the true SF, over the rows after the first SF update (the rows before it
-          have no measurement of their own);
-        * ``turns`` (rotations detected), ``sf_updates`` (accepted), ``sf_fixed``;
-
-        and ``config``.
-
-    Notes
-    -----
-    The heading is integrated open loop for the whole run, so the drift left by the
-    drift compensator accumulates into every line of Fig. 11 alike (``err_ideal``);
-    over a 3-h run it is of the same order as the SF errors and adds to or cancels
-    them by chance. ``sf_heading_*`` isolates the SF's share.
-    """
-    from gyrodrift.compensator import compensate
-    from gyrodrift.simulate import TRUE_SF, simulate
-
-    config = config or ScaleFactorConfig()
-    log = simulate(
-        "scale-factor", seed=seed, duration_s=duration_s, fs_hz=fs_hz, device=device, compass=compass
-    )
-    out = compensate(log, compensator_config)
-    sf = estimate_scale_factor(out, config, causal=causal)
-    turns = sf.attrs["turns"]
-
-    t = out[T].to_numpy(float)
-    ref = out[REF_HEADING].to_numpy(float)
-    true_sf = out[TRUE_SF].to_numpy(float)
-    fig10 = pd.DataFrame(
-        {
-            "t": t,
-            "temp": out[TEMP].to_numpy(float),
-            "sf_ideal": true_sf,
-            "sf_fixed": sf["sf_fixed"].to_numpy(),
-            "sf_adaptive": sf["sf"].to_numpy(),
-        }
-    )
-    heading_ideal = integrate_heading(t, out["rate_z"].to_numpy(float) / true_sf, *heading_anchor(out))
-    headings = {
-        "none": out["heading"].to_numpy(float),
-        "fixed": sf["heading_sf_fixed"].to_numpy(),
-        "adaptive": sf["heading_sf"].to_numpy(),
-    }
-    errors = {k: heading_error(h, ref) for k, h in headings.items()}
-    errors["ideal"] = heading_error(heading_ideal, ref)
-    sf_part = {k: heading_error(h, heading_ideal) for k, h in headings.items()}
-    fig11 = pd.DataFrame({"t": t, **{f"err_{k}": v for k, v in errors.items()}})
-
-    ups = np.flatnonzero(sf["sf_update"].to_numpy())
-    after = slice(int(ups[0]) + 1 if ups.size else t.size, t.size)
-    sf_err = {
-        "none": 1.0 - true_sf[after],
-        "fixed": fig10["sf_fixed"].to_numpy()[after] - true_sf[after],
-        "adaptive": fig10["sf_adaptive"].to_numpy()[after] - true_sf[after],
-    }
-    summary = {
-        "heading_rms_deg": {k: _rms(v) for k, v in errors.items()},
-        "heading_max_deg": {k: _max_abs(v) for k, v in errors.items()},
-        "sf_heading_rms_deg": {k: _rms(v) for k, v in sf_part.items()},
-        "sf_heading_max_deg": {k: _max_abs(v) for k, v in sf_part.items()},
-        "sf_rms": {k: _rms(v) for k, v in sf_err.items()},
-        "sf_max": {k: _max_abs(v) for k, v in sf_err.items()},
-        "turns": int(len(turns)),
-        "sf_updates": int(turns["accepted"].sum()),
-        "sf_fixed": float(sf.attrs["sf_fixed"]),
-    }
-    return {
-        "log": log,
-        "out": out,
-        "sf": sf,
-        "turns": turns,
-        "fig10": fig10,
-        "fig11": fig11,
-        "summary": summary,
-        "config": config,
-    }
