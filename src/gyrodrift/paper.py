@@ -51,13 +51,8 @@ from gyrodrift.metrics import (
     heading_error_stats,
     paper_table2,
 )
-from gyrodrift.scale_factor import (
-    ScaleFactorConfig,
-    estimate_scale_factor,
-    heading_anchor,
-    heading_error,
-    integrate_heading,
-)
+from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor, heading_error, integrate_heading
+from gyrodrift.scale_factor.batch import heading_anchor
 from gyrodrift.simulate import DEFAULT_DURATION_S, TRUE_SF, interference_windows_static, simulate
 
 __all__ = [
