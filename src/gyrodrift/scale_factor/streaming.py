@@ -16,8 +16,9 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compensator import CompensatedSample
-from gyrodrift.conventions import TEMP, T
+from gyrodrift.conventions import TEMP, T, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.kernels.numeric import wrap180
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 from gyrodrift.scale_factor.filter import sf_correct
 from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, require_columns, unmeasured_turn
@@ -63,13 +64,6 @@ class CompensatedSFSample(CompensatedSample):
         """``sample`` with the SF columns of ``row``."""
         base = {f.name: getattr(sample, f.name) for f in fields(CompensatedSample)}
         return cls(**base, sf=row.sf, sf_sd=row.sf_sd, rate_sf=row.rate_sf, heading_sf=row.heading_sf)
-
-
-def _wrap_360_f(angle_deg: float) -> float:
-    """:func:`~gyrodrift.conventions.wrap_360` of one float (Python's float ``%`` is numpy's
-    ``mod``: fmod and the sign rule, so the same bits)."""
-    m = angle_deg % 360.0
-    return m - 360.0 if m >= 360.0 else m
 
 
 class ScaleFactorTracker:
@@ -235,7 +229,7 @@ class ScaleFactorTracker:
         psi_c = math.nan
         has_compass = math.isfinite(compass)
         if has_compass:
-            d = _wrap_360_f(compass - psi + 180.0) - 180.0
+            d = wrap180(compass - psi)  # as wrap_180 of the batch pass: the argument is never -0.0
             if self._c_count == 0:
                 up = d
             else:
@@ -280,7 +274,8 @@ class ScaleFactorTracker:
         self._rate_sf_prev = rate_sf
         if has_compass and self._anchor_deg != self._anchor_deg:  # first compass heading
             self._anchor_deg, self._anchor_angle = compass, self._angle
-        heading = _wrap_360_f(self._anchor_deg + (self._angle - self._anchor_angle))
+        # numpy's wrap, as integrate_heading: the compiled wrap360 keeps a -0.0, numpy gives 0.0
+        heading = float(wrap_360(self._anchor_deg + (self._angle - self._anchor_angle)))
         return ScaleFactorRow(
             sf, math.sqrt(var) if var > 0.0 else 0.0, self._s0, self._s1, rate_sf, heading, update
         )
