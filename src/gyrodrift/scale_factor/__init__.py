@@ -14,8 +14,9 @@ After the drift compensation of :func:`gyrodrift.compensator.compensate`
     rate_z = SF(T) * true_rate + (drift residual) + noise,
     SF(T) = s0 + s1 * (T - T_ref)                                  (cf. eq. 2)
 
-with ``T`` the measured gyro temperature (degC) and ``T_ref`` = ``t_ref_c``. The
-parameters ``x = [s0 (unitless), s1 (1/degC)]`` are the states of a strong tracking
+with ``T`` the measured gyro temperature (degC; an empty cell holds the previous value,
+as in the drift compensator) and ``T_ref`` = ``t_ref_c``. The parameters
+``x = [s0 (unitless), s1 (1/degC)]`` are the states of a strong tracking
 Kalman filter modelled as constant between updates (Φ = Γ = I, Section 3.2): at each
 accepted measurement ``P- = s*P + Q`` then a Joseph-form correction (eq. 10,
 :func:`gyrodrift.kernels.numeric.correct`), and P is capped at the prior ``P0``
@@ -79,12 +80,11 @@ differs:
 * ``heading_sf`` is NaN before the first compass heading (it cannot be anchored yet);
 * a rotation whose rotating rows last longer than ``max_turn_s`` is dropped
   (``long_turn``), which bounds the rows the tracker keeps; a rotation not decided by
-  the end of the log is ``edge``;
-* an empty temperature cell holds the previous value (the default pass lets it give a
-  NaN SF on that row and a NaN ``heading_sf`` from there on).
+  the end of the log is ``edge``.
 
-What the causal pass loses, on the 3-h experiment (:func:`gyrodrift.paper.scale_factor_experiment`,
-seed 0, 10 Hz, default settings; causal against default): SF RMS after the first update
+What the causal pass loses, on the 3-h experiment
+(:func:`gyrodrift.paper.scale_factor_experiment`, seed 0, 10 Hz, default settings; causal
+against default): SF RMS after the first update
 2.864e-4 against 2.845e-4 (max 1.379e-3 against 1.359e-3); the SF's share of the
 heading error (``sf_heading_rms_deg``) 3.28 against 0.32 deg RMS, and the whole heading
 error 4.92 against 2.48 deg RMS. The heading loss is the first turn, integrated with the

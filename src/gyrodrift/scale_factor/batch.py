@@ -74,9 +74,9 @@ def estimate_scale_factor(
         result. True: every row depends on that row and the rows before it only, as
         :class:`ScaleFactorTracker` computes it row by row (same numbers): an update
         applies from the first row at which it could be decided, the prior applies until
-        the first update, ``heading_sf`` is NaN before the first compass heading,
-        rotations longer than ``max_turn_s`` are dropped and an empty temperature cell
-        holds the previous value. See "Causal and non-causal" in the package notes.
+        the first update, ``heading_sf`` is NaN before the first compass heading
+        and rotations longer than ``max_turn_s`` are dropped. See "Causal and
+        non-causal" in the package notes.
 
     Returns
     -------

@@ -133,8 +133,7 @@ def _check_rows(t_s: np.ndarray, rate_dps: np.ndarray, source: str = "scale-fact
 
 def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate") -> np.ndarray:
     """Each non-finite temperature replaced by the previous finite one (degC), as the drift
-    compensator holds an empty temperature cell (both passes and the tracker; the default pass
-    gave NaN SF from such a cell on, and NaN parameters for good when it fell in a rotation)."""
+    compensator holds an empty temperature cell (both passes and the tracker)."""
     ok = np.isfinite(temp_c)
     if ok.all():
         return temp_c
@@ -217,9 +216,9 @@ def turn_measurements(
     config : ScaleFactorConfig
     causal : bool
         Decide each rotation at the first row at which the rows so far suffice
-        (``row_update``; see "Causal and non-causal" in the package notes), drop
-        rotations longer than ``max_turn_s`` (``long_turn``) and hold empty
-        temperature cells; the measurements themselves are those of the default pass.
+        (``row_update``; see "Causal and non-causal" in the package notes) and drop
+        rotations longer than ``max_turn_s`` (``long_turn``); the measurements
+        themselves are those of the default pass.
 
     Returns
     -------
