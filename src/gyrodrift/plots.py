@@ -590,7 +590,7 @@ def fig_scale_factor(fig10: pd.DataFrame, fig11: pd.DataFrame):
     fig11 : DataFrame
         ``t`` (s) and heading errors (deg) ``err_none``, ``err_fixed``,
         ``err_adaptive`` (and optionally ``err_ideal``), as returned by
-        :func:`gyrodrift.scale_factor.scale_factor_experiment`.
+        :func:`gyrodrift.paper.scale_factor_experiment`.
     """
     _need(fig10, ("t", "sf_ideal", "sf_fixed", "sf_adaptive"), "fig_scale_factor")
     _need(fig11, ("t", "err_none", "err_fixed", "err_adaptive"), "fig_scale_factor")
