@@ -1,5 +1,9 @@
 """When compass aiding is refused, and why (the ``gated`` / ``gate_reason`` columns).
 
+This module holds the thresholds (:class:`GateConfig`) and the names of the reasons; the
+decision itself is :func:`gyrodrift.kernels.aiding.row_condition` and
+:func:`gyrodrift.kernels.aiding.close`.
+
 Aiding is judged per update interval (10 s by default). An interval is refused for
 the first of these reasons seen in it (causal: a row shows what was known at that row):
 
@@ -31,9 +35,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-import numpy as np
-
 from gyrodrift.errors import ConfigError
+from gyrodrift.kernels.layout import REASON_NAMES
 
 __all__ = [
     "GateConfig",
@@ -44,20 +47,12 @@ __all__ = [
     "TURNING",
     "INTERFERENCE",
     "REASONS",
-    "row_condition",
-    "row_conditions",
-    "field_anomaly",
 ]
 
-INIT = "init"
-GAP = "gap"
-NO_COMPASS = "no_compass"
-FIELD = "field"
-TURNING = "turning"
-INTERFERENCE = "interference"
 #: Every value of ``gate_reason`` ("" = accepted), in a fixed order (the categories of
-#: the output column).
-REASONS = ("", INIT, GAP, NO_COMPASS, FIELD, TURNING, INTERFERENCE)
+#: the output column; the kernels' codes index it).
+REASONS = REASON_NAMES
+_, INIT, GAP, NO_COMPASS, FIELD, TURNING, INTERFERENCE = REASONS
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -114,51 +109,3 @@ class GateConfig:
                     raise ConfigError(f"gate setting relock_intervals must be a whole number >= 0, got {v!r}")
             elif not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigError(f"gate setting {f.name} must be a positive number, got {v!r}")
-
-
-def field_anomaly(norm, dip_deg, ref_norm: float, ref_dip_deg: float, config: GateConfig):
-    """True where field strength or dip departs from the reference (interference)."""
-    norm = np.asarray(norm, dtype=float)
-    dip_deg = np.asarray(dip_deg, dtype=float)
-    with np.errstate(invalid="ignore"):
-        bad = (np.abs(norm / ref_norm - 1.0) > config.field_norm_tol) | (
-            np.abs(dip_deg - ref_dip_deg) > config.dip_tol_deg
-        )
-    return bad & np.isfinite(norm)
-
-
-def row_condition(gap: bool, field: bool, residual_deg: float, mean_rate_dps: float, config: GateConfig) -> str:
-    """:func:`row_conditions` for one row (the streaming path), same priorities."""
-    if gap:
-        return GAP
-    if field:
-        return FIELD
-    if abs(mean_rate_dps) > config.turn_rate_dps:
-        return TURNING
-    if abs(residual_deg) > config.interference_deg:  # False for NaN (no compass sample)
-        return INTERFERENCE
-    return ""
-
-
-def row_conditions(gap, field, residual_deg, mean_rate_dps, config: GateConfig) -> np.ndarray:
-    """Per-row refusal code ('' for none), priority gap > field > turning > interference.
-
-    Parameters
-    ----------
-    gap, field : (N,) bool array_like
-        Gap or held sample; magnetic field anomaly.
-    residual_deg : (N,) array_like
-        Compass minus compensated-gyro heading change since the interval start, deg
-        (NaN on rows without a compass sample).
-    mean_rate_dps : (N,) array_like
-        1-s mean compensated rate, deg/s.
-    """
-    gap = np.asarray(gap, dtype=bool)
-    out = np.full(gap.shape, "", dtype=object)
-    with np.errstate(invalid="ignore"):
-        out[np.abs(np.asarray(residual_deg, dtype=float)) > config.interference_deg] = INTERFERENCE
-    turning = np.abs(np.asarray(mean_rate_dps, dtype=float)) > config.turn_rate_dps
-    out[turning] = TURNING
-    out[np.asarray(field, dtype=bool)] = FIELD
-    out[gap] = GAP
-    return out

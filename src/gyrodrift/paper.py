@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import CAUSAL, METHODS, run_methods
+from gyrodrift.compare import METHODS, run_methods
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_360
@@ -188,10 +188,6 @@ def envelope(out: pd.DataFrame) -> tuple[float, float]:
     """Lowest and highest heading error (deg) of a run, reference aligned at the start."""
     st = _heading_stats(out)
     return st["min"], st["max"]
-
-
-def causal_label(name: str) -> str:
-    return name if CAUSAL.get(name, True) else f"{name} (non-causal)"
 
 
 # ----------------------------------------------------------------------------- claims

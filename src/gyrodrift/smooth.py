@@ -236,7 +236,8 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     ``bias_sd``.
     """
     from gyrodrift.compensator import CompensatorConfig
-    from gyrodrift.kernels.layout import UNOBSERVABLE_SD_FRACTION
+    from gyrodrift.kernels.aiding import unobservable_code
+    from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES
 
     config = config or CompensatorConfig()
     meas = out.attrs.get("measurements")
@@ -263,12 +264,9 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     res["bias_sd"] = bias_sd
     if "heading_sd" in out.columns:
         res["heading_sd"] = _heading_sd(out, t, bias_sd, config)
-    prior = np.asarray(config.kalman.p0_sd, dtype=float)
-    sd = np.sqrt(np.maximum(np.stack([sm.cov[:, 0, 0], sm.cov[:, 1, 1]], axis=1), 0.0))
-    names = np.array(["", "a", "b", "a+b"])
-    code = (sd[:, 0] > UNOBSERVABLE_SD_FRACTION * prior[0]) + 2 * (sd[:, 1] > UNOBSERVABLE_SD_FRACTION * prior[1])
-    res["unobservable"] = pd.Categorical(names[code[k]], categories=out["unobservable"].cat.categories
-                                         if isinstance(out["unobservable"].dtype, pd.CategoricalDtype) else None)
+    prior_a, prior_b = (float(v) for v in config.kalman.p0_sd[:2])
+    codes = np.array([unobservable_code(np.ascontiguousarray(C), prior_a, prior_b) for C in sm.cov], dtype=np.int8)
+    res["unobservable"] = pd.Categorical.from_codes(codes[k], categories=list(UNOBSERVABLE_NAMES))
     res.attrs = dict(out.attrs)
     res.attrs["smoothed"] = sm
     return res

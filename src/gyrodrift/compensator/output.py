@@ -20,12 +20,14 @@ import pandas as pd
 from gyrodrift import gating
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
+from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES
 
 __all__ = ["CompensatedSample", "UNOBSERVABLE", "MEASUREMENT_COLUMNS", "output_frame", "with_attrs",
            "check_input_columns", "append_input_columns"]
 
-#: Every value of the ``unobservable`` column, in a fixed order (its categories).
-UNOBSERVABLE = ("", "a", "b", "a+b")
+#: Every value of the ``unobservable`` column, in a fixed order (its categories; the kernels'
+#: codes index it).
+UNOBSERVABLE = UNOBSERVABLE_NAMES
 
 #: Columns of ``attrs["measurements"]``: time (s), drift measurement m (deg/s), interval
 #: means of T (degC) and T' (degC/s), variance r ((deg/s)²).

@@ -17,17 +17,20 @@ Python, which the streaming path pays on every sample):
 
 from __future__ import annotations
 
-__all__: list[str] = []  # index names only; import the module
+__all__ = ["REASON_NAMES", "UNOBSERVABLE_NAMES"]  # and the index names; import the module
 
 # --------------------------------------------------------------- reason codes
 
-#: ``gate_reason`` codes: indices into :data:`gyrodrift.gating.REASONS`.
-R_NONE, R_INIT, R_GAP, R_NO_COMPASS, R_FIELD, R_TURNING, R_INTERFERENCE = 0, 1, 2, 3, 4, 5, 6
+#: ``gate_reason`` values ("" = accepted; :mod:`gyrodrift.gating` says what each means) and
+#: their codes, the indices into this tuple.
+REASON_NAMES = ("", "init", "gap", "no_compass", "field", "turning", "interference")
+R_NONE, R_INIT, R_GAP, R_NO_COMPASS, R_FIELD, R_TURNING, R_INTERFERENCE = range(len(REASON_NAMES))
 #: No refusal seen yet in the current interval.
 NO_STICKY = -1
 
-#: ``unobservable`` codes: 1 for ``a`` plus 2 for ``b`` (indices into
-#: :data:`gyrodrift.compensator.output.UNOBSERVABLE`).
+#: ``unobservable`` values (the drift parameters not yet determined) and their codes: 1 for
+#: ``a`` plus 2 for ``b``, the indices into this tuple.
+UNOBSERVABLE_NAMES = ("", "a", "b", "a+b")
 UNOBS_A, UNOBS_B = 1, 2
 #: A parameter is not observable while its standard deviation is above this fraction of
 #: its prior one: the measurements have not pinned it down (a flat temperature leaves a
