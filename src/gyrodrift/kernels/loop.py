@@ -162,9 +162,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     f_t0, f_isd, f_sdp, f_rej = fs[zf + FZ_T0], fs[zf + FZ_ISD], fs[zf + FZ_SDPREV], fs[zf + FZ_REJ_T]
     fR, fN2, ftau = cfg[C_FUSION_R], cfg[C_FUSION_N2], cfg[C_FUSION_TAU]
     fgate, frelock = cfg[C_FUSION_GATE], cfg[C_FUSION_RELOCK]
-    o_bias, o_rate, o_heading, o_sd = O_BIAS * cap, O_RATE * cap, O_HEADING * cap, O_BIAS_SD * cap
-    o_hf, o_hf_sd, o_h_sd = O_FUSED * cap, O_FUSED_SD * cap, O_HEADING_SD * cap
-    oc_update, oc_reason = OC_UPDATE * cap, OC_REASON * cap
+    # column offsets, unsigned like the row index (a mixed sum would be signed: a negative-index check per store)
+    o_bias, o_rate, o_heading = np.uint64(O_BIAS * cap), np.uint64(O_RATE * cap), np.uint64(O_HEADING * cap)
+    o_sd, o_hf, o_hf_sd = np.uint64(O_BIAS_SD * cap), np.uint64(O_FUSED * cap), np.uint64(O_FUSED_SD * cap)
+    o_h_sd, oc_update, oc_reason = np.uint64(O_HEADING_SD * cap), np.uint64(OC_UPDATE * cap), np.uint64(OC_REASON * cap)
     seg = i0  # first row whose a, b, c and unobservable code are still to write (_fill_params)
     # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
     m_T = math.nan

@@ -15,10 +15,10 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compensator import CompensatedSample
-from gyrodrift.conventions import TEMP, T, wrap_360
+from gyrodrift.compensator.output import CompensatedSample
+from gyrodrift.conventions import TEMP, T
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.kernels.numeric import wrap180
+from gyrodrift.kernels.numeric import wrap180, wrap360
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 from gyrodrift.scale_factor.filter import sf_correct
 from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, require_columns, unmeasured_turn
@@ -274,8 +274,8 @@ class ScaleFactorTracker:
         self._rate_sf_prev = rate_sf
         if has_compass and self._anchor_deg != self._anchor_deg:  # first compass heading
             self._anchor_deg, self._anchor_angle = compass, self._angle
-        # numpy's wrap, as integrate_heading: the compiled wrap360 keeps a -0.0, numpy gives 0.0
-        heading = float(wrap_360(self._anchor_deg + (self._angle - self._anchor_angle)))
+        # the scalar form of the batch pass's wrap_360 (integrate_heading): the same bits
+        heading = wrap360(self._anchor_deg + (self._angle - self._anchor_angle))
         return ScaleFactorRow(
             sf, math.sqrt(var) if var > 0.0 else 0.0, self._s0, self._s1, rate_sf, heading, update
         )
