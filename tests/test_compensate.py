@@ -13,6 +13,7 @@ from gyrodrift.gating import GateConfig
 from gyrodrift.io import read_log
 from gyrodrift.kernels.aiding import compass_measurement
 from gyrodrift.model import temp_rate
+from gyrodrift.triad import TRIAD_COLUMNS
 
 
 def stream(log: pd.DataFrame, cfg: CompensatorConfig, raw_mag: bool = False) -> pd.DataFrame:
@@ -244,13 +245,24 @@ def test_empty_cells_are_held_and_refuse_the_interval():
     assert not out[["rate_z", "bias_z", "heading"]].isna().any().any()
 
 
-def test_too_short_and_no_compass_errors():
-    with pytest.raises(GyroDriftError, match="initialisation needs at least 40 s"):
-        compensate(synthetic_log(duration_s=35.0))
-    log = synthetic_log(duration_s=100.0)
-    log.loc[log["t"] < 31, "heading"] = np.nan
-    with pytest.raises(GyroDriftError, match="no compass heading in the first 30 s"):
-        compensate(log)
+def test_short_logs_and_logs_without_compass_are_compensated_with_a_note():
+    """Shorter than the init window: compensated from its still parts (a still 8-s log with a
+    0.3 deg/s bias: the bias is found), with a note; streaming gives the same rows on flush()."""
+    short = synthetic_log(duration_s=8.0, drift_dps=lambda t, T: np.full_like(t, 0.3), gyro_noise_dps=0.02)
+    out = compensate(short)
+    assert len(out) == len(short) and out["bias_z"].iloc[-1] == pytest.approx(0.3, abs=0.01)
+    assert any("shorter than the 30-s init window" in n for n in out.attrs["notes"])
+    comp = Compensator()
+    rows = [r for row in short.itertuples(index=False) for r in comp.push(row.t, row.gyro_z, row.temp, row.heading)]
+    assert rows == [] and comp.notes == []
+    assert_same(out, pd.DataFrame([asdict(s) for s in comp.flush()]).drop(columns=list(TRIAD_COLUMNS)))
+    assert comp.flush() == []  # nothing held any more
+    # no compass at all: relative heading from 0, the drift from the still start
+    blind = synthetic_log(duration_s=120.0, drift_dps=lambda t, T: np.full_like(t, 0.3)).drop(columns="heading")
+    out = compensate(blind)
+    assert out["heading"].iloc[0] == 0.0 and out["compass_heading"].isna().all()
+    assert out["bias_z"].iloc[-1] == pytest.approx(0.3, abs=0.02)
+    assert any("heading starts at 0 deg" in n for n in out.attrs["notes"])
 
 
 def test_streaming_rejects_time_going_back():

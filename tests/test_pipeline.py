@@ -68,11 +68,13 @@ def test_a_bad_row_in_a_later_chunk_is_named_and_nothing_is_written(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["bad.csv"]
 
 
-def test_a_log_too_short_is_an_error_and_nothing_is_written(tmp_path):
+def test_a_log_shorter_than_the_init_window_streams_like_in_memory_with_a_note(tmp_path):
     write_table(synthetic_log(duration_s=20.0), tmp_path / "short.csv")
-    with pytest.raises(GyroDriftError, match="short.csv: the log is .* long"):
-        compensate_file(tmp_path / "short.csv", tmp_path / "out.parquet", chunk_rows=100)
-    assert not (tmp_path / "out.parquet").exists()
+    streamed = compensate_file(tmp_path / "short.csv", tmp_path / "s.csv", chunk_rows=100)
+    whole = compensate_file(tmp_path / "short.csv", tmp_path / "w.csv", stream=False)
+    assert streamed.streamed and (tmp_path / "s.csv").read_bytes() == (tmp_path / "w.csv").read_bytes()
+    for stats in (streamed, whole):
+        assert any("shorter than the 30-s init window" in n for n in stats.notes)
 
 
 def test_python_estimators_stream_too(logs, tmp_path):

@@ -287,6 +287,7 @@ def compensate_file(
         stats.add(out)
         stats.final_params, stats.final_cov = out.attrs["final_params"], out.attrs["final_cov"]
         stats.estimator = str(out.attrs.get("estimator", ""))
+        stats.notes = list(out.attrs.get("notes", ()))
         return stats
     return _stream(input_path, output_path, cfg, opts, chunk_rows)
 
@@ -488,7 +489,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
                     f"type after the start of the file ({exc.value!r}); the file was read again"
                 )
                 continue
-            stats.notes = list(notes.values())
+            stats.notes = list(notes.values()) + stats.notes
             return stats
     finally:
         sys.setswitchinterval(switch)
@@ -519,6 +520,20 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
             # the reader thread reads the first chunks
             engine = ChunkEngine(cfg, est, source)
+
+            def emit(cols) -> None:
+                """Write the rows the engine gave back, with their input columns."""
+                nonlocal pending, triad
+                rows = (pd.concat(pending) if len(pending) > 1 else pending[0]).reset_index(drop=True)
+                pending = []
+                out = output_frame(cols)
+                if has_triad_inputs(rows.columns):
+                    triad = triad or TriadCompensator(cfg)
+                    add_triad_columns(out, rows, tc=triad)
+                out = append_input_columns(out, rows)
+                behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
+                stats.add(out)
+
             for log in reader:
                 has_mag = check_input_columns(log, source)
                 n = len(log)
@@ -528,26 +543,20 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                         n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
                     )
                 else:
-                    heading, norm, dip = heading_in, None, None
+                    heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
                 pending.append(log)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
                                    heading, norm, dip)
-                if cols is None:
-                    continue
-                rows = pd.concat(pending) if len(pending) > 1 else pending[0]
-                pending = []
-                rows = rows.reset_index(drop=True)
-                out = output_frame(cols)
-                if has_triad_inputs(rows.columns):
-                    triad = triad or TriadCompensator(cfg)
-                    add_triad_columns(out, rows, tc=triad)
-                out = append_input_columns(out, rows)
-                behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
-                stats.add(out)
+                if cols is not None:
+                    emit(cols)
+            cols = engine.flush()  # a log shorter than the init window
+            if cols is not None:
+                emit(cols)
             engine.finish()
         finally:
             reader.close()
             behind.close()
         stats.compass = chunks.compass or "?"
+        stats.notes = list(getattr(chunks, "notes", ())) + engine.notes
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats

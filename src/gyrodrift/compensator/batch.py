@@ -11,7 +11,7 @@ from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
-from gyrodrift.errors import GyroDriftError, LogFormatError
+from gyrodrift.errors import LogFormatError
 from gyrodrift.triad import add_triad_columns, has_triad_inputs
 
 __all__ = ["compensate", "compensate_arrays"]
@@ -68,12 +68,6 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the log has no samples")
     if not (np.isfinite(g[0]) and np.isfinite(T_in[0])):
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
-    need = cfg.init_s + cfg.update_interval_s
-    if t[-1] - t[0] < need:
-        raise GyroDriftError(
-            f"{source}: the log is {t[-1] - t[0]:.1f} s long; initialisation needs at least "
-            f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
-        )
     est = estimator if estimator is not None else build_estimator(cfg)
     if mag is not None and acc is not None:
         heading, norm, dip = compass_columns(n, heading_deg, mag, acc)
@@ -83,19 +77,22 @@ def compensate_arrays(
     engine = ChunkEngine(cfg, est, source)
     if progress is None or n <= PROGRESS_ROWS:
         cols = engine.feed(t, g, T_in, heading, norm, dip, buffers)
-        accepted = engine.finish()
-        return with_attrs(output_frame(cols, None if buffers is None else buffers.gated[:n]), accepted, est)
+        gated = None
+        if cols is None:  # shorter than the init window
+            cols = engine.flush()
+        elif buffers is not None:
+            gated = buffers.gated[:n]
+        return with_attrs(output_frame(cols, gated), engine.finish(), est, engine.notes)
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
         sl = slice(lo, lo + PROGRESS_ROWS)
-        cols = engine.feed(t[sl], g[sl], T_in[sl], heading[sl], None if norm is None else norm[sl],
-                           None if dip is None else dip[sl])
-        if cols is not None:
-            parts.append(cols)
-    accepted = engine.finish()
+        parts.append(engine.feed(t[sl], g[sl], T_in[sl], heading[sl], None if norm is None else norm[sl],
+                                 None if dip is None else dip[sl]))
+    parts.append(engine.flush())
+    parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), accepted, est)
+    return with_attrs(output_frame(cols), engine.finish(), est, engine.notes)
 
 
 def compensate(
@@ -152,4 +149,5 @@ def compensate(
     )
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)
+    out.attrs["notes"] = list(log.attrs.get("notes", ())) + out.attrs["notes"]
     return append_input_columns(out, log)

@@ -119,7 +119,9 @@ class ChunkEngine:
     -----
     :meth:`feed` returns the output columns of the rows that became available (none
     until the initialisation window is complete, then all of its rows at once);
-    :meth:`finish` checks the log was long enough and returns the accepted measurements.
+    :meth:`flush` gives the rows of a log that ended before the window did;
+    :meth:`finish` returns the accepted measurements. :attr:`notes` says what could not be
+    learned.
     Rows are numbered from 0 across chunks in error messages.
     """
 
@@ -157,6 +159,8 @@ class ChunkEngine:
         self._t0: float | None = None
         self._held: list[tuple] | None = []  # prepared chunks of the init window, until it is complete
         self._row: _RowMemory | None = None
+        #: What could not be learned or was done instead (one-line sentences, for the user).
+        self.notes: list[str] = []
 
     # ---------------------------------------------------------------- state
     @property
@@ -235,17 +239,22 @@ class ChunkEngine:
             join(helper)
 
     def _initialise(self, inputs, Tp) -> None:
-        """The init window's measurements, the estimator's first update and the field reference."""
+        """The init window's measurements, the estimator's first update and the field reference.
+
+        The window ends at the first row at or after ``t_start``, or at the last row when the
+        log ends before (a short log: the window is what there is)."""
         t, g, T, heading, norm, dip = inputs
         cfg = self.cfg
-        e = int(np.searchsorted(t, self._fs[L.F_TSTART], "left"))  # first row with t >= t_start
-        found, anchor = aiding.init_measurements(t, g, T, Tp, heading, e, cfg.stack_depth, float(cfg.init_s),
+        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)  # first row with t >= t_start
+        span = min(float(cfg.init_s), float(t[e] - t[0]))
+        if t[e] < self._fs[L.F_TSTART]:
+            self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
+                              f"{cfg.init_s:g}-s init window: compensated from its still parts and the prior")
+        found, anchor = aiding.init_measurements(t, g, T, Tp, heading, e, cfg.stack_depth, max(span, 1e-9),
                                                  self._set, self._ist, self._stack, self._acc, cfg.stack_depth)
         if anchor < 0:
-            raise GyroDriftError(
-                f"{self.source}: no compass heading in the first {cfg.init_s:g} s (init window), "
-                "so the heading cannot be anchored; check the heading/mag columns or raise --init-s"
-            )
+            self.notes.append(f"{self.source}: no compass sample in the first {span:.1f} s: the heading starts "
+                              "at 0 deg at the first sample (relative)")
         if norm.size:
             self._fs[L.F_FIELD_NORM], self._fs[L.F_FIELD_DIP] = aiding.field_reference(norm, dip, e + 1)
         if found:
@@ -349,19 +358,26 @@ class ChunkEngine:
         return cols.out.tolist(), cols.codes.tolist(), float(h[0])
 
     # --------------------------------------------------------------- finish
+    def flush(self) -> dict | None:
+        """The rows held back while the init window fills (a log shorter than the window),
+        compensated from what they give (the window ends at the last row): output columns
+        as :meth:`feed` returns them, or None when no row is held. Rows fed afterwards
+        come out as they go in."""
+        if not self._held:
+            return None
+        inputs, cols = _joined(self._held) if len(self._held) > 1 else self._held[0]
+        self._held = None
+        self._initialise(inputs, cols.column(L.O_TEMP_RATE))
+        return self._run(inputs, cols)
+
     def finish(self) -> np.ndarray:
-        """End of the log: check its length; return the accepted measurements, an (M, 5)
-        array of (time s, m deg/s, mean T degC, mean T' degC/s, r (deg/s)²)."""
-        cfg = self.cfg
-        need = cfg.init_s + cfg.update_interval_s
+        """End of the log: return the accepted measurements, an (M, 5) array of (time s,
+        m deg/s, mean T degC, mean T' degC/s, r (deg/s)²). Rows still held must have been
+        taken with :meth:`flush` first."""
         if self._t0 is None:
             raise LogFormatError(f"{self.source}: the log has no samples")
-        span = self._fs[L.F_LAST_T] - self._t0
-        if self._held is not None or span < need:
-            raise GyroDriftError(
-                f"{self.source}: the log is {span:.1f} s long; initialisation needs at least "
-                f"{need:g} s (--init-s {cfg.init_s:g} plus one {cfg.update_interval_s:g}-s update interval)"
-            )
+        if self._held:
+            raise GyroDriftError(f"{self.source}: rows are still held: call flush() before finish()")
         return self.accepted()
 
     def accepted(self) -> np.ndarray:

@@ -104,29 +104,28 @@ def output_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:
     )
 
 
-def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est) -> pd.DataFrame:
+def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=()) -> pd.DataFrame:
     """``out`` with its ``attrs``: the accepted measurements ``(M, 5)``, the estimator's name,
-    final parameters and covariance."""
+    final parameters and covariance, and ``notes``: what could not be learned or was done
+    instead (one-line sentences)."""
     out.attrs["measurements"] = pd.DataFrame(np.asarray(accepted, dtype=float).reshape(-1, 5),
                                              columns=list(MEASUREMENT_COLUMNS))
     out.attrs["estimator"] = est.name
     out.attrs["final_params"] = est.params
     out.attrs["final_cov"] = est.cov
+    out.attrs["notes"] = list(notes)
     return out
 
 
 def check_input_columns(log: pd.DataFrame, source: str) -> bool:
-    """Check a log (or chunk) has the contract's required columns and a compass; return
-    whether the raw magnetometer form (``mag_*`` and ``acc_*``) is complete."""
+    """Check a log (or chunk) has the contract's required columns; return whether the raw
+    magnetometer form (``mag_*`` and ``acc_*``) is complete. A log may have no compass at
+    all (no ``heading`` either): its heading is then relative and its drift is learned
+    from still periods only."""
     missing = [c for c in (T, GYRO_Z, TEMP) if c not in log.columns]
     if missing:
         raise LogFormatError(f"{source}: missing required column(s) {', '.join(missing)}")
-    has_mag = all(c in log.columns for c in MAG_COLS + ACC_COLS)
-    if HEADING not in log.columns and not has_mag:
-        raise LogFormatError(
-            f"{source}: no compass: give a 'heading' column or all of {', '.join(MAG_COLS + ACC_COLS)}"
-        )
-    return has_mag
+    return all(c in log.columns for c in MAG_COLS + ACC_COLS)
 
 
 def append_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:

@@ -26,7 +26,7 @@ class Compensator:
 
     :meth:`push` returns a list of :class:`CompensatedSample`: empty while the
     initialisation window fills, all its rows at once when it ends, then one row per
-    sample. It runs the engine of :func:`gyrodrift.compensate` (the same kernels), so it
+    sample; :meth:`flush` gives the rows still held when the samples end first. It runs the engine of :func:`gyrodrift.compensate` (the same kernels), so it
     gives the same numbers, bit for bit, on the same data.
 
     The x and y axes (``rate_x``, ``bias_x``, ...; :mod:`gyrodrift.triad`) are compensated
@@ -145,6 +145,21 @@ class Compensator:
             return self._with_triad([self._sample(t_s, out, codes, compass)])
         cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
                                  np.array([norm]), np.array([dip]))
+        return self._rows(cols)
+
+    def flush(self) -> list[CompensatedSample]:
+        """The rows held back while the init window fills, when the samples end before it does
+        (a short log): compensated from what they give (the window ends at the last sample).
+        Empty when no row is held. Samples pushed afterwards come out one by one."""
+        return self._rows(self._engine.flush())
+
+    @property
+    def notes(self) -> list[str]:
+        """What could not be learned or was done instead (one-line sentences)."""
+        return list(self._engine.notes)
+
+    def _rows(self, cols: dict | None) -> list[CompensatedSample]:
+        """The samples of the engine's output columns (none for None)."""
         if cols is None:
             return []
         rows = [

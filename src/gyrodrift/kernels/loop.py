@@ -266,7 +266,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             _fill_params(out, codes, cap, seg, i + 1, pa, pb, pc, unobs)
             seg = i + 1
             if i == init_end:
-                anchor = _anchor(heading, out, o_heading, ist[I_ANCHOR_ROW], i)
+                anchor = _anchor(heading, out, O_HEADING * cap, ist[I_ANCHOR_ROW], i)
                 k = math.floor((t_s - t_start) / interval)
                 ist[I_INIT_END] = -1
                 init_end = -1
@@ -321,9 +321,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
 @jit
 def _anchor(heading, out, o_heading, anchor_row, last):
     """The heading anchor at the end of the init window (rows ``0..last``): the first
-    compass sample minus the integrated rate there; the init rows' heading (written as the
+    compass sample minus the integrated rate there (without a compass sample, ``anchor_row``
+    -1: 0, the heading is relative to the first row); the init rows' heading (written as the
     integrated rate) becomes ``anchor + ∫rate``, wrapped. Returns the anchor."""
-    anchor = heading[anchor_row] - out[o_heading + anchor_row]
+    anchor = 0.0 if anchor_row < 0 else heading[anchor_row] - out[o_heading + anchor_row]
     for j in range(last + 1):
         out[o_heading + j] = wrap360(anchor + out[o_heading + j])
     return anchor
