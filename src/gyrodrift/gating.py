@@ -81,6 +81,11 @@ class GateConfig:
         is below this, deg/s ...
     still_heading_deg : float
         ... and the compass heading changes by less than this, deg.
+    still_run_s : float
+        Gyro-only stillness: a run of rows at least this long, s, whose gyro standard
+        deviation stays below ``still_std_dps``, measures the drift (its mean rate), when it
+        is ended by a time gap (a bursty log: records between gaps) or the log has no
+        compass; each run gives one measurement, at most every update interval.
     relock_intervals : int
         Lock-out recovery (0 = off, as in the paper; default 3): after this many
         consecutive intervals
@@ -99,6 +104,7 @@ class GateConfig:
     max_gap_s: float = 1.0
     still_std_dps: float = 1.0
     still_heading_deg: float = 2.0
+    still_run_s: float = 2.0
     relock_intervals: int = 3
 
     def __post_init__(self):

@@ -82,6 +82,7 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     cfg[L.C_DIP_TOL] = gate.dip_tol_deg
     cfg[L.C_STILL_STD] = gate.still_std_dps
     cfg[L.C_STILL_HEADING] = gate.still_heading_deg
+    cfg[L.C_RUN_MIN_S] = gate.still_run_s
     cfg[L.C_FUSION_R:L.C_FUSION_RELOCK + 1] = fusion.vector(config.gyro_noise_dps_rthz)
     icfg = np.zeros(L.N_KCFG, dtype=np.int64)
     icfg[L.K_RELOCK] = gate.relock_intervals

@@ -65,7 +65,11 @@ F_TP_T0, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_RATE = 52, 53, 54, 55  # T' tracker
 F_FUSION = 56  # fused-heading state (FZ_* offsets)
 F_LAST_T, F_LAST_G, F_LAST_TEMP = 65, 66, 67  # last input row (time check, held cells)
 F_FIELD_NORM, F_FIELD_DIP = 68, 69  # reference field of the init window (NaN: none)
-N_FSTATE = 70
+#: The current still run (gyro-only stillness, :func:`gyrodrift.kernels.aiding.close_still_run`):
+#: its first row's time and integrals (t, I_raw, I_T, I_Tp), its first gyro value, and the
+#: sums of the gyro minus that value and of their squares.
+F_RUN_T0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ = 70, 71, 72, 73, 74, 75, 76
+N_FSTATE = 77
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
@@ -82,7 +86,9 @@ I_INIT_END = 21  # last row of the init window in this call (-1: none)
 I_INIT_UPDATED = 22  # the init window gave a measurement
 I_ANCHOR_ROW = 23  # first compass row of the init window
 I_PENDING = 24  # PENDING_* for the caller (MODE_EXTERNAL)
-N_ISTATE = 25
+I_RUN_N = 25  # rows in the current still run (0: none)
+I_COMPASS_SEEN = 26  # a compass sample came after the init window
+N_ISTATE = 27
 
 # ----------------------------------------------------------- float settings
 
@@ -91,7 +97,8 @@ C_INTERF, C_MAX_AGE, C_PRIOR_A, C_PRIOR_B, C_MAX_GAP = 5, 6, 7, 8, 9
 C_TP_BIN_S, C_FIELD_NORM_TOL, C_DIP_TOL, C_STILL_STD, C_STILL_HEADING = 10, 11, 12, 13, 14
 C_FUSION_R, C_FUSION_N2, C_FUSION_TAU, C_FUSION_GATE, C_FUSION_RELOCK = 15, 16, 17, 18, 19
 C_EDGE_S, C_WINDOW_S, C_ZARU_WINDOW_S, C_ZARU_SLOPE_K, C_ZARU_RESID_K = 20, 21, 22, 23, 24
-N_CFG = 25
+C_RUN_MIN_S = 25  # shortest still run that measures the drift, s
+N_CFG = 26
 
 # --------------------------------------------------------- integer settings
 

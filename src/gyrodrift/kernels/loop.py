@@ -30,13 +30,14 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels import aiding, drift, fusion
 from gyrodrift.kernels.layout import (
     C_DIP_TOL, C_FIELD_NORM_TOL, C_FUSION_GATE, C_FUSION_N2, C_FUSION_R, C_FUSION_RELOCK, C_FUSION_TAU, C_INTERF,
-    C_INTERVAL, C_MAX_GAP, C_TP_BIN_S, C_TURN_RATE, C_TURN_WIN, C_WINDOW_S, F_ANCHOR, F_BIAS, F_COV,
+    C_INTERVAL, C_MAX_GAP, C_STILL_STD, C_TP_BIN_S, C_TURN_RATE, C_TURN_WIN, C_WINDOW_S, F_ANCHOR, F_BIAS, F_COV,
     F_FIELD_DIP, F_FIELD_NORM, F_FUSION, F_G, F_IBIAS, F_IRATE, F_IRAW, F_IT, F_ITP, F_K, F_LAST_G, F_LAST_T,
     F_LAST_TEMP, F_PA, F_PB, F_PC, F_RATE, F_S0, F_S1, F_T, F_TEMP, F_TP, F_TSTART, FZ_ISD, FZ_P, FZ_PSI,
     FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
     I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
-    O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
+    F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
+    O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
     OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_INIT, R_INTERFERENCE, R_NONE,
 )
 from gyrodrift.kernels.numeric import near_boundary, wrap180, wrap360
@@ -132,6 +133,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     t_start = fs[F_TSTART]
     anchor = fs[F_ANCHOR]
     external = icfg[K_MODE] == MODE_EXTERNAL
+    still_runs = not external  # gyro-only still runs update the compiled filters
+    still_var = cfg[C_STILL_STD] ** 2
     init_end = ist[I_INIT_END]
     lb_cap = lb.shape[0]
     acc_cap = acc.shape[0]
@@ -183,6 +186,34 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         Ti = T[ix]
         Tpi = Tp[ix]
         h = heading[ix]
+        in_init = i <= init_end
+        run_measured = False
+        if still_runs and not in_init and ist[I_RUN_N] > 0:
+            # the still run so far ends before this row when it moves, a gap comes, or it is an
+            # interval long; it measures the drift when cut by a gap or the log has no compass
+            d = gi - fs[F_RUN_G0]
+            n1 = ist[I_RUN_N] + 1
+            s1 = fs[F_RUN_SUM] + d
+            q1 = fs[F_RUN_SUMSQ] + d * d
+            moving = q1 / n1 - (s1 / n1) ** 2 > still_var
+            if moving or gap[ix] or t_s - fs[F_RUN_T0] >= interval:
+                if gap[ix] or ist[I_COMPASS_SEEN] == 0:
+                    run_measured = aiding.close_still_run(c_t, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc,
+                                                          ef, ei)
+                ist[I_RUN_N] = 0
+                if run_measured:  # the rows before keep the parameters they were compensated with
+                    _fill_params(out, codes, cap, seg, i, pa, pb, pc, unobs)
+                    seg = i
+                    pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
+                    C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
+                    C10, C11, C12 = fs[F_COV + 3], fs[F_COV + 4], fs[F_COV + 5]
+                    C20, C21, C22 = fs[F_COV + 6], fs[F_COV + 7], fs[F_COV + 8]
+                    unobs = ist[I_UNOBS]
+                    m_T = math.nan
+            else:
+                ist[I_RUN_N] = n1
+                fs[F_RUN_SUM] = s1
+                fs[F_RUN_SUMSQ] = q1
         if Ti != m_T or Tpi != m_Tp:
             m_T = Ti
             m_Tp = Tpi
@@ -198,9 +229,11 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         I_bias = I_bias + 0.5 * (bias + c_bias) * dt
         I_rate = I_rate + 0.5 * (rate + c_rate) * dt
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
-        in_init = i <= init_end
+        if still_runs and not in_init and ist[I_RUN_N] == 0:
+            aiding.open_still_run(t_s, I_raw, I_T, I_Tp, gi, fs, ist)
         has_compass = not math.isnan(h)
         if has_compass:
+            ist[I_COMPASS_SEEN] = 1
             fs[F_S1] = t_s
             fs[F_S1 + 1] = h
             fs[F_S1 + 2] = I_raw
@@ -228,7 +261,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         out[o_bias + ix] = bias
         out[o_rate + ix] = rate
         out[o_sd + ix] = bias_sd
-        update = 0
+        update = 1 if run_measured else 0
         if in_init:
             reason = R_INIT
             out[o_heading + ix] = I_rate  # anchored when the window is done
@@ -274,7 +307,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 ist[I_STICKY] = sticky
                 ist[I_AFTER_INT] = 1 if after_int else 0
                 ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
-                update, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei)
+                closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei)
+                update = max(update, closed)
                 if not external:
                     aiding.in_force(fs, ist, cfg, ef, ei)
             k_cur = k
