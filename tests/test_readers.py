@@ -201,12 +201,73 @@ def test_ulog_missing_instance_lists_those_present():
     assert "instance must be a non-negative integer" in _raises(ConfigError, read_ulog, SMALL, instance=-1)
 
 
-def test_ulog_temperature_logged_as_zero_is_an_error():
+_NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
+
+
+def test_ulog_temperature_logged_as_zero_reads_as_a_bias_with_a_note():
     path = _need(EVENTS)
-    msg = _raises(LogFormatError, read_ulog, path)
-    assert msg.startswith(str(path))
-    assert "sensor_gyro instance 0" in msg and "exactly 0 degC" in msg and "31 samples" in msg
-    assert "no gyro temperature" in msg
+    df = read_ulog(path)
+    assert len(df) == 7783 and list(df.columns) == CONTRACT + ["ref_heading"]
+    assert df["temp"].dtype == np.float64 and (df["temp"] == 0.0).all()
+    assert df.attrs["compass"] == "mag" and df.attrs["topics"]["temp"] is None
+    assert df.attrs["notes"] == [
+        f"{path}: no usable gyro temperature (sensor_gyro instance 0 logs 0 degC in all 31 samples, sensor_accel"
+        f" instance 0 logs 0 degC in all 31 samples): {_NO_TEMP_DOES}"
+    ]
+    assert "no gyro temperature (temp set to 0 degC)" in df.attrs["summary"]
+    assert read_log(path).attrs["notes"] == df.attrs["notes"]
+
+
+def test_ulog_temperature_as_nan_without_an_accel_of_the_chip(tmp_path):
+    path = _edited(tmp_path, _need(EVENTS), _set_temperature("sensor_gyro", lambda n: np.full(n, np.nan)),
+                   topics=["sensor_combined", "sensor_gyro", "vehicle_magnetometer"])
+    df = read_ulog(path)
+    assert (df["temp"] == 0.0).all()
+    assert df.attrs["notes"] == [
+        f"{path}: no usable gyro temperature (sensor_gyro instance 0 logs NaN in all 31 samples, no sensor_accel of"
+        f" the same chip): {_NO_TEMP_DOES}"
+    ]
+
+
+def test_ulog_without_magnetometer_reads_without_compass(tmp_path):
+    path = _edited(tmp_path, _need(SMALL), topics=["sensor_combined", "sensor_gyro", "sensor_accel"])
+    df = read_ulog(path)
+    assert list(df.columns) == ["t", "gyro_z", "gyro_x", "gyro_y", "temp", "acc_x", "acc_y", "acc_z"]
+    assert df.attrs["compass"] == "none" and "mag_unit" not in df.attrs and df.attrs["acc_unit"] == "m/s^2"
+    assert df.attrs["topics"]["mag"] is None and df.attrs["topics"]["acc"] == "sensor_combined"
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no sensor_mag nor vehicle_magnetometer topic in the log): {_NO_COMPASS_DOES}"
+    ]
+    assert "; no compass; acc from sensor_combined" in df.attrs["summary"]
+    # a magnetometer instance asked for by name is still required
+    assert "no 'sensor_mag' topic" in _raises(LogFormatError, read_ulog, path, mag_instance=0)
+
+
+def test_ulog_without_accelerometer_has_no_compass(tmp_path):
+    path = _edited(tmp_path, _need(SMALL), topics=["sensor_gyro", "sensor_mag"])
+    df = read_ulog(path)
+    assert list(df.columns) == ["t", "gyro_z", "gyro_x", "gyro_y", "temp"]
+    assert df.attrs["compass"] == "none" and "acc_unit" not in df.attrs and df["temp"].between(35, 45).all()
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no accelerometer for the tilt, neither sensor_combined.accelerometer_m_s2 nor a"
+        f" sensor_accel of the gyro's chip): {_NO_COMPASS_DOES}"
+    ]
+
+
+def test_ulog_magnetometer_outside_the_gyro_record_is_no_compass(tmp_path):
+    def later(ulog):
+        data = _dataset(ulog, "vehicle_magnetometer")
+        for key in ("timestamp", "timestamp_sample"):
+            if key in data:
+                data[key] = data[key] + np.uint64(10**10)
+
+    path = _edited(tmp_path, _need(SMALL), later, topics=["sensor_combined", "sensor_gyro", "vehicle_magnetometer"])
+    df = read_ulog(path)
+    assert df.attrs["compass"] == "none" and "mag_x" not in df.columns
+    (note,) = df.attrs["notes"]
+    assert note.startswith(f"{path}: no compass (no sample of vehicle_magnetometer instance 0 falls within the gyro")
+    assert note.endswith(f" s): {_NO_COMPASS_DOES}")
 
 
 def test_ulog_events_rates_rows_and_interpolated_temperature(tmp_path):
