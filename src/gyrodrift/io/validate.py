@@ -2,10 +2,12 @@
 
 The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
 (:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
-contract with :func:`normalise_frame`: column map, required and compass columns, numeric
+contract with :func:`normalise_frame`: column map, required columns, numeric
 conversion, time and temperature checks, gyro unit (deg/s) and frame (NED/FRD, headings
-in [0, 360)). Every step works row by row, so the chunks of a file come out as the rows
-of the whole file.
+in [0, 360)), and a ``temp`` of 0 degC where the file has no usable temperature. Every
+step works row by row, so the chunks of a file come out as the rows of the whole file.
+:func:`compass_form` names the compass form the file holds ("none" without one), and
+:func:`table_notes` words what the file lacks (:mod:`gyrodrift.io.notes`).
 
 Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
 :class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
