@@ -18,6 +18,7 @@ from conftest import SHARED_DATA
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import check_output_path, read_log, write_table
 from gyrodrift.io import tabular
+from gyrodrift.io.notes import add_note, no_temperature_note
 
 DATA = SHARED_DATA
 MPU = DATA / "mpu6050_rotate_z"
@@ -300,6 +301,15 @@ def test_no_compass_and_no_temperature_give_two_notes(tmp_path):
         f"{path}: no compass (no heading column nor mag_x..z with acc_x..z): {_NO_COMPASS_DOES}",
         f"{path}: no usable gyro temperature (column 'temp' empty in every row): {_NO_TEMP_DOES}",
     ]
+
+
+def test_add_note_appends_to_the_notes_already_there():
+    attrs = {"notes": ["earlier note"]}
+    add_note(attrs, "log.csv: no compass (x): y")
+    assert attrs["notes"] == ["earlier note", "log.csv: no compass (x): y"]
+    fresh = {}
+    add_note(fresh, no_temperature_note("a.csv", "why"))
+    assert fresh == {"notes": [f"a.csv: no usable gyro temperature (why): {_NO_TEMP_DOES}"]}
 
 
 def test_missing_gyro_z_still_refused_and_names_a_missing_temp_too(tmp_path):
