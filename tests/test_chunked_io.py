@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import read_log, write_table
-from gyrodrift.io.chunked import ChunkWriter, LogSummary, iter_log_chunks, log_summary
+from gyrodrift.io.chunked import ChunkWriter, LogChunks, LogSummary, iter_log_chunks, log_summary
 
 SMALL_BLOCK = 1024  # bytes: many pyarrow blocks even in a small file
 
@@ -52,7 +52,7 @@ def _assert_same_as_read_log(path, chunk_rows, **options) -> list[pd.DataFrame]:
     for col in whole.columns:
         if whole[col].dtype == np.float64:
             assert joined[col].to_numpy().tobytes() == whole[col].to_numpy().tobytes(), col
-    expected_attrs = {k: v for k, v in whole.attrs.items() if k != "compass"}
+    expected_attrs = {k: v for k, v in whole.attrs.items() if k not in ("compass", "notes")}
     assert all(p.attrs == expected_attrs for p in parts)
     return parts
 
@@ -257,14 +257,65 @@ def test_time_empty_in_the_first_chunk_only(tmp_path):
     assert "line 2" in msg and "time is empty" in msg
 
 
-def test_compass_empty_everywhere_raises_after_the_last_chunk(tmp_path):
+def _chunks_and_notes(path, chunk_rows, **kwargs) -> tuple[list[pd.DataFrame], LogChunks]:
+    """The chunks (checked equal to read_log) and the LogChunks, read to the end."""
+    whole = read_log(path, **kwargs)
+    if not str(path).endswith(".parquet"):
+        kwargs.setdefault("block_size_bytes", SMALL_BLOCK)
+    chunks = iter_log_chunks(path, chunk_rows=chunk_rows, **kwargs)
+    assert chunks.notes is None and chunks.compass is None
+    parts = list(chunks)
+    pd.testing.assert_frame_equal(pd.concat(parts), whole, check_exact=True)
+    assert chunks.compass == whole.attrs["compass"]
+    assert chunks.notes == whole.attrs.get("notes", [])
+    return parts, chunks
+
+
+def test_compass_empty_everywhere_is_no_compass_after_the_last_chunk(tmp_path):
     path = _write(tmp_path, _rows(300, {i: f"{i / 10!r},0.5,20," for i in range(300)}), "nc.csv")
+    parts, chunks = _chunks_and_notes(path, 64)
+    assert len(parts) == 5 and chunks.compass == "none"
+    assert chunks.notes == [
+        f"{path}: no compass (heading column empty in every row, no mag_x..z with acc_x..z): the heading is relative"
+        " to the first sample and the drift is learned from still periods only"
+    ]
+
+
+def test_no_notes_for_a_complete_log(tmp_path):
+    _, chunks = _chunks_and_notes(_write(tmp_path, _rows(300)), 64)
+    assert chunks.notes == [] and chunks.compass == "heading"
+
+
+def test_no_temp_column_is_zero_in_every_chunk(tmp_path):
+    text = "t,gyro_z,heading\n" + "".join(f"{i / 10!r},0.5,{i % 360}\n" for i in range(300))
+    parts, chunks = _chunks_and_notes(_write(tmp_path, text, "nt.csv"), 64)
+    assert all(list(p.columns) == ["t", "gyro_z", "heading", "temp"] and (p["temp"] == 0.0).all() for p in parts)
+    assert len(chunks.notes) == 1 and "no usable gyro temperature (no 'temp' column;" in chunks.notes[0]
+
+
+@pytest.mark.parametrize("suffix", ["csv", "parquet"])
+def test_temp_empty_everywhere_is_zero_in_every_chunk(tmp_path, suffix):
+    rows = {i: f"{i / 10!r},0.5,,{i % 360}" for i in range(300)}
+    path = _write(tmp_path, _rows(300, rows), "et.csv")
+    if suffix == "parquet":
+        df = read_log(path).assign(temp=np.nan)
+        path = tmp_path / "et.parquet"
+        pq.write_table(pa.Table.from_pandas(df, preserve_index=False), path, row_group_size=50)
+    parts, chunks = _chunks_and_notes(path, 64)
+    assert len(parts) == 5 and all((p["temp"] == 0.0).all() for p in parts)  # none was taken by the read-ahead
+    assert chunks.notes == [
+        f"{path}: no usable gyro temperature (column 'temp' empty in every row): temp set to 0 degC;"
+        " the drift is modelled as a constant bias"
+    ]
+
+
+def test_temp_empty_in_the_first_chunk_then_present_is_refused_before_any_chunk(tmp_path):
+    rows = {i: f"{i / 10!r},0.5,,1" for i in range(100)}
+    path = _write(tmp_path, _rows(300, rows), "lt.csv")
     msg = _same_error(path, 64)
-    assert "hold no values" in msg
-    chunks = iter_log_chunks(path, chunk_rows=64)
-    assert len([next(chunks) for _ in range(5)]) == 5  # every chunk comes, then the error
+    assert "line 102" in msg and "drop the leading rows" in msg
     with pytest.raises(LogFormatError):
-        next(chunks)
+        next(iter_log_chunks(path, chunk_rows=64))
 
 
 @pytest.mark.parametrize(

@@ -18,6 +18,7 @@ from conftest import SHARED_DATA
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import check_output_path, read_log, write_table
 from gyrodrift.io import tabular
+from gyrodrift.io.notes import add_note, no_temperature_note
 
 DATA = SHARED_DATA
 MPU = DATA / "mpu6050_rotate_z"
@@ -219,21 +220,105 @@ def test_missing_required_column(tmp_path):
     assert "'gz'" in msg and "'temperature'" in msg and "--map NEW=OLD" in msg
 
 
-def test_no_compass(tmp_path):
-    msg = _raises(LogFormatError, read_log, _write(tmp_path, "t,gyro_z,temp\n0,1,20\n", "nc.csv"))
-    assert "nc.csv" in msg and "no compass" in msg and "heading" in msg
+_NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
 
 
-def test_partial_mag_names_missing(tmp_path):
+def test_no_compass_reads_with_a_note(tmp_path):
+    path = _write(tmp_path, "t,gyro_z,temp\n0,1,20\n1,2,21\n", "nc.csv")
+    df = read_log(path)
+    assert list(df.columns) == ["t", "gyro_z", "temp"]
+    np.testing.assert_array_equal(df["temp"], [20.0, 21.0])
+    assert df.attrs["compass"] == "none"
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no heading column nor mag_x..z with acc_x..z): {_NO_COMPASS_DOES}"
+    ]
+
+
+def test_partial_mag_form_is_no_compass_and_the_note_names_what_is_missing(tmp_path):
     text = "t,gyro_z,temp,mag_x,mag_y,mag_z,acc_z\n0,1,20,1,2,3,-1\n"
-    msg = _raises(LogFormatError, read_log, _write(tmp_path, text, "pm.csv"))
-    assert "pm.csv" in msg and "missing: acc_x, acc_y" in msg
+    path = _write(tmp_path, text, "pm.csv")
+    df = read_log(path)
+    assert df.attrs["compass"] == "none"
+    assert list(df.columns) == ["t", "gyro_z", "temp", "mag_x", "mag_y", "mag_z", "acc_z"]  # kept as read
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no heading column, mag_x..z with acc_x..z incomplete (missing: acc_x, acc_y)):"
+        f" {_NO_COMPASS_DOES}"
+    ]
 
 
-def test_compass_columns_without_values(tmp_path):
-    text = "t,gyro_z,temp,heading\n0,1,20,\n1,1,20,\n"
-    msg = _raises(LogFormatError, read_log, _write(tmp_path, text, "nh.csv"))
-    assert "nh.csv" in msg and "heading" in msg and "no values" in msg
+def test_compass_columns_without_values_are_no_compass(tmp_path):
+    path = _write(tmp_path, "t,gyro_z,temp,heading\n0,1,20,\n1,1,20,\n", "nh.csv")
+    df = read_log(path)
+    assert df.attrs["compass"] == "none" and df["heading"].isna().all()
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (heading column empty in every row, no mag_x..z with acc_x..z): {_NO_COMPASS_DOES}"
+    ]
+    mag = "mag_x,mag_y,mag_z,acc_x,acc_y,acc_z"
+    path = _write(tmp_path, f"t,gyro_z,temp,{mag}\n0,1,20,1,2,3,,0,-1\n1,1,20,,,,,0,-1\n", "nm.csv")
+    df = read_log(path)
+    assert df.attrs["compass"] == "none"
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no heading column, mag_x..z with acc_x..z incomplete (empty in every row: acc_x)):"
+        f" {_NO_COMPASS_DOES}"
+    ]
+
+
+def test_one_compass_form_with_values_is_enough(tmp_path):
+    df = read_log(_write(tmp_path, "t,gyro_z,temp,heading,mag_x\n0,1,20,5,\n1,1,20,,\n"))
+    assert df.attrs["compass"] == "heading" and "notes" not in df.attrs
+
+
+def test_no_temp_column_reads_as_zero_with_a_note(tmp_path):
+    path = _write(tmp_path, "t,gyro_z,heading,T_die\n0,1,5,30\n1,2,,31\n", "nt.csv")
+    df = read_log(path)
+    assert list(df.columns) == ["t", "gyro_z", "heading", "T_die", "temp"]  # added last
+    assert df["temp"].dtype == np.float64 and (df["temp"] == 0.0).all()
+    assert df.attrs["compass"] == "heading"
+    assert df.attrs["notes"] == [
+        f"{path}: no usable gyro temperature (no 'temp' column; columns found: 't', 'gyro_z', 'heading', 'T_die'):"
+        f" {_NO_TEMP_DOES}; if the log has it under another name, map it with --map temp=NAME (column_map in Python)"
+    ]
+    mapped = read_log(path, column_map={"temp": "T_die"})
+    np.testing.assert_array_equal(mapped["temp"], [30.0, 31.0])
+    assert "notes" not in mapped.attrs
+
+
+def test_temp_empty_in_every_row_reads_as_zero_with_a_note(tmp_path):
+    path = _write(tmp_path, "t,gyro_z,temp,heading\n0,1,,5\n1,2,n/a,\n2,3,,7\n", "et.csv")
+    df = read_log(path)
+    assert list(df.columns) == ["t", "gyro_z", "temp", "heading"]  # in place
+    np.testing.assert_array_equal(df["temp"], [0.0, 0.0, 0.0])
+    assert df.attrs["notes"] == [f"{path}: no usable gyro temperature (column 'temp' empty in every row): {_NO_TEMP_DOES}"]
+
+
+def test_no_compass_and_no_temperature_give_two_notes(tmp_path):
+    path = tmp_path / "bare.parquet"
+    pq.write_table(pa.table({"t": [0.0, 1.0], "gyro_z": [0.5, 0.25], "temp": pa.array([None, None], pa.float64())}), path)
+    df = read_log(path)
+    assert df.attrs["compass"] == "none" and (df["temp"] == 0.0).all()
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no heading column nor mag_x..z with acc_x..z): {_NO_COMPASS_DOES}",
+        f"{path}: no usable gyro temperature (column 'temp' empty in every row): {_NO_TEMP_DOES}",
+    ]
+
+
+def test_add_note_appends_to_the_notes_already_there():
+    attrs = {"notes": ["earlier note"]}
+    add_note(attrs, "log.csv: no compass (x): y")
+    assert attrs["notes"] == ["earlier note", "log.csv: no compass (x): y"]
+    fresh = {}
+    add_note(fresh, no_temperature_note("a.csv", "why"))
+    assert fresh == {"notes": [f"a.csv: no usable gyro temperature (why): {_NO_TEMP_DOES}"]}
+
+
+def test_missing_gyro_z_still_refused_and_names_a_missing_temp_too(tmp_path):
+    msg = _raises(LogFormatError, read_log, _write(tmp_path, "t,gz,heading\n0,1,5\n", "gz.csv"))
+    assert msg == (
+        f"{tmp_path / 'gz.csv'}: missing required column(s) 'gyro_z', 'temp'; columns found: 't', 'gz', 'heading';"
+        " rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz; column_map={'gyro_z': 'gz'}"
+        " in Python)"
+    )
 
 
 @pytest.mark.parametrize(
@@ -508,6 +593,21 @@ def test_check_output_path_links(tmp_path):
 
 _no_mpu = pytest.mark.skipif(not MPU.exists(), reason=f"shared data folder {MPU} is absent")
 _no_acti = pytest.mark.skipif(not ACTI.exists(), reason=f"shared data folder {ACTI} is absent")
+
+
+_TVAC = DATA / "pan_lsm6dsm_tvac"
+
+
+@pytest.mark.skipif(not _TVAC.exists(), reason=f"shared data folder {_TVAC} is absent")
+def test_real_tvac_without_compass_reads_with_a_note():
+    path = _TVAC / "contract.csv"
+    df = read_log(path)
+    assert list(df.columns) == ["t", "gyro_z", "temp"] and len(df) == 6250
+    assert df.attrs["compass"] == "none"
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no heading column nor mag_x..z with acc_x..z): {_NO_COMPASS_DOES}"
+    ]
+    assert df["temp"].between(15.0, 24.0).all()
 
 
 @_no_mpu

@@ -201,12 +201,73 @@ def test_ulog_missing_instance_lists_those_present():
     assert "instance must be a non-negative integer" in _raises(ConfigError, read_ulog, SMALL, instance=-1)
 
 
-def test_ulog_temperature_logged_as_zero_is_an_error():
+_NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
+
+
+def test_ulog_temperature_logged_as_zero_reads_as_a_bias_with_a_note():
     path = _need(EVENTS)
-    msg = _raises(LogFormatError, read_ulog, path)
-    assert msg.startswith(str(path))
-    assert "sensor_gyro instance 0" in msg and "exactly 0 degC" in msg and "31 samples" in msg
-    assert "no gyro temperature" in msg
+    df = read_ulog(path)
+    assert len(df) == 7783 and list(df.columns) == CONTRACT + ["ref_heading"]
+    assert df["temp"].dtype == np.float64 and (df["temp"] == 0.0).all()
+    assert df.attrs["compass"] == "mag" and df.attrs["topics"]["temp"] is None
+    assert df.attrs["notes"] == [
+        f"{path}: no usable gyro temperature (sensor_gyro instance 0 logs 0 degC in all 31 samples, sensor_accel"
+        f" instance 0 logs 0 degC in all 31 samples): {_NO_TEMP_DOES}"
+    ]
+    assert "no gyro temperature (temp set to 0 degC)" in df.attrs["summary"]
+    assert read_log(path).attrs["notes"] == df.attrs["notes"]
+
+
+def test_ulog_temperature_as_nan_without_an_accel_of_the_chip(tmp_path):
+    path = _edited(tmp_path, _need(EVENTS), _set_temperature("sensor_gyro", lambda n: np.full(n, np.nan)),
+                   topics=["sensor_combined", "sensor_gyro", "vehicle_magnetometer"])
+    df = read_ulog(path)
+    assert (df["temp"] == 0.0).all()
+    assert df.attrs["notes"] == [
+        f"{path}: no usable gyro temperature (sensor_gyro instance 0 logs NaN in all 31 samples, no sensor_accel of"
+        f" the same chip): {_NO_TEMP_DOES}"
+    ]
+
+
+def test_ulog_without_magnetometer_reads_without_compass(tmp_path):
+    path = _edited(tmp_path, _need(SMALL), topics=["sensor_combined", "sensor_gyro", "sensor_accel"])
+    df = read_ulog(path)
+    assert list(df.columns) == ["t", "gyro_z", "gyro_x", "gyro_y", "temp", "acc_x", "acc_y", "acc_z"]
+    assert df.attrs["compass"] == "none" and "mag_unit" not in df.attrs and df.attrs["acc_unit"] == "m/s^2"
+    assert df.attrs["topics"]["mag"] is None and df.attrs["topics"]["acc"] == "sensor_combined"
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no sensor_mag nor vehicle_magnetometer topic in the log): {_NO_COMPASS_DOES}"
+    ]
+    assert "; no compass; acc from sensor_combined" in df.attrs["summary"]
+    # a magnetometer instance asked for by name is still required
+    assert "no 'sensor_mag' topic" in _raises(LogFormatError, read_ulog, path, mag_instance=0)
+
+
+def test_ulog_without_accelerometer_has_no_compass(tmp_path):
+    path = _edited(tmp_path, _need(SMALL), topics=["sensor_gyro", "sensor_mag"])
+    df = read_ulog(path)
+    assert list(df.columns) == ["t", "gyro_z", "gyro_x", "gyro_y", "temp"]
+    assert df.attrs["compass"] == "none" and "acc_unit" not in df.attrs and df["temp"].between(35, 45).all()
+    assert df.attrs["notes"] == [
+        f"{path}: no compass (no accelerometer for the tilt, neither sensor_combined.accelerometer_m_s2 nor a"
+        f" sensor_accel of the gyro's chip): {_NO_COMPASS_DOES}"
+    ]
+
+
+def test_ulog_magnetometer_outside_the_gyro_record_is_no_compass(tmp_path):
+    def later(ulog):
+        data = _dataset(ulog, "vehicle_magnetometer")
+        for key in ("timestamp", "timestamp_sample"):
+            if key in data:
+                data[key] = data[key] + np.uint64(10**10)
+
+    path = _edited(tmp_path, _need(SMALL), later, topics=["sensor_combined", "sensor_gyro", "vehicle_magnetometer"])
+    df = read_ulog(path)
+    assert df.attrs["compass"] == "none" and "mag_x" not in df.columns
+    (note,) = df.attrs["notes"]
+    assert note.startswith(f"{path}: no compass (no sample of vehicle_magnetometer instance 0 falls within the gyro")
+    assert note.endswith(f" s): {_NO_COMPASS_DOES}")
 
 
 def test_ulog_events_rates_rows_and_interpolated_temperature(tmp_path):
@@ -360,11 +421,13 @@ def _write_bag(
     zero_stamps: bool = False,
     orientation: bool = True,
     temperature=lambda t: 30.0 + 0.1 * t,
+    mag_stamp_offset_s: float = 0.0,
 ) -> Path:
     """A bag of a level IMU turning at +10 deg/s about ROS z; yaw 0 (east) at the start.
 
     Imu at 100 Hz, Temperature at 1 Hz, MagneticField at 10 Hz, all stamped on the
-    same clock (the mag and temperature times coincide with Imu times).
+    same clock (the mag and temperature times coincide with Imu times; the mag header
+    stamps are ``mag_stamp_offset_s`` later).
     """
     store = _typestore(kind)
     types = store.types
@@ -403,7 +466,7 @@ def _write_bag(
         east, north, up = FIELD_ENU  # world field seen in the body (FLU) frame
         body = vec(x=c * east + s * north, y=-s * east + c * north, z=up)
         return types["sensor_msgs/msg/MagneticField"](
-            header=header(t), magnetic_field=body, magnetic_field_covariance=np.zeros(9)
+            header=header(t + mag_stamp_offset_s), magnetic_field=body, magnetic_field_covariance=np.zeros(9)
         )
 
     streams = [(topic, "sensor_msgs/msg/Imu", imu, 100) for topic in imu_topics]
@@ -490,16 +553,70 @@ def test_rosbag_two_imu_topics(tmp_path):
     assert read_rosbag(bag, imu_topic="/imu2/data").attrs["topics"]["imu"] == "topic '/imu2/data'"
 
 
-@pytest.mark.parametrize(("missing", "needed"), [("temp_topic", "Temperature"), ("mag_topic", "MagneticField")])
-def test_rosbag_missing_type(tmp_path, missing, needed):
-    bag = _write_bag(tmp_path / "b", **{missing: None})
+def test_rosbag_without_imu_is_refused(tmp_path):
+    bag = _write_bag(tmp_path / "b", imu_topics=())
     msg = _raises(LogFormatError, read_rosbag, bag)
-    assert f"no sensor_msgs/msg/{needed} topic" in msg
+    assert "no sensor_msgs/msg/Imu topic in the bag (needed for the gyro rate)" in msg
 
 
-def test_rosbag_temperature_zero_is_not_measured(tmp_path):
-    bag = _write_bag(tmp_path / "b", temperature=lambda t: 0.0)
-    assert "exactly 0 degC" in _raises(LogFormatError, read_rosbag, bag)
+def test_rosbag_without_temperature_topic_reads_as_a_bias(tmp_path):
+    bag = _write_bag(tmp_path / "b", temp_topic=None)
+    df = read_rosbag(bag)
+    assert list(df.columns) == CONTRACT + ["ref_heading"] and (df["temp"] == 0.0).all()
+    assert df.attrs["compass"] == "mag" and df.attrs["topics"]["temp"] is None
+    assert df.attrs["notes"] == [
+        f"{bag}: no usable gyro temperature (no sensor_msgs/msg/Temperature topic in the bag): {_NO_TEMP_DOES}"
+    ]
+    assert "no gyro temperature (temp set to 0 degC)" in df.attrs["summary"]
+    # a topic asked for by name is still required
+    msg = _raises(ConfigError, read_rosbag, bag, temp_topic="/imu/temperature")
+    assert "no topic '/imu/temperature'" in msg and "temp_topic" in msg
+
+
+def test_rosbag_without_magnetometer_has_no_compass(tmp_path):
+    bag = _write_bag(tmp_path / "b", mag_topic=None)
+    df = read_rosbag(bag)
+    assert [c for c in df.columns if c.startswith("mag_")] == [] and "acc_z" in df.columns
+    assert df.attrs["compass"] == "none" and "mag_unit" not in df.attrs and df.attrs["topics"]["mag"] is None
+    assert df.attrs["notes"] == [
+        f"{bag}: no compass (no sensor_msgs/msg/MagneticField topic in the bag): {_NO_COMPASS_DOES}"
+    ]
+    assert "; no compass; acc from topic '/imu/data'" in df.attrs["summary"]
+
+
+def test_rosbag_temperature_topic_without_messages_reads_as_a_bias(tmp_path):
+    bag = _write_bag(tmp_path / "b", duration_s=0.5)  # 1 Hz temperature: no message in 0.5 s
+    df = read_rosbag(bag)
+    assert len(df) == 50 and (df["temp"] == 0.0).all() and df.attrs["compass"] == "mag"
+    assert df.attrs["notes"] == [
+        f"{bag}: no usable gyro temperature (no message on topic '/imu/temperature'): {_NO_TEMP_DOES}"
+    ]
+
+
+def test_rosbag_magnetometer_outside_the_imu_record_is_no_compass(tmp_path):
+    bag = _write_bag(tmp_path / "b", duration_s=2.0, mag_stamp_offset_s=100.0)
+    df = read_rosbag(bag)
+    assert df.attrs["compass"] == "none" and "mag_x" not in df.columns
+    assert df.attrs["notes"] == [
+        f"{bag}: no compass (no message of topic '/imu/mag' falls within the Imu record,"
+        f" t = {T0:.3f}..{T0 + 1.99:.3f} s): {_NO_COMPASS_DOES}"
+    ]
+
+
+def test_rosbag_without_compass_nor_temperature_gives_two_notes(tmp_path):
+    bag = _write_bag(tmp_path / "b", mag_topic=None, temp_topic=None)
+    notes = read_log(bag).attrs["notes"]
+    assert len(notes) == 2 and "no compass" in notes[0] and "no usable gyro temperature" in notes[1]
+
+
+@pytest.mark.parametrize(("value", "shown"), [(0.0, "0 degC"), (float("nan"), "NaN")])
+def test_rosbag_temperature_not_measured_reads_as_a_bias(tmp_path, value, shown):
+    bag = _write_bag(tmp_path / "b", temperature=lambda t: value)
+    df = read_rosbag(bag)
+    assert (df["temp"] == 0.0).all()
+    assert df.attrs["notes"] == [
+        f"{bag}: no usable gyro temperature (topic '/imu/temperature' is {shown} in all 20 messages): {_NO_TEMP_DOES}"
+    ]
 
 
 @pytest.mark.parametrize("kind", ["ros1", "ros2", "mcap"])

@@ -9,7 +9,9 @@
   :mod:`gyrodrift.io.rosbag`.
 
 See :mod:`gyrodrift.io.validate` for the checks of the table readers and the error-message
-style shared by all.
+style shared by all. A log without a compass or without a usable gyro temperature is read,
+not refused: ``attrs["compass"]`` is ``"none"``, or ``temp`` is 0 degC in every row, and
+``attrs["notes"]`` says so in one line each (:mod:`gyrodrift.io.notes`).
 """
 
 from __future__ import annotations
@@ -109,7 +111,10 @@ def read_log(
     Returns
     -------
     pandas.DataFrame
-        The log in the input contract; ``df.attrs["format"]`` names the format.
+        The log in the input contract; ``df.attrs["format"]`` names the format,
+        ``df.attrs["compass"]`` the compass form ("none" without one), and
+        ``df.attrs["notes"]`` (only when there is something to say) lists what the log
+        lacks and what is done instead.
 
     Raises
     ------

@@ -208,8 +208,8 @@ def contract_frame(
     t: np.ndarray,
     gyro_dps: np.ndarray,
     temp_c: np.ndarray,
-    mag: np.ndarray,
-    acc: np.ndarray,
+    mag: np.ndarray | None,
+    acc: np.ndarray | None,
     ref_heading: np.ndarray | None,
     attrs: Mapping[str, object],
 ) -> pd.DataFrame:
@@ -223,8 +223,8 @@ def contract_frame(
         Rates (deg/s), FRD body axes x, y, z, shape (n, 3).
     temp_c : numpy.ndarray
         Gyro temperature (degC), shape (n,).
-    mag, acc : numpy.ndarray
-        Magnetometer and specific force, FRD, shape (n, 3).
+    mag, acc : numpy.ndarray or None
+        Magnetometer and specific force, FRD, shape (n, 3); None for no columns.
     ref_heading : numpy.ndarray or None
         Reference heading (deg, [0, 360)), shape (n,), or None for no column.
     attrs : mapping
@@ -237,8 +237,10 @@ def contract_frame(
         GYRO_Y: gyro_dps[:, 1],
         TEMP: temp_c,
     }
-    columns.update({c: mag[:, i] for i, c in enumerate(MAG_COLS)})
-    columns.update({c: acc[:, i] for i, c in enumerate(ACC_COLS)})
+    if mag is not None:
+        columns.update({c: mag[:, i] for i, c in enumerate(MAG_COLS)})
+    if acc is not None:
+        columns.update({c: acc[:, i] for i, c in enumerate(ACC_COLS)})
     if ref_heading is not None:
         columns[REF_HEADING] = ref_heading
     df = pd.DataFrame({k: np.asarray(v, dtype=np.float64) for k, v in columns.items()})

@@ -15,11 +15,18 @@ the same code as the whole-table functions of :mod:`gyrodrift.io.tabular`
 What a chunked reader cannot know in advance, and what it does about it:
 
 * **Which compass form the log has** (``df.attrs["compass"]`` of ``read_log``) is known
-  after the last chunk: :attr:`LogChunks.compass`. A log whose compass columns are
-  empty in every row raises after its last chunk, as ``read_log`` would.
+  after the last chunk: :attr:`LogChunks.compass`, and so are the notes
+  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature):
+  :attr:`LogChunks.notes`. A log whose compass columns are empty in every row has
+  compass "none", as ``read_log`` says; its chunks keep those columns as read.
 * **A required column empty at the start** (``gyro_z``/``temp`` missing on the first
-  row, or ``t``/``gyro_z``/``temp`` empty in the whole first chunk): the reader reads
-  on until the first value to give ``read_log``'s message, then raises.
+  row, or ``t``/``gyro_z``/``temp`` empty in the whole first chunk): before it hands
+  out the first chunk, the reader reads the file again from the start, on a reader of
+  its own, until the column's first value (to the end if it has none): to give
+  ``read_log``'s message and raise, or, for a ``temp`` empty in every row, to fill it
+  with 0.0 in every chunk as ``read_log`` does. Such a file is read twice. A file
+  without a ``temp`` column is seen from its header (CSV) or schema (Parquet): ``temp``
+  is 0.0 in every chunk, the last column.
 * **Types of the other columns of a CSV** (pass-through columns, not numeric contract
   columns): ``read_log`` lets pyarrow infer them from the whole file; the chunked
   reader infers them from the first ``block_size_bytes`` (1 MiB) of the file. A later value
@@ -316,6 +323,11 @@ class _CsvBatches:
             return False
         return self._names[int(found["col"])] not in csvfile.numeric_raw_names(self._names, self._renames)
 
+    def again(self) -> Iterator[pa.RecordBatch]:
+        """The batches from the start of the file, on a reader of their own (the file is
+        opened again; the types the first block gave are kept)."""
+        return iter(self)
+
     def __iter__(self) -> Iterator[pa.RecordBatch]:
         numbers_as_text = False
         delivered = 0  # data rows handed out
@@ -418,6 +430,15 @@ class _ParquetBatches:
         except (pa.ArrowException, OSError, ValueError) as exc:
             raise parquetfile.parquet_error(self.src, exc) from exc
 
+    def again(self) -> Iterator[pa.RecordBatch]:
+        """The batches from the start of the file, on a reader of their own (the file is
+        opened again)."""
+        try:
+            with pa_pq.ParquetFile(self.path, pre_buffer=False) as file:
+                yield from file.iter_batches(self._batch_rows)
+        except (pa.ArrowException, OSError, ValueError) as exc:
+            raise parquetfile.parquet_error(self.src, exc) from exc
+
     def fix_frame(self, frame: pd.DataFrame, names: list[str]) -> pd.DataFrame:
         """Give a chunk's pass-through columns the dtypes of the whole file (``names``:
         the file's column names, in the order of ``frame``'s columns)."""
@@ -455,9 +476,13 @@ class LogChunks:
         The options, canonical (as ``read_log`` puts them in ``df.attrs``).
     rows : int
         Data rows handed out so far.
-    compass : {"heading", "mag", "both"} or None
+    compass : {"heading", "mag", "both", "none"} or None
         The compass forms holding data in the whole file (``read_log``'s
         ``df.attrs["compass"]``); None until the last chunk has been read.
+    notes : list of str or None
+        What the file lacks and what is done instead (``read_log``'s
+        ``df.attrs.get("notes", [])``, see :mod:`gyrodrift.io.notes`); None until the
+        last chunk has been read, ``[]`` when the file lacks nothing.
     """
 
     def __init__(self, path: Path, table_fmt: str, opts, chunk_rows: int, column_types, block_size_bytes: int) -> None:
@@ -467,6 +492,7 @@ class LogChunks:
         self.frame = opts.frame
         self.rows = 0
         self.compass: str | None = None
+        self.notes: list[str] | None = None
         self._opts = opts
         if table_fmt == "csv":
             self._batches = _CsvBatches(path, opts.renames, column_types, block_size_bytes)
@@ -491,19 +517,32 @@ class LogChunks:
         return frame
 
     def _first_values(self, frame: pd.DataFrame) -> dict[str, int | None]:
-        """First value of each required column in the whole file; reads on when the
-        first chunk holds none (the check then fails: ``read_log``'s message needs it)."""
+        """First value of each required column in the whole file.
+
+        When the first chunk holds no value of a column, the file is read again from its
+        start, on a reader of its own (the chunks still to come are not taken), up to the
+        column's first value or to the end: ``t`` or ``gyro_z`` then fail the check with
+        ``read_log``'s message, and ``temp`` either fails it (a first value after the
+        first row) or is empty in every row (then filled in).
+        """
         first = validate.first_value_rows(frame)
-        row0 = len(frame)
-        for table in self._tables if None in first.values() else ():
-            src = self._batches.src.at(row0)
-            later = validate.convert_numeric(validate.apply_column_map(self._frame(table, src), self._opts.renames, src), src)
-            for col, pos in validate.first_value_rows(later).items():
-                if first[col] is None and pos is not None:
-                    first[col] = row0 + pos
-            row0 += len(later)
-            if None not in first.values():
-                break
+        if None not in first.values():
+            return first
+        row0 = 0
+        batches = self._batches.again()
+        try:
+            for table in _rechunk(batches, len(frame)):
+                src = self._batches.src.at(row0)
+                rows = validate.apply_column_map(self._frame(table, src), self._opts.renames, src)
+                rows = validate.convert_numeric(rows, src)  # a bad cell on the way fails as in read_log
+                for col, pos in validate.first_value_rows(rows).items():
+                    if first[col] is None and pos is not None:
+                        first[col] = row0 + pos
+                row0 += len(rows)
+                if None not in first.values():
+                    break
+        finally:
+            batches.close()
         return first
 
     def _generate(self) -> Iterator[pd.DataFrame]:
@@ -518,14 +557,16 @@ class LogChunks:
         prev_t_s = None
         columns: list = []
         with_values: frozenset[str] = frozenset()
+        temperature = validate.TEMP_MEASURED  # the first chunk decides it for the file
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found = validate.normalise_frame(
+            df, found, temperature = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
                 prev_t_s=prev_t_s,
                 first_values=self._first_values if self.rows == 0 else None,
+                temp_empty=temperature == validate.TEMP_EMPTY,
             )
             df.index = pd.RangeIndex(self.rows, self.rows + len(df))
             df.attrs = self.attrs
@@ -535,7 +576,8 @@ class LogChunks:
             yield df
         if self.rows == 0:
             raise validate.no_data_rows_error(src)
-        self.compass = validate.compass_form(columns, with_values, src)
+        self.compass = validate.compass_form(with_values)
+        self.notes = validate.table_notes(src.name, columns, with_values, temperature)
 
     def __iter__(self) -> "LogChunks":
         return self
@@ -613,15 +655,15 @@ def iter_log_chunks(
         Iterator of :class:`pandas.DataFrame`; chunk ``k`` has the index
         ``RangeIndex(k * chunk_rows, ...)`` (rows of the whole file) and ``attrs``
         ``source``, ``format``, ``gyro_unit``, ``frame``. After the last chunk,
-        :attr:`LogChunks.compass` gives the compass form.
+        :attr:`LogChunks.compass` gives the compass form and :attr:`LogChunks.notes`
+        what the file lacks (no compass, no temperature).
 
     Raises
     ------
     LogFormatError
         As ``read_log``: problems of the file as a whole (missing, empty, no header) at
-        the call, the others while the chunks are read (those that need the whole file,
-        such as compass columns empty in every row, after the last chunk); also a CSV
-        cell that does not fit the type the first block gave its pass-through column.
+        the call, the others while the chunks are read; also a CSV cell that does not
+        fit the type the first block gave its pass-through column.
     ConfigError
         As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
     """

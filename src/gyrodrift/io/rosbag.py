@@ -11,13 +11,18 @@ Messages and columns
     specific force: a level, still IMU reads z ≈ +9.81 in ROS) -> ``acc_*``;
     ``orientation`` -> ``ref_heading`` where it is set (``orientation_covariance[0]``
     is not −1 and the quaternion is not zero). One output row per Imu message.
-``sensor_msgs/Temperature`` (one topic, required)
+``sensor_msgs/Temperature`` (one topic)
     ``temperature`` (degC) -> ``temp``, interpolated linearly onto the Imu times and
     held at the first/last value outside the temperature stream. A temperature that
-    is exactly 0 in every message counts as "not measured".
-``sensor_msgs/MagneticField`` (one topic, required: a bag has no other compass form)
+    is exactly 0 (or NaN) in every message counts as "not measured". Without a
+    measured temperature (no such topic, no message, not measured), ``temp`` is 0 in
+    every row and a note says so (:mod:`gyrodrift.io.notes`: the drift model reduces
+    to a constant bias).
+``sensor_msgs/MagneticField`` (one topic; a bag has no other compass form)
     ``magnetic_field`` (tesla, kept in tesla) -> ``mag_*``, each sample on the row of
-    the first Imu message at or after it, NaN on the other rows.
+    the first Imu message at or after it, NaN on the other rows. Without one (no such
+    topic, or no message within the Imu record): no ``mag_*`` columns, compass
+    "none" and a note.
 
 Time of a message: its ``header.stamp`` (``sec + nanosec * 1e-9`` s, absolute, not
 shifted to 0); if that stamp is zero, the time the bag recorded the message instead
@@ -35,8 +40,10 @@ An IMU without a magnetometer reports a yaw with an arbitrary origin, so its
 ``ref_heading`` is only good for heading changes.
 
 Topics: an option (``imu_topic``, ``temp_topic``, ``mag_topic``) names the topic; if
-it is not given, the only topic of that type is used. No topic, or several, raise
-a one-line error that lists the topics and says which option to use.
+it is not given, the only topic of that type is used. Several, or a named topic the
+bag lacks, raise a one-line error that lists the topics and says which option to
+use; so does a bag without an Imu topic. A bag without a Temperature or a
+MagneticField topic is read without it (see above).
 """
 
 from __future__ import annotations
@@ -60,6 +67,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
+from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
@@ -77,27 +85,30 @@ _MAX_TOPICS_SHOWN = 20
 
 
 class _Role(NamedTuple):
-    """One message type the reader needs: its type name, option and purpose."""
+    """One message type the reader uses: its type name, option and purpose."""
 
     msgtype: str
     option: str
     purpose: str
     advice: str
+    required: bool  #: False: a bag without such a topic is read without it (with a note)
 
 
 _ROLES = (
-    _Role(_IMU, "imu_topic", "the gyro rate", "record the IMU driver's sensor_msgs/Imu topic"),
+    _Role(_IMU, "imu_topic", "the gyro rate", "record the IMU driver's sensor_msgs/Imu topic", True),
     _Role(
         _TEMPERATURE,
         "temp_topic",
         "the gyro temperature",
         "record the IMU driver's temperature topic (sensor_msgs/Temperature)",
+        False,
     ),
     _Role(
         _MAGNETIC_FIELD,
         "mag_topic",
         "the compass",
         "record the magnetometer topic (sensor_msgs/MagneticField)",
+        False,
     ),
 )
 
@@ -174,8 +185,9 @@ def _show_topics(topics: dict[str, str]) -> str:
     return ", ".join(items)
 
 
-def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: str) -> str:
-    """The topic for ``role``: the one named by its option, else the only one of its type."""
+def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: str) -> str | None:
+    """The topic for ``role``: the one named by its option, else the only one of its type;
+    None when the bag has none and the role is not required."""
     of_type = {t: typ for t, typ in topics.items() if typ == role.msgtype}
     if given is not None:
         if given not in topics:
@@ -198,6 +210,8 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
         return given
     if len(of_type) == 1:
         return next(iter(of_type))
+    if not of_type and not role.required:
+        return None
     if not of_type:
         raise LogFormatError(
             message(
@@ -279,7 +293,8 @@ def _to_stream(topic: str, raw: _Raw, width: int) -> tuple[Stream, int]:
 
 
 def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tuple[dict[str, str], dict[str, _Raw]]:
-    """Open the bag, choose the topics and collect their messages.
+    """Open the bag, choose the topics (topic -> msgtype; a type without a topic is left
+    out) and collect their messages.
 
     Any error raised by rosbags or its storage back ends (sqlite3, MCAP, compression)
     while reading means the file is not a readable bag: it becomes one
@@ -292,6 +307,7 @@ def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tupl
         with any_reader([path], default_typestore=default_types) as reader:
             topics = {t: (info.msgtype or "(mixed types)") for t, info in reader.topics.items()}
             chosen = {_choose_topic(topics, role, g, name): role.msgtype for role, g in zip(_ROLES, given)}
+            chosen.pop(None, None)  # a type the bag has no topic of
             return chosen, _collect(reader, chosen)
     except (ConfigError, LogFormatError):
         raise
@@ -304,23 +320,19 @@ def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tupl
 # ---------------------------------------------------------------------------
 
 
-def _temperature(name: str, stream: Stream) -> Stream:
-    """Temperature samples that hold a value; raise if none was measured."""
+def _temperature(name: str, stream: Stream) -> tuple[Stream | None, str]:
+    """Temperature samples that hold a value, and ``""``; or None and why there is no
+    measured temperature (for the note): no message, or exactly 0 or NaN in all."""
     temp = stream.values[:, 0]
     ok = np.isfinite(temp)
+    if not temp.size:
+        return None, f"no message on {stream.label}"
     if not ok.any() or not np.any(temp[ok] != 0.0):
-        what = "exactly 0 degC" if ok.any() else "NaN"
-        raise LogFormatError(
-            message(
-                name,
-                f"the temperature is {what} in all {temp.size} messages (not measured)",
-                "gyrodrift needs the gyro temperature: give the topic of an IMU that reports it (temp_topic)",
-                where=stream.label,
-            )
-        )
+        what = f"{NO_TEMPERATURE_C:g} degC" if ok.any() else "NaN"
+        return None, f"{stream.label} is {what} in all {temp.size} messages"
     out = Stream(stream.label, stream.t[ok], temp[ok])
     check_temperature(name, stream.label, out.values)
-    return out
+    return out, ""
 
 
 def _reference_heading(imu: Stream) -> tuple[np.ndarray, int]:
@@ -335,29 +347,31 @@ def _reference_heading(imu: Stream) -> tuple[np.ndarray, int]:
     return heading, int(valid.sum())
 
 
-def _check_counts(name: str, streams: dict[str, Stream]) -> None:
-    """Every chosen topic needs messages; the Imu at least two."""
-    for role, stream in streams.items():
-        need = _MIN_IMU_SAMPLES if role == "imu" else 1
-        if stream.t.size < need:
-            raise LogFormatError(
-                message(
-                    name,
-                    f"too few messages ({stream.t.size}) on {stream.label}",
-                    f"give a bag with at least {need} message(s) on it",
-                )
+def _check_imu_count(name: str, imu: Stream) -> None:
+    """The Imu topic needs at least two messages."""
+    if imu.t.size < _MIN_IMU_SAMPLES:
+        raise LogFormatError(
+            message(
+                name,
+                f"too few messages ({imu.t.size}) on {imu.label}",
+                f"give a bag with at least {_MIN_IMU_SAMPLES} message(s) on it",
             )
+        )
 
 
-def _summary(path: Path, t: np.ndarray, streams: dict[str, Stream], mag_count: int, notes: list[str]) -> str:
-    """One human line describing what was read."""
+def _summary(path: Path, t: np.ndarray, streams: dict[str, Stream | None], mag_count: int, notes: list[str]) -> str:
+    """One human line describing what was read (``mag_count`` 0: no compass)."""
     imu, temp, mag = streams["imu"], streams["temp"], streams["mag"]
     parts = [
         f"{path.name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
         f"gyro {median_rate_hz(t):.3g} Hz from {imu.label} (ROS FLU converted to FRD)",
         f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
-        f" ({describe_rate(temp.t)}, interpolated)",
-        f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_count} rows) + acc from {imu.label}",
+        f" ({describe_rate(temp.t)}, interpolated)"
+        if temp is not None
+        else f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)",
+        f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_count} rows) + acc from {imu.label}"
+        if mag_count
+        else f"no compass; acc from {imu.label}",
     ]
     return "; ".join(parts + notes)
 
@@ -376,19 +390,32 @@ def _notes(zero_stamps: int, dropped: int, ref_count: int) -> list[str]:
     return notes
 
 
-def _streams(name: str, chosen: dict[str, str], raw: dict[str, _Raw]) -> tuple[dict[str, Stream], int, int]:
+class _Gaps(NamedTuple):
+    """Why the bag has no measured temperature or no compass (``""``: it has one)."""
+
+    temp: str
+    compass: str
+
+
+def _streams(
+    name: str, chosen: dict[str, str], raw: dict[str, _Raw]
+) -> tuple[dict[str, Stream | None], int, int, _Gaps]:
     """Time-ordered Imu, temperature and magnetometer streams (FLU values as recorded).
 
-    Returns the streams, the number of messages timed by their receive time and the
-    number of Imu messages dropped for a repeated time.
+    Returns the streams (``"temp"``, ``"mag"``: None without a topic, without a
+    message, or for a temperature not measured), the number of messages timed by their
+    receive time, the number of Imu messages dropped for a repeated time, and why the
+    temperature or the magnetometer is None.
     """
     by_type = {msgtype: topic for topic, msgtype in chosen.items()}
     widths = {"imu": (_IMU, 11), "temp": (_TEMPERATURE, 1), "mag": (_MAGNETIC_FIELD, 3)}
-    streams, zero_stamps = {}, 0
+    streams: dict[str, Stream | None] = {}
+    zero_stamps = 0
     for role, (msgtype, width) in widths.items():
-        streams[role], zero = _to_stream(by_type[msgtype], raw[by_type[msgtype]], width)
+        topic = by_type.get(msgtype)
+        streams[role], zero = _to_stream(topic, raw[topic], width) if topic is not None else (None, 0)
         zero_stamps += zero
-    _check_counts(name, streams)
+    _check_imu_count(name, streams["imu"])
     streams["imu"], dropped = increasing(streams["imu"])
     if streams["imu"].t.size < _MIN_IMU_SAMPLES:
         raise LogFormatError(
@@ -398,9 +425,16 @@ def _streams(name: str, chosen: dict[str, str], raw: dict[str, _Raw]) -> tuple[d
                 "give a longer bag",
             )
         )
-    streams["temp"] = _temperature(name, increasing(streams["temp"])[0])
-    streams["mag"] = increasing(streams["mag"])[0]
-    return streams, zero_stamps, dropped
+    temp_gap = f"no {_TEMPERATURE} topic in the bag"
+    if streams["temp"] is not None:
+        streams["temp"], temp_gap = _temperature(name, increasing(streams["temp"])[0])
+    mag_gap = f"no {_MAGNETIC_FIELD} topic in the bag"
+    if streams["mag"] is not None and not streams["mag"].t.size:
+        mag_gap = f"no message on {streams['mag'].label}"
+        streams["mag"] = None
+    elif streams["mag"] is not None:
+        streams["mag"], mag_gap = increasing(streams["mag"])[0], ""
+    return streams, zero_stamps, dropped, _Gaps(temp_gap, mag_gap)
 
 
 def read_rosbag(
@@ -422,21 +456,23 @@ def read_rosbag(
     -------
     pandas.DataFrame
         One row per Imu message: ``t`` (s, absolute, strictly increasing), ``gyro_z``,
-        ``gyro_x``, ``gyro_y`` (deg/s, body FRD), ``temp`` (degC), ``mag_x``, ``mag_y``,
-        ``mag_z`` (tesla, body FRD, NaN on rows without a new sample), ``acc_x``,
-        ``acc_y``, ``acc_z`` (m/s², specific force, body FRD) and ``ref_heading`` (deg,
-        [0, 360), NaN where the Imu has no orientation; no column if it never has
-        one). ``df.attrs``: ``source``, ``format`` ("rosbag"), ``gyro_unit``
-        ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag"), ``mag_unit`` ("T"),
-        ``acc_unit`` ("m/s^2"), ``topics`` (column group -> topic) and ``summary``
-        (one line).
+        ``gyro_x``, ``gyro_y`` (deg/s, body FRD), ``temp`` (degC; 0 in every row
+        without a measured temperature), ``mag_x``, ``mag_y``, ``mag_z`` (tesla, body
+        FRD, NaN on rows without a new sample; no columns without a compass),
+        ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD) and
+        ``ref_heading`` (deg, [0, 360), NaN where the Imu has no orientation; no column
+        if it never has one). ``df.attrs``: ``source``, ``format`` ("rosbag"),
+        ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or "none"),
+        ``mag_unit`` ("T", with the mag columns), ``acc_unit`` ("m/s^2"), ``topics``
+        (column group -> topic; None for a group without data), ``summary`` (one
+        line) and, when the bag has no compass or no measured temperature, ``notes``
+        (one line each, :mod:`gyrodrift.io.notes`).
 
     Raises
     ------
     LogFormatError
-        Missing, empty, unreadable or truncated bag; no topic of a needed type; too few
-        messages; no measured or an implausible temperature; no magnetometer message
-        within the Imu record.
+        Missing, empty, unreadable or truncated bag; no Imu topic; fewer than two Imu
+        messages (with distinct times); an implausible temperature.
     ConfigError
         rosbags is not installed; a named topic is missing or has another type; several
         topics of a type and no option naming one.
@@ -446,35 +482,39 @@ def read_rosbag(
     name = str(path)
     _check_bag_path(path)
     chosen, raw = _read_bag(rosbags_api, path, imu_topic, temp_topic, mag_topic)
-    streams, zero_stamps, dropped = _streams(name, chosen, raw)
+    streams, zero_stamps, dropped, gaps = _streams(name, chosen, raw)
     imu, temp, mag = streams["imu"], streams["temp"], streams["mag"]
     t = imu.t
-    mag_rows, mag_count = on_following_rows(t, mag.t, mag.values * _FLU_TO_FRD)
-    if mag_count == 0:
-        raise LogFormatError(
-            message(
-                name,
-                f"no magnetometer message of {mag.label} falls within the Imu record"
-                f" (t = {t[0]:.3f}..{t[-1]:.3f} s)",
-                "check the header stamps; the compass and the IMU must overlap in time",
-            )
-        )
+    mag_rows, mag_count, compass_gap = None, 0, gaps.compass
+    if mag is not None:
+        mag_rows, mag_count = on_following_rows(t, mag.t, mag.values * _FLU_TO_FRD)
+        if mag_count == 0:
+            mag_rows = None
+            compass_gap = f"no message of {mag.label} falls within the Imu record, t = {t[0]:.3f}..{t[-1]:.3f} s"
     ref_heading, ref_count = _reference_heading(imu)
     attrs = {
         "source": name,
         "format": "rosbag",
         "gyro_unit": "deg/s",
         "frame": "ned",
-        "compass": "mag",
-        "mag_unit": "T",
+        "compass": "mag" if mag_count else NO_COMPASS,
+        **({"mag_unit": "T"} if mag_count else {}),
         "acc_unit": "m/s^2",
-        "topics": {"imu": imu.label, "temp": temp.label, "mag": mag.label},
+        "topics": {
+            "imu": imu.label,
+            "temp": temp.label if temp is not None else None,
+            "mag": mag.label if mag_count else None,
+        },
         "summary": _summary(path, t, streams, mag_count, _notes(zero_stamps, dropped, ref_count)),
     }
+    if compass_gap:
+        add_note(attrs, no_compass_note(name, compass_gap))
+    if temp is None:
+        add_note(attrs, no_temperature_note(name, gaps.temp))
     return contract_frame(
         t,
         np.degrees(imu.values[:, 0:3]) * _FLU_TO_FRD,
-        interp_held(temp.t, temp.values, t),
+        interp_held(temp.t, temp.values, t) if temp is not None else np.full(t.size, NO_TEMPERATURE_C),
         mag_rows,
         imu.values[:, 3:6] * _FLU_TO_FRD,
         ref_heading if ref_count else None,

@@ -43,6 +43,7 @@ from gyrodrift.io.csvfile import (
     write_csv_with_pandas,
 )
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
+from gyrodrift.io.notes import add_note
 from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
 from gyrodrift.io.validate import (
     Source,
@@ -55,6 +56,7 @@ from gyrodrift.io.validate import (
     physical_line,
     read_error,
     read_options,
+    table_notes,
     table_to_frame,
 )
 
@@ -166,17 +168,21 @@ def read_log(
         ``heading``, ``mag_*``, ``acc_*``, ``ref_heading``, ``true_bias_*``) are float64,
         with empty cells as NaN; headings are wrapped to [0, 360). Other columns pass
         through as read. ``df.attrs`` holds ``source``, ``format``, ``gyro_unit``,
-        ``frame`` and ``compass`` (``"heading"``, ``"mag"`` or ``"both"``: the compass
-        forms with data).
+        ``frame``, ``compass`` (``"heading"``, ``"mag"`` or ``"both"``: the compass
+        forms with data; ``"none"``: no ``heading`` nor a complete
+        ``mag_*`` + ``acc_*`` form with data) and, when the log lacks a compass or a
+        temperature, ``notes`` (list of one-line str, :mod:`gyrodrift.io.notes`).
+        Without a ``temp`` column, or with one empty in every row, ``temp`` is 0.0 in
+        every row (added as the last column when the file has none).
 
     Raises
     ------
     LogFormatError
-        The file is missing, empty, not a table, ragged, lacks required or compass
-        columns, or holds bad values (non-numbers, inf, empty or non-increasing ``t``,
-        implausible ``temp``, a required column with no value, or a first row without
-        ``gyro_z``/``temp``). Empty cells in ``gyro_z``/``temp`` after the first row
-        are allowed and stay NaN.
+        The file is missing, empty, not a table, ragged, lacks ``t`` or ``gyro_z``, or
+        holds bad values (non-numbers, inf, empty or non-increasing ``t``, implausible
+        ``temp``, ``t`` or ``gyro_z`` with no value, or a first row without
+        ``gyro_z``/``temp`` when the column has a value later). Empty cells in
+        ``gyro_z``/``temp`` after the first row are allowed and stay NaN.
     ConfigError
         An unknown ``fmt``, ``gyro_unit`` or ``frame``, an undecidable file-name ending,
         or a ``column_map`` naming a column the file lacks.
@@ -196,14 +202,16 @@ def read_log(
     else:
         table, src = _read_parquet_table(path)
 
-    df, with_values = normalise_frame(table_to_frame(table, src), src, opts)
+    df, with_values, temperature = normalise_frame(table_to_frame(table, src), src, opts)
     df.attrs = {
         "source": str(path),
         "format": table_fmt,
         "gyro_unit": opts.gyro_unit,
         "frame": opts.frame,
-        "compass": compass_form(df.columns, with_values, src),
+        "compass": compass_form(with_values),
     }
+    for note in table_notes(src.name, df.columns, with_values, temperature):
+        add_note(df.attrs, note)
     return df
 
 

@@ -20,12 +20,14 @@ Which topics give which column
     ``sensor_gyro.temperature`` of the instance, else ``sensor_accel.temperature`` of
     the same chip (same ``device_id``). A temperature that is exactly 0 in every sample
     (or NaN) counts as "not measured" (simulators log it so). Interpolated linearly
-    onto the gyro times, held at the first/last value before/after it.
+    onto the gyro times, held at the first/last value before/after it. Without a
+    measured temperature, ``temp`` is 0 in every row and a note says so
+    (:mod:`gyrodrift.io.notes`: the drift model reduces to a constant bias).
 ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD)
     ``sensor_combined.accelerometer_m_s2[0..2]`` (time = ``timestamp`` +
     ``accelerometer_timestamp_relative``), else ``sensor_accel`` of the gyro's chip
     rotated to the body frame. Level and still reads ``acc_z`` ≈ −9.81. Interpolated
-    onto every gyro row like the temperature.
+    onto every gyro row like the temperature. No columns if the log has neither.
 ``mag_x``, ``mag_y``, ``mag_z`` (gauss, body FRD)
     With ``mag_instance`` given: ``sensor_mag`` of that instance (raw, board/sensor
     frame, rotated to the body frame). Without it: the magnetometer PX4 selected
@@ -33,7 +35,9 @@ Which topics give which column
     ``vehicle_magnetometer`` (``magnetometer_ga[0..2]``, body frame, calibrated) when
     that is at least :data:`FASTER` times faster than ``sensor_mag`` or there is no
     ``sensor_mag``, else from ``sensor_mag``. Each sample goes on the row of the first
-    gyro sample at or after it; the other rows are NaN.
+    gyro sample at or after it; the other rows are NaN. No columns, compass "none" and
+    a note, when there is no compass: no magnetometer topic (and no ``mag_instance``),
+    no accelerometer for the tilt, or no magnetometer sample within the gyro record.
 ``ref_heading`` (deg, [0, 360)), with ``reference=True``
     Yaw of ``vehicle_attitude.q[0..3]`` (w, x, y, z; NED to body):
     ``atan2(2 (w z + x y), 1 - 2 (y² + z²))``, interpolated in unwrapped form onto the
@@ -80,6 +84,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
+from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
 
 __all__ = ["read_ulog", "FASTER"]
@@ -431,8 +436,12 @@ def _gyro_stream(ulog, instance: int, name: str) -> Stream:
     return Stream(f"{label} rotated to the body frame by {how}", t_gyro, rates)
 
 
-def _temperature_stream(ulog, instance: int, name: str) -> Stream:
-    """Gyro temperature (degC): sensor_gyro, else sensor_accel of the same chip."""
+def _temperature_stream(ulog, instance: int) -> tuple[Stream | None, str]:
+    """Gyro temperature (degC): sensor_gyro, else sensor_accel of the same chip.
+
+    Returns the stream and ``""``, or None and why there is no usable temperature (for
+    the note): no temperature field, or one logged as exactly 0 or NaN in every sample.
+    """
     gyro = _instances(ulog, "sensor_gyro")[instance]
     device = _device_id(gyro)
     candidates = [(_label("sensor_gyro", instance), gyro)]
@@ -442,29 +451,23 @@ def _temperature_stream(ulog, instance: int, name: str) -> Stream:
     reasons = []
     for label, ds in candidates:
         if "temperature" not in ds.data:
-            reasons.append(f"'{label}' has no temperature field")
+            reasons.append(f"{label} has no temperature field")
             continue
         temp = np.asarray(ds.data["temperature"], dtype=np.float64)
         ok = np.isfinite(temp)
         if ok.any() and np.any(temp[ok] != 0.0):
             t = _time_s(ds)
-            return Stream(label, t[ok], temp[ok])
-        what = "as exactly 0 degC" if ok.any() else "as NaN"
-        reasons.append(f"'{label}' logs the temperature {what} in all {temp.size} samples (not measured)")
+            return Stream(label, t[ok], temp[ok]), ""
+        what = f"{NO_TEMPERATURE_C:g} degC" if ok.any() else "NaN"
+        reasons.append(f"{label} logs {what} in all {temp.size} samples")
     if len(candidates) == 1:
         reasons.append("no sensor_accel of the same chip")
-    raise LogFormatError(
-        message(
-            name,
-            f"no gyro temperature in this log: {'; '.join(reasons)}",
-            "gyrodrift needs the gyro temperature: use a log from an IMU that reports it"
-            " (simulated SITL logs do not)",
-        )
-    )
+    return None, ", ".join(reasons)
 
 
-def _acc_stream(ulog, instance: int, name: str) -> Stream:
-    """Specific force (m/s², body FRD): sensor_combined, else sensor_accel of the gyro's chip."""
+def _acc_stream(ulog, instance: int, name: str) -> Stream | None:
+    """Specific force (m/s², body FRD): sensor_combined, else sensor_accel of the gyro's
+    chip; None if the log has neither."""
     combined = _instances(ulog, "sensor_combined").get(0)
     if combined is not None and all(f in combined.data for f in _ACC_COMBINED):
         t = np.asarray(combined.data["timestamp"], dtype=np.float64)
@@ -477,14 +480,7 @@ def _acc_stream(ulog, instance: int, name: str) -> Stream:
     device = _device_id(_instances(ulog, "sensor_gyro")[instance])
     acc_id, acc = _same_chip(ulog, "sensor_accel", device, instance)
     if acc is None:
-        raise LogFormatError(
-            message(
-                name,
-                "no accelerometer: neither sensor_combined.accelerometer_m_s2"
-                " nor a sensor_accel of the gyro's chip",
-                "the compass needs the accelerometer for tilt; log sensor_combined",
-            )
-        )
+        return None
     label = _label("sensor_accel", acc_id)
     rot, how = _board_to_body(ulog.initial_parameters, "ACC", _device_id(acc), name)
     return Stream(f"{label} rotated by {how}", _time_s(acc), _fields(acc, _XYZ, name, label) @ rot.T)
@@ -513,8 +509,9 @@ def _vehicle_mag(ulog, device: int | None):
     return (0, found[0]) if 0 in found else (None, None)
 
 
-def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream:
-    """Magnetometer (gauss, body FRD) by the rule in the module doc."""
+def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream | None:
+    """Magnetometer (gauss, body FRD) by the rule in the module doc; None if the log has
+    neither sensor_mag nor vehicle_magnetometer (and ``mag_instance`` is not given)."""
     if mag_instance is not None:
         ds = _pick_instance(ulog, "sensor_mag", mag_instance, name, "mag_instance")
         return _sensor_mag_stream(ulog, ds, mag_instance, name)
@@ -532,13 +529,7 @@ def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream:
             label = _label("vehicle_magnetometer", vm_id)
             return Stream(label, t_vehicle, _fields(vehicle, _MAG_VEHICLE, name, label))
     if chosen is None:
-        raise LogFormatError(
-            message(
-                name,
-                "no magnetometer: neither 'sensor_mag' nor 'vehicle_magnetometer' is in the log",
-                "gyrodrift needs a compass; log sensor_mag or vehicle_magnetometer",
-            )
-        )
+        return None
     return _sensor_mag_stream(ulog, mags[chosen], chosen, name)
 
 
@@ -564,19 +555,44 @@ def _check_instance(value, option: str, allow_none: bool = False) -> None:
         raise ConfigError(one_line(f"{option} must be a non-negative integer, got {value!r}"))
 
 
+def _compass(t: np.ndarray, mag: Stream | None, acc: Stream | None) -> tuple[np.ndarray | None, int, str]:
+    """The magnetometer samples on the gyro rows (None: no compass), the number of rows
+    that got one, and why there is no compass (``""`` when there is one)."""
+    if mag is None:
+        return None, 0, "no sensor_mag nor vehicle_magnetometer topic in the log"
+    if acc is None:
+        return None, 0, (
+            "no accelerometer for the tilt, neither sensor_combined.accelerometer_m_s2 nor a sensor_accel of the"
+            " gyro's chip"
+        )
+    on_rows, rows = on_following_rows(t, mag.t, mag.values)
+    if rows == 0:
+        return None, 0, f"no sample of {mag.label} falls within the gyro record, t = {t[0]:.3f}..{t[-1]:.3f} s"
+    return on_rows, rows, ""
+
+
 def _summary(
-    name: str, t, gyro: Stream, temp: Stream, mag: Stream, mag_rows: int, acc: Stream, extra: list[str]
+    name: str, t, gyro: Stream, temp: Stream | None, mag: Stream | None, mag_rows: int, acc: Stream | None,
+    extra: list[str],
 ) -> str:
-    """One human line describing what was read."""
-    temp_c = temp.values
+    """One human line describing what was read (``mag_rows`` 0: no compass)."""
     parts = [
         f"{Path(name).name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
         f"gyro {median_rate_hz(t):.3g} Hz from {gyro.label}",
-        f"temperature {np.min(temp_c):.1f}..{np.max(temp_c):.1f} degC from {temp.label}"
-        f" ({describe_rate(temp.t)}, interpolated)",
-        f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_rows} rows)"
-        f" + acc from {acc.label}",
     ]
+    if temp is not None:
+        parts.append(
+            f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
+            f" ({describe_rate(temp.t)}, interpolated)"
+        )
+    else:
+        parts.append(f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)")
+    if mag_rows:
+        parts.append(
+            f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_rows} rows) + acc from {acc.label}"
+        )
+    else:
+        parts += ["no compass"] + ([f"acc from {acc.label}"] if acc is not None else [])
     return "; ".join(parts + extra)
 
 
@@ -600,20 +616,23 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     pandas.DataFrame
         One row per gyro sample: ``t`` (s, absolute, strictly increasing), ``gyro_z``,
         ``gyro_x``, ``gyro_y`` (deg/s, body FRD; ``gyro_z`` > 0 = heading increasing),
-        ``temp`` (degC), ``mag_x``, ``mag_y``, ``mag_z`` (gauss, body FRD, NaN on rows
-        without a new sample), ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force,
-        body FRD) and, with ``reference``, ``ref_heading`` (deg, [0, 360)). ``df.attrs``:
-        ``source``, ``format`` ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"),
-        ``compass`` ("mag"), ``mag_unit`` ("gauss"), ``acc_unit`` ("m/s^2"),
-        ``topics`` (column group -> topic used) and ``summary`` (one line).
+        ``temp`` (degC; 0 in every row without a measured temperature), ``mag_x``,
+        ``mag_y``, ``mag_z`` (gauss, body FRD, NaN on rows without a new sample; no
+        columns without a compass), ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific
+        force, body FRD; no columns without an accelerometer) and, with ``reference``,
+        ``ref_heading`` (deg, [0, 360)). ``df.attrs``: ``source``, ``format``
+        ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or
+        "none"), ``mag_unit`` ("gauss", with the mag columns), ``acc_unit`` ("m/s^2",
+        with the acc columns), ``topics`` (column group -> topic used, None for a
+        group without data), ``summary`` (one line) and, when the log has no compass
+        or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
 
     Raises
     ------
     LogFormatError
-        Missing, empty, non-ULog, truncated or corrupt file; a missing topic or field;
-        fewer than 2 gyro samples; no gyro temperature (e.g. logged as 0 in every
-        sample); an implausible temperature; no magnetometer sample within the gyro
-        record; an unsupported sensor rotation.
+        Missing, empty, non-ULog, truncated or corrupt file; a missing gyro topic or
+        a missing field; no ``sensor_mag`` topic while ``mag_instance`` is given; fewer
+        than 2 gyro samples; an implausible temperature; an unsupported sensor rotation.
     ConfigError
         pyulog is not installed; ``instance`` or ``mag_instance`` is not a
         non-negative integer or not in the log (the message lists those present).
@@ -641,21 +660,15 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
                 f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples",
             )
         )
-    temp, _ = increasing(_temperature_stream(ulog, instance, name))
-    check_temperature(name, temp.label, temp.values)
-    acc, _ = increasing(_acc_stream(ulog, instance, name))
-    mag, _ = increasing(_mag_stream(ulog, mag_instance, name))
+    temp, no_temp_why = _temperature_stream(ulog, instance)
+    if temp is not None:
+        temp, _ = increasing(temp)
+        check_temperature(name, temp.label, temp.values)
+    acc, mag = _acc_stream(ulog, instance, name), _mag_stream(ulog, mag_instance, name)
+    acc = increasing(acc)[0] if acc is not None else None
+    mag = increasing(mag)[0] if mag is not None else None
     t = gyro.t
-    mag_on_rows, mag_rows = on_following_rows(t, mag.t, mag.values)
-    if mag_rows == 0:
-        raise LogFormatError(
-            message(
-                name,
-                f"no magnetometer sample of {mag.label} falls within the gyro record"
-                f" (t = {t[0]:.3f}..{t[-1]:.3f} s)",
-                "check the log; the compass and the gyro must overlap in time",
-            )
-        )
+    mag_on_rows, mag_rows, no_compass_why = _compass(t, mag, acc)
 
     extra = []
     ref = _reference_stream(ulog, name) if reference else None
@@ -678,24 +691,28 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
         "format": "ulog",
         "gyro_unit": "deg/s",
         "frame": "ned",
-        "compass": "mag",
-        "mag_unit": "gauss",
-        "acc_unit": "m/s^2",
+        "compass": "mag" if mag_rows else NO_COMPASS,
+        **({"mag_unit": "gauss"} if mag_rows else {}),
+        **({"acc_unit": "m/s^2"} if acc is not None else {}),
         "topics": {
             "gyro": gyro.label,
-            "temp": temp.label,
-            "mag": mag.label,
-            "acc": acc.label,
+            "temp": temp.label if temp is not None else None,
+            "mag": mag.label if mag_rows else None,
+            "acc": acc.label if acc is not None else None,
             "ref_heading": ref.label if ref is not None else None,
         },
         "summary": _summary(name, t, gyro, temp, mag, mag_rows, acc, extra),
     }
+    if no_compass_why:
+        add_note(attrs, no_compass_note(name, no_compass_why))
+    if temp is None:
+        add_note(attrs, no_temperature_note(name, no_temp_why))
     return contract_frame(
         t,
         np.degrees(gyro.values),
-        interp_held(temp.t, temp.values, t),
+        interp_held(temp.t, temp.values, t) if temp is not None else np.full(t.size, NO_TEMPERATURE_C),
         mag_on_rows,
-        interp_held(acc.t, acc.values, t),
+        interp_held(acc.t, acc.values, t) if acc is not None else None,
         ref_heading,
         attrs,
     )

@@ -2,10 +2,12 @@
 
 The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
 (:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
-contract with :func:`normalise_frame`: column map, required and compass columns, numeric
+contract with :func:`normalise_frame`: column map, required columns, numeric
 conversion, time and temperature checks, gyro unit (deg/s) and frame (NED/FRD, headings
-in [0, 360)). Every step works row by row, so the chunks of a file come out as the rows
-of the whole file.
+in [0, 360)), and a ``temp`` of 0 degC where the file has no usable temperature. Every
+step works row by row, so the chunks of a file come out as the rows of the whole file.
+:func:`compass_form` names the compass form the file holds ("none" without one), and
+:func:`table_notes` words what the file lacks (:mod:`gyrodrift.io.notes`).
 
 Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
 :class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
@@ -52,6 +54,7 @@ from gyrodrift.conventions import (
     wrap_360,
 )
 from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
 
 __all__ = [
     "NUMERIC_COLS",
@@ -76,6 +79,11 @@ __all__ = [
     "convert_numeric",
     "first_value_rows",
     "compass_form",
+    "table_notes",
+    "TEMP_MEASURED",
+    "TEMP_ABSENT",
+    "TEMP_EMPTY",
+    "Normalised",
     "normalise_frame",
 ]
 
@@ -90,6 +98,10 @@ NUMERIC_COLS = (
 #: Gyro rate columns (converted to deg/s).
 _GYRO_COLS = (GYRO_X, GYRO_Y, GYRO_Z)
 _MAG_FORM_COLS = MAG_COLS + ACC_COLS
+#: The raw compass form in a note.
+_MAG_FORM = "mag_x..z with acc_x..z"
+#: Where a table's temperature came from (:attr:`Normalised.temperature`).
+TEMP_MEASURED, TEMP_ABSENT, TEMP_EMPTY = "measured", "absent", "empty"
 #: Columns whose sign flips from ROS FLU body axes to FRD (180 deg rotation about x).
 _FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Y, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
 #: Columns holding a heading (deg, clockwise from north in NED).
@@ -352,9 +364,14 @@ def apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: Sourc
 
 
 def _check_required_columns(frame: pd.DataFrame, src: Source) -> None:
-    """Raise if any of t, gyro_z, temp is missing."""
+    """Raise if ``t`` or ``gyro_z`` is missing.
+
+    A log without ``temp`` is read (:func:`normalise_frame` fills it in); when another
+    required column is missing too, the message names ``temp`` as well, so that one
+    ``--map`` fixes both.
+    """
     missing = [c for c in REQUIRED_COLS if c not in frame.columns]
-    if missing:
+    if any(c != TEMP for c in missing):
         raise format_error(
             src,
             f"missing required column(s) {show_names(missing)};"
@@ -362,23 +379,6 @@ def _check_required_columns(frame: pd.DataFrame, src: Source) -> None:
             "rename the matching input columns with --map NEW=OLD (e.g. --map gyro_z=gz;"
             " column_map={'gyro_z': 'gz'} in Python)",
         )
-
-
-def _check_compass_columns(frame: pd.DataFrame, src: Source) -> None:
-    """Raise unless ``heading`` or the full mag_* + acc_* set is present."""
-    if HEADING in frame.columns:
-        return
-    missing = [c for c in _MAG_FORM_COLS if c not in frame.columns]
-    if not missing:
-        return
-    partial = len(missing) < len(_MAG_FORM_COLS)
-    detail = f" (missing: {', '.join(missing)})" if partial else ""
-    raise format_error(
-        src,
-        f"no compass data: need a {HEADING!r} column or all of {', '.join(_MAG_FORM_COLS)}{detail};"
-        f" columns found: {show_names(frame.columns)}",
-        "add the compass columns or rename them with --map NEW=OLD (column_map in Python)",
-    )
 
 
 def _is_plain_numeric(series: pd.Series) -> bool:
@@ -506,17 +506,19 @@ def _first_value_pos(values: np.ndarray) -> int | None:
 
 
 def first_value_rows(frame: pd.DataFrame) -> dict[str, int | None]:
-    """Row of the first value (None: none) of each required column, after conversion."""
-    return {col: _first_value_pos(frame[col].to_numpy()) for col in REQUIRED_COLS}
+    """Row of the first value (None: none) of each required column the frame has, after
+    conversion."""
+    return {col: _first_value_pos(frame[col].to_numpy()) for col in REQUIRED_COLS if col in frame.columns}
 
 
 def _check_required_values(first: Mapping[str, int | None], src: Source) -> None:
-    """Reject entirely empty required columns and leading empty gyro_z/temp cells.
+    """Reject an entirely empty ``t`` or ``gyro_z`` and leading empty gyro_z/temp cells.
 
-    ``first`` maps each required column to the row of its first value in the whole
-    file (None: empty in every row), see :func:`first_value_rows`.
+    ``first`` maps each required column of the frame to the row of its first value in
+    the whole file (None: empty in every row), see :func:`first_value_rows`. A ``temp``
+    empty in every row is no error: :func:`normalise_frame` fills it in.
     """
-    for col in REQUIRED_COLS:
+    for col in (T, GYRO_Z):
         if first[col] is None:
             raise format_error(
                 src,
@@ -524,7 +526,7 @@ def _check_required_values(first: Mapping[str, int | None], src: Source) -> None
                 "check the file, or map the right input column with --map NEW=OLD (column_map in Python)",
             )
     for col in (GYRO_Z, TEMP):
-        pos = first[col]
+        pos = first.get(col)
         if pos is not None and pos > 0:
             raise format_error(
                 src,
@@ -586,11 +588,13 @@ def _compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
     return frozenset(c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns and frame[c].notna().any())
 
 
-def compass_form(columns, with_values: frozenset[str], src: Source) -> str:
-    """Return "heading", "mag" or "both": the compass forms that hold data.
+def compass_form(with_values: frozenset[str]) -> str:
+    """Return "heading", "mag", "both" or "none" (:data:`~gyrodrift.io.notes.NO_COMPASS`):
+    the compass forms that hold data.
 
-    ``columns`` are the frame's columns, ``with_values`` the compass columns holding a
-    value somewhere in the file (:func:`_compass_columns_with_values`, united over chunks).
+    ``with_values`` are the compass columns holding a value somewhere in the file
+    (:func:`_compass_columns_with_values`, united over chunks). The raw form needs all
+    of ``mag_x, mag_y, mag_z, acc_x, acc_y, acc_z``.
     """
     heading = HEADING in with_values
     mag = all(c in with_values for c in _MAG_FORM_COLS)
@@ -600,13 +604,57 @@ def compass_form(columns, with_values: frozenset[str], src: Source) -> str:
         return "heading"
     if mag:
         return "mag"
-    present = [c for c in (HEADING,) + _MAG_FORM_COLS if c in columns]
+    return NO_COMPASS
+
+
+def _compass_gap(columns, with_values: frozenset[str]) -> str:
+    """Why a table has no compass form: the words inside its note's parentheses."""
+    head = f"{HEADING} column empty in every row" if HEADING in columns else f"no {HEADING} column"
+    present = [c for c in _MAG_FORM_COLS if c in columns]
+    if not present:
+        return f"{head} nor {_MAG_FORM}" if HEADING not in columns else f"{head}, no {_MAG_FORM}"
+    missing = [c for c in _MAG_FORM_COLS if c not in columns]
     empty = [c for c in present if c not in with_values]
-    raise format_error(
-        src,
-        f"the compass column(s) hold no values (empty in every row: {', '.join(empty)})",
-        "give a log with compass samples, or map the right columns with --map NEW=OLD (column_map in Python)",
+    parts = ([f"missing: {', '.join(missing)}"] if missing else []) + (
+        [f"empty in every row: {', '.join(empty)}"] if empty else []
     )
+    return f"{head}, {_MAG_FORM} incomplete ({'; '.join(parts)})"
+
+
+def table_notes(name: str, columns, with_values: frozenset[str], temperature: str) -> list[str]:
+    """The notes of a table read whole or in chunks (see :mod:`gyrodrift.io.notes`).
+
+    Parameters
+    ----------
+    name : str
+        The file, as the user gave it.
+    columns : sequence of str
+        The columns of the table as read (``temp`` included when it was filled in).
+    with_values : frozenset of str
+        Compass columns holding a value somewhere in the file.
+    temperature : {"measured", "absent", "empty"}
+        :attr:`Normalised.temperature` of the file.
+
+    Returns
+    -------
+    list of str
+        A compass note when :func:`compass_form` is "none", then a temperature note
+        when ``temperature`` is not "measured"; empty when the table lacks neither.
+    """
+    notes = []
+    if compass_form(with_values) == NO_COMPASS:
+        notes.append(no_compass_note(name, _compass_gap(columns, with_values)))
+    if temperature == TEMP_ABSENT:
+        notes.append(
+            no_temperature_note(
+                name,
+                f"no {TEMP!r} column; columns found: {show_names([c for c in columns if c != TEMP])}",
+                f"if the log has it under another name, map it with --map {TEMP}=NAME (column_map in Python)",
+            )
+        )
+    elif temperature == TEMP_EMPTY:
+        notes.append(no_temperature_note(name, f"column {TEMP!r} empty in every row"))
+    return notes
 
 
 # ---------------------------------------------------------------------------
@@ -651,6 +699,16 @@ def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
 # ---------------------------------------------------------------------------
 
 
+class Normalised(NamedTuple):
+    """A frame brought into the input contract by :func:`normalise_frame`."""
+
+    frame: pd.DataFrame  #: the rows, in contract units and frames
+    with_values: frozenset[str]  #: compass columns holding a value in this frame (for :func:`compass_form`)
+    #: "measured"; "absent" (no ``temp`` column) or "empty" (``temp`` empty in every row
+    #: of the file): then ``temp`` is :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row
+    temperature: str
+
+
 def normalise_frame(
     frame: pd.DataFrame,
     src: Source,
@@ -658,12 +716,19 @@ def normalise_frame(
     *,
     prev_t_s: float | None = None,
     first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = first_value_rows,
-) -> tuple[pd.DataFrame, frozenset[str]]:
+    temp_empty: bool = False,
+) -> Normalised:
     """Check a frame of a table and bring it into the input contract.
 
     The whole file (:func:`gyrodrift.io.tabular.read_log`) or one chunk of it
     (:mod:`gyrodrift.io.chunked`) goes through here; every step is row by row, so the
     chunks of a file come out as the rows of the whole.
+
+    A table without a compass form is read as it is (its compass columns, if any, stay
+    as read; :func:`compass_form` then gives "none"). A table without a usable
+    temperature (no ``temp`` column, or one empty in every row of the file) gets
+    ``temp`` = :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row: in place of
+    the empty column, or added as the last column. :func:`table_notes` words both.
 
     Parameters
     ----------
@@ -676,25 +741,38 @@ def normalise_frame(
         Time (s) of the file row just before the frame, for the strictly-increasing check.
     first_values : callable, optional
         ``first_values(converted_frame)`` gives the file row of the first value of each
-        required column (:func:`first_value_rows`); None skips that check (later chunks).
+        required column the frame has (:func:`first_value_rows`); None skips that check
+        (later chunks).
+    temp_empty : bool, default False
+        With ``first_values`` None (later chunks): the file's ``temp`` column is empty
+        in every row, as the first chunk's ``temperature`` ("empty") said.
 
     Returns
     -------
-    frame : pandas.DataFrame
-        Numeric contract columns float64 in deg/s and NED, headings in [0, 360).
-    with_values : frozenset of str
-        Compass columns holding a value in this frame (for :func:`compass_form`).
+    Normalised
+        The frame (numeric contract columns float64 in deg/s and NED, headings in
+        [0, 360)), its compass columns with values, and where its temperature came from.
     """
     df = apply_column_map(frame, opts.renames, src)
     _check_required_columns(df, src)
-    _check_compass_columns(df, src)
     df = convert_numeric(df, src)
     if first_values is not None:
-        _check_required_values(first_values(df), src)
+        first = first_values(df)
+        _check_required_values(first, src)
+        temp_empty = TEMP in first and first[TEMP] is None
     _check_time(df, src, prev_t_s)
-    _check_temperature(df, src)
+    if TEMP not in df.columns:
+        temperature = TEMP_ABSENT
+    elif temp_empty:
+        temperature = TEMP_EMPTY
+    else:
+        temperature = TEMP_MEASURED
+        _check_temperature(df, src)
     with_values = _compass_columns_with_values(df)
     df = _to_deg_per_s(df, opts.scale)
     if opts.frame == "enu":
         df = _enu_to_ned(df)
-    return _wrap_headings(df), with_values
+    df = _wrap_headings(df)
+    if temperature != TEMP_MEASURED:
+        df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
+    return Normalised(df, with_values, temperature)
