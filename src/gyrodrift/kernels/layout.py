@@ -87,8 +87,9 @@ I_INIT_UPDATED = 22  # the init window gave a measurement
 I_ANCHOR_ROW = 23  # first compass row of the init window
 I_PENDING = 24  # PENDING_* for the caller (MODE_EXTERNAL)
 I_RUN_N = 25  # rows in the current still run (0: none)
-I_COMPASS_SEEN = 26  # a compass sample came after the init window
-N_ISTATE = 27
+I_COMPASS_SEEN = 26  # a compass sample has come
+I_RUN_MEASURED = 27  # a still run ended before this row measured the drift (its update flag)
+N_ISTATE = 28
 
 # ----------------------------------------------------------- float settings
 

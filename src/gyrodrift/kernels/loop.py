@@ -36,7 +36,7 @@ from gyrodrift.kernels.layout import (
     FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
     I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
-    F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
+    F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
     O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
     OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_INIT, R_INTERFERENCE, R_NONE,
 )
@@ -133,8 +133,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     t_start = fs[F_TSTART]
     anchor = fs[F_ANCHOR]
     external = icfg[K_MODE] == MODE_EXTERNAL
-    still_runs = not external  # gyro-only still runs update the compiled filters
     still_var = cfg[C_STILL_STD] ** 2
+    max_gap = cfg[C_MAX_GAP]
     init_end = ist[I_INIT_END]
     lb_cap = lb.shape[0]
     acc_cap = acc.shape[0]
@@ -187,22 +187,26 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         Tpi = Tp[ix]
         h = heading[ix]
         in_init = i <= init_end
-        run_measured = False
-        if still_runs and not in_init and ist[I_RUN_N] > 0:
+        if not in_init and ist[I_RUN_N] > 0:
             # the still run so far ends before this row when it moves, a gap comes, or it is an
-            # interval long; it measures the drift when cut by a gap or the log has no compass
+            # interval long; it measures the drift when a time gap ends it or there is no compass
             d = gi - fs[F_RUN_G0]
             n1 = ist[I_RUN_N] + 1
             s1 = fs[F_RUN_SUM] + d
             q1 = fs[F_RUN_SUMSQ] + d * d
             moving = q1 / n1 - (s1 / n1) ** 2 > still_var
+            time_gap = t_s - c_t > max_gap
             if moving or gap[ix] or t_s - fs[F_RUN_T0] >= interval:
-                if gap[ix] or ist[I_COMPASS_SEEN] == 0:
-                    run_measured = aiding.close_still_run(c_t, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc,
-                                                          ef, ei)
+                measured = False
+                if (time_gap or ist[I_COMPASS_SEEN] == 0) and not (gap[ix] and not time_gap):  # not a held cell
+                    measured = aiding.close_still_run(c_t, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc, ef, ei)
                 ist[I_RUN_N] = 0
-                if run_measured:  # the rows before keep the parameters they were compensated with
-                    _fill_params(out, codes, cap, seg, i, pa, pb, pc, unobs)
+                if measured:
+                    ist[I_RUN_MEASURED] = 1
+                    if external:  # the caller updates its estimator; this row then runs with it
+                        stop = i
+                        break
+                    _fill_params(out, codes, cap, seg, i, pa, pb, pc, unobs)  # the rows before keep theirs
                     seg = i
                     pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
                     C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
@@ -229,7 +233,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         I_bias = I_bias + 0.5 * (bias + c_bias) * dt
         I_rate = I_rate + 0.5 * (rate + c_rate) * dt
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
-        if still_runs and not in_init and ist[I_RUN_N] == 0:
+        if not in_init and ist[I_RUN_N] == 0:
             aiding.open_still_run(t_s, I_raw, I_T, I_Tp, gi, fs, ist)
         has_compass = not math.isnan(h)
         if has_compass:
@@ -261,7 +265,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         out[o_bias + ix] = bias
         out[o_rate + ix] = rate
         out[o_sd + ix] = bias_sd
-        update = 1 if run_measured else 0
+        update = ist[I_RUN_MEASURED]
+        ist[I_RUN_MEASURED] = 0
         if in_init:
             reason = R_INIT
             out[o_heading + ix] = I_rate  # anchored when the window is done
