@@ -19,9 +19,14 @@ goes to:
   the heading is the yaw of its quaternion (NED).
 
 Both see the same gyro (z axis; x, y zero), a level accelerometer and the same compass
-headings. Errors are against ``ref_heading``, wrapped to ±180 deg, RMS over the rows
-where the method has a heading. Prints one Markdown table: per family the mean and
-median RMS of each and on how many seeds ``heading_fused`` is lower.
+headings: the ``heading`` column, or for a log with the raw magnetometer and
+accelerometer instead (``vehicle-rawmag``) the compensator's tilt-compensated
+``compass_heading``. Errors are against ``ref_heading``, wrapped to ±180 deg, RMS over
+the rows where the method has a heading. A log that gyrodrift refuses (too short, no
+compass) gets NaN for gyrodrift and the reason in ``error``; imufusion still runs when
+the log has a heading column. Prints one Markdown table: per family the mean and
+median RMS of each (over the seeds that ran), on how many seeds ``heading_fused`` is
+lower, and how many seeds gyrodrift refused.
 """
 
 from __future__ import annotations
@@ -53,12 +58,15 @@ def imufusion_filters(fs_hz: float, magnetic_rejection_deg: float):
     return bias, ahrs
 
 
-def imufusion_heading(log: pd.DataFrame, fs_hz: float) -> np.ndarray:
-    """Heading (deg, [0, 360)) of x-io Fusion's AHRS with gyroscope offset correction, per row."""
+def imufusion_heading(log: pd.DataFrame, fs_hz: float, heading=None) -> np.ndarray:
+    """Heading (deg, [0, 360)) of x-io Fusion's AHRS with gyroscope offset correction, per row.
+
+    ``heading``: the compass heading per row, deg, NaN without a sample (default the
+    log's ``heading`` column)."""
     bias, ahrs = imufusion_filters(fs_hz, magnetic_rejection_deg=10.0)
     acc = np.array([0.0, 0.0, -1.0])  # level (NED body, g), as the compensator's heading assumes
     gyro_z = log["gyro_z"].to_numpy(float)
-    heading = log["heading"].to_numpy(float)
+    heading = np.asarray(log["heading"] if heading is None else heading, dtype=float)
     out = np.empty(len(log))
     for i in range(len(log)):
         gyro = bias.update(np.array((0.0, 0.0, gyro_z[i])))
@@ -88,16 +96,25 @@ def run(families, seeds, duration_scale: float, fs_hz: float, estimator: str | N
             case = draw_case(family, seed, duration_scale=duration_scale)
             log, _ = simulate_case(case, fs_hz=fs_hz, calibration=False)
             ref = log["ref_heading"].to_numpy(float)
-            out = compensate(log, CompensatorConfig(estimator=estimator) if estimator else None)
+            try:
+                out, error = compensate(log, CompensatorConfig(estimator=estimator) if estimator else None), ""
+            except Exception as err:  # a log gyrodrift refuses: reported in the row, the others go on
+                out, error = None, " ".join(f"{type(err).__name__}: {err}".split())
+            if "heading" in log.columns:
+                compass = log["heading"].to_numpy(float)
+            else:
+                compass = None if out is None else out["compass_heading"].to_numpy(float)
             rows.append({
                 "family": family, "seed": seed,
-                "heading_fused": rms_deg(out["heading_fused"], ref),
-                "imufusion": rms_deg(imufusion_heading(log, fs_hz), ref),
-                "heading (gyro alone)": rms_deg(out["heading"], ref),
-                "compass": rms_deg(log["heading"], ref),
+                "heading_fused": math.nan if out is None else rms_deg(out["heading_fused"], ref),
+                "imufusion": math.nan if compass is None else rms_deg(imufusion_heading(log, fs_hz, compass), ref),
+                "heading (gyro alone)": math.nan if out is None else rms_deg(out["heading"], ref),
+                "compass": math.nan if compass is None else rms_deg(compass, ref),
+                "error": error,
             })
             print(f"{family} seed {seed}: " + ", ".join(f"{k} {v:.2f}" for k, v in rows[-1].items()
-                                                         if k not in ("family", "seed")), flush=True)
+                                                         if k not in ("family", "seed", "error"))
+                  + (f" ({error})" if error else ""), flush=True)
     return pd.DataFrame(rows)
 
 
@@ -110,7 +127,9 @@ def summary(df: pd.DataFrame) -> pd.DataFrame:
         for c in cols:
             row[f"{c} mean"] = g[c].mean()
             row[f"{c} median"] = g[c].median()
-        row["fused < imufusion"] = f"{int((g['heading_fused'] < g['imufusion']).sum())}/{len(g)}"
+        both = g["heading_fused"].notna() & g["imufusion"].notna()
+        row["fused < imufusion"] = f"{int((g['heading_fused'] < g['imufusion']).sum())}/{int(both.sum())}"
+        row["gyrodrift refused"] = int((g["error"] != "").sum())
         out.append(row)
     return pd.DataFrame(out)
 

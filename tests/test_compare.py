@@ -10,6 +10,8 @@ from conftest import synthetic_log
 from gyrodrift.compare import CAUSAL, METHODS, run_method, run_methods, summary_table
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import fit_linear_drift, fit_poly3
+from gyrodrift.fusion_offset import available as fusion_offset_available
+from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.model import temp_rate
 from gyrodrift.simulate import simulate
 
@@ -66,7 +68,8 @@ def test_oracle_has_zero_bias_error_and_all_methods_run():
     log = simulate("static", duration_s=900.0, fs_hz=10.0, seed=3)
     cal = simulate("calibration", duration_s=1800.0, fs_hz=10.0, seed=4)
     outputs, skipped = run_methods(log, METHODS, calibration=cal)
-    assert list(outputs) == list(METHODS) and not skipped
+    missing = set() if fusion_offset_available() else {"fusion-offset"}
+    assert list(outputs) == [m for m in METHODS if m not in missing] and set(skipped) == missing
     np.testing.assert_array_equal(outputs["oracle"]["bias_z"], log["true_bias_z"])
     table = summary_table(outputs)
     assert table.loc["oracle", "bias_rms"] == 0.0
@@ -96,3 +99,54 @@ def test_compare_command_json(tmp_path):
     res = subprocess.run([sys.executable, "-m", "gyrodrift", "compare", str(path), "--methods", "stkf"],
                          capture_output=True, text=True)
     assert res.returncode == 0 and "| stkf |" in res.stdout
+
+
+# ------------------------------------------------------------------ x-io Fusion's offset correction
+
+
+def static_constant_bias_log(bias_dps=0.4, duration_s=120.0, fs_hz=10.0):
+    """Motionless at 100 deg, 25 degC, gyro reading a constant bias, compass on every other row."""
+    t = np.arange(int(duration_s * fs_hz) + 1) / fs_hz
+    log = pd.DataFrame({"t": t, "gyro_z": bias_dps, "temp": 25.0,
+                        "heading": np.where(np.arange(t.size) % 2 == 0, 100.0, np.nan)})
+    log["ref_heading"] = 100.0
+    log["true_bias_z"] = bias_dps
+    return log
+
+
+def test_fusion_offset_recovers_a_constant_bias_after_its_timeout():
+    pytest.importorskip("imufusion")
+    log = static_constant_bias_log()
+    out = run_method("fusion-offset", log)
+    drift = out["bias_z"].to_numpy()
+    # Fusion (defaults: 3 deg/s, 3 s): 30 still samples at 10 Hz, then the offset moves
+    # towards the gyro by g = 2*pi*0.02/10 of the difference per sample.
+    g = 2.0 * np.pi * 0.02 / 10.0
+    k = np.arange(drift.size)
+    expected = np.where(k <= 30, 0.0, 0.4 * (1.0 - (1.0 - g) ** np.maximum(k - 30, 0)))
+    np.testing.assert_allclose(drift, expected, rtol=1e-4, atol=1e-6)
+    assert abs(drift[-1] - 0.4) < 1e-3
+    # the heading keeps what was integrated before the offset converged: bias * (3 s + 1/(10 Hz * g))
+    err = (out["heading"].iloc[-1] - 100.0 + 180.0) % 360.0 - 180.0
+    assert err == pytest.approx(0.4 * (3.0 + 0.1 / g), abs=0.05)
+    assert CAUSAL["fusion-offset"] and out["update"].sum() == 0
+
+
+def test_fusion_offset_uses_the_other_axes_to_tell_stillness():
+    pytest.importorskip("imufusion")
+    log = static_constant_bias_log(duration_s=60.0)
+    # never still: no offset (up to the single precision of the library's gyro)
+    assert np.abs(fusion_offset_drift(log.assign(gyro_x=5.0, gyro_y=0.0))).max() < 1e-7
+    assert fusion_offset_drift(log.assign(gyro_x=0.5, gyro_y=-0.5))[-1] > 0.3
+    with pytest.raises(ConfigError, match="sample_rate_hz must be a positive number"):
+        fusion_offset_drift(log, sample_rate_hz=0.0)
+
+
+def test_fusion_offset_without_imufusion_is_skipped_or_a_one_line_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "imufusion", None)  # import imufusion now raises ImportError
+    assert not fusion_offset_available()
+    log = static_constant_bias_log(duration_s=60.0)
+    outputs, skipped = run_methods(log, ("kf", "fusion-offset"))
+    assert list(outputs) == ["kf"] and "pip install imufusion" in skipped["fusion-offset"]
+    with pytest.raises(ConfigError, match="pip install imufusion"):
+        run_method("fusion-offset", log)

@@ -10,7 +10,9 @@ import pytest
 
 from gyrodrift.cli import main
 from gyrodrift.errors import ConfigError
+from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.montecarlo import (
+    ADVERSARIAL_FAMILIES,
     COLUMNS,
     DEFAULT_METHODS,
     FAMILIES,
@@ -27,13 +29,54 @@ TINY = 0.02  # durations x 0.02: 48 s (vehicle) to 864 s (soak)
 METRICS = ["heading_rms_deg", "heading_max_deg", "bias_rms_dps"]
 
 
-def test_six_families_map_to_scenarios():
-    assert list(FAMILIES) == ["static", "interference-wander", "vehicle", "hysteresis", "cold-start", "soak"]
+def test_families_map_to_scenarios():
+    old = ["static", "interference-wander", "vehicle", "hysteresis", "cold-start", "soak"]
+    assert list(FAMILIES) == old + list(ADVERSARIAL_FAMILIES)
+    assert list(ADVERSARIAL_FAMILIES) == ["bursty", "ramp-interference", "sway", "vehicle-rawmag", "vessel",
+                                          "no-temp", "short"]
     for family in FAMILIES.values():
         assert family.scenario in SCENARIOS
         assert family.duration_s == DEFAULT_DURATION_S[family.scenario]
     assert DEFAULT_METHODS[0] == "adaptive"
-    assert set(DEFAULT_METHODS) >= {"adaptive", "stkf", "kf", "mlr", "lsm", "poly3"}
+    assert set(DEFAULT_METHODS) >= {"adaptive", "stkf", "kf", "mlr", "lsm", "poly3", "fusion-offset"}
+
+
+#: draw_case of the six original families, seed 0: (log_seed, calibration_seed, device c1, compass noise).
+_OLD_CASES = {
+    "static": (1011153410, 2033498012, -0.031177361511713783, 0.5920455227839132),
+    "interference-wander": (806003562, 1639323459, 0.013253363007605667, 0.5999762720473867),
+    "vehicle": (3294786, 891576921, 0.015800470779683683, 0.5510067916020799),
+    "hysteresis": (2558700555, 1979149884, 0.013137609325928324, 0.4135230029260205),
+    "cold-start": (1123712478, 1528351654, 0.02708695415733681, 0.4058017900324672),
+    "soak": (2058229281, 3068979129, -0.030198630981765437, 0.5876058777754781),
+}
+
+
+def test_original_families_draw_the_same_cases():
+    for family, expected in _OLD_CASES.items():
+        case = draw_case(family, 0)
+        assert (case.log_seed, case.calibration_seed, case.device.c1_dps_per_c, case.compass.noise_deg) == expected
+        assert case.duration_s == DEFAULT_DURATION_S[family]
+
+
+def test_short_family_draws_its_length_whatever_the_scale():
+    lengths = [draw_case("short", s, duration_scale=0.1).duration_s for s in range(8)]
+    assert all(20.0 <= x <= 40.0 for x in lengths) and len(set(lengths)) == 8
+    assert draw_case("short", 3, duration_scale=5.0) == draw_case("short", 3, duration_scale=0.1)
+    log, _ = simulate_case(draw_case("short", 3), calibration=False)
+    assert log["t"].iloc[-1] == pytest.approx(lengths[3], abs=0.1)
+
+
+def test_every_adversarial_family_runs_and_reports_failures_as_rows():
+    df = run_monte_carlo(ADVERSARIAL_FAMILIES, [1], ["kf", "fusion-offset"], duration_scale=TINY, workers=1)
+    assert list(df["family"]) == [f for f in ADVERSARIAL_FAMILIES for _ in range(2)]
+    assert set(df["status"]) <= {"ok", "error"}
+    failed = df[df["status"] == "error"]
+    assert (failed["error"] != "").all() and not failed["error"].str.contains("\n").any()
+    ok = df[df["status"] == "ok"]
+    assert np.isfinite(ok[METRICS].to_numpy()).all()
+    if fusion_offset_available():
+        assert set(ok["family"]) >= {"ramp-interference", "sway", "vehicle-rawmag", "vessel", "no-temp"}
 
 
 def test_cases_are_seeded_by_family_and_seed():

@@ -685,3 +685,114 @@ def test_sum_of_steps_is_bitwise_the_sum_over_the_whole_run():
             pulse[ramp] += delta * smooth_step_slope((t[ramp] - start) / dur) / dur
         assert np.array_equal(sum_of_steps(t, steps).view(np.uint64), full.view(np.uint64))
         assert np.array_equal(pulse.view(np.uint64), pulse_full.view(np.uint64))
+
+
+# ------------------------------------------------------------------ adversarial scenarios
+
+ADVERSARIAL = ("vehicle-rawmag", "bursty", "ramp-interference", "sway", "vessel", "no-temp", "short")
+
+
+def _motion(scenario, duration_s, seed=0, fs_hz=1.0):
+    """The scenario's Motion at ``fs_hz`` (no sensor models: fast, exact rates)."""
+    t = np.arange(int(duration_s * fs_hz) + 1) / fs_hz
+    return t, SCENARIOS[scenario](t, float(duration_s), np.random.default_rng(seed))
+
+
+def test_adversarial_scenarios_registered_with_default_durations():
+    assert set(ADVERSARIAL) <= set(SCENARIOS)
+    assert DEFAULT_DURATION_S["sway"] == 12 * 3600.0 and DEFAULT_DURATION_S["short"] == 30.0
+    assert DEFAULT_DURATION_S["vehicle-rawmag"] == DEFAULT_DURATION_S["vehicle"]
+    for name in ("ramp-interference", "sway", "vessel", "no-temp", "short"):
+        a = simulate(name, seed=1, duration_s=600.0, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+        b = simulate(name, seed=2, duration_s=600.0, fs_hz=10.0, device=EXACT_DEVICE, compass=TRUE_COMPASS)
+        assert not np.allclose(a["ref_heading"], b["ref_heading"]), name  # the random heading follows the seed
+
+
+def test_bursty_logs_5_s_records_about_300_s_apart_with_or_without_compass():
+    from gyrodrift.simulate import BURSTY_RECORD_S, BURSTY_SPACING_S
+
+    forms = set()
+    for seed in range(6):
+        df = simulate("bursty", seed=seed, duration_s=3600.0, fs_hz=10.0)
+        t = df["t"].to_numpy()
+        jumps = np.flatnonzero(np.diff(t) > 1.0)
+        starts = t[np.r_[0, jumps + 1]]
+        assert starts[0] == 0.0 and 11 <= starts.size <= 13
+        spacing = np.diff(starts)
+        assert (spacing >= BURSTY_SPACING_S[0] - 0.1).all() and (spacing <= BURSTY_SPACING_S[1] + 0.1).all()
+        assert (np.diff(np.split(t, jumps + 1)[0]) < 0.1 + 1e-9).all()
+        assert all(len(rec) == BURSTY_RECORD_S * 10 for rec in np.split(t, jumps + 1))  # 50 rows at 10 Hz
+        assert len(df.attrs["records"]) == starts.size
+        assert df["ref_heading"].nunique() == 1 and df["temp"].iloc[-1] < df["temp"].iloc[0] - 10.0  # still, cooling
+        forms.add("heading" if "heading" in df.columns else df.attrs["compass_form"])
+        assert not any(c in df.columns for c in MAG_COLS)
+    assert forms == {"heading", "none"}
+
+
+def test_ramp_interference_falls_fast_while_the_compass_wanders():
+    from gyrodrift.simulate import ramp_interference_window
+
+    duration = DEFAULT_DURATION_S["ramp-interference"]
+    t, m = _motion("ramp-interference", duration)
+    assert -0.9 / 60 - 1e-9 <= m.temp_rate_cps.min() <= -0.7 / 60  # about 0.8 degC/min at the fastest
+    assert np.ptp(m.temp_c) > 25.0 and (m.heading_rate_dps == 0.0).all()
+    start, dur = ramp_interference_window(duration)
+    assert dur == pytest.approx(600.0) and m.temp_rate_cps[int(start)] < -0.6 / 60  # inside the fall
+    off = np.abs(m.interference_offset_deg)
+    inside = (t > start + 30.0) & (t < start + dur - 30.0)
+    assert off[(t < start) | (t > start + dur)].max() == 0.0
+    assert 5.0 < off[inside].min() and off[inside].max() < 65.0 and np.ptp(m.interference_offset_deg[inside]) > 5.0
+
+
+def test_sway_is_slow_small_and_has_long_outages():
+    from gyrodrift.simulate import SWAY_MAX_RATE_DPS
+
+    for seed in (0, 1):
+        duration = DEFAULT_DURATION_S["sway"]
+        t, m = _motion("sway", duration, seed=seed)
+        assert 0.0 < np.abs(m.heading_rate_dps).max() <= SWAY_MAX_RATE_DPS + 1e-12
+        assert 1.0 < np.ptp(cumulative_trapezoid(m.heading_rate_dps, t)) < 15.0  # a few degrees
+        assert 3 <= len(m.compass_dropouts) <= 5
+        assert all(40 * 60 <= d <= 90 * 60 for _, d in m.compass_dropouts)
+        ends = [s + d for s, d in m.compass_dropouts]
+        assert all(e <= s for e, (s, _) in zip(ends, m.compass_dropouts[1:])) and ends[-1] <= duration
+        assert np.ptp(m.temp_c) > 4.0  # half a day/night cycle
+    df = simulate("sway", seed=0, duration_s=7200.0, fs_hz=2.0, compass=CompassModel(rate_hz=1.0))
+    for s, d in df.attrs["compass_dropouts"]:
+        assert df.loc[(df["t"] >= s) & (df["t"] < s + d), "heading"].isna().all()
+
+
+def test_vehicle_rawmag_is_the_vehicle_with_raw_columns_and_no_heading():
+    raw = simulate("vehicle-rawmag", seed=4, duration_s=600.0, fs_hz=10.0)
+    veh = simulate("vehicle", seed=4, duration_s=600.0, fs_hz=10.0, raw_mag=True)
+    assert "heading" not in raw.columns and raw.attrs["compass_form"] == "raw"
+    assert list(raw.columns) == [c for c in veh.columns if c != "heading"]
+    pd.testing.assert_frame_equal(raw, veh.drop(columns="heading"), check_exact=True)
+    assert np.abs(raw["acc_x"]).max() > 0.05  # braking and pulling away tilt the accelerometer
+
+
+def test_vessel_turns_slowly_and_is_never_still():
+    t, m = _motion("vessel", DEFAULT_DURATION_S["vessel"], fs_hz=2.0)
+    moving = t > 300.0
+    assert np.abs(m.heading_rate_dps).max() < 2.0  # below the turning gate
+    mean = np.mean(m.heading_rate_dps[moving])
+    assert 0.1 < abs(mean) < 0.8
+    assert abs(cumulative_trapezoid(m.heading_rate_dps, t)[-1]) > 360.0  # round and round
+
+
+def test_no_temp_logs_a_constant_temperature_while_the_drift_follows_the_true_one():
+    from gyrodrift.simulate import NO_TEMP_CHANNEL_C
+
+    df = simulate("no-temp", seed=3, duration_s=1800.0, fs_hz=10.0, device=EXACT_DEVICE)
+    assert (df["temp"] == NO_TEMP_CHANNEL_C).all() and df.attrs["temp_channel_c"] == NO_TEMP_CHANNEL_C
+    assert np.ptp(df["true_bias_z"]) > 0.1  # the real temperature moves the drift
+    assert np.ptp(df["ref_heading"]) > 10.0  # turned now and then
+
+
+def test_short_log_rotates_once():
+    for seed in (0, 1, 2):
+        t, m = _motion("short", 40.0, seed=seed, fs_hz=100.0)  # 40 s: long enough for any rotation to end
+        assert 90.0 - 1e-6 <= abs(cumulative_trapezoid(m.heading_rate_dps, t)[-1]) <= 720.0 + 1e-6
+        assert (m.heading_rate_dps[t < 3.0] == 0.0).all() and m.heading_rate_dps[-1] == 0.0
+    df = simulate("short", seed=2, fs_hz=10.0)
+    assert df["t"].iloc[-1] == 30.0 and df["heading"].notna().sum() == 301

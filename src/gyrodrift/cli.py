@@ -395,7 +395,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
 
-    from gyrodrift.montecarlo import DEFAULT_METHODS, FAMILIES
+    from gyrodrift.montecarlo import ADVERSARIAL_FAMILIES, DEFAULT_METHODS, FAMILIES
 
     mc = sub.add_parser(
         "montecarlo", help="Monte Carlo of every method over the simulated scenario families",
@@ -404,7 +404,10 @@ def build_parser() -> argparse.ArgumentParser:
         "and bias RMS, and how often adaptive beats each method on both. Families: "
         + "; ".join(f"{k}: {v.description}" for k, v in FAMILIES.items()),
     )
-    mc.add_argument("--families", nargs="+", metavar="NAME", help="families (default: all six)")
+    mc.add_argument(
+        "--families", nargs="+", metavar="NAME",
+        help=f"families (default: all {len(FAMILIES)}; the adversarial ones: {' '.join(ADVERSARIAL_FAMILIES)})",
+    )
     mc.add_argument("--seeds", type=int, default=20, help="seeds per family (default 20)")
     mc.add_argument("--first-seed", type=int, default=0, help="first seed (default 0)")
     mc.add_argument(

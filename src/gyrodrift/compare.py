@@ -1,30 +1,35 @@
 """Run our method and the paper's baselines on the same log (``gyrodrift compare``).
 
-==========  ========================================================  ======
-method      what it is                                                causal
-==========  ========================================================  ======
-``stkf``    ours: the paper's strong tracking Kalman filter           yes
-``kf``      the paper's KF: plain Kalman filter on a constant bias    yes
-``stkf-s1`` the [a, b, c] filter with s = 1                           yes
-``lsm``     the paper's "modified LSM": a, b, c refitted every 10 s   yes
-            over a sliding window
-``mlr``     the paper's MLR: one a, b, c fitted by least squares      **no**
-            over every drift measurement of the whole log
-``smoothed`` the configured estimator's measurements smoothed          **no**
-            forwards and backwards (:mod:`gyrodrift.smooth`), for
-            recorded logs
-``poly3``   PX4-style cubic thermal calibration fitted on a separate  yes
-            static heating run of the same device
-``oracle``  subtracts the true drift (``true_bias_z``): the limit     --
-            set by sensor noise alone
-==========  ========================================================  ======
+=================  ========================================================  ======
+method             what it is                                                causal
+=================  ========================================================  ======
+``stkf``           ours: the paper's strong tracking Kalman filter           yes
+``kf``             the paper's KF: plain Kalman filter on a constant bias    yes
+``stkf-s1``        the [a, b, c] filter with s = 1                           yes
+``lsm``            the paper's "modified LSM": a, b, c refitted every 10 s   yes
+                   over a sliding window
+``mlr``            the paper's MLR: one a, b, c fitted by least squares      **no**
+                   over every drift measurement of the whole log
+``smoothed``       the configured estimator's measurements smoothed          **no**
+                   forwards and backwards (:mod:`gyrodrift.smooth`), for
+                   recorded logs
+``poly3``          PX4-style cubic thermal calibration fitted on a separate  yes
+                   static heating run of the same device
+``fusion-offset``  x-io Fusion's run-time gyroscope offset correction        yes
+                   (stillness, then a 0.02-Hz filter; no temperature;
+                   :mod:`gyrodrift.fusion_offset`; needs ``imufusion``)
+``oracle``         subtracts the true drift (``true_bias_z``): the limit     --
+                   set by sensor noise alone
+=================  ========================================================  ======
 
 Any other registered estimator that can be built from settings alone (for example
 ``adaptive``, see :mod:`gyrodrift.estimators`) is accepted as a method name too: it
 runs as :func:`compensate` with ``estimator=name``.
 
 Every method sees the same log, the same compass gates and the same integration;
-only the drift estimate differs.
+only the drift estimate differs. The methods whose drift is known for every row
+without a filter (``poly3``, ``fusion-offset``, ``oracle``) integrate it from the
+first compass sample, without gates.
 """
 
 from __future__ import annotations
@@ -39,13 +44,16 @@ from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
 from gyrodrift.fusion import FusionState
+from gyrodrift.fusion_offset import PACKAGE as FUSION_OFFSET_PACKAGE
+from gyrodrift.fusion_offset import available as fusion_offset_available
+from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
-METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "oracle")
+METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "fusion-offset", "oracle")
 CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "smoothed": False, "poly3": True,
-          "oracle": False}
+          "fusion-offset": True, "oracle": False}
 _FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
 
 
@@ -72,7 +80,8 @@ def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
 
 def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.ndarray) -> pd.DataFrame:
     """The log compensated with a drift known for every row (deg/s), no filter: the oracle
-    (the true drift) and ``poly3`` (an offline calibration). The heading starts from the
+    (the true drift), ``poly3`` (an offline calibration) and ``fusion-offset`` (x-io
+    Fusion's run-time offset, computed before). The heading starts from the
     same anchor as the filters' (the first compass sample) and integrates the same way;
     the fused heading uses every compass sample; no gate applies."""
     out = compensate(log, config, estimator=FixedParams())  # the columns and the anchor row
@@ -115,6 +124,7 @@ def run_method(
     ----------
     name : str
         One of :data:`METHODS`, or another registered estimator name (e.g. ``adaptive``).
+        ``fusion-offset`` raises :class:`ConfigError` when ``imufusion`` is missing.
     log : DataFrame
         Input contract.
     config : CompensatorConfig, optional
@@ -143,6 +153,8 @@ def run_method(
         if isinstance(calibration, pd.DataFrame):
             calibration = calibration_from_log(calibration)
         return _known_drift(log, config, calibration.drift(log["temp"].ffill().to_numpy(float)))
+    if name == "fusion-offset":
+        return _known_drift(log, config, fusion_offset_drift(log))
     if name == "oracle":
         return _oracle(log, config)
     raise ConfigError(f"unknown method {name!r}; choose from: {_valid_methods()}")
@@ -162,7 +174,8 @@ def run_methods(
     outputs : dict
         Method name → output table, in the order given.
     skipped : dict
-        Method name → why it was not run (no truth column, no calibration run).
+        Method name → why it was not run (no truth column, no calibration run,
+        ``imufusion`` not installed).
     """
     unknown = [m for m in methods if m not in METHODS and not _is_estimator_method(m)]
     if unknown:
@@ -176,6 +189,9 @@ def run_methods(
             continue
         if name == "poly3" and calibration is None:
             skipped[name] = "no calibration run (--calibration)"
+            continue
+        if name == "fusion-offset" and not fusion_offset_available():
+            skipped[name] = f"{FUSION_OFFSET_PACKAGE} not installed (pip install {FUSION_OFFSET_PACKAGE})"
             continue
         outputs[name] = run_method(name, log, config, calibration=calibration)
     return outputs, skipped

@@ -1,5 +1,12 @@
 """Monte Carlo comparison of the drift estimators over every simulated scenario family.
 
+The families (:data:`FAMILIES`) are the six of the paper's kind (continuous logs,
+a compass heading, a measured temperature) and seven adversarial ones
+(:data:`ADVERSARIAL_FAMILIES`, :mod:`gyrodrift.simulate.adversarial`), built to break
+a design that relies on those: bursty records, interference during a fast
+temperature fall, a swaying platform with long outages, a vehicle with the raw
+magnetometer, a slow continuous turn, no temperature, a log of tens of seconds.
+
 One *case* is a (family, seed) pair: a device and a compass drawn at random
 (:func:`gyrodrift.simulate.random_device`, :func:`gyrodrift.simulate.random_compass`)
 from a generator seeded by the pair, one simulated log of the family's scenario with
@@ -63,6 +70,7 @@ from gyrodrift.simulate import (
 __all__ = [
     "Family",
     "FAMILIES",
+    "ADVERSARIAL_FAMILIES",
     "DEFAULT_METHODS",
     "REFERENCE_METHOD",
     "COLUMNS",
@@ -91,14 +99,19 @@ class Family:
         Default log length, s (scaled by ``duration_scale``).
     description : str
         One line for tables and help.
+    duration_range_s : tuple of float, optional
+        ``(low, high)``: each case draws its log length uniformly from this range,
+        s, whatever ``duration_scale`` (a family defined by its length: ``short``).
+        None: ``duration_s`` times the scale.
     """
 
     scenario: str
     duration_s: float
     description: str
+    duration_range_s: tuple[float, float] | None = None
 
 
-#: The six scenario families, by name.
+#: The scenario families, by name: the six of the paper's kind, then :data:`ADVERSARIAL_FAMILIES`.
 FAMILIES: Mapping[str, Family] = MappingProxyType(
     {
         "static": Family("static", DEFAULT_DURATION_S["static"], "motionless, heated 23 -> 58 degC and cooled (3 h)"),
@@ -116,12 +129,44 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
             "soak", DEFAULT_DURATION_S["soak"],
             "12-h soak, slow yaw sway, temperature ramps, long compass outages during the ramps",
         ),
+        "bursty": Family(
+            "bursty", DEFAULT_DURATION_S["bursty"],
+            "still and cooling, logged in 5-s records every ~300 s; half the cases without compass (2 h)",
+        ),
+        "ramp-interference": Family(
+            "ramp-interference", DEFAULT_DURATION_S["ramp-interference"],
+            "still, temperature falling ~0.8 degC/min, 10 min of ~30 deg wandering interference (90 min)",
+        ),
+        "sway": Family(
+            "sway", DEFAULT_DURATION_S["sway"],
+            "moored platform: yaw sway < 0.2 deg/s, 40-90 min compass outages, day/night temperature (12 h)",
+        ),
+        "vehicle-rawmag": Family(
+            "vehicle-rawmag", DEFAULT_DURATION_S["vehicle-rawmag"],
+            "the vehicle with raw magnetometer + accelerometer (tilted when braking, cornering), no heading (40 min)",
+        ),
+        "vessel": Family(
+            "vessel", DEFAULT_DURATION_S["vessel"], "slow continuous turn 0.15-0.6 deg/s with wave yaw, warming (2 h)",
+        ),
+        "no-temp": Family(
+            "no-temp", DEFAULT_DURATION_S["no-temp"],
+            "bench unit warming up, turned every few minutes; temperature column constant 0 degC (1 h)",
+        ),
+        "short": Family(
+            "short", DEFAULT_DURATION_S["short"], "hand-held: a few seconds still, one 90-720 deg rotation (20-40 s)",
+            duration_range_s=(20.0, 40.0),
+        ),
     }
 )
 
-#: Methods of the comparison by default: ours, the paper's and PX4's baselines, then our
-#: non-causal smoother for recorded logs (:mod:`gyrodrift.smooth`), beside the non-causal MLR.
-DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3", "smoothed")
+#: The adversarial families (:mod:`gyrodrift.simulate.adversarial`), in the order of :data:`FAMILIES`.
+ADVERSARIAL_FAMILIES = ("bursty", "ramp-interference", "sway", "vehicle-rawmag", "vessel", "no-temp", "short")
+
+#: Methods of the comparison by default: ours, the paper's, PX4's and x-io Fusion's
+#: baselines, then our non-causal smoother for recorded logs (:mod:`gyrodrift.smooth`),
+#: beside the non-causal MLR. ``fusion-offset`` needs ``imufusion``; without it its rows
+#: have ``status = "error"`` and say so.
+DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3", "fusion-offset", "smoothed")
 
 #: The method the others are counted against in :func:`summarise`.
 REFERENCE_METHOD = "adaptive"
@@ -230,7 +275,8 @@ def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
 
     The generator is seeded by ``(crc32(family), seed)``, so a case is the same in
     every process and independent of which other cases run; different families with
-    the same seed get different devices.
+    the same seed get different devices. A family with ``duration_range_s`` draws the
+    log length from a further child of that seed.
 
     Parameters
     ----------
@@ -239,7 +285,8 @@ def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
     seed : int
         Non-negative Monte Carlo seed.
     duration_scale : float
-        Log length as a multiple of the family's default.
+        Log length as a multiple of the family's default (not used by a family with
+        ``duration_range_s``).
 
     Returns
     -------
@@ -259,11 +306,15 @@ def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
     root = np.random.SeedSequence([_family_key(family), seed])
     device_ss, compass_ss = root.spawn(2)
     log_seed, calibration_seed = (int(x) for x in root.generate_state(2))
+    duration = spec.duration_s * scale
+    if spec.duration_range_s is not None:
+        (length_ss,) = root.spawn(1)
+        duration = float(np.random.default_rng(length_ss).uniform(*spec.duration_range_s))
     return Case(
         family=family,
         seed=seed,
         scenario=spec.scenario,
-        duration_s=spec.duration_s * scale,
+        duration_s=duration,
         log_seed=log_seed,
         calibration_seed=calibration_seed,
         device=random_device(np.random.default_rng(device_ss), scenario=spec.scenario),
@@ -384,7 +435,7 @@ def _run_task(task: tuple) -> list[dict]:
 def _failed_task(task: tuple, err: BaseException) -> list[dict]:
     family, seed, methods, duration_scale, _, _ = task
     scenario = FAMILIES[family].scenario
-    duration = FAMILIES[family].duration_s * duration_scale
+    duration = draw_case(family, seed, duration_scale=duration_scale).duration_s
     why = "worker failed: " + _one_line(err)
     return [_row(family, seed, m, scenario, duration, status="error", error=why) for m in methods]
 
@@ -416,7 +467,7 @@ def run_monte_carlo(
         :data:`gyrodrift.compare.METHODS` or a registered estimator.
     duration_scale : float
         Every log's length as a multiple of its family's default (the ``poly3``
-        calibration run keeps its 2 h).
+        calibration run keeps its 2 h, and ``short`` its 20–40 s).
     config : CompensatorConfig, optional
         Settings shared by every method and case (frozen for all families).
     workers : int, optional

@@ -34,6 +34,15 @@ paper's ``static``, ``static-outages``, ``vehicle``, ``calibration`` and
 * ``soak``: 12 h of slow yaw sway, temperature plateaus and ramps, and long compass
   outages (missing or interfered) during the ramps (:func:`soak_outages`).
 
+and seven adversarial ones, built to break a design that relies on what the paper's
+runs offer (:mod:`gyrodrift.simulate.adversarial`): ``bursty`` (5-s records every
+~300 s, with or without a compass), ``ramp-interference`` (about 30 deg of wandering
+interference during a fast temperature fall), ``sway`` (a moored platform, slow sway,
+long outages, a day/night cycle), ``vehicle-rawmag`` (``vehicle`` with the raw
+magnetometer and accelerometer, no heading column), ``vessel`` (a slow continuous
+turn), ``no-temp`` (a temperature column that reads a constant 0 degC) and ``short``
+(tens of seconds).
+
 :func:`random_device` and :func:`random_compass` draw randomised sensors for Monte
 Carlo runs (:mod:`gyrodrift.montecarlo`).
 
@@ -53,6 +62,10 @@ column              unit      meaning
 ``mag_x/y/z``       µT        ``raw_mag=True`` only: FRD body field, NaN off compass rows
 ``acc_x/y/z``       g         ``raw_mag=True`` only: FRD specific force (still: z = -1)
 ==================  ========  =====================================================
+
+A scenario may log differently (see :func:`simulate`): ``bursty`` keeps the rows of its
+records only, ``no-temp`` writes a constant ``temp``, ``vehicle-rawmag`` writes the raw
+columns instead of ``heading``, and a ``bursty`` log may have no compass column.
 
 The ``heading`` column is always the tilt-compensated heading
 (:func:`gyrodrift.compass.tilt_compensated_heading`) of the simulated field and
@@ -77,6 +90,8 @@ Modules
     :class:`Motion` and the temperature profiles.
 :mod:`~gyrodrift.simulate.scenarios`
     The scenarios, :data:`SCENARIOS`, :data:`DEFAULT_DURATION_S` and :func:`simulate`.
+:mod:`~gyrodrift.simulate.adversarial`
+    The adversarial scenarios.
 :mod:`~gyrodrift.simulate.checks`
     Validation of the models' numbers.
 
@@ -90,6 +105,15 @@ Examples
 """
 
 from gyrodrift.conventions import TRUE_BIAS_X, TRUE_BIAS_Y  # the x/y drift truth of simulate(..., triad=...)
+from gyrodrift.simulate.adversarial import (
+    BURSTY_RECORD_S,
+    BURSTY_SPACING_S,
+    NO_TEMP_CHANNEL_C,
+    SWAY_MAX_RATE_DPS,
+    bursty_records,
+    ramp_interference_window,
+    sway_outages,
+)
 from gyrodrift.simulate.device import SCENARIO_MEMORY, SCENARIO_SCALE_FACTOR_PPM, DeviceModel, TriadModel, random_device
 from gyrodrift.simulate.motion import (
     Motion,
@@ -160,4 +184,11 @@ __all__ = [
     "scenario_soak",
     "random_device",
     "random_compass",
+    "BURSTY_RECORD_S",
+    "BURSTY_SPACING_S",
+    "NO_TEMP_CHANNEL_C",
+    "SWAY_MAX_RATE_DPS",
+    "bursty_records",
+    "ramp_interference_window",
+    "sway_outages",
 ]

@@ -3,10 +3,12 @@
 A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what really happens to the
 unit as a :class:`Motion`: the true die temperature and its exact rate, the true
 heading rate, the mounting attitude and the kinematic acceleration, sampled at the log
-times. The temperature profiles here all start with a still hold at constant
-temperature (:func:`hold_s`) and then follow knots placed at fractions of the rest of
-the run, so a shorter run keeps the shape. :func:`smooth_step` is the raised-cosine
-ramp of every turn, speed change and interference window.
+times, and how the run is logged (records of a bursty logger, a temperature channel
+that is not measured, the form of the compass columns). The temperature profiles here
+all start with a still hold at constant temperature (:func:`hold_s`) and then follow
+knots placed at fractions of the rest of the run (:func:`knot_profile`), so a shorter
+run keeps the shape. :func:`smooth_step` is the raised-cosine ramp of every turn,
+speed change and interference window.
 """
 
 from __future__ import annotations
@@ -16,13 +18,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gyrodrift.errors import ConfigError
+
 __all__ = [
     "Motion",
+    "COMPASS_FORMS",
     "hold_s",
     "smooth_step",
     "smooth_step_slope",
     "ramp_slice",
     "sum_of_steps",
+    "knot_profile",
     "static_temperature",
     "vehicle_temperature",
     "calibration_temperature",
@@ -34,6 +40,9 @@ __all__ = [
 
 #: Longest time the unit stands still at constant temperature at the start, s.
 _HOLD_S = 60.0
+
+#: Values of :attr:`Motion.compass_form`.
+COMPASS_FORMS = ("heading", "raw", "none")
 
 
 def smooth_step(x):
@@ -183,6 +192,21 @@ class Motion:
     compass_dropouts : tuple of (start_s, duration_s)
         Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
         ``start_s <= t < start_s + duration_s``).
+
+    The last three fields say how the run is logged (the defaults: every sample, the
+    temperature sensor's reading, a ``heading`` column):
+
+    records : tuple of (start_s, duration_s)
+        The logger keeps only the rows with ``start_s <= t < start_s + duration_s`` of
+        some record (bursty logging: the times jump between records); () = every row.
+    temp_channel_c : float or None
+        The temperature column holds this constant, degC, whatever the true
+        temperature (a log whose temperature channel is not measured); None = the
+        sensor's reading.
+    compass_form : str
+        ``"heading"``: a ``heading`` column (and the raw columns when asked);
+        ``"raw"``: the raw ``mag_*`` and ``acc_*`` columns and no ``heading``;
+        ``"none"``: no compass columns at all.
     """
 
     temp_c: np.ndarray
@@ -196,6 +220,20 @@ class Motion:
     interference: tuple[tuple[float, float, float], ...] = field(default=())
     interference_offset_deg: np.ndarray | None = None
     compass_dropouts: tuple[tuple[float, float], ...] = field(default=())
+    records: tuple[tuple[float, float], ...] = field(default=())
+    temp_channel_c: float | None = None
+    compass_form: str = "heading"
+
+    def __post_init__(self):
+        if self.compass_form not in COMPASS_FORMS:
+            raise ConfigError(
+                f"Motion.compass_form must be one of {', '.join(COMPASS_FORMS)}, got {self.compass_form!r}"
+            )
+        for i, rec in enumerate(self.records):
+            if len(rec) != 2 or not (math.isfinite(rec[0]) and math.isfinite(rec[1]) and rec[1] > 0):
+                raise ConfigError(f"Motion.records[{i}] must be (start_s, duration_s > 0), got {rec!r}")
+        if self.temp_channel_c is not None and not math.isfinite(self.temp_channel_c):
+            raise ConfigError(f"Motion.temp_channel_c must be a finite number or None, got {self.temp_channel_c!r}")
 
 
 def hold_s(duration_s: float) -> float:
@@ -219,11 +257,27 @@ def hold_s(duration_s: float) -> float:
     return min(_HOLD_S, 0.1 * duration_s)
 
 
-def _knot_profile(t_s, duration_s: float, knots_u, knots_c):
+def knot_profile(t_s, duration_s: float, knots_u, knots_c):
     """Temperature (degC) and its exact rate (degC/s) through knots.
 
-    Flat at ``knots_c[0]`` for the hold time, then a monotone C1 cubic (PCHIP) through
-    ``knots_c`` at fractions ``knots_u`` (0 → end of hold, 1 → end of run).
+    Flat at ``knots_c[0]`` for the hold time (:func:`hold_s`), then a monotone C1
+    cubic (PCHIP) through ``knots_c`` at fractions ``knots_u`` of the rest of the run
+    (0 → end of hold, 1 → end of run), so a shorter run keeps the shape.
+
+    Parameters
+    ----------
+    t_s : array_like
+        Times, s.
+    duration_s : float
+        Run length, s.
+    knots_u : sequence of float
+        Increasing fractions of the run after the hold, from 0.
+    knots_c : sequence of float
+        Temperature at each knot, degC.
+
+    Returns
+    -------
+    temp_c, temp_rate_cps : ndarray
     """
     hold = hold_s(duration_s)
     knot_t = np.concatenate([[0.0], hold + (duration_s - hold) * np.asarray(knots_u, dtype=float)])
@@ -249,7 +303,7 @@ def static_temperature(t_s, duration_s: float):
     cool_u = 0.52 + 0.48 * np.arange(1, 9) / 8.0
     knots_u = [0.0, 0.04, 0.10, 0.16, 0.28, 0.40, 0.52, *cool_u]
     knots_c = [23.0, 29.0, 39.0, 46.0, 53.0, 58.0, 58.0, *(23.0 + 35.0 * np.exp(-(cool_u - 0.52) / 0.15))]
-    return _knot_profile(t_s, duration_s, knots_u, knots_c)
+    return knot_profile(t_s, duration_s, knots_u, knots_c)
 
 
 def vehicle_temperature(t_s, duration_s: float):
@@ -261,7 +315,7 @@ def vehicle_temperature(t_s, duration_s: float):
     """
     u = np.linspace(0.0, 1.0, 9)
     c = 26.0 + 11.0 * (1.0 - np.exp(-u / 0.5)) / (1.0 - math.exp(-2.0))
-    return _knot_profile(t_s, duration_s, u, c)
+    return knot_profile(t_s, duration_s, u, c)
 
 
 def calibration_temperature(t_s, duration_s: float):
@@ -271,7 +325,7 @@ def calibration_temperature(t_s, duration_s: float):
     -------
     temp_c, temp_rate_cps : ndarray
     """
-    return _knot_profile(t_s, duration_s, [0.0, 0.05, 0.95, 1.0], [-10.0, -8.25, 58.25, 60.0])
+    return knot_profile(t_s, duration_s, [0.0, 0.05, 0.95, 1.0], [-10.0, -8.25, 58.25, 60.0])
 
 
 def hysteresis_temperature(t_s, duration_s: float):
@@ -288,7 +342,7 @@ def hysteresis_temperature(t_s, duration_s: float):
     """
     knots_u = [0.0, 0.25, 0.32, 0.60, 0.66, 0.80, 0.84, 1.0]
     knots_c = [10.0, 70.0, 70.0, 10.0, 10.0, 45.0, 45.0, 20.0]
-    return _knot_profile(t_s, duration_s, knots_u, knots_c)
+    return knot_profile(t_s, duration_s, knots_u, knots_c)
 
 
 def cold_start_temperature(t_s, duration_s: float):
@@ -305,7 +359,7 @@ def cold_start_temperature(t_s, duration_s: float):
     """
     u = np.linspace(0.0, 1.0, 9)
     c = -20.0 + 80.0 * (1.0 - np.exp(-u / 0.25)) / (1.0 - math.exp(-4.0))
-    return _knot_profile(t_s, duration_s, u, c)
+    return knot_profile(t_s, duration_s, u, c)
 
 
 #: Soak profile: knots (fraction of the run after the hold, degC); ramps between unequal knots.
@@ -323,7 +377,7 @@ def soak_temperature(t_s, duration_s: float):
     -------
     temp_c, temp_rate_cps : ndarray
     """
-    return _knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
+    return knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
 
 
 def soak_ramps(duration_s: float) -> tuple[tuple[float, float], ...]:

@@ -6,7 +6,10 @@ heading rate (still, vehicle loops, turntable turns, sway), the mounting attitud
 the magnetic environment (interference windows, wandering interference, compass
 dropouts). :func:`simulate` samples it, integrates the true heading and applies the
 gyro (:mod:`gyrodrift.simulate.device`) and compass (:mod:`gyrodrift.simulate.sensors`)
-error models, each from its own random stream.
+error models, each from its own random stream, and logs it as the motion says (every
+row or records only, the temperature reading or a constant, a heading column, the raw
+magnetometer and accelerometer, or no compass). The adversarial scenarios are in
+:mod:`gyrodrift.simulate.adversarial`.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import pandas as pd
 
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
 from gyrodrift.errors import ConfigError
+from gyrodrift.simulate.adversarial import ADVERSARIAL_DURATION_S, ADVERSARIAL_SCENARIOS
 from gyrodrift.simulate.checks import positive
 from gyrodrift.simulate.device import DeviceModel, TriadModel, gauss_markov, random_walk, temperature_reading
 from gyrodrift.simulate.motion import (
@@ -58,6 +62,7 @@ __all__ = [
     "scenario_hysteresis",
     "scenario_cold_start",
     "scenario_soak",
+    "scenario_vehicle_rawmag",
 ]
 
 #: Truth column of the gyro scale factor (unitless), written when SF is not ≡ 1.
@@ -186,6 +191,17 @@ def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion
         accel_fwd_mps2=accel,
         accel_lat_mps2=speed * np.radians(rate),
     )
+
+
+def scenario_vehicle_rawmag(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
+    """``vehicle`` logged with the raw magnetometer and accelerometer and no ``heading``.
+
+    The motion of :func:`scenario_vehicle` (the same route for the same seed); the log
+    has ``mag_x..z`` and ``acc_x..z`` instead of a heading column. The accelerometer
+    feels braking, pulling away and cornering (``CompassModel.kinematic_tilt``), so a
+    heading tilt-compensated with it alone is off by degrees in every turn and stop.
+    """
+    return replace(scenario_vehicle(t_s, duration_s, rng), compass_form="raw")
 
 
 #: Rotation schedule of ``scale-factor``: period (s), ramp time (s), peak rate range (deg/s).
@@ -443,6 +459,8 @@ SCENARIOS: dict[str, Callable[[np.ndarray, float, np.random.Generator], Motion]]
     "hysteresis": scenario_hysteresis,
     "cold-start": scenario_cold_start,
     "soak": scenario_soak,
+    "vehicle-rawmag": scenario_vehicle_rawmag,
+    **ADVERSARIAL_SCENARIOS,
 }
 
 #: Default run length of each scenario, s.
@@ -456,6 +474,8 @@ DEFAULT_DURATION_S: dict[str, float] = {
     "hysteresis": 4 * 3600.0,
     "cold-start": 2 * 3600.0,
     "soak": 12 * 3600.0,
+    "vehicle-rawmag": 40 * 60.0,
+    **ADVERSARIAL_DURATION_S,
 }
 
 
@@ -515,7 +535,9 @@ def simulate(
     scenario : str
         One of :data:`SCENARIOS`: ``static``, ``static-outages``, ``vehicle``,
         ``calibration``, ``scale-factor``, ``interference-wander``, ``hysteresis``,
-        ``cold-start``, ``soak``.
+        ``cold-start``, ``soak``, and the adversarial ``vehicle-rawmag``, ``bursty``,
+        ``ramp-interference``, ``sway``, ``vessel``, ``no-temp``, ``short``
+        (:mod:`gyrodrift.simulate.adversarial`).
     seed : int
         Seed of all randomness (trajectory details and every noise term); the same
         seed gives an identical DataFrame.
@@ -550,7 +572,15 @@ def simulate(
         ``duration_s``, ``fs_hz``, and the effective ``device`` (scale-factor
         coefficients and memory fields resolved) and ``compass`` models as plain
         dicts, and ``compass_dropouts`` (list of ``[start_s, duration_s]``) when the
-        scenario has windows without compass samples (``soak``).
+        scenario has windows without compass samples (``soak``, ``sway``).
+
+        How the scenario is logged (:class:`~gyrodrift.simulate.motion.Motion`) can
+        change this: ``bursty`` keeps only the rows of its records (times jump
+        between them; ``attrs["records"]``); ``no-temp`` writes a constant
+        temperature (``attrs["temp_channel_c"]``); ``vehicle-rawmag`` has
+        ``mag_*`` and ``acc_*`` and no ``heading``, and a ``bursty`` log without
+        compass no compass column at all (``attrs["compass_form"]``: ``"raw"``,
+        ``"none"``).
 
     Raises
     ------
@@ -585,6 +615,8 @@ def simulate(
     true_sf = device.scale_factor(motion.temp_c)  # exactly 1.0 unless an sf_* is non-zero
     gyro = true_sf * body_rate + bias + white
     temp = temperature_reading(motion.temp_c, device, rng["temp"])
+    if motion.temp_channel_c is not None:  # a channel that is not measured: one constant on every row
+        temp = np.full(n, float(motion.temp_channel_c))
 
     mask = compass_rows(t, compass.rate_hz)
     heading, mag, acc = compass_columns(t, heading_true, motion, compass, mask, rng["compass"])
@@ -606,11 +638,16 @@ def simulate(
     if triad is not None:
         columns.update(triad_columns(t, dt, motion, triad, scenario, acc, rng))
         acc = np.column_stack([columns.pop(name) for name in ACC_COLS])
-    if raw_mag:
+    form = motion.compass_form
+    if form != "heading":
+        del columns[HEADING]
+    if (raw_mag or form == "raw") and form != "none":
         columns.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
-    if raw_mag or triad is not None:
+    if raw_mag or triad is not None or form == "raw":
         columns.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
     df = pd.DataFrame(columns)
+    if motion.records:
+        df = _logged_rows(df, t, motion.records, scenario)
     effective = replace(compass, interference=compass.interference + motion.interference)
     df.attrs = {
         "scenario": scenario,
@@ -624,4 +661,21 @@ def simulate(
         df.attrs["triad"] = _jsonable(asdict(triad))
     if motion.compass_dropouts:
         df.attrs["compass_dropouts"] = _jsonable(motion.compass_dropouts)
+    if motion.records:
+        df.attrs["records"] = _jsonable(motion.records)
+    if motion.temp_channel_c is not None:
+        df.attrs["temp_channel_c"] = float(motion.temp_channel_c)
+    if form != "heading":
+        df.attrs["compass_form"] = form
     return df
+
+
+def _logged_rows(df: pd.DataFrame, t: np.ndarray, records, scenario: str) -> pd.DataFrame:
+    """The rows of ``df`` (times ``t``, increasing) with ``start_s <= t < start_s + duration_s`` of a record."""
+    keep = np.zeros(t.size, dtype=bool)
+    for start, dur in records:
+        lo, hi = np.searchsorted(t, [start, start + dur], side="left")
+        keep[lo:hi] = True
+    if not keep.any():
+        raise ConfigError(f"scenario {scenario!r}: its records keep no row of the run")
+    return df.loc[keep].reset_index(drop=True)

@@ -1,0 +1,121 @@
+"""x-io Fusion's gyroscope offset correction, run on a log: the ``fusion-offset`` baseline.
+
+x-io Technologies' Fusion library (``xioTechnologies/Fusion``, ``Fusion/FusionBias.c``;
+named ``FusionOffset`` before v1.3.0) corrects the gyroscope offset at run time:
+every sample it subtracts the current offset; when every axis of the corrected gyro
+has stayed within ``stationary_threshold`` (3 deg/s) for ``stationary_period`` (3 s)
+of samples, each further sample moves the offset towards the gyro by a first-order
+filter of 0.02 Hz cut-off (gain ``2π·0.02/sample_rate``). It has no temperature
+input. The baseline here runs the library itself, through its Python package
+``imufusion`` (``imufusion.Bias``, Fusion 1.3; ``pip install imufusion``), a
+benchmark and test dependency only: when it is missing, :func:`available` is False
+and :func:`gyrodrift.compare.run_methods` skips the method with the reason.
+
+The log's gyro goes in as it is (deg/s; ``gyro_x``, ``gyro_y`` when the log has them,
+else 0), one sample per row at the log's median sample rate (the library counts
+samples, not seconds). The drift of a row is ``gyro_z`` minus the corrected z rate:
+the offset in force at that row. :mod:`gyrodrift.compare` then integrates the
+corrected rate from the first compass sample as for every other method.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, T
+from gyrodrift.errors import ConfigError
+
+__all__ = ["PACKAGE", "available", "fusion_offset_drift"]
+
+#: The Python package that runs x-io Fusion.
+PACKAGE = "imufusion"
+
+
+def _imufusion():
+    try:
+        import imufusion
+    except ImportError:
+        return None
+    return imufusion if hasattr(imufusion, "Bias") else None
+
+
+def available() -> bool:
+    """Whether ``imufusion`` (1.3 or later: ``imufusion.Bias``) can be imported."""
+    return _imufusion() is not None
+
+
+def _axis(log: pd.DataFrame, name: str) -> np.ndarray:
+    """A gyro column as floats (deg/s), gaps carried forward; zeros when absent or empty."""
+    if name not in log.columns:
+        return np.zeros(len(log))
+    return log[name].ffill().fillna(0.0).to_numpy(float)
+
+
+def fusion_offset_drift(
+    log: pd.DataFrame,
+    *,
+    sample_rate_hz: float | None = None,
+    stationary_threshold_dps: float | None = None,
+    stationary_period_s: float | None = None,
+) -> np.ndarray:
+    """The gyro z drift that x-io Fusion's offset correction removes at each row, deg/s.
+
+    Parameters
+    ----------
+    log : DataFrame
+        Input contract: ``t`` (s) and ``gyro_z`` (deg/s); ``gyro_x``, ``gyro_y``
+        (deg/s) are used when present, else zero.
+    sample_rate_hz : float, optional
+        Sample rate given to the library, Hz (default: one over the median time step
+        of the log).
+    stationary_threshold_dps : float, optional
+        Largest corrected rate of every axis that counts as still, deg/s (default
+        the library's, 3 deg/s).
+    stationary_period_s : float, optional
+        Stillness needed before the offset adapts, s (default the library's, 3 s).
+
+    Returns
+    -------
+    ndarray
+        ``gyro_z - corrected z rate`` per row, deg/s (the library computes in single
+        precision).
+
+    Raises
+    ------
+    ConfigError
+        ``imufusion`` is missing, a column is missing, the log has fewer than two
+        rows, or a setting is not a positive number.
+    """
+    imufusion = _imufusion()
+    if imufusion is None:
+        raise ConfigError(f"fusion-offset needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    missing = [c for c in (T, GYRO_Z) if c not in log.columns]
+    if missing:
+        raise ConfigError(f"fusion-offset needs the column(s) {', '.join(missing)}")
+    if len(log) < 2:
+        raise ConfigError(f"fusion-offset needs at least 2 rows, got {len(log)}")
+    settings = imufusion.BiasSettings()
+    if sample_rate_hz is None:
+        sample_rate_hz = 1.0 / float(np.median(np.diff(log[T].to_numpy(float))))
+    for name, value in (("sample_rate_hz", sample_rate_hz), ("stationary_threshold_dps", stationary_threshold_dps),
+                        ("stationary_period_s", stationary_period_s)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.floating))
+                                  or not math.isfinite(value) or value <= 0):
+            raise ConfigError(f"fusion-offset {name} must be a positive number, got {value!r}")
+    settings.sample_rate = float(sample_rate_hz)
+    if stationary_threshold_dps is not None:
+        settings.stationary_threshold = float(stationary_threshold_dps)
+    if stationary_period_s is not None:
+        settings.stationary_period = float(stationary_period_s)
+    bias = imufusion.Bias()
+    bias.set_settings(settings)
+
+    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    corrected_z = np.empty(len(log))
+    update = bias.update
+    for i, sample in enumerate(gyro):
+        corrected_z[i] = update(sample)[2]
+    return gyro[:, 2] - corrected_z
