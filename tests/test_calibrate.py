@@ -259,3 +259,37 @@ def test_json_is_gyrodrifts_own_document(tmp_path):
     assert doc["axes"]["z"]["coeffs"] == pytest.approx(list(KNOWN["z"]), abs=1e-12)
     assert (doc["temp_ref_c"], doc["span_c"], doc["samples"]) == (30.0, 30.0, 12000)
     assert ARDUPILOT_SCALE == 1e6
+
+
+# ---------------------------------------------------------------------------- command line
+
+
+def test_cli_calibrate_writes_the_file_and_prints_one_line(heating, tmp_path, capsys):
+    from gyrodrift.cli import main
+
+    log = tmp_path / "heat.csv"
+    heating.to_csv(log, index=False)
+    assert main(["calibrate", str(log), "-o", str(tmp_path / "v.params"), "--device-id", "2360328"]) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and len(out.splitlines()) == 1
+    assert "span 70.1 degC" in out and "residual RMS" in out and "wrote" in out and str(log) in out
+    fitted = fit_calibration(heating, source=str(log))
+    back = read_px4_params(tmp_path / "v.params")
+    T = np.linspace(-10.0, 60.0, 71)
+    np.testing.assert_allclose(back.drift("z", T), fitted.drift("z", T), rtol=1e-9)
+    # --format names the output whatever its name; --instance is the slot (not a ULog option for a CSV)
+    assert main(["calibrate", str(log), "-o", str(tmp_path / "v.txt"), "--format", "ardupilot", "-q",
+                 "--instance", "1"]) == 0
+    assert capsys.readouterr().out == ""
+    assert "INS_TCAL2_GYR3_Z," in (tmp_path / "v.txt").read_text()
+
+
+def test_cli_calibrate_refusal_is_one_line(tmp_path, capsys):
+    from gyrodrift.cli import main
+
+    flat = tmp_path / "flat.csv"
+    known_log(t_lo=25.0, t_hi=27.0).assign(heading=0.0).to_csv(flat, index=False)  # read_log wants a compass
+    assert main(["calibrate", str(flat), "-o", str(tmp_path / "f.params")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith(f"gyrodrift: error: {flat}: the temperature spans only")
+    assert not (tmp_path / "f.params").exists()

@@ -131,6 +131,54 @@ def _cmd_compensate(args) -> int:
     return 0
 
 
+def _cmd_calibrate(args) -> int:
+    from gyrodrift.calibrate import fit_calibration, output_format, write_calibration
+    from gyrodrift.io import log_format
+
+    check_output_path(args.input, args.output)
+    fmt = output_format(args.output, args.output_format)
+    # --format names the output here; --instance is also the parameter slot, read only from a ULog
+    is_ulog = log_format(args.input, args.log_format) == "ulog"
+    read_args = argparse.Namespace(**{**vars(args), "format": args.log_format,
+                                      "instance": args.instance if is_ulog else 0})
+    cal = fit_calibration(read_input(args.input, read_args), source=str(args.input))
+    notes = write_calibration(cal, args.output, fmt, instance=args.instance, device_id=args.device_id)
+    _warn(args.output, notes)
+    if not args.quiet:
+        print(f"{cal.summary()}; wrote {args.output}")
+    return 0
+
+
+def _add_calibrate_parser(sub) -> None:
+    from gyrodrift.calibrate import FORMATS as CAL_FORMATS, MIN_SPAN_C
+    from gyrodrift.io import FORMATS as LOG_FORMATS
+
+    # conflict_handler="resolve": this command's --format is the output's, so it replaces the
+    # input-format option of add_input_options, which is --log-format here
+    cal = sub.add_parser(
+        "calibrate", conflict_handler="resolve", formatter_class=argparse.RawDescriptionHelpFormatter,
+        help="fit the gyro's thermal drift from a still heating run; write PX4, ArduPilot or JSON parameters",
+        description="Fit the drift of every gyro axis of a still heating or cooling log as a cubic in temperature "
+        "(PX4 and ArduPilot style) and write it as a PX4 .params file (TC_G*), an ArduPilot .param file "
+        f"(INS_TCAL*) or gyrodrift JSON (gyrodrift.calibrate). Refused below {MIN_SPAN_C:g} degC of span or when "
+        "the unit moved. Axes: the log's body FRD axes are taken as the autopilot's board axes "
+        "(SENS_BOARD_ROT = 0 / AHRS_ORIENTATION = 0); rates in rad/s in the files. --instance also names the "
+        "parameter slot: TC_G<instance> (PX4), INS_TCAL<instance+1> (ArduPilot). The log is read as compensate "
+        "reads it, so a table needs a compass column even though calibrate does not use it (a bench log "
+        "without one: add a 'heading' column of any value).",
+    )
+    cal.add_argument("input", type=Path, help="the heating or cooling run (any log format of compensate)")
+    cal.add_argument("-o", "--output", type=Path, required=True, help="parameter file to write")
+    cal.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    add_input_options(cal)
+    cal.add_argument("--log-format", choices=list(LOG_FORMATS), help="input format (default: by file name)")
+    cal.add_argument("--format", dest="output_format", choices=list(CAL_FORMATS),
+                     help="px4 (.params), ardupilot (.param) or json (default: by the output's name)")
+    cal.add_argument("--device-id", type=int, default=0,
+                     help="px4: TC_G<instance>_ID, the gyro's device id (its CAL_GYRO*_ID); default 0 = not applied")
+    cal.set_defaults(func=_cmd_calibrate)
+
+
 def _read_options(args) -> dict:
     """The read_log options of :func:`gyrodrift._cliargs.add_input_options`."""
     return {
@@ -424,6 +472,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_report_parser(sub)
     add_batch_parser(sub)
+    _add_calibrate_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
