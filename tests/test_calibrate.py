@@ -293,3 +293,33 @@ def test_cli_calibrate_refusal_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and err.startswith(f"gyrodrift: error: {flat}: the temperature spans only")
     assert not (tmp_path / "f.params").exists()
+
+
+def test_compensate_prior_starts_from_the_tangent_and_warns_outside_the_range(tmp_path, capsys):
+    from conftest import synthetic_log
+    from gyrodrift.calibrate import start_temperature
+    from gyrodrift.cli import main
+
+    params = tmp_path / "k.params"
+    cal = fit_calibration(known_log(), source="k.csv")  # calibrated 15..45 degC
+    write_calibration(cal, params)
+    drift = lambda t, temp: np.polynomial.polynomial.polyval(temp - 30.0, KNOWN["z"])  # noqa: E731
+    inside, outside = tmp_path / "in.csv", tmp_path / "out.csv"
+    synthetic_log(duration_s=300.0, temp_c=lambda t: 20.0 + t / 30.0, drift_dps=drift).to_csv(inside, index=False)
+    synthetic_log(duration_s=300.0, temp_c=lambda t: 40.0 + t / 30.0, drift_dps=drift).to_csv(outside, index=False)
+    assert start_temperature(inside) == 20.0
+    assert main(["compensate", str(inside), "-o", str(tmp_path / "a.csv"), "-q", "--prior", str(params)]) == 0
+    assert capsys.readouterr().err == ""
+    first = pd.read_csv(tmp_path / "a.csv").iloc[0]
+    a0, _, c0 = prior_config(cal, temp_c=20.0).kalman.x0
+    assert first["a"] == pytest.approx(a0, abs=1e-3)  # without --prior the first rows have a = 0.008
+    assert main(["compensate", str(outside), "-o", str(tmp_path / "b.csv"), "-q", "--prior", str(params)]) == 0
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"gyrodrift: warning: {params}: calibrated for 15.0 to 45.0 degC (TMIN..TMAX), "
+                          "the log reaches 40.0 to 50.0 degC")
+    prof = tmp_path / "dev.json"
+    assert main(["compensate", str(inside), "-o", str(tmp_path / "c.csv"), "-q", "--save-profile", str(prof)]) == 0
+    assert main(["compensate", str(inside), "-o", str(tmp_path / "d.csv"), "-q", "--prior", str(params),
+                 "--profile", str(prof)]) == 2
+    assert "--prior and --profile" in capsys.readouterr().err

@@ -117,11 +117,23 @@ def _cmd_compensate(args) -> int:
         profile = load_profile(args.profile)
         _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
         cfg = warm_config(profile, cfg)
+    prior = None
+    if args.prior:  # the z drift model starts from an autopilot's thermal calibration (gyrodrift.calibrate)
+        from gyrodrift.calibrate import prior_config, read_prior, start_temperature
+
+        if profile is not None:
+            raise ConfigError("--prior and --profile both give the starting drift model; use one of them")
+        prior = read_prior(args.prior, instance=args.instance)
+        cfg = prior_config(prior, cfg, start_temperature(args.input, _read_options(args)))
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
                             smooth=args.smooth)
     if profile is not None:  # the temperatures of the run are known once it is read
         _warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
+    if prior is not None:
+        from gyrodrift.calibrate import prior_notes
+
+        _warn(args.prior, prior_notes(prior, (stats.temp_min_c, stats.temp_max_c)))
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
@@ -382,6 +394,12 @@ def build_parser() -> argparse.ArgumentParser:
         "when it was saved by another estimator or the log's temperatures reach beyond its range)",
     )
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
+    c.add_argument(
+        "--prior", type=Path, metavar="FILE.params",
+        help="start the heading-axis drift model from an autopilot's thermal calibration (PX4 TC_G*, ArduPilot "
+        "INS_TCAL*, or gyrodrift calibrate's JSON; slot --instance): its tangent at the log's first temperature. "
+        "A warning on stderr when the log's temperature leaves its TMIN..TMAX",
+    )
     c.add_argument(
         "--scale-factor", action="store_true",
         help="also estimate the gyro scale factor over turns (paper Sec. 4.3; gyrodrift.scale_factor) and add "
