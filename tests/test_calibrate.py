@@ -323,3 +323,15 @@ def test_compensate_prior_starts_from_the_tangent_and_warns_outside_the_range(tm
     assert main(["compensate", str(inside), "-o", str(tmp_path / "d.csv"), "-q", "--prior", str(params),
                  "--profile", str(prof)]) == 2
     assert "--prior and --profile" in capsys.readouterr().err
+
+
+def test_ardupilot_files_in_every_layout_read_the_same(tmp_path):
+    cal = fit_calibration(known_log(), source="k.csv")
+    write_calibration(cal, tmp_path / "mp.param")  # Mission Planner: NAME,VALUE
+    text = (tmp_path / "mp.param").read_text()
+    (tmp_path / "mavproxy.parm").write_text(text.replace(",", " "))  # tempcal_IMU.py: NAME VALUE
+    (tmp_path / "persistent.txt").write_text(text.replace(",", "="))  # firmware dump: NAME=VALUE
+    T = np.linspace(15.0, 45.0, 31)
+    want = read_ardupilot_params(tmp_path / "mp.param").drift("z", T)
+    for name in ("mavproxy.parm", "persistent.txt"):
+        np.testing.assert_array_equal(read_prior(tmp_path / name).drift("z", T), want)

@@ -58,6 +58,10 @@ PX4 (``PX4/PX4-Autopilot``):
   (rad/s)". The coefficients are therefore rad/s per degC**k.
 * ``process_sensor_caldata.py`` sets ``TMIN``/``TMAX`` to the log's extreme
   temperatures and ``TREF = (TMIN + TMAX) / 2``; gyrodrift does the same.
+* PX4 subtracts ``CAL_GYRO*_OFF`` too, so ``X0`` must be the offset of the rates the
+  log holds: raw ``sensor_gyro`` needs those offsets at 0, as the user guide's offboard
+  procedure says; ``sensor_combined`` is already corrected (and thermally compensated
+  when ``TC_G_ENABLE`` was 1), which the ULog reader's summary states.
 * ``TC_G_ENABLE`` (boolean, reboot required, ``temp_comp_params_gyro.yaml``) must be 1;
   a slot is applied only to the gyro whose device id equals ``TC_G{i}_ID``
   (``TemperatureCompensation::set_sensor_id``): with no match nothing is corrected.
@@ -91,8 +95,9 @@ ArduPilot (``ArduPilot/ardupilot``):
 * Third order is what the firmware reads (pull request #16262); a fifth-order variant
   is an open experiment (pull request #27295).
 * ``.param`` files: ``NAME,VALUE`` lines with ``#`` comments (Mission Planner; mavros
-  ``param.py``, ``MissionPlannerParam``); ``tempcal_IMU.py`` writes ``NAME VALUE``. Both
-  are read. Values are written without exponents, as ``tempcal_IMU.py`` intends.
+  ``param.py``, ``MissionPlannerParam``); ``tempcal_IMU.py`` writes ``NAME VALUE``, the
+  firmware's persistent dump ``NAME=VALUE``. All three are read. Values are written
+  without exponents, as ``tempcal_IMU.py`` intends.
 
 Axis mapping: gyrodrift's ``gyro_x, gyro_y, gyro_z`` (deg/s, body FRD) become the
 autopilot's axes 0, 1, 2 (X, Y, Z, rad/s) of its board frame through ``body_to_board``
@@ -236,13 +241,9 @@ class Calibration:
         )
 
 
-def _bin_index(temp: np.ndarray, temp_min: float) -> np.ndarray:
-    return np.floor((temp - temp_min) / BIN_WIDTH_C).astype(np.int64)
-
-
 def _fit_axis(temp: np.ndarray, rate: np.ndarray, temp_ref: float, temp_min: float) -> tuple[np.ndarray, float]:
     """Coefficients (deg/s per degC**k, lowest first) and residual RMS (deg/s) of one axis."""
-    bins = _bin_index(temp, temp_min)
+    bins = np.floor((temp - temp_min) / BIN_WIDTH_C).astype(np.int64)
     counts = np.bincount(bins)
     weight = 1.0 / counts[bins]  # each occupied bin weighs 1 in total
     half = max(0.5 * (float(temp.max()) - float(temp.min())), 1e-9)
@@ -580,7 +581,7 @@ def _bad(path, what: str) -> ConfigError:
 
 def _param_values(path, fmt: str) -> dict[str, float]:
     """``{name: value}`` of a parameter file: QGroundControl lines (``px4``) or
-    ``NAME,VALUE`` / ``NAME VALUE`` lines (``ardupilot``); ``#`` starts a comment line."""
+    ``NAME,VALUE`` / ``NAME VALUE`` / ``NAME=VALUE`` lines (``ardupilot``); ``#`` starts a comment line."""
     what = {"px4": "PX4 parameter file", "ardupilot": "ArduPilot parameter file"}[fmt]
     text = read_utf8(path, what)
     values: dict[str, float] = {}
@@ -588,7 +589,7 @@ def _param_values(path, fmt: str) -> dict[str, float]:
         body = line.strip()
         if not body or body.startswith("#"):
             continue
-        fields = body.split("\t") if fmt == "px4" and "\t" in body else re.split(r"\s*,\s*|\s+", body)
+        fields = body.split("\t") if fmt == "px4" and "\t" in body else re.split(r"\s*[,=]\s*|\s+", body)
         if fmt == "px4" and len(fields) == 5:
             name, value = fields[2].strip(), fields[3].strip()
         elif fmt == "ardupilot" and len(fields) == 2:
