@@ -117,11 +117,23 @@ def _cmd_compensate(args) -> int:
         profile = load_profile(args.profile)
         _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
         cfg = warm_config(profile, cfg)
+    prior = None
+    if args.prior:  # the z drift model starts from an autopilot's thermal calibration (gyrodrift.calibrate)
+        from gyrodrift.calibrate import prior_config, read_prior, start_temperature
+
+        if profile is not None:
+            raise ConfigError("--prior and --profile both give the starting drift model; use one of them")
+        prior = read_prior(args.prior, instance=args.instance)
+        cfg = prior_config(prior, cfg, start_temperature(args.input, _read_options(args)))
     stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
                             smooth=args.smooth)
     if profile is not None:  # the temperatures of the run are known once it is read
         _warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
+    if prior is not None:
+        from gyrodrift.calibrate import prior_notes
+
+        _warn(args.prior, prior_notes(prior, (stats.temp_min_c, stats.temp_max_c)))
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
@@ -129,6 +141,54 @@ def _cmd_compensate(args) -> int:
         if args.save_profile:
             print(f"saved device profile {args.save_profile}")
     return 0
+
+
+def _cmd_calibrate(args) -> int:
+    from gyrodrift.calibrate import fit_calibration, output_format, write_calibration
+    from gyrodrift.io import log_format
+
+    check_output_path(args.input, args.output)
+    fmt = output_format(args.output, args.output_format)
+    # --format names the output here; --instance is also the parameter slot, read only from a ULog
+    is_ulog = log_format(args.input, args.log_format) == "ulog"
+    read_args = argparse.Namespace(**{**vars(args), "format": args.log_format,
+                                      "instance": args.instance if is_ulog else 0})
+    cal = fit_calibration(read_input(args.input, read_args), source=str(args.input))
+    notes = write_calibration(cal, args.output, fmt, instance=args.instance, device_id=args.device_id)
+    _warn(args.output, notes)
+    if not args.quiet:
+        print(f"{cal.summary()}; wrote {args.output}")
+    return 0
+
+
+def _add_calibrate_parser(sub) -> None:
+    from gyrodrift.calibrate import FORMATS as CAL_FORMATS, MIN_SPAN_C
+    from gyrodrift.io import FORMATS as LOG_FORMATS
+
+    # conflict_handler="resolve": this command's --format is the output's, so it replaces the
+    # input-format option of add_input_options, which is --log-format here
+    cal = sub.add_parser(
+        "calibrate", conflict_handler="resolve", formatter_class=argparse.RawDescriptionHelpFormatter,
+        help="fit the gyro's thermal drift from a still heating run; write PX4, ArduPilot or JSON parameters",
+        description="Fit the drift of every gyro axis of a still heating or cooling log as a cubic in temperature "
+        "(PX4 and ArduPilot style) and write it as a PX4 .params file (TC_G*), an ArduPilot .param file "
+        f"(INS_TCAL*) or gyrodrift JSON (gyrodrift.calibrate). Refused below {MIN_SPAN_C:g} degC of span or when "
+        "the unit moved. Axes: the log's body FRD axes are taken as the autopilot's board axes "
+        "(SENS_BOARD_ROT = 0 / AHRS_ORIENTATION = 0); rates in rad/s in the files. --instance also names the "
+        "parameter slot: TC_G<instance> (PX4), INS_TCAL<instance+1> (ArduPilot). The log is read as compensate "
+        "reads it, so a table needs a compass column even though calibrate does not use it (a bench log "
+        "without one: add a 'heading' column of any value).",
+    )
+    cal.add_argument("input", type=Path, help="the heating or cooling run (any log format of compensate)")
+    cal.add_argument("-o", "--output", type=Path, required=True, help="parameter file to write")
+    cal.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    add_input_options(cal)
+    cal.add_argument("--log-format", choices=list(LOG_FORMATS), help="input format (default: by file name)")
+    cal.add_argument("--format", dest="output_format", choices=list(CAL_FORMATS),
+                     help="px4 (.params), ardupilot (.param) or json (default: by the output's name)")
+    cal.add_argument("--device-id", type=int, default=0,
+                     help="px4: TC_G<instance>_ID, the gyro's device id (its CAL_GYRO*_ID); default 0 = not applied")
+    cal.set_defaults(func=_cmd_calibrate)
 
 
 def _read_options(args) -> dict:
@@ -335,6 +395,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.add_argument("--save-profile", type=Path, metavar="DEV.json", help="save what this run learned as a device profile")
     c.add_argument(
+        "--prior", type=Path, metavar="FILE.params",
+        help="start the heading-axis drift model from an autopilot's thermal calibration (PX4 TC_G*, ArduPilot "
+        "INS_TCAL*, or gyrodrift calibrate's JSON; slot --instance): its tangent at the log's first temperature. "
+        "A warning on stderr when the log's temperature leaves its TMIN..TMAX",
+    )
+    c.add_argument(
         "--scale-factor", action="store_true",
         help="also estimate the gyro scale factor over turns (paper Sec. 4.3; gyrodrift.scale_factor) and add "
         "sf, sf_sd, rate_sf and heading_sf (runs in memory)",
@@ -427,6 +493,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_report_parser(sub)
     add_batch_parser(sub)
+    _add_calibrate_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
