@@ -87,7 +87,9 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     out = compensate(log, config, estimator=FixedParams())  # the columns and the anchor row
     t = out["t"].to_numpy()
     rate = log["gyro_z"].ffill().to_numpy(float) - drift_dps
-    integral = np.r_[0.0, np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))]
+    step = np.diff(t)
+    inc = np.where(step > config.gate.max_gap_s, 0.0, 0.5 * (rate[1:] + rate[:-1]) * step)  # as the engine: still across a gap
+    integral = np.r_[0.0, np.cumsum(inc)]
     compass = out["compass_heading"].to_numpy()
     anchor = int(np.flatnonzero(np.isfinite(compass))[0])
     out["rate_z"] = rate
@@ -98,7 +100,7 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     out["gated"] = 0
     out["gate_reason"] = ""
     out["bias_sd"] = 0.0
-    fused = FusionState(config.fusion_settings, config.gyro_noise_dps_rthz).rows(
+    fused = FusionState(config.fusion_settings, config.gyro_noise_dps_rthz, config.gate.max_gap_s).rows(
         t, rate, compass, np.ones(t.size, dtype=bool), np.zeros(t.size))
     out["heading_fused"], out["heading_fused_sd"], out["heading_sd"] = fused
     return out

@@ -127,9 +127,11 @@ class FusionState:
     row loop runs: :meth:`rows` gives the numbers of ``heading_fused`` for any rows.
     """
 
-    def __init__(self, config: FusionConfig, gyro_noise_dps_rthz: float):
+    def __init__(self, config: FusionConfig, gyro_noise_dps_rthz: float, max_gap_s: float = math.inf):
         self.cfg = config.vector(gyro_noise_dps_rthz)
         self.st = np.zeros(9)
+        #: Across a time step longer than this (s) the heading holds (the unit is taken as still).
+        self.max_gap_s = float(max_gap_s)
 
     def row(self, t: float, rate: float, compass: float, allow: bool, bias_sd: float) -> tuple[float, float, float]:
         """One row: (heading_fused deg, heading_fused_sd deg, heading_sd deg)."""
@@ -143,7 +145,7 @@ class FusionState:
         out = np.empty((3, n))
         fusion_kernel.fuse_rows(self.st, np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(rate, dtype=float),
                np.ascontiguousarray(compass, dtype=float), np.ascontiguousarray(allow, dtype=np.bool_),
-               np.ascontiguousarray(bias_sd, dtype=float), self.cfg, out[0], out[1], out[2])
+               np.ascontiguousarray(bias_sd, dtype=float), self.cfg, self.max_gap_s, out[0], out[1], out[2])
         return out[0], out[1], out[2]
 
 

@@ -17,12 +17,13 @@ __all__ = ["step", "fuse_rows"]
 
 @jit(inline=True)
 def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, compass, allow, bias_sd,
-         R, N2, tau, gate, relock):
+         R, N2, tau, gate, relock, held):
     """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`) on scalars.
 
     State in: ``psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t`` (``rej_t``: time
     of the first compass sample of the current run of refused ones, NaN if none);
-    settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock`` (s). Returns the new state
+    settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock`` (s); ``held``: the step from the
+    previous row is a time gap, across which the heading holds. Returns the new state
     then (ψ in [0, 360), σ_ψ, σ of the gyro-alone heading), NaN before the first compass
     sample. Pure: one function for the streaming row and the batch loop, so both give
     the same bits.
@@ -35,7 +36,8 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
         sr = math.sqrt(R)
         return psi, R, t, rate, 1.0, t, 0.0, bias_sd, math.nan, psi, sr, sr
     dt = t - t_prev
-    psi = psi + 0.5 * (rate + r_prev) * dt
+    if not held:  # held: across a time gap the heading holds (its variance grows all the same)
+        psi = psi + 0.5 * (rate + r_prev) * dt
     P = P + (N2 + tau * bias_sd * bias_sd) * dt
     isd = isd + 0.5 * (bias_sd + sd_prev) * dt
     if allow and not math.isnan(compass):
@@ -58,16 +60,16 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
 
 
 @jit
-def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, out_h, out_sd, out_gyro_sd):
+def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, max_gap_s, out_h, out_sd, out_gyro_sd):
     """:func:`step` over arrays: state ``st`` (9 values, the order of :func:`step`'s first
-    nine arguments; updated), settings ``cfg`` = [R, N², τ, gate, relock]; outputs
-    written in place."""
+    nine arguments; updated), settings ``cfg`` = [R, N², τ, gate, relock]; the heading holds
+    across a time step longer than ``max_gap_s``; outputs written in place."""
     psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t = st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8]
     R, N2, tau, gate, relock = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     for i in range(t.size):
         psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, h, sd, gsd = step(
             psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t[i], rate[i], compass[i], allow[i],
-            bias_sd[i], R, N2, tau, gate, relock,
+            bias_sd[i], R, N2, tau, gate, relock, started == 1.0 and t[i] - t_prev > max_gap_s,
         )
         out_h[i] = h
         out_sd[i] = sd

@@ -4,7 +4,8 @@
 :func:`run_chunk` then compensates its rows. Per row (Feng, Li, Zhang 2015, Sections
 2–3): ``bias = a T + b T' + c`` with the parameters in force (eq. 5),
 ``rate = gyro − bias``, the trapezoid integrals of gyro, T, T', bias and rate, the heading
-``anchor + ∫rate`` (wrapped to [0, 360)), the gates of the current interval
+``anchor + ∫rate`` (wrapped to [0, 360); across a time gap longer than ``max_gap_s`` the unit
+is taken as still: the heading holds and the gyro is taken to have read its drift), the gates of the current interval
 (:func:`gyrodrift.kernels.aiding.row_condition`), and at the first row of each new
 update interval the interval decision (:func:`gyrodrift.kernels.aiding.close`); then the
 fused heading (:func:`gyrodrift.kernels.fusion.step`).
@@ -227,11 +228,14 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         bias_sd = m_sd
         rate = gi - bias
         dt = t_s - c_t
-        I_raw = I_raw + 0.5 * (gi + c_g) * dt
+        if dt > max_gap:  # across a time gap the unit is taken as still: the gyro read its drift
+            I_raw = I_raw + 0.5 * (bias + c_bias) * dt
+        else:
+            I_raw = I_raw + 0.5 * (gi + c_g) * dt
+            I_rate = I_rate + 0.5 * (rate + c_rate) * dt
         I_T = I_T + 0.5 * (Ti + c_T) * dt
         I_Tp = I_Tp + 0.5 * (Tpi + c_Tp) * dt
         I_bias = I_bias + 0.5 * (bias + c_bias) * dt
-        I_rate = I_rate + 0.5 * (rate + c_rate) * dt
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
         if not in_init and ist[I_RUN_N] == 0:
             aiding.open_still_run(t_s, I_raw, I_T, I_Tp, gi, fs, ist)
@@ -334,7 +338,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         allow = reason != R_FIELD and not (fuse_interference and reason == R_INTERFERENCE)
         f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, hf, hf_sd, h_sd = fusion.step(
             f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, t_s, rate, h, allow, bias_sd,
-            fR, fN2, ftau, fgate, frelock,
+            fR, fN2, ftau, fgate, frelock, dt > max_gap,
         )
         out[o_hf + ix] = hf
         out[o_hf_sd + ix] = hf_sd
