@@ -97,7 +97,6 @@ BAD_FILES = {
     "duplicate": (b"t,gyro_z,temp,heading\n0,0.1,30,10\n0,0.1,30,10\n", "line 3"),
     "kelvin": (b"t,gyro_z,temp,heading\n0,0.1,303.15,10\n0.1,0.1,303.15,10\n", "temp"),
     "no_gyro": (b"t,gz,temp,heading\n0,0.1,30,10\n", "gyro_z"),
-    "no_compass": (b"t,gyro_z,temp\n0,0.1,30\n", "compass"),
     "binary": (bytes(range(256)) * 4, "log.csv"),
 }
 
@@ -218,3 +217,13 @@ def test_a_terminal_is_told_when_the_engine_compiles(monkeypatch, capsys):
         monkeypatch.setattr(cli.sys, "stderr", err)
         cli._say_if_compiling(command)
         assert ("compiling the engine" in err.getvalue()) is said, (is_cached, command)
+
+
+def test_a_log_without_compass_is_compensated_with_notes(tmp_path):
+    """No compass column: a relative heading and stillness learning, said in note lines (exit 0)."""
+    log = synthetic_log(duration_s=60.0).drop(columns="heading")
+    log.to_csv(tmp_path / "log.csv", index=False)
+    res = run_module("compensate", str(tmp_path / "log.csv"), "-o", str(tmp_path / "o.csv"))
+    assert res.returncode == 0, res.stderr
+    notes = [line for line in res.stdout.splitlines() if line.startswith("note: ")]
+    assert any("no compass" in n for n in notes) and any("heading starts at 0 deg" in n for n in notes)

@@ -171,6 +171,7 @@ def stream(log: pd.DataFrame, cfg: CompensatorConfig | None) -> pd.DataFrame:
             kw["mag"] = (r.mag_x, r.mag_y, r.mag_z)
             kw["acc"] = (r.acc_x, r.acc_y, r.acc_z)
         rows += comp.push(r.t, r.gyro_z, r.temp, **kw)
+    rows += comp.flush()  # a log shorter than the init window
     out = pd.DataFrame([asdict(s) for s in rows])
     return _without_empty_triad(out)
 
