@@ -100,7 +100,7 @@ def test_row_by_row_equals_batch_and_python_equals_compiled():
 
     plain = compiled.py_func  # the same source run as plain Python gives the same bits
     out = np.empty((3, n))
-    plain(np.zeros(9), t, rate, compass, allow, sd, cfg.vector(0.04), math.inf, out[0], out[1], out[2])
+    plain(np.zeros(11), t, rate, compass, allow, sd, cfg.vector(0.04), math.inf, out[0], out[1], out[2])
     for k in range(3):
         assert np.array_equal(out[k], batch[k], equal_nan=True)
 

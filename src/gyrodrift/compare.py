@@ -91,10 +91,11 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     inc = np.where(step > config.gate.max_gap_s, 0.0, 0.5 * (rate[1:] + rate[:-1]) * step)  # as the engine: still across a gap
     integral = np.r_[0.0, np.cumsum(inc)]
     compass = out["compass_heading"].to_numpy()
-    anchor = int(np.flatnonzero(np.isfinite(compass))[0])
+    seen = np.flatnonzero(np.isfinite(compass))
+    anchor = int(seen[0]) if seen.size else 0  # no compass: relative to the first row, as the engine
     out["rate_z"] = rate
     out["bias_z"] = drift_dps
-    out["heading"] = wrap_360(compass[anchor] + integral - integral[anchor])
+    out["heading"] = wrap_360((compass[anchor] if seen.size else 0.0) + integral - integral[anchor])
     out[["a", "b", "c"]] = np.nan
     out["update"] = 0
     out["gated"] = 0

@@ -74,6 +74,12 @@ class FusionConfig:
         (``math.inf``, the default: never; P growth widens the gate instead). It bounds
         a lock-out; the price is that an interference lasting longer than this is
         followed.
+    consistent_s : float
+        A run of refused compass samples whose innovations stay within 2 σ_c of each other
+        for this long, s, re-anchors the filter on the compass: after a disturbance the
+        compass is again self-consistent and turns with the gyro, so the fused heading takes
+        it back within this time (no lock-out), while a wandering disturbance keeps being
+        refused.
     magnetic_gates : bool
         Also refuse the compass where the compensator refused aiding for interference
         (``field`` is always refused). On by default, for the default ``adaptive``
@@ -93,6 +99,7 @@ class FusionConfig:
     bias_corr_s: float = 30.0
     nis_gate: float = 9.0
     relock_s: float = math.inf
+    consistent_s: float = 60.0
     magnetic_gates: bool = True
 
     @classmethod
@@ -106,18 +113,18 @@ class FusionConfig:
         return cls(**settings)
 
     def __post_init__(self):
-        for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s"):
+        for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s", "consistent_s"):
             v = getattr(self, name)
             finite = math.isfinite(v) if isinstance(v, (int, float)) else False
-            if not (isinstance(v, (int, float)) and v > 0 and (finite or name == "relock_s")):
+            if not (isinstance(v, (int, float)) and v > 0 and (finite or name in ("relock_s", "consistent_s"))):
                 raise ConfigError(f"fusion setting {name} must be a positive number, got {v!r}")
         if not isinstance(self.magnetic_gates, bool):
             raise ConfigError(f"fusion setting magnetic_gates must be true or false, got {self.magnetic_gates!r}")
 
     def vector(self, gyro_noise_dps_rthz: float) -> np.ndarray:
-        """The settings as the kernel takes them: [σ_c², N², τ_b, nis_gate, relock_s]."""
+        """The settings as the kernel takes them: [σ_c², N², τ_b, nis_gate, relock_s, consistent_s]."""
         return np.array([self.heading_sigma_deg**2, gyro_noise_dps_rthz**2, self.bias_corr_s, self.nis_gate,
-                         self.relock_s])
+                         self.relock_s, self.consistent_s])
 
 
 class FusionState:
@@ -129,7 +136,7 @@ class FusionState:
 
     def __init__(self, config: FusionConfig, gyro_noise_dps_rthz: float, max_gap_s: float = math.inf):
         self.cfg = config.vector(gyro_noise_dps_rthz)
-        self.st = np.zeros(9)
+        self.st = np.zeros(11)
         #: Across a time step longer than this (s) the heading holds (the unit is taken as still).
         self.max_gap_s = float(max_gap_s)
 

@@ -227,7 +227,9 @@ def heading_error_stats(out: pd.DataFrame) -> dict[str, float]:
     """Statistics of the heading error against ``ref_heading``, deg.
 
     The error is ``heading − ref_heading`` wrapped to [−180, 180) (so 359° against
-    1° is −2°, not 358°); rows without a reference (NaN) are left out.
+    1° is −2°, not 358°); rows without a reference (NaN) are left out. A log without any
+    compass sample (``compass_heading`` empty in every row) has a heading relative to its
+    first row: its error is taken after removing the offset at the first referenced row.
 
     Returns
     -------
@@ -237,7 +239,10 @@ def heading_error_stats(out: pd.DataFrame) -> dict[str, float]:
     """
     ref = _column(out, REF_HEADING, "heading_error_stats")
     e = heading_error_deg(_column(out, "heading", "heading_error_stats"), ref)
-    return error_stats(e[np.isfinite(ref)])
+    e = e[np.isfinite(ref)]
+    if "compass_heading" in out.columns and e.size and not np.isfinite(out["compass_heading"].to_numpy(float)).any():
+        e = heading_error_deg(e - e[0], 0.0)
+    return error_stats(e)
 
 
 #: Rows of :func:`table2`: the paper's mean and variance, then extra statistics.

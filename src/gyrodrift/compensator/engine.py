@@ -83,7 +83,9 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     cfg[L.C_STILL_STD] = gate.still_std_dps
     cfg[L.C_STILL_HEADING] = gate.still_heading_deg
     cfg[L.C_RUN_MIN_S] = gate.still_run_s
-    cfg[L.C_FUSION_R:L.C_FUSION_RELOCK + 1] = fusion.vector(config.gyro_noise_dps_rthz)
+    vector = fusion.vector(config.gyro_noise_dps_rthz)
+    cfg[L.C_FUSION_R:L.C_FUSION_RELOCK + 1] = vector[:5]
+    cfg[L.C_FUSION_CONSISTENT] = vector[5]
     icfg = np.zeros(L.N_KCFG, dtype=np.int64)
     icfg[L.K_RELOCK] = gate.relock_intervals
     icfg[L.K_DEPTH] = config.stack_depth if st is None or st.stacked else 1

@@ -16,25 +16,32 @@ __all__ = ["step", "fuse_rows"]
 
 
 @jit(inline=True)
-def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, compass, allow, bias_sd,
-         R, N2, tau, gate, relock, held):
+def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t, t, rate, compass, allow, bias_sd,
+         R, N2, tau, gate, relock, consistent, held):
     """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`) on scalars.
 
-    State in: ``psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t`` (``rej_t``: time
-    of the first compass sample of the current run of refused ones, NaN if none);
-    settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock`` (s); ``held``: the step from the
-    previous row is a time gap, across which the heading holds. Returns the new state
+    State in: ``psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t``
+    (``rej_t``: time of the first compass sample of the current run of refused ones, NaN if
+    none; ``cons_t`` the time since which its innovations stayed within 2 σ_c of ``nu0``);
+    settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock, consistent`` (s); ``held``: the step
+    from the previous row is a time gap, across which the heading holds.
+
+    A refused run re-anchors the filter on the compass (ψ = compass, P = σ_c²) after
+    ``relock`` seconds, or after ``consistent`` seconds in which its innovations stayed
+    within 2 σ_c of each other: the compass is again self-consistent and turns with the
+    gyro (a new offset, not a wandering disturbance), so no lock-out lasts. Returns the new
+    state
     then (ψ in [0, 360), σ_ψ, σ of the gyro-alone heading), NaN before the first compass
     sample. Pure: one function for the streaming row and the batch loop, so both give
     the same bits.
     """
     if started == 0.0:
         if math.isnan(compass):
-            return (psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t,
+            return (psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t,
                     math.nan, math.nan, math.nan)
         psi = wrap360(compass)
         sr = math.sqrt(R)
-        return psi, R, t, rate, 1.0, t, 0.0, bias_sd, math.nan, psi, sr, sr
+        return psi, R, t, rate, 1.0, t, 0.0, bias_sd, math.nan, 0.0, t, psi, sr, sr
     dt = t - t_prev
     if not held:  # held: across a time gap the heading holds (its variance grows all the same)
         psi = psi + 0.5 * (rate + r_prev) * dt
@@ -48,31 +55,39 @@ def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t, rate, comp
             psi = psi + k * nu
             P = P - k * P
             rej_t = math.nan
-        elif math.isnan(rej_t):
-            rej_t = t
-        elif t - rej_t >= relock:  # refused for ``relock`` s on end: trust the compass again
-            psi = compass
-            P = R
-            rej_t = math.nan
+        else:
+            if math.isnan(rej_t):  # the first refused sample of a run
+                rej_t = t
+                cons_t = t
+                nu0 = nu
+            elif abs(wrap180(nu - nu0)) > 2.0 * math.sqrt(R):  # the refusals disagree: count again
+                cons_t = t
+                nu0 = nu
+            if t - rej_t >= relock or t - cons_t >= consistent:  # trust the compass again
+                psi = compass
+                P = R
+                rej_t = math.nan
     psi = wrap360(psi)
     gyro_var = R + N2 * (t - t0) + isd * isd
-    return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
+    return psi, P, t, rate, started, t0, isd, bias_sd, rej_t, nu0, cons_t, psi, math.sqrt(max(P, 0.0)), math.sqrt(gyro_var)
 
 
 @jit
 def fuse_rows(st, t, rate, compass, allow, bias_sd, cfg, max_gap_s, out_h, out_sd, out_gyro_sd):
-    """:func:`step` over arrays: state ``st`` (9 values, the order of :func:`step`'s first
-    nine arguments; updated), settings ``cfg`` = [R, N², τ, gate, relock]; the heading holds
+    """:func:`step` over arrays: state ``st`` (11 values, the order of :func:`step`'s first
+    eleven arguments; updated), settings ``cfg`` = [R, N², τ, gate, relock, consistent]; the heading holds
     across a time step longer than ``max_gap_s``; outputs written in place."""
     psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t = st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8]
-    R, N2, tau, gate, relock = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
+    nu0, cons_t = st[9], st[10]
+    R, N2, tau, gate, relock, consistent = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4], cfg[5]
     for i in range(t.size):
-        psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, h, sd, gsd = step(
-            psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, t[i], rate[i], compass[i], allow[i],
-            bias_sd[i], R, N2, tau, gate, relock, started == 1.0 and t[i] - t_prev > max_gap_s,
+        psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t, h, sd, gsd = step(
+            psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t, t[i], rate[i], compass[i],
+            allow[i], bias_sd[i], R, N2, tau, gate, relock, consistent, started == 1.0 and t[i] - t_prev > max_gap_s,
         )
         out_h[i] = h
         out_sd[i] = sd
         out_gyro_sd[i] = gsd
     st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8] = (
         psi, P_, t_prev, r_prev, started, t0, isd, sd_prev, rej_t)
+    st[9], st[10] = nu0, cons_t

@@ -69,7 +69,10 @@ F_FIELD_NORM, F_FIELD_DIP = 68, 69  # reference field of the init window (NaN: n
 #: its first row's time and integrals (t, I_raw, I_T, I_Tp), its first gyro value, and the
 #: sums of the gyro minus that value and of their squares.
 F_RUN_T0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ = 70, 71, 72, 73, 74, 75, 76
-N_FSTATE = 77
+#: The fused heading's refused compass run: the innovation its consistency is counted from,
+#: and since when (:func:`gyrodrift.kernels.fusion.step`).
+F_FZ_NU0, F_FZ_CONS_T = 77, 78
+N_FSTATE = 79
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
@@ -99,7 +102,8 @@ C_TP_BIN_S, C_FIELD_NORM_TOL, C_DIP_TOL, C_STILL_STD, C_STILL_HEADING = 10, 11, 
 C_FUSION_R, C_FUSION_N2, C_FUSION_TAU, C_FUSION_GATE, C_FUSION_RELOCK = 15, 16, 17, 18, 19
 C_EDGE_S, C_WINDOW_S, C_ZARU_WINDOW_S, C_ZARU_SLOPE_K, C_ZARU_RESID_K = 20, 21, 22, 23, 24
 C_RUN_MIN_S = 25  # shortest still run that measures the drift, s
-N_CFG = 26
+C_FUSION_CONSISTENT = 26  # refused compass samples consistent with the gyro this long re-anchor, s
+N_CFG = 27
 
 # --------------------------------------------------------- integer settings
 

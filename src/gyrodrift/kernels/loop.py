@@ -30,9 +30,9 @@ import numpy as np
 from gyrodrift.kernels import jit
 from gyrodrift.kernels import aiding, drift, fusion
 from gyrodrift.kernels.layout import (
-    C_DIP_TOL, C_FIELD_NORM_TOL, C_FUSION_GATE, C_FUSION_N2, C_FUSION_R, C_FUSION_RELOCK, C_FUSION_TAU, C_INTERF,
+    C_DIP_TOL, C_FIELD_NORM_TOL, C_FUSION_CONSISTENT, C_FUSION_GATE, C_FUSION_N2, C_FUSION_R, C_FUSION_RELOCK, C_FUSION_TAU, C_INTERF,
     C_INTERVAL, C_MAX_GAP, C_STILL_STD, C_TP_BIN_S, C_TURN_RATE, C_TURN_WIN, C_WINDOW_S, F_ANCHOR, F_BIAS, F_COV,
-    F_FIELD_DIP, F_FIELD_NORM, F_FUSION, F_G, F_IBIAS, F_IRATE, F_IRAW, F_IT, F_ITP, F_K, F_LAST_G, F_LAST_T,
+    F_FIELD_DIP, F_FIELD_NORM, F_FUSION, F_FZ_CONS_T, F_FZ_NU0, F_G, F_IBIAS, F_IRATE, F_IRAW, F_IT, F_ITP, F_K, F_LAST_G, F_LAST_T,
     F_LAST_TEMP, F_PA, F_PB, F_PC, F_RATE, F_S0, F_S1, F_T, F_TEMP, F_TP, F_TSTART, FZ_ISD, FZ_P, FZ_PSI,
     FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
@@ -164,8 +164,9 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     zf = F_FUSION
     f_psi, f_P, f_tp, f_rp, f_started = fs[zf + FZ_PSI], fs[zf + FZ_P], fs[zf + FZ_TPREV], fs[zf + FZ_RPREV], fs[zf + FZ_STARTED]
     f_t0, f_isd, f_sdp, f_rej = fs[zf + FZ_T0], fs[zf + FZ_ISD], fs[zf + FZ_SDPREV], fs[zf + FZ_REJ_T]
+    f_nu0, f_cons = fs[F_FZ_NU0], fs[F_FZ_CONS_T]
     fR, fN2, ftau = cfg[C_FUSION_R], cfg[C_FUSION_N2], cfg[C_FUSION_TAU]
-    fgate, frelock = cfg[C_FUSION_GATE], cfg[C_FUSION_RELOCK]
+    fgate, frelock, fconsistent = cfg[C_FUSION_GATE], cfg[C_FUSION_RELOCK], cfg[C_FUSION_CONSISTENT]
     # column offsets, unsigned like the row index (a mixed sum would be signed: a negative-index check per store)
     o_bias, o_rate, o_heading = np.uint64(O_BIAS * cap), np.uint64(O_RATE * cap), np.uint64(O_HEADING * cap)
     o_sd, o_hf, o_hf_sd = np.uint64(O_BIAS_SD * cap), np.uint64(O_FUSED * cap), np.uint64(O_FUSED_SD * cap)
@@ -336,9 +337,9 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         codes[oc_update + ix] = update
         codes[oc_reason + ix] = reason
         allow = reason != R_FIELD and not (fuse_interference and reason == R_INTERFERENCE)
-        f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, hf, hf_sd, h_sd = fusion.step(
-            f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, t_s, rate, h, allow, bias_sd,
-            fR, fN2, ftau, fgate, frelock, dt > max_gap,
+        f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, f_nu0, f_cons, hf, hf_sd, h_sd = fusion.step(
+            f_psi, f_P, f_tp, f_rp, f_started, f_t0, f_isd, f_sdp, f_rej, f_nu0, f_cons, t_s, rate, h, allow,
+            bias_sd, fR, fN2, ftau, fgate, frelock, fconsistent, dt > max_gap,
         )
         out[o_hf + ix] = hf
         out[o_hf_sd + ix] = hf_sd
@@ -358,6 +359,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
     fs[zf + FZ_PSI], fs[zf + FZ_P], fs[zf + FZ_TPREV], fs[zf + FZ_RPREV], fs[zf + FZ_STARTED] = f_psi, f_P, f_tp, f_rp, f_started
     fs[zf + FZ_T0], fs[zf + FZ_ISD], fs[zf + FZ_SDPREV], fs[zf + FZ_REJ_T] = f_t0, f_isd, f_sdp, f_rej
+    fs[F_FZ_NU0], fs[F_FZ_CONS_T] = f_nu0, f_cons
     return stop
 
 
