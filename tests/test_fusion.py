@@ -148,3 +148,19 @@ def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default():
             for r in comp.push(t, g, T, heading_deg=h)]
     want = compensate(part, stkf)["heading_fused"].to_numpy()
     assert np.array_equal(np.array([r.heading_fused for r in rows]), want, equal_nan=True)
+
+
+def test_a_lasting_compass_offset_is_taken_back_after_consistent_s():
+    """Without relock_s, a 20-deg step of the compass that then turns with the gyro is refused
+    at first and taken again once its innovations have agreed for consistent_s; a compass that
+    keeps wandering is never taken."""
+    t = np.arange(0.0, 600.0, 0.1)
+    has = np.arange(t.size) % 10 == 0
+    cfg = FusionConfig(consistent_s=120.0)
+    step = np.where(has, np.where(t < 100.0, 50.0, 70.0), np.nan)
+    h, _, _ = fuse_rows(t, np.zeros(t.size), step, np.ones(t.size, bool), np.full(t.size, 0.001), cfg)
+    assert abs(h[int(200 / 0.1)] - 50.0) < 1.0  # refused 100 s after the step
+    assert abs(h[int(230 / 0.1)] - 70.0) < 1e-6  # taken again 120 s after the first refusal
+    wander = np.where(has, np.where(t < 100.0, 50.0, 90.0 + 15.0 * np.sin(2 * np.pi * t / 40.0)), np.nan)
+    h, _, _ = fuse_rows(t, np.zeros(t.size), wander, np.ones(t.size, bool), np.full(t.size, 0.001), cfg)
+    assert np.abs(h[t > 100.0] - 50.0).max() < 3.0  # still following the gyro

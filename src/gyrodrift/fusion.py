@@ -76,10 +76,12 @@ class FusionConfig:
         followed.
     consistent_s : float
         A run of refused compass samples whose innovations stay within 2 σ_c of each other
-        for this long, s, re-anchors the filter on the compass: after a disturbance the
-        compass is again self-consistent and turns with the gyro, so the fused heading takes
-        it back within this time (no lock-out), while a wandering disturbance keeps being
-        refused.
+        for this long, s, re-anchors the filter on the compass: the compass is again
+        self-consistent and turns with the gyro, so a lock-out ends within this time, while
+        a wandering disturbance keeps being refused. 300 s: on the simulated soak family
+        (slow interference that holds its offset for minutes) 60 s raised the mean
+        ``heading_fused`` RMS from 1.84° to 5.92° and 120 s to 5.24° (4 seeds, a quarter of
+        the length); 300 s left it unchanged.
     magnetic_gates : bool
         Also refuse the compass where the compensator refused aiding for interference
         (``field`` is always refused). On by default, for the default ``adaptive``
@@ -99,7 +101,7 @@ class FusionConfig:
     bias_corr_s: float = 30.0
     nis_gate: float = 9.0
     relock_s: float = math.inf
-    consistent_s: float = 60.0
+    consistent_s: float = 300.0
     magnetic_gates: bool = True
 
     @classmethod
