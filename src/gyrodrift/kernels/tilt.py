@@ -20,6 +20,11 @@ the order a row meets them. :func:`run` is the row loop of
   (:func:`measurement`) and the estimators' update or hold
   (:func:`gyrodrift.kernels.kalman.update`, :func:`~gyrodrift.kernels.kalman.hold`).
 
+:func:`close` and the estimator steps it calls are inlined into :func:`run`
+(``inline=True``): numba optimises a function together with the compiled functions it
+calls, so every separately compiled level above the Kalman filters would optimise their
+code once more (a first compilation of about 20 s this way, about 50 s otherwise).
+
 The state is in the arrays of the x/y section of :mod:`gyrodrift.kernels.layout`. An
 axis whose estimator is not one of the kernels' filters (a Python estimator,
 ``xk[XK_EXTERNAL + axis]``) is left to the caller at each interval end:
@@ -300,7 +305,7 @@ def residual_ok(m, h, r, dt, params, cov, rates, held, relock, residual_deg, res
     return accept, held
 
 
-@jit
+@jit(inline=True)
 def _in_force(axis, xf, ef, ei):
     """A kernel filter's parameters and covariance into ``xf`` (the rows use them)."""
     p = kalman.params(ef, ei)
@@ -311,7 +316,7 @@ def _in_force(axis, xf, ef, ei):
             xf[XF_COV + 9 * axis + 3 * k + j] = C[k, j]
 
 
-@jit
+@jit(inline=True)
 def _hold(axis, xf, xi, xk, ef, ei):
     """A refused interval for one axis: the filter's hold, or the caller's (PENDING_HOLD)."""
     if xk[XK_EXTERNAL + axis] == 1:
@@ -321,7 +326,7 @@ def _hold(axis, xf, xi, xk, ef, ei):
     _in_force(axis, xf, ef, ei)
 
 
-@jit
+@jit(inline=True)
 def _update(axis, m, h, r, xf, xi, xk, ef, ei):
     """An accepted measurement ``m = h x + v``, ``v ~ N(0, r)``, for one axis: the filter's
     update, or the caller's (PENDING_UPDATE, the measurement in ``xf[XF_MEAS..]``)."""
@@ -344,7 +349,7 @@ def _update(axis, m, h, r, xf, xi, xk, ef, ei):
     _in_force(axis, xf, ef, ei)
 
 
-@jit
+@jit(inline=True)
 def close(ring, xf, xi, xc, xk, ef_x, ei_x, ef_y, ei_y):
     """Decide the interval that ends at the ring's newest row: its end edge (the next
     interval's start edge), the gates, and per axis the update or hold. Sets
