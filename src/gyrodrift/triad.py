@@ -77,15 +77,29 @@ Bad inputs
 * Empty (NaN) gyro_x/gyro_y/temp/temp_rate cells hold the previous value and refuse
   the interval; before the first gyro value ``rate_x``/``rate_y`` are empty (NaN)
   while ``bias_x``/``bias_y`` are given.
-* Accelerometer rows that are empty, or whose norm is outside 0.5–1.5 g (e.g. all
-  zero), are not used; with no usable accelerometer at all every interval is refused,
-  the parameters stay at the prior ``x0`` and ``rate_i = gyro_i − drift(x0)``.
+* Accelerometer rows that are empty, whose norm is outside 0.5–1.5 g (e.g. all
+  zero), or that point along body x alone (pitch ±90°: no roll angle), are not used
+  (taken as level in the integrals); with no usable accelerometer at all every
+  interval is refused, the parameters stay at the prior ``x0`` and
+  ``rate_i = gyro_i − drift(x0)``.
 * The accelerometer unit (g or m/s²) is taken from the first usable row
   (``acc_unit="auto"``: norm above 3 means m/s²) unless given.
 
+Where the equations are
+-----------------------
+In :mod:`gyrodrift.kernels.tilt` (compiled with numba, as the z axis's): the row loop
+:func:`~gyrodrift.kernels.tilt.run` with the accelerometer's unit and validity, the
+Euler coefficients, the trapezoid integrals, the interval boundary and the turning gate
+of each row, then at each boundary :func:`~gyrodrift.kernels.tilt.close` with the edge
+windows, the gates, the measurement above and the estimators' update or hold (the
+Kalman filters of :mod:`gyrodrift.kernels.kalman` on their own arrays; a Python
+estimator is updated by :class:`TriadCompensator` when the loop returns at the interval
+end). This module holds the settings, the state arrays and the table functions.
+
 Causality and chunks: a row depends only on earlier rows. :class:`TriadCompensator`
-processes chunks of any size with results identical bit for bit to one chunk
-(:func:`compensate_triad`).
+runs the same kernel on chunks of any size, one row included
+(:meth:`TriadCompensator.feed_row`, the streaming compensator's case), with results
+identical bit for bit to one chunk (:func:`compensate_triad`).
 """
 
 from __future__ import annotations
@@ -97,10 +111,13 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.engine import compiled_arrays
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import Observation
-from gyrodrift.kernels.aiding import steady_disagreement
+from gyrodrift.estimators.base import LinearDrift
+from gyrodrift.kernels import layout as L
+from gyrodrift.kernels import tilt
 
 __all__ = [
     "TriadConfig",
@@ -117,13 +134,9 @@ __all__ = [
 #: latest x/y update interval was refused (for either axis) or none has ended yet.
 TRIAD_COLUMNS = ("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated")
 
-#: Reasons an x/y interval is refused (:attr:`TriadCompensator.reasons` counts them).
-TRIAD_REASONS = ("gap", "accel", "tilt", "turning", "residual")
-
-_G_MPS2 = 9.80665
-
-#: :meth:`TriadCompensator.feed` works through long inputs in blocks of this many rows.
-_BLOCK_ROWS = 1 << 15
+#: Reasons an x/y interval is refused, in the order the gates are tried
+#: (:attr:`TriadCompensator.reasons` counts them).
+TRIAD_REASONS = L.TILT_REASON_NAMES
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -187,32 +200,32 @@ class TriadConfig:
 def tilt_angles(acc_g):
     """Roll and pitch (deg) of FRD specific force rows ``(N, 3)`` (any unit).
 
-    ``roll = atan2(-f_y, -f_z)``, ``pitch = asin(f_x/|f|)``.
+    ``roll = atan2(-f_y, -f_z)``, ``pitch = asin(f_x/|f|)``
+    (:func:`gyrodrift.kernels.tilt.roll_pitch`).
 
     >>> r, p = tilt_angles(np.array([[0.0, 0.0, -1.0], [np.sin(np.radians(10.0)), 0.0, -np.cos(np.radians(10.0))]]))
     >>> [round(float(v), 9) + 0.0 for v in r], [round(float(v), 9) + 0.0 for v in p]
     ([0.0, 0.0], [0.0, 10.0])
     """
-    f = np.asarray(acc_g, dtype=float)
-    norm = np.sqrt(f[:, 0] ** 2 + f[:, 1] ** 2 + f[:, 2] ** 2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        roll = np.degrees(np.arctan2(-f[:, 1], -f[:, 2]))
-        pitch = np.degrees(np.arcsin(np.clip(f[:, 0] / norm, -1.0, 1.0)))
+    f = np.ascontiguousarray(acc_g, dtype=float).reshape(-1, 3)
+    roll, pitch = np.empty(f.shape[0]), np.empty(f.shape[0])
+    tilt.roll_pitch_all(f, roll, pitch)
     return roll, pitch
 
 
-def _hold(x: np.ndarray, last: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """Forward-fill non-finite values from ``last``; return values, held mask, new last."""
-    bad = ~np.isfinite(x)
-    if bad.any():
-        x = pd.Series(np.where(bad, np.nan, x)).ffill().fillna(last).to_numpy()
-    return x, bad, float(x[-1])
+def _column(values) -> np.ndarray:
+    """A float64, contiguous, read-only view of an input (a copy only when needed): the
+    kernel takes its inputs read-only, one compiled version whatever the caller passes."""
+    view = np.ascontiguousarray(values, dtype=float).view()
+    view.flags.writeable = False
+    return view
 
 
-#: Per-row arrays of the open interval, in the order kept by the buffer.
-_FIELDS = ("t", "Iphi", "Ith", "IT", "ITp", "Ik1", "Ik2", "Igx", "Igy", "Irz", "fx", "fy", "fz", "ok")
-_F = slice(10, 13)
-_OK = 13
+#: Messages of the kernel's statuses below 0.
+_STATUS = {
+    L.XS_BAD_TIME: "triad: time must be finite and strictly increasing",
+    L.XS_NO_TEMP: "triad: the first row needs a temp value",
+}
 
 
 class TriadCompensator:
@@ -227,7 +240,9 @@ class TriadCompensator:
         ``triad.estimator``.
     triad : TriadConfig, optional
     estimators : (DriftEstimator, DriftEstimator), optional
-        Fresh estimators for x and y instead of two built from ``config``.
+        Fresh estimators for x and y instead of two built from ``config``; their drift
+        must be eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`). The Kalman
+        filters are updated inside the compiled row loop, others here at interval ends.
 
     Examples
     --------
@@ -244,41 +259,63 @@ class TriadCompensator:
     def __init__(self, config=None, triad: TriadConfig | None = None, *, estimators=None):
         self.config = config or CompensatorConfig()
         self.triad = triad or TriadConfig()
-        if self.triad.edge_s > 0.5 * self.config.update_interval_s:
+        tc, gate = self.triad, self.config.gate
+        if tc.edge_s > 0.5 * self.config.update_interval_s:
             raise ConfigError(
-                f"triad edge_s ({self.triad.edge_s:g} s) must be at most half the update interval "
+                f"triad edge_s ({tc.edge_s:g} s) must be at most half the update interval "
                 f"({self.config.update_interval_s:g} s)"
             )
         if estimators is None:
             axis_config = replace(self.config, estimator=self.triad.estimator)
             estimators = (build_estimator(axis_config), build_estimator(axis_config))
+        for est in estimators:
+            owner = next((k for k in type(est).__mro__ if "drift" in k.__dict__), None)
+            if owner is not LinearDrift:
+                raise ConfigError(f"x/y estimator {est.name!r}: its drift is not a*T + b*T' + c (eq. 2), which the "
+                                  "x/y axes are compensated with")
         self.est_x, self.est_y = estimators
-        self._scale: float | None = {"g": 1.0, "m/s2": 1.0 / _G_MPS2}.get(self.triad.acc_unit)
-        self._t0: float | None = None
-        self._k = 0.0
-        self._t_last = -math.inf
-        self._prev: np.ndarray | None = None  # integrands of the last row
-        self._I = np.zeros(9)  # their integrals
-        self._held = {"gx": math.nan, "gy": math.nan, "T": math.nan, "Tp": 0.0}
-        self._buf: list[dict[str, np.ndarray]] = []
-        self._bad = False  # a gap or held cell in the open interval
-        self._edge: dict | None = None  # window means at the start of the open interval
-        self._gated = 1
-        self._started = False
-        #: Rates of the residual refusals in a row, per axis, and how many are held (lock-out recovery).
-        self._relock = {axis: np.zeros(max(self.config.gate.relock_intervals, 1)) for axis in ("x", "y")}
-        self._refusals = {"x": 0, "y": 0}
-        #: Number of intervals refused for each reason of :data:`TRIAD_REASONS` (an
-        #: interval refused for two reasons counts under the first).
-        self.reasons = dict.fromkeys(TRIAD_REASONS, 0)
-        #: Accepted updates per axis.
-        self.updates = {"x": 0, "y": 0}
+        self._xc = np.zeros(L.N_XC)
+        self._xc[[L.XC_INTERVAL, L.XC_MAX_GAP, L.XC_TURN_RATE, L.XC_TURN_WIN, L.XC_GYRO_NOISE, L.XC_EDGE_S]] = (
+            self.config.update_interval_s, gate.max_gap_s, gate.turn_rate_dps, gate.turn_window_s,
+            self.config.gyro_noise_dps_rthz, tc.edge_s)
+        self._xc[[L.XC_NORM_TOL, L.XC_SPREAD, L.XC_ACC_NOISE, L.XC_MAX_TILT, L.XC_RESID_DEG, L.XC_RESID_K]] = (
+            tc.acc_norm_tol_g, tc.acc_spread_g, tc.acc_noise_g, tc.max_tilt_deg, tc.residual_deg, tc.residual_k)
+        self._xk = np.zeros(L.N_XK, dtype=np.int64)
+        self._xk[L.XK_RELOCK] = gate.relock_intervals
+        self._xf = np.zeros(L.xf_size(gate.relock_intervals))
+        self._xf[[L.XF_TLAST, L.XF_GX, L.XF_GY, L.XF_TEMP]] = (-math.inf, math.nan, math.nan, math.nan)
+        self._xf[L.XF_SCALE] = {"g": 1.0, "m/s2": 1.0 / tilt.G_MPS2}.get(tc.acc_unit, math.nan)
+        self._xi = np.zeros(L.N_XI, dtype=np.int64)
+        self._xi[L.XI_GATED] = 1
+        self._ring = np.zeros((64, L.N_XW))
+        filters = []
+        for axis, est in enumerate(estimators):
+            arrays = compiled_arrays(est)
+            if arrays is None:  # a Python estimator: updated in _settle
+                self._xk[L.XK_EXTERNAL + axis] = 1
+                arrays = (np.zeros(1), np.zeros(1, dtype=np.int64))
+            filters += arrays
+            self._in_force(axis)
+        self._filters = tuple(filters)
+        self._external = bool(self._xk[L.XK_EXTERNAL:].any())
+        self._one: _OneRow | None = None
 
     # ------------------------------------------------------------------ public
     @property
     def params(self) -> tuple[np.ndarray, np.ndarray]:
         """[a, b, c] of x and of y now in force (deg/s/degC, deg, deg/s)."""
         return self.est_x.params, self.est_y.params
+
+    @property
+    def reasons(self) -> dict[str, int]:
+        """Number of intervals refused for each reason of :data:`TRIAD_REASONS` (an interval
+        refused for two reasons counts under the first; the first interval is not counted)."""
+        return dict(zip(TRIAD_REASONS, self._xi[L.XI_REASONS:L.XI_REASONS + len(TRIAD_REASONS)].tolist()))
+
+    @property
+    def updates(self) -> dict[str, int]:
+        """Accepted updates per axis (``x``, ``y``)."""
+        return {"x": int(self._xi[L.XI_UPDATES]), "y": int(self._xi[L.XI_UPDATES + 1])}
 
     def feed(self, t_s, gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps, acc, rate_z_dps=None) -> dict:
         """Compensate the next rows; return the columns of :data:`TRIAD_COLUMNS` for them.
@@ -303,278 +340,115 @@ class TriadCompensator:
         -------
         dict of (N,) ndarray
             ``rate_x, rate_y, bias_x, bias_y`` (deg/s, float) and ``tilt_gated`` (int8).
+
+        Raises
+        ------
+        GyroDriftError
+            A time not finite or not increasing, no temperature on the first row, or
+            columns of different lengths; no row is taken then.
         """
-        t = np.asarray(t_s, dtype=float)
+        t = _column(t_s)
         n = t.size
-        cols = [np.asarray(v, dtype=float) for v in (gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps)]
-        acc = np.asarray(acc, dtype=float).reshape(n, 3)
-        rz = np.zeros(n) if rate_z_dps is None else np.asarray(rate_z_dps, dtype=float)
-        if n == 1:  # the streaming compensator's case: the same arithmetic on Python floats
-            out = self.feed_row(float(t[0]), *(float(c[0]) for c in cols), acc[0], float(rz[0]))
-            return {c: np.array([v], dtype=np.int8 if c == "tilt_gated" else float) for c, v in zip(TRIAD_COLUMNS, out)}
-        if n <= _BLOCK_ROWS:
-            return self._feed(t, *cols, acc, rz)
-        # blocks of cache size: the result does not depend on them, the speed does
-        parts = [
-            self._feed(t[i : i + _BLOCK_ROWS], *(c[i : i + _BLOCK_ROWS] for c in cols), acc[i : i + _BLOCK_ROWS],
-                       rz[i : i + _BLOCK_ROWS])
-            for i in range(0, n, _BLOCK_ROWS)
-        ]
-        return {c: np.concatenate([p[c] for p in parts]) for c in TRIAD_COLUMNS}
-
-    def _feed(self, t, gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps, acc, rz) -> dict:
-        n = t.size
-        if n == 0:
-            return {c: np.empty(0, dtype=np.int8 if c == "tilt_gated" else float) for c in TRIAD_COLUMNS}
-        rz = np.where(np.isfinite(rz), rz, 0.0)
-        if not np.all(np.isfinite(t)) or not (t[0] > self._t_last and np.all(np.diff(t) > 0)):
-            raise GyroDriftError("triad: time must be finite and strictly increasing")
-        if self._t0 is None:
-            if not math.isfinite(float(np.asarray(temp_c, dtype=float)[0])):
-                raise GyroDriftError("triad: the first row needs a temp value")
-            self._t0 = float(t[0])
-            self._k = 0.0
-        h = self._held
-        gx, bad_gx, h["gx"] = _hold(np.asarray(gyro_x_dps, dtype=float), h["gx"])
-        gy, bad_gy, h["gy"] = _hold(np.asarray(gyro_y_dps, dtype=float), h["gy"])
-        T, bad_T, h["T"] = _hold(np.asarray(temp_c, dtype=float), h["T"])
-        Tp, _, h["Tp"] = _hold(np.asarray(temp_rate_cps, dtype=float), h["Tp"])
-        gx0 = np.where(np.isfinite(gx), gx, 0.0)  # before the first value: integrate 0 (refused)
-        gy0 = np.where(np.isfinite(gy), gy, 0.0)
-        dt = t - np.r_[t[0] if self._prev is None else self._t_last, t[:-1]]
-        bad = bad_gx | bad_gy | bad_T | (dt > self.config.gate.max_gap_s) | ~np.isfinite(gx) | ~np.isfinite(gy)
-
-        # accelerometer: unit, validity, angles, Euler coefficients
-        if self._scale is None:
-            norm_raw = np.sqrt(np.sum(acc**2, axis=1))
-            first = np.flatnonzero(np.isfinite(norm_raw) & (norm_raw > 0.05))
-            if first.size:
-                self._scale = 1.0 / _G_MPS2 if norm_raw[first[0]] > 3.0 else 1.0
-        f = acc * (self._scale if self._scale is not None else math.nan)
-        norm = np.sqrt(f[:, 0] ** 2 + f[:, 1] ** 2 + f[:, 2] ** 2)
-        ok = np.isfinite(norm) & (norm > 0.5) & (norm < 1.5)
-        f = np.where(ok[:, None], f, np.array([0.0, 0.0, -1.0]))  # unusable rows: taken as level
-        yz = np.sqrt(f[:, 1] ** 2 + f[:, 2] ** 2)
-        sphi, cphi, tth = -f[:, 1] / yz, -f[:, 2] / yz, f[:, 0] / yz  # sin φ, cos φ, tan θ
-        k1 = tth * sphi
-        u_phi = gx0 + tth * (gy0 * sphi + rz * cphi)
-        u_th = gy0 * cphi - rz * sphi
-
-        # trapezoid integrals continued from the last chunk (sequential sums: chunk-invariant)
-        u = np.stack([u_phi, u_th, T, Tp, k1, cphi, gx0, gy0, rz])
-        prev = self._prev if self._prev is not None else u[:, 0]
-        inc = 0.5 * (u + np.concatenate([prev[:, None], u[:, :-1]], axis=1)) * dt
-        inc[:, 0] += self._I
-        I = np.cumsum(inc, axis=1)
-        self._I, self._prev, self._t_last = I[:, -1].copy(), u[:, -1].copy(), float(t[-1])
-        rows = np.empty((n, len(_FIELDS)))
-        rows[:, 0] = t
-        rows[:, 1:10] = I.T
-        rows[:, _F] = f
-        rows[:, _OK] = ok
-
-        out_bias_x, out_bias_y = np.empty(n), np.empty(n)
-        out_gated = np.empty(n, dtype=np.int8)
-        k = np.floor((t - self._t0) / self.config.update_interval_s)
-        boundary = np.flatnonzero(k > np.r_[self._k, k[:-1]])
-        self._k = float(k[-1])
-        ends = [(int(b), True) for b in boundary]
-        if not ends or ends[-1][0] != n - 1:
-            ends.append((n - 1, False))
-        s = 0
-        for b, closes in ends:
-            seg = slice(s, b + 1)
-            out_bias_x[seg] = self.est_x.drift(T[seg], Tp[seg])
-            out_bias_y[seg] = self.est_y.drift(T[seg], Tp[seg])
-            out_gated[seg] = self._gated
-            self._buf.append(rows[seg])
-            self._bad = self._bad or bool(bad[seg].any())
-            if closes:  # the boundary row keeps the old parameters and shows the decision
-                self._close()
-                out_gated[b] = self._gated
-                self._buf = [rows[b : b + 1]]
-                self._bad = False
-            s = b + 1
-        return {
-            "rate_x": gx - out_bias_x,
-            "rate_y": gy - out_bias_y,
-            "bias_x": out_bias_x,
-            "bias_y": out_bias_y,
-            "tilt_gated": out_gated,
-        }
+        cols = [_column(v) for v in (gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps)]
+        rz = _column(np.zeros(n) if rate_z_dps is None else rate_z_dps)
+        acc = _column(np.asarray(acc, dtype=float).reshape(-1, 3))
+        if t.ndim != 1 or any(c.shape != (n,) for c in (*cols, rz)) or acc.shape != (n, 3):
+            raise GyroDriftError("triad: every input needs one value per row (acc three)")
+        out = np.empty((4, n))
+        gated = np.empty(n, dtype=np.int8)
+        if n:
+            inputs = (t, *cols, acc, rz)
+            self._resume(tilt.run(*inputs, 0, *self._state, out, gated), inputs, out, gated)
+        return {"rate_x": out[0], "rate_y": out[1], "bias_x": out[2], "bias_y": out[3], "tilt_gated": gated}
 
     def feed_row(self, t: float, gx: float, gy: float, T: float, Tp: float, acc, rz: float = 0.0) -> tuple:
         """:meth:`feed` for one row, on Python floats (the streaming compensator's case): the
-        same operations in the same order as for a chunk, so the same bits, without numpy's
-        per-call cost. Arguments as for :meth:`feed`, one value each (``acc`` three); returns
-        the values of :data:`TRIAD_COLUMNS` for the row, as floats and an int."""
-        rz = rz if math.isfinite(rz) else 0.0
-        if not (math.isfinite(t) and t > self._t_last):
-            raise GyroDriftError("triad: time must be finite and strictly increasing")
-        if self._t0 is None:
-            if not math.isfinite(T):
-                raise GyroDriftError("triad: the first row needs a temp value")
-            self._t0 = t
-            self._k = 0.0
-        h = self._held
-        bad_gx, bad_gy, bad_T = not math.isfinite(gx), not math.isfinite(gy), not math.isfinite(T)
-        gx = h["gx"] if bad_gx else gx
-        gy = h["gy"] if bad_gy else gy
-        T = h["T"] if bad_T else T
-        Tp = h["Tp"] if not math.isfinite(Tp) else Tp
-        h["gx"], h["gy"], h["T"], h["Tp"] = gx, gy, T, Tp
-        gx_ok, gy_ok = math.isfinite(gx), math.isfinite(gy)
-        gx0 = gx if gx_ok else 0.0
-        gy0 = gy if gy_ok else 0.0
-        dt = t - (t if self._prev is None else self._t_last)
-        bad = bad_gx or bad_gy or bad_T or dt > self.config.gate.max_gap_s or not gx_ok or not gy_ok
+        same kernel on one-row arrays kept between calls. Arguments as for :meth:`feed`, one
+        value each (``acc`` three); returns the values of :data:`TRIAD_COLUMNS` for the row,
+        as floats and an int."""
+        one = self._one
+        if one is None:
+            one = self._one = _OneRow(self._state)
+        ax, ay, az = acc
+        v = one.values
+        v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8] = t, gx, gy, T, Tp, ax, ay, az, rz
+        done = tilt.run(*one.args)
+        if done != 1 or self._external:
+            self._resume(done, one.inputs, one.out, one.gated)
+        return (*one.flat.tolist(), one.gated.item())
 
-        ax, ay, az = (float(v) for v in acc)
-        if self._scale is None:
-            norm_raw = math.sqrt(ax * ax + ay * ay + az * az)
-            if math.isfinite(norm_raw) and norm_raw > 0.05:
-                self._scale = 1.0 / _G_MPS2 if norm_raw > 3.0 else 1.0
-        scale = self._scale if self._scale is not None else math.nan
-        f0, f1, f2 = ax * scale, ay * scale, az * scale
-        norm = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-        ok = math.isfinite(norm) and 0.5 < norm < 1.5
-        if not ok:
-            f0, f1, f2 = 0.0, 0.0, -1.0
-        yz = math.sqrt(f1 * f1 + f2 * f2)
-        sphi, cphi, tth = -f1 / yz, -f2 / yz, f0 / yz
-        k1 = tth * sphi
-        u = (gx0 + tth * (gy0 * sphi + rz * cphi), gy0 * cphi - rz * sphi, T, Tp, k1, cphi, gx0, gy0, rz)
-        prev = u if self._prev is None else self._prev.tolist()
-        I = [0.5 * (ui + pi) * dt + Ii for ui, pi, Ii in zip(u, prev, self._I.tolist())]
-        self._I, self._prev, self._t_last = np.array(I), np.array(u), t
-        row = np.array([[t, *I, f0, f1, f2, float(ok)]])
+    # ------------------------------------------------------------------ the kernel
+    @property
+    def _state(self) -> tuple:
+        """The state and estimator arrays, in the order of :func:`gyrodrift.kernels.tilt.run`."""
+        return (self._xf, self._xi, self._xc, self._xk, self._ring, *self._filters)
 
-        k = math.floor((t - self._t0) / self.config.update_interval_s)
-        closes = k > self._k
-        self._k = float(k)
-        bias_x, bias_y = self.est_x.drift(T, Tp), self.est_y.drift(T, Tp)
-        gated = self._gated
-        self._buf.append(row)
-        self._bad = self._bad or bad
-        if closes:  # the boundary row keeps the old parameters and shows the decision
-            self._close()
-            gated = self._gated
-            self._buf = [row]
-            self._bad = False
-        return float(gx - bias_x), float(gy - bias_y), float(bias_x), float(bias_y), int(gated)
+    def _resume(self, done: int, inputs: tuple, out: np.ndarray, gated: np.ndarray) -> None:
+        """Do what the row loop returned for (``done``: the next row, or a status below 0) and
+        call it again until every row of ``inputs`` is done (the columns in the order of
+        :func:`gyrodrift.kernels.tilt.run`)."""
+        n = inputs[0].size
+        while True:
+            if done < 0:
+                raise GyroDriftError(_STATUS[done])
+            if self._external:
+                self._settle()
+            if self._xi[L.XI_N] == self._ring.shape[0]:
+                self._grow()
+            if done >= n:
+                return
+            done = tilt.run(*inputs, done, *self._state, out, gated)
 
-    # ------------------------------------------------------------------ intervals
-    def _window(self, buf: np.ndarray) -> dict | None:
-        """Means over the last ``edge_s`` of the buffer rows (ending at its last row); None if unusable."""
-        t = buf[:, 0]
-        first = int(np.searchsorted(t, t[-1] - self.triad.edge_s, "right"))
-        win = buf[first:]
-        n = win.shape[0]
-        okw = win[:, _OK] > 0
-        n_ok = int(okw.sum())
-        if n < 3 or n_ok < max(3, 0.8 * n) or t[-1] - t[first] < 0.5 * self.triad.edge_s:
-            return None
-        if n_ok < n:
-            win = win[okw]
-        m = win.mean(axis=0)
-        f = win[:, _F]
-        roll, pitch = tilt_angles(f)
-        fm = m[_F]
-        norm = float(np.sqrt(fm @ fm))
-        return {
-            **{name: float(m[i]) for i, name in enumerate(_FIELDS[:7])},
-            "roll": float(np.mean(roll)),
-            "pitch": float(np.mean(pitch)),
-            "norm": norm,
-            "tilt": math.degrees(math.acos(max(-1.0, min(1.0, -float(fm[2]) / norm)))),
-            "spread": float(np.max(f.std(axis=0))),
-            "n": n_ok,
-        }
-
-    def _refusal(self, start: dict | None, end: dict | None, r: dict[str, np.ndarray]) -> str | None:
-        tc, gate = self.triad, self.config.gate
-        if self._bad:
-            return "gap"
-        if start is None or end is None:
-            return "accel"
-        for e in (start, end):
-            if abs(e["norm"] - 1.0) > tc.acc_norm_tol_g or e["spread"] > tc.acc_spread_g:
-                return "accel"
-        if max(start["tilt"], end["tilt"]) > tc.max_tilt_deg:
-            return "tilt"
-        # turning: window means of the compensated rates
-        t = r["t"]
-        j = np.searchsorted(t, t - gate.turn_window_s, "left")
-        span = t - t[j]
-        use = span >= 0.5 * gate.turn_window_s
-        if use.any():
-            span, j, i = span[use], j[use], np.flatnonzero(use)
-            dT, dTp = r["IT"][i] - r["IT"][j], r["ITp"][i] - r["ITp"][j]
-            for est, key in ((self.est_x, "Igx"), (self.est_y, "Igy")):
-                a, b, c = (float(v) for v in est.params)
-                mean = (r[key][i] - r[key][j] - a * dT - b * dTp - c * span) / span
-                if np.max(np.abs(mean)) > gate.turn_rate_dps:
-                    return "turning"
-            if np.max(np.abs((r["Irz"][i] - r["Irz"][j]) / span)) > gate.turn_rate_dps:
-                return "turning"
-        return None
-
-    def _close(self) -> None:
-        """Decide the interval that ends at the buffer's last row; update or hold."""
-        buf = np.concatenate(self._buf) if len(self._buf) > 1 else self._buf[0]
-        r = {name: buf[:, i] for i, name in enumerate(_FIELDS)}
-        start, end = self._edge, self._window(buf)
-        self._edge = end
-        first, self._started = not self._started, True
-        reason = self._refusal(start, end, r)
-        if reason is not None:
-            if not first:  # the first interval has no start edge: nothing to count
-                self.reasons[reason] += 1
-            self.est_x.hold()
-            self.est_y.hold()
-            self._gated = 1
-            self._refusals = {"x": 0, "y": 0}
-            return
-        dt = end["t"] - start["t"]
-        M_phi = (end["Iphi"] - start["Iphi"] - (end["roll"] - start["roll"])) / dt
-        M_th = (end["Ith"] - start["Ith"] - (end["pitch"] - start["pitch"])) / dt
-        k1 = (end["Ik1"] - start["Ik1"]) / dt  # window-matched means of tanθ sinφ and cos φ
-        k2 = (end["Ik2"] - start["Ik2"]) / dt
-        m_y = M_th / k2
-        m_x = M_phi - k1 * m_y
-        h = np.array([(end["IT"] - start["IT"]) / dt, (end["ITp"] - start["ITp"]) / dt, 1.0])
-        var_edge = sum(
-            math.degrees(max(self.triad.acc_noise_g, e["spread"])) ** 2 / e["n"] for e in (start, end)
-        )
-        r_angle = self.config.gyro_noise_dps_rthz**2 / dt + var_edge / dt**2
-        r_y = r_angle / k2**2
-        r_x = r_angle + k1**2 * r_y
-        t_end = float(r["t"][-1])
-        refused = False
-        for axis, est, m, var in (("x", self.est_x, m_x, r_x), ("y", self.est_y, m_y, r_y)):
-            if self._residual_ok(axis, est, m, h, var, dt):
-                est.update(Observation(t=t_end, y=np.array([m]), H=h[None, :], R=np.array([[var]]), n_new=1))
-                self.updates[axis] += 1
+    def _settle(self) -> None:
+        """The Python estimators' update or hold at an interval end (PENDING_* of the kernel)."""
+        xi, xf = self._xi, self._xf
+        for axis, est in enumerate((self.est_x, self.est_y)):
+            pending = xi[L.XI_PENDING + axis]
+            if pending == L.PENDING_NONE:
+                continue
+            xi[L.XI_PENDING + axis] = L.PENDING_NONE
+            if pending == L.PENDING_UPDATE:
+                m, h_T, h_Tp, r = xf[L.XF_MEAS + 4 * axis:L.XF_MEAS + 4 * axis + 4].tolist()
+                est.update(Observation(t=float(xf[L.XF_T_MEAS]), y=np.array([m]), H=np.array([[h_T, h_Tp, 1.0]]),
+                                       R=np.array([[r]]), n_new=1))
             else:
                 est.hold()
-                refused = True
-        if refused:
-            self.reasons["residual"] += 1
-        self._gated = int(refused)
+            self._in_force(axis)
 
-    def _residual_ok(self, axis: str, est, m: float, h: np.ndarray, var: float, dt: float) -> bool:
-        """The residual gate with lock-out recovery (module notes)."""
-        resid = (m - float(h @ est.params)) * dt
-        s = float(h @ est.cov @ h) + var
-        limit = max(self.triad.residual_deg, self.triad.residual_k * math.sqrt(max(s, 0.0)) * dt)
-        if abs(resid) <= limit:
-            self._refusals[axis] = 0
-            return True
-        accept, self._refusals[axis] = steady_disagreement(resid / dt, self._relock[axis], self._refusals[axis],
-                                                           self.config.gate.relock_intervals)
-        if accept:
-            self._refusals[axis] = 0
-        return bool(accept)
+    def _in_force(self, axis: int) -> None:
+        """An estimator's parameters and covariance into the kernel's state."""
+        est = (self.est_x, self.est_y)[axis]
+        self._xf[L.XF_PARAMS + 3 * axis:L.XF_PARAMS + 3 * axis + 3] = np.asarray(est.params, dtype=float)
+        self._xf[L.XF_COV + 9 * axis:L.XF_COV + 9 * axis + 9] = np.asarray(est.cov, dtype=float).ravel()
+
+    def _grow(self) -> None:
+        """Twice the rows in the ring, oldest first."""
+        head, n = int(self._xi[L.XI_HEAD]), int(self._xi[L.XI_N])
+        ring = np.zeros((2 * self._ring.shape[0], L.N_XW))
+        ring[:n] = self._ring[(head + np.arange(n)) % self._ring.shape[0]]
+        self._ring = ring
+        self._xi[L.XI_HEAD] = 0
+        if self._one is not None:
+            self._one.bind(self._state)
+
+
+class _OneRow:
+    """One-row inputs and outputs of :meth:`TriadCompensator.feed_row`, kept between calls:
+    ``values`` (t, gyro_x, gyro_y, temp, temp_rate, acc x y z, rate_z) seen by the kernel
+    through the read-only views ``inputs``, and ``args``, the kernel's arguments for row 0."""
+
+    def __init__(self, state: tuple):
+        self.values = np.zeros(9)
+        v = self.values
+        self.inputs = tuple(_column(c) for c in (v[0:1], v[1:2], v[2:3], v[3:4], v[4:5], v[5:8].reshape(1, 3), v[8:9]))
+        self.out = np.zeros((4, 1))
+        self.flat = self.out.reshape(4)
+        self.gated = np.zeros(1, dtype=np.int8)
+        self.bind(state)
+
+    def bind(self, state: tuple) -> None:
+        """The kernel's arguments with these state arrays."""
+        self.args = (*self.inputs, 0, *state, self.out, self.gated)
 
 
 def compensate_triad(
