@@ -18,6 +18,7 @@ module              what it holds
 :mod:`.fusion`      the fused heading (one-state Kalman filter)
 :mod:`.loop`        the row loop: input checks, compensation, integration,
                     gating, interval decisions, fused heading
+:mod:`.tilt`        the x and y axes: their row loop, aided by the gravity direction
 ==================  ============================================================
 
 The functions are compiled on first use and cached on disk (``cache=True``); with
@@ -80,6 +81,6 @@ def jit(fn=None, *, inline: bool = False):
 
 
 def cached() -> bool:
-    """True when the compiled row loop is in numba's cache next to this package (the
-    first run after an install compiles it, about a minute)."""
-    return any(_CACHE.glob("loop.run_chunk-*.nbi"))
+    """True when the compiled row loops (heading axis, x/y axes) are in numba's cache next to
+    this package (the first run after an install compiles them, about a minute)."""
+    return any(_CACHE.glob("loop.run_chunk-*.nbi")) and any(_CACHE.glob("tilt.*.nbi"))
