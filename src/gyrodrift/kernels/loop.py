@@ -198,9 +198,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             q1 = fs[F_RUN_SUMSQ] + d * d
             moving = q1 / n1 - (s1 / n1) ** 2 > still_var
             time_gap = t_s - c_t > max_gap
+            held = gap[ix] and not time_gap  # an empty cell: the run ends without measuring
             if moving or gap[ix] or t_s - fs[F_RUN_T0] >= interval:
                 measured = False
-                if (time_gap or ist[I_COMPASS_SEEN] == 0) and not (gap[ix] and not time_gap):  # not a held cell
+                if (time_gap or ist[I_COMPASS_SEEN] == 0) and not held:
                     measured = aiding.close_still_run(c_t, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc, ef, ei)
                 ist[I_RUN_N] = 0
                 if measured:
