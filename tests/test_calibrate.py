@@ -335,3 +335,15 @@ def test_ardupilot_files_in_every_layout_read_the_same(tmp_path):
     want = read_ardupilot_params(tmp_path / "mp.param").drift("z", T)
     for name in ("mavproxy.parm", "persistent.txt"):
         np.testing.assert_array_equal(read_prior(tmp_path / name).drift("z", T), want)
+
+
+def test_a_bench_log_without_compass_calibrates(tmp_path):
+    """t, gyro_z and temp only (a bench heating run): read with a note, calibrated."""
+    from gyrodrift.cli import main
+    from gyrodrift.simulate import simulate
+
+    log = simulate("calibration", seed=1, duration_s=3600, fs_hz=10)
+    log.attrs = {}
+    log[["t", "gyro_z", "temp"]].to_csv(tmp_path / "bench.csv", index=False)
+    assert main(["calibrate", str(tmp_path / "bench.csv"), "-o", str(tmp_path / "cal.json"), "--format", "json"]) == 0
+    assert (tmp_path / "cal.json").is_file()

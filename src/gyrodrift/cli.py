@@ -176,8 +176,7 @@ def _add_calibrate_parser(sub) -> None:
         "the unit moved. Axes: the log's body FRD axes are taken as the autopilot's board axes "
         "(SENS_BOARD_ROT = 0 / AHRS_ORIENTATION = 0); rates in rad/s in the files. --instance also names the "
         "parameter slot: TC_G<instance> (PX4), INS_TCAL<instance+1> (ArduPilot). The log is read as compensate "
-        "reads it, so a table needs a compass column even though calibrate does not use it (a bench log "
-        "without one: add a 'heading' column of any value).",
+        "reads it; a bench log without compass columns is fine (the compass is not used).",
     )
     cal.add_argument("input", type=Path, help="the heating or cooling run (any log format of compensate)")
     cal.add_argument("-o", "--output", type=Path, required=True, help="parameter file to write")
