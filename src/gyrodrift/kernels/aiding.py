@@ -38,8 +38,7 @@ from gyrodrift.kernels import kalman
 from gyrodrift.kernels.layout import (
     C_COMPASS_SD, C_DIP_TOL, C_FIELD_NORM_TOL, C_GYRO_NOISE, C_INTERF, C_INTERVAL, C_MAX_AGE, C_PRIOR_A,
     C_PRIOR_B, C_RUN_MIN_S, C_STILL_HEADING, C_STILL_STD, C_ZARU_RESID_K, C_ZARU_SLOPE_K, C_ZARU_WINDOW_S, C_EDGE_S, F_COV,
-    F_E0, F_E1, F_PA, F_PB, F_PC, F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0,
-    F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_REFUSED_N, I_RUN_N,
+    F_E0, F_E1, F_PA, F_PB, F_PC, F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_REFUSED_N,
     I_S0_OK, I_S1_OK, I_STACK_N, I_STICKY, I_STILL_CHAIN, I_UNOBS, I_WIN_HEAD, I_WIN_N, K_DEPTH, K_EDGE, K_MODE,
     K_RELOCK, K_ZARU, K_ZARU_HOLD, MODE_ADAPTIVE, MODE_EXTERNAL, N_SNAP, N_WIN, NO_STICKY, PENDING_HOLD,
     PENDING_UPDATE, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
@@ -49,7 +48,7 @@ from gyrodrift.kernels.numeric import wrap180
 
 __all__ = ["add", "compass_measurement", "zaru_measurement", "flat_compass", "gyro_still", "row_condition",
            "field_anomaly", "field_reference", "unobservable_code", "steady_disagreement", "begin", "close",
-           "push_measurement", "stacked", "open_still_run", "close_still_run",
+           "push_measurement", "stacked", "close_still_run",
            "in_force", "init_measurements"]
 
 
@@ -550,26 +549,23 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
 
 
 @jit
-def close_still_run(t_end, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc, ef, ei):
-    """End the current still run at a row (time ``t_end``, integrals ``I_raw``, ``I_T``,
-    ``I_Tp`` there); returns whether it measured the drift.
+def close_still_run(t_end, d_raw, d_T, d_Tp, duration, n, gyro_sum, gyro_sq, fs, ist, cfg, icfg, stack, acc, ef, ei):
+    """A still run ending at ``t_end``: ``duration`` s, ``n`` rows, integrals over it ``d_raw``
+    (gyro, deg), ``d_T``, ``d_Tp``; ``gyro_sum``, ``gyro_sq`` the sums of the gyro minus its
+    first value and of their squares. Returns whether it measured the drift.
 
     A run at least ``still_run_s`` long whose gyro varied less than ``still_std_dps``
     (standard deviation) is a zero-rate measurement: with the unit still, its mean gyro
     rate is the drift (eq. 1), H the run's means of [T, T', 1], variance ``N²/Δt``. The
-    estimator takes it at once (or, MODE_EXTERNAL, the caller). Then no run is open.
+    estimator takes it at once (or, MODE_EXTERNAL, the caller).
     """
-    n = ist[I_RUN_N]
-    ist[I_RUN_N] = 0
-    dt = t_end - fs[F_RUN_T0]
-    if n < 2 or dt < cfg[C_RUN_MIN_S]:
+    if n < 2 or duration < cfg[C_RUN_MIN_S]:
         return False
-    mean = fs[F_RUN_SUM] / n
-    if fs[F_RUN_SUMSQ] / n - mean * mean > cfg[C_STILL_STD] ** 2:
+    mean = gyro_sum / n
+    if gyro_sq / n - mean * mean > cfg[C_STILL_STD] ** 2:
         return False
-    m = (I_raw - fs[F_RUN_IRAW0]) / dt
-    rows = push_measurement(t_end, m, (I_T - fs[F_RUN_IT0]) / dt, (I_Tp - fs[F_RUN_ITP0]) / dt,
-                            cfg[C_GYRO_NOISE] ** 2 / dt, ist, stack, acc, 1)
+    rows = push_measurement(t_end, d_raw / duration, d_T / duration, d_Tp / duration,
+                            cfg[C_GYRO_NOISE] ** 2 / duration, ist, stack, acc, 1)
     if icfg[K_MODE] == MODE_EXTERNAL:
         ist[I_PENDING] = PENDING_UPDATE
     else:
@@ -577,19 +573,6 @@ def close_still_run(t_end, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc, ef,
         kalman.update(ef, ei, y, H, R)
         in_force(fs, ist, cfg, ef, ei)
     return True
-
-
-@jit
-def open_still_run(t, I_raw, I_T, I_Tp, g, fs, ist):
-    """Open a still run at a row (its time, integrals and gyro rate)."""
-    fs[F_RUN_T0] = t
-    fs[F_RUN_IRAW0] = I_raw
-    fs[F_RUN_IT0] = I_T
-    fs[F_RUN_ITP0] = I_Tp
-    fs[F_RUN_G0] = g
-    fs[F_RUN_SUM] = 0.0
-    fs[F_RUN_SUMSQ] = 0.0
-    ist[I_RUN_N] = 1
 
 
 @jit

@@ -65,9 +65,9 @@ F_TP_T0, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_RATE = 52, 53, 54, 55  # T' tracker
 F_FUSION = 56  # fused-heading state (FZ_* offsets)
 F_LAST_T, F_LAST_G, F_LAST_TEMP = 65, 66, 67  # last input row (time check, held cells)
 F_FIELD_NORM, F_FIELD_DIP = 68, 69  # reference field of the init window (NaN: none)
-#: The current still run (gyro-only stillness, :func:`gyrodrift.kernels.aiding.close_still_run`):
-#: its first row's time and integrals (t, I_raw, I_T, I_Tp), its first gyro value, and the
-#: sums of the gyro minus that value and of their squares.
+#: The current still run (gyro-only stillness, :func:`gyrodrift.kernels.aiding.close_still_run`),
+#: kept here between calls of the row loop: its first row's time and integrals (t, I_raw, I_T,
+#: I_Tp), its first gyro value, and the sums of the gyro minus that value and of their squares.
 F_RUN_T0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ = 70, 71, 72, 73, 74, 75, 76
 #: The fused heading's refused compass run: the innovation its consistency is counted from,
 #: and since when (:func:`gyrodrift.kernels.fusion.step`).

@@ -37,7 +37,8 @@ from gyrodrift.kernels.layout import (
     FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
     I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
-    F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
+    F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED,
+    I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
     O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
     OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_INIT, R_INTERFERENCE, R_NONE,
 )
@@ -172,6 +173,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     o_sd, o_hf, o_hf_sd = np.uint64(O_BIAS_SD * cap), np.uint64(O_FUSED * cap), np.uint64(O_FUSED_SD * cap)
     o_h_sd, oc_update, oc_reason = np.uint64(O_HEADING_SD * cap), np.uint64(OC_UPDATE * cap), np.uint64(OC_REASON * cap)
     seg = i0  # first row whose a, b, c and unobservable code are still to write (_fill_params)
+    # the still run (gyro-only stillness): its first row's time, integrals and gyro, the sums of
+    # the gyro minus that first value and of their squares, and its rows (0: none open)
+    run_t0, run_Iraw0, run_IT0, run_ITp0 = fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0]
+    run_g0, run_sum, run_sq, run_n = fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N]
     # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
     m_T = math.nan
     m_Tp = math.nan
@@ -189,21 +194,23 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         Tpi = Tp[ix]
         h = heading[ix]
         in_init = i <= init_end
-        if not in_init and ist[I_RUN_N] > 0:
+        if not in_init and run_n > 0:
             # the still run so far ends before this row when it moves, a gap comes, or it is an
             # interval long; it measures the drift when a time gap ends it or there is no compass
-            d = gi - fs[F_RUN_G0]
-            n1 = ist[I_RUN_N] + 1
-            s1 = fs[F_RUN_SUM] + d
-            q1 = fs[F_RUN_SUMSQ] + d * d
+            d = gi - run_g0
+            s1 = run_sum + d
+            q1 = run_sq + d * d
+            n1 = run_n + 1
             moving = q1 / n1 - (s1 / n1) ** 2 > still_var
             time_gap = t_s - c_t > max_gap
             held = gap[ix] and not time_gap  # an empty cell: the run ends without measuring
-            if moving or gap[ix] or t_s - fs[F_RUN_T0] >= interval:
+            if moving or gap[ix] or t_s - run_t0 >= interval:
                 measured = False
                 if (time_gap or ist[I_COMPASS_SEEN] == 0) and not held:
-                    measured = aiding.close_still_run(c_t, I_raw, I_T, I_Tp, fs, ist, cfg, icfg, stack, acc, ef, ei)
-                ist[I_RUN_N] = 0
+                    measured = aiding.close_still_run(c_t, I_raw - run_Iraw0, I_T - run_IT0, I_Tp - run_ITp0,
+                                                      c_t - run_t0, run_n, run_sum, run_sq, fs, ist, cfg, icfg,
+                                                      stack, acc, ef, ei)
+                run_n = 0
                 if measured:
                     ist[I_RUN_MEASURED] = 1
                     if external:  # the caller updates its estimator; this row then runs with it
@@ -218,9 +225,9 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                     unobs = ist[I_UNOBS]
                     m_T = math.nan
             else:
-                ist[I_RUN_N] = n1
-                fs[F_RUN_SUM] = s1
-                fs[F_RUN_SUMSQ] = q1
+                run_n = n1
+                run_sum = s1
+                run_sq = q1
         if Ti != m_T or Tpi != m_Tp:
             m_T = Ti
             m_Tp = Tpi
@@ -239,8 +246,11 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         I_Tp = I_Tp + 0.5 * (Tpi + c_Tp) * dt
         I_bias = I_bias + 0.5 * (bias + c_bias) * dt
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
-        if not in_init and ist[I_RUN_N] == 0:
-            aiding.open_still_run(t_s, I_raw, I_T, I_Tp, gi, fs, ist)
+        if not in_init and run_n == 0:  # a still run opens at this row
+            run_t0, run_Iraw0, run_IT0, run_ITp0, run_g0 = t_s, I_raw, I_T, I_Tp, gi
+            run_sum = 0.0
+            run_sq = 0.0
+            run_n = 1
         has_compass = not math.isnan(h)
         if has_compass:
             ist[I_COMPASS_SEEN] = 1
@@ -361,6 +371,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     fs[zf + FZ_PSI], fs[zf + FZ_P], fs[zf + FZ_TPREV], fs[zf + FZ_RPREV], fs[zf + FZ_STARTED] = f_psi, f_P, f_tp, f_rp, f_started
     fs[zf + FZ_T0], fs[zf + FZ_ISD], fs[zf + FZ_SDPREV], fs[zf + FZ_REJ_T] = f_t0, f_isd, f_sdp, f_rej
     fs[F_FZ_NU0], fs[F_FZ_CONS_T] = f_nu0, f_cons
+    fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0] = run_t0, run_Iraw0, run_IT0, run_ITp0
+    fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N] = run_g0, run_sum, run_sq, run_n
     return stop
 
 
