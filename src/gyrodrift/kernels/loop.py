@@ -194,6 +194,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         Tpi = Tp[ix]
         h = heading[ix]
         in_init = i <= init_end
+        run_update = 0
+        if i == i0 and ist[I_RUN_MEASURED] == 1:  # resumed after the caller's update for a still run
+            run_update = 1
+            ist[I_RUN_MEASURED] = 0
         if not in_init and run_n > 0:
             # the still run so far ends before this row when it moves, a gap comes, or it is an
             # interval long; it measures the drift when a time gap ends it or there is no compass
@@ -201,7 +205,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             s1 = run_sum + d
             q1 = run_sq + d * d
             n1 = run_n + 1
-            moving = q1 / n1 - (s1 / n1) ** 2 > still_var
+            moving = q1 * n1 - s1 * s1 > still_var * n1 * n1  # the variance above still_std², without a division
             time_gap = t_s - c_t > max_gap
             held = gap[ix] and not time_gap  # an empty cell: the run ends without measuring
             if moving or gap[ix] or t_s - run_t0 >= interval:
@@ -212,8 +216,9 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                                                       stack, acc, ef, ei)
                 run_n = 0
                 if measured:
-                    ist[I_RUN_MEASURED] = 1
+                    run_update = 1
                     if external:  # the caller updates its estimator; this row then runs with it
+                        ist[I_RUN_MEASURED] = 1
                         stop = i
                         break
                     _fill_params(out, codes, cap, seg, i, pa, pb, pc, unobs)  # the rows before keep theirs
@@ -281,8 +286,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         out[o_bias + ix] = bias
         out[o_rate + ix] = rate
         out[o_sd + ix] = bias_sd
-        update = ist[I_RUN_MEASURED]
-        ist[I_RUN_MEASURED] = 0
+        update = run_update
         if in_init:
             reason = R_INIT
             out[o_heading + ix] = I_rate  # anchored when the window is done
