@@ -344,7 +344,6 @@ class ChunkEngine:
             r = self._row = _RowMemory()
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
-        cols.codes[:] = 0
         rows_before = self.rows_in
         bad, fix = loop.prepare(r.ro_t, r.ro_g, r.ro_T, r.ro_heading, self._fs, self._ist, self._set, self._iset,
                                 self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
