@@ -655,7 +655,7 @@ def markdown(summary: pd.DataFrame, *, tuned_on: str | None = None, floatfmt: st
 #: process noise, no stationarity updates.
 EVERY_FIX_OFF = AdaptiveConfig(
     stacked=True, edge_s=0.0, recentre=False, outage_memory=False, zaru=False, zaru_hold=False,
-    normalised=False, softening=1.0, q_sd=None, slope_q_per_rtc=0.0,
+    normalised=False, softening=1.0, q_sd=None, slope_q_per_rtc=0.0, quasi_static_s=0.0,
 )
 
 

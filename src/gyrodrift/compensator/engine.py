@@ -99,6 +99,8 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
         cfg[L.C_ZARU_WINDOW_S] = st.zaru_window_s
         cfg[L.C_ZARU_SLOPE_K] = st.zaru_slope_k
         cfg[L.C_ZARU_RESID_K] = st.zaru_resid_k
+        cfg[L.C_QS_S] = st.quasi_static_s
+        cfg[L.C_QS_DEG] = st.quasi_static_deg
         icfg[L.K_ZARU] = int(st.zaru)
         icfg[L.K_ZARU_HOLD] = int(st.zaru_hold)
         icfg[L.K_EDGE] = int(st.edge_s > 0.0)

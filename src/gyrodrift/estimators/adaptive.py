@@ -148,6 +148,13 @@ class AdaptiveConfig:
         intervals (outages) the drift is extrapolated with the twin's a and b from the
         drift the tracking filter had at the last update: the short memory that
         follows the drift while aided is too noisy a slope to extrapolate a ramp with.
+    quasi_static_s, quasi_static_deg : float
+        Quasi-static windows (:func:`gyrodrift.kernels.aiding.quasi_static`): through
+        ``quasi_static_s`` seconds of refused intervals (no compass, interference, ...), a
+        compensated heading that stays within ``quasi_static_deg`` peak to peak about a
+        straight line (a parked, moored or bench unit, swaying or not) gives its mean gyro
+        rate as a drift measurement, with the sway as its uncertainty, when the drift in
+        force agrees with it (a slow real turn does not). ``quasi_static_s`` = 0: off.
     """
 
     stacked: bool = False
@@ -167,6 +174,8 @@ class AdaptiveConfig:
     q_sd: tuple[float, float, float] | None = (1e-4, 0.05, 5e-3)
     slope_q_per_rtc: float = 0.06
     outage_memory: bool = True
+    quasi_static_s: float = 300.0
+    quasi_static_deg: float = 10.0
 
     def __post_init__(self):
         if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
@@ -179,6 +188,10 @@ class AdaptiveConfig:
             raise ConfigError(f"innovation_window must be a whole number >= 1, got {self.innovation_window!r}")
         if not (isinstance(self.edge_s, (int, float)) and math.isfinite(self.edge_s) and self.edge_s >= 0):
             raise ConfigError(f"adaptive setting edge_s must be a number >= 0, got {self.edge_s!r}")
+        for name in ("quasi_static_s", "quasi_static_deg"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+                raise ConfigError(f"adaptive setting {name} must be a number >= 0, got {v!r}")
         for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -193,14 +206,14 @@ class AdaptiveConfig:
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
     FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "zaru_hold", "fading",
-                                         "process_noise")
+                                         "process_noise", "quasi_static")
 
     def ablated(self, fix: str) -> "AdaptiveConfig":
         """These settings with one fix of :attr:`FIXES` switched off."""
         off = {"one_measurement": {"stacked": True}, "edge_averaging": {"edge_s": 0.0}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
                "zaru_hold": {"zaru_hold": False},
                "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0},
-               "outage_memory": {"outage_memory": False}}
+               "outage_memory": {"outage_memory": False}, "quasi_static": {"quasi_static_s": 0.0}}
         if fix not in off:
             raise ConfigError(f"unknown fix {fix!r}; choose from: {', '.join(self.FIXES)}")
         return replace(self, **off[fix])

@@ -37,18 +37,18 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels import kalman
 from gyrodrift.kernels.layout import (
     C_COMPASS_SD, C_DIP_TOL, C_FIELD_NORM_TOL, C_GYRO_NOISE, C_INTERF, C_INTERVAL, C_MAX_AGE, C_PRIOR_A,
-    C_PRIOR_B, C_RUN_MIN_S, C_STILL_HEADING, C_STILL_STD, C_ZARU_RESID_K, C_ZARU_SLOPE_K, C_ZARU_WINDOW_S, C_EDGE_S, F_COV,
-    F_E0, F_E1, F_PA, F_PB, F_PC, F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_REFUSED_N,
+    C_PRIOR_B, C_QS_DEG, C_QS_S, C_RUN_MIN_S, C_STILL_HEADING, C_STILL_STD, C_ZARU_RESID_K, C_ZARU_SLOPE_K, C_ZARU_WINDOW_S, C_EDGE_S, F_COV,
+    F_E0, F_E1, F_PA, F_PB, F_PC, F_QS_IRAW0, F_QS_IT0, F_QS_ITP0, F_QS_PTS, F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_QS_N, I_REFUSED_N,
     I_S0_OK, I_S1_OK, I_STACK_N, I_STICKY, I_STILL_CHAIN, I_UNOBS, I_WIN_HEAD, I_WIN_N, K_DEPTH, K_EDGE, K_MODE,
     K_RELOCK, K_ZARU, K_ZARU_HOLD, MODE_ADAPTIVE, MODE_EXTERNAL, N_SNAP, N_WIN, NO_STICKY, PENDING_HOLD,
-    PENDING_UPDATE, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
+    PENDING_UPDATE, QS_MAX, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
     UNOBSERVABLE_SD_FRACTION, W_DT, W_HEADING, W_IBIAS, W_IRAW, W_IT, W_ITP, W_RATE, W_T, ZARU_NIS,
 )
 from gyrodrift.kernels.numeric import wrap180
 
 __all__ = ["add", "compass_measurement", "zaru_measurement", "flat_compass", "gyro_still", "row_condition",
            "field_anomaly", "field_reference", "unobservable_code", "steady_disagreement", "begin", "close",
-           "push_measurement", "stacked", "close_still_run",
+           "push_measurement", "stacked", "close_still_run", "quasi_static",
            "in_force", "init_measurements"]
 
 
@@ -528,6 +528,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
                                                        icfg[K_RELOCK])
         if accept:
             reason = NO_STICKY
+
     if reason != R_INTERFERENCE:
         ist[I_REFUSED_N] = 0
     if reason == NO_STICKY:
@@ -573,6 +574,86 @@ def close_still_run(t_end, d_raw, d_T, d_Tp, duration, n, gyro_sum, gyro_sq, fs,
         kalman.update(ef, ei, y, H, R)
         in_force(fs, ist, cfg, ef, ei)
     return True
+
+
+@jit
+def quasi_static(t_b, accepted, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg, stack, acc, ef, ei):
+    """The quasi-static window at an interval end ``t_b``: returns whether it measured the drift.
+
+    Through refused intervals (no compass, interference, a field anomaly, turning) a
+    platform that is parked, moored or on a bench keeps its heading within a bounded sway:
+    over a window of ``quasi_static_s`` seconds its mean true rate is at most the sway's
+    peak-to-peak over the window length, so the window's mean gyro rate measures the drift
+    (eq. 1) with that uncertainty. The window collects the compensated heading ``I_rate``
+    at each interval end; when it is long enough, the heading minus its straight-line fit
+    (a drift error is a straight line) must stay within ``quasi_static_deg`` peak to peak
+    (``p2p``). The measurement is the mean gyro rate with H the window's means of
+    ``[T, T', 1]`` and variance ``(p2p / 2Δt)² + N²/Δt``; it is taken only when it agrees
+    with the drift in force (NIS below 6.63, χ²₁ at 99 %): a slow real turn is a mean
+    rate the drift model does not explain, and is refused (so is a drift the model has
+    badly lost: the compass then has to find it). An accepted interval (``accepted``) or a
+    gap closes the window; a new one opens at ``t_b``.
+    """
+    length = cfg[C_QS_S]
+    n = ist[I_QS_N]
+    if length <= 0.0:
+        return False
+    if accepted or reason == R_GAP or n == 0 or n >= QS_MAX:
+        _qs_open(t_b, I_raw, I_T, I_Tp, I_rate, fs, ist)
+        return False
+    fs[F_QS_PTS + 2 * n] = t_b
+    fs[F_QS_PTS + 2 * n + 1] = I_rate
+    n += 1
+    ist[I_QS_N] = n
+    t0 = fs[F_QS_PTS]
+    span = t_b - t0
+    if span < length and n < QS_MAX:
+        return False
+    p2p = _detrended_p2p(fs[F_QS_PTS:F_QS_PTS + 2 * n].reshape((n, 2)))
+    m = (I_raw - fs[F_QS_IRAW0]) / span
+    h_T = (I_T - fs[F_QS_IT0]) / span
+    h_Tp = (I_Tp - fs[F_QS_ITP0]) / span
+    _qs_open(t_b, I_raw, I_T, I_Tp, I_rate, fs, ist)  # the next window starts here, measured or not
+    if not p2p <= cfg[C_QS_DEG]:
+        return False
+    r = (0.5 * p2p / span) ** 2 + cfg[C_GYRO_NOISE] ** 2 / span
+    h = np.array([h_T, h_Tp, 1.0])
+    cov = fs[F_COV:F_COV + 9].reshape((3, 3))
+    gamma = m - (fs[F_PA] * h_T + fs[F_PB] * h_Tp + fs[F_PC])
+    if gamma * gamma > ZARU_NIS * (np.dot(np.dot(h, cov), h) + r):
+        return False
+    rows = push_measurement(t_b, m, h_T, h_Tp, r, ist, stack, acc, 1)
+    if icfg[K_MODE] == MODE_EXTERNAL:
+        ist[I_PENDING] = PENDING_UPDATE
+    else:
+        y, H, R = stacked(stack, rows)
+        kalman.update(ef, ei, y, H, R)
+        in_force(fs, ist, cfg, ef, ei)
+    return True
+
+
+@jit
+def _qs_open(t_b, I_raw, I_T, I_Tp, I_rate, fs, ist):
+    """A new quasi-static window from ``t_b``: its start integrals and first point."""
+    fs[F_QS_IRAW0] = I_raw
+    fs[F_QS_IT0] = I_T
+    fs[F_QS_ITP0] = I_Tp
+    fs[F_QS_PTS] = t_b
+    fs[F_QS_PTS + 1] = I_rate
+    ist[I_QS_N] = 1
+
+
+@jit
+def _detrended_p2p(pts):
+    """Peak-to-peak of ``pts[:, 1]`` about its least-squares line in ``pts[:, 0]``."""
+    t = pts[:, 0] - pts[0, 0]
+    y = pts[:, 1] - pts[0, 1]
+    tm = np.mean(t)
+    ym = np.mean(y)
+    stt = np.sum((t - tm) ** 2)
+    slope = np.sum((t - tm) * (y - ym)) / stt if stt > 0.0 else 0.0
+    resid = y - ym - slope * (t - tm)
+    return np.max(resid) - np.min(resid)
 
 
 @jit

@@ -72,7 +72,13 @@ F_RUN_T0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ =
 #: The fused heading's refused compass run: the innovation its consistency is counted from,
 #: and since when (:func:`gyrodrift.kernels.fusion.step`).
 F_FZ_NU0, F_FZ_CONS_T = 77, 78
-N_FSTATE = 79
+#: The open quasi-static window (:func:`gyrodrift.kernels.aiding.quasi_static`): its start's
+#: integrals (I_raw, I_T, I_Tp), then its points, ``QS_MAX`` pairs (t, I_rate) at the
+#: interval ends it spans, the first at its start.
+F_QS_IRAW0, F_QS_IT0, F_QS_ITP0 = 79, 80, 81
+F_QS_PTS = 82
+QS_MAX = 64
+N_FSTATE = F_QS_PTS + 2 * QS_MAX
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
@@ -92,7 +98,8 @@ I_PENDING = 24  # PENDING_* for the caller (MODE_EXTERNAL)
 I_RUN_N = 25  # rows in the current still run (0: none)
 I_COMPASS_SEEN = 26  # a compass sample has come
 I_RUN_MEASURED = 27  # a still run ended before this row measured the drift (its update flag)
-N_ISTATE = 28
+I_QS_N = 28  # points of the open quasi-static window (0: none open)
+N_ISTATE = 29
 
 # ----------------------------------------------------------- float settings
 
@@ -103,7 +110,8 @@ C_FUSION_R, C_FUSION_N2, C_FUSION_TAU, C_FUSION_GATE, C_FUSION_RELOCK = 15, 16, 
 C_EDGE_S, C_WINDOW_S, C_ZARU_WINDOW_S, C_ZARU_SLOPE_K, C_ZARU_RESID_K = 20, 21, 22, 23, 24
 C_RUN_MIN_S = 25  # shortest still run that measures the drift, s
 C_FUSION_CONSISTENT = 26  # refused compass samples consistent with the gyro this long re-anchor, s
-N_CFG = 27
+C_QS_S, C_QS_DEG = 27, 28  # quasi-static window: length (s; 0: off) and largest sway (deg)
+N_CFG = 29
 
 # --------------------------------------------------------- integer settings
 

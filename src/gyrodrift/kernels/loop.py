@@ -328,11 +328,15 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 k = math.floor((t_s - t_start) / interval)
                 ist[I_INIT_END] = -1
                 init_end = -1
+                aiding.quasi_static(t_s, True, R_NONE, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg, stack, acc, ef, ei)
             else:
                 ist[I_STICKY] = sticky
                 ist[I_AFTER_INT] = 1 if after_int else 0
                 ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
                 closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei)
+                if aiding.quasi_static(t_s, closed == 1, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg,
+                                       stack, acc, ef, ei):
+                    closed = 1
                 update = max(update, closed)
                 if not external:
                     aiding.in_force(fs, ist, cfg, ef, ei)
