@@ -138,7 +138,7 @@ def _check_file(path: Path) -> None:
             message(
                 name,
                 "is not an ArduPilot DataFlash log (it does not start with a FMT message, bytes A3 95 80)",
-                "give a binary .bin log from the vehicle's SD card or downloaded over MAVLink, or name the right format",
+                "give a binary .bin log (from the SD card or downloaded over MAVLink), or name the right format",
             )
         )
 
