@@ -214,3 +214,18 @@ def logged_values(log: pd.DataFrame, *, instance: int = 0, t0_us: int = 5_000_00
         "mag": (mag_mgauss(log) + 7 * instance) / 1000.0,
         "att_yaw": heading,
     }
+
+
+def write_fixture(path: Path) -> Path:
+    """Write ``tests/data/ardupilot_sim.bin``: 20 s of the simulated ``vehicle-rawmag``
+    run (seed 7) at 25 Hz, one IMU and one compass, ``ATT`` at 5 Hz."""
+    from gyrodrift.simulate import TriadModel, simulate
+
+    log = simulate("vehicle-rawmag", seed=7, duration_s=20.0, fs_hz=25.0, raw_mag=True, triad=TriadModel())
+    return write_simulated(Path(path), log, instances=1)
+
+
+if __name__ == "__main__":  # python tests/dataflash_writer.py tests/data/ardupilot_sim.bin
+    import sys
+
+    print(write_fixture(Path(sys.argv[1])))

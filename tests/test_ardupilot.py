@@ -291,3 +291,17 @@ def test_cli_compensate_bin_equals_compensating_the_simulated_csv(sim, flight, t
     out1 = tmp_path / "instance1.csv"
     assert cli.main(["compensate", str(flight), "-o", str(out1), "-q", "--instance", "1"]) == 0
     np.testing.assert_allclose(pd.read_csv(out1)["temp"], a["temp"] + 5.0, rtol=1e-6)
+
+
+def test_committed_fixture_reads(tmp_path):
+    """tests/data/ardupilot_sim.bin: fixed bytes written once by tests/dataflash_writer.py."""
+    path = Path(__file__).parent / "data" / "ardupilot_sim.bin"
+    df = read_log(path)
+    assert list(df.columns) == CONTRACT + ["ref_heading"] and len(df) == 501
+    assert df["t"].iloc[0] == 5.0 and df["t"].iloc[-1] == pytest.approx(25.0)
+    assert df["mag_x"].notna().sum() == 201 and df["ref_heading"].notna().all()
+    assert 25.9 < df["temp"].min() < df["temp"].max() < 37.1 and df["acc_z"].mean() == pytest.approx(-9.8, abs=0.1)
+    assert "gyro 25 Hz from IMU instance 0" in df.attrs["summary"] and "notes" not in df.attrs
+    out = tmp_path / "out.csv"
+    assert cli.main(["compensate", str(path), "-o", str(out), "-q"]) == 0
+    assert len(pd.read_csv(out)) == 501
