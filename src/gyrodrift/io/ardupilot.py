@@ -144,11 +144,22 @@ def _check_file(path: Path) -> None:
 
 
 def _open(dfreader, path: Path):
-    """Index the log with pymavlink; any failure of the parser becomes one LogFormatError."""
+    """Index the log with pymavlink; any failure of the parser becomes one LogFormatError.
+
+    pymavlink's reader also works out a wall-clock time base when it opens a log,
+    which in a log without GPS time reads every message in Python (about half a
+    minute for 80 MB). The times used here are the messages' own ``TimeUS``, so that
+    step is left out: ``init_clock`` only rewinds.
+    """
+
+    class IndexOnly(dfreader.DFReader_binary):
+        def init_clock(self):
+            self._rewind(keep_messages=True)
+
     try:
         # pymavlink prints about skipped bytes; keep that out of gyrodrift's output
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            return dfreader.DFReader_binary(str(path), zero_time_base=True)
+            return IndexOnly(str(path), zero_time_base=True)
     except Exception as exc:  # any failure of a third-party parser on an untrusted file
         raise LogFormatError(
             message(str(path), f"cannot be parsed as a DataFlash log ({one_line(str(exc)) or type(exc).__name__})",
@@ -186,12 +197,9 @@ def _complete(reader, type_id: int) -> np.ndarray:
     return offsets[offsets + reader.formats[type_id].len <= reader.data_len]
 
 
-def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
-    """Fields ``wanted`` (those present) of every complete message ``type_name``, as float64.
-
-    Returns None if the log defines no such type. Scaled fields are divided by their
-    factor (100 for ``c``/``C``/``e``/``E``, 1e7 for ``L``), as pymavlink does.
-    """
+def _records(reader, name: str, type_name: str) -> tuple[np.ndarray, dict] | None:
+    """Every complete message ``type_name`` as a numpy record array (raw field values),
+    and the multipliers of its scaled fields; None if the log defines no such type."""
     type_id = getattr(reader, "name_to_id", {}).get(type_name)
     if type_id is None or type_id not in reader.formats:
         return None
@@ -204,13 +212,35 @@ def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
     for start in range(0, offsets.size, _GATHER_ROWS):
         part = offsets[start : start + _GATHER_ROWS]
         raw[start : start + part.size] = data[part[:, None] + span]
-    records = raw.view(dtype)[:, 0]
+    return raw.view(dtype)[:, 0], scales
+
+
+def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
+    """Fields ``wanted`` (those present) of every complete message ``type_name``, as float64.
+
+    Returns None if the log defines no such type. Scaled fields are divided by their
+    factor (100 for ``c``/``C``/``e``/``E``, 1e7 for ``L``), as pymavlink does.
+    """
+    found = _records(reader, name, type_name)
+    if found is None:
+        return None
+    records, scales = found
     out = {}
     for field in wanted:
-        if field in dtype.names:
+        if field in records.dtype.names:
             values = records[field].astype(np.float64)
             out[field] = values / scales[field] if field in scales else values
     return out
+
+
+def _params(reader, name: str) -> dict[str, float]:
+    """The ``PARM`` messages: parameter name -> value (the last logged value wins)."""
+    found = _records(reader, name, "PARM")
+    if found is None or not {"Name", "Value"} <= set(found[0].dtype.names):
+        return {}
+    records = found[0]
+    names = (n.split(b"\0", 1)[0].decode("ascii", "replace") for n in records["Name"])
+    return dict(zip(names, records["Value"].astype(np.float64).tolist()))
 
 
 def _time_s(fields: dict) -> np.ndarray | None:
@@ -290,14 +320,14 @@ def _temperature(imu: _Source) -> tuple[Stream | None, str]:
     return None, f"{imu.label} logs {what} in all {temp.size} samples"
 
 
-def _mag_stream(reader, mag_instance: int | None, name: str) -> tuple[Stream | None, int]:
+def _mag_stream(reader, params: dict, mag_instance: int | None, name: str) -> tuple[Stream | None, int]:
     """Magnetometer (gauss, body FRD) by the rule in the module doc, and the number of
     unhealthy samples dropped; None if the log has no MAG messages (no instance named)."""
     found = _sources(reader, name, _MAG_TYPES, (*_MAG_FIELDS, "Health"))
     if mag_instance is None:
         if not found:
             return None, 0
-        primary = reader.params.get("COMPASS_PRIMARY")
+        primary = params.get("COMPASS_PRIMARY")
         mag_instance = int(primary) if primary is not None and int(primary) in found else min(found)
     mag = _pick(found, "MAG", mag_instance, name, "mag_instance")
     values = _stack(mag, _MAG_FIELDS)
@@ -480,7 +510,8 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
         temp, _ = increasing(temp)
         check_temperature(name, temp.label, temp.values)
         temp_on_rows = interp_held(temp.t, temp.values, t)  # the same messages: the values themselves
-    mag, unhealthy = _mag_stream(reader, mag_instance, name)
+    params = _params(reader, name)
+    mag, unhealthy = _mag_stream(reader, params, mag_instance, name)
     mag = increasing(mag)[0] if mag is not None else None
     acc = gyro.values[:, 3:6] if acc_values is not None else None
     mag_on_rows, mag_rows, no_compass_why = _compass(t, mag, acc)
@@ -502,7 +533,7 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
         extra.append(f"{skipped} bytes that are no message skipped")
     if partial:
         extra.append(f"the file ends inside a message ({partial} bytes at the end ignored)")
-    tcal = reader.params.get(f"INS_TCAL{instance + 1}_ENABLE")
+    tcal = params.get(f"INS_TCAL{instance + 1}_ENABLE")
     if tcal is not None and int(tcal) == 1:
         extra.append(f"ArduPilot's gyro temperature calibration was on (INS_TCAL{instance + 1}_ENABLE=1)")
 
