@@ -667,13 +667,16 @@ def test_read_log_ulog_and_options():
 
 
 def test_read_log_fmt_overrides_suffix(tmp_path):
-    renamed = tmp_path / "flight.bin"
+    renamed = tmp_path / "flight.dat"
     renamed.write_bytes(_need(SMALL).read_bytes())
     assert read_log(renamed, fmt="ulog").attrs["format"] == "ulog"
-    msg = _raises(ConfigError, read_log, renamed)
-    assert "flight.bin" in msg and ".ulg" in msg and ".bag" in msg and ".csv" in msg
+    assert read_log(renamed).attrs["format"] == "ulog"  # an unknown ending: told by the ULog header bytes
+    unknown = tmp_path / "flight.xyz"
+    unknown.write_bytes(b"t,gyro_z,temp\n0,0,25\n")
+    msg = _raises(ConfigError, read_log, unknown)
+    assert "flight.xyz" in msg and ".ulg" in msg and ".bin" in msg and ".bag" in msg and ".csv" in msg
     msg = _raises(ConfigError, read_log, renamed, fmt="xlsx")
-    assert "csv, parquet, ulog, rosbag" in msg
+    assert "csv, parquet, ulog, ardupilot, rosbag" in msg
 
 
 @pytest.mark.parametrize(

@@ -31,8 +31,10 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
     g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
     g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
-    g.add_argument("--instance", type=int, default=0, help="PX4 ULog: sensor_gyro instance (default 0)")
-    g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected)")
+    g.add_argument("--instance", type=int, default=0,
+                   help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); default 0")
+    g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected); "
+                   "ArduPilot .bin: MAG instance (default: COMPASS_PRIMARY, else the first)")
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
     g.add_argument("--temp-topic", help="ROS bag: sensor_msgs/Temperature topic (default: the only one)")
     g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")

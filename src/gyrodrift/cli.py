@@ -149,10 +149,10 @@ def _cmd_calibrate(args) -> int:
 
     check_output_path(args.input, args.output)
     fmt = output_format(args.output, args.output_format)
-    # --format names the output here; --instance is also the parameter slot, read only from a ULog
-    is_ulog = log_format(args.input, args.log_format) == "ulog"
+    # --format names the output here; --instance is also the parameter slot, read only from a ULog or .bin
+    has_instances = log_format(args.input, args.log_format) in ("ulog", "ardupilot")
     read_args = argparse.Namespace(**{**vars(args), "format": args.log_format,
-                                      "instance": args.instance if is_ulog else 0})
+                                      "instance": args.instance if has_instances else 0})
     cal = fit_calibration(read_input(args.input, read_args), source=str(args.input))
     notes = write_calibration(cal, args.output, fmt, instance=args.instance, device_id=args.device_id)
     _warn(args.output, notes)
@@ -384,7 +384,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Compensate the heading-axis gyro of a log; write the output table atomically.",
     )
-    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
+    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     c.add_argument(

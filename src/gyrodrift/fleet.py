@@ -77,7 +77,7 @@ __all__ = [
 ]
 
 #: File-name endings (lower case) that :func:`find_logs` picks up.
-LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq", ".ulg", ".bag", ".mcap", ".db3")
+LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq", ".ulg", ".bin", ".bag", ".mcap", ".db3")
 #: Output table formats of :func:`process_one` and their file-name endings.
 OUT_FORMATS = {"parquet": ".parquet", "csv": ".csv"}
 #: Columns of the summary table, in order (see the module notes).
@@ -114,7 +114,7 @@ def find_logs(dir_or_glob) -> list[Path]:
     ----------
     dir_or_glob : str or os.PathLike
         A folder (its own files, not sub-folders: every ``.csv``, ``.csv.gz``,
-        ``.parquet``, ``.pq``, ``.ulg``, ``.bag``, ``.mcap``, ``.db3`` file and every
+        ``.parquet``, ``.pq``, ``.ulg``, ``.bin``, ``.bag``, ``.mcap``, ``.db3`` file and every
         ROS 2 bag folder in it), a glob pattern (``logs/*.csv``, ``runs/**/*.parquet``;
         matches with other endings are left out), or a single log file.
 

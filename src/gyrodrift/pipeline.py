@@ -7,7 +7,7 @@ each chunk is compensated where the last one stopped
 (:class:`gyrodrift.io.chunked.ChunkWriter`), so memory does not grow with the log. The
 output file is the same as the in-memory path (``read_log`` →
 :func:`~gyrodrift.compensator.compensate` → ``write_table``) gives. Other formats (ULog,
-ROS bags), ``--smooth`` and ``--scale-factor`` run in memory.
+ArduPilot DataFlash, ROS bags), ``--smooth`` and ``--scale-factor`` run in memory.
 
 :class:`RunStats` gathers, chunk by chunk, what the command prints at the end: the
 log's span and temperature range, the share of refused rows, the final drift model
@@ -134,7 +134,7 @@ class RunStats:
     # ------------------------------------------------------------------ text
     def read_line(self) -> str:
         """One line on what was read."""
-        if self.read_summary:  # ULog and ROS readers say which topics and instances they used
+        if self.read_summary:  # ULog, DataFlash and ROS readers say what they used
             return f"read {self.source}: {self.read_summary}"
         return _read_text(self.source, self.rows, self.t_first_s, self.t_last_s, self.temp_min_c, self.temp_max_c,
                           self.compass)
@@ -233,7 +233,7 @@ def compensate_file(
     config : CompensatorConfig, optional
     read_options : dict, optional
         Keyword arguments of :func:`gyrodrift.io.read_log` (``fmt``, ``gyro_unit``,
-        ``frame``, ``column_map``, ULog/ROS options).
+        ``frame``, ``column_map``, ULog/ArduPilot/ROS options).
     chunk_rows : int
         Rows per chunk when streaming.
     stream : bool, optional

@@ -716,7 +716,7 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
         "read, an error table per method, figures after Feng, Li, Zhang (2015) Figs. 1-9 and the settings. "
         "Needs matplotlib (gyrodrift[plot]); the Allan figure needs allantools (gyrodrift[allan]).",
     )
-    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, ROS bag)")
+    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
     p.add_argument("-o", "--output", type=Path, required=True, help="HTML file to write (atomically)")
     p.add_argument(
         "--methods", default=",".join(METHODS),

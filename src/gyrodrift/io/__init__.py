@@ -5,8 +5,10 @@
 * ``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz`` (csv) and ``.parquet``, ``.pq``
   (parquet): :mod:`gyrodrift.io.tabular`;
 * ``.ulg`` (ulog, PX4 ULog): :mod:`gyrodrift.io.ulog`;
+* ``.bin`` (ardupilot, ArduPilot DataFlash): :mod:`gyrodrift.io.ardupilot`;
 * ``.bag``, ``.db3``, ``.mcap`` or a directory holding ``metadata.yaml`` (rosbag):
-  :mod:`gyrodrift.io.rosbag`.
+  :mod:`gyrodrift.io.rosbag`;
+* a file with another ending that starts like a ULog or a DataFlash log: that format.
 
 See :mod:`gyrodrift.io.validate` for the checks of the table readers and the error-message
 style shared by all. A log without a compass or without a usable gyro temperature is read,
@@ -23,6 +25,7 @@ import pandas as pd
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
+from gyrodrift.io.ardupilot import read_ardupilot
 from gyrodrift.io.formats import FORMATS, log_format
 from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
@@ -34,6 +37,7 @@ __all__ = [
     "log_format",
     "read_log",
     "read_ulog",
+    "read_ardupilot",
     "read_rosbag",
     "write_table",
     "check_output_path",
@@ -55,7 +59,7 @@ def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None
 
 
 def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map) -> None:
-    """ULog and ROS bags state their units and frames: unit/frame/column options must stay default."""
+    """ULog, DataFlash and ROS bags state their units and frames: unit/frame/column options must stay default."""
     changed = {}
     if str(gyro_unit).strip().lower() not in _NEUTRAL_UNITS:
         changed["gyro_unit"] = gyro_unit
@@ -93,17 +97,19 @@ def read_log(
     Parameters
     ----------
     path : str or os.PathLike
-        The log: CSV/Parquet table, PX4 ULog (``.ulg``), ROS 1 ``.bag``, ROS 2 bag
-        directory or ``.db3``/``.mcap`` file.
-    fmt : {"csv", "parquet", "ulog", "rosbag"}, optional
+        The log: CSV/Parquet table, PX4 ULog (``.ulg``), ArduPilot DataFlash
+        (``.bin``), ROS 1 ``.bag``, ROS 2 bag directory or ``.db3``/``.mcap`` file.
+    fmt : {"csv", "parquet", "ulog", "ardupilot", "rosbag"}, optional
         Format; overrides the file-name ending.
     gyro_unit, frame, column_map
-        Table options, see :func:`gyrodrift.io.tabular.read_log`. ULog and ROS bags state
-        their units and frames, so these must stay at their defaults for them.
+        Table options, see :func:`gyrodrift.io.tabular.read_log`. ULog, DataFlash and
+        ROS bags state their units and frames, so these must stay at their defaults for them.
     instance : int, default 0
-        ULog only: ``sensor_gyro`` instance (see :func:`gyrodrift.io.ulog.read_ulog`).
+        ULog: ``sensor_gyro`` instance (see :func:`gyrodrift.io.ulog.read_ulog`);
+        ArduPilot: IMU instance (see :func:`gyrodrift.io.ardupilot.read_ardupilot`).
     mag_instance : int, optional
-        ULog only: ``sensor_mag`` instance; default the magnetometer PX4 selected.
+        ULog: ``sensor_mag`` instance, default the magnetometer PX4 selected;
+        ArduPilot: ``MAG`` instance, default ``COMPASS_PRIMARY`` or the first.
     imu_topic, temp_topic, mag_topic : str, optional
         ROS bags only: topics of type Imu, Temperature and MagneticField (see
         :func:`gyrodrift.io.rosbag.read_rosbag`).
@@ -134,6 +140,10 @@ def read_log(
         _check_stated_units(path, "ulog", gyro_unit, frame, column_map)
         _refuse_options(path, "ulog", set_ros)
         return read_ulog(path, instance=instance, mag_instance=mag_instance)
+    if log_fmt == "ardupilot":
+        _check_stated_units(path, "ardupilot", gyro_unit, frame, column_map)
+        _refuse_options(path, "ardupilot", set_ros)
+        return read_ardupilot(path, instance=instance, mag_instance=mag_instance)
     if log_fmt == "rosbag":
         _check_stated_units(path, "rosbag", gyro_unit, frame, column_map)
         _refuse_options(path, "rosbag", set_ulog)

@@ -1,8 +1,9 @@
-"""Helpers shared by the binary-log readers (:mod:`~gyrodrift.io.ulog`, :mod:`~gyrodrift.io.rosbag`).
+"""Helpers shared by the binary-log readers (:mod:`~gyrodrift.io.ulog`,
+:mod:`~gyrodrift.io.ardupilot`, :mod:`~gyrodrift.io.rosbag`).
 
-Both readers get streams at different rates (a fast gyro, a slow temperature, a
+The readers get streams at different rates (a fast gyro, a slow temperature, a
 magnetometer in between) and put them on one time base: the gyro samples. The rules
-live here so both readers apply them the same way:
+live here so every reader applies them the same way:
 
 * temperature and accelerometer: linear interpolation onto the gyro times, held at
   the first/last value outside the stream (:func:`interp_held`);

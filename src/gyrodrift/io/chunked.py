@@ -599,9 +599,9 @@ class LogChunks:
 
 
 def _chunk_format(path: Path, fmt: str | None) -> str:
-    """"csv" or "parquet" from ``fmt`` or the file name; ULog and ROS bags are refused."""
+    """"csv" or "parquet" from ``fmt`` or the file name; ULog, ArduPilot logs and ROS bags are refused."""
     named = str(fmt).strip().lower() if fmt is not None else formats.format_from_path(path)
-    if named in ("ulog", "rosbag"):
+    if named in ("ulog", "ardupilot", "rosbag"):
         raise ConfigError(
             validate.message(
                 str(path),

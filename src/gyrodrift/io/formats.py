@@ -1,4 +1,4 @@
-"""Which format a log is: from the ``fmt`` option or from the path.
+"""Which format a log is: from the ``fmt`` option, from the path, or from its first bytes.
 
 :func:`log_format` chooses among all formats :func:`gyrodrift.io.read_log` reads,
 :func:`table_format` between CSV and Parquet for the table readers and writers.
@@ -16,7 +16,7 @@ __all__ = ["FORMATS", "READ_SUFFIXES", "WRITE_SUFFIXES", "table_format", "format
 
 
 #: Formats :func:`gyrodrift.io.read_log` accepts for ``fmt``.
-FORMATS = ("csv", "parquet", "ulog", "rosbag")
+FORMATS = ("csv", "parquet", "ulog", "ardupilot", "rosbag")
 #: File-name endings (lower case) and the table format each one means.
 READ_SUFFIXES = {
     ".csv": "csv",
@@ -31,7 +31,21 @@ WRITE_SUFFIXES = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet"}
 _TABLE_FORMATS = ("csv", "parquet")
 #: File-name endings of the binary logs.
 _ULOG_SUFFIXES = (".ulg",)
+_ARDUPILOT_SUFFIXES = (".bin",)
 _ROSBAG_SUFFIXES = (".bag", ".db3", ".mcap")
+#: First bytes of the binary logs, to tell a file with another ending: a ULog header,
+#: and the DataFlash FMT message that defines FMT (``0xA3 0x95``, type 128).
+_MAGIC = ((b"ULog\x01\x12\x35", "ulog"), (b"\xa3\x95\x80", "ardupilot"))
+
+
+def _sniff(path: Path) -> str | None:
+    """"ulog" or "ardupilot" from the file's first bytes, else None (also when unreadable)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+    except OSError:
+        return None
+    return next((fmt for magic, fmt in _MAGIC if head.startswith(magic)), None)
 
 
 def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> str:
@@ -58,10 +72,12 @@ def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> st
 
 
 def format_from_path(path: Path) -> str | None:
-    """"ulog" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
+    """"ulog", "ardupilot" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
     name = path.name.lower()
     if name.endswith(_ULOG_SUFFIXES):
         return "ulog"
+    if name.endswith(_ARDUPILOT_SUFFIXES):
+        return "ardupilot"
     if name.endswith(_ROSBAG_SUFFIXES) or (path.is_dir() and (path / "metadata.yaml").is_file()):
         return "rosbag"
     for suffix, table_fmt in READ_SUFFIXES.items():
@@ -71,7 +87,8 @@ def format_from_path(path: Path) -> str | None:
 
 
 def log_format(path: Path, fmt: str | None) -> str | None:
-    """The format named by ``fmt`` or by the path (None: let the table reader decide)."""
+    """The format named by ``fmt``, by the path, or by the first bytes of a file with an
+    ending no format uses (a ULog or DataFlash log); None: let the table reader decide."""
     if fmt is not None:
         key = str(fmt).strip().lower()
         if key not in FORMATS:
@@ -79,7 +96,9 @@ def log_format(path: Path, fmt: str | None) -> str | None:
         return key
     found = format_from_path(path)
     if found is None and path.is_file():
-        endings = sorted(READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ROSBAG_SUFFIXES)
+        found = _sniff(path)
+    if found is None and path.is_file():
+        endings = sorted(READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ARDUPILOT_SUFFIXES + _ROSBAG_SUFFIXES)
         raise ConfigError(
             message(
                 str(path),

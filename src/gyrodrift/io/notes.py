@@ -5,13 +5,13 @@ the reader says so in one line per gap, kept in ``frame.attrs["notes"]`` (a list
 str; :class:`gyrodrift.io.chunked.LogChunks` keeps them in its ``notes`` attribute):
 
 * **no compass** (no ``heading`` column nor a complete ``mag_*`` + ``acc_*`` form, or
-  those columns empty in every row; in a ULog or ROS bag, no magnetometer sample within
-  the gyro record, or in a ULog no accelerometer for the tilt): ``attrs["compass"]`` is
-  ``"none"`` (:data:`NO_COMPASS`);
+  those columns empty in every row; in a ULog, DataFlash log or ROS bag, no magnetometer
+  sample within the gyro record, or in a ULog or DataFlash log no accelerometer for the
+  tilt): ``attrs["compass"]`` is ``"none"`` (:data:`NO_COMPASS`);
 * **no usable gyro temperature** (no ``temp`` column, one empty in every row; in a
-  ULog or ROS bag, none logged, or logged as exactly 0 or NaN everywhere): ``temp`` is
-  :data:`NO_TEMPERATURE_C` in every row, so the drift model ``a*T + b*T' + c`` reduces
-  to the constant bias ``c`` (``T'`` is 0).
+  ULog, DataFlash log or ROS bag, none logged, or logged as exactly 0 or NaN
+  everywhere): ``temp`` is :data:`NO_TEMPERATURE_C` in every row, so the drift model
+  ``a*T + b*T' + c`` reduces to the constant bias ``c`` (``T'`` is 0).
 
 Every note has the form ``<file>: <what is missing> (<why>): <what is done instead>``
 (:func:`no_compass_note`, :func:`no_temperature_note`); :func:`add_note` appends one to

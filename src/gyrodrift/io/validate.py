@@ -19,8 +19,8 @@ where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the
 is line 1) or ``data row N`` for Parquet (1-based, the first data row is ``data row 1``),
 optionally followed by ``, column 'name'``. Parts that do not apply are left out.
 :func:`message` builds such a message; :class:`Source`, :func:`row_label` and
-:func:`cell_label` name the rows and cells. The ULog and ROS bag readers use the same
-style.
+:func:`cell_label` name the rows and cells. The ULog, DataFlash and ROS bag readers use
+the same style.
 """
 
 from __future__ import annotations
