@@ -212,3 +212,10 @@ def test_unit_frame_and_map_options_are_applied(log_csv, tmp_path):
     for col in ("rate_z", "bias_z", "heading", "c", "gyro_z", "true_bias_z", "heading_fused"):
         np.testing.assert_allclose(got[col], want[col], rtol=0, atol=1e-9, err_msg=col)
     assert main(args[:-2]) == 2  # without --map: no gyro_z column, one error line
+
+
+def test_serial_without_pyserial_names_the_extra(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "serial", None)  # import serial raises ImportError
+    assert main(["stream", "--serial", "/dev/ttyUSB0", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pip install 'gyrodrift[serial]'" in err
