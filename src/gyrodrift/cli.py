@@ -195,8 +195,8 @@ def _add_stream_parser(sub) -> None:
         epilog=CONVENTIONS, formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Read samples line by line (CSV with a header line, or JSON lines: one object per line) from "
         "standard input, a file or a serial port, compensate them with the streaming Compensator and write each "
-        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate'. Rows of "
-        "the initialisation window come out when it ends, the rest one per sample. A bad line stops the stream "
+        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate' (today the "
+        "Compensator returns the rows of its initialisation window when it ends, then one per sample). A bad line stops the stream "
         "with one error line naming the line and column (exit 2); --skip-bad skips it with a warning instead. "
         "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
         "(gyrodrift.stream).",

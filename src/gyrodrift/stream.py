@@ -110,6 +110,8 @@ __all__ = [
 FORMATS = ("csv", "jsonl")
 #: How to install the serial-port support.
 SERIAL_ADVICE = "pip install 'gyrodrift[serial]'"
+#: The byte-order mark some programs write first (decoded).
+BOM = "\ufeff"
 #: Bytes asked for in one read of a file descriptor (a read returns what is there, up to this).
 READ_BYTES = 1 << 16
 #: Output rows gathered before they are added to the run's account (:class:`gyrodrift.pipeline.RunStats`),
@@ -629,9 +631,11 @@ def stream_rows(
     comp = compensator if compensator is not None else Compensator(config, source=source)
     state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
                     warn=warn or (lambda line: None))
-    carry, line_no = "", 0
+    carry, line_no, started = "", 0, False
     try:
         for piece in blocks:
+            if not started and piece:  # a UTF-8 byte-order mark, as some programs write, is not text
+                piece, started = piece.removeprefix(BOM), True
             lines = (carry + piece).split("\n")
             carry = lines.pop()  # an unfinished line waits for the rest
             numbered = []
