@@ -8,7 +8,7 @@ from pathlib import Path
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import FORMATS, read_log
 
-__all__ = ["parse_map", "add_input_options", "read_input"]
+__all__ = ["parse_map", "add_input_options", "add_table_options", "read_input"]
 
 
 def parse_map(text: str | None) -> dict[str, str] | None:
@@ -28,9 +28,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     """Options that say how to read the input log (every format)."""
     g = p.add_argument_group("input")
     g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
-    g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
-    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
-    g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
+    add_table_options(g)
     g.add_argument("--instance", type=int, default=0,
                    help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); default 0")
     g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected); "
@@ -38,6 +36,14 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
     g.add_argument("--temp-topic", help="ROS bag: sensor_msgs/Temperature topic (default: the only one)")
     g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")
+
+
+def add_table_options(g) -> None:
+    """The unit, frame and column options of tables (``--gyro-unit``, ``--frame``, ``--map``),
+    to a parser or an argument group."""
+    g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
+    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
+    g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
 
 
 def read_input(path: Path, args: argparse.Namespace, *, with_format: bool = True):

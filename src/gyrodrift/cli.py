@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from gyrodrift import __version__
-from gyrodrift._cliargs import add_input_options, parse_map, read_input
+from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -141,6 +141,82 @@ def _cmd_compensate(args) -> int:
         if args.save_profile:
             print(f"saved device profile {args.save_profile}")
     return 0
+
+
+def _cmd_stream(args) -> int:
+    from gyrodrift.compensator import Compensator
+    from gyrodrift.profile import load_profile, profile_from_run, profile_notes, save_profile, warm_config
+    from gyrodrift.stream import deferred_signals, input_blocks, output_writer, stream_rows
+
+    if args.serial is None and args.input != "-" and args.output != "-":
+        check_output_path(args.input, args.output)
+    cfg = _config(args)
+    profile = None
+    if args.profile:
+        profile = load_profile(args.profile)
+        _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
+        cfg = warm_config(profile, cfg)
+
+    def warn(line: str) -> None:
+        print(f"gyrodrift: warning: {line}", file=sys.stderr, flush=True)
+
+    with deferred_signals() as signals, \
+            input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
+            output_writer(args.output) as write:
+        stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
+                            frame=args.frame, column_map=parse_map(args.map), source=name, skip_bad=args.skip_bad,
+                            warn=warn, compensator=Compensator(cfg, source=name))
+    run = stats.run
+    if profile is not None and run.rows:
+        _warn(args.profile, profile_notes(profile, temp_range_c=(run.temp_min_c, run.temp_max_c)))
+    if args.save_profile:
+        if run.rows:
+            save_profile(profile_from_run(run), args.save_profile)
+        else:
+            warn(f"{args.save_profile}: no row was compensated, so no profile was saved")
+    if not args.quiet and run.rows:
+        lines = [run.read_line(), *run.result_lines()]
+        if stats.skipped:
+            lines.append(f"skipped {stats.skipped} bad line(s)")
+        if args.save_profile:
+            lines.append(f"saved device profile {args.save_profile}")
+        print("\n".join(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
+    if stats.signal is not None:
+        print("gyrodrift: " + ("terminated" if stats.signal == signal.SIGTERM else "interrupted"), file=sys.stderr)
+        return 143 if stats.signal == signal.SIGTERM else 130
+    return 0
+
+
+def _add_stream_parser(sub) -> None:
+    from gyrodrift.stream import FORMATS as STREAM_FORMATS, SERIAL_ADVICE
+
+    s = sub.add_parser(
+        "stream", help="compensate samples as they come: CSV or JSON lines in, compensated rows out",
+        epilog=CONVENTIONS, formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Read samples line by line (CSV with a header line, or JSON lines: one object per line) from "
+        "standard input, a file or a serial port, compensate them with the streaming Compensator and write each "
+        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate' (today the "
+        "Compensator returns the rows of its initialisation window when it ends, then one per sample). A bad line stops the stream "
+        "with one error line naming the line and column (exit 2); --skip-bad skips it with a warning instead. "
+        "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
+        "(gyrodrift.stream).",
+    )
+    s.add_argument("input", nargs="?", default="-", help="input file, or - for standard input (default)")
+    s.add_argument("-o", "--output", default="-",
+                   help="output file, or - for standard output (default); a file appears, whole, when the stream ends")
+    s.add_argument("--format", choices=list(STREAM_FORMATS),
+                   help="input format (default: jsonl when the first non-blank character is '{', else csv)")
+    s.add_argument("--out-format", choices=list(STREAM_FORMATS), help="output format (default: the input's)")
+    s.add_argument("--serial", metavar="PORT", help=f"read a serial port instead, e.g. /dev/ttyUSB0 ({SERIAL_ADVICE})")
+    s.add_argument("--baud", type=int, default=115200, help="serial port speed, baud (default 115200)")
+    s.add_argument("--skip-bad", action="store_true", help="skip a bad line with a warning instead of stopping")
+    s.add_argument("-q", "--quiet", action="store_true", help="no summary on stderr at the end")
+    s.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
+    s.add_argument("--save-profile", type=Path, metavar="DEV.json",
+                   help="save what this run learned as a device profile at the end of the input, or on SIGINT/SIGTERM")
+    add_table_options(s.add_argument_group("input"))
+    _add_method_options(s)
+    s.set_defaults(func=_cmd_stream)
 
 
 def _cmd_calibrate(args) -> int:
@@ -493,6 +569,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_report_parser(sub)
     add_batch_parser(sub)
     _add_calibrate_parser(sub)
+    _add_stream_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
@@ -502,7 +579,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Commands that run the compensator (whose kernels numba compiles on first use).
-_ENGINE_COMMANDS = frozenset({"compensate", "demo", "report", "compare", "batch", "paper", "montecarlo"})
+_ENGINE_COMMANDS = frozenset({"compensate", "demo", "report", "compare", "batch", "paper", "montecarlo", "stream"})
 
 
 def _say_if_compiling(command: str) -> None:

@@ -1,0 +1,666 @@
+"""Samples in, compensated rows out, as they come: what ``gyrodrift stream`` runs.
+
+:func:`stream_rows` reads samples as CSV (a header line first) or JSON lines (one object
+per line), from any source of text (standard input, a file, a serial port:
+:func:`fd_blocks`, :func:`serial_blocks`), feeds them to a :class:`gyrodrift.Compensator`
+and writes every row it returns, in order, in the format and with the columns
+``gyrodrift compensate`` writes.
+
+Input
+-----
+The columns and their units are those of ``gyrodrift compensate`` (the input contract,
+:mod:`gyrodrift.conventions`), read with the same options (``gyro_unit``, ``frame``,
+``column_map``) and the same checks and conversions
+(:func:`gyrodrift.io.validate.normalise_frame`). A column the input does not have is
+"no value" in every row: no ``heading`` (nor ``mag_*`` + ``acc_*``) is no compass, no
+``temp`` is 0 degC (both said in a note). The first row needs ``gyro_z`` and ``temp``
+values; later empty cells hold the previous value, as in a log.
+
+* CSV: the first non-blank line is the header; every line after it one sample, with one
+  cell per header column (an empty cell is no value).
+* JSON lines: every line one object ``{"t": 0.0, "gyro_z": 0.1, ...}``; the keys of the
+  first object are the columns. A later object may leave keys out (or give ``null``):
+  no value there; a key the first object did not have is a bad line, so give every key
+  in the first line (``"heading": null`` when the first sample has no compass).
+
+The format is ``fmt`` or, by default, JSON lines when the first non-blank character is
+``{`` and CSV otherwise. Blank lines are skipped.
+
+Latency
+-------
+The lines that arrive together (one read of the source: one line when samples come one
+by one, more when they come faster than they are compensated) are converted together,
+pushed one by one, and the rows the pushes return are written at once with one call of
+``write``, before the next read. Nothing is held back but what the
+:class:`~gyrodrift.Compensator` itself holds (today the rows of its initialisation
+window, until it ends); the rows it still holds when the input ends come from
+:meth:`~gyrodrift.Compensator.flush`.
+
+Each read costs a fixed time (the conversion of :func:`~gyrodrift.io.validate.normalise_frame`
+and the output table, with pandas and pyarrow): about 20 ms on a shared 2-core test
+machine, against about 0.1 ms per line when many lines come in one read. A source that
+sends lines faster than one per read time is therefore read several lines at a time: the
+stream keeps up, and a row comes out within about one read time of its line.
+
+Bad lines
+---------
+A line that cannot be read (wrong number of cells, not JSON, not a number, time not
+increasing, ...) is a :class:`~gyrodrift.errors.LogFormatError` of one line naming the
+source, the line number and the column, and what to do. It stops the stream (the rows
+written so far stay written); with ``skip_bad`` the line is skipped instead, with that
+message as a warning. Problems of the header (a required column missing, a bad
+``column_map``) always stop.
+
+Signals
+-------
+:func:`deferred_signals` turns SIGINT and SIGTERM into the end of the input: a signal
+that comes while the source is waiting for input ends the read at once; one that comes
+while rows are being compensated ends it after them. The held rows are then flushed and
+written as at the end of the input, and :attr:`StreamStats.signal` says which signal
+ended it (the command line then saves the profile and exits 130 or 143).
+"""
+
+from __future__ import annotations
+
+import codecs
+import csv
+import json
+import math
+import os
+import signal
+import sys
+from contextlib import contextmanager
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+
+from gyrodrift._atomic import atomic_output
+from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig, append_input_columns
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
+from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
+from gyrodrift.io.validate import (
+    Source,
+    cell_label,
+    check_input_path,
+    format_error,
+    message,
+    no_data_rows_error,
+    normalise_frame,
+    read_error,
+    read_options,
+    compass_form,
+    show_names,
+    table_notes,
+    table_to_frame,
+)
+from gyrodrift.pipeline import RunStats
+from gyrodrift.triad import TRIAD_COLUMNS, has_triad_inputs
+
+__all__ = [
+    "FORMATS", "StreamStats", "StreamInterrupted", "stream_rows", "detect_format", "fd_blocks", "serial_blocks",
+    "deferred_signals", "input_blocks", "output_writer", "SERIAL_ADVICE",
+]
+
+#: Input and output formats of :func:`stream_rows`.
+FORMATS = ("csv", "jsonl")
+#: How to install the serial-port support.
+SERIAL_ADVICE = "pip install 'gyrodrift[serial]'"
+#: The byte-order mark some programs write first (decoded).
+BOM = "\ufeff"
+#: Bytes asked for in one read of a file descriptor (a read returns what is there, up to this).
+READ_BYTES = 1 << 16
+#: Output rows gathered before they are added to the run's account (:class:`gyrodrift.pipeline.RunStats`),
+#: which costs about as much for one row as for a thousand.
+ACCOUNT_ROWS = 1000
+#: The output columns of the z axis, in the order of :func:`gyrodrift.compensator.output_frame`.
+_Z_COLUMNS = tuple(f.name for f in fields(CompensatedSample) if f.name not in TRIAD_COLUMNS)
+_COMPASS_COLUMNS = (HEADING, *MAG_COLS, *ACC_COLS)
+
+
+class StreamInterrupted(Exception):
+    """A signal (SIGINT or SIGTERM) ended the input; ``signum`` says which."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+@dataclass
+class StreamStats:
+    """What a stream read and wrote (:func:`stream_rows`)."""
+
+    #: The run as :func:`gyrodrift.pipeline.compensate_file` accounts it (rows written,
+    #: temperatures, refusals, final drift model): what a profile is made of.
+    run: RunStats
+    #: Samples pushed to the compensator.
+    rows_in: int = 0
+    #: Lines skipped as bad (``skip_bad``).
+    skipped: int = 0
+    #: The signal that ended the input (``signal.SIGINT`` or ``signal.SIGTERM``), or None at its end.
+    signal: int | None = None
+    #: What could not be learned or was done instead (one line each): the input's notes, then the compensator's.
+    notes: list = field(default_factory=list)
+
+
+def detect_format(first_line: str) -> str:
+    """``"jsonl"`` when the first non-blank character of ``first_line`` is ``{``, else ``"csv"``."""
+    return "jsonl" if first_line.lstrip().startswith("{") else "csv"
+
+
+class _Signals:
+    """SIGINT/SIGTERM received while :func:`deferred_signals` runs (see the module notes)."""
+
+    def __init__(self) -> None:
+        self.received: int | None = None
+        self.waiting = False  # True while a source blocks for input: a signal then ends the read at once
+
+    def handler(self, signum, frame) -> None:
+        self.received = signum
+        if self.waiting:
+            raise StreamInterrupted(signum)
+
+    def check(self) -> None:
+        """Raise :class:`StreamInterrupted` if a signal came since the last read."""
+        if self.received is not None:
+            raise StreamInterrupted(self.received)
+
+    @contextmanager
+    def wait(self):
+        """Around a blocking read: a signal raises :class:`StreamInterrupted` in it."""
+        self.waiting = True  # before the check: a signal after it raises in the handler
+        try:
+            self.check()
+            yield
+        finally:
+            self.waiting = False
+
+
+@contextmanager
+def deferred_signals(signums=(signal.SIGINT, signal.SIGTERM)):
+    """Catch ``signums`` while the block runs; yield the object the sources take.
+
+    Pass it as ``signals`` to :func:`fd_blocks` or :func:`serial_blocks`: a signal then
+    ends their input (module notes). The handlers in force before are restored after
+    the block. Outside the main thread (where Python cannot install handlers) nothing
+    is caught.
+    """
+    state = _Signals()
+    previous = {}
+    try:
+        for signum in signums:
+            previous[signum] = signal.signal(signum, state.handler)
+    except (ValueError, OSError):  # not the main thread
+        pass
+    try:
+        yield state
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+
+
+def fd_blocks(fd: int, signals: _Signals | None = None, *, read_bytes: int = READ_BYTES) -> Iterator[str]:
+    """The text of an open file descriptor (standard input, a file, a pipe) as it arrives.
+
+    Each item is what one :func:`os.read` returned (up to ``read_bytes``: what is there,
+    waiting only when nothing is), decoded as UTF-8 (a byte that is not UTF-8 becomes
+    U+FFFD, and its line is then refused as not a number). Ends at the end of the input,
+    or with :class:`StreamInterrupted` when ``signals`` (:func:`deferred_signals`)
+    caught a signal.
+    """
+    decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
+    while True:
+        if signals is None:
+            data = os.read(fd, read_bytes)
+        else:
+            with signals.wait():
+                data = os.read(fd, read_bytes)
+        if not data:
+            tail = decoder.decode(b"", final=True)
+            if tail:
+                yield tail
+            return
+        yield decoder.decode(data)
+
+
+def serial_blocks(port: str, baud: int, signals: _Signals | None = None) -> Iterator[str]:
+    """The text a serial port sends, as it arrives (as :func:`fd_blocks`); needs pyserial.
+
+    Raises
+    ------
+    ConfigError
+        pyserial is not installed (:data:`SERIAL_ADVICE`), or the port cannot be opened.
+    """
+    try:
+        import serial
+    except ImportError:
+        raise ConfigError(f"--serial {port}: reading a serial port needs pyserial; {SERIAL_ADVICE}") from None
+    try:
+        port_file = serial.Serial(port, baudrate=baud, timeout=None)
+    except (serial.SerialException, ValueError, OSError) as exc:
+        raise ConfigError(message(port, f"cannot open the serial port ({' '.join(str(exc).split())})",
+                                  "check the device name, its permissions and --baud")) from exc
+    decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
+    with port_file:
+        while True:
+            if signals is None:
+                data = port_file.read(max(1, port_file.in_waiting))
+            else:
+                with signals.wait():
+                    data = port_file.read(max(1, port_file.in_waiting))
+            if data:
+                yield decoder.decode(data)
+
+
+@contextmanager
+def input_blocks(path: str = "-", signals: _Signals | None = None, *, serial_port: str | None = None,
+                 baud: int = 115200):
+    """Open the input of ``gyrodrift stream``; yield ``(blocks, name)`` for :func:`stream_rows`.
+
+    ``serial_port`` (with ``baud``) reads a serial port (:func:`serial_blocks`); otherwise
+    ``path`` is a file, or ``"-"`` for standard input (named ``stdin`` in messages).
+    """
+    if serial_port is not None:
+        yield serial_blocks(serial_port, baud, signals), serial_port
+        return
+    if path == "-":
+        yield fd_blocks(0, signals), "stdin"
+        return
+    check_input_path(Path(path))
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError as exc:
+        raise read_error(path, exc) from exc
+    try:
+        yield fd_blocks(fd, signals), str(path)
+    finally:
+        os.close(fd)
+
+
+@contextmanager
+def output_writer(path: str = "-"):
+    """Yield ``write(text)`` for :func:`stream_rows`: every call written and flushed.
+
+    ``"-"`` is standard output (a reader that closes it stops the stream with a
+    :class:`~gyrodrift.errors.GyroDriftError`); a file is written atomically (:func:`gyrodrift._atomic.atomic_output`):
+    it appears, whole, when the block ends without an exception (the end of the input or a
+    signal), and an existing file is left as it was when it ends with one.
+    """
+    if path == "-":
+        out = sys.stdout
+        out.flush()
+
+        def write(text: str) -> None:
+            try:
+                out.buffer.write(text.encode("utf-8"))
+                out.buffer.flush()
+            except BrokenPipeError:  # e.g. "| head": what is still buffered goes nowhere, without a second error
+                os.dup2(os.open(os.devnull, os.O_WRONLY), out.fileno())
+                raise GyroDriftError("stdout: the program reading the output has closed it; the stream stopped "
+                                     "(no profile is saved); keep the reader open, or write to a file with -o") from None
+
+        yield write
+        return
+    with atomic_output(Path(path)) as fh:
+
+        def write(text: str) -> None:
+            fh.write(text.encode("utf-8"))
+            fh.flush()
+
+        yield write
+
+
+class _Reader:
+    """Lines of text → parsed records (CSV cells or JSON objects) with their line numbers."""
+
+    def __init__(self, fmt: str, name: str) -> None:
+        self.fmt, self.name = fmt, name
+        self.columns: list[str] | None = None  # as in the input (before column_map)
+
+    def header(self, line: str, line_no: int) -> list | None:
+        """Take the columns from the first line; return its record (JSON) or None (CSV header)."""
+        if self.fmt == "csv":
+            self.columns = next(csv.reader([line]))
+            return None
+        record = self._object(line, line_no, first=True)
+        self.columns = list(record)
+        return self.record(line, line_no, record)
+
+    def _bad(self, line_no: int, problem: str, advice: str, column: str | None = None) -> LogFormatError:
+        where = f"line {line_no}" + (f", column {column!r}" if column is not None else "")
+        return LogFormatError(message(self.name, problem, advice, where=where))
+
+    def _object(self, line: str, line_no: int, first: bool = False) -> dict:
+        try:
+            record = json.loads(line)
+        except ValueError as exc:
+            raise self._bad(line_no, f"is not JSON ({' '.join(str(exc).split())})",
+                            "give one JSON object per line, e.g. {\"t\": 0.0, \"gyro_z\": 0.1, \"temp\": 25.0}") from None
+        if not isinstance(record, dict):
+            raise self._bad(line_no, f"is a JSON {type(record).__name__}, not an object",
+                            "give one JSON object per line, e.g. {\"t\": 0.0, \"gyro_z\": 0.1, \"temp\": 25.0}")
+        if first and not record:
+            raise self._bad(line_no, "the first object has no keys", "give the sample's columns as keys")
+        return record
+
+    def record(self, line: str, line_no: int, parsed=None) -> list:
+        """One data line → its cells in the order of :attr:`columns` (None: no value)."""
+        if self.fmt == "csv":
+            cells = next(csv.reader([line]))
+            if len(cells) != len(self.columns):
+                raise self._bad(line_no, f"row has {len(cells)} field(s) but the header has {len(self.columns)}",
+                                "every row needs one value per header column (leave a cell empty, do not drop it)")
+            return [cell if cell.strip() else None for cell in cells]
+        obj = parsed if parsed is not None else self._object(line, line_no)
+        extra = [k for k in obj if k not in self._known]
+        if extra:
+            raise self._bad(line_no, f"key {extra[0]!r} is not a key of the first object (its keys are the columns: "
+                            f"{show_names(self.columns)})",
+                            "give every key in the first line, with null where it has no value", column=extra[0])
+        return [obj.get(k) for k in self.columns]
+
+    @property
+    def _known(self) -> frozenset:
+        known = getattr(self, "_known_set", None)
+        if known is None:
+            known = self._known_set = frozenset(self.columns)
+        return known
+
+
+class _Stream:
+    """The state of one stream: reader, compensator, rows waiting for their output."""
+
+    def __init__(self, write, comp: Compensator, *, fmt, out_format, opts, name, skip_bad, warn) -> None:
+        self.write, self.comp, self.opts, self.name = write, comp, opts, name
+        self.fmt, self.out_format, self.skip_bad, self.warn = fmt, out_format, skip_bad, warn
+        self.reader: _Reader | None = None
+        self.stats = StreamStats(RunStats(name, streamed=True))
+        self.prev_t_s: float | None = None  # time of the last sample pushed
+        self.prev_line = 0  # its line number
+        self.pending: list[pd.DataFrame] = []  # input rows (converted) whose output rows have not come yet
+        self.names: list[str] | None = None  # input columns as read (names stripped)
+        self.columns: list[str] | None = None  # input columns after conversion (temp added when missing)
+        self.has_mag = self.has_triad = False
+        self.written: list[pd.DataFrame] = []  # output rows not yet in the run's account (:meth:`_account`)
+        self.written_rows = 0
+
+    # -- header
+    def _source(self, line_nos: list[int]) -> Source:
+        """Where the rows of a block are: row r is on line ``line_nos[r]`` (row -1: the last sample's line)."""
+        numbers = [self.prev_line, *line_nos]
+        return Source(self.name, "csv", lambda k: numbers[k - 1])
+
+    def start(self, line: str, line_no: int) -> None:
+        """The first non-blank line: format, columns, header checks, notes, output header."""
+        fmt = self.fmt or detect_format(line)
+        self.reader = _Reader(fmt, self.name)
+        if self.out_format is None:
+            self.out_format = fmt
+        first = self.reader.header(line, line_no)
+        names = self.reader.columns
+        header = pa.Table.from_arrays([pa.array([], pa.string())] * len(names), names=names)
+        src = Source(self.name, "csv", lambda k: line_no)
+        raw = table_to_frame(header, src)  # names stripped of spaces; a name given twice is refused here
+        self.names = list(raw.columns)
+        empty = normalise_frame(raw, src, self.opts, first_values=None)
+        self.columns = list(empty.frame.columns)
+        self.has_mag = all(c in self.columns for c in MAG_COLS + ACC_COLS)
+        self.has_triad = has_triad_inputs(self.columns)
+        with_values = frozenset(c for c in _COMPASS_COLUMNS if c in self.columns)
+        self.stats.notes += table_notes(self.name, self.columns, with_values, empty.temperature)
+        for note in self.stats.notes:
+            self.warn(note)
+        self.stats.run.compass = compass_form(with_values)
+        if self.out_format == "csv":
+            names = self._output([], empty.frame).columns
+            self.write(csv_header(names).decode("utf-8"))
+        if first is not None:
+            self.block([(line_no, first)])
+
+    # -- data
+    def lines(self, lines: list[tuple[int, str]]) -> None:
+        """Data lines (number, text): parsed, converted and pushed as one block."""
+        records = []
+        for line_no, line in lines:
+            if self.reader is None:
+                self.start(line, line_no)
+                continue
+            try:
+                records.append((line_no, self.reader.record(line, line_no)))
+            except LogFormatError as exc:
+                self._bad(exc)
+        if records:
+            self.block(records)
+
+    def _bad(self, exc: LogFormatError) -> None:
+        if not self.skip_bad:
+            raise exc
+        self.stats.skipped += 1
+        self.warn(f"{exc}; line skipped")
+
+    def _convert(self, records: list[tuple[int, list]]) -> pd.DataFrame:
+        """Records → the rows in the input contract (:func:`normalise_frame`), or a LogFormatError."""
+        line_nos = [n for n, _ in records]
+        frame = pd.DataFrame([cells for _, cells in records], columns=self.names)
+        src = self._source(line_nos)
+        df = normalise_frame(frame, src, self.opts, prev_t_s=self.prev_t_s, first_values=None).frame
+        if self.prev_t_s is None:  # the first sample: gyro_z and temp needed (later empty cells hold)
+            for col in (GYRO_Z, TEMP):
+                if math.isnan(df[col].iloc[0]):
+                    raise format_error(src, f"the first data row has no {col} value",
+                                       f"drop the leading rows without {col} data", where=cell_label(src, 0, col))
+        return df
+
+    def block(self, records: list[tuple[int, list]]) -> None:
+        """Convert and push the records of one read; write the rows the pushes return."""
+        try:
+            df = self._convert(records)
+        except LogFormatError as exc:
+            if len(records) == 1 or not self.skip_bad:
+                self._bad(exc)
+                return
+            for record in records:  # one by one, to skip only the bad lines
+                try:
+                    df = self._convert([record])
+                except LogFormatError as one:
+                    self._bad(one)
+                else:
+                    self._push([record], df)
+            return
+        self._push(records, df)
+
+    def _push(self, records, df: pd.DataFrame) -> None:
+        cols = {c: df[c].to_numpy(float).tolist() for c in (T, GYRO_Z, TEMP)}
+        heading = df[HEADING].to_numpy(float).tolist() if HEADING in df.columns else None
+        mag = df[list(MAG_COLS)].to_numpy(float).tolist() if self.has_mag else None
+        acc = df[list(ACC_COLS)].to_numpy(float).tolist() if self.has_mag or self.has_triad else None
+        gx = df[GYRO_X].to_numpy(float).tolist() if self.has_triad else None
+        gy = df[GYRO_Y].to_numpy(float).tolist() if self.has_triad else None
+        self.pending.append(df)
+        rows: list[CompensatedSample] = []
+        for i, t_s in enumerate(cols[T]):
+            rows += self.comp.push(
+                t_s, cols[GYRO_Z][i], cols[TEMP][i], heading_deg=math.nan if heading is None else heading[i],
+                mag=None if mag is None else mag[i], acc=None if acc is None else acc[i],
+                gyro_x_dps=None if gx is None else gx[i], gyro_y_dps=None if gy is None else gy[i],
+            )
+        self.stats.rows_in += len(df)
+        self.prev_t_s, self.prev_line = cols[T][-1], records[-1][0]
+        self.emit(rows)
+
+    # -- output
+    def _take(self, n: int) -> pd.DataFrame:
+        """The first ``n`` pending input rows (the inputs of the next ``n`` output rows)."""
+        parts, left = [], n
+        while left:
+            head = self.pending[0]
+            if len(head) <= left:
+                parts.append(self.pending.pop(0))
+                left -= len(head)
+            else:
+                parts.append(head.iloc[:left])
+                self.pending[0] = head.iloc[left:]
+                left = 0
+        rows = parts[0] if len(parts) == 1 else pd.concat(parts)
+        return rows.reset_index(drop=True)
+
+    def _output(self, samples: list[CompensatedSample], inputs: pd.DataFrame) -> pd.DataFrame:
+        """The output table of these rows: the columns ``gyrodrift compensate`` writes."""
+        names = _Z_COLUMNS + (TRIAD_COLUMNS if self.has_triad else ())
+        out = pd.DataFrame({name: [getattr(s, name) for s in samples] for name in names})
+        return append_input_columns(out, inputs)
+
+    def emit(self, samples: list[CompensatedSample]) -> None:
+        """Write output rows (one call of ``write``) and account for them."""
+        if not samples:
+            return
+        out = self._output(samples, self._take(len(samples)))
+        self.write(_csv_text(out) if self.out_format == "csv" else _jsonl_text(out))
+        self.written.append(out)
+        self.written_rows += len(out)
+        if self.written_rows >= ACCOUNT_ROWS:
+            self._account()
+
+    def _account(self) -> None:
+        """Add the rows written since the last call to :attr:`StreamStats.run`."""
+        if self.written:
+            self.stats.run.add(pd.concat(self.written, ignore_index=True) if len(self.written) > 1 else self.written[0])
+        self.written, self.written_rows = [], 0
+
+    def finish(self) -> None:
+        """The rows the compensator still holds (end of input); the run's account complete."""
+        self.emit(self.comp.flush())
+        self._account()
+
+
+def _csv_text(out: pd.DataFrame) -> str:
+    """The CSV data lines of ``out``, printed as :func:`gyrodrift.io.write_table` prints them."""
+    sink = pa.BufferOutputStream()
+    table = csv_table(out)
+    if table is None or not write_csv_rows(table, sink):
+        write_csv_with_pandas(out, sink, header=False)
+    return sink.getvalue().to_pybytes().decode("utf-8")
+
+
+def _jsonl_text(out: pd.DataFrame) -> str:
+    """One JSON object per row of ``out`` (NaN and empty cells as null)."""
+    columns = {c: out[c].tolist() for c in out.columns}
+    names = list(columns)
+    lines = []
+    for values in zip(*columns.values()):
+        row = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in zip(names, values)}
+        lines.append(json.dumps(row, allow_nan=False, default=_json_value) + "\n")
+    return "".join(lines)
+
+
+def _json_value(v):
+    """JSON for the values :func:`json.dumps` does not know (numpy scalars, timestamps)."""
+    if isinstance(v, np.generic):
+        return v.item()
+    return str(v)
+
+
+def stream_rows(
+    blocks: Iterable[str],
+    write: Callable[[str], object],
+    config: CompensatorConfig | None = None,
+    *,
+    fmt: str | None = None,
+    out_format: str | None = None,
+    gyro_unit: str = "deg/s",
+    frame: str = "ned",
+    column_map=None,
+    source: str = "stdin",
+    skip_bad: bool = False,
+    warn: Callable[[str], object] | None = None,
+    compensator: Compensator | None = None,
+) -> StreamStats:
+    """Compensate samples as they arrive and write the output rows as they come.
+
+    Parameters
+    ----------
+    blocks : iterable of str
+        The input text in pieces of any size as it arrives: lines (with their line ends),
+        or what each read of a source returned (:func:`fd_blocks`, :func:`serial_blocks`).
+        The complete lines of a piece are compensated and written before the next piece
+        is taken (module notes: latency).
+    write : callable
+        ``write(text)`` gets the output: the CSV header at the start (``out_format``
+        "csv"), then the complete lines of the rows each piece gave. The command line
+        flushes after each call.
+    config : CompensatorConfig, optional
+        Settings of the compensator made here (ignored with ``compensator``).
+    fmt, out_format : {"csv", "jsonl"}, optional
+        Input format (default: by the first non-blank character, module notes) and output
+        format (default: the input's).
+    gyro_unit, frame, column_map
+        As :func:`gyrodrift.io.read_log`: the unit of the gyro columns, ``"ned"`` or
+        ``"enu"``, and ``{NEW: OLD}`` renames of input columns.
+    source : str
+        The input's name in messages (a path, ``stdin``, a serial port).
+    skip_bad : bool
+        Skip a bad line with a warning instead of stopping (module notes).
+    warn : callable, optional
+        ``warn(line)`` gets each note and warning (one line each) when it arises: the
+        input's notes after its first line, the compensator's at the end, skipped lines;
+        default: dropped.
+    compensator : Compensator, optional
+        The compensator to feed (e.g. warm-started); default a new one from ``config``.
+
+    Returns
+    -------
+    StreamStats
+        Rows in and out, skipped lines, notes, and the signal that ended the input if
+        one did (a :class:`StreamInterrupted` from ``blocks`` ends the input like its end).
+
+    Raises
+    ------
+    LogFormatError
+        A bad line (without ``skip_bad``) or header, or an input without data rows.
+    ConfigError
+        A bad ``fmt``, ``out_format``, ``gyro_unit``, ``frame`` or ``column_map``.
+    """
+    for option, value in (("format", fmt), ("output format", out_format)):
+        if value is not None and value not in FORMATS:
+            raise ConfigError(f"unknown {option} {value!r}; use one of: {', '.join(FORMATS)}")
+    opts = read_options(gyro_unit, frame, column_map)
+    comp = compensator if compensator is not None else Compensator(config, source=source)
+    state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
+                    warn=warn or (lambda line: None))
+    carry, line_no, started = "", 0, False
+    try:
+        for piece in blocks:
+            if not started and piece:  # a UTF-8 byte-order mark, as some programs write, is not text
+                piece, started = piece.removeprefix(BOM), True
+            lines = (carry + piece).split("\n")
+            carry = lines.pop()  # an unfinished line waits for the rest
+            numbered = []
+            for line in lines:
+                line_no += 1
+                if line.strip():
+                    numbered.append((line_no, line.rstrip("\r")))
+            if numbered:
+                state.lines(numbered)
+    except StreamInterrupted as stop:
+        state.stats.signal = stop.signum
+        carry = ""  # an unfinished line is not a sample
+    if carry.strip():
+        state.lines([(line_no + 1, carry.rstrip("\r"))])
+    if state.stats.rows_in == 0 and state.stats.signal is None:
+        where = Source(source, "csv", None)
+        if state.reader is None:
+            raise LogFormatError(message(source, "no input",
+                                         "give a CSV header line and samples, or JSON lines (one object per line)"))
+        raise no_data_rows_error(where)
+    state.finish()
+    for note in comp.notes:
+        state.warn(note)
+    state.stats.notes += comp.notes
+    run = state.stats.run
+    run.final_params, run.final_cov, run.estimator = comp.params, comp.cov, comp.estimator.name
+    return state.stats
+
