@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from gyrodrift.conventions import TIME_UNITS
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import FORMATS, read_log
 
@@ -31,6 +32,10 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
     g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
     g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
+    g.add_argument(
+        "--time-unit", choices=list(TIME_UNITS),
+        help="tables: unit of t, converted to s (default s; time stamps that look like ms, us or ns are refused)",
+    )
     g.add_argument("--instance", type=int, default=0, help="PX4 ULog: sensor_gyro instance (default 0)")
     g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected)")
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
@@ -46,6 +51,7 @@ def read_input(path: Path, args: argparse.Namespace, *, with_format: bool = True
         gyro_unit=args.gyro_unit,
         frame=args.frame,
         column_map=parse_map(args.map),
+        time_unit=args.time_unit,
         instance=args.instance,
         mag_instance=args.mag_instance,
         imu_topic=args.imu_topic,

@@ -23,7 +23,8 @@ __all__ = ["main"]
 
 CONVENTIONS = """\
 units and conventions (input contract, CSV with a header row or Parquet):
-  t            s, strictly increasing
+  t            s, strictly increasing (--time-unit ms, us or ns converts; time
+               stamps that look like those units are refused)
   gyro_z       deg/s; positive = heading increases (clockwise seen from above:
                NED body frame, z down). --gyro-unit rad/s converts.
   temp         degC, gyro temperature
@@ -194,6 +195,7 @@ def _read_options(args) -> dict:
     """The read_log options of :func:`gyrodrift._cliargs.add_input_options`."""
     return {
         "fmt": args.format, "gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
+        "time_unit": args.time_unit,
         "instance": args.instance, "mag_instance": args.mag_instance, "imu_topic": args.imu_topic,
         "temp_topic": args.temp_topic, "mag_topic": args.mag_topic,
     }

@@ -558,9 +558,10 @@ class LogChunks:
         columns: list = []
         with_values: frozenset[str] = frozenset()
         temperature = validate.TEMP_MEASURED  # the first chunk decides it for the file
+        first_notes: tuple[str, ...] = ()  # and the time base (gyrodrift.io.timebase)
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found, temperature = validate.normalise_frame(
+            df, found, temperature, notes = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
@@ -572,12 +573,13 @@ class LogChunks:
             df.attrs = self.attrs
             prev_t_s = float(df[T].iloc[-1])
             columns, with_values = list(df.columns), with_values | found
+            first_notes = first_notes or notes
             self.rows += len(df)
             yield df
         if self.rows == 0:
             raise validate.no_data_rows_error(src)
         self.compass = validate.compass_form(with_values)
-        self.notes = validate.table_notes(src.name, columns, with_values, temperature)
+        self.notes = [*validate.table_notes(src.name, columns, with_values, temperature), *first_notes]
 
     def __iter__(self) -> "LogChunks":
         return self
@@ -619,6 +621,7 @@ def iter_log_chunks(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
+    time_unit: str | None = None,
     chunk_rows: int = 1_000_000,
     column_types: Mapping[str, object] | None = None,
     block_size_bytes: int = DEFAULT_BLOCK_SIZE_BYTES,
@@ -637,8 +640,9 @@ def iter_log_chunks(
         or Parquet (``.parquet``, ``.pq``).
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
-    gyro_unit, frame, column_map
-        As for :func:`gyrodrift.io.tabular.read_log`.
+    gyro_unit, frame, column_map, time_unit
+        As for :func:`gyrodrift.io.tabular.read_log`; the time base is checked on the
+        first chunk.
     chunk_rows : int, default 1_000_000
         Rows per chunk; every chunk but the last has exactly this many, except that a
         CSV whose number columns hold text somewhere ends one chunk early there.
@@ -668,7 +672,7 @@ def iter_log_chunks(
         As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
     """
     path = Path(path)
-    opts = validate.read_options(gyro_unit, frame, column_map)
+    opts = validate.read_options(gyro_unit, frame, column_map, time_unit)
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, (int, np.integer)) or chunk_rows < 1:
         raise ConfigError(f"chunk_rows must be a positive whole number of rows, got {chunk_rows!r}")
     if isinstance(block_size_bytes, bool) or not isinstance(block_size_bytes, (int, np.integer)) or block_size_bytes < 1024:

@@ -55,6 +55,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
+from gyrodrift.io.timebase import check_time_base, time_scale
 
 __all__ = [
     "NUMERIC_COLS",
@@ -269,13 +270,17 @@ class ReadOptions(NamedTuple):
     scale: float  #: multiplier from that unit to deg/s
     frame: str  #: "ned" or "enu"
     renames: dict[str, str]  #: column map NEW -> OLD
+    time_unit: str | None = None  #: canonical unit of ``t`` in the file (None: s, not stated)
+    time_scale: float = 1.0  #: multiplier from that unit to s
 
 
-def read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None) -> ReadOptions:
+def read_options(
+    gyro_unit: str, frame: str, column_map: Mapping[str, str] | None, time_unit: str | None = None
+) -> ReadOptions:
     """Check the table options (raising :class:`ConfigError`) and return them canonical."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
-    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map))
+    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit))
 
 
 # ---------------------------------------------------------------------------
@@ -566,6 +571,15 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
         )
 
 
+def _check_time_base(frame: pd.DataFrame, src: Source, opts: ReadOptions) -> tuple[str, ...]:
+    """Refuse time stamps implausible in their unit (:func:`~gyrodrift.io.timebase.check_time_base`,
+    on the frame's rows); return the note of a low sample rate, if any."""
+    found = check_time_base(frame[T].to_numpy(), opts.time_unit)
+    if found.problem:
+        raise format_error(src, found.problem, found.advice, where=f"column {T!r}")
+    return (f"{src.name}: {found.note}",) if found.note else ()
+
+
 def _check_temperature(frame: pd.DataFrame, src: Source) -> None:
     """Reject temperatures outside :data:`TEMP_RANGE_C`."""
     lo, hi = TEMP_RANGE_C
@@ -707,6 +721,7 @@ class Normalised(NamedTuple):
     #: "measured"; "absent" (no ``temp`` column) or "empty" (``temp`` empty in every row
     #: of the file): then ``temp`` is :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row
     temperature: str
+    notes: tuple[str, ...] = ()  #: notes of the first frame about the whole file (a low sample rate)
 
 
 def normalise_frame(
@@ -761,6 +776,9 @@ def normalise_frame(
         _check_required_values(first, src)
         temp_empty = TEMP in first and first[TEMP] is None
     _check_time(df, src, prev_t_s)
+    notes = _check_time_base(df, src, opts) if first_values is not None else ()
+    if opts.time_scale != 1.0:
+        df[T] = df[T].to_numpy() * opts.time_scale  # df is a new frame (convert_numeric)
     if TEMP not in df.columns:
         temperature = TEMP_ABSENT
     elif temp_empty:
@@ -775,4 +793,4 @@ def normalise_frame(
     df = _wrap_headings(df)
     if temperature != TEMP_MEASURED:
         df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
-    return Normalised(df, with_values, temperature)
+    return Normalised(df, with_values, temperature, notes)

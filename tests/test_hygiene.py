@@ -1,0 +1,83 @@
+"""Real-log hygiene (issue 15, item 5): time units, held compass values, declination,
+unit mix-ups, batch folders, option typos."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import synthetic_log
+from gyrodrift.cli import main
+from gyrodrift.errors import LogFormatError
+from gyrodrift.io import read_log
+from gyrodrift.io.chunked import iter_log_chunks
+
+
+@pytest.fixture(scope="module")
+def log():
+    return synthetic_log(duration_s=200.0, gyro_noise_dps=0.05, compass_noise_deg=0.5)
+
+
+def _write(frame, path):
+    frame.to_csv(path, index=False)
+    return path
+
+
+def _with_time(log, t):
+    out = log.copy()
+    out["t"] = t
+    return out
+
+
+# ----------------------------------------------------------------------------- time unit
+
+
+@pytest.mark.parametrize(
+    "unit, factor, offset_s",
+    [("ms", 1e3, 12_345.0), ("us", 1e6, 12_345.0), ("ns", 1e9, 12_345.0), ("ms", 1e3, 1.7e9), ("us", 1e6, 1.7e9)],
+)
+def test_time_stamps_in_another_unit_are_refused_naming_the_unit(log, tmp_path, capsys, unit, factor, offset_s):
+    t = np.round((log["t"] + offset_s) * factor)  # since boot, or since 1970
+    path = _write(_with_time(log, t.astype("int64")), tmp_path / "log.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "column 't'" in err and f"--time-unit {unit}" in err
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_float_epoch_milliseconds_are_refused(log, tmp_path):
+    path = _write(_with_time(log, log["t"] * 1e3 + 1.7e12), tmp_path / "log.csv")
+    with pytest.raises(LogFormatError, match="--time-unit ms"):
+        read_log(path)
+
+
+def test_time_unit_converts_to_seconds_whole_and_chunked(log, tmp_path, capsys):
+    path = _write(_with_time(log, np.round((log["t"] + 100.0) * 1e3).astype("int64")), tmp_path / "ms.csv")
+    whole = read_log(path, time_unit="ms")
+    np.testing.assert_allclose(whole["t"], log["t"] + 100.0, rtol=0, atol=1e-9)
+    chunks = pd.concat(list(iter_log_chunks(path, time_unit="ms", chunk_rows=1000)))
+    pd.testing.assert_frame_equal(chunks, whole, check_exact=True)
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--time-unit", "ms"]) == 0
+    assert "at 20.0 Hz" in capsys.readouterr().out
+
+
+def test_a_sample_rate_above_100_khz_is_refused_even_with_a_time_unit(log, tmp_path, capsys):
+    path = _write(_with_time(log, np.round(log["t"] * 1e3).astype("int64")), tmp_path / "ms.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--time-unit", "ns"]) == 2
+    err = capsys.readouterr().err
+    assert "MHz" in err and "--time-unit ms" in err
+
+
+def test_a_sample_rate_below_1_hz_is_read_with_a_note(log, tmp_path, capsys):
+    path = _write(_with_time(log, log["t"] * 50.0), tmp_path / "slow.csv")  # 0.4 Hz, not whole numbers
+    notes = read_log(path).attrs["notes"]
+    assert any("below 1 Hz" in n and "--time-unit" in n for n in notes)
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "note:" in out and "below 1 Hz" in out and "at 0.4 Hz" in out
+
+
+def test_a_bad_time_unit_is_a_usage_error(log, tmp_path, capsys):
+    path = _write(log, tmp_path / "log.csv")
+    with pytest.raises(SystemExit):
+        main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--time-unit", "min"])
+    assert "invalid choice" in capsys.readouterr().err
