@@ -81,3 +81,52 @@ def test_a_bad_time_unit_is_a_usage_error(log, tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--time-unit", "min"])
     assert "invalid choice" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- gyro unit
+
+
+@pytest.fixture(scope="module")
+def turning():
+    return synthetic_log(
+        duration_s=300.0, gyro_noise_dps=0.05, compass_noise_deg=0.5,
+        heading_deg=lambda t: 100.0 + 90.0 * np.sin(2 * np.pi * t / 120.0),
+    )
+
+
+def _gyro_in(log, factor):
+    out = log.copy()
+    out["gyro_z"] = log["gyro_z"] * factor
+    out["true_bias_z"] = log["true_bias_z"] * factor
+    return out
+
+
+def test_a_gyro_in_rad_s_read_as_deg_s_gets_a_note(turning, tmp_path, capsys):
+    path = _write(_gyro_in(turning, np.pi / 180.0), tmp_path / "rad.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "note:" in out and "times less than the compass" in out and "--gyro-unit rad/s" in out
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out2.csv"), "--gyro-unit", "rad/s"]) == 0
+    assert "gyro_z turns" not in capsys.readouterr().out
+    from gyrodrift import compensate
+
+    notes = compensate(read_log(path)).attrs["notes"]  # the in-memory path says it too
+    assert any("times less than the compass" in n for n in notes)
+
+
+def test_a_gyro_in_deg_s_converted_as_rad_s_gets_a_note(turning, tmp_path, capsys):
+    path = _write(turning, tmp_path / "deg.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--gyro-unit", "rad/s"]) == 0
+    out = capsys.readouterr().out
+    assert "times more than the compass" in out and "drop --gyro-unit rad/s" in out
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out2.csv")]) == 0
+    assert "gyro_z turns" not in capsys.readouterr().out
+
+
+def test_rates_beyond_a_mems_range_after_rad_s_conversion_get_a_note_without_compass(turning, tmp_path):
+    from gyrodrift import compensate
+
+    path = _write(_gyro_in(turning, 10.0).drop(columns=["heading"]), tmp_path / "nocompass.csv")
+    notes = compensate(read_log(path, gyro_unit="rad/s")).attrs["notes"]
+    assert any("beyond any MEMS gyro's range" in n for n in notes)
+    assert not any("MEMS" in n for n in compensate(read_log(path)).attrs["notes"])

@@ -502,6 +502,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     column_types: dict[str, str]) -> RunStats:
     from gyrodrift.compass import compass_columns
     from gyrodrift.compensator import ChunkEngine, output_frame
+    from gyrodrift.gyro_units import GyroUnitCheck
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
@@ -510,6 +511,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     est = build_estimator(cfg)
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
+    units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
     table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
     # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
     # (gathered into bigger groups, it idled and then held up the compute thread, and
@@ -548,6 +550,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 else:
                     heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
                 pending.append(log)
+                units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
                                    heading, norm, dip)
                 if cols is not None:
@@ -560,6 +563,6 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             reader.close()
             behind.close()
         stats.compass = chunks.compass or "?"
-        stats.notes = list(getattr(chunks, "notes", ())) + engine.notes
+        stats.notes = [*getattr(chunks, "notes", ()), *engine.notes, *filter(None, [units.note()])]
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats
