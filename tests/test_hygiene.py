@@ -130,3 +130,29 @@ def test_rates_beyond_a_mems_range_after_rad_s_conversion_get_a_note_without_com
     notes = compensate(read_log(path, gyro_unit="rad/s")).attrs["notes"]
     assert any("beyond any MEMS gyro's range" in n for n in notes)
     assert not any("MEMS" in n for n in compensate(read_log(path)).attrs["notes"])
+
+
+# ----------------------------------------------------------------------------- declination
+
+
+def test_declination_puts_the_headings_in_true_north(log, tmp_path, capsys):
+    from gyrodrift import compensate
+    from gyrodrift.compensator import CompensatorConfig
+    from gyrodrift.config import config_from_dict
+
+    turning = log
+    magnetic = turning.copy()
+    magnetic["heading"] = np.mod(turning["heading"] - 7.0, 360.0)  # east declination 7 deg; ref in true north
+    plain = compensate(magnetic)
+    true = compensate(magnetic, CompensatorConfig(declination_deg=7.0))
+    error = lambda out, col: np.abs((out[col] - turning["ref_heading"] + 180.0) % 360.0 - 180.0).mean()
+    for col in ("heading", "heading_fused"):
+        assert error(plain, col) > 5.0 and error(true, col) < 1.0
+    np.testing.assert_allclose(true["compass_heading"], turning["heading"], atol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(true["bias_z"], plain["bias_z"])  # the drift does not depend on it
+    assert config_from_dict({"declination_deg": 7.0}).declination_deg == 7.0
+    path = _write(magnetic, tmp_path / "mag.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--declination", "7"]) == 0
+    assert "compensated RMS 0." in capsys.readouterr().out
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--declination", "200"]) == 2
+    assert "declination_deg must be" in capsys.readouterr().err

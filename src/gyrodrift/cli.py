@@ -32,7 +32,8 @@ units and conventions (input contract, CSV with a header row or Parquet):
                no sample) or raw FRD 'mag_x,mag_y,mag_z' (any unit) with
                'acc_x,acc_y,acc_z' (g or m/s^2, specific force: level+still reads
                acc_z = -1 g); the heading is then tilt-compensated
-  optional     gyro_x, gyro_y (deg/s), ref_heading (deg, evaluation only),
+  optional     gyro_x, gyro_y (deg/s), ref_heading (deg from true north, as
+               PX4's attitude yaw; evaluation only),
                true_bias_z (deg/s, evaluation only); other columns pass through
   --frame enu  ROS REP-103 logs (ENU world, FLU body): heading = 90 - yaw, and
                gyro/mag/acc y and z axes change sign
@@ -43,7 +44,9 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, unobservable (a, b or a+b: parameters not yet determined by
   the data, e.g. at a flat temperature), bias_sd (deg/s, standard deviation of
-  bias_z), heading_fused (deg [0,360), gyro and compass combined),
+  bias_z), heading_fused (deg [0,360), gyro and compass combined; heading,
+  heading_fused and compass_heading are from magnetic north, or from true north
+  with --declination),
   heading_fused_sd and heading_sd (deg, standard deviations of heading_fused and
   of heading); with gyro_x, gyro_y and acc_* in the log also rate_x, rate_y,
   bias_x, bias_y (deg/s) and tilt_gated; then the other input columns.
@@ -68,7 +71,7 @@ def _config(args) -> CompensatorConfig:
         gate = replace(gate, interference_deg=args.interference_deg)
     changes = {
         name: getattr(args, name)
-        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator")
+        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator", "declination_deg")
         if getattr(args, name) is not None
     }
     return replace(base, kalman=kalman, gate=gate, **changes)
@@ -87,6 +90,11 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--init-s", type=float, help=f"initialisation window at the start, s (default {d.init_s:g})")
     g.add_argument("--stack-depth", type=int, help=f"measurements stacked per update (default {d.stack_depth})")
     g.add_argument("--compass-sigma-deg", type=float, help=f"compass noise, deg (default {d.compass_sigma_deg:g})")
+    g.add_argument(
+        "--declination", dest="declination_deg", type=float, metavar="DEG",
+        help="magnetic declination, deg, east positive: added to the compass heading, so that compass_heading, "
+        "heading and heading_fused are in true north like ref_heading (default 0: magnetic north)",
+    )
     g.add_argument("--turn-rate-dps", type=float, help=f"turning threshold, deg/s (default {d.gate.turn_rate_dps:g})")
     g.add_argument(
         "--interference-deg", type=float,
