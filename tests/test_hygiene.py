@@ -156,3 +156,37 @@ def test_declination_puts_the_headings_in_true_north(log, tmp_path, capsys):
     assert "compensated RMS 0." in capsys.readouterr().out
     assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--declination", "200"]) == 2
     assert "declination_deg must be" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- held compass
+
+
+def test_held_compass_values_are_dropped_so_a_resampled_csv_equals_its_bag(log, tmp_path):
+    from gyrodrift import compensate
+
+    sparse = log.copy()  # as a bag gives it: one compass sample per message, NaN elsewhere
+    held = sparse.copy()
+    held["heading"] = sparse["heading"].ffill()  # as a CSV resampled onto the gyro rows gives it
+    a, b = read_log(_write(sparse, tmp_path / "bag.csv")), read_log(_write(held, tmp_path / "held.csv"))
+    np.testing.assert_array_equal(a["heading"], b["heading"])
+    dropped = int(held["heading"].notna().sum() - sparse["heading"].notna().sum())
+    assert any(f"{dropped} compass samples repeated" in n for n in b.attrs["notes"])
+    assert not any("repeated" in n for n in a.attrs.get("notes", []))
+    np.testing.assert_array_equal(compensate(a)["heading_fused"], compensate(b)["heading_fused"])
+    chunks = pd.concat(list(iter_log_chunks(tmp_path / "held.csv", chunk_rows=7)))  # runs across chunks
+    pd.testing.assert_frame_equal(chunks, b, check_exact=True)
+    with iter_log_chunks(tmp_path / "held.csv", chunk_rows=7) as reader:
+        list(reader)
+        assert any(f"{dropped} compass samples repeated" in n for n in reader.notes)
+
+
+def test_held_magnetometer_triples_are_dropped_only_when_all_three_repeat(tmp_path):
+    rows = pd.DataFrame({
+        "t": np.arange(6) * 0.1, "gyro_z": 0.1, "temp": 25.0,
+        "mag_x": [0.2, 0.2, 0.2, 0.3, 0.3, np.nan], "mag_y": [0.0, 0.0, 0.1, 0.1, 0.1, np.nan],
+        "mag_z": [0.4] * 5 + [np.nan], "acc_x": 0.0, "acc_y": 0.0, "acc_z": -1.0,
+    })
+    out = read_log(_write(rows, tmp_path / "mag.csv"))
+    assert out["mag_x"].isna().tolist() == [False, True, False, False, True, True]
+    assert out["mag_y"].isna().tolist() == out["mag_x"].isna().tolist()
+    assert any("2 compass samples repeated" in n for n in out.attrs["notes"])

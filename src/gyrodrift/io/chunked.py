@@ -16,7 +16,8 @@ What a chunked reader cannot know in advance, and what it does about it:
 
 * **Which compass form the log has** (``df.attrs["compass"]`` of ``read_log``) is known
   after the last chunk: :attr:`LogChunks.compass`, and so are the notes
-  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature):
+  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature, held compass values
+  emptied; a low sample rate, decided on the first chunk):
   :attr:`LogChunks.notes`. A log whose compass columns are empty in every row has
   compass "none", as ``read_log`` says; its chunks keep those columns as read.
 * **A required column empty at the start** (``gyro_z``/``temp`` missing on the first
@@ -72,6 +73,7 @@ from gyrodrift.conventions import T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import csvfile, formats, parquetfile, validate
 from gyrodrift.io.chunkwriter import ChunkWriter
+from gyrodrift.io.held import held_note
 
 __all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary", "ColumnTypeChanged"]
 
@@ -559,27 +561,30 @@ class LogChunks:
         with_values: frozenset[str] = frozenset()
         temperature = validate.TEMP_MEASURED  # the first chunk decides it for the file
         first_notes: tuple[str, ...] = ()  # and the time base (gyrodrift.io.timebase)
+        held, last_compass = 0, None  # held compass values emptied so far (gyrodrift.io.held)
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found, temperature, notes = validate.normalise_frame(
+            df, found, temperature, notes, held_here, last_compass = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
                 prev_t_s=prev_t_s,
                 first_values=self._first_values if self.rows == 0 else None,
                 temp_empty=temperature == validate.TEMP_EMPTY,
+                prev_compass=last_compass,
             )
             df.index = pd.RangeIndex(self.rows, self.rows + len(df))
             df.attrs = self.attrs
             prev_t_s = float(df[T].iloc[-1])
             columns, with_values = list(df.columns), with_values | found
-            first_notes = first_notes or notes
+            first_notes, held = first_notes or notes, held + held_here
             self.rows += len(df)
             yield df
         if self.rows == 0:
             raise validate.no_data_rows_error(src)
         self.compass = validate.compass_form(with_values)
-        self.notes = [*validate.table_notes(src.name, columns, with_values, temperature), *first_notes]
+        held_notes = filter(None, [held_note(src.name, held)])
+        self.notes = [*validate.table_notes(src.name, columns, with_values, temperature), *first_notes, *held_notes]
 
     def __iter__(self) -> "LogChunks":
         return self

@@ -43,6 +43,7 @@ from gyrodrift.io.csvfile import (
     write_csv_with_pandas,
 )
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
+from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
 from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
 from gyrodrift.io.validate import (
@@ -208,7 +209,7 @@ def read_log(
     else:
         table, src = _read_parquet_table(path)
 
-    df, with_values, temperature, first_notes = normalise_frame(table_to_frame(table, src), src, opts)
+    df, with_values, temperature, first_notes, held, _ = normalise_frame(table_to_frame(table, src), src, opts)
     df.attrs = {
         "source": str(path),
         "format": table_fmt,
@@ -216,7 +217,8 @@ def read_log(
         "frame": opts.frame,
         "compass": compass_form(with_values),
     }
-    for note in [*table_notes(src.name, df.columns, with_values, temperature), *first_notes]:
+    held_notes = filter(None, [held_note(src.name, held)])
+    for note in [*table_notes(src.name, df.columns, with_values, temperature), *first_notes, *held_notes]:
         add_note(df.attrs, note)
     return df
 

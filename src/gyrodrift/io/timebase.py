@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from gyrodrift.conventions import TIME_UNITS
-from gyrodrift.errors import ConfigError
+from gyrodrift.errors import ConfigError, LogFormatError
 
 __all__ = [
     "MAX_RATE_HZ",
@@ -38,6 +38,7 @@ __all__ = [
     "time_scale",
     "TimeBase",
     "check_time_base",
+    "time_base_notes",
 ]
 
 #: Highest plausible sample rate, Hz.
@@ -153,3 +154,18 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
             "if t is not in seconds, pass --time-unit ms, us or ns (time_unit in Python)",
         )
     return TimeBase(None, None, None)
+
+
+def time_base_notes(t_raw: np.ndarray, unit: str | None, name: str) -> tuple[str, ...]:
+    """:func:`check_time_base` for the file ``name``: raise its refusal, return its note.
+
+    Raises
+    ------
+    LogFormatError
+        ``<name>: column 't': <problem>; <advice>``, the message style of
+        :mod:`gyrodrift.io.validate`.
+    """
+    found = check_time_base(t_raw, unit)
+    if found.problem:
+        raise LogFormatError(f"{name}: column 't': {found.problem}; {found.advice}")
+    return (f"{name}: {found.note}",) if found.note else ()

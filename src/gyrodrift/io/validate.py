@@ -55,7 +55,8 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
-from gyrodrift.io.timebase import check_time_base, time_scale
+from gyrodrift.io.held import drop_held
+from gyrodrift.io.timebase import time_base_notes, time_scale
 
 __all__ = [
     "NUMERIC_COLS",
@@ -571,15 +572,6 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
         )
 
 
-def _check_time_base(frame: pd.DataFrame, src: Source, opts: ReadOptions) -> tuple[str, ...]:
-    """Refuse time stamps implausible in their unit (:func:`~gyrodrift.io.timebase.check_time_base`,
-    on the frame's rows); return the note of a low sample rate, if any."""
-    found = check_time_base(frame[T].to_numpy(), opts.time_unit)
-    if found.problem:
-        raise format_error(src, found.problem, found.advice, where=f"column {T!r}")
-    return (f"{src.name}: {found.note}",) if found.note else ()
-
-
 def _check_temperature(frame: pd.DataFrame, src: Source) -> None:
     """Reject temperatures outside :data:`TEMP_RANGE_C`."""
     lo, hi = TEMP_RANGE_C
@@ -722,6 +714,8 @@ class Normalised(NamedTuple):
     #: of the file): then ``temp`` is :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row
     temperature: str
     notes: tuple[str, ...] = ()  #: notes of the first frame about the whole file (a low sample rate)
+    held: int = 0  #: rows whose held compass values were emptied (:mod:`gyrodrift.io.held`)
+    last_compass: dict | None = None  #: ``prev_compass`` of the next frame
 
 
 def normalise_frame(
@@ -732,6 +726,7 @@ def normalise_frame(
     prev_t_s: float | None = None,
     first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = first_value_rows,
     temp_empty: bool = False,
+    prev_compass: dict | None = None,
 ) -> Normalised:
     """Check a frame of a table and bring it into the input contract.
 
@@ -744,6 +739,7 @@ def normalise_frame(
     temperature (no ``temp`` column, or one empty in every row of the file) gets
     ``temp`` = :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row: in place of
     the empty column, or added as the last column. :func:`table_notes` words both.
+    Compass values that repeat the row before bit for bit are emptied (:mod:`gyrodrift.io.held`).
 
     Parameters
     ----------
@@ -761,6 +757,9 @@ def normalise_frame(
     temp_empty : bool, default False
         With ``first_values`` None (later chunks): the file's ``temp`` column is empty
         in every row, as the first chunk's ``temperature`` ("empty") said.
+    prev_compass : dict, optional
+        ``last_compass`` of the frame before (chunks): held compass values are emptied
+        across chunks as in the whole file (:func:`~gyrodrift.io.held.drop_held`).
 
     Returns
     -------
@@ -776,7 +775,8 @@ def normalise_frame(
         _check_required_values(first, src)
         temp_empty = TEMP in first and first[TEMP] is None
     _check_time(df, src, prev_t_s)
-    notes = _check_time_base(df, src, opts) if first_values is not None else ()
+    notes = time_base_notes(df[T].to_numpy(), opts.time_unit, src.name) if first_values is not None else ()
+    df, held, last_compass = drop_held(df, prev_compass)
     if opts.time_scale != 1.0:
         df[T] = df[T].to_numpy() * opts.time_scale  # df is a new frame (convert_numeric)
     if TEMP not in df.columns:
@@ -793,4 +793,4 @@ def normalise_frame(
     df = _wrap_headings(df)
     if temperature != TEMP_MEASURED:
         df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
-    return Normalised(df, with_values, temperature, notes)
+    return Normalised(df, with_values, temperature, notes, held, last_compass)
