@@ -190,3 +190,25 @@ def test_held_magnetometer_triples_are_dropped_only_when_all_three_repeat(tmp_pa
     assert out["mag_x"].isna().tolist() == [False, True, False, False, True, True]
     assert out["mag_y"].isna().tolist() == out["mag_x"].isna().tolist()
     assert any("2 compass samples repeated" in n for n in out.attrs["notes"])
+
+
+# ----------------------------------------------------------------------------- batch
+
+
+def test_batch_mirrors_input_folders_and_takes_the_input_options(log, tmp_path, capsys):
+    ms = _with_time(log, np.round((log["t"] + 100.0) * 1e3).astype("int64"))
+    for sub in ("a", "b"):
+        (tmp_path / "logs" / sub).mkdir(parents=True)
+        _write(ms, tmp_path / "logs" / sub / "x.csv")
+    out = tmp_path / "out"
+    pattern = str(tmp_path / "logs" / "*" / "x.csv")
+    assert main(["batch", pattern, "-o", str(out), "--workers", "1", "--format", "csv"]) == 1  # ms read as s
+    assert "--time-unit ms" in capsys.readouterr().out
+    args = ["batch", pattern, "-o", str(out), "--workers", "1", "--format", "csv", "--time-unit", "ms",
+            "--init-s", "20", "--gyro-unit", "deg/s", "--frame", "ned", "--map", "gyro_z=gyro_z"]
+    assert main(args) == 0
+    a, b = pd.read_csv(out / "a" / "x_out.csv"), pd.read_csv(out / "b" / "x_out.csv")
+    np.testing.assert_allclose(a["t"], log["t"] + 100.0, atol=1e-9)
+    pd.testing.assert_frame_equal(a, b)
+    assert (a["gate_reason"] == "init").sum() == 20 * 20  # 20 s at 20 Hz
+

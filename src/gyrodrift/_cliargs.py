@@ -9,7 +9,7 @@ from gyrodrift.conventions import TIME_UNITS
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import FORMATS, read_log
 
-__all__ = ["parse_map", "add_input_options", "read_input"]
+__all__ = ["parse_map", "add_table_options", "add_input_options", "read_input", "table_read_options"]
 
 
 def parse_map(text: str | None) -> dict[str, str] | None:
@@ -25,10 +25,9 @@ def parse_map(text: str | None) -> dict[str, str] | None:
     return mapping
 
 
-def add_input_options(p: argparse.ArgumentParser) -> None:
-    """Options that say how to read the input log (every format)."""
-    g = p.add_argument_group("input")
-    g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
+def add_table_options(g) -> None:
+    """Options that say how to read a CSV or Parquet table (``--gyro-unit``, ``--frame``,
+    ``--map``, ``--time-unit``), on a parser or an argument group."""
     g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
     g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
     g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
@@ -36,6 +35,19 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
         "--time-unit", choices=list(TIME_UNITS),
         help="tables: unit of t, converted to s (default s; time stamps that look like ms, us or ns are refused)",
     )
+
+
+def table_read_options(args: argparse.Namespace) -> dict:
+    """The :func:`gyrodrift.io.read_log` keywords of :func:`add_table_options`."""
+    return {"gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
+            "time_unit": args.time_unit}
+
+
+def add_input_options(p: argparse.ArgumentParser) -> None:
+    """Options that say how to read the input log (every format)."""
+    g = p.add_argument_group("input")
+    g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
+    add_table_options(g)
     g.add_argument("--instance", type=int, default=0, help="PX4 ULog: sensor_gyro instance (default 0)")
     g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected)")
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
