@@ -212,3 +212,22 @@ def test_batch_mirrors_input_folders_and_takes_the_input_options(log, tmp_path, 
     pd.testing.assert_frame_equal(a, b)
     assert (a["gate_reason"] == "init").sum() == 20 * 20  # 20 s at 20 Hz
 
+
+# ----------------------------------------------------------------------------- did you mean
+
+
+@pytest.mark.parametrize(
+    "argv, hint",
+    [
+        (["compensat", "x.csv"], "did you mean 'compensate'?"),
+        (["compensate", "x.csv", "-o", "y.csv", "--gyro-units", "rad/s"], "did you mean --gyro-unit?"),
+        (["compensate", "x.csv", "-o", "y.csv", "--declinaton=3"], "did you mean --declination?"),
+        (["batch", "x", "-o", "y", "--time-units", "ms"], "did you mean --time-unit?"),
+        (["compensate", "x.csv", "-o", "y.csv", "--estimator", "stfk"], "did you mean 'stkf'?"),
+    ],
+)
+def test_typos_get_a_did_you_mean(argv, hint, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    assert hint in capsys.readouterr().err

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, parse_map, read_input
+from gyrodrift._parser import SuggestingParser
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -379,7 +380,7 @@ def _cmd_montecarlo(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = SuggestingParser(  # "did you mean" for mistyped options and subcommands
         prog="gyrodrift",
         description="Remove the temperature drift of a MEMS gyroscope with compass aiding "
         "(strong tracking Kalman filter of Feng, Li, Zhang, Sensors 2015).",
