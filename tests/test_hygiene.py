@@ -231,3 +231,15 @@ def test_typos_get_a_did_you_mean(argv, hint, capsys):
         main(argv)
     assert exc.value.code == 2
     assert hint in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- units printed, typing marker
+
+
+def test_b_is_printed_in_deg_per_degc_and_the_package_is_typed(log, tmp_path, capsys):
+    from importlib import resources
+
+    path = _write(log, tmp_path / "log.csv")
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv")]) == 0
+    assert " deg/degC, c = " in capsys.readouterr().out  # b multiplies T' (degC/s) and gives deg/s
+    assert (resources.files("gyrodrift") / "py.typed").is_file()

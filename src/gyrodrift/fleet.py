@@ -473,7 +473,7 @@ BATCH_EPILOG = """\
 output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically (logs in
 sub-folders of the logs' common folder go to the same sub-folders of OUTDIR), and
 OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
-temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg), c (deg/s) final
+temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg/degC), c (deg/s) final
 drift model, seconds (wall time per log). Text cells that start with = + - @ get a
 leading ' (shown as text, never run as a spreadsheet formula).
 

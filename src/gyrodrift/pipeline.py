@@ -151,7 +151,7 @@ class RunStats:
         lines = [
             *(f"note: {n}" for n in self.notes),
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
-            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
+            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s",
         ]
         raw_ss, ss, n = self._bias
         if n:
