@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from gyrodrift.conventions import TIME_UNITS
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import FORMATS, read_log
 
-__all__ = ["parse_map", "add_input_options", "add_table_options", "read_input"]
+__all__ = ["parse_map", "add_table_options", "add_input_options", "read_input", "table_read_options"]
 
 
 def parse_map(text: str | None) -> dict[str, str] | None:
@@ -22,6 +23,24 @@ def parse_map(text: str | None) -> dict[str, str] | None:
             raise ConfigError(f"--map expects NEW=OLD[,NEW=OLD...], got {item!r}")
         mapping[new.strip()] = old.strip()
     return mapping
+
+
+def add_table_options(g) -> None:
+    """Options that say how to read a CSV or Parquet table (``--gyro-unit``, ``--frame``,
+    ``--map``, ``--time-unit``), on a parser or an argument group."""
+    g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
+    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
+    g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
+    g.add_argument(
+        "--time-unit", choices=list(TIME_UNITS),
+        help="tables: unit of t, converted to s (default s; time stamps that look like ms, us or ns are refused)",
+    )
+
+
+def table_read_options(args: argparse.Namespace) -> dict:
+    """The :func:`gyrodrift.io.read_log` keywords of :func:`add_table_options`."""
+    return {"gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
+            "time_unit": args.time_unit}
 
 
 def add_input_options(p: argparse.ArgumentParser) -> None:
@@ -38,14 +57,6 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")
 
 
-def add_table_options(g) -> None:
-    """The unit, frame and column options of tables (``--gyro-unit``, ``--frame``, ``--map``),
-    to a parser or an argument group."""
-    g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
-    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
-    g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
-
-
 def read_input(path: Path, args: argparse.Namespace, *, with_format: bool = True):
     """Read ``path`` with the options of :func:`add_input_options`."""
     return read_log(
@@ -54,6 +65,7 @@ def read_input(path: Path, args: argparse.Namespace, *, with_format: bool = True
         gyro_unit=args.gyro_unit,
         frame=args.frame,
         column_map=parse_map(args.map),
+        time_unit=args.time_unit,
         instance=args.instance,
         mag_instance=args.mag_instance,
         imu_topic=args.imu_topic,

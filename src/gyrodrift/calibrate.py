@@ -729,7 +729,7 @@ def start_temperature(path, read_options: dict | None = None) -> float:
     opts = dict(read_options or {})
     path = Path(path)
     if log_format(path, opts.get("fmt")) in ("csv", "parquet"):
-        table = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if opts.get(k) is not None}
+        table = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map", "time_unit") if opts.get(k) is not None}
         with iter_log_chunks(path, chunk_rows=4096, **table) as chunks:
             for chunk in chunks:
                 temps = chunk[TEMP].to_numpy(dtype=float)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
+from gyrodrift._parser import SuggestingParser
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -23,7 +24,8 @@ __all__ = ["main"]
 
 CONVENTIONS = """\
 units and conventions (input contract, CSV with a header row or Parquet):
-  t            s, strictly increasing
+  t            s, strictly increasing (--time-unit ms, us or ns converts; time
+               stamps that look like those units are refused)
   gyro_z       deg/s; positive = heading increases (clockwise seen from above:
                NED body frame, z down). --gyro-unit rad/s converts.
   temp         degC, gyro temperature
@@ -31,18 +33,21 @@ units and conventions (input contract, CSV with a header row or Parquet):
                no sample) or raw FRD 'mag_x,mag_y,mag_z' (any unit) with
                'acc_x,acc_y,acc_z' (g or m/s^2, specific force: level+still reads
                acc_z = -1 g); the heading is then tilt-compensated
-  optional     gyro_x, gyro_y (deg/s), ref_heading (deg, evaluation only),
+  optional     gyro_x, gyro_y (deg/s), ref_heading (deg from true north, as
+               PX4's attitude yaw; evaluation only),
                true_bias_z (deg/s, evaluation only); other columns pass through
   --frame enu  ROS REP-103 logs (ENU world, FLU body): heading = 90 - yaw, and
                gyro/mag/acc y and z axes change sign
 output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (deg [0,360), integrated from rate_z from the first compass heading), a
-  (deg/s/degC), b (deg), c (deg/s) of the drift model a*T + b*T' + c, update
+  (deg/s/degC), b (deg/degC), c (deg/s) of the drift model a*T + b*T' + c, update
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, unobservable (a, b or a+b: parameters not yet determined by
   the data, e.g. at a flat temperature), bias_sd (deg/s, standard deviation of
-  bias_z), heading_fused (deg [0,360), gyro and compass combined),
+  bias_z), heading_fused (deg [0,360), gyro and compass combined; heading,
+  heading_fused and compass_heading are from magnetic north, or from true north
+  with --declination),
   heading_fused_sd and heading_sd (deg, standard deviations of heading_fused and
   of heading); with gyro_x, gyro_y and acc_* in the log also rate_x, rate_y,
   bias_x, bias_y (deg/s) and tilt_gated; then the other input columns.
@@ -67,7 +72,7 @@ def _config(args) -> CompensatorConfig:
         gate = replace(gate, interference_deg=args.interference_deg)
     changes = {
         name: getattr(args, name)
-        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator")
+        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator", "declination_deg")
         if getattr(args, name) is not None
     }
     return replace(base, kalman=kalman, gate=gate, **changes)
@@ -86,6 +91,11 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--init-s", type=float, help=f"initialisation window at the start, s (default {d.init_s:g})")
     g.add_argument("--stack-depth", type=int, help=f"measurements stacked per update (default {d.stack_depth})")
     g.add_argument("--compass-sigma-deg", type=float, help=f"compass noise, deg (default {d.compass_sigma_deg:g})")
+    g.add_argument(
+        "--declination", dest="declination_deg", type=float, metavar="DEG",
+        help="magnetic declination, deg, east positive: added to the compass heading, so that compass_heading, "
+        "heading and heading_fused are in true north like ref_heading (default 0: magnetic north)",
+    )
     g.add_argument("--turn-rate-dps", type=float, help=f"turning threshold, deg/s (default {d.gate.turn_rate_dps:g})")
     g.add_argument(
         "--interference-deg", type=float,
@@ -164,7 +174,8 @@ def _cmd_stream(args) -> int:
             input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
             output_writer(args.output) as write:
         stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
-                            frame=args.frame, column_map=parse_map(args.map), source=name, skip_bad=args.skip_bad,
+                            frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
+                            source=name, skip_bad=args.skip_bad,
                             warn=warn, compensator=Compensator(cfg, source=name))
     run = stats.run
     if profile is not None and run.rows:
@@ -270,6 +281,7 @@ def _read_options(args) -> dict:
     """The read_log options of :func:`gyrodrift._cliargs.add_input_options`."""
     return {
         "fmt": args.format, "gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
+        "time_unit": args.time_unit,
         "instance": args.instance, "mag_instance": args.mag_instance, "imu_topic": args.imu_topic,
         "temp_topic": args.temp_topic, "mag_topic": args.mag_topic,
     }
@@ -445,7 +457,7 @@ def _cmd_montecarlo(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = SuggestingParser(  # "did you mean" for mistyped options and subcommands
         prog="gyrodrift",
         description="Remove the temperature drift of a MEMS gyroscope with compass aiding "
         "(strong tracking Kalman filter of Feng, Li, Zhang, Sensors 2015).",

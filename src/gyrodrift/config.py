@@ -71,7 +71,7 @@ _TABLES = ("kalman", "gate", "temp_rate", "adaptive", "fusion")
 #: Largest settings or profile file read, bytes (such files are a few hundred bytes).
 MAX_FILE_BYTES = 1 << 20
 _INT64 = (-(2**63), 2**63 - 1)
-#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg) and
+#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
 #: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
 #: give (the reasoning is in the notes of :mod:`gyrodrift.profile`).
 DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)

@@ -51,6 +51,7 @@ __all__ = [
     "REQUIRED_COLS",
     "OUTPUT_COLS",
     "GYRO_UNITS",
+    "TIME_UNITS",
     "FRAMES",
     "TEMP_RANGE_C",
     "wrap_360",
@@ -90,6 +91,9 @@ OUTPUT_COLS = (
 
 #: Multiplier from each accepted gyro unit to deg/s.
 GYRO_UNITS = {"deg/s": 1.0, "dps": 1.0, "rad/s": float(np.degrees(1.0))}
+
+#: Multiplier from each accepted time unit of a table's ``t`` column to s.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 #: Accepted body/world frame conventions of input logs.
 FRAMES = ("ned", "enu")

@@ -3,7 +3,8 @@
 ``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) reads
 every log, compensates it with :func:`gyrodrift.compensator.compensate`, writes
 ``OUTDIR/<stem>_out.parquet`` (or ``.csv``) atomically, and returns one summary row per
-log. A log that cannot be processed (bad file, too short, no compass, even an
+log; the logs' folders below their common folder are mirrored in ``OUTDIR``
+(``a/x.csv`` and ``b/x.csv`` → ``OUTDIR/a/x_out.parquet`` and ``OUTDIR/b/x_out.parquet``). A log that cannot be processed (bad file, too short, no compass, even an
 unexpected exception in a reader) gives a row with ``status = "error"`` and a one-line
 message; it never stops the other logs.
 
@@ -60,6 +61,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gyrodrift._cliargs import add_table_options, table_read_options
 from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = [
@@ -146,13 +148,28 @@ def find_logs(dir_or_glob) -> list[Path]:
     return sorted(found, key=str)
 
 
-def output_path(path, out_dir, out_format: str = "parquet") -> Path:
-    """Where :func:`process_one` writes the output of ``path``: ``out_dir/<stem>_out.<ext>``.
+def common_root(paths) -> Path | None:
+    """The deepest folder holding every log of ``paths`` (None for none): the input folder
+    :func:`output_path` mirrors under the output folder.
 
-    ``<stem>`` is the file name without its log ending (``run.csv.gz`` → ``run``).
+    >>> common_root(["runs/a/x.csv", "runs/b/x.csv"]).as_posix()
+    'runs'
+    """
+    parents = [os.path.abspath(Path(p).parent) for p in paths]
+    return Path(os.path.commonpath(parents)) if parents else None
+
+
+def output_path(path, out_dir, out_format: str = "parquet", root=None) -> Path:
+    """Where :func:`process_one` writes the output of ``path``: ``out_dir/<sub>/<stem>_out.<ext>``.
+
+    ``<stem>`` is the file name without its log ending (``run.csv.gz`` → ``run``);
+    ``<sub>`` is the log's folder relative to ``root`` (:func:`common_root` of the logs),
+    so that logs of equal names in different folders do not clash; none without ``root``.
 
     >>> output_path("logs/run1.csv.gz", "out").as_posix()
     'out/run1_out.parquet'
+    >>> output_path("runs/b/x.csv", "out", root="runs").as_posix()
+    'out/b/x_out.parquet'
     """
     if out_format not in OUT_FORMATS:
         raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
@@ -160,7 +177,8 @@ def output_path(path, out_dir, out_format: str = "parquet") -> Path:
     lower = name.lower()
     stem = next((name[: -len(s)] for s in _STEM_SUFFIXES if lower.endswith(s) and len(name) > len(s)), None)
     stem = stem if stem is not None else Path(name).stem
-    return Path(out_dir) / f"{stem}_out{OUT_FORMATS[out_format]}"
+    sub = Path(os.path.relpath(os.path.abspath(Path(path).parent), os.path.abspath(root))) if root is not None else Path()
+    return Path(out_dir) / sub / f"{stem}_out{OUT_FORMATS[out_format]}"
 
 
 # --------------------------------------------------------------------------- one log
@@ -192,19 +210,25 @@ def _error_text(err: BaseException) -> str:
     return _one_line(f"unexpected {type(err).__name__}: {err}")
 
 
-def process_one(path, out_dir, *, config=None, out_format: str = "parquet") -> dict:
+def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None) -> dict:
     """Read, compensate and write one log; return its summary row. Never raises.
 
     Parameters
     ----------
     path : str or os.PathLike
-        The log (any format :func:`gyrodrift.io.read_log` reads, in contract units:
-        the table options ``gyro_unit``, ``frame`` and ``column_map`` keep their defaults).
+        The log (any format :func:`gyrodrift.io.read_log` reads).
     out_dir : str or os.PathLike
-        Existing folder for the output table (see :func:`output_path`).
+        Existing folder for the output table (see :func:`output_path`; the sub-folder
+        below it is created).
     config : CompensatorConfig, optional
     out_format : {"parquet", "csv"}
         Format of the output table.
+    root : str or os.PathLike, optional
+        The input folder mirrored under ``out_dir`` (:func:`output_path`).
+    read_options : dict, optional
+        Keywords of :func:`gyrodrift.io.read_log` (``gyro_unit``, ``frame``,
+        ``column_map``, ``time_unit``); a ULog or ROS bag refuses table options other
+        than their defaults (an error row).
 
     Returns
     -------
@@ -221,9 +245,10 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet") -> d
     start = time.perf_counter()
     row = _empty_row(path)
     try:
-        out_path = output_path(path, out_dir, out_format)
+        out_path = output_path(path, out_dir, out_format, root)
         check_output_path(path, out_path)
-        log = read_log(path)
+        log = read_log(path, **(read_options or {}))
+        out_path.parent.mkdir(parents=True, exist_ok=True)
         row.update(_log_facts(log))
         out = compensate(log, config, source=str(path))
         write_table(out, out_path, fmt=out_format)
@@ -256,14 +281,14 @@ def _check_workers(workers) -> int:
     return int(workers)
 
 
-def _check_outputs(paths: list[Path], out_dir: Path, out_format: str) -> None:
+def _check_outputs(paths: list[Path], out_dir: Path, out_format: str, root: Path | None) -> None:
     """Refuse a missing output folder, two logs with one output, an output that is an input."""
     if not out_dir.is_dir():
         raise ConfigError(f"{out_dir}: output folder does not exist; create it first or choose another")
     inputs = {os.path.realpath(p): p for p in paths}
     seen: dict[str, Path] = {}
     for p in paths:
-        out = output_path(p, out_dir, out_format)
+        out = output_path(p, out_dir, out_format, root)
         key = os.path.realpath(out)
         if key in seen:
             raise ConfigError(
@@ -331,6 +356,7 @@ def process_many(
     dask_address=None,
     progress=None,
     out_format: str = "parquet",
+    read_options: dict | None = None,
 ) -> pd.DataFrame:
     """Compensate many logs in parallel; return the summary table, in the input order.
 
@@ -339,7 +365,8 @@ def process_many(
     paths : iterable of str or os.PathLike
         The logs (see :func:`find_logs`).
     out_dir : str or os.PathLike
-        Existing folder for the outputs ``<stem>_out.<ext>`` (see :func:`output_path`).
+        Existing folder for the outputs ``<sub>/<stem>_out.<ext>``: the logs' folders
+        below their :func:`common_root` are mirrored in it (see :func:`output_path`).
     config : CompensatorConfig, optional
         Settings for every log.
     workers : int, optional
@@ -354,6 +381,8 @@ def process_many(
         :func:`gyrodrift._progress.progress_iter`); it must yield the same items.
     out_format : {"parquet", "csv"}
         Format of the output tables.
+    read_options : dict, optional
+        Keywords of :func:`gyrodrift.io.read_log` for every log (see :func:`process_one`).
 
     Returns
     -------
@@ -377,8 +406,10 @@ def process_many(
     n_workers = _check_workers(workers)
     if not paths:
         return _summary_frame([])
-    _check_outputs(paths, out_dir, out_format)
-    job = partial(process_one, out_dir=out_dir, config=config, out_format=out_format)
+    root = common_root(paths)
+    _check_outputs(paths, out_dir, out_format, root)
+    job = partial(process_one, out_dir=out_dir, config=config, out_format=out_format, root=root,
+                  read_options=read_options)
     if dask_address is not None:
         rows = _run_dask(job, paths, dask_address, progress)
     elif n_workers == 1 or len(paths) == 1:
@@ -439,9 +470,10 @@ def summary_markdown(summary: pd.DataFrame) -> str:
 
 
 BATCH_EPILOG = """\
-output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically, and
+output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically (logs in
+sub-folders of the logs' common folder go to the same sub-folders of OUTDIR), and
 OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
-temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg), c (deg/s) final
+temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg/degC), c (deg/s) final
 drift model, seconds (wall time per log). Text cells that start with = + - @ get a
 leading ' (shown as text, never run as a spreadsheet formula).
 
@@ -476,6 +508,8 @@ def add_batch_parser(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--format", choices=list(OUT_FORMATS), default="parquet", help="output table format (default parquet)")
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
+    p.add_argument("--init-s", type=float, help="initialisation window at the start, s (overrides --config)")
+    add_table_options(p.add_argument_group("input (as for compensate)"))
     p.set_defaults(func=batch_command)
     return p
 
@@ -489,12 +523,18 @@ def _prepare_output_dir(out_dir: Path) -> None:
 
 def batch_command(args: argparse.Namespace) -> int:
     """Run ``gyrodrift batch``; return 0 (all ok), 1 (some logs failed) or 2 (bad usage)."""
+    from dataclasses import replace
+
     from gyrodrift._progress import progress_iter
+    from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.config import load_config
 
     try:
         paths = find_logs(args.logs)
-        config = load_config(args.config) if args.config else None
+        config = load_config(args.config) if args.config else CompensatorConfig()
+        if args.init_s is not None:
+            config = replace(config, init_s=args.init_s)
+        read_options = table_read_options(args)
         summary_path = args.output / SUMMARY_FILE
         clash = [p for p in paths if os.path.realpath(p) == os.path.realpath(summary_path)]
         if clash:
@@ -506,6 +546,7 @@ def batch_command(args: argparse.Namespace) -> int:
         summary = process_many(
             paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
             progress=lambda items, total: progress_iter(items, total, "logs"), out_format=args.format,
+            read_options=read_options,
         )
         write_summary(summary, summary_path)
     except GyroDriftError as err:

@@ -113,7 +113,7 @@ def drift(params, temp_c, temp_rate_cps):
     Parameters
     ----------
     params : sequence of 3 floats
-        a (deg/s/degC), b (deg), c (deg/s).
+        a (deg/s/degC), b (deg/degC), c (deg/s).
     temp_c, temp_rate_cps : array_like
         T (degC) and T' (degC/s).
 

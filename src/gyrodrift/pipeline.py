@@ -44,6 +44,8 @@ CHUNK_ROWS = 250_000
 #: Chunks the reader thread reads ahead of the compensation: it reads on while numba starts,
 #: so the second core is not idle then.
 READ_AHEAD = 4
+#: The read options of :func:`gyrodrift.io.read_log` that the table readers take.
+_TABLE_OPTIONS = ("fmt", "gyro_unit", "frame", "column_map", "time_unit")
 
 
 @dataclass
@@ -149,7 +151,7 @@ class RunStats:
         lines = [
             *(f"note: {n}" for n in self.notes),
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
-            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg, c = {c:.6g} deg/s",
+            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s",
         ]
         raw_ss, ss, n = self._bias
         if n:
@@ -189,8 +191,9 @@ def _read_text(source, rows: int, t_first_s: float, t_last_s: float, temp_min_c:
                compass: str) -> str:
     dur = t_last_s - t_first_s
     rate = (rows - 1) / dur if dur > 0 else float("nan")
+    rate_text = f"{rate:.1f}" if not rate < 1.0 else f"{rate:.2g}"  # a rate below 1 Hz keeps its digits
     return (
-        f"read {source}: {rows} rows, {dur:.1f} s at {rate:.1f} Hz, "
+        f"read {source}: {rows} rows, {dur:.1f} s at {rate_text} Hz, "
         f"temperature {temp_min_c:.2f} to {temp_max_c:.2f} degC, compass from {compass}"
     )
 
@@ -233,7 +236,7 @@ def compensate_file(
     config : CompensatorConfig, optional
     read_options : dict, optional
         Keyword arguments of :func:`gyrodrift.io.read_log` (``fmt``, ``gyro_unit``,
-        ``frame``, ``column_map``, ULog/ArduPilot/ROS options).
+        ``frame``, ``column_map``, ``time_unit``, ULog/ArduPilot/ROS options).
     chunk_rows : int
         Rows per chunk when streaming.
     stream : bool, optional
@@ -261,7 +264,7 @@ def compensate_file(
     opts = dict(read_options or {})
     input_path, output_path = Path(input_path), Path(output_path)
     table = _table_format(input_path, opts.get("fmt")) in ("csv", "parquet")
-    ulog_or_ros = {k: v for k, v in opts.items() if k not in ("fmt", "gyro_unit", "frame", "column_map")}
+    ulog_or_ros = {k: v for k, v in opts.items() if k not in _TABLE_OPTIONS}
     table_options = not any(v not in (None, 0) for v in ulog_or_ros.values())  # else the reader refuses them
     can_stream = table and table_options
     if stream and not can_stream:
@@ -499,6 +502,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     column_types: dict[str, str]) -> RunStats:
     from gyrodrift.compass import compass_columns
     from gyrodrift.compensator import ChunkEngine, output_frame
+    from gyrodrift.gyro_units import GyroUnitCheck
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
@@ -507,7 +511,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     est = build_estimator(cfg)
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
-    table_opts = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map") if k in opts}
+    units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
+    table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
     # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
     # (gathered into bigger groups, it idled and then held up the compute thread, and
     # the last group was encoded after the compute had finished).
@@ -545,6 +550,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 else:
                     heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
                 pending.append(log)
+                units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
                                    heading, norm, dip)
                 if cols is not None:
@@ -557,6 +563,6 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             reader.close()
             behind.close()
         stats.compass = chunks.compass or "?"
-        stats.notes = list(getattr(chunks, "notes", ())) + engine.notes
+        stats.notes = [*getattr(chunks, "notes", ()), *engine.notes, *filter(None, [units.note()])]
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats

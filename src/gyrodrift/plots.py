@@ -401,7 +401,7 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
     Returns
     -------
     matplotlib.figure.Figure
-        Three stacked axes: a (deg/s/degC), b (deg), c (deg/s). Rows refused for
+        Three stacked axes: a (deg/s/degC), b (deg/degC), c (deg/s). Rows refused for
         compass aiding are shaded in the colour of their reason
         (:data:`GATE_COLORS`; one shading collection per reason and axes, with
         ``gid`` ``"gate-<reason>"``); filter updates are marked with dots. The
@@ -416,7 +416,7 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
     reason = out["gate_reason"].fillna("").astype(str).to_numpy()
     upd = pd.to_numeric(out["update"], errors="coerce").fillna(0).to_numpy() > 0
     fig, axes = _figure(6.6, 3)
-    units = {"a": "a (deg/s/degC)", "b": "b (deg)", "c": "c (deg/s)"}
+    units = {"a": "a (deg/s/degC)", "b": "b (deg/degC)", "c": "c (deg/s)"}
     reasons = [r for r in GATE_COLORS if (reason == r).any()]
     reasons += sorted(set(reason[reason != ""]) - set(GATE_COLORS))
     for ax, name in zip(axes, ("a", "b", "c")):

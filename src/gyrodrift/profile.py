@@ -92,7 +92,7 @@ class Profile:
     Attributes
     ----------
     params : tuple of 3 floats
-        a (deg/s/degC), b (deg), c (deg/s) at the end of the run.
+        a (deg/s/degC), b (deg/degC), c (deg/s) at the end of the run.
     cov : 3x3 tuple
         Their covariance.
     temp_range_c : (float, float)

@@ -574,6 +574,7 @@ def stream_rows(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map=None,
+    time_unit: str | None = None,
     source: str = "stdin",
     skip_bad: bool = False,
     warn: Callable[[str], object] | None = None,
@@ -597,9 +598,10 @@ def stream_rows(
     fmt, out_format : {"csv", "jsonl"}, optional
         Input format (default: by the first non-blank character, module notes) and output
         format (default: the input's).
-    gyro_unit, frame, column_map
+    gyro_unit, frame, column_map, time_unit
         As :func:`gyrodrift.io.read_log`: the unit of the gyro columns, ``"ned"`` or
-        ``"enu"``, and ``{NEW: OLD}`` renames of input columns.
+        ``"enu"``, ``{NEW: OLD}`` renames of input columns, and the unit of ``t``
+        (``s``, ``ms``, ``us``, ``ns``; None: s).
     source : str
         The input's name in messages (a path, ``stdin``, a serial port).
     skip_bad : bool
@@ -627,7 +629,7 @@ def stream_rows(
     for option, value in (("format", fmt), ("output format", out_format)):
         if value is not None and value not in FORMATS:
             raise ConfigError(f"unknown {option} {value!r}; use one of: {', '.join(FORMATS)}")
-    opts = read_options(gyro_unit, frame, column_map)
+    opts = read_options(gyro_unit, frame, column_map, time_unit)
     comp = compensator if compensator is not None else Compensator(config, source=source)
     state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
                     warn=warn or (lambda line: None))

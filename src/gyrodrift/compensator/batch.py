@@ -12,6 +12,7 @@ from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
+from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.triad import add_triad_columns, has_triad_inputs
 
 __all__ = ["compensate", "compensate_arrays"]
@@ -132,6 +133,8 @@ def compensate(
         input ``heading`` is ``compass_heading``). When the log has ``gyro_x``,
         ``gyro_y`` and ``acc_x..z``, ``rate_x, rate_y, bias_x, bias_y`` (deg/s) and
         ``tilt_gated`` come before the input columns (:mod:`gyrodrift.triad`).
+        ``attrs["notes"]`` has the log's notes, the compensator's, and one when the gyro
+        unit looks wrong against the compass (:mod:`gyrodrift.gyro_units`).
     """
     source = source or log.attrs.get("source", "log")
     has_mag = check_input_columns(log, source)
@@ -149,5 +152,7 @@ def compensate(
     )
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)
-    out.attrs["notes"] = list(log.attrs.get("notes", ())) + out.attrs["notes"]
+    units = GyroUnitCheck(source, log.attrs.get("gyro_unit"))
+    units.add(out[T].to_numpy(), log[GYRO_Z].to_numpy(float), out["compass_heading"].to_numpy())
+    out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"], *filter(None, [units.note()])]
     return append_input_columns(out, log)

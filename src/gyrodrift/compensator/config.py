@@ -48,6 +48,13 @@ class CompensatorConfig:
         Settings of the ``adaptive`` estimator, each change beyond the paper switchable
         (:class:`gyrodrift.estimators.AdaptiveConfig`); used only when ``estimator`` is
         ``adaptive``.
+    declination_deg : float
+        Magnetic declination at the log's place, deg, east positive (true north =
+        magnetic north + declination). It is added to every compass heading (given, or
+        from the magnetometer) as it enters the engine, so that ``compass_heading``,
+        ``heading`` and ``heading_fused`` are in true north, the north of ``ref_heading``
+        (a reference such as PX4's attitude yaw is in true north). 0 (default): they
+        stay in magnetic north. The drift estimate does not depend on it.
     """
 
     update_interval_s: float = 10.0
@@ -61,6 +68,7 @@ class CompensatorConfig:
     gate: GateConfig = field(default_factory=GateConfig)
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
+    declination_deg: float = 0.0
 
     @property
     def fusion_settings(self) -> FusionConfig:
@@ -83,6 +91,9 @@ class CompensatorConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigError(f"{name} must be a positive number, got {v!r}")
+        d = self.declination_deg
+        if isinstance(d, bool) or not (isinstance(d, (int, float)) and math.isfinite(d) and -180.0 <= d <= 180.0):
+            raise ConfigError(f"declination_deg must be a number of degrees in -180..180 (east positive), got {d!r}")
         if not (isinstance(self.stack_depth, int) and self.stack_depth >= 1):
             raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
         if self.init_s < self.stack_depth * 0.1:

@@ -209,6 +209,8 @@ class ChunkEngine:
         n = len(t)
         if n == 0:
             return None
+        if self.cfg.declination_deg:  # magnetic to true north (CompensatorConfig.declination_deg)
+            heading = np.asarray(heading, dtype=float) + self.cfg.declination_deg
         t, g, T, heading = (_input(a) for a in (t, g, T, heading))
         norm = _NO_FIELD if norm is None else _input(norm)
         dip = _NO_FIELD if dip is None else _input(dip)

@@ -58,7 +58,7 @@ def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None
     )
 
 
-def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map) -> None:
+def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map, time_unit) -> None:
     """ULog, DataFlash and ROS bags state their units and frames: unit/frame/column options must stay default."""
     changed = {}
     if str(gyro_unit).strip().lower() not in _NEUTRAL_UNITS:
@@ -67,6 +67,8 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
         changed["frame"] = frame
     if column_map:
         changed["column_map"] = dict(column_map)
+    if time_unit is not None:
+        changed["time_unit"] = time_unit
     if changed:
         option, value = next(iter(changed.items()))
         raise ConfigError(
@@ -74,7 +76,7 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
                 str(path),
                 f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
                 " frames and the reader converts them (to deg/s, NED/FRD)",
-                "leave gyro_unit, frame and column_map at their defaults",
+                "leave gyro_unit, frame, column_map and time_unit at their defaults",
             )
         )
 
@@ -86,6 +88,7 @@ def read_log(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
+    time_unit: str | None = None,
     instance: int = 0,
     mag_instance: int | None = None,
     imu_topic: str | None = None,
@@ -101,7 +104,7 @@ def read_log(
         (``.bin``), ROS 1 ``.bag``, ROS 2 bag directory or ``.db3``/``.mcap`` file.
     fmt : {"csv", "parquet", "ulog", "ardupilot", "rosbag"}, optional
         Format; overrides the file-name ending.
-    gyro_unit, frame, column_map
+    gyro_unit, frame, column_map, time_unit
         Table options, see :func:`gyrodrift.io.tabular.read_log`. ULog, DataFlash and
         ROS bags state their units and frames, so these must stay at their defaults for them.
     instance : int, default 0
@@ -137,7 +140,7 @@ def read_log(
     set_ulog = {k: v for k, v in ulog_options.items() if v is not None and not (k == "instance" and v == 0)}
     set_ros = {k: v for k, v in ros_options.items() if v is not None}
     if log_fmt == "ulog":
-        _check_stated_units(path, "ulog", gyro_unit, frame, column_map)
+        _check_stated_units(path, "ulog", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "ulog", set_ros)
         return read_ulog(path, instance=instance, mag_instance=mag_instance)
     if log_fmt == "ardupilot":
@@ -145,8 +148,10 @@ def read_log(
         _refuse_options(path, "ardupilot", set_ros)
         return read_ardupilot(path, instance=instance, mag_instance=mag_instance)
     if log_fmt == "rosbag":
-        _check_stated_units(path, "rosbag", gyro_unit, frame, column_map)
+        _check_stated_units(path, "rosbag", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "rosbag", set_ulog)
         return read_rosbag(path, imu_topic=imu_topic, temp_topic=temp_topic, mag_topic=mag_topic)
     _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
-    return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map)
+    return tabular.read_log(
+        path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map, time_unit=time_unit
+    )

@@ -16,7 +16,8 @@ What a chunked reader cannot know in advance, and what it does about it:
 
 * **Which compass form the log has** (``df.attrs["compass"]`` of ``read_log``) is known
   after the last chunk: :attr:`LogChunks.compass`, and so are the notes
-  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature):
+  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature, held compass values
+  emptied; a low sample rate, decided on the first chunk):
   :attr:`LogChunks.notes`. A log whose compass columns are empty in every row has
   compass "none", as ``read_log`` says; its chunks keep those columns as read.
 * **A required column empty at the start** (``gyro_z``/``temp`` missing on the first
@@ -72,6 +73,7 @@ from gyrodrift.conventions import T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import csvfile, formats, parquetfile, validate
 from gyrodrift.io.chunkwriter import ChunkWriter
+from gyrodrift.io.held import held_note
 
 __all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary", "ColumnTypeChanged"]
 
@@ -558,26 +560,31 @@ class LogChunks:
         columns: list = []
         with_values: frozenset[str] = frozenset()
         temperature = validate.TEMP_MEASURED  # the first chunk decides it for the file
+        first_notes: tuple[str, ...] = ()  # and the time base (gyrodrift.io.timebase)
+        held, last_compass = 0, None  # held compass values emptied so far (gyrodrift.io.held)
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found, temperature = validate.normalise_frame(
+            df, found, temperature, notes, held_here, last_compass = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
                 prev_t_s=prev_t_s,
                 first_values=self._first_values if self.rows == 0 else None,
                 temp_empty=temperature == validate.TEMP_EMPTY,
+                prev_compass=last_compass,
             )
             df.index = pd.RangeIndex(self.rows, self.rows + len(df))
             df.attrs = self.attrs
             prev_t_s = float(df[T].iloc[-1])
             columns, with_values = list(df.columns), with_values | found
+            first_notes, held = first_notes or notes, held + held_here
             self.rows += len(df)
             yield df
         if self.rows == 0:
             raise validate.no_data_rows_error(src)
         self.compass = validate.compass_form(with_values)
-        self.notes = validate.table_notes(src.name, columns, with_values, temperature)
+        held_notes = filter(None, [held_note(src.name, held)])
+        self.notes = [*validate.table_notes(src.name, columns, with_values, temperature), *first_notes, *held_notes]
 
     def __iter__(self) -> "LogChunks":
         return self
@@ -619,6 +626,7 @@ def iter_log_chunks(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
+    time_unit: str | None = None,
     chunk_rows: int = 1_000_000,
     column_types: Mapping[str, object] | None = None,
     block_size_bytes: int = DEFAULT_BLOCK_SIZE_BYTES,
@@ -637,8 +645,9 @@ def iter_log_chunks(
         or Parquet (``.parquet``, ``.pq``).
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
-    gyro_unit, frame, column_map
-        As for :func:`gyrodrift.io.tabular.read_log`.
+    gyro_unit, frame, column_map, time_unit
+        As for :func:`gyrodrift.io.tabular.read_log`; the time base is checked on the
+        first chunk.
     chunk_rows : int, default 1_000_000
         Rows per chunk; every chunk but the last has exactly this many, except that a
         CSV whose number columns hold text somewhere ends one chunk early there.
@@ -668,7 +677,7 @@ def iter_log_chunks(
         As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
     """
     path = Path(path)
-    opts = validate.read_options(gyro_unit, frame, column_map)
+    opts = validate.read_options(gyro_unit, frame, column_map, time_unit)
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, (int, np.integer)) or chunk_rows < 1:
         raise ConfigError(f"chunk_rows must be a positive whole number of rows, got {chunk_rows!r}")
     if isinstance(block_size_bytes, bool) or not isinstance(block_size_bytes, (int, np.integer)) or block_size_bytes < 1024:

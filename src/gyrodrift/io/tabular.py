@@ -43,6 +43,7 @@ from gyrodrift.io.csvfile import (
     write_csv_with_pandas,
 )
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
+from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
 from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
 from gyrodrift.io.validate import (
@@ -138,6 +139,7 @@ def read_log(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
+    time_unit: str | None = None,
 ) -> pd.DataFrame:
     """Read and validate an input log; return it in contract units and frames.
 
@@ -159,6 +161,11 @@ def read_log(
         ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign.
     column_map : mapping of str to str, optional
         ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
+    time_unit : {"s", "ms", "us", "ns"}, optional
+        Unit of ``t`` in the file; ``t`` is converted to s. Without it ``t`` is read as
+        s, and time stamps that look like another unit are refused naming the unit to
+        give (:mod:`gyrodrift.io.timebase`, decided on the whole file here and on the
+        first chunk by :func:`gyrodrift.io.chunked.iter_log_chunks`).
 
     Returns
     -------
@@ -194,7 +201,7 @@ def read_log(
     ``data row N`` (1-based) for Parquet.
     """
     path = Path(path)
-    opts = read_options(gyro_unit, frame, column_map)
+    opts = read_options(gyro_unit, frame, column_map, time_unit)
     check_input_path(path)
     table_fmt = table_format(path, fmt, READ_SUFFIXES)
     if table_fmt == "csv":
@@ -202,7 +209,7 @@ def read_log(
     else:
         table, src = _read_parquet_table(path)
 
-    df, with_values, temperature = normalise_frame(table_to_frame(table, src), src, opts)
+    df, with_values, temperature, first_notes, held, _ = normalise_frame(table_to_frame(table, src), src, opts)
     df.attrs = {
         "source": str(path),
         "format": table_fmt,
@@ -210,7 +217,8 @@ def read_log(
         "frame": opts.frame,
         "compass": compass_form(with_values),
     }
-    for note in table_notes(src.name, df.columns, with_values, temperature):
+    held_notes = filter(None, [held_note(src.name, held)])
+    for note in [*table_notes(src.name, df.columns, with_values, temperature), *first_notes, *held_notes]:
         add_note(df.attrs, note)
     return df
 

@@ -55,6 +55,8 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
+from gyrodrift.io.held import drop_held
+from gyrodrift.io.timebase import time_base_notes, time_scale
 
 __all__ = [
     "NUMERIC_COLS",
@@ -269,13 +271,17 @@ class ReadOptions(NamedTuple):
     scale: float  #: multiplier from that unit to deg/s
     frame: str  #: "ned" or "enu"
     renames: dict[str, str]  #: column map NEW -> OLD
+    time_unit: str | None = None  #: canonical unit of ``t`` in the file (None: s, not stated)
+    time_scale: float = 1.0  #: multiplier from that unit to s
 
 
-def read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None) -> ReadOptions:
+def read_options(
+    gyro_unit: str, frame: str, column_map: Mapping[str, str] | None, time_unit: str | None = None
+) -> ReadOptions:
     """Check the table options (raising :class:`ConfigError`) and return them canonical."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
-    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map))
+    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit))
 
 
 # ---------------------------------------------------------------------------
@@ -707,6 +713,9 @@ class Normalised(NamedTuple):
     #: "measured"; "absent" (no ``temp`` column) or "empty" (``temp`` empty in every row
     #: of the file): then ``temp`` is :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row
     temperature: str
+    notes: tuple[str, ...] = ()  #: notes of the first frame about the whole file (a low sample rate)
+    held: int = 0  #: rows whose held compass values were emptied (:mod:`gyrodrift.io.held`)
+    last_compass: dict | None = None  #: ``prev_compass`` of the next frame
 
 
 def normalise_frame(
@@ -717,6 +726,7 @@ def normalise_frame(
     prev_t_s: float | None = None,
     first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = first_value_rows,
     temp_empty: bool = False,
+    prev_compass: dict | None = None,
 ) -> Normalised:
     """Check a frame of a table and bring it into the input contract.
 
@@ -729,6 +739,7 @@ def normalise_frame(
     temperature (no ``temp`` column, or one empty in every row of the file) gets
     ``temp`` = :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row: in place of
     the empty column, or added as the last column. :func:`table_notes` words both.
+    Compass values that repeat the row before bit for bit are emptied (:mod:`gyrodrift.io.held`).
 
     Parameters
     ----------
@@ -746,6 +757,9 @@ def normalise_frame(
     temp_empty : bool, default False
         With ``first_values`` None (later chunks): the file's ``temp`` column is empty
         in every row, as the first chunk's ``temperature`` ("empty") said.
+    prev_compass : dict, optional
+        ``last_compass`` of the frame before (chunks): held compass values are emptied
+        across chunks as in the whole file (:func:`~gyrodrift.io.held.drop_held`).
 
     Returns
     -------
@@ -761,6 +775,10 @@ def normalise_frame(
         _check_required_values(first, src)
         temp_empty = TEMP in first and first[TEMP] is None
     _check_time(df, src, prev_t_s)
+    notes = time_base_notes(df[T].to_numpy(), opts.time_unit, src.name) if first_values is not None else ()
+    df, held, last_compass = drop_held(df, prev_compass)
+    if opts.time_scale != 1.0:
+        df[T] = df[T].to_numpy() * opts.time_scale  # df is a new frame (convert_numeric)
     if TEMP not in df.columns:
         temperature = TEMP_ABSENT
     elif temp_empty:
@@ -775,4 +793,4 @@ def normalise_frame(
     df = _wrap_headings(df)
     if temperature != TEMP_MEASURED:
         df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
-    return Normalised(df, with_values, temperature)
+    return Normalised(df, with_values, temperature, notes, held, last_compass)

@@ -1,0 +1,171 @@
+"""The time base of a table's ``t`` column: its unit, and whether it is plausible.
+
+Tables state no unit for ``t``; the contract is seconds. ``--time-unit`` (``time_unit``
+in Python) names another unit of :data:`~gyrodrift.conventions.TIME_UNITS`, and the
+table readers multiply ``t`` by its factor as they read. Without it, the time stamps
+are checked for the marks of another unit (:func:`check_time_base`), because a log in
+milliseconds read as seconds runs at a thousandth of its rate without any error:
+
+* values above :data:`EPOCH_LIMIT` (1e12): ms, µs or ns since 1970 (the magnitude tells
+  which), or ns since boot;
+* a median time step of :data:`MAX_STEP_S` (1000) or more, or of :data:`MAX_WHOLE_STEP_S`
+  (10) or more in a column of whole numbers: ms, µs or ns since boot;
+* a median time step giving a sample rate above :data:`MAX_RATE_HZ` (100 kHz), checked
+  with or without ``time_unit``.
+
+Each is refused with the ``--time-unit`` to pass (the unit whose sample rate is the most
+ordinary). A sample rate below :data:`MIN_RATE_HZ` (1 Hz) that none of these catches is
+read, with a note. This module imports no other module of gyrodrift.io but
+:mod:`gyrodrift.io.notes`, so that :mod:`gyrodrift.io.validate` can import it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from gyrodrift.conventions import TIME_UNITS
+from gyrodrift.errors import ConfigError, LogFormatError
+
+__all__ = [
+    "MAX_RATE_HZ",
+    "MIN_RATE_HZ",
+    "EPOCH_LIMIT",
+    "MAX_STEP_S",
+    "MAX_WHOLE_STEP_S",
+    "time_scale",
+    "TimeBase",
+    "check_time_base",
+    "time_base_notes",
+]
+
+#: Highest plausible sample rate, Hz.
+MAX_RATE_HZ = 1e5
+#: Sample rates below this get a note, Hz.
+MIN_RATE_HZ = 1.0
+#: Time stamps above this cannot be seconds (3e4 years); seconds since 1970 are about 1.7e9.
+EPOCH_LIMIT = 1e12
+#: A median time step (in the file's numbers) at or above this is refused without ``time_unit``.
+MAX_STEP_S = 1000.0
+#: A median step of whole numbers at or above this is refused without ``time_unit``.
+MAX_WHOLE_STEP_S = 10.0
+#: Seconds since 1970 of years 1990 and 2200: the span that identifies an epoch time base.
+_EPOCH_SPAN_S = (6.3e8, 7.3e9)
+#: The most ordinary sample rate, Hz: the unit whose rate is nearest it (in log) is suggested.
+_TYPICAL_RATE_HZ = 100.0
+
+
+def time_scale(time_unit: str | None) -> tuple[str | None, float]:
+    """The canonical name of ``time_unit`` (None: not given) and its multiplier to s.
+
+    Raises
+    ------
+    ConfigError
+        An unknown unit.
+    """
+    if time_unit is None:
+        return None, 1.0
+    key = str(time_unit).strip().lower().replace("µ", "u")
+    if key not in TIME_UNITS:
+        raise ConfigError(f"unknown time unit {time_unit!r}; use one of: {', '.join(TIME_UNITS)}")
+    return key, TIME_UNITS[key]
+
+
+class TimeBase(NamedTuple):
+    """What :func:`check_time_base` found: a refusal, a note, or neither."""
+
+    problem: str | None  #: why the time stamps cannot be in the unit read (None: they can)
+    advice: str | None  #: what to do about the problem
+    note: str | None  #: a low sample rate read anyway (None: nothing to say)
+
+
+def _rate_text(rate_hz: float) -> str:
+    """``rate_hz`` in Hz, kHz or MHz, three significant digits."""
+    if rate_hz < 1e3:
+        return f"{rate_hz:.3g} Hz"
+    return f"{rate_hz / 1e3:.3g} kHz" if rate_hz < 1e6 else f"{rate_hz / 1e6:.3g} MHz"
+
+
+def _suggest(step_raw: float, t_max_raw: float, unit: str | None) -> str | None:
+    """The time unit the numbers are most likely in: from an epoch magnitude, else the
+    unit (other than ``unit``) whose sample rate is plausible and nearest 100 Hz."""
+    others = [u for u in TIME_UNITS if u != (unit or "s")]
+    if t_max_raw > EPOCH_LIMIT:
+        for u in others:
+            if _EPOCH_SPAN_S[0] <= t_max_raw * TIME_UNITS[u] <= _EPOCH_SPAN_S[1]:
+                return u
+    best, best_distance = None, math.inf
+    for u in others:
+        rate_hz = 1.0 / (step_raw * TIME_UNITS[u])
+        if MIN_RATE_HZ <= rate_hz <= MAX_RATE_HZ:
+            distance = abs(math.log10(rate_hz / _TYPICAL_RATE_HZ))
+            if distance < best_distance:
+                best, best_distance = u, distance
+    return best
+
+
+def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
+    """Check that strictly increasing time stamps are plausible in the unit they are read in.
+
+    Parameters
+    ----------
+    t_raw : numpy.ndarray
+        The ``t`` column as in the file (before the unit's factor), strictly increasing;
+        at least two values are needed for a step (one value passes).
+    unit : str or None
+        The canonical ``time_unit`` given (None: seconds, not stated; then the marks of
+        another unit are looked for too).
+
+    Returns
+    -------
+    TimeBase
+        ``problem`` and ``advice`` (one clause each) when the time base is implausible,
+        else ``note`` when the sample rate is below :data:`MIN_RATE_HZ`, else neither.
+    """
+    t_raw = np.asarray(t_raw, dtype=np.float64)
+    if t_raw.size < 2:
+        return TimeBase(None, None, None)
+    step_raw = float(np.median(np.diff(t_raw)))
+    step_s = step_raw * TIME_UNITS[unit or "s"]
+    rate_hz = 1.0 / step_s
+    t_max_raw = float(np.max(np.abs(t_raw)))
+    read_as = f"read as {unit}" if unit else "read as seconds"
+    problem = None
+    if rate_hz > MAX_RATE_HZ:
+        problem = f"the median time step {step_raw:.6g} {read_as} gives {_rate_text(rate_hz)}, above {_rate_text(MAX_RATE_HZ)}"
+    elif unit is None and t_max_raw > EPOCH_LIMIT:
+        problem = f"time stamps up to {t_max_raw:.6g} cannot be seconds (since 1970 or since boot)"
+    elif unit is None and (step_raw >= MAX_STEP_S or (step_raw >= MAX_WHOLE_STEP_S and np.all(t_raw == np.floor(t_raw)))):
+        problem = f"the median time step {step_raw:.6g} {read_as} gives {_rate_text(rate_hz)}"
+    if problem is not None:
+        suggested = _suggest(step_raw, t_max_raw, unit)
+        advice = (
+            f"t looks like {suggested}: pass --time-unit {suggested} (time_unit={suggested!r} in Python)"
+            if suggested
+            else f"check the t column (it must be a time; units: {', '.join(TIME_UNITS)} with --time-unit)"
+        )
+        return TimeBase(problem, advice, None)
+    if rate_hz < MIN_RATE_HZ:
+        return TimeBase(
+            None, None,
+            f"sample rate {_rate_text(rate_hz)} (median time step {step_s:.6g} s) is below {MIN_RATE_HZ:g} Hz; "
+            "if t is not in seconds, pass --time-unit ms, us or ns (time_unit in Python)",
+        )
+    return TimeBase(None, None, None)
+
+
+def time_base_notes(t_raw: np.ndarray, unit: str | None, name: str) -> tuple[str, ...]:
+    """:func:`check_time_base` for the file ``name``: raise its refusal, return its note.
+
+    Raises
+    ------
+    LogFormatError
+        ``<name>: column 't': <problem>; <advice>``, the message style of
+        :mod:`gyrodrift.io.validate`.
+    """
+    found = check_time_base(t_raw, unit)
+    if found.problem:
+        raise LogFormatError(f"{name}: column 't': {found.problem}; {found.advice}")
+    return (f"{name}: {found.note}",) if found.note else ()
