@@ -42,6 +42,7 @@ from gyrodrift.io.csvfile import (
     write_csv_rows,
     write_csv_with_pandas,
 )
+from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
 from gyrodrift.io.notes import add_note
 from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
@@ -138,6 +139,7 @@ def read_log(
     gyro_unit: str = "deg/s",
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Read and validate an input log; return it in contract units and frames.
 
@@ -159,6 +161,9 @@ def read_log(
         ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign.
     column_map : mapping of str to str, optional
         ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
+    gyro_max_dps : float, default :data:`gyrodrift.io.limits.GYRO_MAX_DPS` (10000)
+        Plausible full scale of the gyro axes, deg/s: a larger rate is refused like an
+        implausible temperature (:mod:`gyrodrift.io.limits` lists every plausible range).
 
     Returns
     -------
@@ -179,8 +184,9 @@ def read_log(
     ------
     LogFormatError
         The file is missing, empty, not a table, ragged, lacks ``t`` or ``gyro_z``, or
-        holds bad values (non-numbers, inf, empty or non-increasing ``t``, implausible
-        ``temp``, ``t`` or ``gyro_z`` with no value, or a first row without
+        holds bad values (non-numbers, inf, empty or non-increasing ``t``, a value
+        outside its plausible range (:mod:`gyrodrift.io.limits`: ``temp``, ``gyro_*``,
+        ``heading``, ``mag_*``, ``acc_*``), ``t`` or ``gyro_z`` with no value, or a first row without
         ``gyro_z``/``temp`` when the column has a value later). Empty cells in
         ``gyro_z``/``temp`` after the first row are allowed and stay NaN.
     ConfigError
@@ -194,7 +200,7 @@ def read_log(
     ``data row N`` (1-based) for Parquet.
     """
     path = Path(path)
-    opts = read_options(gyro_unit, frame, column_map)
+    opts = read_options(gyro_unit, frame, column_map, gyro_max_dps)
     check_input_path(path)
     table_fmt = table_format(path, fmt, READ_SUFFIXES)
     if table_fmt == "csv":

@@ -1,0 +1,149 @@
+"""Plausible input ranges (issue 16): no finite value can poison the output.
+
+One huge finite gyro rate (a bit-flipped float gives 5e38) used to freeze ``heading`` for
+the rest of the log and put ``heading_fused`` far outside [0, 360), exit 0. Every entry
+point now refuses a value outside its plausible range (:mod:`gyrodrift.io.limits`), as it
+refuses an implausible temperature: one line naming the file, row and column.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import synthetic_log
+from gyrodrift import compensate, compensate_arrays
+from gyrodrift.cli import main
+from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.io import read_log
+from gyrodrift.io.align import contract_frame
+from gyrodrift.io.chunked import iter_log_chunks
+from gyrodrift.io.limits import GYRO_MAX_DPS, HEADING_MAX_ABS_DEG, MAG_MAX_ABS
+
+
+def one_line_error(err: str, *names: str) -> None:
+    """``err`` is one ``gyrodrift: error:`` line that contains every one of ``names``."""
+    assert "Traceback" not in err
+    assert err.startswith("gyrodrift: error: ") and err.count("\n") == 1, err
+    for name in names:
+        assert name in err, (name, err)
+
+
+@pytest.fixture(scope="module")
+def log() -> pd.DataFrame:
+    return synthetic_log(duration_s=200.0, gyro_noise_dps=0.05, compass_noise_deg=0.5)
+
+
+def _with(log: pd.DataFrame, row: int, **cells) -> pd.DataFrame:
+    out = log.copy()
+    for col, value in cells.items():
+        out.loc[out.index[row], col] = value
+    return out
+
+
+def _in_range(out: pd.DataFrame) -> None:
+    for col in ("heading", "heading_fused"):
+        values = out[col].to_numpy()
+        assert np.all((values >= 0.0) & (values < 360.0)), col
+    for col in ("rate_z", "bias_z", "heading_sd", "heading_fused_sd"):
+        assert np.all(np.isfinite(out[col].to_numpy())), col
+
+
+@pytest.mark.parametrize("value", [1e16, -5e38, 1.7976931348623157e308])
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+@pytest.mark.parametrize("extra", [[], ["--smooth"], ["--scale-factor"]])
+def test_huge_gyro_rate_is_refused_naming_file_row_and_column(tmp_path, log, capsys, value, suffix, extra):
+    path = tmp_path / f"flipped{suffix}"
+    bad = _with(log, 2000, gyro_z=value)
+    bad.to_csv(path, index=False) if suffix == ".csv" else bad.to_parquet(path, index=False)
+    assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), *extra]) == 2
+    where = "line 2002" if suffix == ".csv" else "data row 2001"
+    one_line_error(capsys.readouterr().err, str(path), where, "'gyro_z'", "plausible", "10000")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_limit_is_in_the_files_gyro_unit_and_configurable(tmp_path, log):
+    path = tmp_path / "rad.csv"
+    rad = log.assign(gyro_z=np.radians(log["gyro_z"]))
+    _with(rad, 10, gyro_z=200.0).to_csv(path, index=False)  # 200 rad/s = 11459 deg/s
+    with pytest.raises(LogFormatError, match=r"line 12, column 'gyro_z': gyro_z = 200.0 rad/s .*174\.5"):
+        read_log(path, gyro_unit="rad/s")
+    assert read_log(path, gyro_unit="rad/s", gyro_max_dps=20_000.0)["gyro_z"].iloc[10] == pytest.approx(11459.156)
+    with pytest.raises(ConfigError, match="gyro_max_dps"):
+        read_log(path, gyro_max_dps=-1.0)
+
+
+def test_chunked_reader_refuses_in_a_later_chunk(tmp_path, log):
+    path = tmp_path / "late.csv"
+    _with(log, 3500, gyro_x=5e38).assign(gyro_x=lambda d: d["gyro_x"].fillna(0.0)).to_csv(path, index=False)
+    with pytest.raises(LogFormatError, match=r"line 3502, column 'gyro_x'"):
+        for _ in iter_log_chunks(path, chunk_rows=1000):
+            pass
+
+
+@pytest.mark.parametrize(
+    "cells, column",
+    [
+        ({"heading": 1e308}, "heading"),
+        ({"heading": -2 * HEADING_MAX_ABS_DEG}, "heading"),
+        ({"ref_heading": 1e300}, "ref_heading"),
+    ],
+)
+def test_huge_heading_is_refused(tmp_path, log, cells, column):
+    path = tmp_path / "h.csv"
+    _with(log, 40, **cells).to_csv(path, index=False)
+    with pytest.raises(LogFormatError, match=rf"line 42, column '{column}': .*plausible"):
+        read_log(path)
+
+
+def test_headings_of_many_turns_still_wrap(tmp_path, log):
+    path = tmp_path / "turns.csv"
+    _with(log, 40, heading=720.0 + 90.0).to_csv(path, index=False)
+    assert read_log(path)["heading"].iloc[40] == 90.0
+
+
+def test_magnetometer_beyond_any_unit_is_refused(tmp_path, log):
+    path = tmp_path / "mag.csv"
+    raw = log.drop(columns=["heading"]).assign(mag_x=0.2, mag_y=0.0, mag_z=0.4, acc_x=0.0, acc_y=0.0, acc_z=-1.0)
+    _with(raw, 7, mag_y=10 * MAG_MAX_ABS).to_csv(path, index=False)
+    with pytest.raises(LogFormatError, match=r"line 9, column 'mag_y'"):
+        read_log(path)
+
+
+@pytest.mark.parametrize("cells", [{"gyro_z": 1e16}, {"temp": 1000.0}, {"heading": 1e308}])
+def test_compensate_refuses_what_the_readers_refuse(log, cells):
+    column = next(iter(cells))
+    with pytest.raises(LogFormatError, match=rf"mylog: row 2000, column '{column}'"):
+        compensate(_with(log, 2000, **cells), source="mylog")
+
+
+def test_compensate_refuses_a_huge_x_rate_and_arrays_take_the_option(log):
+    triad = log.assign(gyro_x=0.0, gyro_y=0.0, acc_x=0.0, acc_y=0.0, acc_z=-1.0)
+    with pytest.raises(LogFormatError, match=r"row 5, column 'gyro_x'"):
+        compensate(_with(triad, 5, gyro_x=-5e38))
+    fast = _with(log, 5, gyro_z=1.5 * GYRO_MAX_DPS)
+    with pytest.raises(LogFormatError, match=r"row 5, column 'gyro_z'"):
+        compensate_arrays(fast["t"], fast["gyro_z"], fast["temp"], fast["heading"])
+    out = compensate_arrays(fast["t"], fast["gyro_z"], fast["temp"], fast["heading"], gyro_max_dps=2 * GYRO_MAX_DPS)
+    _in_range(out)
+
+
+def test_binary_readers_refuse_a_bit_flipped_gyro_sample():
+    t = np.arange(100) * 0.01
+    gyro = np.zeros((100, 3))
+    gyro[42, 2] = 5.3e38
+    with pytest.raises(LogFormatError, match=r"f\.ulg: gyro sample 43 \(t = 0\.420000 s\): gyro_z = 5\.3e\+38"):
+        contract_frame(t, gyro, np.full(100, 30.0), None, None, None, {"source": "f.ulg"})
+    acc = np.zeros((100, 3))
+    acc[3, 0] = math.inf
+    with pytest.raises(LogFormatError, match=r"gyro sample 4 .*acc_x"):
+        contract_frame(t, np.zeros((100, 3)), np.full(100, 30.0), None, acc, None, {"source": "f.ulg"})
+
+
+def test_largest_plausible_rate_keeps_outputs_in_range(log):
+    out = compensate(_with(log, 2000, gyro_z=GYRO_MAX_DPS))
+    _in_range(out)
+
