@@ -9,15 +9,16 @@ refuses an implausible temperature: one line naming the file, row and column.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift import compensate, compensate_arrays
+from gyrodrift import Compensator, compensate, compensate_arrays
 from gyrodrift.cli import main
-from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io import read_log
 from gyrodrift.io.align import contract_frame
 from gyrodrift.io.chunked import iter_log_chunks
@@ -146,4 +147,71 @@ def test_binary_readers_refuse_a_bit_flipped_gyro_sample():
 def test_largest_plausible_rate_keeps_outputs_in_range(log):
     out = compensate(_with(log, 2000, gyro_z=GYRO_MAX_DPS))
     _in_range(out)
+
+
+# --------------------------------------------------------------------------- streaming
+
+
+def _started() -> Compensator:
+    comp = Compensator()
+    comp.push(0.0, 0.1, 30.0, heading_deg=90.0)
+    return comp
+
+
+@pytest.mark.parametrize(
+    "kwargs, names",
+    [
+        ({"temp_c": 1000.0}, ["temp_c", "1000.0", "-60..150 degC"]),
+        ({"temp_c": -300}, ["temp_c", "-300.0", "plausible"]),
+        ({"heading_deg": 1e308}, ["heading_deg", "1e+308", "plausible"]),
+        ({"gyro_z_dps": 1e16}, ["gyro_z_dps", "1e+16", "10000 deg/s"]),
+        ({"gyro_z_dps": math.inf}, ["gyro_z_dps", "inf"]),
+        ({"gyro_x_dps": -5e38, "gyro_y_dps": 0.0}, ["gyro_x_dps", "-5e+38"]),
+        ({"mag": (0.2, 1e200, 0.4), "acc": (0, 0, -1)}, ["mag[1]", "mag_y", "1e+200"]),
+        ({"acc": (0.0, 0.0, 1e300)}, ["acc[2]", "acc_z"]),
+    ],
+)
+def test_push_refuses_what_a_file_refuses_and_keeps_its_state(kwargs, names):
+    comp = _started()
+    sample = {"t_s": 0.01, "gyro_z_dps": 0.1, "temp_c": 30.0, **kwargs}
+    with pytest.raises(GyroDriftError) as info:
+        comp.push(**sample)
+    message = str(info.value)
+    assert message.startswith("stream: ") and "\n" not in message
+    for name in names:
+        assert name in message, (name, message)
+    # the refused sample was not taken: the same time is accepted next
+    assert comp.push(0.01, 0.1, 30.0) == []
+
+
+@pytest.mark.parametrize(
+    "kwargs, arg",
+    [
+        ({"t_s": None}, "t_s"),
+        ({"t_s": "0.01"}, "t_s"),
+        ({"gyro_z_dps": "0.1"}, "gyro_z_dps"),
+        ({"gyro_z_dps": None}, "gyro_z_dps"),
+        ({"temp_c": True}, "temp_c"),
+        ({"temp_c": 10**400}, "temp_c"),
+        ({"heading_deg": [90.0]}, "heading_deg"),
+        ({"heading_deg": 10**400}, "heading_deg"),
+        ({"mag": 3.0, "acc": (0, 0, -1)}, "mag"),
+        ({"acc": "xyz"}, "acc"),
+        ({"acc": (0.0, 0.0)}, "acc"),
+        ({"acc": (0.0, None, -1.0)}, "acc[1]"),
+        ({"gyro_x_dps": object(), "gyro_y_dps": 0.0}, "gyro_x_dps"),
+    ],
+)
+def test_push_refuses_values_that_are_not_numbers_naming_the_argument(kwargs, arg):
+    comp = _started()
+    with pytest.raises(GyroDriftError, match=rf"^stream: {re.escape(arg)}[ :]"):
+        comp.push(**{"t_s": 0.01, "gyro_z_dps": 0.1, "temp_c": 30.0, **kwargs})
+
+
+def test_push_takes_numpy_numbers_and_another_full_scale():
+    comp = Compensator(gyro_max_dps=20_000.0)
+    comp.push(np.float32(0.0), np.int64(0), np.float64(30.0), heading_deg=None)
+    comp.push(0.01, 15_000.0, 30.0, heading_deg=np.nan)
+    with pytest.raises(ConfigError, match="gyro_max_dps"):
+        Compensator(gyro_max_dps=math.nan)
 
