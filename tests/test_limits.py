@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -18,11 +19,14 @@ import pytest
 from conftest import synthetic_log
 from gyrodrift import Compensator, compensate, compensate_arrays
 from gyrodrift.cli import main
+from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
+from gyrodrift.estimators import AdaptiveConfig, FixedParams, KalmanConfig
 from gyrodrift.io import read_log
 from gyrodrift.io.align import contract_frame
 from gyrodrift.io.chunked import iter_log_chunks
 from gyrodrift.io.limits import GYRO_MAX_DPS, HEADING_MAX_ABS_DEG, MAG_MAX_ABS
+from gyrodrift.profile import Profile, compensate_warm
 
 
 def one_line_error(err: str, *names: str) -> None:
@@ -215,3 +219,45 @@ def test_push_takes_numpy_numbers_and_another_full_scale():
     with pytest.raises(ConfigError, match="gyro_max_dps"):
         Compensator(gyro_max_dps=math.nan)
 
+
+# --------------------------------------------------------------------------- drift model from Python
+
+
+@pytest.mark.parametrize(
+    "kwargs, names",
+    [
+        ({"x0": (0.0, 0.0, 1e308)}, ["x0", "1e+308", "|c| <= 50 deg/s"]),
+        ({"x0": (2.0, 0.0, 0.0)}, ["x0", "|a| <= 1"]),
+        ({"x0": (0.0, -5000.0, 0.0)}, ["x0", "|b| <= 1000"]),
+        ({"p0_sd": (0.05, 5.0, 1e200)}, ["p0_sd", "plausible"]),
+        ({"q_sd": (1e-4, 2000.0, 1e-3)}, ["q_sd", "plausible"]),
+        ({"p0_cov": ((1e300, 0, 0), (0, 1, 0), (0, 0, 1))}, ["p0_cov", "plausible"]),
+    ],
+)
+def test_kalman_settings_from_python_are_bounded_like_settings_files(kwargs, names):
+    with pytest.raises(ConfigError) as info:
+        KalmanConfig(**kwargs)
+    for name in names:
+        assert name in str(info.value), (name, str(info.value))
+
+
+def test_estimator_parameters_from_python_are_bounded():
+    with pytest.raises(ConfigError, match=r"adaptive q_sd .*plausible"):
+        AdaptiveConfig(q_sd=(1e-4, 0.05, 1e300))
+    with pytest.raises(ConfigError, match=r"fixed parameters .*\|c\| <= 50"):
+        FixedParams((0.0, 0.0, 1e308))
+    with pytest.raises(ConfigError, match="three finite numbers"):
+        FixedParams((0.0, 0.0))
+    assert FixedParams((0.01, 2.0, -0.5)).params.tolist() == [0.01, 2.0, -0.5]
+    KalmanConfig(max_sd=(1e3,) * 3)  # a cap beyond the bounds is a filter without cap
+
+
+def test_compensate_warm_notes_another_estimator_and_temperature_range(log):
+    prof = Profile((0.0, 0.0, 0.3), ((1e-6, 0, 0), (0, 0.5, 0), (0, 0, 1e-3)), (0.0, 5.0), 10, 1, "stkf",
+                   "2024-05-01T12:00:00+00:00", "gyrodrift 1.0.0")
+    out = compensate_warm(log, prof, name="dev.json")  # log at 25..26 degC, default estimator adaptive
+    notes = [n for n in out.attrs["notes"] if n.startswith("dev.json: ")]
+    assert len(notes) == 2 and "'stkf'" in notes[0] and "0.0 to 5.0 degC" in notes[1]
+    _in_range(out)
+    same = compensate_warm(log, replace(prof, temp_range_c=(20.0, 30.0)), CompensatorConfig(estimator="stkf"))
+    assert not [n for n in same.attrs["notes"] if n.startswith("profile: ")]
