@@ -261,3 +261,32 @@ def test_compensate_warm_notes_another_estimator_and_temperature_range(log):
     _in_range(out)
     same = compensate_warm(log, replace(prof, temp_range_c=(20.0, 30.0)), CompensatorConfig(estimator="stkf"))
     assert not [n for n in same.attrs["notes"] if n.startswith("profile: ")]
+
+
+# --------------------------------------------------------------------------- montecarlo -o
+
+
+def test_montecarlo_csv_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypatch, capsys):
+    import gyrodrift.montecarlo as mc
+
+    real = mc.run_monte_carlo
+
+    def with_bad_cells(*args, **kwargs):
+        df = real(*args, **kwargs)
+        df.loc[0, ["status", "error"]] = ["error", "=HYPERLINK(\"http://x\")"]
+        df.loc[1, ["status", "error"]] = ["error", "-2+3 failed"]
+        return df
+
+    monkeypatch.setattr(mc, "run_monte_carlo", with_bad_cells)
+    out = tmp_path / "mc.csv"
+    main(["montecarlo", "--seeds", "1", "--families", "static", "--methods", "adaptive", "kf",
+          "--duration-scale", "0.05", "--workers", "1", "-o", str(out)])
+    capsys.readouterr()
+    back = pd.read_csv(out, keep_default_na=False)
+    assert back.loc[0, "error"] == "'=HYPERLINK(\"http://x\")" and back.loc[1, "error"] == "'-2+3 failed"
+    for col in back.columns:
+        assert not any(str(v).startswith(("=", "+", "@")) for v in back[col] if isinstance(v, str)), col
+    parquet = tmp_path / "mc.parquet"  # Parquet holds the text as it is
+    main(["montecarlo", "--seeds", "1", "--families", "static", "--methods", "adaptive", "kf",
+          "--duration-scale", "0.05", "--workers", "1", "-o", str(parquet)])
+    assert pd.read_parquet(parquet).loc[0, "error"] == "=HYPERLINK(\"http://x\")"

@@ -61,7 +61,7 @@ from gyrodrift.io.validate import (
     table_to_frame,
 )
 
-__all__ = ["read_log", "write_table", "check_output_path"]
+__all__ = ["read_log", "write_table", "check_output_path", "FORMULA_STARTS", "formula_safe"]
 
 
 # ---------------------------------------------------------------------------
@@ -244,7 +244,29 @@ def _write_parquet(df: pd.DataFrame, sink) -> None:
     pa_pq.write_table(table, sink, **parquet_options(table.schema))
 
 
-def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
+#: First characters that make a spreadsheet read a cell as a formula (OWASP's CSV injection list).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def _as_text_cell(value):
+    """``value`` with a leading ``'`` if it is text a spreadsheet would run as a formula."""
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
+def formula_safe(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``df`` whose text cells that start like a formula (:data:`FORMULA_STARTS`)
+    get a leading ``'``, so that a spreadsheet shows them as text; number columns are left
+    as they are."""
+    safe = df.copy()
+    for col in safe.columns:
+        if safe[col].dtype == object or pd.api.types.is_string_dtype(safe[col].dtype):
+            safe[col] = safe[col].map(_as_text_cell)
+    return safe
+
+
+def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_safe: bool = False) -> None:
     """Write a DataFrame as CSV or Parquet, atomically.
 
     The table goes to a hidden temporary file in the destination directory, which then
@@ -259,6 +281,9 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
         Destination; its ending (``.csv``, ``.parquet``, ``.pq``) picks the format.
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
+    spreadsheet_safe : bool, default False
+        CSV only: write :func:`formula_safe` of ``df`` (for tables of file names and
+        error messages a user may open in a spreadsheet); ``df`` itself is not changed.
 
     Raises
     ------
@@ -269,6 +294,8 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     path = Path(path)
     table_fmt = table_format(path, fmt, WRITE_SUFFIXES)
     writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
+    if spreadsheet_safe and table_fmt == "csv":
+        df = formula_safe(df)
     with atomic_path(path) as tmp, pa.OSFile(str(tmp), "w") as sink:  # pyarrow's file: no GIL, no copy
         writer(df, sink)
 
