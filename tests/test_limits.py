@@ -290,3 +290,13 @@ def test_montecarlo_csv_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypat
     main(["montecarlo", "--seeds", "1", "--families", "static", "--methods", "adaptive", "kf",
           "--duration-scale", "0.05", "--workers", "1", "-o", str(parquet)])
     assert pd.read_parquet(parquet).loc[0, "error"] == "=HYPERLINK(\"http://x\")"
+
+
+def test_a_single_sample_is_refused_not_crashed_on():
+    # found by tests/test_fuzz.py: one sample gave ZeroDivisionError or LinAlgError
+    with pytest.raises(LogFormatError, match="single sample"):
+        compensate_arrays([0.0], [0.0], [20.0], [0.0])
+    comp = Compensator()
+    assert comp.push(0.0, 0.1, 30.0) == []
+    with pytest.raises(GyroDriftError, match="single sample"):
+        comp.flush()
