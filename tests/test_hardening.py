@@ -405,6 +405,43 @@ def test_sigterm_cleans_up_like_sigint(tmp_path, sig, code, word):
     assert _hidden(tmp_path) == [] and not out.exists()
 
 
+_BATCH_CLI = """
+import sys
+from gyrodrift.cli import main
+
+print("ready", flush=True)
+sys.exit(main(["batch", sys.argv[1], "-o", sys.argv[2], "--workers", "2"]))
+"""
+
+
+def test_sigterm_cancels_the_queued_logs_of_batch(tmp_path):
+    import shutil
+    import time
+
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    synthetic_log(duration_s=4 * 3600.0, gyro_noise_dps=0.05).to_csv(logs / "log00.csv", index=False)
+    for k in range(1, 16):
+        shutil.copy(logs / "log00.csv", logs / f"log{k:02d}.csv")
+    out = tmp_path / "out"
+    proc = _child(_BATCH_CLI, str(logs / "*.csv"), str(out))
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None and not (
+        out.is_dir() and any(not p.name.startswith(".") for p in out.iterdir())
+    ):
+        time.sleep(0.1)
+    assert proc.poll() is None, proc.stderr.read()
+    proc.send_signal(signal.SIGTERM)
+    sent = time.monotonic()
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stderr
+    assert time.monotonic() - sent < 15.0  # the queued logs were not run
+    assert stderr.endswith("gyrodrift: terminated\n") and "Traceback" not in stderr
+    written = [p.name for p in out.iterdir() if not p.name.startswith(".")]
+    assert 1 <= len(written) < 12, written
+    assert _hidden(out) == []
+
+
 def test_main_restores_the_sigterm_handler(tmp_path, capsys):
     before = signal.getsignal(signal.SIGTERM)
     main(["simulate", "nope", "-o", str(tmp_path / "x.csv")])
@@ -422,7 +459,7 @@ def test_batch_summary_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypatc
     for name in names:
         (tmp_path / name).write_bytes(b"\x00\x01 not a log")
     monkeypatch.chdir(tmp_path)
-    assert batch_command(_parse(["batch", "*.csv", "-o", "out", "--workers", "1"])) == 1
+    assert batch_command(_parse(["batch", "*.csv", "-o", "out", "--workers", "2"])) == 1
     capsys.readouterr()
     with open(tmp_path / "out" / "summary.csv", newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))

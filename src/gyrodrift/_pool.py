@@ -3,7 +3,33 @@
 
 from __future__ import annotations
 
+import signal
+
 __all__ = ["map_processes"]
+
+#: Seconds a worker is given to stop (and remove its temporary files) once terminated.
+STOP_WAIT_S = 10.0
+
+
+def _worker_start() -> None:
+    """In each worker: SIGTERM raises :class:`KeyboardInterrupt`, so that a job stopped by
+    :func:`map_processes` runs its clean-up (a partial output is removed, :mod:`gyrodrift._atomic`)."""
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
+
+
+def _stop(pool) -> None:
+    """Cancel the items not started, terminate the workers running one, and wait for them."""
+    # the standard library's own record of the workers, which shutdown() drops
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in workers:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in workers:
+        proc.join(STOP_WAIT_S)
+        if proc.is_alive():
+            proc.kill()
+            proc.join()
 
 
 def map_processes(job, items, workers: int, progress=None, on_error=None) -> list:
@@ -22,6 +48,13 @@ def map_processes(job, items, workers: int, progress=None, on_error=None) -> lis
         ``on_error(item, exception)`` gives the result of an item whose worker failed
         (a process that died, an argument that could not be pickled); without it the
         exception propagates.
+
+    Notes
+    -----
+    An interruption of the caller (Ctrl-C, or SIGTERM as :class:`gyrodrift.cli.Terminated`)
+    cancels the items not yet started and terminates the workers (SIGTERM, which they
+    take as Ctrl-C, so their partial outputs are removed; SIGKILL after
+    :data:`STOP_WAIT_S`), then propagates: nothing queued runs after it.
     """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -29,7 +62,8 @@ def map_processes(job, items, workers: int, progress=None, on_error=None) -> lis
     items = list(items)
     results: list = [None] * len(items)
     ctx = multiprocessing.get_context("spawn")  # no fork of a process that may hold threads
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=ctx) as pool:
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=ctx, initializer=_worker_start)
+    try:
         futures = {pool.submit(job, item): i for i, item in enumerate(items)}
         done = as_completed(futures)
         if progress is not None:
@@ -42,4 +76,8 @@ def map_processes(job, items, workers: int, progress=None, on_error=None) -> lis
                 if on_error is None:
                     raise
                 results[i] = on_error(items[i], err)
+    except BaseException:
+        _stop(pool)
+        raise
+    pool.shutdown(wait=True)
     return results

@@ -438,8 +438,8 @@ def _cmd_montecarlo(args) -> int:
         fs_hz=args.fs_hz,
     )
     seconds = time.monotonic() - start
-    if args.output:
-        write_table(df, args.output)
+    if args.output:  # a CSV's text cells (error messages) never start a spreadsheet formula
+        write_table(df, args.output, spreadsheet_safe=True)
     summary = summarise(df)
     if args.markdown:
         print(markdown(summary, tuned_on=args.tuned_on))

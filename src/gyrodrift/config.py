@@ -56,6 +56,7 @@ from pathlib import Path
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
+from gyrodrift.estimators.base import DRIFT_BOUNDS_TEXT, DRIFT_PARAM_BOUNDS
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -71,10 +72,6 @@ _TABLES = ("kalman", "gate", "temp_rate", "adaptive", "fusion")
 #: Largest settings or profile file read, bytes (such files are a few hundred bytes).
 MAX_FILE_BYTES = 1 << 20
 _INT64 = (-(2**63), 2**63 - 1)
-#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
-#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
-#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`).
-DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
 #: Per table: the settings that are triples (a, b, c) of drift-model values.
 _DRIFT_TRIPLES = {"kalman": ("x0", "p0_sd", "q_sd", "max_sd"), "adaptive": ("q_sd",)}
 
@@ -272,7 +269,7 @@ def _declared_types(cls) -> dict:
 def _within_drift_bounds(table: str):
     """A check for :func:`apply_settings`: the drift-model triples of ``table`` (and the
     variances of ``[kalman] p0_cov``) within :data:`DRIFT_PARAM_BOUNDS`."""
-    unit = "|a| <= 1 deg/s/degC, |b| <= 1000 deg, |c| <= 50 deg/s"
+    unit = DRIFT_BOUNDS_TEXT
 
     def check(converted: dict, where: str) -> None:
         for key in _DRIFT_TRIPLES.get(table, ()):

@@ -423,17 +423,6 @@ def process_many(
 
 # --------------------------------------------------------------------------- command line
 
-#: First characters that make a spreadsheet read a cell as a formula (module notes).
-_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
-
-
-def _as_text_cell(value):
-    """``value`` with a leading ``'`` if it is text a spreadsheet would run as a formula."""
-    if isinstance(value, str) and value.startswith(_FORMULA_STARTS):
-        return "'" + value
-    return value
-
-
 def write_summary(summary: pd.DataFrame, path) -> None:
     """Write a summary table as CSV, atomically, safe to open in a spreadsheet.
 
@@ -445,16 +434,13 @@ def write_summary(summary: pd.DataFrame, path) -> None:
 
     Notes
     -----
-    Text cells that start like a formula get a leading ``'`` (module notes); number
-    columns and ``summary`` itself are left as they are.
+    Text cells that start like a formula get a leading ``'`` (module notes,
+    :func:`gyrodrift.io.tabular.formula_safe`); number columns and ``summary`` itself
+    are left as they are.
     """
     from gyrodrift.io import write_table
 
-    safe = summary.copy()
-    for col in safe.columns:
-        if safe[col].dtype == object or pd.api.types.is_string_dtype(safe[col].dtype):
-            safe[col] = safe[col].map(_as_text_cell)
-    write_table(safe, path, fmt="csv")
+    write_table(summary, path, fmt="csv", spreadsheet_safe=True)
 
 
 

@@ -39,7 +39,8 @@ Using a profile
 saved by another estimator than the one in use, or the run's temperatures reach beyond
 those it was learned at (by more than :data:`TEMP_MARGIN_C`), so that its drift model
 is extrapolated. ``gyrodrift compensate --profile`` prints each note as a warning line
-on stderr.
+on stderr; :func:`compensate_warm` (the same from Python) adds them to the output's
+``attrs["notes"]``.
 """
 
 from __future__ import annotations
@@ -54,15 +55,15 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
-from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.config import DRIFT_PARAM_BOUNDS, read_utf8
-from gyrodrift.conventions import TEMP_RANGE_C
+from gyrodrift.conventions import TEMP, TEMP_RANGE_C
 from gyrodrift.errors import ConfigError
 from gyrodrift.kernels.numeric import cap_covariance
 
 __all__ = [
     "FORMAT", "VERSION", "PARAM_BOUNDS", "TEMP_MARGIN_C", "Profile", "profile_from_run", "save_profile",
-    "load_profile", "profile_notes", "warm_config",
+    "load_profile", "profile_notes", "warm_config", "compensate_warm",
 ]
 
 FORMAT = "gyrodrift-profile"
@@ -392,3 +393,37 @@ def warm_config(profile: Profile, config: CompensatorConfig | None = None) -> Co
     P = P + np.diag(np.square(np.array(kal.q_sd, dtype=float)))  # keeps it positive definite
     warm = replace(kal, x0=tuple(profile.params), p0_cov=tuple(map(tuple, P.tolist())))
     return replace(config, kalman=warm)
+
+
+def compensate_warm(log, profile: Profile, config: CompensatorConfig | None = None, *, name: str = "profile",
+                    **options):
+    """:func:`gyrodrift.compensate` started from ``profile``, with its notes.
+
+    Parameters
+    ----------
+    log : pandas.DataFrame
+        A log in the input contract (:func:`gyrodrift.io.read_log`).
+    profile : Profile
+        From :func:`load_profile`.
+    config : CompensatorConfig, optional
+        The settings to warm-start (:func:`warm_config`); default settings without it.
+    name : str, default "profile"
+        What to call the profile in the notes (its file, say).
+    **options
+        Passed to :func:`gyrodrift.compensate` (``source``, ``progress``, ``gyro_max_dps``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The output of :func:`gyrodrift.compensate`; ``attrs["notes"]`` ends with the notes
+        of :func:`profile_notes` for this configuration's estimator and the log's
+        temperatures, each as ``"<name>: <note>"``.
+    """
+    config = config or CompensatorConfig()
+    temp_c = np.asarray(log[TEMP], dtype=float) if TEMP in log.columns else np.array([])
+    seen = temp_c[np.isfinite(temp_c)]
+    temp_range_c = (float(seen.min()), float(seen.max())) if seen.size else None
+    out = compensate(log, warm_config(profile, config), **options)
+    notes = profile_notes(profile, estimator=config.estimator, temp_range_c=temp_range_c)
+    out.attrs["notes"] = list(out.attrs.get("notes", ())) + [f"{name}: {note}" for note in notes]
+    return out

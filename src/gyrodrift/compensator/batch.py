@@ -10,9 +10,10 @@ from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
-from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
 from gyrodrift.gyro_units import GyroUnitCheck
+from gyrodrift.io.limits import GYRO_MAX_DPS, check_columns, check_gyro_max_dps
 from gyrodrift.triad import add_triad_columns, has_triad_inputs
 
 __all__ = ["compensate", "compensate_arrays"]
@@ -34,6 +35,7 @@ def compensate_arrays(
     source: str = "arrays",
     progress=None,
     buffers: OutputBuffers | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -59,6 +61,15 @@ def compensate_arrays(
         Memory for the output columns, kept between calls (see :class:`OutputBuffers`):
         the returned table then views it, and the next call with the same buffers
         overwrites it.
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro, deg/s.
+
+    Raises
+    ------
+    LogFormatError
+        No samples; a first sample without gyro or temperature; a value outside its
+        plausible range (:mod:`gyrodrift.io.limits`: the gyro beyond ``gyro_max_dps``,
+        the temperature, heading, magnetometer or accelerometer), naming the row.
     """
     cfg = config or CompensatorConfig()
     t = np.asarray(t_s, dtype=float)
@@ -69,6 +80,8 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the log has no samples")
     if not (np.isfinite(g[0]) and np.isfinite(T_in[0])):
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
+    check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
+                  check_gyro_max_dps(gyro_max_dps))
     est = estimator if estimator is not None else build_estimator(cfg)
     if mag is not None and acc is not None:
         heading, norm, dip = compass_columns(n, heading_deg, mag, acc)
@@ -103,6 +116,7 @@ def compensate(
     estimator=None,
     source: str | None = None,
     progress=None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Compensate a log in the input contract; return the output table.
 
@@ -119,6 +133,10 @@ def compensate(
         Name for error messages; defaults to ``log.attrs["source"]``.
     progress : callable, optional
         See :func:`compensate_arrays`.
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s; a log with a larger rate, or
+        another value outside its plausible range (:mod:`gyrodrift.io.limits`), raises
+        :class:`~gyrodrift.errors.LogFormatError` naming the row and column.
 
     Returns
     -------
@@ -138,6 +156,8 @@ def compensate(
     """
     source = source or log.attrs.get("source", "log")
     has_mag = check_input_columns(log, source)
+    check_columns(source, {c: log[c].to_numpy(float) for c in (GYRO_X, GYRO_Y) if c in log.columns},
+                  check_gyro_max_dps(gyro_max_dps))
     out = compensate_arrays(
         log[T].to_numpy(float),
         log[GYRO_Z].to_numpy(float),
@@ -149,6 +169,7 @@ def compensate(
         estimator=estimator,
         source=source,
         progress=progress,
+        gyro_max_dps=gyro_max_dps,
     )
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)

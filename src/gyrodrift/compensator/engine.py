@@ -252,6 +252,8 @@ class ChunkEngine:
         log ends before (a short log: the window is what there is)."""
         t, g, T, heading, norm, dip = inputs
         cfg = self.cfg
+        if t.size < 2:  # no time span: the init window's measurements would divide by zero
+            raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
         e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)  # first row with t >= t_start
         span = min(float(cfg.init_s), float(t[e] - t[0]))
         if t[e] < self._fs[L.F_TSTART]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from collections import deque
 from dataclasses import replace
 
@@ -13,7 +14,9 @@ from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps, limit_of, outside_problem
 from gyrodrift.kernels import layout as L
 
 __all__ = ["Compensator"]
@@ -40,6 +43,9 @@ class Compensator:
     ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
     fields are NaN and no work is done for them.
 
+    ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
+    sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
+
     Examples
     --------
     >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
@@ -51,9 +57,10 @@ class Compensator:
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
-                 scale_factor=None):
+                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS):
         self.config = config or CompensatorConfig()
         self.source = source
+        self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         self._est = estimator if estimator is not None else build_estimator(self.config)
         self._engine = ChunkEngine(self.config, self._est, source)
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
@@ -117,8 +124,21 @@ class Compensator:
             Raw roll- and pitch-axis rates, deg/s (FRD; NaN: hold). Given with ``acc`` on
             the first sample, every row gets ``rate_x, rate_y, bias_x, bias_y`` and
             ``tilt_gated``; later samples without them hold the last values.
+
+        Raises
+        ------
+        GyroDriftError
+            An argument that is not a number (``mag`` and ``acc``: not three numbers;
+            None is allowed where the argument is optional), naming the argument; a
+            value outside its plausible range, as a log's cell is refused
+            (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
+            temperature, heading, magnetometer and accelerometer; NaN is no value and
+            holds); a time that is not finite or does not increase. The refused
+            sample is not taken: the compensator stays as it was.
         """
-        t_s, g, T = float(t_s), float(gyro_z_dps), float(temp_c)
+        t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
+            self.source, self._gyro_max_dps, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
         if self._prev is None:
@@ -239,3 +259,56 @@ def _compass_values(heading_deg, mag, acc) -> tuple[float, float, float]:
 def _float(v) -> float:
     """A float from an optional number (None: NaN)."""
     return math.nan if v is None else float(v)
+
+
+def _number(source: str, arg: str, value, column: str, gyro_max_dps: float) -> float:
+    """``value`` as a float within the plausible range of ``column`` (NaN passes), or a
+    :class:`GyroDriftError` naming the argument ``arg``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise GyroDriftError(f"{source}: {arg} must be a number, got {type(value).__name__} {_shown(value)}")
+    try:
+        x = float(value)
+    except (OverflowError, ValueError):
+        raise GyroDriftError(f"{source}: {arg} = {_shown(value)} is not a float (too large)") from None
+    limit = limit_of(column, gyro_max_dps)
+    if limit is not None and not math.isnan(x) and not limit.lo <= x <= limit.hi:
+        raise GyroDriftError(f"{source}: {arg}: {outside_problem(column, x, limit)}; {limit.advice}")
+    return x
+
+
+def _triple(source: str, arg: str, value, columns: tuple[str, ...], gyro_max_dps: float) -> tuple | None:
+    """``mag`` or ``acc``: None, or three checked floats."""
+    if value is None:
+        return None
+    try:
+        items = list(value) if not isinstance(value, (str, bytes)) else None
+    except TypeError:
+        items = None
+    if items is None or len(items) != 3:
+        raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {_shown(value)}")
+    return tuple(_number(source, f"{arg}[{k}]", v, c, gyro_max_dps) for k, (v, c) in enumerate(zip(items, columns)))
+
+
+def _checked_sample(source: str, gyro_max_dps: float, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps,
+                    gyro_y_dps) -> tuple:
+    """The arguments of :meth:`Compensator.push` checked and as floats (``heading_deg``
+    None: NaN; ``mag``, ``acc``, ``gyro_x_dps``, ``gyro_y_dps`` stay None when None)."""
+    def num(arg, value, column):
+        return _number(source, arg, value, column, gyro_max_dps)
+
+    return (
+        num("t_s", t_s, ""),
+        num("gyro_z_dps", gyro_z_dps, GYRO_Z),
+        num("temp_c", temp_c, TEMP),
+        math.nan if heading_deg is None else num("heading_deg", heading_deg, HEADING),
+        _triple(source, "mag", mag, MAG_COLS, gyro_max_dps),
+        _triple(source, "acc", acc, ACC_COLS, gyro_max_dps),
+        None if gyro_x_dps is None else num("gyro_x_dps", gyro_x_dps, GYRO_X),
+        None if gyro_y_dps is None else num("gyro_y_dps", gyro_y_dps, GYRO_Y),
+    )
+
+
+def _shown(value) -> str:
+    """A value for a message: its repr, shortened and on one line."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 40 else text[:37] + "..."

@@ -45,7 +45,7 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import register
+from gyrodrift.estimators.base import check_drift_triple, register
 from gyrodrift.estimators.kalman import KalmanConfig, KernelFilter, filter_arrays
 from gyrodrift.kernels import kalman as kernel
 from gyrodrift.kernels import layout as L
@@ -203,6 +203,7 @@ class AdaptiveConfig:
                 ok = False
             if not ok:
                 raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
+            check_drift_triple("adaptive q_sd", self.q_sd)
 
     #: The fixes that :meth:`ablated` switches off one at a time, by name.
     FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "zaru_hold", "fading",

@@ -9,6 +9,7 @@ update interval: :meth:`DriftEstimator.update` when the aiding was accepted,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import ClassVar, Protocol, runtime_checkable
 
@@ -16,7 +17,36 @@ import numpy as np
 
 from gyrodrift.errors import ConfigError
 
-__all__ = ["Observation", "DriftEstimator", "LinearDrift", "Unaided", "ESTIMATORS", "register", "make_estimator"]
+#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
+#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
+#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`). Settings, profiles and
+#: fixed parameters beyond them are refused, from files and from Python alike.
+DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
+#: :data:`DRIFT_PARAM_BOUNDS` in words, for messages.
+DRIFT_BOUNDS_TEXT = "|a| <= {:g} deg/s/degC, |b| <= {:g} deg/degC, |c| <= {:g} deg/s".format(*DRIFT_PARAM_BOUNDS)
+
+
+def check_drift_triple(name: str, values) -> None:
+    """Raise :class:`ConfigError` naming ``name`` unless ``values`` are three finite numbers
+    (a, b, c) within :data:`DRIFT_PARAM_BOUNDS`.
+
+    Parameters
+    ----------
+    name : str
+        The setting, for the message (``"x0"``, ``"fixed parameters"``).
+    values : sequence of 3 numbers
+        Drift-model values in the units of a, b, c (parameters or standard deviations).
+    """
+    try:
+        x = [float(v) for v in values]
+    except (TypeError, ValueError, OverflowError):
+        x = []
+    if len(x) != 3 or not all(math.isfinite(v) for v in x):
+        raise ConfigError(f"{name} must be three finite numbers (a, b, c), got {values!r}")
+    if any(abs(v) > bound for v, bound in zip(x, DRIFT_PARAM_BOUNDS)):
+        raise ConfigError(f"{name} = {tuple(x)!r} is outside the plausible drift model ({DRIFT_BOUNDS_TEXT})")
+
+__all__ = ["DRIFT_PARAM_BOUNDS", "DRIFT_BOUNDS_TEXT", "check_drift_triple", "Observation", "DriftEstimator", "LinearDrift", "Unaided", "ESTIMATORS", "register", "make_estimator"]
 
 
 @dataclass(frozen=True)

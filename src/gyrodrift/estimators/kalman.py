@@ -18,7 +18,7 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.estimators.base import LinearDrift, Observation, check_drift_triple, register
 from gyrodrift.kernels import kalman as kernel
 from gyrodrift.kernels import layout as L
 
@@ -43,7 +43,10 @@ class KalmanConfig:
         Process-noise standard deviations of [a, b, c] per update interval;
         Q = diag(q_sd²).
     max_sd : tuple of 3 floats, optional
-        Cap on each standard deviation (see module notes); default ``p0_sd``.
+        Cap on each standard deviation (see module notes); default ``p0_sd``. A cap
+        above :data:`~gyrodrift.estimators.base.DRIFT_PARAM_BOUNDS` is allowed (a filter
+        without cap, for reference); ``x0``, ``p0_sd``, ``q_sd`` and the standard
+        deviations of ``p0_cov`` must lie within them (:class:`ConfigError` otherwise).
     p0_cov : 3x3 nested tuple, optional
         A full prior covariance replacing ``diag(p0_sd²)`` (a warm start from a device
         profile keeps the strong a–c correlation); the cap stays ``max_sd``/``p0_sd``.
@@ -75,6 +78,8 @@ class KalmanConfig:
                 raise ConfigError(f"{name} must be positive, got {v!r}")
         if not all(float(e) >= 0 for e in self.q_sd):
             raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
+        for name in ("x0", "p0_sd", "q_sd"):
+            check_drift_triple(name, getattr(self, name))
         if self.p0_cov is not None:
             try:
                 P = np.array(self.p0_cov, dtype=float)
@@ -84,6 +89,7 @@ class KalmanConfig:
                 ok = False
             if not ok:
                 raise ConfigError("p0_cov must be a symmetric positive definite 3x3 matrix")
+            check_drift_triple("p0_cov's standard deviations", np.sqrt(np.diag(P)))
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Initial covariance P0, the variance cap (diagonal) and Q of these settings."""

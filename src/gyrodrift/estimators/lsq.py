@@ -22,7 +22,7 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import LinearDrift, Observation, Unaided, register
+from gyrodrift.estimators.base import LinearDrift, Observation, Unaided, check_drift_triple, register
 from gyrodrift.estimators.kalman import KalmanConfig
 
 __all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
@@ -128,9 +128,8 @@ class FixedParams(Unaided, LinearDrift):
     causal: ClassVar[bool] = True
 
     def __init__(self, params=(0.0, 0.0, 0.0)):
+        check_drift_triple("fixed parameters", params)
         self._x = np.array(params, dtype=float)
-        if self._x.shape != (3,) or not np.all(np.isfinite(self._x)):
-            raise ConfigError(f"fixed parameters must be three finite numbers (a, b, c), got {params!r}")
 
     @property
     def params(self) -> np.ndarray:

@@ -27,6 +27,7 @@ from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
 from gyrodrift.io.ardupilot import read_ardupilot
 from gyrodrift.io.formats import FORMATS, log_format
+from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.ulog import read_ulog
@@ -94,6 +95,7 @@ def read_log(
     imu_topic: str | None = None,
     temp_topic: str | None = None,
     mag_topic: str | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Read any supported log into the input contract (units and frames of :mod:`gyrodrift.conventions`).
 
@@ -116,6 +118,9 @@ def read_log(
     imu_topic, temp_topic, mag_topic : str, optional
         ROS bags only: topics of type Imu, Temperature and MagneticField (see
         :func:`gyrodrift.io.rosbag.read_rosbag`).
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s, in every format
+        (:mod:`gyrodrift.io.limits`).
 
     Returns
     -------
@@ -142,16 +147,16 @@ def read_log(
     if log_fmt == "ulog":
         _check_stated_units(path, "ulog", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "ulog", set_ros)
-        return read_ulog(path, instance=instance, mag_instance=mag_instance)
+        return read_ulog(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
     if log_fmt == "ardupilot":
-        _check_stated_units(path, "ardupilot", gyro_unit, frame, column_map)
+        _check_stated_units(path, "ardupilot", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "ardupilot", set_ros)
-        return read_ardupilot(path, instance=instance, mag_instance=mag_instance)
+        return read_ardupilot(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
     if log_fmt == "rosbag":
         _check_stated_units(path, "rosbag", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "rosbag", set_ulog)
-        return read_rosbag(path, imu_topic=imu_topic, temp_topic=temp_topic, mag_topic=mag_topic)
+        return read_rosbag(path, imu_topic=imu_topic, temp_topic=temp_topic, mag_topic=mag_topic,
+                           gyro_max_dps=gyro_max_dps)
     _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
-    return tabular.read_log(
-        path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map, time_unit=time_unit
-    )
+    return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map,
+                            time_unit=time_unit, gyro_max_dps=gyro_max_dps)

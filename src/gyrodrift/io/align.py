@@ -35,6 +35,7 @@ from gyrodrift.conventions import (
     wrap_360,
 )
 from gyrodrift.errors import LogFormatError
+from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, first_outside, limit_of, outside_problem
 from gyrodrift.io.validate import message
 
 __all__ = [
@@ -213,8 +214,14 @@ def contract_frame(
     acc: np.ndarray | None,
     ref_heading: np.ndarray | None,
     attrs: Mapping[str, object],
+    *,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Assemble the input-contract DataFrame (all float64) and set ``df.attrs``.
+
+    Every value is checked against its plausible range (:mod:`gyrodrift.io.limits`);
+    the first one outside raises :class:`LogFormatError` naming the file
+    (``attrs["source"]``), the gyro sample (the row) and its time, and the column.
 
     Parameters
     ----------
@@ -230,6 +237,8 @@ def contract_frame(
         Reference heading (deg, [0, 360)), shape (n,), or None for no column.
     attrs : mapping
         Copied into ``df.attrs``.
+    gyro_max_dps : float
+        Plausible full scale of the gyro axes, deg/s.
     """
     columns = {
         T: t,
@@ -245,6 +254,18 @@ def contract_frame(
     if ref_heading is not None:
         columns[REF_HEADING] = ref_heading
     df = pd.DataFrame({k: np.asarray(v, dtype=np.float64) for k, v in columns.items()})
+    for col in LIMITED_COLS:
+        limit = limit_of(col, gyro_max_dps) if col in df.columns else None
+        pos = None if limit is None else first_outside(df[col].to_numpy(), limit)
+        if pos is not None:
+            raise LogFormatError(
+                message(
+                    str(attrs.get("source", "log")),
+                    outside_problem(col, df[col].iloc[pos], limit),
+                    limit.advice,
+                    where=f"gyro sample {pos + 1} (t = {float(t[pos]):.6f} s)",
+                )
+            )
     df.attrs = dict(attrs)
     return df
 

@@ -64,6 +64,7 @@ from gyrodrift.io.align import (
     median_rate_hz,
     on_following_rows,
 )
+from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
 
@@ -418,7 +419,8 @@ def _summary(name: str, t, imu: _Source, temp: Stream | None, mag: Stream | None
     return "; ".join(parts + extra)
 
 
-def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True) -> pd.DataFrame:
+def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True,
+                   gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
     """Read an ArduPilot DataFlash log (``.bin``) into the gyrodrift input contract.
 
     Parameters
@@ -433,6 +435,9 @@ def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, 
         ``COMPASS_PRIMARY`` when logged, else the lowest instance in the log.
     reference : bool, default True
         Add ``ref_heading`` (deg) from ``ATT.Yaw`` when the log has it.
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s; a larger rate (a corrupt record)
+        is refused, as are the other implausible values of :mod:`gyrodrift.io.limits`.
 
     Returns
     -------
@@ -467,19 +472,21 @@ def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, 
     """
     _check_instance(instance, "instance")
     _check_instance(mag_instance, "mag_instance", allow_none=True)
+    gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     dfreader = _import_dfreader()
     path = Path(path)
     name = str(path)
     _check_file(path)
     reader = _open(dfreader, path)
     try:
-        return _read(reader, name, instance, mag_instance, reference)
+        return _read(reader, name, instance, mag_instance, reference, gyro_max_dps)
     finally:
         with contextlib.suppress(Exception):
             reader.close()
 
 
-def _read(reader, name: str, instance: int, mag_instance: int | None, reference: bool) -> pd.DataFrame:
+def _read(reader, name: str, instance: int, mag_instance: int | None, reference: bool,
+          gyro_max_dps: float) -> pd.DataFrame:
     """The body of :func:`read_ardupilot` on an open pymavlink reader."""
     skipped, partial = _damage(reader)
     imus = _sources(reader, name, _IMU_TYPES, (*_GYRO_FIELDS, *_ACC_FIELDS, "T"))
@@ -566,4 +573,5 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
         acc,
         ref_heading,
         attrs,
+        gyro_max_dps=gyro_max_dps,
     )

@@ -74,6 +74,7 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import csvfile, formats, parquetfile, validate
 from gyrodrift.io.chunkwriter import ChunkWriter
 from gyrodrift.io.held import held_note
+from gyrodrift.io.limits import GYRO_MAX_DPS
 
 __all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "LogSummary", "log_summary", "ColumnTypeChanged"]
 
@@ -627,6 +628,7 @@ def iter_log_chunks(
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
     chunk_rows: int = 1_000_000,
     column_types: Mapping[str, object] | None = None,
     block_size_bytes: int = DEFAULT_BLOCK_SIZE_BYTES,
@@ -645,7 +647,7 @@ def iter_log_chunks(
         or Parquet (``.parquet``, ``.pq``).
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
-    gyro_unit, frame, column_map, time_unit
+    gyro_unit, frame, column_map, time_unit, gyro_max_dps
         As for :func:`gyrodrift.io.tabular.read_log`; the time base is checked on the
         first chunk.
     chunk_rows : int, default 1_000_000
@@ -677,7 +679,7 @@ def iter_log_chunks(
         As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
     """
     path = Path(path)
-    opts = validate.read_options(gyro_unit, frame, column_map, time_unit)
+    opts = validate.read_options(gyro_unit, frame, column_map, time_unit, gyro_max_dps)
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, (int, np.integer)) or chunk_rows < 1:
         raise ConfigError(f"chunk_rows must be a positive whole number of rows, got {chunk_rows!r}")
     if isinstance(block_size_bytes, bool) or not isinstance(block_size_bytes, (int, np.integer)) or block_size_bytes < 1024:

@@ -67,6 +67,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
+from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
 
@@ -438,7 +439,8 @@ def _streams(
 
 
 def read_rosbag(
-    path, *, imu_topic: str | None = None, temp_topic: str | None = None, mag_topic: str | None = None
+    path, *, imu_topic: str | None = None, temp_topic: str | None = None, mag_topic: str | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Read a ROS 1 or ROS 2 bag into the gyrodrift input contract.
 
@@ -451,6 +453,9 @@ def read_rosbag(
         Topics of type ``sensor_msgs/Imu``, ``sensor_msgs/Temperature`` and
         ``sensor_msgs/MagneticField``. Each may be left out if the bag has exactly one
         topic of that type.
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s; a larger rate (a corrupt record)
+        is refused, as are the other implausible values of :mod:`gyrodrift.io.limits`.
 
     Returns
     -------
@@ -472,11 +477,13 @@ def read_rosbag(
     ------
     LogFormatError
         Missing, empty, unreadable or truncated bag; no Imu topic; fewer than two Imu
-        messages (with distinct times); an implausible temperature.
+        messages (with distinct times); an implausible temperature, gyro rate or
+        magnetometer or accelerometer value (:mod:`gyrodrift.io.limits`).
     ConfigError
         rosbags is not installed; a named topic is missing or has another type; several
         topics of a type and no option naming one.
     """
+    gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     rosbags_api = _import_rosbags()
     path = Path(path)
     name = str(path)
@@ -519,4 +526,5 @@ def read_rosbag(
         imu.values[:, 3:6] * _FLU_TO_FRD,
         ref_heading if ref_count else None,
         attrs,
+        gyro_max_dps=gyro_max_dps,
     )

@@ -42,6 +42,7 @@ from gyrodrift.io.csvfile import (
     write_csv_rows,
     write_csv_with_pandas,
 )
+from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
 from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
@@ -61,7 +62,7 @@ from gyrodrift.io.validate import (
     table_to_frame,
 )
 
-__all__ = ["read_log", "write_table", "check_output_path"]
+__all__ = ["read_log", "write_table", "check_output_path", "FORMULA_STARTS", "formula_safe"]
 
 
 # ---------------------------------------------------------------------------
@@ -140,6 +141,7 @@ def read_log(
     frame: str = "ned",
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
+    gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
     """Read and validate an input log; return it in contract units and frames.
 
@@ -166,6 +168,9 @@ def read_log(
         s, and time stamps that look like another unit are refused naming the unit to
         give (:mod:`gyrodrift.io.timebase`, decided on the whole file here and on the
         first chunk by :func:`gyrodrift.io.chunked.iter_log_chunks`).
+    gyro_max_dps : float, default :data:`gyrodrift.io.limits.GYRO_MAX_DPS` (10000)
+        Plausible full scale of the gyro axes, deg/s: a larger rate is refused like an
+        implausible temperature (:mod:`gyrodrift.io.limits` lists every plausible range).
 
     Returns
     -------
@@ -186,8 +191,9 @@ def read_log(
     ------
     LogFormatError
         The file is missing, empty, not a table, ragged, lacks ``t`` or ``gyro_z``, or
-        holds bad values (non-numbers, inf, empty or non-increasing ``t``, implausible
-        ``temp``, ``t`` or ``gyro_z`` with no value, or a first row without
+        holds bad values (non-numbers, inf, empty or non-increasing ``t``, a value
+        outside its plausible range (:mod:`gyrodrift.io.limits`: ``temp``, ``gyro_*``,
+        ``heading``, ``mag_*``, ``acc_*``), ``t`` or ``gyro_z`` with no value, or a first row without
         ``gyro_z``/``temp`` when the column has a value later). Empty cells in
         ``gyro_z``/``temp`` after the first row are allowed and stay NaN.
     ConfigError
@@ -201,7 +207,7 @@ def read_log(
     ``data row N`` (1-based) for Parquet.
     """
     path = Path(path)
-    opts = read_options(gyro_unit, frame, column_map, time_unit)
+    opts = read_options(gyro_unit, frame, column_map, time_unit, gyro_max_dps)
     check_input_path(path)
     table_fmt = table_format(path, fmt, READ_SUFFIXES)
     if table_fmt == "csv":
@@ -246,7 +252,29 @@ def _write_parquet(df: pd.DataFrame, sink) -> None:
     pa_pq.write_table(table, sink, **parquet_options(table.schema))
 
 
-def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
+#: First characters that make a spreadsheet read a cell as a formula (OWASP's CSV injection list).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def _as_text_cell(value):
+    """``value`` with a leading ``'`` if it is text a spreadsheet would run as a formula."""
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
+def formula_safe(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``df`` whose text cells that start like a formula (:data:`FORMULA_STARTS`)
+    get a leading ``'``, so that a spreadsheet shows them as text; number columns are left
+    as they are."""
+    safe = df.copy()
+    for col in safe.columns:
+        if safe[col].dtype == object or pd.api.types.is_string_dtype(safe[col].dtype):
+            safe[col] = safe[col].map(_as_text_cell)
+    return safe
+
+
+def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_safe: bool = False) -> None:
     """Write a DataFrame as CSV or Parquet, atomically.
 
     The table goes to a hidden temporary file in the destination directory, which then
@@ -261,6 +289,9 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
         Destination; its ending (``.csv``, ``.parquet``, ``.pq``) picks the format.
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
+    spreadsheet_safe : bool, default False
+        CSV only: write :func:`formula_safe` of ``df`` (for tables of file names and
+        error messages a user may open in a spreadsheet); ``df`` itself is not changed.
 
     Raises
     ------
@@ -271,6 +302,8 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None) -> None:
     path = Path(path)
     table_fmt = table_format(path, fmt, WRITE_SUFFIXES)
     writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
+    if spreadsheet_safe and table_fmt == "csv":
+        df = formula_safe(df)
     with atomic_path(path) as tmp, pa.OSFile(str(tmp), "w") as sink:  # pyarrow's file: no GIL, no copy
         writer(df, sink)
 

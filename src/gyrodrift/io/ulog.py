@@ -84,6 +84,7 @@ from gyrodrift.io.align import (
     on_following_rows,
     yaw_deg,
 )
+from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
 
@@ -596,7 +597,8 @@ def _summary(
     return "; ".join(parts + extra)
 
 
-def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True) -> pd.DataFrame:
+def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True,
+              gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
     """Read a PX4 ULog (``.ulg``) into the gyrodrift input contract.
 
     Parameters
@@ -610,6 +612,9 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
         PX4 selected, from ``vehicle_magnetometer`` when that is logged much faster.
     reference : bool, default True
         Add ``ref_heading`` (deg) from ``vehicle_attitude`` when the log has it.
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s; a larger rate (a corrupt record)
+        is refused, as are the other implausible values of :mod:`gyrodrift.io.limits`.
 
     Returns
     -------
@@ -632,7 +637,8 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     LogFormatError
         Missing, empty, non-ULog, truncated or corrupt file; a missing gyro topic or
         a missing field; no ``sensor_mag`` topic while ``mag_instance`` is given; fewer
-        than 2 gyro samples; an implausible temperature; an unsupported sensor rotation.
+        than 2 gyro samples; an implausible temperature, gyro rate or magnetometer or
+        accelerometer value (:mod:`gyrodrift.io.limits`); an unsupported sensor rotation.
     ConfigError
         pyulog is not installed; ``instance`` or ``mag_instance`` is not a
         non-negative integer or not in the log (the message lists those present).
@@ -643,6 +649,7 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     the summary; see the module documentation for the topic and alignment rules.
     """
     _check_instance(instance, "instance")
+    gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     _check_instance(mag_instance, "mag_instance", allow_none=True)
     ulog_class = _import_pyulog()
     path = Path(path)
@@ -715,4 +722,5 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
         interp_held(acc.t, acc.values, t) if acc is not None else None,
         ref_heading,
         attrs,
+        gyro_max_dps=gyro_max_dps,
     )

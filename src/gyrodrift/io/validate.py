@@ -3,7 +3,7 @@
 The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
 (:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
 contract with :func:`normalise_frame`: column map, required columns, numeric
-conversion, time and temperature checks, gyro unit (deg/s) and frame (NED/FRD, headings
+conversion, time checks, plausible ranges (:mod:`gyrodrift.io.limits`), gyro unit (deg/s) and frame (NED/FRD, headings
 in [0, 360)), and a ``temp`` of 0 degC where the file has no usable temperature. Every
 step works row by row, so the chunks of a file come out as the rows of the whole file.
 :func:`compass_form` names the compass form the file holds ("none" without one), and
@@ -47,13 +47,13 @@ from gyrodrift.conventions import (
     REQUIRED_COLS,
     T,
     TEMP,
-    TEMP_RANGE_C,
     TRUE_BIAS_X,
     TRUE_BIAS_Y,
     TRUE_BIAS_Z,
     wrap_360,
 )
 from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
 from gyrodrift.io.held import drop_held
 from gyrodrift.io.timebase import time_base_notes, time_scale
@@ -273,15 +273,17 @@ class ReadOptions(NamedTuple):
     renames: dict[str, str]  #: column map NEW -> OLD
     time_unit: str | None = None  #: canonical unit of ``t`` in the file (None: s, not stated)
     time_scale: float = 1.0  #: multiplier from that unit to s
+    #: plausible gyro full scale, deg/s (:mod:`gyrodrift.io.limits`)
+    gyro_max_dps: float = GYRO_MAX_DPS
 
 
-def read_options(
-    gyro_unit: str, frame: str, column_map: Mapping[str, str] | None, time_unit: str | None = None
-) -> ReadOptions:
+def read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None, time_unit: str | None = None,
+                 gyro_max_dps: float = GYRO_MAX_DPS) -> ReadOptions:
     """Check the table options (raising :class:`ConfigError`) and return them canonical."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
-    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit))
+    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
+                       check_gyro_max_dps(gyro_max_dps))
 
 
 # ---------------------------------------------------------------------------
@@ -572,21 +574,19 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
         )
 
 
-def _check_temperature(frame: pd.DataFrame, src: Source) -> None:
-    """Reject temperatures outside :data:`TEMP_RANGE_C`."""
-    lo, hi = TEMP_RANGE_C
-    temp_c = frame[TEMP].to_numpy()
-    with np.errstate(invalid="ignore"):
-        outside = np.flatnonzero((temp_c < lo) | (temp_c > hi))
-    if outside.size:
-        pos = int(outside[0])
-        raise format_error(
-            src,
-            f"temperature {float(temp_c[pos])!r} degC is outside the plausible range {lo:g}..{hi:g} degC",
-            "check the unit and the column (Kelvin? raw sensor counts?)"
-            " and map the right one with --map NEW=OLD (column_map in Python)",
-            where=cell_label(src, pos, TEMP),
-        )
+def _check_limits(frame: pd.DataFrame, src: Source, opts: "ReadOptions") -> None:
+    """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`): temperature,
+    gyro rates (in the file's unit, against ``opts.gyro_max_dps``), headings, magnetometer
+    and accelerometer components."""
+    for col in LIMITED_COLS:
+        if col not in frame.columns:
+            continue
+        limit = limit_of(col, opts.gyro_max_dps, opts.scale, opts.gyro_unit)
+        pos = first_outside(frame[col].to_numpy(), limit)
+        if pos is not None:
+            value = frame[col].iloc[pos]
+            advice = limit.advice + (" and map the right one with --map NEW=OLD (column_map in Python)" if col == TEMP else "")
+            raise format_error(src, outside_problem(col, value, limit), advice, where=cell_label(src, pos, col))
 
 
 def _compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
@@ -785,7 +785,7 @@ def normalise_frame(
         temperature = TEMP_EMPTY
     else:
         temperature = TEMP_MEASURED
-        _check_temperature(df, src)
+    _check_limits(df, src, opts)
     with_values = _compass_columns_with_values(df)
     df = _to_deg_per_s(df, opts.scale)
     if opts.frame == "enu":
