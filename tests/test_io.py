@@ -643,7 +643,7 @@ def test_real_actigraph():
 
 
 def test_module_exports():
-    assert set(tabular.__all__) == {"read_log", "write_table", "check_output_path"}
+    assert set(tabular.__all__) == {"read_log", "write_table", "check_output_path", "formula_safe", "FORMULA_STARTS"}
 
 
 def test_parquet_numbers_stored_as_dictionary_text(tmp_path):

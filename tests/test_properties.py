@@ -362,8 +362,15 @@ def test_streaming_equals_batch(case, cfg):
 @settings(REPRO, max_examples=10)
 @example(col="gyro_z", row=35)
 @given(st.sampled_from(["gyro_z", "temp"]), st.integers(31, 40))
-def test_streaming_equals_batch_with_infinite_cells(col, row):
+def test_batch_and_streaming_refuse_an_infinite_cell_alike(col, row):
+    # an infinite rate or temperature is a corrupt record, refused like an implausible one
+    # (gyrodrift.io.limits); an empty cell is what holds the previous value
     log = tiny_log(41, **{col: {row: math.inf}})
+    with pytest.raises(GyroDriftError, match=f"row {row}, column '{col}'"):
+        compensate(log)
+    with pytest.raises(GyroDriftError, match="outside the plausible range"):
+        stream(log, None)
+    log = tiny_log(41, **{col: {row: math.nan}})
     assert_same_columns(compensate(log), stream(log, None))
 
 

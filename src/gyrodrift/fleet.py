@@ -152,8 +152,8 @@ def common_root(paths) -> Path | None:
     """The deepest folder holding every log of ``paths`` (None for none): the input folder
     :func:`output_path` mirrors under the output folder.
 
-    >>> common_root(["runs/a/x.csv", "runs/b/x.csv"]).as_posix()
-    'runs'
+    >>> common_root(["/data/runs/a/x.csv", "/data/runs/b/x.csv"]).as_posix()
+    '/data/runs'
     """
     parents = [os.path.abspath(Path(p).parent) for p in paths]
     return Path(os.path.commonpath(parents)) if parents else None

@@ -93,7 +93,7 @@ class Compensator:
 
     @property
     def params(self) -> np.ndarray:
-        """[a (deg/s/degC), b (deg), c (deg/s)] now in force."""
+        """[a (deg/s/degC), b (deg/degC), c (deg/s)] now in force."""
         return self._est.params
 
     @property

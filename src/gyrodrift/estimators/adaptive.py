@@ -128,7 +128,7 @@ class AdaptiveConfig:
         Number of updates averaged in the normalised test.
     q_sd : tuple of 3 floats, optional
         Fix 5, per-parameter process noise: random-walk standard deviations of
-        [a (deg/s/degC), b (deg), c' (deg/s, the drift at T_ref)] per update interval.
+        [a (deg/s/degC), b (deg/degC), c' (deg/s, the drift at T_ref)] per update interval.
         A random-walk ``c'`` follows drift the linear model does not explain
         (curvature, hysteresis, bias instability) while a and b keep a long memory.
         None: ``KalmanConfig.q_sd``, shared with the other Kalman estimators (and no

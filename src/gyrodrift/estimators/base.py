@@ -91,7 +91,7 @@ class DriftEstimator(Protocol):
 
     @property
     def params(self) -> np.ndarray:
-        """(3,) ndarray: a (deg/s/degC), b (deg), c (deg/s) now in force."""
+        """(3,) ndarray: a (deg/s/degC), b (deg/degC), c (deg/s) now in force."""
 
     @property
     def cov(self) -> np.ndarray:

@@ -36,7 +36,7 @@ class KalmanConfig:
         (default 1.2: about 6 updates, 60 s at the 10-s interval; chosen on the
         simulated static and vehicle runs, see the README). Ignored by ``kf``.
     x0 : tuple of 3 floats
-        Prior mean of [a (deg/s/degC), b (deg), c (deg/s)].
+        Prior mean of [a (deg/s/degC), b (deg/degC), c (deg/s)].
     p0_sd : tuple of 3 floats
         Prior standard deviations of [a, b, c] (same units); P0 = diag(p0_sd²).
     q_sd : tuple of 3 floats

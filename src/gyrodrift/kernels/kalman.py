@@ -285,7 +285,7 @@ def hold(ef, ei):
 
 @jit
 def params(ef, ei):
-    """The parameters in force, absolute [a (deg/s/degC), b (deg), c (deg/s)]: ``adaptive``
+    """The parameters in force, absolute [a (deg/s/degC), b (deg/degC), c (deg/s)]: ``adaptive``
     gives the outage anchor while one is set."""
     z, P, Q, max_var, af, V, nis, ai = views(ef, ei)
     if ei[EI_MODE] != MODE_ADAPTIVE:
