@@ -17,7 +17,7 @@ from gyrodrift.triad import TRIAD_COLUMNS
 
 
 def stream(log: pd.DataFrame, cfg: CompensatorConfig, raw_mag: bool = False) -> pd.DataFrame:
-    comp = Compensator(cfg)
+    comp = Compensator(cfg, provisional=False)
     rows = []
     has_heading = "heading" in log.columns
     for r in log.itertuples(index=False):
@@ -252,7 +252,7 @@ def test_short_logs_and_logs_without_compass_are_compensated_with_a_note():
     out = compensate(short)
     assert len(out) == len(short) and out["bias_z"].iloc[-1] == pytest.approx(0.3, abs=0.01)
     assert any("shorter than the 30-s init window" in n for n in out.attrs["notes"])
-    comp = Compensator()
+    comp = Compensator(provisional=False)
     rows = [r for row in short.itertuples(index=False) for r in comp.push(row.t, row.gyro_z, row.temp, row.heading)]
     assert rows == [] and comp.notes == []
     assert_same(out, pd.DataFrame([asdict(s) for s in comp.flush()]).drop(columns=list(TRIAD_COLUMNS)))
@@ -266,7 +266,7 @@ def test_short_logs_and_logs_without_compass_are_compensated_with_a_note():
 
 
 def test_streaming_rejects_time_going_back():
-    comp = Compensator()
+    comp = Compensator(provisional=False)
     comp.push(0.0, 0.1, 30.0, 10.0)
     with pytest.raises(GyroDriftError, match="time must increase"):
         comp.push(0.0, 0.1, 30.0, 10.0)
@@ -348,3 +348,29 @@ def test_bias_sd_does_not_understate_the_error():
         z = (out["bias_z"] - out["true_bias_z"])[late] / out["bias_sd"][late]
         assert 0.1 < float(np.sqrt(np.mean(z**2))) < 1.0, estimator
         assert (out["bias_sd"] > 0).all()
+
+
+def test_streaming_emits_a_provisional_row_per_sample_from_the_first():
+    """The default Compensator answers every sample at once: through the init window with the
+    drift model known before any measurement (here a profile-like prior), flagged ``init``
+    with an honest bias_sd; from the end of the window on, the batch's rows bit for bit."""
+    log = synthetic_log(duration_s=120.0, drift_dps=lambda t, T: 0.01 * (T - 30.0) + 0.2)
+    est = Compensator().estimator  # a fresh default estimator, to read its prior
+    prior_sd = float(np.sqrt(np.array([log.temp.iloc[0], 0.0, 1.0]) @ est.cov @ np.array([log.temp.iloc[0], 0.0, 1.0])))
+    comp = Compensator()
+    rows = []
+    for r in log.itertuples(index=False):
+        got = comp.push(r.t, r.gyro_z, r.temp, r.heading)
+        assert len(got) == 1 and got[0].t == r.t  # one row per sample, at once
+        rows += got
+    assert comp.flush() == []
+    out = pd.DataFrame([asdict(s) for s in rows]).drop(columns=list(TRIAD_COLUMNS))
+    batch = compensate(log)
+    window = out["t"] < out["t"].iloc[0] + CompensatorConfig().init_s  # the row at init_s closes it
+    assert (out["gate_reason"][window] == "init").all() and not (out["update"][window] == 1).any()
+    first = out.iloc[0]
+    params = est.params
+    assert first["bias_z"] == pytest.approx(params[0] * log.temp.iloc[0] + params[2], abs=1e-12)
+    assert first["bias_sd"] == pytest.approx(prior_sd, rel=1e-6) and first["bias_sd"] > 0.1  # nothing learned yet
+    assert first["heading"] == pytest.approx(log.heading.iloc[0], abs=1e-9)  # anchored on the first compass sample
+    assert_same(batch[~window.to_numpy()].reset_index(drop=True), out[~window].reset_index(drop=True))

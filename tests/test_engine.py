@@ -74,7 +74,7 @@ def engine_columns(out: pd.DataFrame) -> pd.DataFrame:
 
 
 def streamed(log: pd.DataFrame, cfg: CompensatorConfig, estimator=None) -> pd.DataFrame:
-    comp = Compensator(cfg, estimator=estimator)
+    comp = Compensator(cfg, estimator=estimator, provisional=False)
     raw = "mag_x" in log.columns
     rows = []
     for r in log.itertuples(index=False):

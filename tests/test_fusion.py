@@ -143,7 +143,7 @@ def test_the_paper_filter_gets_the_tolerant_fused_heading_by_default():
     assert not np.allclose(auto, fused(replace(stkf, fusion=FusionConfig())), equal_nan=True)  # it matters here
     assert np.array_equal(fused(CompensatorConfig()), fused(CompensatorConfig(fusion=FusionConfig())), equal_nan=True)
     part = log[log["t"] < 360.0]  # the streaming compensator, on the first 6 minutes
-    comp = Compensator(stkf)
+    comp = Compensator(stkf, provisional=False)
     rows = [r for t, g, T, h in part[["t", "gyro_z", "temp", "heading"]].itertuples(index=False)
             for r in comp.push(t, g, T, heading_deg=h)]
     want = compensate(part, stkf)["heading_fused"].to_numpy()

@@ -157,7 +157,7 @@ def test_largest_plausible_rate_keeps_outputs_in_range(log):
 
 
 def _started() -> Compensator:
-    comp = Compensator()
+    comp = Compensator(provisional=False)
     comp.push(0.0, 0.1, 30.0, heading_deg=90.0)
     return comp
 
@@ -296,7 +296,11 @@ def test_a_single_sample_is_refused_not_crashed_on():
     # found by tests/test_fuzz.py: one sample gave ZeroDivisionError or LinAlgError
     with pytest.raises(LogFormatError, match="single sample"):
         compensate_arrays([0.0], [0.0], [20.0], [0.0])
-    comp = Compensator()
+    comp = Compensator(provisional=False)
     assert comp.push(0.0, 0.1, 30.0) == []
+    with pytest.raises(GyroDriftError, match="single sample"):
+        comp.flush()
+    comp = Compensator()  # its provisional row is out; closing the window needs two samples
+    assert len(comp.push(0.0, 0.1, 30.0)) == 1
     with pytest.raises(GyroDriftError, match="single sample"):
         comp.flush()

@@ -162,7 +162,7 @@ def check_output(out: pd.DataFrame, n_rows: int) -> None:
 
 def stream(log: pd.DataFrame, cfg: CompensatorConfig | None) -> pd.DataFrame:
     """Feed a log sample by sample to :class:`Compensator`; return its rows as a table."""
-    comp = Compensator(cfg)
+    comp = Compensator(cfg, provisional=False)
     has_mag = "mag_x" in log.columns
     rows = []
     for r in log.itertuples(index=False):

@@ -347,7 +347,7 @@ def test_compensator_scale_factor_equals_batch():
     batch = compensate(log, cfg)
     sf = estimate_scale_factor(batch, sf_cfg, causal=True)
 
-    comp = Compensator(cfg, scale_factor=sf_cfg)
+    comp = Compensator(cfg, scale_factor=sf_cfg, provisional=False)
     rows = []
     for r in log.itertuples(index=False):
         rows += comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading)

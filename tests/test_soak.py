@@ -177,7 +177,7 @@ def test_streaming_covariance_matches_batch_over_a_long_outage(estimator):
     s = Soak(hours=3.0, outages_h=((1.0, 1.0),), flat_h=(2.2, 0.5))
     log = soak_log(s)
     cfg = CompensatorConfig(estimator=estimator)
-    comp = Compensator(cfg)
+    comp = Compensator(cfg, provisional=False)
     est = comp.estimator
     for r in log.itertuples(index=False):
         comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading)

@@ -255,7 +255,7 @@ def test_streaming_compensator_gives_the_x_y_axes_of_the_batch(estimator):
     log.loc[log.index[700:703], "gyro_x"] = np.nan  # held cells refuse their interval in both
     cfg = CompensatorConfig(estimator=estimator)
     batch = compensate(log, cfg)
-    comp = Compensator(cfg)
+    comp = Compensator(cfg, provisional=False)
     rows = []
     for r in log.itertuples(index=False):
         rows += comp.push(r.t, r.gyro_z, r.temp, heading_deg=r.heading, acc=(r.acc_x, r.acc_y, r.acc_z),
@@ -270,7 +270,7 @@ def test_streaming_compensator_gives_the_x_y_axes_of_the_batch(estimator):
 def test_streaming_without_x_y_inputs_leaves_the_x_y_fields_empty():
     from gyrodrift.compensator import Compensator
 
-    comp = Compensator()
+    comp = Compensator(provisional=False)
     rows = []
     for i in range(400):
         rows += comp.push(i * 0.1, 0.2, 30.0, heading_deg=90.0)

@@ -24,7 +24,7 @@ from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, Observation
 from gyrodrift.estimators.base import LinearDrift
 from gyrodrift.estimators.kalman import KernelFilter
-from gyrodrift.kernels import aiding, loop
+from gyrodrift.kernels import aiding, drift, loop, numeric
 from gyrodrift.kernels import layout as L
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
@@ -164,6 +164,8 @@ class ChunkEngine:
         self._t0: float | None = None
         self._held: list[tuple] | None = []  # prepared chunks of the init window, until it is complete
         self._row: _RowMemory | None = None
+        #: the provisional rows' previous time and rate, heading integral, anchor and its time
+        self._prov = (math.nan, 0.0, 0.0, math.nan, math.nan)
         #: What could not be learned or was done instead (one-line sentences, for the user).
         self.notes: list[str] = []
 
@@ -366,6 +368,46 @@ class ChunkEngine:
         return cols.out.tolist(), cols.codes.tolist(), float(h[0])
 
     # --------------------------------------------------------------- finish
+    def provisional(self) -> dict | None:
+        """Provisional output columns of the rows of the last :meth:`feed` while the init
+        window fills (None once it is complete): compensated causally with the drift model
+        in force before any measurement (the prior, or a warm start's profile), its
+        ``bias_sd`` saying how little that is; the heading integrated from the first
+        compass sample (from 0 before one, relative), ``heading_fused`` the same, reason
+        ``init``. The streaming :class:`gyrodrift.Compensator` emits them so that every
+        sample gets a row at once; the rows the init window then gives replace nothing
+        (the rows after the window are the same as without them)."""
+        if not self._held:
+            return None
+        (t, g, T, heading, _, _), cols = self._held[-1]
+        Tp = cols.column(L.O_TEMP_RATE)
+        a, b, c = (float(v) for v in self.est.params)
+        C = np.asarray(self.est.cov, dtype=float).reshape(9)
+        unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
+        n = t.size
+        out = {k: np.empty(n) for k in ("bias_z", "rate_z", "heading", "bias_sd", "heading_sd")}
+        t_prev, rate_prev, integral, anchor, t_anchor = self._prov
+        for i in range(n):
+            bias = drift.bias(a, b, c, T[i], Tp[i])
+            rate = g[i] - bias
+            if not math.isnan(t_prev) and t[i] - t_prev <= self.cfg.gate.max_gap_s:
+                integral += 0.5 * (rate + rate_prev) * (t[i] - t_prev)
+            if math.isnan(anchor) and not math.isnan(heading[i]):
+                anchor, t_anchor = heading[i] - integral, t[i]
+            t_prev, rate_prev = t[i], rate
+            sd = drift.bias_sd(*C, T[i], Tp[i])
+            out["bias_z"][i], out["rate_z"][i], out["bias_sd"][i] = bias, rate, sd
+            out["heading"][i] = numeric.wrap360((0.0 if math.isnan(anchor) else anchor) + integral)
+            since = t[i] - (self._t0 if math.isnan(t_anchor) else t_anchor)
+            out["heading_sd"][i] = math.hypot(self.cfg.compass_sigma_deg if not math.isnan(anchor) else 0.0, sd * since)
+        self._prov = (t_prev, rate_prev, integral, anchor, t_anchor)
+        return {
+            "t": t, **out, "a": np.full(n, a), "b": np.full(n, b), "c": np.full(n, c),
+            "heading_fused": out["heading"], "heading_fused_sd": out["heading_sd"], "temp_rate": Tp,
+            "compass_heading": heading, "update": np.zeros(n, np.int8), "reason": np.full(n, L.R_INIT, np.int8),
+            "unobs": np.full(n, unobs, np.int8),
+        }
+
     def flush(self) -> dict | None:
         """The rows held back while the init window fills (a log shorter than the window),
         compensated from what they give (the window ends at the last row): output columns

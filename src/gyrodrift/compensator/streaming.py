@@ -27,10 +27,16 @@ _REASONS = gating.REASONS
 class Compensator:
     """Streaming compensator: feed samples in time order, get compensated rows back.
 
-    :meth:`push` returns a list of :class:`CompensatedSample`: empty while the
-    initialisation window fills, all its rows at once when it ends, then one row per
-    sample; :meth:`flush` gives the rows still held when the samples end first. It runs the engine of :func:`gyrodrift.compensate` (the same kernels), so it
-    gives the same numbers, bit for bit, on the same data.
+    :meth:`push` returns a list of :class:`CompensatedSample`, one row per sample from the
+    first: while the initialisation window fills (``init_s``) the rows are *provisional*,
+    compensated causally with the drift model known before any measurement (the prior, or
+    the profile of a warm start), with ``bias_sd`` and ``heading_sd`` saying how little
+    that is and ``gate_reason`` ``init``. From the end of the window on, the rows are those
+    of :func:`gyrodrift.compensate` on the same data, bit for bit (the same kernels);
+    there the init window's rows are compensated with what the window taught, which a
+    stream cannot wait for. ``provisional=False`` holds the window's rows back instead and
+    returns them all at once when it ends (then every row equals the batch's), and
+    :meth:`flush` gives the rows still held when the samples end first.
 
     The x and y axes (``rate_x``, ``bias_x``, ...; :mod:`gyrodrift.triad`) are compensated
     too when the first sample gives ``gyro_x_dps``, ``gyro_y_dps`` and ``acc``, with the
@@ -57,12 +63,14 @@ class Compensator:
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
-                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS):
+                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True):
         self.config = config or CompensatorConfig()
         self.source = source
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         self._est = estimator if estimator is not None else build_estimator(self.config)
         self._engine = ChunkEngine(self.config, self._est, source)
+        self._provisional = bool(provisional)
+        self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
         self._triad = None  # TriadCompensator once the first sample brought gyro_x, gyro_y, acc
         self._triad_started = False
@@ -165,18 +173,46 @@ class Compensator:
             return self._with_triad([self._sample(t_s, out, codes, compass)])
         cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
                                  np.array([norm]), np.array([dip]))
-        return self._rows(cols)
+        if cols is None and self._provisional:
+            rows = self._provisional_rows(self._engine.provisional())
+            self._n_provisional += len(rows)
+            return rows
+        return self._released(cols)
 
     def flush(self) -> list[CompensatedSample]:
         """The rows held back while the init window fills, when the samples end before it does
-        (a short log): compensated from what they give (the window ends at the last sample).
-        Empty when no row is held. Samples pushed afterwards come out one by one."""
-        return self._rows(self._engine.flush())
+        (a short log, ``provisional=False``): compensated from what they give (the window ends
+        at the last sample). Empty when no row is held, and with provisional rows (every
+        sample already has its row; the window is still closed, so samples pushed afterwards
+        come out one by one, as after a complete window)."""
+        return self._released(self._engine.flush())
 
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
         return list(self._engine.notes)
+
+    def _released(self, cols: dict | None) -> list[CompensatedSample]:
+        """The rows of the engine's output columns, less those already emitted as provisional
+        (the x/y axes and the scale factor still take every row, in order)."""
+        rows = self._rows(cols)
+        if self._n_provisional and rows:
+            rows = rows[self._n_provisional:]
+            self._n_provisional = 0
+        return rows
+
+    def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
+        """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
+        axis only, the x/y and scale-factor fields NaN."""
+        if cols is None:
+            return []
+        kind = CompensatedSample if self._sf is None else self._sf_sample
+        return [kind(*self._values(t, out, codes, compass))
+                for t, out, codes, compass in zip(
+                    cols["t"].tolist(),
+                    zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
+                    zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
+                    cols["compass_heading"].tolist())]
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
@@ -195,15 +231,20 @@ class Compensator:
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
-        reason = _REASONS[codes[L.OC_REASON]]
-        values = (t, out[L.O_RATE], out[L.O_BIAS], out[L.O_HEADING], out[L.O_A], out[L.O_B], out[L.O_C],
-                  codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
-                  UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
-                  out[L.O_HEADING_SD])
+        values = self._values(t, out, codes, compass)
         if self._sf is None:
             return CompensatedSample(*values)
-        sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, reason)
+        sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, values[9])
         return self._sf_sample(*values, sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf)
+
+    @staticmethod
+    def _values(t: float, out, codes, compass: float) -> tuple:
+        """The fields of :class:`CompensatedSample` from the engine's float outputs and codes."""
+        reason = _REASONS[codes[L.OC_REASON]]
+        return (t, out[L.O_RATE], out[L.O_BIAS], out[L.O_HEADING], out[L.O_A], out[L.O_B], out[L.O_C],
+                codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
+                UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
+                out[L.O_HEADING_SD])
 
     def _start_triad(self, gyro_x_dps, gyro_y_dps, acc) -> None:
         """Decided on the first sample: x/y axes when it has gyro_x, gyro_y and acc."""
