@@ -99,7 +99,8 @@ I_RUN_N = 25  # rows in the current still run (0: none)
 I_COMPASS_SEEN = 26  # a compass sample has come
 I_RUN_MEASURED = 27  # a still run ended before this row measured the drift (its update flag)
 I_QS_N = 28  # points of the open quasi-static window (0: none open)
-N_ISTATE = 29
+I_QS_GAP = 29  # a time gap came in the open interval (kept between calls of the row loop)
+N_ISTATE = 30
 
 # ----------------------------------------------------------- float settings
 

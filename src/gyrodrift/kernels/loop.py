@@ -38,9 +38,9 @@ from gyrodrift.kernels.layout import (
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
     I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
     F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED,
-    I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
+    I_QS_GAP, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
     O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
-    OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_INIT, R_INTERFERENCE, R_NONE,
+    OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NONE,
 )
 from gyrodrift.kernels.numeric import near_boundary, wrap180, wrap360
 
@@ -182,6 +182,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     m_Tp = math.nan
     m_bias = 0.0
     m_sd = 0.0
+    time_gap_seen = ist[I_QS_GAP] == 1  # a time gap in the open interval (quasi-static windows)
     stop = t.size
     for i in range(i0, t.size):
         if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or 2 * win_n >= win_cap:
@@ -244,6 +245,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         dt = t_s - c_t
         if dt > max_gap:  # across a time gap the unit is taken as still: the gyro read its drift
             I_raw = I_raw + 0.5 * (bias + c_bias) * dt
+            time_gap_seen = True
         else:
             I_raw = I_raw + 0.5 * (gi + c_g) * dt
             I_rate = I_rate + 0.5 * (rate + c_rate) * dt
@@ -334,13 +336,15 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 ist[I_AFTER_INT] = 1 if after_int else 0
                 ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
                 closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei)
-                if aiding.quasi_static(t_s, closed == 1, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg,
+                qs_reason = R_GAP if time_gap_seen else reason  # a window never spans a time gap
+                if aiding.quasi_static(t_s, closed == 1, qs_reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg,
                                        stack, acc, ef, ei):
                     closed = 1
                 update = max(update, closed)
                 if not external:
                     aiding.in_force(fs, ist, cfg, ef, ei)
             k_cur = k
+            time_gap_seen = False
             aiding.begin(t_s, fs, ist, cfg, icfg, win)
             pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
             C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
@@ -374,6 +378,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     ist[I_STICKY] = sticky
     ist[I_AFTER_INT] = 1 if after_int else 0
     ist[I_UNOBS] = unobs
+    ist[I_QS_GAP] = 1 if time_gap_seen else 0
     ist[I_LB_HEAD], ist[I_LB_N] = lb_head, lb_n
     ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
     fs[zf + FZ_PSI], fs[zf + FZ_P], fs[zf + FZ_TPREV], fs[zf + FZ_RPREV], fs[zf + FZ_STARTED] = f_psi, f_P, f_tp, f_rp, f_started
