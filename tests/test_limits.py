@@ -304,3 +304,39 @@ def test_a_single_sample_is_refused_not_crashed_on():
     assert len(comp.push(0.0, 0.1, 30.0)) == 1
     with pytest.raises(GyroDriftError, match="single sample"):
         comp.flush()
+
+
+# --------------------------------------------------------------------------- time gaps
+
+
+def _gap_log(gap_s: float) -> pd.DataFrame:
+    """300 s of a still unit whose compass wanders (interference) in its last 100 s, a time
+    gap of ``gap_s``, then 100 s more."""
+    t1 = np.arange(0.0, 300.0, 0.1)
+    t2 = 300.0 + gap_s + np.arange(0.0, 100.0, 0.1)
+    t = np.concatenate([t1, t2])
+    heading = np.full(t.size, 50.0)
+    wander = (t > 200.0) & (t < 300.0)
+    heading[wander] += np.linspace(0.0, 30.0, wander.sum())
+    gyro = 0.1 + np.random.default_rng(0).normal(0.0, 0.02, t.size)
+    return pd.DataFrame({"t": t, "gyro_z": gyro, "temp": 25.0, "heading": heading})
+
+
+def test_a_gap_inside_a_refused_interval_is_labelled_gap():
+    out = compensate(_gap_log(3600.0))
+    before, after = out.iloc[2999], out.iloc[3000]
+    assert before["gate_reason"] == "interference"
+    assert after["gate_reason"] == "gap"  # the gap outranks the refusal seen before it
+
+
+def test_bias_sd_grows_with_the_time_a_gap_lasts():
+    sd = {}
+    for gap_s in (60.0, 3600.0, 30 * 86400.0):
+        out = compensate(_gap_log(gap_s))
+        sd[gap_s] = float(out["bias_sd"].iloc[3001])  # the row after the gap's interval end
+    assert sd[60.0] < sd[3600.0] < sd[30 * 86400.0]
+    # a month of random walk reaches the covariance cap (the prior's size, on the centred
+    # states): about as little is known as before any data
+    h = np.array([25.0, 0.0, 1.0])
+    prior = float(np.sqrt(h @ Compensator().estimator.cov @ h))
+    assert 0.3 * prior < sd[30 * 86400.0] <= prior and sd[30 * 86400.0] > 100 * sd[60.0]

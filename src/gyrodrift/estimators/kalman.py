@@ -172,7 +172,7 @@ class KernelFilter(LinearDrift):
         return self.params
 
     def hold(self) -> np.ndarray:
-        kernel.hold(self._ef, self._ei)
+        kernel.hold(self._ef, self._ei, 1.0)
         return self.params
 
 

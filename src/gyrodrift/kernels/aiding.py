@@ -468,7 +468,7 @@ def stacked(stack, n):
 
 
 @jit
-def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
+def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, intervals):
     """Decide the interval ending at a boundary row and update or hold the estimator;
     returns (update, reason).
 
@@ -477,8 +477,9 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
     then refused for interference when its residual exceeds ``interference_deg``. With
     ZARU a still interval gives the zero-rate measurement instead, accepted even when the
     compass disagrees. The estimator (``ef``, ``ei``) is updated with the stacked
-    measurements (``depth`` rows, eq. 3) or held; in MODE_EXTERNAL the caller does it
-    (``ist[I_PENDING]``).
+    measurements (``depth`` rows, eq. 3) or held for ``intervals`` intervals (more than one
+    when a time gap skipped some); in MODE_EXTERNAL the caller does it (``ist[I_PENDING]``,
+    one hold).
     """
     mode = icfg[K_MODE]
     reason = ist[I_STICKY]
@@ -544,7 +545,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei):
     if mode == MODE_EXTERNAL:
         ist[I_PENDING] = PENDING_HOLD
     else:
-        kalman.hold(ef, ei)
+        kalman.hold(ef, ei, intervals)
     ist[I_AFTER_INT] = 1 if reason == R_INTERFERENCE else 0
     return 0, reason
 

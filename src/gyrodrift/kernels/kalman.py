@@ -109,11 +109,11 @@ def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
 
 
 @jit
-def _fixed_hold(P, Q, max_var, active):
-    """A refused interval: ``P ← cap(P + Q)`` on the active states."""
+def _fixed_hold(P, Q, max_var, active, intervals):
+    """``intervals`` refused intervals: ``P ← cap(P + intervals Q)`` on the active states."""
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
-    _put(P, active, cap_covariance(1.0 * Pa + Qa, max_var[active]))
+    _put(P, active, cap_covariance(1.0 * Pa + intervals * Qa, max_var[active]))
 
 
 # ----------------------------------------------------------------- adaptive
@@ -254,18 +254,20 @@ def update(ef, ei, y, H, R):
 
 
 @jit
-def hold(ef, ei):
-    """One refused interval: ``P ← cap(P + Q)`` (no fading); ``adaptive`` with a twin also
+def hold(ef, ei, intervals):
+    """``intervals`` refused intervals (1, or more when a time gap skipped some): ``P ←
+    cap(P + intervals Q)`` (no fading; the random walk of the states grows with the time
+    elapsed, up to the cap); ``adaptive`` with a twin also
     sets, at the first refusal after an update, the outage anchor: the twin's a and b
     from the drift last tracked at the last measurement's (T, T') (eq. 5 through the
     outage)."""
     z, P, Q, max_var, af, V, nis, ai = views(ef, ei)
     if ei[EI_MODE] != MODE_ADAPTIVE:
-        _fixed_hold(P[MAIN], Q[MAIN], max_var[MAIN], ei[EI_ACTIVE:EI_ACTIVE + ei[EI_N_ACTIVE]])
+        _fixed_hold(P[MAIN], Q[MAIN], max_var[MAIN], ei[EI_ACTIVE:EI_ACTIVE + ei[EI_N_ACTIVE]], intervals)
         return
-    P[MAIN] = cap_covariance(1.0 * P[MAIN] + Q[MAIN], max_var[MAIN])
+    P[MAIN] = cap_covariance(1.0 * P[MAIN] + intervals * Q[MAIN], max_var[MAIN])
     if ei[EI_TWIN] == 1:
-        P[TWIN] = cap_covariance(1.0 * P[TWIN] + Q[TWIN], max_var[TWIN])
+        P[TWIN] = cap_covariance(1.0 * P[TWIN] + intervals * Q[TWIN], max_var[TWIN])
         if ai[MAIN, AI_ANCHOR_SET] == 0 and ai[MAIN, AI_LAST_H_SET] == 1:
             T0 = af[MAIN, AF_LAST_H_T]
             Tp0 = af[MAIN, AF_LAST_H_TP]

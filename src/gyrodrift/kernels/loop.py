@@ -310,6 +310,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                     mean_rate = (I_rate - lb_I0) / (t_s - lb_t0)
                 field = has_field and aiding.field_anomaly(norm[ix], dip[ix], ref_norm, ref_dip, norm_tol, dip_tol)
                 sticky = aiding.row_condition(gap[ix], field, resid, mean_rate, turn_rate, interf)
+            elif gap[ix]:  # a gap outranks the refusal already seen (the priority of row_condition)
+                sticky = R_GAP
             if sticky != NO_STICKY:
                 reason = sticky
             elif after_int:
@@ -335,7 +337,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 ist[I_STICKY] = sticky
                 ist[I_AFTER_INT] = 1 if after_int else 0
                 ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
-                closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei)
+                closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei,
+                                              float(k - k_cur))
                 qs_reason = R_GAP if time_gap_seen else reason  # a window never spans a time gap
                 if aiding.quasi_static(t_s, closed == 1, qs_reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg,
                                        stack, acc, ef, ei):

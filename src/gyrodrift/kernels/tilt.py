@@ -322,7 +322,7 @@ def _hold(axis, xf, xi, xk, ef, ei):
     if xk[XK_EXTERNAL + axis] == 1:
         xi[XI_PENDING + axis] = PENDING_HOLD
         return
-    kalman.hold(ef, ei)
+    kalman.hold(ef, ei, 1.0)
     _in_force(axis, xf, ef, ei)
 
 
