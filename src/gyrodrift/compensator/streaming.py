@@ -67,6 +67,7 @@ class Compensator:
         self.config = config or CompensatorConfig()
         self.source = source
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
+        self._limits = _limits(self._gyro_max_dps)
         self._est = estimator if estimator is not None else build_estimator(self.config)
         self._engine = ChunkEngine(self.config, self._est, source)
         self._provisional = bool(provisional)
@@ -145,7 +146,7 @@ class Compensator:
             sample is not taken: the compensator stays as it was.
         """
         t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
-            self.source, self._gyro_max_dps, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+            self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
@@ -302,22 +303,31 @@ def _float(v) -> float:
     return math.nan if v is None else float(v)
 
 
-def _number(source: str, arg: str, value, column: str, gyro_max_dps: float) -> float:
-    """``value`` as a float within the plausible range of ``column`` (NaN passes), or a
-    :class:`GyroDriftError` naming the argument ``arg``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+def _limits(gyro_max_dps: float) -> dict:
+    """The plausible range of every checked input column (:mod:`gyrodrift.io.limits`), by name."""
+    names = ("", GYRO_Z, TEMP, HEADING, GYRO_X, GYRO_Y, *MAG_COLS, *ACC_COLS)
+    return {name: limit_of(name, gyro_max_dps) for name in names}
+
+
+def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
+    """``value`` as a float within the plausible range of ``column`` (``limits`` from
+    :func:`_limits`; NaN passes), or a :class:`GyroDriftError` naming the argument ``arg``."""
+    if type(value) is float:  # the common case, without the generic checks
+        x = value
+    elif isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise GyroDriftError(f"{source}: {arg} must be a number, got {type(value).__name__} {_shown(value)}")
-    try:
-        x = float(value)
-    except (OverflowError, ValueError):
-        raise GyroDriftError(f"{source}: {arg} = {_shown(value)} is not a float (too large)") from None
-    limit = limit_of(column, gyro_max_dps)
-    if limit is not None and not math.isnan(x) and not limit.lo <= x <= limit.hi:
+    else:
+        try:
+            x = float(value)
+        except (OverflowError, ValueError):
+            raise GyroDriftError(f"{source}: {arg} = {_shown(value)} is not a float (too large)") from None
+    limit = limits[column]
+    if limit is not None and not limit.lo <= x <= limit.hi and not math.isnan(x):
         raise GyroDriftError(f"{source}: {arg}: {outside_problem(column, x, limit)}; {limit.advice}")
     return x
 
 
-def _triple(source: str, arg: str, value, columns: tuple[str, ...], gyro_max_dps: float) -> tuple | None:
+def _triple(source: str, arg: str, value, columns: tuple[str, ...], limits: dict) -> tuple | None:
     """``mag`` or ``acc``: None, or three checked floats."""
     if value is None:
         return None
@@ -327,25 +337,23 @@ def _triple(source: str, arg: str, value, columns: tuple[str, ...], gyro_max_dps
         items = None
     if items is None or len(items) != 3:
         raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {_shown(value)}")
-    return tuple(_number(source, f"{arg}[{k}]", v, c, gyro_max_dps) for k, (v, c) in enumerate(zip(items, columns)))
+    return tuple(_number(source, f"{arg}[{k}]", v, c, limits) for k, (v, c) in enumerate(zip(items, columns)))
 
 
-def _checked_sample(source: str, gyro_max_dps: float, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps,
+def _checked_sample(source: str, limits: dict, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps,
                     gyro_y_dps) -> tuple:
     """The arguments of :meth:`Compensator.push` checked and as floats (``heading_deg``
-    None: NaN; ``mag``, ``acc``, ``gyro_x_dps``, ``gyro_y_dps`` stay None when None)."""
-    def num(arg, value, column):
-        return _number(source, arg, value, column, gyro_max_dps)
-
+    None: NaN; ``mag``, ``acc``, ``gyro_x_dps``, ``gyro_y_dps`` stay None when None);
+    ``limits`` from :func:`_limits`."""
     return (
-        num("t_s", t_s, ""),
-        num("gyro_z_dps", gyro_z_dps, GYRO_Z),
-        num("temp_c", temp_c, TEMP),
-        math.nan if heading_deg is None else num("heading_deg", heading_deg, HEADING),
-        _triple(source, "mag", mag, MAG_COLS, gyro_max_dps),
-        _triple(source, "acc", acc, ACC_COLS, gyro_max_dps),
-        None if gyro_x_dps is None else num("gyro_x_dps", gyro_x_dps, GYRO_X),
-        None if gyro_y_dps is None else num("gyro_y_dps", gyro_y_dps, GYRO_Y),
+        _number(source, "t_s", t_s, "", limits),
+        _number(source, "gyro_z_dps", gyro_z_dps, GYRO_Z, limits),
+        _number(source, "temp_c", temp_c, TEMP, limits),
+        math.nan if heading_deg is None else _number(source, "heading_deg", heading_deg, HEADING, limits),
+        None if mag is None else _triple(source, "mag", mag, MAG_COLS, limits),
+        None if acc is None else _triple(source, "acc", acc, ACC_COLS, limits),
+        None if gyro_x_dps is None else _number(source, "gyro_x_dps", gyro_x_dps, GYRO_X, limits),
+        None if gyro_y_dps is None else _number(source, "gyro_y_dps", gyro_y_dps, GYRO_Y, limits),
     )
 
 
