@@ -150,3 +150,68 @@ def test_batch_chunked_and_streaming_give_the_same_compass(tmp_path):
                                    equal_nan=True, err_msg=c)
     assert any("gyro-aided gravity" in n for n in comp.notes)
     assert RawTilt("gyro", True).uses_gyro and not RawTilt("accel", True).uses_gyro
+
+
+def _hand_turned(n: int = 6000, turn_dps: float = 1.5, offset=(6.0, -9.0, 4.0), scale=(1.0, 1.1, 0.95)):
+    """A unit turned by hand: heading at ``turn_dps``, rolling and pitching ±25/20 deg; body field
+    with a hard-iron offset and axis scales (eq. 1 of gyrodrift.magcal inverted), and down vectors."""
+    rng = np.random.default_rng(4)
+    t = np.arange(n) * 0.1
+    psi, roll, pitch = np.radians(turn_dps * t), np.radians(25 * np.sin(t / 7)), np.radians(20 * np.sin(t / 11 + 1))
+
+    def body(v):
+        cp, sp, ct, st = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
+        return np.column_stack([v[:, 0] * ct - v[:, 2] * st,
+                                v[:, 0] * st * sp + v[:, 1] * cp + v[:, 2] * ct * sp,
+                                v[:, 0] * st * cp - v[:, 1] * sp + v[:, 2] * ct * cp])
+
+    field = body(np.column_stack([H_UT * np.cos(psi), -H_UT * np.sin(psi), np.full(n, V_UT)]))
+    down = body(np.tile([0.0, 0.0, 1.0], (n, 1)))
+    mag = field / np.asarray(scale) + np.asarray(offset) + 0.1 * rng.standard_normal((n, 3))
+    return mag, down, field
+
+
+def test_hard_iron_offset_and_scales_are_recovered_from_a_turning_log_in_any_chunks():
+    from gyrodrift.magcal import MagSamples, fit
+
+    mag, down, field = _hand_turned()
+    samples = MagSamples(capacity=2000)  # thinned twice, whatever the chunks
+    for a in range(0, mag.shape[0], 777):
+        samples.add(mag[a:a + 777], down[a:a + 777])
+    whole = MagSamples(capacity=2000)
+    whole.add(mag, down)
+    assert np.array_equal(samples.arrays()[0], whole.arrays()[0])
+    cal = fit(*samples.arrays())
+    assert cal.ok and cal.coverage_deg > 270 and cal.residual < 0.01
+    np.testing.assert_allclose(cal.offset, (6.0, -9.0, 4.0), atol=0.01 * np.linalg.norm((6.0, -9.0, 4.0)))
+    np.testing.assert_allclose(cal.scale, (1.0, 1.1, 0.95), rtol=0.01)
+    assert "calibrated from the log" in cal.note("log")
+    h_true, _, _ = compass_columns(mag.shape[0], None, field, -down)
+    h_cal, _, _ = compass_columns(mag.shape[0], None, cal.apply(mag), -down)
+    assert np.sqrt(np.mean(wrap_180(h_cal - h_true) ** 2)) < 1.0
+
+
+def test_no_calibration_when_the_log_turns_too_little():
+    from gyrodrift.magcal import fit
+
+    mag, down, _ = _hand_turned(n=1500, turn_dps=1.2)  # 180 deg of heading
+    cal = fit(mag, down)
+    assert not cal.ok and "not calibrated" in cal.note("log") and "turns through" in cal.why
+    np.testing.assert_array_equal(cal.apply(mag), mag)
+
+
+def test_calibration_in_batch_equals_chunked(tmp_path):
+    from gyrodrift.pipeline import compensate_file
+
+    log = _turning_log(600.0)
+    log[["mag_x", "mag_y", "mag_z"]] += np.array([5.0, -3.0, 1.0])
+    cols = [c for c in log.columns if not c.startswith("true_bias_")]
+    log[cols].to_csv(tmp_path / "in.csv", index=False)
+    cfg = CompensatorConfig(mag_calibration=True)
+    s_whole = compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", cfg, stream=False)
+    s_parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", cfg, stream=True, chunk_rows=500)
+    whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
+    for c in ("compass_heading", "heading", "bias_z"):
+        assert whole[c].equals(parts[c]), c
+    note = [n for n in s_whole.notes if "magnetometer" in n]
+    assert note and note == [n for n in s_parts.notes if "magnetometer" in n]

@@ -68,6 +68,7 @@ __all__ = [
     "gravity_down",
     "GravityFilter",
     "RawTilt",
+    "accel_down",
     "TILT_SOURCES",
 ]
 
@@ -243,6 +244,13 @@ class GravityFilter:
 def gravity_down(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
     """Down unit vectors (n, 3) of a whole log (a fresh :class:`GravityFilter`)."""
     return GravityFilter().feed(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)
+
+
+def accel_down(acc) -> np.ndarray:
+    """The accelerometer's down unit vectors (n, 3), ``-f/|f|``: the tilt without the gyro."""
+    acc = np.asarray(acc, dtype=float).reshape(-1, 3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return -acc / np.linalg.norm(acc, axis=1)[:, None]
 
 
 #: Names of the tilt sources (``CompensatorConfig.tilt``).

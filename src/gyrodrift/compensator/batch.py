@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gyrodrift.attitude import RawTilt
+from gyrodrift.attitude import RawTilt, accel_down
 from gyrodrift.compass import compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import ChunkEngine
@@ -95,8 +95,16 @@ def compensate_arrays(
         if tilt.uses_gyro:
             gxy = np.asarray(gyro_xy, dtype=float)
             down = tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
-        heading, norm, dip = compass_columns(n, heading_deg, mag, acc, down)
         notes.append(tilt.note())
+        if cfg.mag_calibration:
+            from gyrodrift import magcal
+
+            samples = magcal.MagSamples()
+            samples.add(mag, accel_down(acc) if down is None else down)
+            cal = magcal.fit(*samples.arrays())
+            mag = cal.apply(mag)
+            notes.append(cal.note(source))
+        heading, norm, dip = compass_columns(n, heading_deg, mag, acc, down)
     else:  # the engine wraps the heading itself
         heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
         norm = dip = None

@@ -60,6 +60,11 @@ class CompensatorConfig:
         gravity propagated with ``gyro_x``, ``gyro_y``, ``gyro_z`` and corrected by the
         accelerometer near 1 g (:mod:`gyrodrift.attitude`) when the log has ``gyro_x`` and
         ``gyro_y``, else the accelerometer alone; ``"accel"`` the accelerometer alone.
+    mag_calibration : bool
+        Fit a hard-iron offset and axis scales to a raw magnetometer over the whole log and
+        apply them before the heading, when the log turns through more than 270° of
+        heading (:mod:`gyrodrift.magcal`; a note says whether and how well). Not causal:
+        the streaming :class:`~gyrodrift.Compensator` does not calibrate. Default False.
     """
 
     update_interval_s: float = 10.0
@@ -75,6 +80,7 @@ class CompensatorConfig:
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
     declination_deg: float = 0.0
     tilt: str = "gyro"
+    mag_calibration: bool = False
 
     @property
     def fusion_settings(self) -> FusionConfig:
