@@ -94,7 +94,7 @@ def field_norm_dip(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
     return np.sqrt(horiz**2 + vert**2), np.degrees(np.arctan2(vert, horiz))
 
 
-def compass_columns(n: int, heading_deg=None, mag=None, acc=None):
+def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
     """The compass of every row of a log: heading (deg in [0, 360), NaN = no sample), field
     strength and dip (NaN without a raw magnetometer).
 
@@ -107,6 +107,10 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None):
     mag, acc : (n, 3) array_like, optional
         Raw FRD magnetometer and accelerometer: a tilt-compensated heading where
         ``heading_deg`` has none, and the field strength and dip of every row.
+    down : (n, 3) array_like, optional
+        The gravity direction (a unit vector pointing down, body FRD) to tilt-compensate
+        with instead of the accelerometer's (:mod:`gyrodrift.attitude`); the heading and
+        field use ``-down`` as the specific force.
 
     Returns
     -------
@@ -117,7 +121,7 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None):
     dip = np.full(n, np.nan)
     if mag is not None and acc is not None:
         mag = np.asarray(mag, dtype=float)
-        acc = np.asarray(acc, dtype=float)
+        acc = np.asarray(acc, dtype=float) if down is None else -np.asarray(down, dtype=float)
         with np.errstate(invalid="ignore"):
             norm, dip = field_norm_dip(*mag.T, *acc.T)
             from_mag = tilt_compensated_heading(*mag.T, *acc.T)

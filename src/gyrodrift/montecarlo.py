@@ -66,6 +66,7 @@ from gyrodrift.simulate import (
     random_device,
     simulate,
 )
+from gyrodrift.simulate.device import TriadModel
 
 __all__ = [
     "Family",
@@ -103,12 +104,16 @@ class Family:
         ``(low, high)``: each case draws its log length uniformly from this range,
         s, whatever ``duration_scale`` (a family defined by its length: ``short``).
         None: ``duration_s`` times the scale.
+    triad : bool
+        The log also has ``gyro_x``, ``gyro_y`` (the default
+        :class:`~gyrodrift.simulate.device.TriadModel`, its accelerometer noise included).
     """
 
     scenario: str
     duration_s: float
     description: str
     duration_range_s: tuple[float, float] | None = None
+    triad: bool = False
 
 
 #: The scenario families, by name: the six of the paper's kind, then :data:`ADVERSARIAL_FAMILIES`.
@@ -143,7 +148,9 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
         ),
         "vehicle-rawmag": Family(
             "vehicle-rawmag", DEFAULT_DURATION_S["vehicle-rawmag"],
-            "the vehicle with raw magnetometer + accelerometer (tilted when braking, cornering), no heading (40 min)",
+            "the vehicle with raw magnetometer + accelerometer (tilted when braking, cornering) and x/y gyros, "
+            "no heading (40 min)",
+            triad=True,
         ),
         "vessel": Family(
             "vessel", DEFAULT_DURATION_S["vessel"], "slow continuous turn 0.15-0.6 deg/s with wave yaw, warming (2 h)",
@@ -343,7 +350,7 @@ def simulate_case(case: Case, *, fs_hz: float = 10.0, calibration: bool = True):
     """
     log = simulate(
         case.scenario, seed=case.log_seed, duration_s=case.duration_s, fs_hz=fs_hz,
-        device=case.device, compass=case.compass,
+        device=case.device, compass=case.compass, triad=TriadModel() if FAMILIES[case.family].triad else None,
     )
     cal = None
     if calibration:

@@ -34,7 +34,7 @@ from gyrodrift.compensator import (
     check_input_columns,
     compensate,
 )
-from gyrodrift.conventions import GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
+from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
@@ -498,8 +498,31 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
         sys.setswitchinterval(switch)
 
 
+def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dict, table_opts: dict,
+                     chunk_rows: int, source: str):
+    """The magnetometer calibration of a whole file (:func:`gyrodrift.magcal.fit`), from a first
+    reading of its chunks: the same samples and tilt as :func:`gyrodrift.compensate` uses."""
+    from gyrodrift import magcal
+    from gyrodrift.attitude import RawTilt, accel_down
+    from gyrodrift.io.chunked import iter_log_chunks
+
+    samples, tilt = magcal.MagSamples(), None
+    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks:
+        for log in chunks:
+            if not set(MAG_COLS) | set(ACC_COLS) <= set(log.columns):
+                continue
+            acc = log[list(ACC_COLS)].to_numpy(float)
+            if tilt is None:
+                tilt = RawTilt(cfg.tilt, {GYRO_X, GYRO_Y} <= set(log.columns), source)
+            down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float), log[GYRO_Y].to_numpy(float),
+                             log[GYRO_Z].to_numpy(float), acc) if tilt.uses_gyro else accel_down(acc)
+            samples.add(log[list(MAG_COLS)].to_numpy(float), down)
+    return magcal.fit(*samples.arrays())
+
+
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
                     column_types: dict[str, str]) -> RunStats:
+    from gyrodrift.attitude import RawTilt
     from gyrodrift.compass import compass_columns
     from gyrodrift.compensator import ChunkEngine, output_frame
     from gyrodrift.gyro_units import GyroUnitCheck
@@ -510,6 +533,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     stats = RunStats(source, streamed=True)
     est = build_estimator(cfg)
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
+    tilt, tilt_note = None, None  # the raw compass's tilt (gyrodrift.attitude), continued chunk by chunk
+    cal = None  # the magnetometer calibration (gyrodrift.magcal), fitted before the first chunk with a compass
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
     table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
@@ -544,9 +569,21 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 n = len(log)
                 heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
                 if has_mag:
-                    heading, norm, dip = compass_columns(
-                        n, heading_in, log[list(MAG_COLS)].to_numpy(float), log[list(ACC_COLS)].to_numpy(float)
-                    )
+                    acc = log[list(ACC_COLS)].to_numpy(float)
+                    gyro_xy = {GYRO_X, GYRO_Y} <= set(log.columns)
+                    if tilt is None:  # decided on the first chunk, as the batch decides on the log's columns
+                        tilt = RawTilt(cfg.tilt, gyro_xy, source)
+                        tilt_note = tilt.note()
+                    down = None
+                    if tilt.uses_gyro:
+                        down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float),
+                                         log[GYRO_Y].to_numpy(float), log[GYRO_Z].to_numpy(float), acc)
+                    mag = log[list(MAG_COLS)].to_numpy(float)
+                    if cfg.mag_calibration:
+                        if cal is None:  # a first reading of the whole file: the fit (gyrodrift.magcal)
+                            cal = _mag_calibration(input_path, cfg, column_types, table_opts, chunk_rows, source)
+                        mag = cal.apply(mag)
+                    heading, norm, dip = compass_columns(n, heading_in, mag, acc, down)
                 else:
                     heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
                 pending.append(log)
@@ -563,6 +600,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             reader.close()
             behind.close()
         stats.compass = chunks.compass or "?"
-        stats.notes = [*getattr(chunks, "notes", ()), *engine.notes, *filter(None, [units.note()])]
+        stats.notes = [*getattr(chunks, "notes", ()), *filter(None, [tilt_note, cal and cal.note(source)]),
+                       *engine.notes,
+                       *filter(None, [units.note()])]
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
     return stats

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from gyrodrift.attitude import RawTilt, accel_down
 from gyrodrift.compass import compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import ChunkEngine
@@ -36,6 +37,7 @@ def compensate_arrays(
     progress=None,
     buffers: OutputBuffers | None = None,
     gyro_max_dps: float = GYRO_MAX_DPS,
+    gyro_xy=None,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -63,6 +65,9 @@ def compensate_arrays(
         overwrites it.
     gyro_max_dps : float, default 10000
         Plausible full scale of the gyro, deg/s.
+    gyro_xy : (N, 2) array_like, optional
+        Raw ``gyro_x``, ``gyro_y`` (deg/s, FRD): with ``mag`` and ``acc``, the compass is
+        tilt-compensated with the gyro-aided gravity (``config.tilt``, :mod:`gyrodrift.attitude`).
 
     Raises
     ------
@@ -83,8 +88,23 @@ def compensate_arrays(
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
                   check_gyro_max_dps(gyro_max_dps))
     est = estimator if estimator is not None else build_estimator(cfg)
+    notes = []
     if mag is not None and acc is not None:
-        heading, norm, dip = compass_columns(n, heading_deg, mag, acc)
+        tilt = RawTilt(cfg.tilt, gyro_xy is not None, source)
+        down = None
+        if tilt.uses_gyro:
+            gxy = np.asarray(gyro_xy, dtype=float)
+            down = tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        notes.append(tilt.note())
+        if cfg.mag_calibration:
+            from gyrodrift import magcal
+
+            samples = magcal.MagSamples()
+            samples.add(mag, accel_down(acc) if down is None else down)
+            cal = magcal.fit(*samples.arrays())
+            mag = cal.apply(mag)
+            notes.append(cal.note(source))
+        heading, norm, dip = compass_columns(n, heading_deg, mag, acc, down)
     else:  # the engine wraps the heading itself
         heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
         norm = dip = None
@@ -96,7 +116,7 @@ def compensate_arrays(
             cols = engine.flush()
         elif buffers is not None:
             gated = buffers.gated[:n]
-        return with_attrs(output_frame(cols, gated), engine.finish(), est, engine.notes)
+        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes])
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
@@ -106,7 +126,7 @@ def compensate_arrays(
     parts.append(engine.flush())
     parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), engine.finish(), est, engine.notes)
+    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes])
 
 
 def compensate(
@@ -170,6 +190,7 @@ def compensate(
         source=source,
         progress=progress,
         gyro_max_dps=gyro_max_dps,
+        gyro_xy=log[[GYRO_X, GYRO_Y]].to_numpy(float) if has_mag and {GYRO_X, GYRO_Y} <= set(log.columns) else None,
     )
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)

@@ -55,6 +55,16 @@ class CompensatorConfig:
         ``heading`` and ``heading_fused`` are in true north, the north of ``ref_heading``
         (a reference such as PX4's attitude yaw is in true north). 0 (default): they
         stay in magnetic north. The drift estimate does not depend on it.
+    tilt : str
+        The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``): ``"gyro"`` (default) the
+        gravity propagated with ``gyro_x``, ``gyro_y``, ``gyro_z`` and corrected by the
+        accelerometer near 1 g (:mod:`gyrodrift.attitude`) when the log has ``gyro_x`` and
+        ``gyro_y``, else the accelerometer alone; ``"accel"`` the accelerometer alone.
+    mag_calibration : bool
+        Fit a hard-iron offset and axis scales to a raw magnetometer over the whole log and
+        apply them before the heading, when the log turns through more than 270° of
+        heading (:mod:`gyrodrift.magcal`; a note says whether and how well). Not causal:
+        the streaming :class:`~gyrodrift.Compensator` does not calibrate. Default False.
     """
 
     update_interval_s: float = 10.0
@@ -69,6 +79,8 @@ class CompensatorConfig:
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
     declination_deg: float = 0.0
+    tilt: str = "gyro"
+    mag_calibration: bool = False
 
     @property
     def fusion_settings(self) -> FusionConfig:
@@ -94,6 +106,8 @@ class CompensatorConfig:
         d = self.declination_deg
         if isinstance(d, bool) or not (isinstance(d, (int, float)) and math.isfinite(d) and -180.0 <= d <= 180.0):
             raise ConfigError(f"declination_deg must be a number of degrees in -180..180 (east positive), got {d!r}")
+        if self.tilt not in ("gyro", "accel"):
+            raise ConfigError(f"tilt must be 'gyro' or 'accel', got {self.tilt!r}")
         if not (isinstance(self.stack_depth, int) and self.stack_depth >= 1):
             raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
         if self.init_s < self.stack_depth * 0.1:

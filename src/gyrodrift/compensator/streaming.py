@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
+from gyrodrift.attitude import RawTilt
 from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import ChunkEngine
@@ -75,6 +76,8 @@ class Compensator:
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
         self._triad = None  # TriadCompensator once the first sample brought gyro_x, gyro_y, acc
         self._triad_started = False
+        self._tilt = None  # RawTilt, decided on the first sample (gyrodrift.attitude)
+        self._tilt_note = None
         self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
         self._sf = None  # ScaleFactorTracker when a scale factor was asked for
@@ -128,7 +131,9 @@ class Compensator:
         mag, acc : 3-sequences, optional
             Raw FRD magnetometer and accelerometer (used when ``heading_deg`` is NaN
             to compute a tilt-compensated heading, and to detect field anomalies); ``acc`` also
-            aids the x and y axes.
+            aids the x and y axes. With ``gyro_x_dps`` and ``gyro_y_dps`` on the first sample
+            (and ``config.tilt`` ``"gyro"``), the tilt is the gyro-aided gravity of
+            :mod:`gyrodrift.attitude`, as in :func:`gyrodrift.compensate`.
         gyro_x_dps, gyro_y_dps : float, optional
             Raw roll- and pitch-axis rates, deg/s (FRD; NaN: hold). Given with ``acc`` on
             the first sample, every row gets ``rate_x, rate_y, bias_x, bias_y`` and
@@ -161,7 +166,15 @@ class Compensator:
             if not math.isfinite(T):
                 T = self._prev[2]
         self._prev = (t_s, g, T)
-        heading, norm, dip = _compass_values(heading_deg, mag, acc)
+        down = None
+        if self._tilt is None:  # decided on the first sample, as the x/y axes are
+            self._tilt = RawTilt(self.config.tilt, gyro_x_dps is not None and gyro_y_dps is not None, self.source)
+        if self._tilt.uses_gyro:  # every sample, as the batch runs the filter over every row
+            down = self._tilt.down((t_s,), (_float(gyro_x_dps),), (_float(gyro_y_dps),), (gyro_z_dps,),
+                                   _float_triple(acc))[0]
+        if mag is not None and acc is not None and self._tilt_note is None:
+            self._tilt_note = self._tilt.note()
+        heading, norm, dip = _compass_values(heading_deg, mag, acc if down is None else -down)
         if not self._triad_started:
             self._start_triad(gyro_x_dps, gyro_y_dps, acc)
         if self._triad is not None:
@@ -191,7 +204,7 @@ class Compensator:
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return list(self._engine.notes)
+        return [*filter(None, [self._tilt_note]), *self._engine.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
@@ -296,6 +309,11 @@ def _compass_values(heading_deg, mag, acc) -> tuple[float, float, float]:
             if not math.isfinite(heading):
                 heading = float(tilt_compensated_heading(*mag, *acc))
     return heading, norm, dip
+
+
+def _float_triple(v) -> np.ndarray:
+    """An optional triple as a (1, 3) array (None: NaN)."""
+    return np.full((1, 3), math.nan) if v is None else np.array([v], dtype=float)
 
 
 def _float(v) -> float:

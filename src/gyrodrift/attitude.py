@@ -1,0 +1,298 @@
+"""Gravity direction from the gyro, aided by the accelerometer: the tilt of the raw compass.
+
+A heading tilt-compensated with the accelerometer alone (:func:`gyrodrift.compass.tilt_compensated_heading`)
+takes the specific force for gravity, so braking and cornering tilt it by tens of degrees
+(0.2 g of braking: 11°). With the gyro's x and y axes, the gravity direction is instead
+*propagated* with the body rates and only *corrected* towards the accelerometer when the
+accelerometer is believable: a complementary filter with an integral term (Mahony, Hamel and
+Pflimlin, *Nonlinear complementary filters on the special orthogonal group*, IEEE TAC 2008,
+reduced to the gravity vector).
+
+Equations (body frame FRD, ``d`` the unit vector pointing down, ``ω`` the gyro in rad/s,
+``b`` the gyro bias the filter learns, ``m = -f/|f|`` the accelerometer's down)::
+
+    e     = d × m                                  (1)  error axis, |e| = sin(angle)
+    ω_eff = ω - b - k_P e     (k_P e only when the accelerometer is accepted)   (2)
+    d    ← rotate(d, -ω_eff Δt)                    (3)  a fixed world vector seen from a
+                                                        body turning at ω: d' = -ω × d
+    b    ← b + k_I e Δt                            (4)  (only when accepted)
+
+With (2), ``d' ⊃ k_P (m - (d·m) d)``: ``d`` turns towards ``m`` with the time constant
+``1/k_P`` (:data:`TAU_S`, 2 s); with (4) a constant gyro bias across gravity is learned
+(:data:`K_I` = ``k_P²/4``, the critically damped pair, ω_n = k_P/2, settling in about
+4/ω_n = 16 s). Until it is, a bias β tilts ``d`` by ``β/k_P`` (0.5 deg/s: 1°).
+(3) is exact for a constant rate over the step (Rodrigues' rotation formula).
+
+The accelerometer is accepted on a row when all hold (each a setting here, module constants):
+
+* ``| |f| / g - 1 | <= NORM_TOL`` (0.05): the specific force is near 1 g, ``g`` being 1 or
+  9.80665 as the first row reads near one or the other (the log's unit);
+* ``|ω| <= MAX_RATE_DPS`` (10 deg/s): not turning fast (cornering's centripetal
+  acceleration, ``v·ω``);
+* the angle between ``m`` and ``d`` is at most :data:`ANGLE_GATE_DEG` (2°). Braking at 0.2 g
+  changes ``|f|`` by 2 % only (inside the norm gate) but tilts ``m`` by 11°: this gate is
+  what refuses it. So that a wrong ``d`` is not locked out for ever, a disagreement that
+  lasts :data:`RELOCK_S` (20 s) with the two other gates passed is accepted (a sustained
+  acceleration that long is rare; a turn is refused by the rate gate and does not count),
+  and through the first :data:`STARTUP_S` (20 s) the angle gate is open, while the bias
+  is learned.
+
+The filter starts from the accelerometer on its first row with a finite one, and starts
+again from the accelerometer after a time gap longer than :data:`MAX_GAP_S` (nothing is
+known of what happened in it). A NaN gyro cell holds the previous rate, a NaN
+accelerometer cell is not used. The state (:func:`new_state`) is a small array, so the
+filter resumes exactly across chunks and rows: the batch, chunked and streaming paths run
+:func:`propagate` and give the same numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.kernels import jit
+
+__all__ = [
+    "TAU_S",
+    "K_I",
+    "NORM_TOL",
+    "MAX_RATE_DPS",
+    "ANGLE_GATE_DEG",
+    "RELOCK_S",
+    "STARTUP_S",
+    "MAX_GAP_S",
+    "MAX_BIAS_DPS",
+    "new_state",
+    "propagate",
+    "gravity_down",
+    "GravityFilter",
+    "RawTilt",
+    "accel_down",
+    "TILT_SOURCES",
+]
+
+#: Time constant of the accelerometer correction, s (k_P = 1/TAU_S, eq. 2). A few seconds:
+#: long against the accelerometer's noise and vibration, short against the drift of a
+#: gyro whose bias is not yet learned.
+TAU_S = 2.0
+#: After the first row, the angle gate is open this long, s: the gyro bias is not yet
+#: learned (eq. 4 settles in about 4/ω_n = 16 s), and a disagreement it causes must not be
+#: refused (the start-up phase of x-io Fusion's AHRS does the same with a raised gain).
+STARTUP_S = 20.0
+#: Integral gain of eq. (4), 1/s²: k_P²/4 (critically damped).
+K_I = 0.25 / TAU_S**2
+#: Tolerance of the specific force's norm about 1 g (fraction of g).
+NORM_TOL = 0.05
+#: Largest gyro rate (norm of the three axes) at which the accelerometer is used, deg/s.
+MAX_RATE_DPS = 10.0
+#: Largest angle between the accelerometer's down and the propagated one that is accepted, deg.
+ANGLE_GATE_DEG = 2.0
+#: A disagreement beyond ANGLE_GATE_DEG, with the other gates passed, accepted after this long, s.
+RELOCK_S = 20.0
+#: A time step longer than this restarts the filter from the accelerometer, s.
+MAX_GAP_S = 1.0
+#: The learned gyro bias is kept within ± this per axis, deg/s.
+MAX_BIAS_DPS = 5.0
+
+# State array layout.
+_D = 0  # 0..2: down unit vector, body FRD
+_B = 3  # 3..5: gyro bias, rad/s
+_T = 6  # previous row's time, s
+_STARTED = 7  # 1 once the first accelerometer row was taken
+_G = 8  # 1 g in the log's accelerometer unit
+_REFUSED = 9  # time the angle gate began refusing (NaN: not refusing)
+_W = 10  # 10..12: the last finite gyro rate, deg/s (NaN cells hold it)
+_T0 = 13  # time of the first row taken, s
+_N_STATE = 14
+
+
+def new_state() -> np.ndarray:
+    """A fresh filter state (nothing seen yet)."""
+    s = np.zeros(_N_STATE)
+    s[_D:_D + 3] = math.nan
+    s[_T] = math.nan
+    s[_REFUSED] = math.nan
+    return s
+
+
+@jit
+def _rotate(v0, v1, v2, r0, r1, r2):
+    """``v`` rotated by the rotation vector ``r`` (rad; Rodrigues' formula)."""
+    ang = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    if ang < 1e-12:
+        return v0 + (r1 * v2 - r2 * v1), v1 + (r2 * v0 - r0 * v2), v2 + (r0 * v1 - r1 * v0)
+    k0, k1, k2 = r0 / ang, r1 / ang, r2 / ang
+    c, s = math.cos(ang), math.sin(ang)
+    kv = k0 * v0 + k1 * v1 + k2 * v2
+    x0 = v0 * c + (k1 * v2 - k2 * v1) * s + k0 * kv * (1.0 - c)
+    x1 = v1 * c + (k2 * v0 - k0 * v2) * s + k1 * kv * (1.0 - c)
+    x2 = v2 * c + (k0 * v1 - k1 * v0) * s + k2 * kv * (1.0 - c)
+    return x0, x1, x2
+
+
+@jit
+def propagate(t, gx, gy, gz, acc, state, out):
+    """Run the filter over rows; write each row's down unit vector (body FRD) to ``out``.
+
+    Parameters
+    ----------
+    t : (n,) float64
+        Time, s, increasing (also across calls).
+    gx, gy, gz : (n,) float64
+        Raw gyro rates, deg/s, FRD. NaN holds the previous value.
+    acc : (n, 3) float64
+        Specific force, g or m/s², FRD (level and still: (0, 0, -1 g)). NaN: not used.
+    state : (14,) float64
+        From :func:`new_state`; updated in place.
+    out : (n, 3) float64
+        The down vector after each row (NaN before the first finite accelerometer row).
+    """
+    kp = 1.0 / TAU_S
+    cos_gate = math.cos(math.radians(ANGLE_GATE_DEG))
+    max_b = math.radians(MAX_BIAS_DPS)
+    for i in range(t.size):
+        if math.isfinite(gx[i]):
+            state[_W] = gx[i]
+        if math.isfinite(gy[i]):
+            state[_W + 1] = gy[i]
+        if math.isfinite(gz[i]):
+            state[_W + 2] = gz[i]
+        f0, f1, f2 = acc[i, 0], acc[i, 1], acc[i, 2]
+        fn = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+        have_acc = math.isfinite(fn) and fn > 0.0
+        dt = t[i] - state[_T]
+        restart = state[_STARTED] == 0.0 or not dt <= MAX_GAP_S
+        if restart:
+            if have_acc:
+                if state[_STARTED] == 0.0:
+                    state[_G] = 9.80665 if fn > 3.0 else 1.0
+                    state[_T0] = t[i]
+                state[_D], state[_D + 1], state[_D + 2] = -f0 / fn, -f1 / fn, -f2 / fn
+                state[_STARTED] = 1.0
+                state[_REFUSED] = math.nan
+            state[_T] = t[i]
+            for k in range(3):
+                out[i, k] = state[_D + k]
+            continue
+        state[_T] = t[i]
+        d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
+        w0 = math.radians(state[_W]) - state[_B]
+        w1 = math.radians(state[_W + 1]) - state[_B + 1]
+        w2 = math.radians(state[_W + 2]) - state[_B + 2]
+        if have_acc:
+            m0, m1, m2 = -f0 / fn, -f1 / fn, -f2 / fn
+            quiet = (abs(fn / state[_G] - 1.0) <= NORM_TOL
+                     and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS)
+            agree = d0 * m0 + d1 * m1 + d2 * m2 >= cos_gate or t[i] - state[_T0] < STARTUP_S
+            use = False
+            if quiet and agree:
+                use = True
+                state[_REFUSED] = math.nan
+            elif quiet:
+                if math.isnan(state[_REFUSED]):
+                    state[_REFUSED] = t[i]
+                use = t[i] - state[_REFUSED] >= RELOCK_S
+            else:
+                state[_REFUSED] = math.nan
+            if use:
+                e0, e1, e2 = d1 * m2 - d2 * m1, d2 * m0 - d0 * m2, d0 * m1 - d1 * m0  # eq. (1)
+                w0, w1, w2 = w0 - kp * e0, w1 - kp * e1, w2 - kp * e2  # eq. (2)
+                state[_B] = min(max(state[_B] + K_I * e0 * dt, -max_b), max_b)  # eq. (4)
+                state[_B + 1] = min(max(state[_B + 1] + K_I * e1 * dt, -max_b), max_b)
+                state[_B + 2] = min(max(state[_B + 2] + K_I * e2 * dt, -max_b), max_b)
+        d0, d1, d2 = _rotate(d0, d1, d2, -w0 * dt, -w1 * dt, -w2 * dt)  # eq. (3)
+        norm = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        state[_D], state[_D + 1], state[_D + 2] = d0 / norm, d1 / norm, d2 / norm
+        for k in range(3):
+            out[i, k] = state[_D + k]
+
+
+def _column(a) -> np.ndarray:
+    """A float64, contiguous, read-only view (one compiled version of :func:`propagate`)."""
+    view = np.ascontiguousarray(a, dtype=float).view()
+    view.flags.writeable = False
+    return view
+
+
+class GravityFilter:
+    """The gravity filter of the module notes, resumable: chunks or rows in time order.
+
+    Examples
+    --------
+    A still, level unit: down stays (0, 0, 1).
+
+    >>> f = GravityFilter()
+    >>> d = f.feed([0.0, 0.1], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [[0, 0, -1.0], [0, 0, -1.0]])
+    >>> d[-1].tolist()
+    [0.0, 0.0, 1.0]
+    """
+
+    def __init__(self):
+        self.state = new_state()
+
+    def feed(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
+        """Down unit vectors (n, 3), body FRD, of these rows (see :func:`propagate`)."""
+        t = _column(t)
+        acc = np.ascontiguousarray(acc, dtype=float).reshape(-1, 3).view()
+        acc.flags.writeable = False
+        out = np.empty((t.size, 3))
+        propagate(t, _column(gyro_x_dps), _column(gyro_y_dps), _column(gyro_z_dps), acc, self.state, out)
+        return out
+
+
+def gravity_down(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
+    """Down unit vectors (n, 3) of a whole log (a fresh :class:`GravityFilter`)."""
+    return GravityFilter().feed(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)
+
+
+def accel_down(acc) -> np.ndarray:
+    """The accelerometer's down unit vectors (n, 3), ``-f/|f|``: the tilt without the gyro."""
+    acc = np.asarray(acc, dtype=float).reshape(-1, 3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return -acc / np.linalg.norm(acc, axis=1)[:, None]
+
+
+#: Names of the tilt sources (``CompensatorConfig.tilt``).
+TILT_SOURCES = ("gyro", "accel")
+
+
+class RawTilt:
+    """The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``) for one log, chunk by chunk.
+
+    Parameters
+    ----------
+    tilt : str
+        ``"gyro"``: the gyro-aided gravity of :class:`GravityFilter` when the log has
+        ``gyro_x`` and ``gyro_y``; ``"accel"``: the accelerometer alone.
+    gyro_xy : bool
+        Whether the log has ``gyro_x`` and ``gyro_y``.
+    source : str
+        Name for the note.
+
+    Attributes
+    ----------
+    uses_gyro : bool
+        True when :meth:`down` propagates gravity with the gyro.
+    """
+
+    def __init__(self, tilt: str, gyro_xy: bool, source: str = "log"):
+        self.gyro_xy = bool(gyro_xy)
+        self.uses_gyro = tilt == "gyro" and self.gyro_xy
+        self.source = source
+        self._filter = GravityFilter() if self.uses_gyro else None
+
+    def down(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray | None:
+        """Down unit vectors (n, 3) of these rows, or None for the accelerometer alone."""
+        if self._filter is None:
+            return None
+        return self._filter.feed(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)
+
+    def note(self) -> str:
+        """One line for ``attrs["notes"]``: which tilt the raw compass was compensated with."""
+        if self.uses_gyro:
+            return (f"{self.source}: compass tilt from the gyro-aided gravity (gyro_x, gyro_y, gyro_z "
+                    "corrected by the accelerometer near 1 g; gyrodrift.attitude)")
+        why = "tilt = 'accel'" if self.gyro_xy else "no gyro_x, gyro_y"
+        return (f"{self.source}: compass tilt from the accelerometer alone ({why}): braking and cornering "
+                "tilt the heading")

@@ -1,0 +1,168 @@
+"""Hard- and soft-iron calibration of a raw magnetometer from the log itself, when it turns enough.
+
+Model (body frame FRD, ``m`` the raw field, ``d`` the down unit vector of the tilt in force,
+:mod:`gyrodrift.attitude`)::
+
+    m_cal = s ⊙ (m - o),   s = (1, s_y, s_z)            (1)  hard-iron offset o, axis scales
+    |m_cal| = F                                          (2)  the Earth's field strength
+    m_cal · d = V = F sin(dip)                           (3)  its vertical part
+
+Both are solved together by least squares (Levenberg–Marquardt). On a unit that stays
+level (its down vector within :data:`MIN_TILT_SPREAD_DEG`, 15°, of its mean) ``o_z`` and
+``s_z`` are undetermined (they only shift the vertical part): they are kept at 0 and 1,
+which does not change the heading of a level unit. The fit is accepted when the
+calibrated, tilt-compensated headings cover more than :data:`MIN_COVERAGE_DEG` (270°, in
+10° sectors) and the relative RMS of (2) is below :data:`MAX_RESIDUAL` (5 %).
+
+The fit needs the whole log (the chunked file path reads the file once more before
+compensating it), so it is not causal: the streaming :class:`gyrodrift.Compensator`
+does not calibrate. :class:`MagSamples` keeps a bounded, evenly thinned set of samples
+whatever the length of the log and the size of its chunks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "MagCalibration", "MagSamples", "fit"]
+
+#: Least heading coverage of the calibrated field for the fit to be used, deg.
+MIN_COVERAGE_DEG = 270.0
+#: Largest relative RMS residual of |m_cal| = F for the fit to be used.
+MAX_RESIDUAL = 0.05
+#: Below this spread of the down vector (largest angle from its mean, deg) the log is taken
+#: as level: o_z and s_z are not fitted (kept 0 and 1).
+MIN_TILT_SPREAD_DEG = 15.0
+#: Samples :class:`MagSamples` keeps at most.
+CAPACITY = 8192
+
+
+@dataclass(frozen=True)
+class MagCalibration:
+    """The outcome of :func:`fit`: ``ok`` with ``offset`` (input unit), ``scale`` (x, y, z),
+    ``residual`` (relative RMS of eq. 2), ``coverage_deg``; or not ``ok`` and ``why``."""
+
+    ok: bool
+    offset: tuple = (0.0, 0.0, 0.0)
+    scale: tuple = (1.0, 1.0, 1.0)
+    residual: float = math.nan
+    coverage_deg: float = 0.0
+    why: str = ""
+
+    def apply(self, mag) -> np.ndarray:
+        """Eq. (1) on (n, 3) raw samples (unchanged when not ``ok``)."""
+        mag = np.asarray(mag, dtype=float)
+        if not self.ok:
+            return mag
+        return (mag - np.asarray(self.offset)) * np.asarray(self.scale)
+
+    def note(self, source: str) -> str:
+        """One line for ``attrs["notes"]``."""
+        if self.ok:
+            o = ", ".join(f"{v:.3g}" for v in self.offset)
+            s = ", ".join(f"{v:.4f}" for v in self.scale)
+            return (f"{source}: magnetometer calibrated from the log (hard iron ({o}), scales ({s}); fit residual "
+                    f"{100 * self.residual:.2f} % of the field, heading coverage {self.coverage_deg:.0f} deg)")
+        return f"{source}: magnetometer not calibrated: {self.why}"
+
+
+class MagSamples:
+    """A bounded, evenly thinned set of (mag, down) samples, in row order: every
+    ``stride``-th finite sample, the stride doubling when the set is full. The same rows
+    are kept however the log is cut into chunks."""
+
+    def __init__(self, capacity: int = CAPACITY):
+        self.capacity = int(capacity)
+        self.stride = 1
+        self.seen = 0
+        self.rows: list[np.ndarray] = []
+        self.n = 0
+
+    def add(self, mag, down) -> None:
+        """Take the rows of a chunk with a finite field and down vector."""
+        both = np.hstack([np.asarray(mag, dtype=float).reshape(-1, 3), np.asarray(down, dtype=float).reshape(-1, 3)])
+        both = both[np.isfinite(both).all(axis=1)]
+        index = self.seen + np.arange(both.shape[0])
+        self.seen += both.shape[0]
+        keep = both[index % self.stride == 0]
+        self.rows.append(keep)
+        self.n += keep.shape[0]
+        while self.n > self.capacity:  # thin: keep every other kept row (those on the doubled stride)
+            allrows = np.concatenate(self.rows)
+            first = allrows[::2]
+            self.rows, self.n = [first], first.shape[0]
+            self.stride *= 2
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kept (n, 3) fields and down vectors."""
+        allrows = np.concatenate(self.rows) if self.rows else np.zeros((0, 6))
+        return allrows[:, :3], allrows[:, 3:]
+
+
+def _coverage_deg(mag_cal: np.ndarray, down: np.ndarray) -> float:
+    """Degrees of heading (10° sectors) the tilt-compensated, calibrated field covers."""
+    from gyrodrift.compass import tilt_compensated_heading
+
+    heading = tilt_compensated_heading(*mag_cal.T, *(-down).T)
+    sectors = np.unique(np.floor(heading[np.isfinite(heading)] / 10.0).astype(int) % 36)
+    return 10.0 * sectors.size
+
+
+def fit(mag, down) -> MagCalibration:
+    """Fit eqs. (1)–(3) to samples of a log; see the module notes.
+
+    Parameters
+    ----------
+    mag, down : (n, 3) array_like
+        Raw field (any unit) and down unit vectors (body FRD) of the same rows.
+
+    Returns
+    -------
+    MagCalibration
+    """
+    from scipy.optimize import least_squares  # here: scipy costs 0.4 s at start-up
+
+    mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)
+    if mag.shape[0] < 100:
+        return MagCalibration(False, why=f"{mag.shape[0]} magnetometer samples, fewer than 100")
+    o0 = 0.5 * (mag.max(axis=0) + mag.min(axis=0))
+    o0[2] = 0.0
+    F0 = float(np.median(np.linalg.norm(mag - o0, axis=1)))
+    V0 = float(np.median(np.sum((mag - o0) * down, axis=1)))
+    mean_down = down.mean(axis=0) / np.linalg.norm(down.mean(axis=0))
+    spread = float(np.degrees(np.arccos(np.clip(down @ mean_down, -1.0, 1.0))).max())
+    free = np.ones(7, dtype=bool)
+    if spread < MIN_TILT_SPREAD_DEG:  # o_z and s_z undetermined: kept at 0 and 1
+        free[[2, 4]] = False
+    start = np.array([*o0, 1.0, 1.0, F0, V0])
+
+    def full(q):
+        p = start.copy()
+        p[free] = q
+        return p
+
+    def residuals(q):
+        p = full(q)
+        mc = (mag - p[0:3]) * np.array([1.0, p[3], p[4]])
+        return np.concatenate([np.linalg.norm(mc, axis=1) - p[5], np.sum(mc * down, axis=1) - p[6]]) / F0
+
+    sol = least_squares(residuals, start[free], method="lm")
+    sol.x = full(sol.x)
+    o, s, F = sol.x[0:3], np.array([1.0, sol.x[3], sol.x[4]]), sol.x[5]
+    mc = (mag - o) * s
+    resid = float(np.sqrt(np.mean((np.linalg.norm(mc, axis=1) - F) ** 2)) / abs(F))
+    cover = _coverage_deg(mc, down)
+    result = dict(offset=tuple(float(v) for v in o), scale=tuple(float(v) for v in s), residual=resid,
+                  coverage_deg=cover)
+    if cover <= MIN_COVERAGE_DEG:
+        return MagCalibration(False, **result, why=f"the log turns through {cover:.0f} deg of heading, "
+                                                     f"not more than {MIN_COVERAGE_DEG:.0f}")
+    if not sol.success or not np.all(np.isfinite(sol.x)) or np.any(s <= 0.2) or np.any(s >= 5.0):
+        return MagCalibration(False, **result, why="the fit did not converge")
+    if resid > MAX_RESIDUAL:
+        return MagCalibration(False, **result, why=f"the fit leaves {100 * resid:.1f} % of the field, more than "
+                                                     f"{100 * MAX_RESIDUAL:.0f} %")
+    return MagCalibration(True, **result)

@@ -1,0 +1,217 @@
+"""The gyro-aided gravity of the raw compass (gyrodrift.attitude): known answers, and the same
+numbers in the batch, chunked and streaming paths."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gyrodrift
+from gyrodrift.attitude import GravityFilter, RawTilt, gravity_down
+from gyrodrift.compass import compass_columns, roll_pitch_deg
+from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.conventions import wrap_180
+
+H_UT, V_UT = 20.0, 40.0  # horizontal and vertical Earth field (dip 63 deg)
+
+
+def _level_field(heading_deg):
+    """Body field of a level unit at this heading (FRD)."""
+    psi = np.radians(heading_deg)
+    return np.column_stack([H_UT * np.cos(psi), -H_UT * np.sin(psi), np.full(psi.shape, V_UT)])
+
+
+def _tilt_error_deg(down, true_down):
+    return np.degrees(np.arccos(np.clip(np.sum(down * true_down, axis=1), -1.0, 1.0)))
+
+
+def test_level_unit_turning_gives_the_exact_heading():
+    t = np.arange(0.0, 60.0, 0.05)
+    rate = 30.0 * np.sin(2 * np.pi * t / 20.0)  # up to 30 deg/s, both ways
+    heading = 40.0 + np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+    acc = np.tile([0.0, 0.0, -1.0], (t.size, 1))
+    down = gravity_down(t, np.zeros_like(t), np.zeros_like(t), rate, acc)
+    np.testing.assert_allclose(down, np.tile([0.0, 0.0, 1.0], (t.size, 1)), atol=1e-12)
+    got, norm, dip = compass_columns(t.size, None, _level_field(heading), acc, down)
+    assert np.max(np.abs(wrap_180(got - heading))) < 1e-9
+    np.testing.assert_allclose(norm, math.hypot(H_UT, V_UT), rtol=1e-12)
+    np.testing.assert_allclose(dip, math.degrees(math.atan2(V_UT, H_UT)), rtol=1e-12)
+
+
+def test_static_tilted_unit_converges_to_the_accelerometer_and_learns_the_gyro_bias():
+    t = np.arange(0.0, 200.0, 0.1)
+    roll, pitch = math.radians(20.0), math.radians(-10.0)
+    f = np.array([math.sin(pitch), -math.cos(pitch) * math.sin(roll), -math.cos(pitch) * math.cos(roll)])
+    acc = np.tile(f, (t.size, 1)) + 0.002 * np.random.default_rng(1).standard_normal((t.size, 3))
+    bias_dps = (0.3, -0.2, 0.1)
+    filt = GravityFilter()
+    down = filt.feed(t, *(np.full(t.size, b) for b in bias_dps), acc)
+    late = t > 100.0
+    assert np.max(_tilt_error_deg(down[late], np.tile(-f, (late.sum(), 1)))) < 0.1
+    # the bias across gravity is learned (along gravity it does not move the tilt)
+    learned = np.degrees(filt.state[3:6])
+    across = np.asarray(bias_dps) - np.dot(bias_dps, -f) * (-f)
+    np.testing.assert_allclose(learned - np.dot(learned, -f) * (-f), across, atol=0.01)
+
+
+def test_braking_vehicle_keeps_the_tilt_where_the_accelerometer_alone_is_off():
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 120.0, 0.1)
+    brake = np.clip(np.minimum(t - 60.0, 66.0 - t), 0.0, 1.0) * 0.25  # 6 s of braking, 0.25 g, 1-s ramps
+    acc = np.column_stack([-brake, np.zeros_like(t), -np.ones_like(t)]) + 0.002 * rng.standard_normal((t.size, 3))
+    gx, gy = 0.2 + 0.02 * rng.standard_normal(t.size), -0.15 + 0.02 * rng.standard_normal(t.size)
+    gz = 0.5 + 0.02 * rng.standard_normal(t.size)
+    down = gravity_down(t, gx, gy, gz, acc)
+    level = np.tile([0.0, 0.0, 1.0], (t.size, 1))
+    during = brake > 0
+    gyro_err = _tilt_error_deg(down[during], level[during])
+    acc_only = -acc / np.linalg.norm(acc, axis=1)[:, None]
+    acc_err = _tilt_error_deg(acc_only[during], level[during])
+    assert gyro_err.max() < 1.0 and acc_err.max() > 5.0
+    heading = np.full(t.size, 123.0)
+    mag = _level_field(heading)
+    h_gyro, _, _ = compass_columns(t.size, None, mag, acc, down)
+    h_acc, _, _ = compass_columns(t.size, None, mag, acc)
+    assert np.max(np.abs(wrap_180(h_gyro[during] - 123.0))) < 1.0
+    assert np.max(np.abs(wrap_180(h_acc[during] - 123.0))) > 5.0
+
+
+def test_a_time_gap_restarts_from_the_accelerometer_and_nan_cells_hold():
+    t = np.array([0.0, 0.1, 0.2, 5.0, 5.1])
+    acc = np.array([[0, 0, -1.0], [np.nan] * 3, [0, 0, -1.0], [0, -0.5, -0.866025403784], [0, -0.5, -0.866025403784]])
+    gx = np.array([0.0, np.nan, np.nan, 0.0, 0.0])
+    down = gravity_down(t, gx, np.zeros(5), np.zeros(5), acc)
+    roll, _ = roll_pitch_deg(*(-down).T)
+    np.testing.assert_allclose(roll, [0, 0, 0, 30, 30], atol=1e-9)
+
+
+def test_chunks_and_rows_give_the_numbers_of_one_call():
+    rng = np.random.default_rng(3)
+    n = 700
+    t = np.cumsum(rng.uniform(0.05, 0.15, n))
+    g = rng.normal(0.0, 3.0, (n, 3))
+    acc = np.column_stack([rng.normal(0, 0.05, n), rng.normal(0, 0.05, n), -1.0 + rng.normal(0, 0.02, n)])
+    whole = gravity_down(t, *g.T, acc)
+    f = GravityFilter()
+    parts = np.concatenate([f.feed(t[a:b], *g[a:b].T, acc[a:b]) for a, b in [(0, 1), (1, 250), (250, 251), (251, n)]])
+    assert np.array_equal(parts, whole)
+
+
+def _turning_log(seconds: float = 240.0) -> pd.DataFrame:
+    from gyrodrift.montecarlo import draw_case
+    from gyrodrift.simulate import simulate
+    from gyrodrift.simulate.device import TriadModel
+
+    case = draw_case("vehicle-rawmag", 1)
+    return simulate(case.scenario, seed=case.log_seed, duration_s=seconds, fs_hz=10.0, device=case.device,
+                    compass=case.compass, triad=TriadModel())
+
+
+def test_the_compensator_uses_the_gyro_tilt_with_gyro_x_y_and_says_so():
+    log = _turning_log()
+    gyro = gyrodrift.compensate(log)
+    accel = gyrodrift.compensate(log, CompensatorConfig(tilt="accel"))
+    assert any("gyro-aided gravity" in n for n in gyro.attrs["notes"])
+    assert any("accelerometer alone (tilt = 'accel')" in n for n in accel.attrs["notes"])
+    err = {k: np.abs(wrap_180(o["compass_heading"] - o["ref_heading"])) for k, o in (("g", gyro), ("a", accel))}
+    assert np.nanpercentile(err["g"], 99) < np.nanpercentile(err["a"], 99)
+    without = gyrodrift.compensate(log.drop(columns=["gyro_x", "gyro_y"]))
+    assert np.array_equal(without["compass_heading"], accel["compass_heading"], equal_nan=True)
+    assert any("no gyro_x, gyro_y" in n for n in without.attrs["notes"])
+    with pytest.raises(gyrodrift.errors.ConfigError, match="tilt must be"):
+        CompensatorConfig(tilt="mag")
+
+
+def test_batch_chunked_and_streaming_give_the_same_compass(tmp_path):
+    from gyrodrift.pipeline import compensate_file
+
+    log = _turning_log()
+    cols = [c for c in log.columns if not c.startswith("true_bias_")]
+    log[cols].to_csv(tmp_path / "in.csv", index=False)
+    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", stream=False)
+    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", stream=True, chunk_rows=333)
+    whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
+    for c in ("compass_heading", "heading", "heading_fused", "bias_z", "gate_reason"):
+        assert whole[c].equals(parts[c]), c
+    batch = gyrodrift.compensate(log)
+    comp = gyrodrift.Compensator(provisional=False)
+    rows = []
+    for r in log.itertuples(index=False):
+        rows += comp.push(r.t, r.gyro_z, r.temp, mag=(r.mag_x, r.mag_y, r.mag_z), acc=(r.acc_x, r.acc_y, r.acc_z),
+                          gyro_x_dps=r.gyro_x, gyro_y_dps=r.gyro_y)
+    rows += comp.flush()
+    stream = pd.DataFrame([dataclasses.asdict(r) for r in rows])
+    for c in ("compass_heading", "heading", "heading_fused", "bias_z"):
+        np.testing.assert_allclose(stream[c].to_numpy(float), batch[c].to_numpy(float), rtol=0, atol=1e-9,
+                                   equal_nan=True, err_msg=c)
+    assert any("gyro-aided gravity" in n for n in comp.notes)
+    assert RawTilt("gyro", True).uses_gyro and not RawTilt("accel", True).uses_gyro
+
+
+def _hand_turned(n: int = 6000, turn_dps: float = 1.5, offset=(6.0, -9.0, 4.0), scale=(1.0, 1.1, 0.95)):
+    """A unit turned by hand: heading at ``turn_dps``, rolling and pitching ±25/20 deg; body field
+    with a hard-iron offset and axis scales (eq. 1 of gyrodrift.magcal inverted), and down vectors."""
+    rng = np.random.default_rng(4)
+    t = np.arange(n) * 0.1
+    psi, roll, pitch = np.radians(turn_dps * t), np.radians(25 * np.sin(t / 7)), np.radians(20 * np.sin(t / 11 + 1))
+
+    def body(v):
+        cp, sp, ct, st = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
+        return np.column_stack([v[:, 0] * ct - v[:, 2] * st,
+                                v[:, 0] * st * sp + v[:, 1] * cp + v[:, 2] * ct * sp,
+                                v[:, 0] * st * cp - v[:, 1] * sp + v[:, 2] * ct * cp])
+
+    field = body(np.column_stack([H_UT * np.cos(psi), -H_UT * np.sin(psi), np.full(n, V_UT)]))
+    down = body(np.tile([0.0, 0.0, 1.0], (n, 1)))
+    mag = field / np.asarray(scale) + np.asarray(offset) + 0.1 * rng.standard_normal((n, 3))
+    return mag, down, field
+
+
+def test_hard_iron_offset_and_scales_are_recovered_from_a_turning_log_in_any_chunks():
+    from gyrodrift.magcal import MagSamples, fit
+
+    mag, down, field = _hand_turned()
+    samples = MagSamples(capacity=2000)  # thinned twice, whatever the chunks
+    for a in range(0, mag.shape[0], 777):
+        samples.add(mag[a:a + 777], down[a:a + 777])
+    whole = MagSamples(capacity=2000)
+    whole.add(mag, down)
+    assert np.array_equal(samples.arrays()[0], whole.arrays()[0])
+    cal = fit(*samples.arrays())
+    assert cal.ok and cal.coverage_deg > 270 and cal.residual < 0.01
+    np.testing.assert_allclose(cal.offset, (6.0, -9.0, 4.0), atol=0.01 * np.linalg.norm((6.0, -9.0, 4.0)))
+    np.testing.assert_allclose(cal.scale, (1.0, 1.1, 0.95), rtol=0.01)
+    assert "calibrated from the log" in cal.note("log")
+    h_true, _, _ = compass_columns(mag.shape[0], None, field, -down)
+    h_cal, _, _ = compass_columns(mag.shape[0], None, cal.apply(mag), -down)
+    assert np.sqrt(np.mean(wrap_180(h_cal - h_true) ** 2)) < 1.0
+
+
+def test_no_calibration_when_the_log_turns_too_little():
+    from gyrodrift.magcal import fit
+
+    mag, down, _ = _hand_turned(n=1500, turn_dps=1.2)  # 180 deg of heading
+    cal = fit(mag, down)
+    assert not cal.ok and "not calibrated" in cal.note("log") and "turns through" in cal.why
+    np.testing.assert_array_equal(cal.apply(mag), mag)
+
+
+def test_calibration_in_batch_equals_chunked(tmp_path):
+    from gyrodrift.pipeline import compensate_file
+
+    log = _turning_log(600.0)
+    log[["mag_x", "mag_y", "mag_z"]] += np.array([5.0, -3.0, 1.0])
+    cols = [c for c in log.columns if not c.startswith("true_bias_")]
+    log[cols].to_csv(tmp_path / "in.csv", index=False)
+    cfg = CompensatorConfig(mag_calibration=True)
+    s_whole = compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", cfg, stream=False)
+    s_parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", cfg, stream=True, chunk_rows=500)
+    whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
+    for c in ("compass_heading", "heading", "bias_z"):
+        assert whole[c].equals(parts[c]), c
+    note = [n for n in s_whole.notes if "magnetometer" in n]
+    assert note and note == [n for n in s_parts.notes if "magnetometer" in n]
