@@ -279,3 +279,35 @@ def test_report_renders_in_chromium_without_console_errors(static_page, tmp_path
         if re.search(r"CONSOLE[(:]|Uncaught", line)
     ]
     assert not page_errors, "\n".join(page_errors)
+
+
+# ------------------------------------------------------------------ the default estimator first
+
+
+def test_report_runs_the_default_estimator_first_and_names_it(log_csv, tmp_path):
+    from gyrodrift.compare import DEFAULT_METHODS
+
+    assert parse(["report", str(log_csv), "-o", "r.html"]).methods == ",".join(DEFAULT_METHODS)
+    assert DEFAULT_METHODS[0] == "adaptive"
+    out = tmp_path / "r.html"
+    args = parse(["report", str(log_csv), "-o", str(out), "--methods", "adaptive,stkf", "-q"])
+    assert args.func(args) == 0
+    page = out.read_text(encoding="utf-8")
+    table = re.search(r'<table class="summary">(.*?)</table>', page, flags=re.S).group(1)
+    rows = re.findall(r"<tr><td>(.*?)</td>", table)
+    assert rows == ["raw gyro (no compensation)", "adaptive (default)", "stkf"]
+    figures = figure_sections(page)
+    for key in ("rates", "params", "heading"):
+        assert "(adaptive (default))</h2>" in figures[key]
+    assert "<td>adaptive (default) rate_z</td>" in figures["allan"]  # the noise-term table names the curve
+
+
+def test_figure_legends_name_the_default_estimator():
+    from gyrodrift import plots
+
+    log = simulate("vehicle", duration_s=300, fs_hz=10, seed=1)
+    outputs, _ = run_methods(log, methods=("adaptive", "mlr"))
+    legend = [t.get_text() for t in plots.fig_bias(outputs).axes[0].get_legend().get_texts()]
+    assert "adaptive (default) bias_z" in legend and "mlr bias_z" in legend
+    legend = [t.get_text() for t in plots.fig_heading_error(outputs).axes[0].get_legend().get_texts()]
+    assert legend == ["adaptive (default)", "mlr (non-causal)"]

@@ -75,8 +75,10 @@ GATE_COLORS = {
     "interference": "#d62728",
 }
 
-#: Line colour of each method (the paper's: adaptive blue, KF red, MLR green, LSM black).
+#: Line colour of each method (the paper's: adaptive blue, KF red, MLR green, LSM black; the paper's
+#: adaptive filter is ``stkf`` here, and gyrodrift's default estimator ``adaptive`` is magenta).
 METHOD_COLORS = {
+    "adaptive": "#c51b7d",
     "stkf": "#1f4fd6",
     "kf": "#d62728",
     "mlr": "#2ca02c",
@@ -129,6 +131,13 @@ def _column(table: pd.DataFrame, name: str) -> np.ndarray:
 
 def _method_color(name: str, index: int) -> str:
     return METHOD_COLORS.get(name, _EXTRA_COLORS[index % len(_EXTRA_COLORS)])
+
+
+def _method_label(name: str) -> str:
+    """A method's legend name: the default estimator's says so (:func:`gyrodrift.compare.method_label`)."""
+    from gyrodrift.compare import method_label
+
+    return method_label(name)
 
 
 def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None:
@@ -346,7 +355,8 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
     out_by_method : mapping of str to DataFrame
         Output table per method (same log). The raw ``gyro_z`` and, when present,
         ``true_bias_z`` are taken from the first table. The ``oracle`` method is not
-        drawn when the truth is (its bias is the truth).
+        drawn when the truth is (its bias is the truth). The default estimator's
+        line is labelled "adaptive (default)".
 
     Returns
     -------
@@ -376,7 +386,7 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
         bias = _column(out, "bias_z")
         core.append(bias)
         xm = time_axis(_column(out, "t"))[0]
-        _plot(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{name} bias_z", zorder=2)
+        _plot(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{_method_label(name)} bias_z", zorder=2)
     limits = _robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
@@ -462,7 +472,8 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         Output table per method, each with ``t``, ``heading`` and ``ref_heading``.
     causal : mapping of str to bool, optional
         Whether each method is causal (default :data:`gyrodrift.compare.CAUSAL`);
-        non-causal methods are dashed and marked "(non-causal)" in the legend.
+        non-causal methods are dashed and marked "(non-causal)" in the legend;
+        the default estimator is labelled "adaptive (default)".
 
     Returns
     -------
@@ -483,7 +494,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         n = max(n, t.size)
         err = heading_error_deg(_column(out, "heading"), _column(out, REF_HEADING))
         live = causal.get(name, True)
-        label = name if live else f"{name} (non-causal)"
+        label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
         _plot(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
     ax.set_ylabel("heading error (deg)")
