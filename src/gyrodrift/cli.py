@@ -103,10 +103,17 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _bar(desc: str):
+def _bar(desc: str, unit: str = "it"):
+    """``progress(iterable, total, **options)``: a bar labelled ``desc`` counting ``unit`` on a terminal.
+
+    ``options`` (``unit``, ``size``) are those of :func:`gyrodrift._progress.progress_iter`.
+    """
     from gyrodrift._progress import progress_iter
 
-    return lambda iterable, total: progress_iter(iterable, total, desc)
+    def progress(iterable, total, **options):
+        return progress_iter(iterable, total, desc, **{"unit": unit, **options})
+
+    return progress
 
 
 def _warn(source, notes) -> None:
@@ -435,7 +442,7 @@ def _cmd_montecarlo(args) -> int:
         duration_scale=args.duration_scale,
         config=config,
         workers=args.workers,
-        progress=_bar("monte carlo"),
+        progress=_bar("monte carlo", "logs"),
         fs_hz=args.fs_hz,
     )
     seconds = time.monotonic() - start
