@@ -129,7 +129,7 @@ def test_fusion_offset_recovers_a_constant_bias_after_its_timeout():
     # the heading keeps what was integrated before the offset converged: bias * (3 s + 1/(10 Hz * g))
     err = (out["heading"].iloc[-1] - 100.0 + 180.0) % 360.0 - 180.0
     assert err == pytest.approx(0.4 * (3.0 + 0.1 / g), abs=0.05)
-    assert CAUSAL["fusion-offset"] and out["update"].sum() == 0
+    assert CAUSAL["fusion-offset"] and out["updated"].sum() == 0
 
 
 def test_fusion_offset_uses_the_other_axes_to_tell_stillness():

@@ -85,7 +85,7 @@ def test_summary_table_has_a_row_per_method(static_page):
     stkf = re.search(r"<tr><td>stkf</td>(.*?)</tr>", table).group(1)
     cells = re.findall(r"<td>(.*?)</td>", stkf)
     updates = cells[header.index("filter updates") - 1]
-    assert updates == str(int(outputs["stkf"]["update"].sum()))
+    assert updates == str(int(outputs["stkf"]["updated"].sum()))
     oracle = re.findall(r"<td>(.*?)</td>", re.search(r"<tr><td>oracle †</td>(.*?)</tr>", table).group(1))
     assert float(oracle[header.index("bias error RMS (deg/s)") - 1]) == 0.0
 

@@ -40,7 +40,7 @@ units and conventions (input contract, CSV with a header row or Parquet):
                gyro/mag/acc y and z axes change sign
 output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (deg [0,360), integrated from rate_z from the first compass heading), a
-  (deg/s/degC), b (deg/degC), c (deg/s) of the drift model a*T + b*T' + c, update
+  (deg/s/degC), b (deg/degC), c (deg/s) of the drift model a*T + b*T' + c, updated
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, unobservable (a, b or a+b: parameters not yet determined by

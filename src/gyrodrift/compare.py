@@ -43,6 +43,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig, compensate
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
@@ -123,7 +124,7 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     out["bias_z"] = drift_dps
     out["heading"] = wrap_360((compass[anchor] if seen.size else 0.0) + integral - integral[anchor])
     out[["a", "b", "c"]] = np.nan
-    out["update"] = 0
+    out["updated"] = 0
     out["gated"] = 0
     out["gate_reason"] = ""
     out["bias_sd"] = 0.0
@@ -236,11 +237,14 @@ def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
     (:func:`gyrodrift.metrics.bias_error`: against ``true_bias_z`` when present,
     deg/s) ``bias_mean``, ``bias_var``, ``bias_rms``, ``bias_max_abs``; heading
     error against ``ref_heading`` (deg) ``heading_mean``, ``heading_var``,
-    ``heading_rms``, ``heading_min``, ``heading_max``.
+    ``heading_rms``, ``heading_min``, ``heading_max``. A table written before the
+    ``updated`` column was renamed is read with its ``update`` column
+    (:func:`gyrodrift.compensator.output.updated_column`).
     """
     rows = {}
     for name, out in outputs.items():
-        row = {"causal": _causal(name), "updates": int(out["update"].sum()), "gated_pct": 100.0 * float(out["gated"].mean())}
+        updates = int(updated_column(out, f"summary_table ({name})").sum())
+        row = {"causal": _causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
         if name == "oracle":
             row.update(updates=np.nan, gated_pct=np.nan)
         if TRUE_BIAS_Z in out.columns:

@@ -88,7 +88,7 @@ class RunStats:
         if np.isfinite(temp).any():
             self.temp_min_c = min(self.temp_min_c, float(np.nanmin(temp)))
             self.temp_max_c = max(self.temp_max_c, float(np.nanmax(temp)))
-        self.updates += int(out["update"].to_numpy().sum(dtype=np.int64))
+        self.updates += int(out["updated"].to_numpy().sum(dtype=np.int64))
         codes = pd.Categorical(out["gate_reason"], categories=gating.REASONS).codes
         self.refused += np.bincount(codes[codes >= 0], minlength=len(gating.REASONS))
         if REF_HEADING in out.columns and GYRO_Z in out.columns:

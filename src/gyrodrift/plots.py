@@ -38,6 +38,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.errors import ConfigError, LogFormatError
@@ -404,7 +405,8 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
     Parameters
     ----------
     out : DataFrame
-        Output table with ``t``, ``a``, ``b``, ``c``, ``update`` and ``gate_reason``.
+        Output table with ``t``, ``a``, ``b``, ``c``, ``updated`` and ``gate_reason``
+        (an older table's ``update`` is read as ``updated``, with a FutureWarning).
     method : str, optional
         Method name for the title.
 
@@ -417,14 +419,14 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
         ``gid`` ``"gate-<reason>"``); filter updates are marked with dots. The
         legend lists the reasons present.
     """
-    _need(out, ("t", "a", "b", "c", "update", "gate_reason"), "fig_params")
+    _need(out, ("t", "a", "b", "c", "gate_reason"), "fig_params")
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     t = _column(out, "t")
     x, xlabel = time_axis(t)
     reason = out["gate_reason"].fillna("").astype(str).to_numpy()
-    upd = pd.to_numeric(out["update"], errors="coerce").fillna(0).to_numpy() > 0
+    upd = pd.to_numeric(updated_column(out, "fig_params"), errors="coerce").fillna(0).to_numpy() > 0
     fig, axes = _figure(6.6, 3)
     units = {"a": "a (deg/s/degC)", "b": "b (deg/degC)", "c": "c (deg/s)"}
     reasons = [r for r in GATE_COLORS if (reason == r).any()]

@@ -48,6 +48,7 @@ import pandas as pd
 from gyrodrift.compare import DEFAULT_METHOD
 from gyrodrift.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._cliargs import add_input_options
 from gyrodrift._progress import progress_iter as _progress
@@ -249,7 +250,7 @@ def _summary_section(log, outputs) -> str:
         label = _esc(_label(name)) + ("" if _causal(name) else " †")
         rows.append(
             [label] + error_cells(bias, heading)
-            + [str(int(pd.to_numeric(out["update"], errors="coerce").fillna(0).sum())),
+            + [str(int(pd.to_numeric(updated_column(out, name), errors="coerce").fillna(0).sum())),
                f"{100.0 * float((reason != '').sum()) / n:.1f} %"] + share
         )
     notes = []
