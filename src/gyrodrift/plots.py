@@ -16,6 +16,7 @@ function                    what it shows                                    pap
 :func:`fig_heading_error`   heading error of each method (wrapped)           Fig. 4, 5, 9
 :func:`fig_heading`         compass, compensated gyro and reference heading  Fig. 8
 :func:`fig_allan`           Allan deviation with intervals and noise terms   Fig. 6
+:func:`fig_calibration`     thermal calibration fit per axis, its residual   --
 ==========================  ===============================================  =========
 
 Time axes run from the first row of the table, in s, min (logs longer than
@@ -590,6 +591,75 @@ def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None =
             handles.append(Line2D([], [], ls="", marker=marker, mfc="white", mec="#333333", label=text))
     ax.legend(handles=handles, loc="best", fontsize=8)
     ax.grid(True, which="minor", alpha=0.12, linewidth=0.5)
+    return fig
+
+
+def _bin_means(temp: np.ndarray, rate: np.ndarray, temp_min: float, width: float):
+    """Centres (degC) and mean rates of the occupied ``width``-degC temperature bins from ``temp_min``."""
+    bins = np.floor((temp - temp_min) / width).astype(np.int64)
+    counts = np.bincount(bins)
+    occupied = np.flatnonzero(counts)
+    return temp_min + (occupied + 0.5) * width, np.bincount(bins, rate)[occupied] / counts[occupied]
+
+
+def fig_calibration(log: pd.DataFrame, cal):
+    """A thermal calibration fit against its data (:func:`gyrodrift.calibrate.fit_calibration`).
+
+    Parameters
+    ----------
+    log : DataFrame
+        The still heating or cooling log the calibration was fitted on (``temp`` degC;
+        ``gyro_x``, ``gyro_y``, ``gyro_z`` deg/s for the fitted axes).
+    cal : gyrodrift.calibrate.Calibration
+        The fit.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One column per fitted axis. Top: the rate against temperature (grey: the
+        samples, at most :data:`MAX_POINTS`; blue: their mean per
+        :data:`gyrodrift.calibrate.BIN_WIDTH_C` bin) and the fitted cubic (red) over
+        the calibrated range, ``T_ref`` dotted. Bottom: bin mean minus fit, deg/s,
+        with ± the fit's residual RMS dashed. The title gives the temperature span.
+    """
+    from gyrodrift.calibrate import BIN_WIDTH_C
+
+    names = list(cal.axes)
+    _need(log, ("temp", *(f"gyro_{a}" for a in names)), "fig_calibration")
+    Figure, FigureCanvasAgg = require_matplotlib()
+    fig = Figure(figsize=(_WIDTH_IN, 5.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.subplots(2, len(names), sharex=True, squeeze=False)
+    temp = _column(log, "temp")
+    curve = np.linspace(cal.temp_min_c, cal.temp_max_c, 200)
+    for k, axis in enumerate(names):
+        top, bottom = grid[0, k], grid[1, k]
+        rate = _column(log, f"gyro_{axis}")
+        ok = np.isfinite(temp) & np.isfinite(rate)
+        step = max(1, int(ok.sum()) // MAX_POINTS)
+        top.plot(temp[ok][::step], rate[ok][::step], ".", ms=1, color=_RAW_COLOR, label="samples", rasterized=True)
+        centres, means = _bin_means(temp[ok], rate[ok], cal.temp_min_c, BIN_WIDTH_C)
+        fitted = cal.drift(axis, curve)
+        top.plot(centres, means, ".", ms=3, color="#1f77b4", label=f"mean per {BIN_WIDTH_C:g} degC")
+        top.plot(curve, fitted, color="#d62728", lw=1.4, label="fitted cubic")
+        limits = _robust_limits([means, fitted], rate[ok])
+        if limits is not None:
+            top.set_ylim(*limits)
+        rms = cal.axes[axis].residual_rms_dps
+        bottom.plot(centres, means - cal.drift(axis, centres), ".", ms=3, color="#1f77b4")
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.3, linewidth=0.6)
+            ax.axvline(cal.temp_ref_c, color="#555555", lw=0.8, ls=":")
+        for sign in (1.0, -1.0):
+            bottom.axhline(sign * rms, color="#d62728", lw=0.8, ls="--")
+        top.set_title(f"gyro_{axis}")
+        bottom.set_title(f"residual RMS {rms:.4g} deg/s", fontsize=9)
+        bottom.set_xlabel("temperature (degC)")
+    grid[0, 0].set_ylabel("rate (deg/s)")
+    grid[1, 0].set_ylabel("mean − fit (deg/s)")
+    grid[0, 0].legend(loc="best", fontsize=8, markerscale=3)
+    fig.suptitle(f"Thermal calibration: {cal.temp_min_c:.1f} to {cal.temp_max_c:.1f} degC (span {cal.span_c:.1f} "
+                 f"degC), T_ref {cal.temp_ref_c:.1f} degC (dotted)")
     return fig
 
 

@@ -16,7 +16,9 @@ Contents, top to bottom:
    (``bias_z − true_bias_z``, deg/s) when the log has ``true_bias_z``, heading
    error (``heading − ref_heading`` wrapped, deg) when it has ``ref_heading``,
    filter updates and the share of rows gated per reason;
-3. figures, each with a short "how to read this" note: temperature, raw vs
+3. figures, each with a short "how to read this" note: temperature, the thermal
+   calibration fit (``gyrodrift calibrate``'s, when the log is a still run over 5 degC
+   or more; else a note of why not), raw vs
    compensated rate, drift estimates, drift-model parameters with the gates,
    headings, heading error, Allan deviation of the rate error with a table of
    noise terms. A figure the log cannot support is replaced by a one-line note
@@ -380,6 +382,11 @@ _HOW = {
     "real time); dashed: non-causal ones (mlr is fitted on the whole log; oracle removes the true drift and "
     "shows the limit set by gyro noise alone). Growth during the shaded stretches of the parameter figure shows "
     "how well a method holds its drift model through aiding outages (paper Figs. 4, 5, 9).",
+    "calibration": "What gyrodrift calibrate would write for an autopilot from this log: per gyro axis, the drift "
+    "as a cubic in temperature (red) over the temperatures seen (TMIN..TMAX), fitted to the still samples (grey; "
+    "blue: their mean per temperature bin, each bin weighing the same). Bottom: bin mean minus fit; dashed: ± the "
+    "residual RMS calibrate prints. A residual with a shape (a loop, a trend) is drift a cubic in temperature does "
+    "not explain, e.g. heating-rate dependence, which the adaptive filter's b·T′ term and the compass take up.",
     "allan": "Allan deviation of the angular-rate error (rate minus the true rate) against averaging time τ, "
     "with 68 % confidence bands. Slope −1/2: angle random walk N (read at τ = 1 s); flat bottom: bias "
     "instability B; +1/2: rate random walk K (read at τ = 3 s); +1: rate ramp. Temperature compensation should "
@@ -393,7 +400,8 @@ def _figure_plan(log, outputs, config) -> list[_Figure]:
     main = _main_method(outputs)
     first = next(iter(outputs.values()), None)
     temp_table = first if first is not None else log
-    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table))]
+    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table)),
+            _calibration_figure(log)]
     if main is None:
         note = "no method ran: compensation figures not shown"
         for key, title in (("rates", "Raw and compensated rate"), ("bias", "Drift estimates"),
@@ -423,6 +431,20 @@ def _figure_plan(log, outputs, config) -> list[_Figure]:
                             missing="no ref_heading: heading error not shown"))
     plan.append(_allan_figure(outputs, config))
     return plan
+
+
+def _calibration_figure(log) -> _Figure:
+    """The thermal calibration fit of the log, or a note saying why the log gives none."""
+    from gyrodrift import plots
+    from gyrodrift.calibrate import CalibrationError, fit_calibration
+
+    title = "Thermal calibration fit (gyrodrift calibrate)"
+    try:
+        cal = fit_calibration(log, source="this log")
+    except CalibrationError as err:
+        return _Figure("calibration", title, _HOW["calibration"], missing=f"no thermal calibration fit: {err}")
+    return _Figure("calibration", title, _HOW["calibration"] + f" {cal.summary()}.",
+                   make=lambda: plots.fig_calibration(log, cal))
 
 
 def _allan_figure(outputs, config) -> _Figure:
