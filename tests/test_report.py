@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib")
@@ -346,3 +347,11 @@ def test_calibration_figure_draws_data_fit_and_residual_per_axis():
     assert bottom_x.get_title().startswith("residual RMS")
     fit_line = top_x.get_lines()[2]
     assert fit_line.get_xdata()[0] == cal.temp_min_c and fit_line.get_xdata()[-1] == cal.temp_max_c
+
+
+def test_allan_of_a_jittery_time_base_is_on_an_even_one():
+    log = simulate("static", duration_s=300, fs_hz=10, seed=3)
+    log["t"] += np.random.default_rng(0).uniform(-0.02, 0.02, len(log))  # ±20 % of the sample interval
+    outputs, skipped = run_methods(log, methods=("stkf",))
+    allan = figure_sections(report.build_report(log, outputs, skipped, title="t", source="s.csv"))["allan"]
+    assert "<img " in allan and "resampled to an even time base (the time stamps jitter)" in allan

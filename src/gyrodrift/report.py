@@ -28,7 +28,9 @@ Contents, top to bottom:
 The Allan deviation is of the angular-rate *error*: the rate minus the true rate.
 The true rate is 0 on a motionless log (one whose reference heading, or else whose
 1-s mean compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log
-with a reference, and unknown otherwise (the figure is then left out).
+with a reference, and unknown otherwise (the figure is then left out). It is computed
+over the longest stretch without a time gap; time stamps that jitter are first put on an
+even time base (:func:`gyrodrift.allan.even_rate`), and the figure's note says so.
 
 matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 (``gyrodrift[allan]``) computes the Allan deviation.
@@ -339,12 +341,18 @@ def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
         return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
     rows = slice(int(rows[0]), int(rows[-1]) + 1)
     tt = t[rows]
-    fs = (tt.size - 1) / (tt[-1] - tt[0])
+    from gyrodrift.allan import even_rate
+
     rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
     chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
     for name in chosen:
         rates[f"{_label(name)} rate_z"] = outputs[name]["rate_z"].to_numpy(float)[rows] - true_rate[rows]
+    even = {label: even_rate(tt, r) for label, r in rates.items()}  # a jittery time base resampled
+    rates = {label: r for label, (r, _, _) in even.items()}
+    _, fs, resampled = next(iter(even.values()))
     span = "all rows" if tt.size == t.size else f"rows {rows.start}–{rows.stop - 1} (longest stretch without a time gap)"
+    if resampled:
+        span += ", resampled to an even time base (the time stamps jitter)"
     return _AllanInput(rates=rates, fs_hz=float(fs), truth=truth, span=span)
 
 
