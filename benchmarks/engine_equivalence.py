@@ -22,7 +22,7 @@ from gyrodrift.io import read_log
 from gyrodrift.montecarlo import FAMILIES, draw_case, simulate_case
 
 METHODS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm", "mlr", "poly3", "smoothed")
-COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "update", "gated", "bias_sd",
+COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "bias_sd",
            "heading_fused", "heading_fused_sd", "heading_sd")
 
 

@@ -222,7 +222,7 @@ def test_a_still_unit_whose_compass_moved_keeps_the_compass_from_the_fused_headi
                                                                       relock_s=float("inf")))
     out = compensate(log, cfg)
     flagged = (out["gate_reason"] == "interference").to_numpy()
-    update = out["update"].to_numpy() == 1
+    update = out["updated"].to_numpy() == 1
     # an accepted interval followed by one labelled interference from its first row: only
     # a ZARU held on a moving compass does that (after any other acceptance the label clears)
     assert np.sum(update[:-1] & flagged[1:]) > 10

@@ -17,6 +17,7 @@ pytest.importorskip("allantools")
 from gyrodrift.allan import (  # noqa: E402
     AllanResult,
     allan_deviation,
+    even_rate,
     noise_terms,
 )
 from gyrodrift.errors import ConfigError  # noqa: E402
@@ -311,3 +312,44 @@ def test_mixed_curve_has_terms():
     """The property above is not vacuous: the mixed record shows several terms."""
     present = [n for n in ("arw", "bias_instability", "rrw", "rate_ramp") if getattr(MIXED_TERMS, n) is not None]
     assert len(present) >= 2
+
+
+# ------------------------------------------------------------------ jittery time bases
+
+
+def test_an_even_time_base_is_left_as_it_is():
+    t = np.arange(1000) / FS
+    t[500] += 0.005 / FS  # within JITTER_TOL
+    rate = np.random.default_rng(0).normal(size=t.size)
+    out, fs, resampled = even_rate(t, rate)
+    assert out is rate and not resampled and fs == pytest.approx(FS)
+
+
+def test_a_jittery_time_base_is_resampled_keeping_the_angle_and_the_arw():
+    """White rate noise of density N sampled at times jittering by ±40 %: the angle is kept at the
+    even times and the ARW stays N (linear interpolation of the angle lowers the shortest taus a little)."""
+    n_true, rng = 0.04, np.random.default_rng(3)
+    step = (1.0 + rng.uniform(-0.4, 0.4, int(3600 * FS))) / FS
+    t = np.r_[0.0, np.cumsum(step)]
+    angle = np.r_[0.0, np.cumsum(n_true * np.sqrt(step) * rng.normal(size=step.size))]  # a Wiener angle
+    rate = np.r_[0.0, np.diff(angle) / step]  # each the mean over the interval ending at its time
+    out, fs, resampled = even_rate(t, rate)
+    assert resampled and out.size == t.size - 1 and fs == pytest.approx((t.size - 1) / t[-1])
+    assert out.sum() / fs == pytest.approx(angle[-1], abs=1e-9)  # the angle is kept
+    assert noise_terms(allan_deviation(out, fs)).arw.value == pytest.approx(n_true, rel=0.1)
+    with pytest.raises(ConfigError, match="increasing"):
+        even_rate(t[::-1], rate)
+
+
+def test_a_jittery_ramp_is_resampled_onto_its_even_times():
+    """A rate ramp R t at jittered times: the samples drift up to about a second from the even
+    times they would be given (the jitter adds up); resampled, each is the ramp's mean over its
+    even interval."""
+    ramp, rng = 1e-3, np.random.default_rng(4)
+    t = np.r_[0.0, np.cumsum((1.0 + rng.uniform(-0.4, 0.4, int(3600 * FS))) / FS)]
+    rate = np.r_[0.0, ramp * 0.5 * (t[1:] + t[:-1])]
+    out, fs, _ = even_rate(t, rate)
+    even = np.arange(t.size) / fs
+    expected = ramp * 0.5 * (even[1:] + even[:-1])
+    assert np.max(np.abs(out - expected)) < 0.5 * ramp / FS  # the interpolated angle: within half an interval
+    assert np.max(np.abs(rate[1:] - expected)) > 100 * ramp / FS  # as if even, off by many intervals

@@ -404,7 +404,7 @@ def _output_frame(n: int = 250, seed: int = 0) -> pd.DataFrame:
     unobservable = np.where(np.arange(n) < 180, "a", "a,b")  # quoting needed only in later chunks
     return pd.DataFrame(
         {
-            "t": np.arange(n) * 0.01, "rate_z": x, "update": rng.integers(0, 2, n), "gate_reason": reason.astype(str),
+            "t": np.arange(n) * 0.01, "rate_z": x, "updated": rng.integers(0, 2, n), "gate_reason": reason.astype(str),
             "unobservable": unobservable.astype(str), "note": [f'say "{i}"' if i % 50 == 0 else f"n{i}" for i in range(n)],
         }
     )

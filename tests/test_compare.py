@@ -129,7 +129,7 @@ def test_fusion_offset_recovers_a_constant_bias_after_its_timeout():
     # the heading keeps what was integrated before the offset converged: bias * (3 s + 1/(10 Hz * g))
     err = (out["heading"].iloc[-1] - 100.0 + 180.0) % 360.0 - 180.0
     assert err == pytest.approx(0.4 * (3.0 + 0.1 / g), abs=0.05)
-    assert CAUSAL["fusion-offset"] and out["update"].sum() == 0
+    assert CAUSAL["fusion-offset"] and out["updated"].sum() == 0
 
 
 def test_fusion_offset_uses_the_other_axes_to_tell_stillness():
@@ -150,3 +150,33 @@ def test_fusion_offset_without_imufusion_is_skipped_or_a_one_line_error(monkeypa
     assert list(outputs) == ["kf"] and "pip install imufusion" in skipped["fusion-offset"]
     with pytest.raises(ConfigError, match="pip install imufusion"):
         run_method("fusion-offset", log)
+
+
+# ------------------------------------------------------------------ the default estimator first
+
+
+def test_default_methods_start_with_the_default_estimator():
+    from gyrodrift.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label
+    from gyrodrift.compensator import CompensatorConfig
+
+    assert DEFAULT_METHOD == CompensatorConfig().estimator == "adaptive"
+    assert DEFAULT_METHODS == (DEFAULT_METHOD, *METHODS)
+    assert method_label("adaptive") == "adaptive (default)" and method_label("stkf") == "stkf"
+    log = synthetic_log(duration_s=120.0).drop(columns="true_bias_z")
+    outputs, _ = run_methods(log)
+    assert next(iter(outputs)) == "adaptive"
+
+
+def test_compare_command_lists_the_default_estimator_first_and_names_it(tmp_path):
+    path = tmp_path / "log.csv"
+    simulate("vehicle", duration_s=300.0, fs_hz=10.0, seed=2).to_csv(path, index=False)
+    res = subprocess.run([sys.executable, "-m", "gyrodrift", "compare", str(path)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    rows = [line for line in res.stdout.splitlines() if line.startswith("| ") and "---" not in line]
+    assert rows[1].startswith("| adaptive (default) |")  # rows[0] is the header
+    assert rows[2].startswith("| stkf |")
+    res = subprocess.run([sys.executable, "-m", "gyrodrift", "compare", str(path), "--methods", "stkf,adaptive",
+                          "--json"], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    data = json.loads(res.stdout)
+    assert list(data["methods"]) == ["stkf", "adaptive"] and data["default_method"] == "adaptive"

@@ -68,7 +68,7 @@ def test_exact_recovery_of_linear_drift_from_noiseless_data():
     compass[1::2] = np.nan
     log = pd.DataFrame({"t": t, "gyro_z": a * temp + b * tp + c, "temp": temp, "heading": compass})
     out = compensate(log, CompensatorConfig(estimator="stkf"))
-    assert out["update"].sum() > 600
+    assert out["updated"].sum() > 600
     final = out[["a", "b", "c"]].iloc[-1].to_numpy()
     np.testing.assert_allclose(final, [a, b, c], rtol=1e-6)
     # adaptive keeps a random walk in the slope and in c' (it expects the drift to move), so
@@ -172,10 +172,10 @@ def test_interference_window_does_not_move_parameters():
     inside = (out["t"] > 610) & (out["t"] <= 900)
     params = out.loc[inside, ["a", "b", "c"]].to_numpy()
     assert np.all(params == params[0])
-    assert out.loc[inside, "update"].sum() == 0
+    assert out.loc[inside, "updated"].sum() == 0
     assert (out.loc[inside, "gate_reason"] == "interference").mean() > 0.9
     after = out["t"] > 940
-    assert out.loc[after, "update"].sum() > 50  # aiding resumes after the window
+    assert out.loc[after, "updated"].sum() > 50  # aiding resumes after the window
     err = np.abs(out["bias_z"] - out["true_bias_z"])[out["t"] > 300]
     assert err.max() < 0.1
     # adaptive: the unit is still, so zero-rate updates go on through the window; the compass
@@ -223,7 +223,7 @@ def test_turns_are_gated_and_straight_legs_update():
     phase = np.mod(out["t"], 100.0)
     in_turn = (phase > 51) & (phase < 55) & (out["t"] > 40)
     assert (out.loc[in_turn, "gate_reason"] == "turning").all()
-    assert out["update"].sum() >= 40
+    assert out["updated"].sum() >= 40
     h_err = wrap_180(out["heading"] - out["ref_heading"])
     assert np.abs(h_err).max() < 2.0
 
@@ -367,7 +367,7 @@ def test_streaming_emits_a_provisional_row_per_sample_from_the_first():
     out = pd.DataFrame([asdict(s) for s in rows]).drop(columns=list(TRIAD_COLUMNS))
     batch = compensate(log)
     window = out["t"] < out["t"].iloc[0] + CompensatorConfig().init_s  # the row at init_s closes it
-    assert (out["gate_reason"][window] == "init").all() and not (out["update"][window] == 1).any()
+    assert (out["gate_reason"][window] == "init").all() and not (out["updated"][window] == 1).any()
     first = out.iloc[0]
     params = est.params
     assert first["bias_z"] == pytest.approx(params[0] * log.temp.iloc[0] + params[2], abs=1e-12)

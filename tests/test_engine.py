@@ -128,7 +128,7 @@ def test_every_adaptive_setting_in_chunks(variant):
     log = family_log("soak", 0.05)
     cfg = CompensatorConfig(adaptive=VARIANTS[variant])
     whole, m_whole, est_whole = feed_in_chunks(log, cfg, [len(log)])
-    assert whole["update"].sum() > 10
+    assert whole["updated"].sum() > 10
     rng = np.random.default_rng(7)
     sizes = [1, 1, 7, 250, 1, 3] + list(rng.integers(1, 40, size=150)) + list(rng.integers(1, 3000, size=40)) + [len(log)]
     parts, m_parts, est_parts = feed_in_chunks(log, cfg, sizes)
@@ -177,7 +177,7 @@ def test_a_python_estimator_sees_what_the_compiled_filter_sees(estimator):
     python = compensate(log, cfg, estimator=wrapped)
     assert_identical(engine_columns(compiled), engine_columns(python))
     meas = compiled.attrs["measurements"]
-    assert len(wrapped.observations) == int(compiled["update"].sum())
+    assert len(wrapped.observations) == int(compiled["updated"].sum())
     # every new measurement is the first row of its observation (eq. 3: the newest first)
     news = np.concatenate([o.y[: o.n_new][::-1] for o in wrapped.observations])
     assert np.array_equal(news, meas["m"].to_numpy())
@@ -233,7 +233,7 @@ def test_the_source_without_the_compiler_gives_the_same_numbers(tmp_path, estima
     plain = np.load(path)
     out = compensate(complex_log(raw_mag).iloc[:rows], CompensatorConfig(estimator=estimator))
     assert np.array_equal(plain["codes"], out["gate_reason"].cat.codes.to_numpy())
-    assert out["update"].sum() > 10
+    assert out["updated"].sum() > 10
     for col in plain.files:
         if col in ("codes", "meas"):
             continue

@@ -104,7 +104,7 @@ def test_process_one_matches_compensate_exactly(fleet_dir, tmp_path):
         pd.testing.assert_frame_equal(written, as_written, check_exact=True)
         a, b, c = expected.attrs["final_params"]
         assert (row["a"], row["b"], row["c"]) == (a, b, c)
-        assert row["updates"] == int(expected["update"].sum())
+        assert row["updates"] == int(expected["updated"].sum())
         assert row["rows"] == len(expected)
         assert row["duration_s"] == pytest.approx(300.0)
         assert row["temp_min_c"] == expected["temp"].min() and row["temp_max_c"] == expected["temp"].max()

@@ -243,3 +243,28 @@ def test_b_is_printed_in_deg_per_degc_and_the_package_is_typed(log, tmp_path, ca
     assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv")]) == 0
     assert " deg/degC, c = " in capsys.readouterr().out  # b multiplies T' (degC/s) and gives deg/s
     assert (resources.files("gyrodrift") / "py.typed").is_file()
+
+
+# ----------------------------------------------------------------------------- the updated column
+
+
+def test_the_updated_column_does_not_shadow_a_dataframe_method(log, tmp_path):
+    import gyrodrift
+    from gyrodrift.compare import summary_table
+    from gyrodrift.conventions import OUTPUT_COLS
+
+    out = gyrodrift.compensate(log)
+    assert "updated" in OUTPUT_COLS and "update" not in OUTPUT_COLS
+    assert "update" not in out.columns and out["updated"].sum() > 0
+    assert out.updated.equals(out["updated"])  # attribute access reaches the column
+    comp = gyrodrift.Compensator()
+    rows = [row for t, g, temp, h in log[["t", "gyro_z", "temp", "heading"]].itertuples(index=False)
+            for row in comp.push(t, g, temp, heading_deg=h)]
+    assert sum(row.updated for row in rows) == out["updated"].sum() and not hasattr(rows[0], "update")
+    written = tmp_path / "out.csv"
+    assert main(["compensate", str(_write(log, tmp_path / "log.csv")), "-o", str(written), "-q"]) == 0
+    assert pd.read_csv(written, nrows=1).columns[7] == "updated"
+    old = out.rename(columns={"updated": "update"})  # an output table written before the rename
+    with pytest.warns(FutureWarning, match="'update' read as 'updated'"):
+        old_table = summary_table({"adaptive": old})
+    assert old_table.loc["adaptive", "updates"] == summary_table({"adaptive": out}).loc["adaptive", "updates"] > 0

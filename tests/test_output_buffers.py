@@ -31,7 +31,7 @@ def test_buffers_give_the_same_table(estimator):
     fresh = run(log, cfg)
     buffers = OutputBuffers(len(log) + 100)  # larger than the log: the first rows are used
     pd.testing.assert_frame_equal(run(log, cfg, buffers=buffers), fresh)
-    assert fresh["update"].sum() > 10 and fresh["gated"].sum() > 100  # the codes matter here
+    assert fresh["updated"].sum() > 10 and fresh["gated"].sum() > 100  # the codes matter here
 
 
 def test_a_second_call_overwrites_the_first_and_starts_from_clean_codes():
@@ -39,7 +39,7 @@ def test_a_second_call_overwrites_the_first_and_starts_from_clean_codes():
     busy, quiet = complex_log(), quiet_log()
     expected_quiet = run(quiet, cfg_long_init)
     expected_busy = run(busy, cfg)
-    assert expected_busy.loc[expected_busy["t"] < 100.0, "update"].sum() > 3  # inside the second call's init
+    assert expected_busy.loc[expected_busy["t"] < 100.0, "updated"].sum() > 3  # inside the second call's init
     buffers = OutputBuffers(len(busy))
     first = run(busy, cfg, buffers=buffers)
     pd.testing.assert_frame_equal(first, expected_busy)

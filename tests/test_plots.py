@@ -102,7 +102,7 @@ def test_fig_params_shades_gates_by_reason(scenario, reasons, static_outputs, ve
     fig = plots.fig_params(out, method="stkf")
     assert len(fig.axes) == 3
     assert [ax.get_ylabel() for ax in fig.axes] == ["a (deg/s/degC)", "b (deg/degC)", "c (deg/s)"]
-    n_updates = int(out["update"].sum())
+    n_updates = int(out["updated"].sum())
     for ax in fig.axes:
         gids = {c.get_gid() for c in ax.collections}
         assert gids == {f"gate-{r}" for r in reasons}

@@ -51,7 +51,7 @@ REPRO = settings(
 )
 
 #: Output columns that must be finite whenever compensation succeeds.
-FINITE_COLS = ["t", "rate_z", "bias_z", "heading", "a", "b", "c", "update", "gated"]
+FINITE_COLS = ["t", "rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated"]
 #: Earth field of the raw-magnetometer compass form, µT (horizontal, vertical down).
 FIELD_H_UT, FIELD_V_UT = 20.0, 45.0
 
@@ -156,7 +156,7 @@ def check_output(out: pd.DataFrame, n_rows: int) -> None:
     values = out[FINITE_COLS].to_numpy(dtype=float)
     bad = ~np.isfinite(values)
     assert not bad.any(), f"non-finite in {[c for c, b in zip(FINITE_COLS, bad.any(axis=0)) if b]}"
-    assert set(np.unique(out["update"])) <= {0, 1} and set(np.unique(out["gated"])) <= {0, 1}
+    assert set(np.unique(out["updated"])) <= {0, 1} and set(np.unique(out["gated"])) <= {0, 1}
     assert ((out["heading"] >= 0.0) & (out["heading"] < 360.0)).all()
 
 

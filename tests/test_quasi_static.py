@@ -47,7 +47,7 @@ def outage_error(out) -> float:
 
 def outage_updates(out) -> int:
     inside = (out.t > OUTAGE[0] + 20.0) & (out.t < OUTAGE[1])
-    return int(out["update"][inside].sum())
+    return int(out["updated"][inside].sum())
 
 
 def bias_error(out) -> float:

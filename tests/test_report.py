@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib")
@@ -22,7 +23,7 @@ from gyrodrift.errors import ConfigError  # noqa: E402
 from gyrodrift.simulate import simulate  # noqa: E402
 
 METHODS = ("stkf", "kf", "mlr", "oracle")
-ALL_FIGURES = ("temperature", "rates", "bias", "params", "heading", "heading_error", "allan")
+ALL_FIGURES = ("temperature", "rates", "bias", "params", "heading", "heading_error", "allan")  # and "calibration"
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +86,7 @@ def test_summary_table_has_a_row_per_method(static_page):
     stkf = re.search(r"<tr><td>stkf</td>(.*?)</tr>", table).group(1)
     cells = re.findall(r"<td>(.*?)</td>", stkf)
     updates = cells[header.index("filter updates") - 1]
-    assert updates == str(int(outputs["stkf"]["update"].sum()))
+    assert updates == str(int(outputs["stkf"]["updated"].sum()))
     oracle = re.findall(r"<td>(.*?)</td>", re.search(r"<tr><td>oracle †</td>(.*?)</tr>", table).group(1))
     assert float(oracle[header.index("bias error RMS (deg/s)") - 1]) == 0.0
 
@@ -93,7 +94,8 @@ def test_summary_table_has_a_row_per_method(static_page):
 def test_one_image_per_figure_with_a_reading_note(static_page):
     page = static_page[0]
     sections = figure_sections(page)
-    assert tuple(sections) == ALL_FIGURES
+    assert tuple(sections) == ("temperature", "calibration", *ALL_FIGURES[1:])
+    assert "no thermal calibration fit: this log:" in sections.pop("calibration")  # a note: not a clean heating run
     for key, body in sections.items():
         assert body.count("<img ") == 1, key
         assert "How to read this:" in body
@@ -279,3 +281,77 @@ def test_report_renders_in_chromium_without_console_errors(static_page, tmp_path
         if re.search(r"CONSOLE[(:]|Uncaught", line)
     ]
     assert not page_errors, "\n".join(page_errors)
+
+
+# ------------------------------------------------------------------ the default estimator first
+
+
+def test_report_runs_the_default_estimator_first_and_names_it(log_csv, tmp_path):
+    from gyrodrift.compare import DEFAULT_METHODS
+
+    assert parse(["report", str(log_csv), "-o", "r.html"]).methods == ",".join(DEFAULT_METHODS)
+    assert DEFAULT_METHODS[0] == "adaptive"
+    out = tmp_path / "r.html"
+    args = parse(["report", str(log_csv), "-o", str(out), "--methods", "adaptive,stkf", "-q"])
+    assert args.func(args) == 0
+    page = out.read_text(encoding="utf-8")
+    table = re.search(r'<table class="summary">(.*?)</table>', page, flags=re.S).group(1)
+    rows = re.findall(r"<tr><td>(.*?)</td>", table)
+    assert rows == ["raw gyro (no compensation)", "adaptive (default)", "stkf"]
+    figures = figure_sections(page)
+    for key in ("rates", "params", "heading"):
+        assert "(adaptive (default))</h2>" in figures[key]
+    assert "<td>adaptive (default) rate_z</td>" in figures["allan"]  # the noise-term table names the curve
+
+
+def test_figure_legends_name_the_default_estimator():
+    from gyrodrift import plots
+
+    log = simulate("vehicle", duration_s=300, fs_hz=10, seed=1)
+    outputs, _ = run_methods(log, methods=("adaptive", "mlr"))
+    legend = [t.get_text() for t in plots.fig_bias(outputs).axes[0].get_legend().get_texts()]
+    assert "adaptive (default) bias_z" in legend and "mlr bias_z" in legend
+    legend = [t.get_text() for t in plots.fig_heading_error(outputs).axes[0].get_legend().get_texts()]
+    assert legend == ["adaptive (default)", "mlr (non-causal)"]
+
+
+# ------------------------------------------------------------------ thermal calibration fit
+
+
+def test_a_heating_run_gets_the_calibration_fit_and_a_flat_log_says_why_not():
+    heating = simulate("calibration", duration_s=1200, fs_hz=10, seed=2)
+    outputs, skipped = run_methods(heating, methods=("stkf",))
+    page = report.build_report(heating, outputs, skipped, title="heat", source="heat.csv")
+    section = figure_sections(page)["calibration"]
+    assert section.count("<img ") == 1 and "How to read this:" in section
+    assert "calibrated gyro z from this log" in section and "span" in section
+    flat = heating.assign(temp=25.0)
+    outputs, skipped = run_methods(flat, methods=("stkf",))
+    section = figure_sections(report.build_report(flat, outputs, skipped, title="flat", source="flat.csv"))["calibration"]
+    assert "<img" not in section
+    assert "no thermal calibration fit: this log: the temperature spans only 0.00 degC" in section
+
+
+def test_calibration_figure_draws_data_fit_and_residual_per_axis():
+    from gyrodrift import plots
+    from gyrodrift.calibrate import fit_calibration
+
+    log = simulate("calibration", duration_s=1200, fs_hz=10, seed=2)
+    log = log.drop(columns=["gyro_y"], errors="ignore").assign(gyro_x=0.01 * (log["temp"] - 20.0))  # exactly linear
+    cal = fit_calibration(log)
+    fig = plots.fig_calibration(log, cal)
+    top_x, top_z, bottom_x, bottom_z = fig.axes  # rows: fit, residual; columns: the axes of the calibration
+    assert list(cal.axes) == ["x", "z"] and top_x.get_title() == "gyro_x"
+    assert [t.get_text() for t in top_x.get_legend().get_texts()] == ["samples", "mean per 0.25 degC", "fitted cubic"]
+    assert f"span {cal.span_c:.1f} degC" in fig.get_suptitle()
+    assert bottom_x.get_title().startswith("residual RMS")
+    fit_line = top_x.get_lines()[2]
+    assert fit_line.get_xdata()[0] == cal.temp_min_c and fit_line.get_xdata()[-1] == cal.temp_max_c
+
+
+def test_allan_of_a_jittery_time_base_is_on_an_even_one():
+    log = simulate("static", duration_s=300, fs_hz=10, seed=3)
+    log["t"] += np.random.default_rng(0).uniform(-0.02, 0.02, len(log))  # ±20 % of the sample interval
+    outputs, skipped = run_methods(log, methods=("stkf",))
+    allan = figure_sections(report.build_report(log, outputs, skipped, title="t", source="s.csv"))["allan"]
+    assert "<img " in allan and "resampled to an even time base (the time stamps jitter)" in allan

@@ -27,7 +27,7 @@ from gyrodrift.estimators.kalman import KalmanDrift
 
 HOUR_S = 3600.0
 DAY_S = 24 * HOUR_S
-FINITE_COLS = ["t", "rate_z", "bias_z", "heading", "a", "b", "c", "update", "gated", "temp_rate"]
+FINITE_COLS = ["t", "rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "temp_rate"]
 
 
 @dataclass(frozen=True)
@@ -134,7 +134,7 @@ def check_soak(s: Soak, config: CompensatorConfig | None = None) -> None:
         assert out.loc[inside, ["a", "b", "c"]].nunique().max() == 1
     flat = (t >= s.flat_h[0] * HOUR_S + 120.0) & (t < (s.flat_h[0] + s.flat_h[1]) * HOUR_S)
     assert np.all(out.loc[flat, "temp_rate"].abs() < 1e-12)  # T' is 0 on constant temperature
-    assert out.loc[flat, "update"].sum() > 0  # still learning c there
+    assert out.loc[flat, "updated"].sum() > 0  # still learning c there
 
     # A sanity bound, not an accuracy claim: the model follows the drift within 0.05 deg/s.
     err = (out["bias_z"] - log["true_bias_z"]).abs().to_numpy()

@@ -94,7 +94,7 @@ def test_stdin_to_stdout_equals_compensate(log_csv, reference):
     assert res.returncode == 0, res.stderr
     got = read_output(res.stdout)
     assert list(got.columns) == list(reference.columns)
-    assert reference["update"].sum() >= 5  # the filter learned during the run
+    assert reference["updated"].sum() >= 5  # the filter learned during the run
     assert_same_rows(got, reference)
     assert "Traceback" not in res.stderr
 
@@ -173,7 +173,7 @@ def test_sigterm_mid_stream_flushes_and_saves_the_profile(log_csv, tmp_path):
     assert rest == "" and "terminated" in err and "Traceback" not in err
     profile = load_profile(profile_path)
     assert profile.samples == n_in
-    assert profile.updates == read_output("".join(out))["update"].sum() > 0
+    assert profile.updates == read_output("".join(out))["updated"].sum() > 0
 
 
 def test_sigint_during_the_init_window_writes_the_held_rows(log_csv, tmp_path):

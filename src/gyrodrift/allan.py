@@ -8,6 +8,9 @@ Two steps, each a small function on numpy arrays:
    Allan variance eq. (7), chi-squared interval eq. (45); equivalent degrees of
    freedom after Greenhall & Riley 2004, as implemented by
    ``allantools.edf_greenhall``).
+Logs whose time stamps jitter (a real IMU's do) are first put on an even time
+base by :func:`even_rate`, since :func:`allan_deviation` takes one sample rate.
+
 2. :func:`noise_terms` reads the angle random walk N, bias instability B, rate
    random walk K and rate ramp R off the curve with the slope method of IEEE
    Std 952-1997, Annex C (Allan-variance method of gyro noise analysis).
@@ -51,7 +54,9 @@ __all__ = [
     "NoiseTerm",
     "NoiseTerms",
     "allan_deviation",
+    "even_rate",
     "noise_terms",
+    "JITTER_TOL",
 ]
 
 #: Probability content of the confidence intervals, erf(1/√2) ≈ 0.6827 (±1 sigma).
@@ -73,6 +78,10 @@ MIN_POINTS = 2
 MIN_EDF = 10.0
 
 _TAU_KEYWORDS = ("octave", "decade", "log10", "all")
+
+#: Largest departure of a sample interval from the median interval, relative to it, that
+#: :func:`even_rate` takes as an even time base.
+JITTER_TOL = 0.01
 
 
 def _require_allantools():
@@ -405,6 +414,53 @@ def allan_deviation(
         overlapping=bool(overlapping),
         ci=float(ci),
     )
+
+
+def even_rate(t_s, rate) -> tuple[np.ndarray, float, bool]:
+    """A rate record on an even time base, for :func:`allan_deviation`.
+
+    Parameters
+    ----------
+    t_s : (N,) array_like
+        Sample times, s, increasing (N >= 3).
+    rate : (N,) array_like
+        Rate samples; each the mean rate over the interval that ends at its time (the
+        convention of :func:`allan_deviation`).
+
+    Returns
+    -------
+    rate : ndarray
+        ``rate`` itself when every interval is within :data:`JITTER_TOL` of the median
+        one; else N − 1 values on an even base: the angle (the sum of rate × interval,
+        the phase of the Allan variance) is interpolated linearly at N even times over
+        the same span and differenced, so each value is the mean rate over its even
+        interval and the angle is kept at every even time.
+    fs_hz : float
+        Sample rate of the returned record, Hz: (N − 1) / span.
+    resampled : bool
+        Whether the time base jittered and the record was resampled.
+
+    Examples
+    --------
+    >>> t = np.array([0.0, 0.1, 0.25, 0.3, 0.4])
+    >>> rate, fs, resampled = even_rate(t, [1.0, 1.0, 1.0, 1.0, 1.0])
+    >>> rate.round(12).tolist(), fs, resampled
+    ([1.0, 1.0, 1.0, 1.0], 10.0, True)
+    """
+    t = np.asarray(t_s, dtype=float)
+    r = np.asarray(rate, dtype=float)
+    if t.ndim != 1 or t.shape != r.shape or t.size < 3:
+        raise ConfigError("even_rate needs times and rates of one equal length, at least 3")
+    step = np.diff(t)
+    if not np.all(step > 0):
+        raise ConfigError("even_rate needs increasing times")
+    fs = (t.size - 1) / float(t[-1] - t[0])
+    median = float(np.median(step))
+    if np.max(np.abs(step - median)) <= JITTER_TOL * median:
+        return r, fs, False
+    angle = np.r_[0.0, np.cumsum(r[1:] * step)]
+    even = np.interp(t[0] + np.arange(t.size) / fs, t, angle)
+    return np.diff(even) * fs, fs, True
 
 
 # ------------------------------------------------------------------ noise terms

@@ -40,7 +40,7 @@ units and conventions (input contract, CSV with a header row or Parquet):
                gyro/mag/acc y and z axes change sign
 output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
   (deg [0,360), integrated from rate_z from the first compass heading), a
-  (deg/s/degC), b (deg/degC), c (deg/s) of the drift model a*T + b*T' + c, update
+  (deg/s/degC), b (deg/degC), c (deg/s) of the drift model a*T + b*T' + c, updated
   (1 = filter update), gated (1 = compass aiding refused) and gate_reason
   (init, gap, no_compass, field, turning, interference), temp_rate (T', degC/s),
   compass_heading, unobservable (a, b or a+b: parameters not yet determined by
@@ -103,10 +103,17 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _bar(desc: str):
+def _bar(desc: str, unit: str = "it"):
+    """``progress(iterable, total, **options)``: a bar labelled ``desc`` counting ``unit`` on a terminal.
+
+    ``options`` (``unit``, ``size``) are those of :func:`gyrodrift._progress.progress_iter`.
+    """
     from gyrodrift._progress import progress_iter
 
-    return lambda iterable, total: progress_iter(iterable, total, desc)
+    def progress(iterable, total, **options):
+        return progress_iter(iterable, total, desc, **{"unit": unit, **options})
+
+    return progress
 
 
 def _warn(source, notes) -> None:
@@ -351,11 +358,11 @@ def _cmd_compare(args) -> int:
 
     import pandas as pd
 
-    from gyrodrift.compare import METHODS, run_methods, summary_table
+    from gyrodrift.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label, run_methods, summary_table
     from gyrodrift.metrics import markdown_table
     from gyrodrift.pipeline import describe_log
 
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(METHODS)
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(DEFAULT_METHODS)
     log = read_input(args.input, args)
     if "ref_heading" not in log.columns and "true_bias_z" not in log.columns:
         raise ConfigError(
@@ -371,11 +378,12 @@ def _cmd_compare(args) -> int:
             "methods": {k: {c: (v.item() if hasattr(v, "item") else v) for c, v in row.items() if pd.notna(v)}
                         for k, row in table.to_dict(orient="index").items()},
             "skipped": skipped,
+            "default_method": DEFAULT_METHOD,
         }
         print(json.dumps(payload, indent=2))
         return 0
     print(describe_log(log, args.input))
-    print(markdown_table(table, floatfmt=".4g"))
+    print(markdown_table(table.rename(index=method_label), floatfmt=".4g"))
     print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
           "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")
     for name, why in skipped.items():
@@ -434,7 +442,7 @@ def _cmd_montecarlo(args) -> int:
         duration_scale=args.duration_scale,
         config=config,
         workers=args.workers,
-        progress=_bar("monte carlo"),
+        progress=_bar("monte carlo", "logs"),
         fs_hz=args.fs_hz,
     )
     seconds = time.monotonic() - start
@@ -504,11 +512,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     cmp_ = sub.add_parser(
         "compare", help="run ours and the paper's baselines on one log; print the Table-2 statistics",
-        description="Compensate one log with several methods (stkf = ours, kf, stkf-s1, lsm, mlr, poly3, "
-        "oracle) and compare them against ref_heading and/or true_bias_z.",
+        description="Compensate one log with several methods (adaptive = the default estimator, stkf = the "
+        "paper's filter, kf, stkf-s1, lsm, mlr, smoothed, poly3, fusion-offset, oracle) and compare them "
+        "against ref_heading and/or true_bias_z.",
     )
     cmp_.add_argument("input", type=Path, help="log with ref_heading and/or true_bias_z")
-    cmp_.add_argument("--methods", help="comma-separated (default: all)")
+    cmp_.add_argument("--methods", help="comma-separated (default: all, the default estimator adaptive first)")
     cmp_.add_argument("--calibration", type=Path, help="a still heating run of the same device, for poly3")
     cmp_.add_argument("--json", action="store_true", help="machine-readable output")
     add_input_options(cmp_)

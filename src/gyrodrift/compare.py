@@ -24,7 +24,10 @@ method             what it is                                                cau
 
 Any other registered estimator that can be built from settings alone (for example
 ``adaptive``, see :mod:`gyrodrift.estimators`) is accepted as a method name too: it
-runs as :func:`compensate` with ``estimator=name``.
+runs as :func:`compensate` with ``estimator=name``. The default estimator
+(:data:`DEFAULT_METHOD`, ``CompensatorConfig().estimator``) comes first in the
+default method list :data:`DEFAULT_METHODS` of ``compare`` and ``report``, and
+tables and figures name it "adaptive (default)" (:func:`method_label`).
 
 Every method sees the same log, the same compass gates and the same integration;
 only the drift estimate differs. The methods whose drift is known for every row
@@ -40,6 +43,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig, compensate
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
@@ -49,9 +53,14 @@ from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
-__all__ = ["METHODS", "CAUSAL", "run_method", "run_methods", "calibration_from_log", "summary_table"]
+__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "method_label", "run_method",
+           "run_methods", "calibration_from_log", "summary_table"]
 
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "fusion-offset", "oracle")
+#: The estimator ``compensate`` runs when none is chosen.
+DEFAULT_METHOD = CompensatorConfig().estimator
+#: The methods ``compare`` and ``report`` run when none are chosen: the default estimator first.
+DEFAULT_METHODS = tuple(dict.fromkeys((DEFAULT_METHOD, *METHODS)))
 CAUSAL = {"stkf": True, "kf": True, "stkf-s1": True, "lsm": True, "mlr": False, "smoothed": False, "poly3": True,
           "fusion-offset": True, "oracle": False}
 _FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
@@ -60,6 +69,24 @@ _FILTERS = ("stkf", "kf", "stkf-s1", "lsm")
 def _is_estimator_method(name: str) -> bool:
     """A registered estimator name that is not one of :data:`METHODS` (run as ``estimator=name``)."""
     return name in ESTIMATORS and name not in METHODS
+
+
+def is_method(name: str) -> bool:
+    """Whether ``name`` is a method :func:`run_method` runs (:data:`METHODS` or a registered estimator)."""
+    return name in METHODS or _is_estimator_method(name)
+
+
+def method_label(name: str) -> str:
+    """The name a table or figure shows for a method: ``"adaptive (default)"`` for the default estimator.
+
+    Examples
+    --------
+    >>> method_label(DEFAULT_METHOD)
+    'adaptive (default)'
+    >>> method_label("kf")
+    'kf'
+    """
+    return f"{name} (default)" if name == DEFAULT_METHOD else name
 
 
 def _valid_methods() -> str:
@@ -97,7 +124,7 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     out["bias_z"] = drift_dps
     out["heading"] = wrap_360((compass[anchor] if seen.size else 0.0) + integral - integral[anchor])
     out[["a", "b", "c"]] = np.nan
-    out["update"] = 0
+    out["updated"] = 0
     out["gated"] = 0
     out["gate_reason"] = ""
     out["bias_sd"] = 0.0
@@ -165,12 +192,14 @@ def run_method(
 
 def run_methods(
     log: pd.DataFrame,
-    methods=METHODS,
+    methods=DEFAULT_METHODS,
     config: CompensatorConfig | None = None,
     *,
     calibration=None,
 ) -> tuple[dict[str, pd.DataFrame], dict[str, str]]:
     """Run several methods; methods that cannot run on this log are skipped with a reason.
+
+    ``methods`` defaults to :data:`DEFAULT_METHODS` (the default estimator first).
 
     Returns
     -------
@@ -180,7 +209,7 @@ def run_methods(
         Method name → why it was not run (no truth column, no calibration run,
         ``imufusion`` not installed).
     """
-    unknown = [m for m in methods if m not in METHODS and not _is_estimator_method(m)]
+    unknown = [m for m in methods if not is_method(m)]
     if unknown:
         raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {_valid_methods()}")
     if isinstance(calibration, pd.DataFrame):
@@ -208,11 +237,14 @@ def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
     (:func:`gyrodrift.metrics.bias_error`: against ``true_bias_z`` when present,
     deg/s) ``bias_mean``, ``bias_var``, ``bias_rms``, ``bias_max_abs``; heading
     error against ``ref_heading`` (deg) ``heading_mean``, ``heading_var``,
-    ``heading_rms``, ``heading_min``, ``heading_max``.
+    ``heading_rms``, ``heading_min``, ``heading_max``. A table written before the
+    ``updated`` column was renamed is read with its ``update`` column
+    (:func:`gyrodrift.compensator.output.updated_column`).
     """
     rows = {}
     for name, out in outputs.items():
-        row = {"causal": _causal(name), "updates": int(out["update"].sum()), "gated_pct": 100.0 * float(out["gated"].mean())}
+        updates = int(updated_column(out, f"summary_table ({name})").sum())
+        row = {"causal": _causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
         if name == "oracle":
             row.update(updates=np.nan, gated_pct=np.nan)
         if TRUE_BIAS_Z in out.columns:

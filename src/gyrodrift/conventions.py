@@ -84,7 +84,7 @@ OUTPUT_COLS = (
     "a",
     "b",
     "c",
-    "update",
+    "updated",
     "gated",
     "gate_reason",
 )

@@ -531,7 +531,7 @@ def batch_command(args: argparse.Namespace) -> int:
         _prepare_output_dir(args.output)
         summary = process_many(
             paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
-            progress=lambda items, total: progress_iter(items, total, "logs"), out_format=args.format,
+            progress=lambda items, total: progress_iter(items, total, "batch", unit="logs"), out_format=args.format,
             read_options=read_options,
         )
         write_summary(summary, summary_path)

@@ -88,7 +88,7 @@ class RunStats:
         if np.isfinite(temp).any():
             self.temp_min_c = min(self.temp_min_c, float(np.nanmin(temp)))
             self.temp_max_c = max(self.temp_max_c, float(np.nanmax(temp)))
-        self.updates += int(out["update"].to_numpy().sum(dtype=np.int64))
+        self.updates += int(out["updated"].to_numpy().sum(dtype=np.int64))
         codes = pd.Categorical(out["gate_reason"], categories=gating.REASONS).codes
         self.refused += np.bincount(codes[codes >= 0], minlength=len(gating.REASONS))
         if REF_HEADING in out.columns and GYRO_Z in out.columns:
@@ -242,7 +242,12 @@ def compensate_file(
     stream : bool, optional
         Force (True) or forbid (False) the streaming path; default: stream when it can.
     progress : callable, optional
-        ``progress(iterable, total)`` for the in-memory path (see :func:`compensate`).
+        ``progress(iterable, total, **options)`` wraps a loop of the run and yields the
+        same items (e.g. :func:`gyrodrift._progress.progress_iter` with a label). The
+        streaming path wraps the chunks read with ``total`` the log's rows (the Parquet
+        footer's count, a CSV's estimated from its size; None for a compressed CSV)
+        and the options ``unit="rows"`` and ``size=len``; the in-memory path passes it
+        to :func:`compensate` (``progress(iterable, total)`` over chunks of rows).
     scale_factor : bool
         Also estimate the gyro scale factor over the turns of the log
         (:func:`gyrodrift.scale_factor.estimate_scale_factor`: updated at every accepted
@@ -292,7 +297,7 @@ def compensate_file(
         stats.estimator = str(out.attrs.get("estimator", ""))
         stats.notes = list(out.attrs.get("notes", ()))
         return stats
-    return _stream(input_path, output_path, cfg, opts, chunk_rows)
+    return _stream(input_path, output_path, cfg, opts, chunk_rows, progress)
 
 
 class _Ahead:
@@ -459,7 +464,8 @@ def _with_scale_factor(out: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int) -> RunStats:
+def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
+            progress=None) -> RunStats:
     """The chunked path: read ahead in one thread, write behind in another, compensate here
     (the compiled kernels and pyarrow's readers and writers release the GIL)."""
     # The reader, writer and compute threads hand the GIL to each other thousands of times
@@ -480,7 +486,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
     try:
         while True:
             try:
-                stats = _stream_threads(input_path, output_path, cfg, opts, chunk_rows, column_types)
+                stats = _stream_threads(input_path, output_path, cfg, opts, chunk_rows, column_types, progress)
             except ColumnTypeChanged as exc:
                 pinned = column_types.get(exc.column)
                 if pinned == "string":
@@ -521,7 +527,7 @@ def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dic
 
 
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
-                    column_types: dict[str, str]) -> RunStats:
+                    column_types: dict[str, str], progress=None) -> RunStats:
     from gyrodrift.attitude import RawTilt
     from gyrodrift.compass import compass_columns
     from gyrodrift.compensator import ChunkEngine, output_frame
@@ -564,7 +570,9 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
                 stats.add(out)
 
-            for log in reader:
+            chunks_read = reader if progress is None else progress(
+                reader, _estimated_rows(input_path, opts.get("fmt")), unit="rows", size=len)
+            for log in chunks_read:
                 has_mag = check_input_columns(log, source)
                 n = len(log)
                 heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None

@@ -16,6 +16,7 @@ function                    what it shows                                    pap
 :func:`fig_heading_error`   heading error of each method (wrapped)           Fig. 4, 5, 9
 :func:`fig_heading`         compass, compensated gyro and reference heading  Fig. 8
 :func:`fig_allan`           Allan deviation with intervals and noise terms   Fig. 6
+:func:`fig_calibration`     thermal calibration fit per axis, its residual   --
 ==========================  ===============================================  =========
 
 Time axes run from the first row of the table, in s, min (logs longer than
@@ -38,6 +39,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.errors import ConfigError, LogFormatError
@@ -75,8 +77,10 @@ GATE_COLORS = {
     "interference": "#d62728",
 }
 
-#: Line colour of each method (the paper's: adaptive blue, KF red, MLR green, LSM black).
+#: Line colour of each method (the paper's: adaptive blue, KF red, MLR green, LSM black; the paper's
+#: adaptive filter is ``stkf`` here, and gyrodrift's default estimator ``adaptive`` is magenta).
 METHOD_COLORS = {
+    "adaptive": "#c51b7d",
     "stkf": "#1f4fd6",
     "kf": "#d62728",
     "mlr": "#2ca02c",
@@ -129,6 +133,13 @@ def _column(table: pd.DataFrame, name: str) -> np.ndarray:
 
 def _method_color(name: str, index: int) -> str:
     return METHOD_COLORS.get(name, _EXTRA_COLORS[index % len(_EXTRA_COLORS)])
+
+
+def _method_label(name: str) -> str:
+    """A method's legend name: the default estimator's says so (:func:`gyrodrift.compare.method_label`)."""
+    from gyrodrift.compare import method_label
+
+    return method_label(name)
 
 
 def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None:
@@ -346,7 +357,8 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
     out_by_method : mapping of str to DataFrame
         Output table per method (same log). The raw ``gyro_z`` and, when present,
         ``true_bias_z`` are taken from the first table. The ``oracle`` method is not
-        drawn when the truth is (its bias is the truth).
+        drawn when the truth is (its bias is the truth). The default estimator's
+        line is labelled "adaptive (default)".
 
     Returns
     -------
@@ -376,7 +388,7 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
         bias = _column(out, "bias_z")
         core.append(bias)
         xm = time_axis(_column(out, "t"))[0]
-        _plot(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{name} bias_z", zorder=2)
+        _plot(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{_method_label(name)} bias_z", zorder=2)
     limits = _robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
@@ -394,7 +406,8 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
     Parameters
     ----------
     out : DataFrame
-        Output table with ``t``, ``a``, ``b``, ``c``, ``update`` and ``gate_reason``.
+        Output table with ``t``, ``a``, ``b``, ``c``, ``updated`` and ``gate_reason``
+        (an older table's ``update`` is read as ``updated``, with a FutureWarning).
     method : str, optional
         Method name for the title.
 
@@ -407,14 +420,14 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
         ``gid`` ``"gate-<reason>"``); filter updates are marked with dots. The
         legend lists the reasons present.
     """
-    _need(out, ("t", "a", "b", "c", "update", "gate_reason"), "fig_params")
+    _need(out, ("t", "a", "b", "c", "gate_reason"), "fig_params")
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     t = _column(out, "t")
     x, xlabel = time_axis(t)
     reason = out["gate_reason"].fillna("").astype(str).to_numpy()
-    upd = pd.to_numeric(out["update"], errors="coerce").fillna(0).to_numpy() > 0
+    upd = pd.to_numeric(updated_column(out, "fig_params"), errors="coerce").fillna(0).to_numpy() > 0
     fig, axes = _figure(6.6, 3)
     units = {"a": "a (deg/s/degC)", "b": "b (deg/degC)", "c": "c (deg/s)"}
     reasons = [r for r in GATE_COLORS if (reason == r).any()]
@@ -462,7 +475,8 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         Output table per method, each with ``t``, ``heading`` and ``ref_heading``.
     causal : mapping of str to bool, optional
         Whether each method is causal (default :data:`gyrodrift.compare.CAUSAL`);
-        non-causal methods are dashed and marked "(non-causal)" in the legend.
+        non-causal methods are dashed and marked "(non-causal)" in the legend;
+        the default estimator is labelled "adaptive (default)".
 
     Returns
     -------
@@ -483,7 +497,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         n = max(n, t.size)
         err = heading_error_deg(_column(out, "heading"), _column(out, REF_HEADING))
         live = causal.get(name, True)
-        label = name if live else f"{name} (non-causal)"
+        label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
         _plot(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
     ax.set_ylabel("heading error (deg)")
@@ -577,6 +591,75 @@ def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None =
             handles.append(Line2D([], [], ls="", marker=marker, mfc="white", mec="#333333", label=text))
     ax.legend(handles=handles, loc="best", fontsize=8)
     ax.grid(True, which="minor", alpha=0.12, linewidth=0.5)
+    return fig
+
+
+def _bin_means(temp: np.ndarray, rate: np.ndarray, temp_min: float, width: float):
+    """Centres (degC) and mean rates of the occupied ``width``-degC temperature bins from ``temp_min``."""
+    bins = np.floor((temp - temp_min) / width).astype(np.int64)
+    counts = np.bincount(bins)
+    occupied = np.flatnonzero(counts)
+    return temp_min + (occupied + 0.5) * width, np.bincount(bins, rate)[occupied] / counts[occupied]
+
+
+def fig_calibration(log: pd.DataFrame, cal):
+    """A thermal calibration fit against its data (:func:`gyrodrift.calibrate.fit_calibration`).
+
+    Parameters
+    ----------
+    log : DataFrame
+        The still heating or cooling log the calibration was fitted on (``temp`` degC;
+        ``gyro_x``, ``gyro_y``, ``gyro_z`` deg/s for the fitted axes).
+    cal : gyrodrift.calibrate.Calibration
+        The fit.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One column per fitted axis. Top: the rate against temperature (grey: the
+        samples, at most :data:`MAX_POINTS`; blue: their mean per
+        :data:`gyrodrift.calibrate.BIN_WIDTH_C` bin) and the fitted cubic (red) over
+        the calibrated range, ``T_ref`` dotted. Bottom: bin mean minus fit, deg/s,
+        with ± the fit's residual RMS dashed. The title gives the temperature span.
+    """
+    from gyrodrift.calibrate import BIN_WIDTH_C
+
+    names = list(cal.axes)
+    _need(log, ("temp", *(f"gyro_{a}" for a in names)), "fig_calibration")
+    Figure, FigureCanvasAgg = require_matplotlib()
+    fig = Figure(figsize=(_WIDTH_IN, 5.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.subplots(2, len(names), sharex=True, squeeze=False)
+    temp = _column(log, "temp")
+    curve = np.linspace(cal.temp_min_c, cal.temp_max_c, 200)
+    for k, axis in enumerate(names):
+        top, bottom = grid[0, k], grid[1, k]
+        rate = _column(log, f"gyro_{axis}")
+        ok = np.isfinite(temp) & np.isfinite(rate)
+        step = max(1, int(ok.sum()) // MAX_POINTS)
+        top.plot(temp[ok][::step], rate[ok][::step], ".", ms=1, color=_RAW_COLOR, label="samples", rasterized=True)
+        centres, means = _bin_means(temp[ok], rate[ok], cal.temp_min_c, BIN_WIDTH_C)
+        fitted = cal.drift(axis, curve)
+        top.plot(centres, means, ".", ms=3, color="#1f77b4", label=f"mean per {BIN_WIDTH_C:g} degC")
+        top.plot(curve, fitted, color="#d62728", lw=1.4, label="fitted cubic")
+        limits = _robust_limits([means, fitted], rate[ok])
+        if limits is not None:
+            top.set_ylim(*limits)
+        rms = cal.axes[axis].residual_rms_dps
+        bottom.plot(centres, means - cal.drift(axis, centres), ".", ms=3, color="#1f77b4")
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.3, linewidth=0.6)
+            ax.axvline(cal.temp_ref_c, color="#555555", lw=0.8, ls=":")
+        for sign in (1.0, -1.0):
+            bottom.axhline(sign * rms, color="#d62728", lw=0.8, ls="--")
+        top.set_title(f"gyro_{axis}")
+        bottom.set_title(f"residual RMS {rms:.4g} deg/s", fontsize=9)
+        bottom.set_xlabel("temperature (degC)")
+    grid[0, 0].set_ylabel("rate (deg/s)")
+    grid[1, 0].set_ylabel("mean − fit (deg/s)")
+    grid[0, 0].legend(loc="best", fontsize=8, markerscale=3)
+    fig.suptitle(f"Thermal calibration: {cal.temp_min_c:.1f} to {cal.temp_max_c:.1f} degC (span {cal.span_c:.1f} "
+                 f"degC), T_ref {cal.temp_ref_c:.1f} degC (dotted)")
     return fig
 
 

@@ -138,10 +138,12 @@ def profile_from_run(out) -> Profile:
         final_params, final_cov, estimator = out.final_params, out.final_cov, out.estimator
         temp_range, samples, updates = (out.temp_min_c, out.temp_max_c), out.rows, out.updates
     else:
+        from gyrodrift.compensator.output import updated_column
+
         final_params, final_cov = out.attrs["final_params"], out.attrs["final_cov"]
         estimator = out.attrs.get("estimator", "")
         temp = out["temp"] if "temp" in out.columns else out["in_temp"]
-        temp_range, samples, updates = (temp.min(), temp.max()), len(out), out["update"].sum()
+        temp_range, samples, updates = (temp.min(), temp.max()), len(out), updated_column(out, "profile_from_run").sum()
     return Profile(
         params=tuple(float(v) for v in final_params),
         cov=tuple(tuple(float(v) for v in row) for row in final_cov),

@@ -8,12 +8,17 @@ mailed or archived as one file and opened offline.
 Contents, top to bottom:
 
 1. what was read: file, rows, duration, sample rate, temperature range, compass
-   form, evaluation columns, methods run and methods skipped with the reason;
+   form, evaluation columns, methods run and methods skipped with the reason. The
+   default estimator (``adaptive``) runs first unless ``--methods`` says otherwise,
+   is named "adaptive (default)" in tables and legends, and is the method of the
+   single-method figures;
 2. the summary table, one row per method (plus the raw gyro): bias error
    (``bias_z − true_bias_z``, deg/s) when the log has ``true_bias_z``, heading
    error (``heading − ref_heading`` wrapped, deg) when it has ``ref_heading``,
    filter updates and the share of rows gated per reason;
-3. figures, each with a short "how to read this" note: temperature, raw vs
+3. figures, each with a short "how to read this" note: temperature, the thermal
+   calibration fit (``gyrodrift calibrate``'s, when the log is a still run over 5 degC
+   or more; else a note of why not), raw vs
    compensated rate, drift estimates, drift-model parameters with the gates,
    headings, heading error, Allan deviation of the rate error with a table of
    noise terms. A figure the log cannot support is replaced by a one-line note
@@ -23,7 +28,9 @@ Contents, top to bottom:
 The Allan deviation is of the angular-rate *error*: the rate minus the true rate.
 The true rate is 0 on a motionless log (one whose reference heading, or else whose
 1-s mean compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log
-with a reference, and unknown otherwise (the figure is then left out).
+with a reference, and unknown otherwise (the figure is then left out). It is computed
+over the longest stretch without a time gap; time stamps that jitter are first put on an
+even time base (:func:`gyrodrift.allan.even_rate`), and the figure's note says so.
 
 matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 (``gyrodrift[allan]``) computes the Allan deviation.
@@ -42,7 +49,10 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from gyrodrift.compare import DEFAULT_METHOD
+from gyrodrift.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._cliargs import add_input_options
 from gyrodrift._progress import progress_iter as _progress
@@ -50,8 +60,8 @@ from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = ["ALLAN_METHODS", "build_report", "write_report", "report_command", "add_report_parser"]
 
-#: Methods whose compensated rate error gets an Allan-deviation curve (paper Fig. 6).
-ALLAN_METHODS = ("stkf", "kf", "mlr")
+#: Methods whose compensated rate error gets an Allan-deviation curve (paper Fig. 6), the default estimator first.
+ALLAN_METHODS = (DEFAULT_METHOD, "stkf", "kf", "mlr")
 
 _DPI = 100
 _NONE = "–"
@@ -94,10 +104,12 @@ def _table(header: list[str], rows: list[list[str]], *, cls: str = "") -> str:
 
 
 def _main_method(outputs: Mapping[str, pd.DataFrame]) -> str | None:
-    """``stkf`` if it ran, else the first method that ran."""
-    if "stkf" in outputs:
-        return "stkf"
+    """The default estimator if it ran, else ``stkf`` if it ran, else the first method that ran."""
+    for name in (DEFAULT_METHOD, "stkf"):
+        if name in outputs:
+            return name
     return next(iter(outputs), None)
+
 
 
 def _causal(name: str) -> bool:
@@ -144,7 +156,7 @@ def _read_section(log, outputs, skipped, source: str) -> str:
         units.append(f"gyro unit in file {log.attrs['gyro_unit']}")
     if "frame" in log.attrs:
         units.append(f"frame {str(log.attrs['frame']).upper()}")
-    run = [f"{_esc(m)}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
+    run = [f"{_esc(_label(m))}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
     rows = [
         ("file", _esc(source)),
         ("rows", f"{len(log)}"),
@@ -239,10 +251,10 @@ def _summary_section(log, outputs) -> str:
         reason = out["gate_reason"].fillna("").astype(str)
         n = max(len(out), 1)
         share = [f"{100.0 * float((reason == r).sum()) / n:.1f} %" for r in reasons]
-        label = _esc(name) + ("" if _causal(name) else " †")
+        label = _esc(_label(name)) + ("" if _causal(name) else " †")
         rows.append(
             [label] + error_cells(bias, heading)
-            + [str(int(pd.to_numeric(out["update"], errors="coerce").fillna(0).sum())),
+            + [str(int(pd.to_numeric(updated_column(out, name), errors="coerce").fillna(0).sum())),
                f"{100.0 * float((reason != '').sum()) / n:.1f} %"] + share
         )
     notes = []
@@ -329,12 +341,18 @@ def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
         return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
     rows = slice(int(rows[0]), int(rows[-1]) + 1)
     tt = t[rows]
-    fs = (tt.size - 1) / (tt[-1] - tt[0])
+    from gyrodrift.allan import even_rate
+
     rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
     chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
     for name in chosen:
-        rates[f"{name} rate_z"] = outputs[name]["rate_z"].to_numpy(float)[rows] - true_rate[rows]
+        rates[f"{_label(name)} rate_z"] = outputs[name]["rate_z"].to_numpy(float)[rows] - true_rate[rows]
+    even = {label: even_rate(tt, r) for label, r in rates.items()}  # a jittery time base resampled
+    rates = {label: r for label, (r, _, _) in even.items()}
+    _, fs, resampled = next(iter(even.values()))
     span = "all rows" if tt.size == t.size else f"rows {rows.start}–{rows.stop - 1} (longest stretch without a time gap)"
+    if resampled:
+        span += ", resampled to an even time base (the time stamps jitter)"
     return _AllanInput(rates=rates, fs_hz=float(fs), truth=truth, span=span)
 
 
@@ -372,6 +390,11 @@ _HOW = {
     "real time); dashed: non-causal ones (mlr is fitted on the whole log; oracle removes the true drift and "
     "shows the limit set by gyro noise alone). Growth during the shaded stretches of the parameter figure shows "
     "how well a method holds its drift model through aiding outages (paper Figs. 4, 5, 9).",
+    "calibration": "What gyrodrift calibrate would write for an autopilot from this log: per gyro axis, the drift "
+    "as a cubic in temperature (red) over the temperatures seen (TMIN..TMAX), fitted to the still samples (grey; "
+    "blue: their mean per temperature bin, each bin weighing the same). Bottom: bin mean minus fit; dashed: ± the "
+    "residual RMS calibrate prints. A residual with a shape (a loop, a trend) is drift a cubic in temperature does "
+    "not explain, e.g. heating-rate dependence, which the adaptive filter's b·T′ term and the compass take up.",
     "allan": "Allan deviation of the angular-rate error (rate minus the true rate) against averaging time τ, "
     "with 68 % confidence bands. Slope −1/2: angle random walk N (read at τ = 1 s); flat bottom: bias "
     "instability B; +1/2: rate random walk K (read at τ = 3 s); +1: rate ramp. Temperature compensation should "
@@ -385,7 +408,8 @@ def _figure_plan(log, outputs, config) -> list[_Figure]:
     main = _main_method(outputs)
     first = next(iter(outputs.values()), None)
     temp_table = first if first is not None else log
-    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table))]
+    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table)),
+            _calibration_figure(log)]
     if main is None:
         note = "no method ran: compensation figures not shown"
         for key, title in (("rates", "Raw and compensated rate"), ("bias", "Drift estimates"),
@@ -394,17 +418,19 @@ def _figure_plan(log, outputs, config) -> list[_Figure]:
             plan.append(_Figure(key, title, _HOW[key], missing=note))
         return plan
     out = outputs[main]
-    plan.append(_Figure("rates", f"Raw and compensated rate ({main})", _HOW["rates"],
-                        make=lambda: plots.fig_rates(out, method=main)))
+    label = _label(main)
+    plan.append(_Figure("rates", f"Raw and compensated rate ({label})", _HOW["rates"],
+                        make=lambda: plots.fig_rates(out, method=label)))
     how = _HOW["bias"] if TRUE_BIAS_Z in log.columns else _HOW["bias"] + " No true_bias_z: the true drift is not drawn."
     plan.append(_Figure("bias", "Drift estimates of every method", how, make=lambda: plots.fig_bias(outputs)))
     if out[["a", "b", "c"]].notna().any().any():
-        plan.append(_Figure("params", f"Drift-model parameters and aiding gates ({main})", _HOW["params"],
-                            make=lambda: plots.fig_params(out, method=main)))
+        plan.append(_Figure("params", f"Drift-model parameters and aiding gates ({label})", _HOW["params"],
+                            make=lambda: plots.fig_params(out, method=label)))
     else:
         plan.append(_Figure("params", "Drift-model parameters", _HOW["params"],
-                            missing=f"{main} has no a, b, c parameters: parameter figure not shown"))
-    plan.append(_Figure("heading", f"Headings ({main})", _HOW["heading"], make=lambda: plots.fig_heading(out, method=main)))
+                            missing=f"{label} has no a, b, c parameters: parameter figure not shown"))
+    plan.append(_Figure("heading", f"Headings ({label})", _HOW["heading"],
+                        make=lambda: plots.fig_heading(out, method=label)))
     if REF_HEADING in log.columns:
         plan.append(_Figure("heading_error", "Heading error of every method", _HOW["heading_error"],
                             make=lambda: plots.fig_heading_error(outputs)))
@@ -413,6 +439,20 @@ def _figure_plan(log, outputs, config) -> list[_Figure]:
                             missing="no ref_heading: heading error not shown"))
     plan.append(_allan_figure(outputs, config))
     return plan
+
+
+def _calibration_figure(log) -> _Figure:
+    """The thermal calibration fit of the log, or a note saying why the log gives none."""
+    from gyrodrift import plots
+    from gyrodrift.calibrate import CalibrationError, fit_calibration
+
+    title = "Thermal calibration fit (gyrodrift calibrate)"
+    try:
+        cal = fit_calibration(log, source="this log")
+    except CalibrationError as err:
+        return _Figure("calibration", title, _HOW["calibration"], missing=f"no thermal calibration fit: {err}")
+    return _Figure("calibration", title, _HOW["calibration"] + f" {cal.summary()}.",
+                   make=lambda: plots.fig_calibration(log, cal))
 
 
 def _allan_figure(outputs, config) -> _Figure:
@@ -508,7 +548,7 @@ def _versions() -> list[tuple[str, str]]:
 def _settings_section(config: CompensatorConfig, outputs) -> str:
     versions = ", ".join(f"{_esc(k)} {_esc(v)}" for k, v in _versions())
     rows = [[f"<code>{_esc(k)}</code>", f"<code>{_esc(v)}</code>"] for k, v in _flatten(config)]
-    estimators = [f"{_esc(m)}: {_esc(o.attrs.get('estimator', m))}" for m, o in outputs.items()]
+    estimators = [f"{_esc(_label(m))}: {_esc(o.attrs.get('estimator', m))}" for m, o in outputs.items()]
     text = f"<p>Software: {versions}.</p>"
     if estimators:
         text += (f"<p>Estimator of each method: {', '.join(estimators)} (every method sees the same gates and "
@@ -555,8 +595,9 @@ def build_report(
         The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
     outputs : mapping of str to DataFrame
         Method name → output table, as returned by
-        :func:`gyrodrift.compare.run_methods`. ``stkf`` is the method of the
-        single-method figures; without it, the first one.
+        :func:`gyrodrift.compare.run_methods`. The default estimator
+        (:data:`gyrodrift.compare.DEFAULT_METHOD`) is the method of the
+        single-method figures; without it ``stkf``, else the first one.
     skipped : mapping of str to str, optional
         Method name → why it did not run (listed in the header).
     title : str
@@ -641,13 +682,14 @@ def write_report(path, html: str) -> None:
 
 
 def _parse_methods(text: str) -> tuple[str, ...]:
-    from gyrodrift.compare import METHODS
+    from gyrodrift.compare import DEFAULT_METHODS, is_method
 
     names = list(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
-    unknown = [m for m in names if m not in METHODS]
+    unknown = [m for m in names if not is_method(m)]
     if unknown or not names:
         raise ConfigError(
-            f"--methods: unknown method(s) {', '.join(unknown) or '(none given)'}; choose from: {', '.join(METHODS)}"
+            f"--methods: unknown method(s) {', '.join(unknown) or '(none given)'}; "
+            f"choose from: {', '.join(DEFAULT_METHODS)}"
         )
     return tuple(names)
 
@@ -707,7 +749,7 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
 
     The parser's ``func`` default is :func:`report_command`.
     """
-    from gyrodrift.compare import METHODS
+    from gyrodrift.compare import DEFAULT_METHODS
 
     p = subparsers.add_parser(
         "report",
@@ -719,9 +761,9 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
     p.add_argument("-o", "--output", type=Path, required=True, help="HTML file to write (atomically)")
     p.add_argument(
-        "--methods", default=",".join(METHODS),
-        help=f"comma-separated methods to run (default: all: {','.join(METHODS)}; "
-        "those that cannot run are listed as skipped)",
+        "--methods", default=",".join(DEFAULT_METHODS),
+        help=f"comma-separated methods to run (default: all, the default estimator first: "
+        f"{','.join(DEFAULT_METHODS)}; those that cannot run are listed as skipped)",
     )
     p.add_argument("--calibration", type=Path, metavar="CAL.csv", help="static heating run of the same device, for poly3")
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")

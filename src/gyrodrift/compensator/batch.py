@@ -161,7 +161,7 @@ def compensate(
     Returns
     -------
     DataFrame
-        ``t, rate_z, bias_z, heading, a, b, c, update, gated, gate_reason`` (the output
+        ``t, rate_z, bias_z, heading, a, b, c, updated, gated, gate_reason`` (the output
         contract), then ``temp_rate`` (T', degC/s), ``compass_heading`` (deg, the
         compass used; empty where there was no sample), ``unobservable`` (``a``, ``b``
         or ``a+b``: drift parameters the data have not yet determined, e.g. while the

@@ -206,7 +206,7 @@ class ChunkEngine:
         dict or None
             Columns ``t, bias_z, rate_z, heading, a, b, c, bias_sd, heading_fused,
             heading_fused_sd, heading_sd, temp_rate, compass_heading`` (float) and
-            ``update, reason, unobs`` (int8 codes), or None while the init window fills.
+            ``updated, reason, unobs`` (int8 codes), or None while the init window fills.
         """
         n = len(t)
         if n == 0:
@@ -301,7 +301,7 @@ class ChunkEngine:
             "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
             "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
             "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "update": cols.code(L.OC_UPDATE),
+            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
             "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
         }
         return columns
@@ -404,7 +404,7 @@ class ChunkEngine:
         return {
             "t": t, **out, "a": np.full(n, a), "b": np.full(n, b), "c": np.full(n, c),
             "heading_fused": out["heading"], "heading_fused_sd": out["heading_sd"], "temp_rate": Tp,
-            "compass_heading": heading, "update": np.zeros(n, np.int8), "reason": np.full(n, L.R_INIT, np.int8),
+            "compass_heading": heading, "updated": np.zeros(n, np.int8), "reason": np.full(n, L.R_INIT, np.int8),
             "unobs": np.full(n, unobs, np.int8),
         }
 

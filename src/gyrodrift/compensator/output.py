@@ -7,11 +7,16 @@ The output table (:func:`output_frame`) has the columns of the output contract
 :data:`UNOBSERVABLE`). Its ``attrs`` carry the accepted drift measurements
 (:data:`MEASUREMENT_COLUMNS`), the estimator's name and its final parameters and
 covariance.
+
+The column ``updated`` (1 where the filter took a measurement) was named ``update``
+before; that name shadowed :meth:`pandas.DataFrame.update` (``out.update`` was the
+method, not the column). :func:`updated_column` reads either.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,7 +28,7 @@ from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES
 
 __all__ = ["CompensatedSample", "UNOBSERVABLE", "MEASUREMENT_COLUMNS", "output_frame", "with_attrs",
-           "check_input_columns", "append_input_columns"]
+           "check_input_columns", "append_input_columns", "updated_column", "LEGACY_UPDATED"]
 
 #: Every value of the ``unobservable`` column, in a fixed order (its categories; the kernels'
 #: codes index it).
@@ -45,7 +50,7 @@ class CompensatedSample:
     a: float
     b: float
     c: float
-    update: int
+    updated: int
     gated: int
     gate_reason: str
     temp_rate: float
@@ -88,7 +93,7 @@ def output_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:
             "a": cols["a"],
             "b": cols["b"],
             "c": cols["c"],
-            "update": cols["update"],
+            "updated": cols["updated"],
             "gated": np.not_equal(reason_code, 0, out=gated).view(np.int8),  # bool and int8 share one byte
             # codes made by the kernels are in range: no validation pass over the rows
             "gate_reason": pd.Categorical.from_codes(reason_code, categories=list(gating.REASONS), validate=False),
@@ -102,6 +107,40 @@ def output_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:
         },
         copy=False,
     )
+
+
+#: The name of the ``updated`` column in output tables written before it was renamed.
+LEGACY_UPDATED = "update"
+
+
+def updated_column(out: pd.DataFrame, what: str = "output table") -> pd.Series:
+    """The ``updated`` column of an output table (1 where the filter took a measurement).
+
+    Parameters
+    ----------
+    out : DataFrame
+        An output table; one written before the rename, with ``update`` instead, is
+        read too, with a :class:`FutureWarning` saying so.
+    what : str
+        What the table is, for the messages.
+
+    Returns
+    -------
+    Series
+        The column, as it is in the table.
+
+    Raises
+    ------
+    LogFormatError
+        The table has neither column.
+    """
+    if "updated" in out.columns:
+        return out["updated"]
+    if LEGACY_UPDATED in out.columns:
+        warnings.warn(f"{what}: column {LEGACY_UPDATED!r} read as 'updated' (its name in output tables "
+                      "written before gyrodrift renamed it)", FutureWarning, stacklevel=3)
+        return out[LEGACY_UPDATED]
+    raise LogFormatError(f"{what} needs the column updated, which the table lacks")
 
 
 def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=()) -> pd.DataFrame:

@@ -294,7 +294,7 @@ class Compensator:
 #: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
 _FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
                   "heading_sd", "temp_rate")
-_CODE_COLUMNS = ("update", "reason", "unobs")
+_CODE_COLUMNS = ("updated", "reason", "unobs")
 
 
 def _compass_values(heading_deg, mag, acc) -> tuple[float, float, float]:
