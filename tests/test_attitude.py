@@ -113,13 +113,13 @@ def _turning_log(seconds: float = 240.0) -> pd.DataFrame:
 
 def test_the_compensator_uses_the_gyro_tilt_with_gyro_x_y_and_says_so():
     log = _turning_log()
-    gyro = gyrodrift.compensate(log)
-    accel = gyrodrift.compensate(log, CompensatorConfig(tilt="accel"))
+    gyro = gyrodrift.compensate(log, CompensatorConfig(tilt="gyro"))
+    accel = gyrodrift.compensate(log)  # the default
     assert any("gyro-aided gravity" in n for n in gyro.attrs["notes"])
     assert any("accelerometer alone (tilt = 'accel')" in n for n in accel.attrs["notes"])
     err = {k: np.abs(wrap_180(o["compass_heading"] - o["ref_heading"])) for k, o in (("g", gyro), ("a", accel))}
     assert np.nanpercentile(err["g"], 99) < np.nanpercentile(err["a"], 99)
-    without = gyrodrift.compensate(log.drop(columns=["gyro_x", "gyro_y"]))
+    without = gyrodrift.compensate(log.drop(columns=["gyro_x", "gyro_y"]), CompensatorConfig(tilt="gyro"))
     assert np.array_equal(without["compass_heading"], accel["compass_heading"], equal_nan=True)
     assert any("no gyro_x, gyro_y" in n for n in without.attrs["notes"])
     with pytest.raises(gyrodrift.errors.ConfigError, match="tilt must be"):
@@ -132,13 +132,14 @@ def test_batch_chunked_and_streaming_give_the_same_compass(tmp_path):
     log = _turning_log()
     cols = [c for c in log.columns if not c.startswith("true_bias_")]
     log[cols].to_csv(tmp_path / "in.csv", index=False)
-    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", stream=False)
-    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", stream=True, chunk_rows=333)
+    gyro_tilt = CompensatorConfig(tilt="gyro")
+    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", gyro_tilt, stream=False)
+    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", gyro_tilt, stream=True, chunk_rows=333)
     whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
     for c in ("compass_heading", "heading", "heading_fused", "bias_z", "gate_reason"):
         assert whole[c].equals(parts[c]), c
-    batch = gyrodrift.compensate(log)
-    comp = gyrodrift.Compensator(provisional=False)
+    batch = gyrodrift.compensate(log, gyro_tilt)
+    comp = gyrodrift.Compensator(gyro_tilt, provisional=False)
     rows = []
     for r in log.itertuples(index=False):
         rows += comp.push(r.t, r.gyro_z, r.temp, mag=(r.mag_x, r.mag_y, r.mag_z), acc=(r.acc_x, r.acc_y, r.acc_z),

@@ -224,7 +224,7 @@ class GravityFilter:
 
     >>> f = GravityFilter()
     >>> d = f.feed([0.0, 0.1], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [[0, 0, -1.0], [0, 0, -1.0]])
-    >>> d[-1].tolist()
+    >>> (d[-1] + 0.0).tolist()  # + 0.0: no negative zero
     [0.0, 0.0, 1.0]
     """
 

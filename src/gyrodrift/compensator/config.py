@@ -56,10 +56,14 @@ class CompensatorConfig:
         (a reference such as PX4's attitude yaw is in true north). 0 (default): they
         stay in magnetic north. The drift estimate does not depend on it.
     tilt : str
-        The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``): ``"gyro"`` (default) the
-        gravity propagated with ``gyro_x``, ``gyro_y``, ``gyro_z`` and corrected by the
-        accelerometer near 1 g (:mod:`gyrodrift.attitude`) when the log has ``gyro_x`` and
-        ``gyro_y``, else the accelerometer alone; ``"accel"`` the accelerometer alone.
+        The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``): ``"accel"`` (default) the
+        accelerometer alone; ``"gyro"`` the gravity propagated with ``gyro_x``, ``gyro_y``,
+        ``gyro_z`` and corrected by the accelerometer near 1 g (:mod:`gyrodrift.attitude`)
+        when the log has ``gyro_x`` and ``gyro_y`` (else the accelerometer alone). Not the
+        default: on the real hand-turned ``mpu6050_rotate_z`` log (24 s, turns above the
+        10 °/s correction limit before the x/y gyro bias is learned) it moved the compass's
+        two turns from −719.6° to −730.2°, and on the simulated ``vehicle-rawmag`` family it
+        refuses far fewer rows but left the drift no better (``docs/results.md``).
     mag_calibration : bool
         Fit a hard-iron offset and axis scales to a raw magnetometer over the whole log and
         apply them before the heading, when the log turns through more than 270° of
@@ -79,7 +83,7 @@ class CompensatorConfig:
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
     declination_deg: float = 0.0
-    tilt: str = "gyro"
+    tilt: str = "accel"
     mag_calibration: bool = False
 
     @property
