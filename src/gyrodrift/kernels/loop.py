@@ -7,8 +7,11 @@
 ``anchor + ∫rate`` (wrapped to [0, 360); across a time gap longer than ``max_gap_s`` the unit
 is taken as still: the heading holds and the gyro is taken to have read its drift), the gates of the current interval
 (:func:`gyrodrift.kernels.aiding.row_condition`), and at the first row of each new
-update interval the interval decision (:func:`gyrodrift.kernels.aiding.close`); then the
-fused heading (:func:`gyrodrift.kernels.fusion.step`).
+update interval the interval decision (:func:`gyrodrift.kernels.aiding.close`; the
+estimator holds for as many intervals as a time gap skipped) and, when it refused the
+interval, the quasi-static window (:func:`gyrodrift.kernels.aiding.quasi_static`, which
+never spans a time gap); then the fused heading (:func:`gyrodrift.kernels.fusion.step`).
+A gap outranks any refusal seen before it in the interval (``gap`` from that row on).
 
 The rows of the init window (``ist[I_INIT_END]`` ≥ 0, the first call after the window is
 complete) are compensated with the parameters the initialisation produced, without
