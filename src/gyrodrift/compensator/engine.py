@@ -166,6 +166,7 @@ class ChunkEngine:
         self._row: _RowMemory | None = None
         #: the provisional rows' previous time and rate, heading integral, anchor and its time
         self._prov = (math.nan, 0.0, 0.0, math.nan, math.nan)
+        self._prov_model: tuple | None = None  # a, b, c, covariance (9) and unobservable code
         #: What could not be learned or was done instead (one-line sentences, for the user).
         self.notes: list[str] = []
 
@@ -373,19 +374,22 @@ class ChunkEngine:
         window fills (None once it is complete): compensated causally with the drift model
         in force before any measurement (the prior, or a warm start's profile), its
         ``bias_sd`` saying how little that is; the heading integrated from the first
-        compass sample (from 0 before one, relative), ``heading_fused`` the same, reason
-        ``init``. The streaming :class:`gyrodrift.Compensator` emits them so that every
+        compass sample (from 0 before one, relative), ``heading_fused`` the same from that
+        sample on (NaN before it, as the fused filter's), reason ``init``. The streaming :class:`gyrodrift.Compensator` emits them so that every
         sample gets a row at once; the rows the init window then gives replace nothing
         (the rows after the window are the same as without them)."""
         if not self._held:
             return None
         (t, g, T, heading, _, _), cols = self._held[-1]
         Tp = cols.column(L.O_TEMP_RATE)
-        a, b, c = (float(v) for v in self.est.params)
-        C = np.asarray(self.est.cov, dtype=float).reshape(9)
-        unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
+        if self._prov_model is None:  # nothing updates the estimator before the window ends
+            C = np.asarray(self.est.cov, dtype=float).reshape(9)
+            unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
+            self._prov_model = (*(float(v) for v in self.est.params), tuple(C.tolist()), int(unobs))
+        a, b, c, C, unobs = self._prov_model
         n = t.size
-        out = {k: np.empty(n) for k in ("bias_z", "rate_z", "heading", "bias_sd", "heading_sd")}
+        out = {k: np.empty(n) for k in ("bias_z", "rate_z", "heading", "bias_sd", "heading_sd", "heading_fused",
+                                         "heading_fused_sd")}
         t_prev, rate_prev, integral, anchor, t_anchor = self._prov
         for i in range(n):
             bias = drift.bias(a, b, c, T[i], Tp[i])
@@ -400,10 +404,13 @@ class ChunkEngine:
             out["heading"][i] = numeric.wrap360((0.0 if math.isnan(anchor) else anchor) + integral)
             since = t[i] - (self._t0 if math.isnan(t_anchor) else t_anchor)
             out["heading_sd"][i] = math.hypot(self.cfg.compass_sigma_deg if not math.isnan(anchor) else 0.0, sd * since)
+            # the fused heading, as the filter's: none before the first compass sample
+            out["heading_fused"][i] = out["heading"][i] if not math.isnan(anchor) else math.nan
+            out["heading_fused_sd"][i] = out["heading_sd"][i] if not math.isnan(anchor) else math.nan
         self._prov = (t_prev, rate_prev, integral, anchor, t_anchor)
         return {
             "t": t, **out, "a": np.full(n, a), "b": np.full(n, b), "c": np.full(n, c),
-            "heading_fused": out["heading"], "heading_fused_sd": out["heading_sd"], "temp_rate": Tp,
+            "temp_rate": Tp,
             "compass_heading": heading, "updated": np.zeros(n, np.int8), "reason": np.full(n, L.R_INIT, np.int8),
             "unobs": np.full(n, unobs, np.int8),
         }

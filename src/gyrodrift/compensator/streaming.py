@@ -209,11 +209,12 @@ class Compensator:
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
         (the x/y axes and the scale factor still take every row, in order)."""
-        rows = self._rows(cols)
-        if self._n_provisional and rows:
-            rows = rows[self._n_provisional:]
-            self._n_provisional = 0
-        return rows
+        skip, self._n_provisional = self._n_provisional, 0
+        if cols is None or not skip:
+            return self._rows(cols)
+        if self._triad is None and self._sf is None:  # only the rows not yet out are made
+            return self._rows({k: v[skip:] for k, v in cols.items()})
+        return self._rows(cols)[skip:]
 
     def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
         """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
@@ -330,8 +331,8 @@ def _limits(gyro_max_dps: float) -> dict:
 def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
     """``value`` as a float within the plausible range of ``column`` (``limits`` from
     :func:`_limits`; NaN passes), or a :class:`GyroDriftError` naming the argument ``arg``."""
-    if type(value) is float:  # the common case, without the generic checks
-        x = value
+    if isinstance(value, float):  # the common case (numpy's float64 too), without the generic checks
+        x = float(value)
     elif isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise GyroDriftError(f"{source}: {arg} must be a number, got {type(value).__name__} {_shown(value)}")
     else:
