@@ -183,7 +183,8 @@ def _cmd_stream(args) -> int:
         stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
                             frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
                             source=name, skip_bad=args.skip_bad,
-                            warn=warn, compensator=Compensator(cfg, source=name))
+                            warn=warn,
+                            compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
     run = stats.run
     if profile is not None and run.rows:
         _warn(args.profile, profile_notes(profile, temp_range_c=(run.temp_min_c, run.temp_max_c)))
@@ -213,8 +214,10 @@ def _add_stream_parser(sub) -> None:
         epilog=CONVENTIONS, formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Read samples line by line (CSV with a header line, or JSON lines: one object per line) from "
         "standard input, a file or a serial port, compensate them with the streaming Compensator and write each "
-        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate' (today the "
-        "Compensator returns the rows of its initialisation window when it ends, then one per sample). A bad line stops the stream "
+        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate': one row per "
+        "sample from the first, those of the initialisation window provisional (the prior's or the profile's drift, "
+        "gate_reason init), then the rows 'gyrodrift compensate' gives; --hold-init holds the window's rows back and "
+        "writes them when it ends, every row then equal to compensate's. A bad line stops the stream "
         "with one error line naming the line and column (exit 2); --skip-bad skips it with a warning instead. "
         "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
         "(gyrodrift.stream).",
@@ -228,6 +231,9 @@ def _add_stream_parser(sub) -> None:
     s.add_argument("--serial", metavar="PORT", help=f"read a serial port instead, e.g. /dev/ttyUSB0 ({SERIAL_ADVICE})")
     s.add_argument("--baud", type=int, default=115200, help="serial port speed, baud (default 115200)")
     s.add_argument("--skip-bad", action="store_true", help="skip a bad line with a warning instead of stopping")
+    s.add_argument("--hold-init", action="store_true",
+                   help="hold the init window's rows back until it ends (no provisional rows; every row then equals "
+                   "what 'gyrodrift compensate' writes)")
     s.add_argument("-q", "--quiet", action="store_true", help="no summary on stderr at the end")
     s.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
     s.add_argument("--save-profile", type=Path, metavar="DEV.json",

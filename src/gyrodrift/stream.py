@@ -31,10 +31,11 @@ Latency
 The lines that arrive together (one read of the source: one line when samples come one
 by one, more when they come faster than they are compensated) are converted together,
 pushed one by one, and the rows the pushes return are written at once with one call of
-``write``, before the next read. Nothing is held back but what the
-:class:`~gyrodrift.Compensator` itself holds (today the rows of its initialisation
-window, until it ends); the rows it still holds when the input ends come from
-:meth:`~gyrodrift.Compensator.flush`.
+``write``, before the next read. Nothing is held back: the
+:class:`~gyrodrift.Compensator` answers every sample with its row, provisional through
+its initialisation window; one made with ``provisional=False`` (``--hold-init``) holds
+the window's rows until it ends, and the rows it still holds when the input ends come
+from :meth:`~gyrodrift.Compensator.flush`.
 
 Each read costs a fixed time (the conversion of :func:`~gyrodrift.io.validate.normalise_frame`
 and the output table, with pandas and pyarrow): about 20 ms on a shared 2-core test
