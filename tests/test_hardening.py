@@ -374,9 +374,12 @@ def test_very_long_output_name_still_gets_a_temporary(tmp_path):
 
 
 _BLOCKING_CLI = """
-import sys, time
+import signal, sys, time
 import gyrodrift.io
 from gyrodrift._atomic import atomic_output
+
+# a shell starts background jobs with SIGINT ignored, and children inherit that: Python's handler
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from gyrodrift.cli import main
 
 
