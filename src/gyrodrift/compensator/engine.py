@@ -375,9 +375,10 @@ class ChunkEngine:
         in force before any measurement (the prior, or a warm start's profile), its
         ``bias_sd`` saying how little that is; the heading integrated from the first
         compass sample (from 0 before one, relative), ``heading_fused`` the same from that
-        sample on (NaN before it, as the fused filter's), reason ``init``. The streaming :class:`gyrodrift.Compensator` emits them so that every
-        sample gets a row at once; the rows the init window then gives replace nothing
-        (the rows after the window are the same as without them)."""
+        sample on (NaN before it, as the fused filter's), reason ``init``. The streaming
+        :class:`gyrodrift.Compensator` emits them so that every sample gets a row at once;
+        the engine's own rows of the window are made all the same, when it ends, and the
+        rows after it are the same as without provisional rows."""
         if not self._held:
             return None
         (t, g, T, heading, _, _), cols = self._held[-1]
