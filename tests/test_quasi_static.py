@@ -88,3 +88,10 @@ def test_detrended_peak_to_peak_of_a_line_plus_a_sinusoid():
     assert _detrended_p2p(np.column_stack([t, y])) == pytest.approx(np.ptp(resid), rel=1e-9)
     assert 4.0 <= np.ptp(resid) < 5.0
     assert _detrended_p2p(np.column_stack([t, 0.7 * t - 3.0])) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_intervals_as_long_as_the_window_show_too_little_to_be_used():
+    # one point per 300-s interval: no sway could be seen, so no window is taken
+    cfg = CompensatorConfig(update_interval_s=150.0)
+    out = compensate(outage_log(), replace(cfg, adaptive=replace(cfg.adaptive, quasi_static_s=300.0)))
+    assert outage_updates(out) == 0

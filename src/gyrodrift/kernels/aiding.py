@@ -588,7 +588,7 @@ def quasi_static(t_b, accepted, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, 
     (eq. 1) with that uncertainty. The window collects the compensated heading ``I_rate``
     at each interval end; when it is long enough, the heading minus its straight-line fit
     (a drift error is a straight line) must stay within ``quasi_static_deg`` peak to peak
-    (``p2p``). The measurement is the mean gyro rate with H the window's means of
+    (``p2p``), seen at four interval ends at least. The measurement is the mean gyro rate with H the window's means of
     ``[T, T', 1]`` and variance ``(p2p / 2Δt)² + N²/Δt``; it is taken only when it agrees
     with the drift in force (NIS below 6.63, χ²₁ at 99 %): a slow real turn is a mean
     rate the drift model does not explain, and is refused (so is a drift the model has
@@ -611,6 +611,8 @@ def quasi_static(t_b, accepted, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, 
     if span < length and n < QS_MAX:
         return False
     p2p = _detrended_p2p(fs[F_QS_PTS:F_QS_PTS + 2 * n].reshape((n, 2)))
+    if n < 4:  # intervals as long as the window: too few points to see a sway
+        p2p = math.inf
     m = (I_raw - fs[F_QS_IRAW0]) / span
     h_T = (I_T - fs[F_QS_IT0]) / span
     h_Tp = (I_Tp - fs[F_QS_ITP0]) / span
