@@ -566,15 +566,23 @@ def close_still_run(t_end, d_raw, d_T, d_Tp, duration, n, gyro_sum, gyro_sq, fs,
     mean = gyro_sum / n
     if gyro_sq / n - mean * mean > cfg[C_STILL_STD] ** 2:
         return False
-    rows = push_measurement(t_end, d_raw / duration, d_T / duration, d_Tp / duration,
-                            cfg[C_GYRO_NOISE] ** 2 / duration, ist, stack, acc, 1)
+    _take_now(t_end, d_raw / duration, d_T / duration, d_Tp / duration, cfg[C_GYRO_NOISE] ** 2 / duration,
+              fs, ist, cfg, icfg, stack, acc, ef, ei)
+    return True
+
+
+@jit
+def _take_now(t, m, h_T, h_Tp, r, fs, ist, cfg, icfg, stack, acc, ef, ei):
+    """One drift measurement taken between interval ends (a still run, a quasi-static
+    window): alone, not stacked; the estimator updated and put in force at once (or,
+    MODE_EXTERNAL, by the caller)."""
+    rows = push_measurement(t, m, h_T, h_Tp, r, ist, stack, acc, 1)
     if icfg[K_MODE] == MODE_EXTERNAL:
         ist[I_PENDING] = PENDING_UPDATE
     else:
         y, H, R = stacked(stack, rows)
         kalman.update(ef, ei, y, H, R)
         in_force(fs, ist, cfg, ef, ei)
-    return True
 
 
 @jit
@@ -625,13 +633,7 @@ def quasi_static(t_b, accepted, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, 
     gamma = m - (fs[F_PA] * h_T + fs[F_PB] * h_Tp + fs[F_PC])
     if gamma * gamma > ZARU_NIS * (np.dot(np.dot(h, cov), h) + r):
         return False
-    rows = push_measurement(t_b, m, h_T, h_Tp, r, ist, stack, acc, 1)
-    if icfg[K_MODE] == MODE_EXTERNAL:
-        ist[I_PENDING] = PENDING_UPDATE
-    else:
-        y, H, R = stacked(stack, rows)
-        kalman.update(ef, ei, y, H, R)
-        in_force(fs, ist, cfg, ef, ei)
+    _take_now(t_b, m, h_T, h_Tp, r, fs, ist, cfg, icfg, stack, acc, ef, ei)
     return True
 
 
