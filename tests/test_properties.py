@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import tempfile
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +33,7 @@ from hypothesis import strategies as st
 
 from test_compensate import _without_empty_triad
 from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
-from gyrodrift.compensator import Compensator, CompensatorConfig, compensate
+from gyrodrift.compensator import Compensator, CompensatorConfig, compensate, uses_clock
 from gyrodrift.conventions import wrap_180, wrap_360
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.estimators import KalmanConfig
@@ -349,12 +349,14 @@ def test_heading_is_invariant_to_mag_and_acc_scale(sample, k_mag, k_acc):
 @given(messy_logs(allow_time_faults=False, max_rows=500), small_configs())
 def test_streaming_equals_batch(case, cfg):
     log, _ = case
+    # what T is, as the batch decides it on the whole log ("auto"), given to the stream
+    cfg = replace(cfg, temperature="clock" if uses_clock(cfg, log["temp"].to_numpy(float)) else "measured")
     try:
         batch = compensate(log, cfg)
     except GyroDriftError as err:
         event(f"batch refused: {_kind(err)}")
         return  # batch refuses the log (too short, no compass in the init window, ...)
-    event("compared")
+    event(f"compared, T {cfg.temperature}")
     assert_same_columns(batch, stream(log, cfg))
 
 
@@ -371,7 +373,8 @@ def test_batch_and_streaming_refuse_an_infinite_cell_alike(col, row):
     with pytest.raises(GyroDriftError, match="outside the plausible range"):
         stream(log, None)
     log = tiny_log(41, **{col: {row: math.nan}})
-    assert_same_columns(compensate(log), stream(log, None))
+    measured = CompensatorConfig(temperature="measured")  # the stream cannot see that the log's temperature is flat
+    assert_same_columns(compensate(log, measured), stream(log, measured))
 
 
 @settings(REPRO, max_examples=10)

@@ -15,6 +15,7 @@ from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift._parser import SuggestingParser
 from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.compensator.config import TEMPERATURE_MODES
 from gyrodrift.config import config_from_dict, load_config, load_toml
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import ESTIMATORS
@@ -72,7 +73,8 @@ def _config(args) -> CompensatorConfig:
         gate = replace(gate, interference_deg=args.interference_deg)
     changes = {
         name: getattr(args, name)
-        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator", "declination_deg")
+        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator", "declination_deg",
+                     "temperature")
         if getattr(args, name) is not None
     }
     return replace(base, kalman=kalman, gate=gate, **changes)
@@ -95,6 +97,12 @@ def _add_method_options(p: argparse.ArgumentParser) -> None:
         "--declination", dest="declination_deg", type=float, metavar="DEG",
         help="magnetic declination, deg, east positive: added to the compass heading, so that compass_heading, "
         "heading and heading_fused are in true north like ref_heading (default 0: magnetic north)",
+    )
+    g.add_argument(
+        "--temperature", choices=TEMPERATURE_MODES,
+        help="what T of the drift model is: auto (default) the temperature column, or the elapsed time when that "
+        "never changes over the log; measured: always the column; clock: always the elapsed time (a stream "
+        "without temperature)",
     )
     g.add_argument("--turn-rate-dps", type=float, help=f"turning threshold, deg/s (default {d.gate.turn_rate_dps:g})")
     g.add_argument(

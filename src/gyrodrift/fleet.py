@@ -240,7 +240,7 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root
     """
     from gyrodrift.compensator import compensate
     from gyrodrift.io import check_output_path, read_log, write_table
-    from gyrodrift.profile import profile_from_run
+    from gyrodrift.compensator.output import updated_column
 
     start = time.perf_counter()
     row = _empty_row(path)
@@ -252,9 +252,12 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root
         row.update(_log_facts(log))
         out = compensate(log, config, source=str(path))
         write_table(out, out_path, fmt=out_format)
-        prof = profile_from_run(out)
-        a, b, c = prof.params
-        row.update(status="ok", updates=prof.updates, a=a, b=b, c=c)
+        updates = int(updated_column(out, "batch").sum())
+        if out.attrs.get("drift_regressor") == "clock":  # a drift in time: no a, b per degC; c is the final drift
+            a, b, c = math.nan, math.nan, float(out["bias_z"].iloc[-1])
+        else:
+            a, b, c = (float(v) for v in out.attrs["final_params"])
+        row.update(status="ok", updates=updates, a=a, b=b, c=c)
     except Exception as err:  # one bad file never stops the rest: report it in the row
         row.update(status="error", error=_error_text(err))
     row["seconds"] = time.perf_counter() - start
@@ -460,7 +463,7 @@ output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically (logs in
 sub-folders of the logs' common folder go to the same sub-folders of OUTDIR), and
 OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
 temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg/degC), c (deg/s) final
-drift model, seconds (wall time per log). Text cells that start with = + - @ get a
+drift model (a log whose temperature never changes: a, b empty, c its final drift), seconds (wall time per log). Text cells that start with = + - @ get a
 leading ' (shown as text, never run as a spreadsheet formula).
 
 exit status: 0 if every log was compensated, 1 if some logs failed (each one is

@@ -30,7 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TempRateConfig", "temp_rate", "drift", "regressors"]
+__all__ = ["TempRateConfig", "temp_rate", "drift", "regressors", "CLOCK_UNIT_S", "ElapsedClock", "temperature_is_flat"]
+
+#: Seconds per unit of the clock regressor (:class:`ElapsedClock`): ``a`` is then the
+#: drift's change per 300 s, deg/s. Chosen on the ``no-temp`` Monte Carlo family, seeds
+#: 0–3 (180, 300, 600, 1200 and 3600 s tried; ``docs/results.md``).
+CLOCK_UNIT_S = 300.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -122,3 +127,54 @@ def drift(params, temp_c, temp_rate_cps):
     """
     a, b, c = (float(v) for v in params)
     return a * np.asarray(temp_c, dtype=float) + b * np.asarray(temp_rate_cps, dtype=float) + c
+
+
+def temperature_is_flat(temp_c) -> bool:
+    """Whether a temperature column cannot explain any drift: every finite value the
+    same (a sensor that logs a constant, or a column filled in for a log without one),
+    or none finite."""
+    temp_c = np.asarray(temp_c, dtype=float)
+    seen = temp_c[np.isfinite(temp_c)]
+    return seen.size == 0 or bool(seen.min() == seen.max())
+
+
+class ElapsedClock:
+    """The regressor that stands in for a temperature that never changes.
+
+    With no usable temperature, eq. (2) keeps its form with the elapsed time, in units of
+    :data:`CLOCK_UNIT_S`, as ``T`` and T' taken as 0: ``c`` is the drift at the start and
+    ``a`` its change per unit, so the ``adaptive`` filter (whose reference follows ``T``)
+    tracks a local trend in time — the warm-up a temperature would have explained —
+    instead of a constant bias that lags it. The clock stops across a time gap longer
+    than ``max_gap_s`` (a record of a bursty log does not jump the trend ahead).
+    Call it on consecutive chunks of time stamps; it carries on where it stopped.
+
+    Parameters
+    ----------
+    max_gap_s : float
+        The longest step, s, that counts as elapsed time (``GateConfig.max_gap_s``).
+
+    Examples
+    --------
+    >>> clock = ElapsedClock(1.0)
+    >>> clock(np.array([0.0, 150.0, 150.5, 300.5])).tolist()  # 150 s and 150 s are gaps
+    [0.0, 0.0, 0.0016666666666666668, 0.0016666666666666668]
+    >>> clock(np.array([301.0])).tolist()
+    [0.0033333333333333335]
+    """
+
+    def __init__(self, max_gap_s: float):
+        self.max_gap_s = float(max_gap_s)
+        self._t_last = math.nan
+        self._elapsed_s = 0.0
+
+    def __call__(self, t_s) -> np.ndarray:
+        t = np.asarray(t_s, dtype=float)
+        if t.size == 0:
+            return np.zeros(0)
+        steps = np.diff(t, prepend=t[0] if math.isnan(self._t_last) else self._t_last)
+        steps[~((steps >= 0.0) & (steps <= self.max_gap_s))] = 0.0  # gaps; bad time stamps (the engine refuses those)
+        # one running sum of seconds, continued from the last chunk: the same bits in any chunks
+        elapsed = np.cumsum(np.concatenate(([self._elapsed_s], steps)))[1:]
+        self._t_last, self._elapsed_s = float(t[-1]), float(elapsed[-1])
+        return elapsed / CLOCK_UNIT_S

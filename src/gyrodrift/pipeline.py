@@ -32,10 +32,13 @@ from gyrodrift.compensator import (
     append_input_columns,
     build_estimator,
     check_input_columns,
+    clock_config,
     compensate,
+    uses_clock,
 )
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.model import temperature_is_flat
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -65,6 +68,8 @@ class RunStats:
     final_params: np.ndarray | None = None
     final_cov: np.ndarray | None = None
     estimator: str = ""
+    #: What the drift model's T was: "temperature", or "clock" (the elapsed time).
+    regressor: str = "temperature"
     streamed: bool = False
     #: Things the run had to do that the user may want to know (e.g. a column read again with another type).
     notes: list = field(default_factory=list)
@@ -526,6 +531,27 @@ def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dic
     return magcal.fit(*samples.arrays())
 
 
+def _file_uses_clock(cfg: CompensatorConfig, first: pd.DataFrame, input_path: Path, column_types: dict,
+                     table_opts: dict, chunk_rows: int) -> bool:
+    """:func:`gyrodrift.compensator.uses_clock` for a file read in chunks: decided on the first
+    chunk when its temperature changes, else on a first reading of the whole file's
+    temperature (the same decision as :func:`gyrodrift.compensate` on the whole log)."""
+    from gyrodrift.io.chunked import iter_log_chunks
+
+    if cfg.temperature != "auto" or not temperature_is_flat(first[TEMP]):
+        return uses_clock(cfg, first[TEMP].to_numpy(float))
+    seen: list[float] = []
+    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks:
+        for log in chunks:
+            temp = log[TEMP].to_numpy(float)
+            temp = temp[np.isfinite(temp)]
+            if temp.size:
+                seen += [float(temp.min()), float(temp.max())]
+                if min(seen) != max(seen):
+                    return False
+    return True
+
+
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
                     column_types: dict[str, str], progress=None) -> RunStats:
     from gyrodrift.attitude import RawTilt
@@ -541,6 +567,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
     tilt, tilt_note = None, None  # the raw compass's tilt (gyrodrift.attitude), continued chunk by chunk
     cal = None  # the magnetometer calibration (gyrodrift.magcal), fitted before the first chunk with a compass
+    clock = None  # whether the drift model's T is the elapsed time (gyrodrift.model.ElapsedClock)
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
     units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
     table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
@@ -594,6 +621,12 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     heading, norm, dip = compass_columns(n, heading_in, mag, acc, down)
                 else:
                     heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
+                if clock is None:  # what the drift model's T is, decided on the first chunk
+                    clock = _file_uses_clock(cfg, log, input_path, column_types, table_opts, chunk_rows)
+                    if clock:
+                        cfg = clock_config(cfg)
+                        est = build_estimator(cfg)
+                        engine = ChunkEngine(cfg, est, source, clock=True)
                 pending.append(log)
                 units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
@@ -612,4 +645,5 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                        *engine.notes,
                        *filter(None, [units.note()])]
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
+    stats.regressor = engine.regressor
     return stats

@@ -133,7 +133,21 @@ class Profile:
 
 def profile_from_run(out) -> Profile:
     """The profile of a run: a :func:`gyrodrift.compensator.compensate` output table, or the
-    :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`."""
+    :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`.
+
+    Raises
+    ------
+    ConfigError
+        The run's drift model was in time, not temperature (a log whose temperature never
+        changes; ``CompensatorConfig.temperature``): it does not carry over to another run.
+    """
+    regressor = out.regressor if not hasattr(out, "attrs") else out.attrs.get("drift_regressor", "temperature")
+    if regressor == "clock":
+        raise ConfigError(
+            f"{getattr(out, 'source', None) or out.attrs.get('source', 'the log')}: no profile saved: the log's "
+            "temperature never changes, so its drift was modelled in time, which does not carry over to another "
+            "run; a profile needs a log with the gyro temperature"
+        )
     if hasattr(out, "final_params") and not hasattr(out, "attrs"):  # RunStats
         final_params, final_cov, estimator = out.final_params, out.final_cov, out.estimator
         temp_range, samples, updates = (out.temp_min_c, out.temp_max_c), out.rows, out.updates

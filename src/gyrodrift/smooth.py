@@ -53,6 +53,7 @@ import pandas as pd
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError
+from gyrodrift.model import ElapsedClock
 
 __all__ = ["SmoothedDrift", "smooth_drift", "smooth_output"]
 
@@ -243,10 +244,13 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     meas = out.attrs.get("measurements")
     if meas is None:
         raise ConfigError("smoothing needs the accepted measurements (attrs['measurements'] of compensate())")
-    if "temp" not in out.columns:
-        raise ConfigError("smoothing needs the input 'temp' column (degC) in the compensated table")
     t = out["t"].to_numpy(float)
-    T = _held(out["temp"].to_numpy(float))
+    if out.attrs.get("drift_regressor") == "clock":  # the model's T was the elapsed time
+        T = ElapsedClock(config.gate.max_gap_s)(t)
+    elif "temp" not in out.columns:
+        raise ConfigError("smoothing needs the input 'temp' column (degC) in the compensated table")
+    else:
+        T = _held(out["temp"].to_numpy(float))
     sm = smooth_drift(meas, config, epochs=_interval_epochs(meas["t"].to_numpy(float), t, T,
                                                             config.update_interval_s))
     Tp = out["temp_rate"].to_numpy(float)

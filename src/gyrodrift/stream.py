@@ -13,7 +13,8 @@ The columns and their units are those of ``gyrodrift compensate`` (the input con
 ``column_map``) and the same checks and conversions
 (:func:`gyrodrift.io.validate.normalise_frame`). A column the input does not have is
 "no value" in every row: no ``heading`` (nor ``mag_*`` + ``acc_*``) is no compass, no
-``temp`` is 0 degC (both said in a note). The first row needs ``gyro_z`` and ``temp``
+``temp`` is 0 degC and, with ``temperature = "auto"``, a drift model in elapsed time
+(:meth:`gyrodrift.Compensator.temperature_absent`; both said in a note). The first row needs ``gyro_z`` and ``temp``
 values; later empty cells hold the previous value, as in a log.
 
 * CSV: the first non-blank line is the header; every line after it one sample, with one
@@ -85,6 +86,7 @@ from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
 from gyrodrift.io.validate import (
+    TEMP_ABSENT,
     Source,
     cell_label,
     check_input_path,
@@ -413,6 +415,8 @@ class _Stream:
         self.has_triad = has_triad_inputs(self.columns)
         with_values = frozenset(c for c in _COMPASS_COLUMNS if c in self.columns)
         self.stats.notes += table_notes(self.name, self.columns, with_values, empty.temperature)
+        if empty.temperature == TEMP_ABSENT:  # no temp column: the drift model's T is the elapsed time ("auto")
+            self.comp.temperature_absent()
         for note in self.stats.notes:
             self.warn(note)
         self.stats.run.compass = compass_form(with_values)

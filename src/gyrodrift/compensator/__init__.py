@@ -38,6 +38,8 @@ init window are emitted when it ends, compensated with the parameters it produce
 
 Missing values: an empty gyro or temperature cell holds the previous value and
 refuses that interval (``gap``); an empty compass cell is "no compass sample here".
+A temperature that never changes over the log explains no drift: the model's ``T`` is
+then the elapsed time (``CompensatorConfig.temperature``, :func:`uses_clock`).
 
 Causality: every output row depends only on earlier rows, except init rows, which
 depend on the whole init window. The equations are in :mod:`gyrodrift.kernels`;
@@ -47,7 +49,7 @@ chunked file path alike, so all three give the same numbers.
 ==================  ================================================================
 module              what it holds
 ==================  ================================================================
-:mod:`.config`      :class:`CompensatorConfig`, :func:`build_estimator`
+:mod:`.config`      :class:`CompensatorConfig`, :func:`build_estimator`, :func:`uses_clock`
 :mod:`.engine`      :class:`ChunkEngine`: the state, chunk by chunk
 :mod:`.memory`      output memory (:class:`OutputBuffers`)
 :mod:`.output`      :class:`CompensatedSample`, the output table
@@ -57,7 +59,7 @@ module              what it holds
 """
 
 from gyrodrift.compensator.batch import compensate, compensate_arrays
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import (
@@ -73,5 +75,5 @@ from gyrodrift.compensator.streaming import Compensator
 __all__ = [
     "CompensatorConfig", "build_estimator", "CompensatedSample", "Compensator", "compensate", "compensate_arrays",
     "OutputBuffers", "ChunkEngine", "MEASUREMENT_COLUMNS", "UNOBSERVABLE", "output_frame", "check_input_columns",
-    "append_input_columns",
+    "append_input_columns", "uses_clock", "clock_config",
 ]

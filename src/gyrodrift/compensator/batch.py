@@ -7,7 +7,7 @@ import pandas as pd
 
 from gyrodrift.attitude import RawTilt, accel_down
 from gyrodrift.compass import compass_columns
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
@@ -87,6 +87,9 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
                   check_gyro_max_dps(gyro_max_dps))
+    clock = uses_clock(cfg, T_in)
+    if clock:
+        cfg = clock_config(cfg)
     est = estimator if estimator is not None else build_estimator(cfg)
     notes = []
     if mag is not None and acc is not None:
@@ -108,7 +111,7 @@ def compensate_arrays(
     else:  # the engine wraps the heading itself
         heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
         norm = dip = None
-    engine = ChunkEngine(cfg, est, source)
+    engine = ChunkEngine(cfg, est, source, clock=clock)
     if progress is None or n <= PROGRESS_ROWS:
         cols = engine.feed(t, g, T_in, heading, norm, dip, buffers)
         gated = None
@@ -116,7 +119,7 @@ def compensate_arrays(
             cols = engine.flush()
         elif buffers is not None:
             gated = buffers.gated[:n]
-        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes])
+        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
@@ -126,7 +129,7 @@ def compensate_arrays(
     parts.append(engine.flush())
     parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes])
+    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
 
 
 def compensate(

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig, KalmanConfig, make_estimator
 from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
-from gyrodrift.model import TempRateConfig
+from gyrodrift.model import TempRateConfig, temperature_is_flat
 
-__all__ = ["CompensatorConfig", "build_estimator"]
+__all__ = ["CompensatorConfig", "build_estimator", "uses_clock", "clock_config", "TEMPERATURE_MODES"]
+
+#: Values of :attr:`CompensatorConfig.temperature`.
+TEMPERATURE_MODES = ("auto", "measured", "clock")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -69,6 +72,14 @@ class CompensatorConfig:
         apply them before the heading, when the log turns through more than 270° of
         heading (:mod:`gyrodrift.magcal`; a note says whether and how well). Not causal:
         the streaming :class:`~gyrodrift.Compensator` does not calibrate. Default False.
+    temperature : str
+        What ``T`` of the drift model is. ``"auto"`` (default): the temperature column,
+        unless it never changes over the log (a sensor without a temperature, a column
+        filled with a constant), then the elapsed time (:class:`gyrodrift.model.ElapsedClock`:
+        ``a`` becomes the drift's change per 300 s, and a note says so); the streaming
+        :class:`~gyrodrift.Compensator` cannot see the whole log and takes the column.
+        ``"measured"``: always the column. ``"clock"``: always the elapsed time (a stream
+        without temperature).
     """
 
     update_interval_s: float = 10.0
@@ -85,6 +96,7 @@ class CompensatorConfig:
     declination_deg: float = 0.0
     tilt: str = "accel"
     mag_calibration: bool = False
+    temperature: str = "auto"
 
     @property
     def fusion_settings(self) -> FusionConfig:
@@ -112,6 +124,9 @@ class CompensatorConfig:
             raise ConfigError(f"declination_deg must be a number of degrees in -180..180 (east positive), got {d!r}")
         if self.tilt not in ("gyro", "accel"):
             raise ConfigError(f"tilt must be 'gyro' or 'accel', got {self.tilt!r}")
+        if self.temperature not in TEMPERATURE_MODES:
+            raise ConfigError(f"temperature must be one of {', '.join(map(repr, TEMPERATURE_MODES))}, "
+                              f"got {self.temperature!r}")
         if not (isinstance(self.stack_depth, int) and self.stack_depth >= 1):
             raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
         if self.init_s < self.stack_depth * 0.1:
@@ -128,6 +143,32 @@ class CompensatorConfig:
                 "pass an instance as compensate(..., estimator=...)"
             ) from None
 
+
+
+def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:
+    """Whether the drift model's ``T`` is the elapsed time (``cfg.temperature``): ``temp_c``
+    is the whole log's temperature column, degC (None: not known, as in streaming).
+    ``"auto"`` keeps the temperature for a warm start (a profile's or a calibration's
+    ``x0``): its model gives the drift at a constant temperature too."""
+    if cfg.temperature == "auto":
+        return temp_c is not None and temperature_is_flat(temp_c) and not _warm(cfg)
+    return cfg.temperature == "clock"
+
+
+def _warm(cfg: CompensatorConfig) -> bool:
+    """Whether the drift model starts from a warm start (not the default prior)."""
+    return cfg.kalman.x0 != (0.0, 0.0, 0.0) or cfg.kalman.p0_cov is not None
+
+
+def clock_config(cfg: CompensatorConfig) -> CompensatorConfig:
+    """The settings for a clock-regressor run: a warm start's ``a`` and ``b`` (per degC, from a
+    profile) mean nothing per unit of time, so they start from 0; ``c`` (the profile's drift
+    at 0 degC, which its note flags as an extrapolation) is kept, and all three get the
+    default prior spread ``p0_sd``."""
+    kal = cfg.kalman
+    if not _warm(cfg):
+        return cfg
+    return replace(cfg, kalman=replace(kal, x0=(0.0, 0.0, kal.x0[2]), p0_cov=None))
 
 
 def build_estimator(cfg: CompensatorConfig):

@@ -26,6 +26,7 @@ from gyrodrift.estimators.base import LinearDrift
 from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.kernels import aiding, drift, loop, numeric
 from gyrodrift.kernels import layout as L
+from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
 __all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays"]
@@ -119,6 +120,9 @@ class ChunkEngine:
         it is updated in place and holds the final state at the end.
     source : str
         Name used in error messages.
+    clock : bool, default False
+        The drift model's ``T`` is the elapsed time (:class:`gyrodrift.model.ElapsedClock`;
+        see :func:`gyrodrift.compensator.uses_clock`), not the ``T`` given, and T' is 0.
 
     Notes
     -----
@@ -130,7 +134,7 @@ class ChunkEngine:
     Rows are numbered from 0 across chunks in error messages.
     """
 
-    def __init__(self, config, estimator, source: str = "arrays"):
+    def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False):
         owner = next((k for k in type(estimator).__mro__ if "drift" in k.__dict__), None)
         if owner is not LinearDrift:
             raise ConfigError(f"estimator {estimator.name!r}: its drift is not a*T + b*T' + c (eq. 2), which the "
@@ -169,6 +173,17 @@ class ChunkEngine:
         self._prov_model: tuple | None = None  # a, b, c, covariance (9) and unobservable code
         #: What could not be learned or was done instead (one-line sentences, for the user).
         self.notes: list[str] = []
+        self._clock = ElapsedClock(config.gate.max_gap_s) if clock else None
+        if clock:
+            self._ei[L.EI_HOLD_DRIFT] = 1  # a trend in time is not extrapolated through an outage
+            why = "asked for" if config.temperature == "clock" else "the log has no temperature, or it never changes"
+            self.notes.append(f"{source}: the drift model's T is the elapsed time, not the temperature ({why}): "
+                              f"c is the drift at the start and a its change per {CLOCK_UNIT_S:g} s, deg/s")
+
+    @property
+    def regressor(self) -> str:
+        """What the drift model's ``T`` is: ``"temperature"`` or ``"clock"`` (the elapsed time)."""
+        return "temperature" if self._clock is None else "clock"
 
     # ---------------------------------------------------------------- state
     @property
@@ -214,6 +229,8 @@ class ChunkEngine:
             return None
         if self.cfg.declination_deg:  # magnetic to true north (CompensatorConfig.declination_deg)
             heading = np.asarray(heading, dtype=float) + self.cfg.declination_deg
+        if self._clock is not None:
+            T = self._clock(t)
         t, g, T, heading = (_input(a) for a in (t, g, T, heading))
         norm = _NO_FIELD if norm is None else _input(norm)
         dip = _NO_FIELD if dip is None else _input(dip)
@@ -235,6 +252,8 @@ class ChunkEngine:
                                     cols.code(L.OC_GAP).view(np.bool_))
             if bad >= 0:
                 raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+            if self._clock is not None:
+                cols.column(L.O_TEMP_RATE)[:] = 0.0
             inputs = (t, _read_only(cols.g_held) if fix & 1 else g, _read_only(cols.T_held) if fix & 2 else T,
                       _read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip)
             if self._held is not None:
@@ -351,6 +370,8 @@ class ChunkEngine:
         r = self._row
         if r is None:
             r = self._row = _RowMemory()
+        if self._clock is not None:
+            T = float(self._clock(r.clock_t(t))[0])
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
         rows_before = self.rows_in
@@ -358,6 +379,8 @@ class ChunkEngine:
                                 self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
         if bad >= 0:
             raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+        if self._clock is not None:
+            r.Tp[0] = 0.0
         h = r.ro_h_wrapped if fix & 4 else r.ro_heading
         g_in, T_in = r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T
         done = 0
@@ -470,3 +493,9 @@ class _RowMemory:
             setattr(self, "ro_" + name, _read_only(getattr(self, name)))
         for name in ("g_held", "T_held", "h_wrapped"):
             setattr(self, "ro_" + name, _read_only(getattr(self.cols, name)))
+        self._one_t = np.zeros(1)
+
+    def clock_t(self, t: float) -> np.ndarray:
+        """``t`` as a one-element array (the clock's input), reused."""
+        self._one_t[0] = t
+        return self._one_t

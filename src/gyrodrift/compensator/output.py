@@ -143,16 +143,18 @@ def updated_column(out: pd.DataFrame, what: str = "output table") -> pd.Series:
     raise LogFormatError(f"{what} needs the column updated, which the table lacks")
 
 
-def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=()) -> pd.DataFrame:
+def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=(), regressor: str = "temperature") -> pd.DataFrame:
     """``out`` with its ``attrs``: the accepted measurements ``(M, 5)``, the estimator's name,
-    final parameters and covariance, and ``notes``: what could not be learned or was done
-    instead (one-line sentences)."""
+    final parameters and covariance, ``notes``: what could not be learned or was done
+    instead (one-line sentences), and ``drift_regressor``: what the model's ``T`` was
+    (``"temperature"``, or ``"clock"``: the elapsed time, :class:`gyrodrift.model.ElapsedClock`)."""
     out.attrs["measurements"] = pd.DataFrame(np.asarray(accepted, dtype=float).reshape(-1, 5),
                                              columns=list(MEASUREMENT_COLUMNS))
     out.attrs["estimator"] = est.name
     out.attrs["final_params"] = est.params
     out.attrs["final_cov"] = est.cov
     out.attrs["notes"] = list(notes)
+    out.attrs["drift_regressor"] = regressor
     return out
 
 

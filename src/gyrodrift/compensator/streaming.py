@@ -12,7 +12,7 @@ import numpy as np
 from gyrodrift import gating
 from gyrodrift.attitude import RawTilt
 from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator
+from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
@@ -69,8 +69,12 @@ class Compensator:
         self.source = source
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         self._limits = _limits(self._gyro_max_dps)
+        self._own_estimator = estimator is None
+        self._clock = uses_clock(self.config)  # "auto" takes the temperature: a stream has no whole log to look at
+        if self._clock:
+            self.config = clock_config(self.config)
         self._est = estimator if estimator is not None else build_estimator(self.config)
-        self._engine = ChunkEngine(self.config, self._est, source)
+        self._engine = ChunkEngine(self.config, self._est, source, clock=self._clock)
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
@@ -86,6 +90,22 @@ class Compensator:
 
             self._sf = ScaleFactorTracker(scale_factor, source=source)
             self._sf_sample = CompensatedSFSample
+
+    def temperature_absent(self) -> None:
+        """Say, before the first sample, that the stream has no temperature (its ``temp_c``
+        will be None or NaN): with ``config.temperature = "auto"`` the drift model's ``T``
+        becomes the elapsed time, as for a log whose temperature never changes
+        (:func:`gyrodrift.compensator.uses_clock`). ``"measured"`` keeps a constant
+        temperature (a bias); ``"clock"`` has the clock already."""
+        if self._prev is not None:
+            raise GyroDriftError(f"{self.source}: temperature_absent() must come before the first sample")
+        if self._clock or self.config.temperature != "auto":
+            return
+        self._clock = True
+        self.config = clock_config(self.config)
+        if self._own_estimator:
+            self._est = build_estimator(self.config)
+        self._engine = ChunkEngine(self.config, self._est, self.source, clock=True)
 
     # -- public state
     @property
@@ -124,8 +144,9 @@ class Compensator:
         gyro_z_dps : float
             Raw heading-axis rate, deg/s (NED: positive = heading increases).
             NaN: hold the previous value (the interval is refused as ``gap``).
-        temp_c : float
-            Gyro temperature, degC (NaN: hold the previous value).
+        temp_c : float or None
+            Gyro temperature, degC (NaN: hold the previous value). With
+            ``config.temperature = "clock"`` it is not used and may be None.
         heading_deg : float, optional
             Compass heading, deg clockwise from magnetic north; NaN = no sample.
         mag, acc : 3-sequences, optional
@@ -150,12 +171,16 @@ class Compensator:
             holds); a time that is not finite or does not increase. The refused
             sample is not taken: the compensator stays as it was.
         """
+        if self._clock and temp_c is None:
+            temp_c = math.nan
         t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
             self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
         if self._prev is None:
+            if self._clock and not math.isfinite(T):
+                T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
             if not (math.isfinite(g) and math.isfinite(T)):
                 raise GyroDriftError(f"{self.source}: the first sample needs gyro_z and temp values")
         else:

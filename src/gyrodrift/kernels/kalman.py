@@ -40,7 +40,7 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels.layout import (
     AF_ANCHOR, AF_LAMBDA, AF_LAST_H_T, AF_LAST_H_TP, AF_LAST_T, AF_TREF, AI_ANCHOR_SET, AI_LAST_H_SET,
     AI_LAST_T_SET, AI_NIS_N, AI_TREF_SET, AI_V_N, EF_AF, EF_MAX_VAR, EF_P, EF_Q, EF_SET, EF_V, EF_Z, EI_ACTIVE,
-    EI_AI, EI_DEPTH, EI_MODE, EI_N_ACTIVE, EI_NIS_W, EI_NORMALISED, EI_RECENTRE, EI_TWIN, ES_FADING,
+    EI_AI, EI_DEPTH, EI_HOLD_DRIFT, EI_MODE, EI_N_ACTIVE, EI_NIS_W, EI_NORMALISED, EI_RECENTRE, EI_TWIN, ES_FADING,
     ES_LAMBDA_MAX, ES_RHO, ES_SLOPE_Q, ES_SOFTENING, MAIN, MODE_ADAPTIVE, N_AF, N_AI, TWIN,
 )
 from gyrodrift.kernels.numeric import cap_covariance, correct, matmul, matmul_t, matvec, solve
@@ -260,7 +260,7 @@ def hold(ef, ei, intervals):
     elapsed, up to the cap); ``adaptive`` with a twin also
     sets, at the first refusal after an update, the outage anchor: the twin's a and b
     from the drift last tracked at the last measurement's (T, T') (eq. 5 through the
-    outage)."""
+    outage), or a = b = 0, the drift held, with ``EI_HOLD_DRIFT``."""
     z, P, Q, max_var, af, V, nis, ai = views(ef, ei)
     if ei[EI_MODE] != MODE_ADAPTIVE:
         _fixed_hold(P[MAIN], Q[MAIN], max_var[MAIN], ei[EI_ACTIVE:EI_ACTIVE + ei[EI_N_ACTIVE]], intervals)
@@ -272,8 +272,8 @@ def hold(ef, ei, intervals):
             T0 = af[MAIN, AF_LAST_H_T]
             Tp0 = af[MAIN, AF_LAST_H_TP]
             tw = _own_params(z[TWIN], af[TWIN])
-            a = tw[0]
-            b = tw[1]
+            a = tw[0] if ei[EI_HOLD_DRIFT] == 0 else 0.0
+            b = tw[1] if ei[EI_HOLD_DRIFT] == 0 else 0.0
             h = np.empty(3)
             h[0] = T0
             h[1] = Tp0

@@ -143,7 +143,11 @@ EI_AI = 10
 #: set, number of normalised innovations held.
 AI_TREF_SET, AI_V_N, AI_LAST_T_SET, AI_LAST_H_SET, AI_ANCHOR_SET, AI_NIS_N = 0, 1, 2, 3, 4, 5
 N_AI = 6
-N_EI = EI_AI + 2 * N_AI
+#: After the per-filter integers: 1 when the drift is held, not extrapolated, through refused
+#: intervals (the model's T is the elapsed time: a trend in time is not carried through an
+#: outage of unknown length; set by the engine).
+EI_HOLD_DRIFT = EI_AI + 2 * N_AI
+N_EI = EI_HOLD_DRIFT + 1
 
 
 def ef_size(depth: int, nis_window: int) -> int:
