@@ -38,17 +38,17 @@ from gyrodrift.kernels import kalman
 from gyrodrift.kernels.layout import (
     C_COMPASS_SD, C_DIP_TOL, C_FIELD_NORM_TOL, C_GYRO_NOISE, C_INTERF, C_INTERVAL, C_MAX_AGE, C_PRIOR_A,
     C_PRIOR_B, C_QS_DEG, C_QS_S, C_RUN_MIN_S, C_STILL_HEADING, C_STILL_STD, C_ZARU_RESID_K, C_ZARU_SLOPE_K, C_ZARU_WINDOW_S, C_EDGE_S, F_COV,
-    F_E0, F_E1, F_PA, F_PB, F_PC, F_QS_IRAW0, F_QS_IT0, F_QS_ITP0, F_QS_PTS, F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_QS_N, I_REFUSED_N,
+    F_E0, F_E1, F_NOISE_SUM, F_NOISE_W, F_PA, F_PB, F_PC, F_QS_IRAW0, F_QS_IT0, F_QS_ITP0, F_QS_PTS, F_S0, F_S1, I_AFTER_INT, I_E0_OK, I_E1_OK, I_N_ACC, I_PENDING, I_QS_N, I_REFUSED_N,
     I_S0_OK, I_S1_OK, I_STACK_N, I_STICKY, I_STILL_CHAIN, I_UNOBS, I_WIN_HEAD, I_WIN_N, K_DEPTH, K_EDGE, K_MODE,
     K_RELOCK, K_ZARU, K_ZARU_HOLD, MODE_ADAPTIVE, MODE_EXTERNAL, N_SNAP, N_WIN, NO_STICKY, PENDING_HOLD,
-    PENDING_UPDATE, QS_MAX, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
+    NOISE_MIN_STEPS, PENDING_UPDATE, QS_MAX, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
     UNOBSERVABLE_SD_FRACTION, W_DT, W_HEADING, W_IBIAS, W_IRAW, W_IT, W_ITP, W_RATE, W_T, ZARU_NIS,
 )
 from gyrodrift.kernels.numeric import wrap180
 
 __all__ = ["add", "compass_measurement", "zaru_measurement", "flat_compass", "gyro_still", "row_condition",
            "field_anomaly", "field_reference", "unobservable_code", "steady_disagreement", "begin", "close",
-           "push_measurement", "stacked", "close_still_run", "quasi_static",
+           "push_measurement", "stacked", "close_still_run", "quasi_static", "gyro_noise", "note_still_noise",
            "in_force", "init_measurements"]
 
 
@@ -211,7 +211,7 @@ def _edge_variance(win, head, n, snap, d_ref, k, interval_s, compass_sd):
 
 
 @jit
-def zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, cfg, icfg):
+def zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_noise, cfg, icfg):
     """Zero-rate measurement of the interval from ``start`` to ``end`` when the unit is still.
 
     Still: the gyro saw no motion over the last ``zaru_window_s`` (:func:`gyro_still`) and
@@ -226,8 +226,8 @@ def zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, cfg, i
     (plus the squared slope standard error of a verified flat compass); ``held``: found by
     ``zaru_hold`` with a compass that is not flat (the compass moved, not the unit).
     The window is read in place (its columns ``lo:hi``), its rates as :func:`add` stored them.
+    ``gyro_noise`` is N, deg/s/√Hz (:func:`gyro_noise`).
     """
-    gyro_noise = cfg[C_GYRO_NOISE]
     if icfg[K_ZARU] == 0:
         return False, 0.0, 0.0, 0.0, 0.0, still_chain, False
     lo, hi = _span(win, head, n, math.nan, end[W_T], True)
@@ -497,7 +497,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
         if (not end_ok) or fs[F_S1] - fs[F_S0] < 0.5 * cfg[C_INTERVAL]:
             reason = R_NO_COMPASS
         else:
-            m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], cfg[C_GYRO_NOISE], 0.0, 0.0, False)
+            m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], gyro_noise(cfg, fs), 0.0, 0.0, False)
             if ist[I_E0_OK] == 1:
                 end_edge, end_var = _edge(win, ist[I_WIN_HEAD], ist[I_WIN_N], s1, cfg[C_EDGE_S], cfg[C_INTERVAL],
                                           cfg[C_COMPASS_SD])
@@ -506,7 +506,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
                 fs[F_E1 + N_SNAP] = end_var
                 ist[I_E1_OK] = 1
                 m, h0, h1, r, resid = compass_measurement(fs[F_E0:F_E0 + N_SNAP], end_edge, cfg[C_COMPASS_SD],
-                                                           cfg[C_GYRO_NOISE], fs[F_E0 + N_SNAP], end_var, True)
+                                                           gyro_noise(cfg, fs), fs[F_E0 + N_SNAP], end_var, True)
             have_meas = True
             if abs(resid) > cfg[C_INTERF]:
                 reason = R_INTERFERENCE
@@ -515,7 +515,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
     if icfg[K_ZARU] == 1 and (reason == NO_STICKY or reason == R_INTERFERENCE) and ist[I_S0_OK] == 1 and end_ok:
         zaru, zm, zh0, zh1, zr, chain, compass_moved = zaru_measurement(
             win, ist[I_WIN_HEAD], ist[I_WIN_N], s0, s1, fs[F_PA], fs[F_PB], fs[F_PC],
-            fs[F_COV:F_COV + 9].reshape((3, 3)), ist[I_STILL_CHAIN] == 1, cfg, icfg,
+            fs[F_COV:F_COV + 9].reshape((3, 3)), ist[I_STILL_CHAIN] == 1, gyro_noise(cfg, fs), cfg, icfg,
         )
         ist[I_STILL_CHAIN] = 1 if chain else 0
         if zaru:  # still: the drift moved, not the heading; no lock-out
@@ -523,7 +523,7 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
             reason = NO_STICKY
     if not zaru and reason == R_INTERFERENCE and ist[I_S0_OK] == 1 and end_ok:
         if not have_meas:
-            m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], cfg[C_GYRO_NOISE], 0.0, 0.0, False)
+            m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], gyro_noise(cfg, fs), 0.0, 0.0, False)
             have_meas = True
         accept, ist[I_REFUSED_N] = steady_disagreement(resid / (fs[F_S1] - fs[F_S0]), refused, ist[I_REFUSED_N],
                                                        icfg[K_RELOCK])
@@ -566,9 +566,37 @@ def close_still_run(t_end, d_raw, d_T, d_Tp, duration, n, gyro_sum, gyro_sq, fs,
     mean = gyro_sum / n
     if gyro_sq / n - mean * mean > cfg[C_STILL_STD] ** 2:
         return False
-    _take_now(t_end, d_raw / duration, d_T / duration, d_Tp / duration, cfg[C_GYRO_NOISE] ** 2 / duration,
+    _take_now(t_end, d_raw / duration, d_T / duration, d_Tp / duration, gyro_noise(cfg, fs) ** 2 / duration,
               fs, ist, cfg, icfg, stack, acc, ef, ei)
     return True
+
+
+@jit
+def gyro_noise(cfg, fs):
+    """The gyro's white-noise density N in use, deg/s/√Hz: the setting ``gyro_noise_dps_rthz``,
+    or the noise measured from the log's still runs (:func:`note_still_noise`, once they
+    hold ``NOISE_MIN_STEPS`` steps) when that is larger. The variances of the gyro-based
+    measurements after the init window (eq. 6's gyro term, zero-rate, still runs,
+    quasi-static windows) use it, so a gyro noisier than its setting is not over-trusted.
+    A quieter gyro keeps the setting: the filter's process noise was tuned against it, and
+    the Monte Carlo lost bias accuracy when a quiet gyro's own noise was used (docs/results.md)."""
+    if fs[F_NOISE_W] >= NOISE_MIN_STEPS:
+        return max(math.sqrt(fs[F_NOISE_SUM] / fs[F_NOISE_W]), cfg[C_GYRO_NOISE])
+    return cfg[C_GYRO_NOISE]
+
+
+@jit
+def note_still_noise(d2, n, duration, fs):
+    """A closed still run of ``n`` rows over ``duration`` s whose gyro steps (row to row)
+    have the sum of squares ``d2``: for white noise of density N sampled every δ s a step
+    has variance 2N²/δ, so the run measures ``N² = d2 δ / (2 (n-1))`` with ``δ =
+    duration / (n-1)``; added to the log's estimate with weight ``n - 1``. Steps, not
+    deviations from the mean, so a slow sway or drift change does not count as noise."""
+    if n < 3 or duration <= 0.0:
+        return
+    steps = n - 1.0
+    fs[F_NOISE_SUM] += 0.5 * d2 * duration / steps
+    fs[F_NOISE_W] += steps
 
 
 @jit
@@ -627,7 +655,7 @@ def quasi_static(t_b, accepted, reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, 
     _qs_open(t_b, I_raw, I_T, I_Tp, I_rate, fs, ist)  # the next window starts here, measured or not
     if not p2p <= cfg[C_QS_DEG]:
         return False
-    r = (0.5 * p2p / span) ** 2 + cfg[C_GYRO_NOISE] ** 2 / span
+    r = (0.5 * p2p / span) ** 2 + gyro_noise(cfg, fs) ** 2 / span
     h = np.array([h_T, h_Tp, 1.0])
     cov = fs[F_COV:F_COV + 9].reshape((3, 3))
     gamma = m - (fs[F_PA] * h_T + fs[F_PB] * h_Tp + fs[F_PC])

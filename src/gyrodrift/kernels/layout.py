@@ -78,7 +78,14 @@ F_FZ_NU0, F_FZ_CONS_T = 77, 78
 F_QS_IRAW0, F_QS_IT0, F_QS_ITP0 = 79, 80, 81
 F_QS_PTS = 82
 QS_MAX = 64
-N_FSTATE = F_QS_PTS + 2 * QS_MAX
+#: The gyro's white noise measured from the log (:func:`gyrodrift.kernels.aiding.gyro_noise`):
+#: the open still run's sum of squared steps of the gyro, then over the closed still runs
+#: the sum of their N² (deg²/s) weighted by their steps, and the sum of those weights.
+F_RUN_D2 = F_QS_PTS + 2 * QS_MAX
+F_NOISE_SUM, F_NOISE_W = F_RUN_D2 + 1, F_RUN_D2 + 2
+#: Steps of the gyro in still runs before the measured noise replaces the setting.
+NOISE_MIN_STEPS = 100
+N_FSTATE = F_NOISE_W + 1
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)

@@ -40,7 +40,7 @@ from gyrodrift.kernels.layout import (
     FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
     I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
     I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
-    F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED,
+    F_RUN_D2, F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED,
     I_QS_GAP, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
     O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
     OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NONE,
@@ -180,6 +180,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     # the gyro minus that first value and of their squares, and its rows (0: none open)
     run_t0, run_Iraw0, run_IT0, run_ITp0 = fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0]
     run_g0, run_sum, run_sq, run_n = fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N]
+    run_d2 = fs[F_RUN_D2]  # the sum of squared steps of the gyro in the run (its noise)
     # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
     m_T = math.nan
     m_Tp = math.nan
@@ -213,6 +214,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             time_gap = t_s - c_t > max_gap
             held = gap[ix] and not time_gap  # an empty cell: the run ends without measuring
             if moving or gap[ix] or t_s - run_t0 >= interval:
+                aiding.note_still_noise(run_d2, run_n, c_t - run_t0, fs)
                 measured = False
                 if (time_gap or ist[I_COMPASS_SEEN] == 0) and not held:
                     measured = aiding.close_still_run(c_t, I_raw - run_Iraw0, I_T - run_IT0, I_Tp - run_ITp0,
@@ -237,6 +239,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 run_n = n1
                 run_sum = s1
                 run_sq = q1
+                run_d2 += (gi - c_g) * (gi - c_g)
         if Ti != m_T or Tpi != m_Tp:
             m_T = Ti
             m_Tp = Tpi
@@ -260,6 +263,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             run_t0, run_Iraw0, run_IT0, run_ITp0, run_g0 = t_s, I_raw, I_T, I_Tp, gi
             run_sum = 0.0
             run_sq = 0.0
+            run_d2 = 0.0
             run_n = 1
         has_compass = not math.isnan(h)
         if has_compass:
@@ -392,6 +396,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     fs[F_FZ_NU0], fs[F_FZ_CONS_T] = f_nu0, f_cons
     fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0] = run_t0, run_Iraw0, run_IT0, run_ITp0
     fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N] = run_g0, run_sum, run_sq, run_n
+    fs[F_RUN_D2] = run_d2
     return stop
 
 
