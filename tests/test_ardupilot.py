@@ -25,7 +25,7 @@ DFReader = pytest.importorskip("pymavlink.DFReader")
 
 CONTRACT = ["t", "gyro_z", "gyro_x", "gyro_y", "temp", "mag_x", "mag_y", "mag_z", "acc_x", "acc_y", "acc_z"]
 _NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
-_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a trend in elapsed time"
 
 
 @pytest.fixture(scope="module")

@@ -307,7 +307,7 @@ def test_temp_empty_everywhere_is_zero_in_every_chunk(tmp_path, suffix):
     assert len(parts) == 5 and all((p["temp"] == 0.0).all() for p in parts)  # none was taken by the read-ahead
     assert chunks.notes == [
         f"{path}: no usable gyro temperature (column 'temp' empty in every row): temp set to 0 degC;"
-        " the drift is modelled as a constant bias"
+        " the drift is modelled as a trend in elapsed time"
     ]
 
 

@@ -221,7 +221,7 @@ def test_missing_required_column(tmp_path):
 
 
 _NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
-_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a trend in elapsed time"
 
 
 def test_no_compass_reads_with_a_note(tmp_path):

@@ -202,7 +202,7 @@ def test_ulog_missing_instance_lists_those_present():
 
 
 _NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
-_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a constant bias"
+_NO_TEMP_DOES = "temp set to 0 degC; the drift is modelled as a trend in elapsed time"
 
 
 def test_ulog_temperature_logged_as_zero_reads_as_a_bias_with_a_note():

@@ -10,8 +10,9 @@ str; :class:`gyrodrift.io.chunked.LogChunks` keeps them in its ``notes`` attribu
   tilt): ``attrs["compass"]`` is ``"none"`` (:data:`NO_COMPASS`);
 * **no usable gyro temperature** (no ``temp`` column, one empty in every row; in a
   ULog, DataFlash log or ROS bag, none logged, or logged as exactly 0 or NaN
-  everywhere): ``temp`` is :data:`NO_TEMPERATURE_C` in every row, so the drift model
-  ``a*T + b*T' + c`` reduces to the constant bias ``c`` (``T'`` is 0).
+  everywhere): ``temp`` is :data:`NO_TEMPERATURE_C` in every row, a temperature that
+  never changes, so the compensator's drift model takes the elapsed time as its ``T``
+  (``CompensatorConfig.temperature``, :class:`gyrodrift.model.ElapsedClock`).
 
 Every note has the form ``<file>: <what is missing> (<why>): <what is done instead>``
 (:func:`no_compass_note`, :func:`no_temperature_note`); :func:`add_note` appends one to
@@ -39,7 +40,7 @@ NO_COMPASS = "none"
 NO_TEMPERATURE_C = 0.0
 
 _NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is learned from still periods only"
-_NO_TEMPERATURE_DOES = f"temp set to {NO_TEMPERATURE_C:g} degC; the drift is modelled as a constant bias"
+_NO_TEMPERATURE_DOES = f"temp set to {NO_TEMPERATURE_C:g} degC; the drift is modelled as a trend in elapsed time"
 
 
 def _one_line(text: str) -> str:
@@ -83,7 +84,7 @@ def no_temperature_note(name: str, why: str, advice: str = "") -> str:
     -------
     str
         ``"<name>: no usable gyro temperature (<why>): temp set to 0 degC; the drift is
-        modelled as a constant bias[; <advice>]"``, on one line.
+        modelled as a trend in elapsed time[; <advice>]"``, on one line.
     """
     tail = f"; {advice}" if advice else ""
     return _one_line(f"{name}: no usable gyro temperature ({why}): {_NO_TEMPERATURE_DOES}{tail}")

@@ -16,8 +16,8 @@ Messages and columns
     held at the first/last value outside the temperature stream. A temperature that
     is exactly 0 (or NaN) in every message counts as "not measured". Without a
     measured temperature (no such topic, no message, not measured), ``temp`` is 0 in
-    every row and a note says so (:mod:`gyrodrift.io.notes`: the drift model reduces
-    to a constant bias).
+    every row and a note says so (:mod:`gyrodrift.io.notes`: the drift model is then
+    a trend in elapsed time).
 ``sensor_msgs/MagneticField`` (one topic; a bag has no other compass form)
     ``magnetic_field`` (tesla, kept in tesla) -> ``mag_*``, each sample on the row of
     the first Imu message at or after it, NaN on the other rows. Without one (no such

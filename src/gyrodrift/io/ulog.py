@@ -22,7 +22,7 @@ Which topics give which column
     (or NaN) counts as "not measured" (simulators log it so). Interpolated linearly
     onto the gyro times, held at the first/last value before/after it. Without a
     measured temperature, ``temp`` is 0 in every row and a note says so
-    (:mod:`gyrodrift.io.notes`: the drift model reduces to a constant bias).
+    (:mod:`gyrodrift.io.notes`: the drift model is then a trend in elapsed time).
 ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD)
     ``sensor_combined.accelerometer_m_s2[0..2]`` (time = ``timestamp`` +
     ``accelerometer_timestamp_relative``), else ``sensor_accel`` of the gyro's chip
