@@ -463,8 +463,9 @@ output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically (logs in
 sub-folders of the logs' common folder go to the same sub-folders of OUTDIR), and
 OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
 temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg/degC), c (deg/s) final
-drift model (a log whose temperature never changes: a, b empty, c its final drift), seconds (wall time per log). Text cells that start with = + - @ get a
-leading ' (shown as text, never run as a spreadsheet formula).
+drift model (a log whose temperature never changes: a, b empty, c its final drift),
+seconds (wall time per log). Text cells that start with = + - @ get a leading ' (shown
+as text, never run as a spreadsheet formula).
 
 exit status: 0 if every log was compensated, 1 if some logs failed (each one is
 reported in the table and in summary.csv; the others are still written), 2 for bad
