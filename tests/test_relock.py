@@ -37,3 +37,27 @@ def test_without_zaru_the_lock_out_recovery_still_follows_a_steady_disagreement(
     out = compensate(steady_interference_log(), cfg)
     window = (out["t"] > 400.0) & (out["t"] < 500.0)
     assert np.abs(out["bias_z"] - out["true_bias_z"])[window].max() > 0.2
+
+
+def wobble_log():
+    """A still unit (drift 0.2 deg/s) whose compass creeps at 0.2 deg/s from 400 s to 440 s
+    (2 deg per interval: inside the 3-deg gate), and whose gyro sees a short wobble (two
+    periods of a 4-s oscillation of 0.8 deg/s, which integrate to nothing) from 422 s,
+    which the zero-rate test's stillness check refuses."""
+    log = synthetic_log(duration_s=900.0, fs_hz=20.0, seed=5, gyro_noise_dps=0.02, compass_noise_deg=0.1,
+                        temp_c=lambda t: np.full_like(t, 30.0), drift_dps=lambda t, T: np.full_like(t, 0.2))
+    t = log["t"].to_numpy()
+    log["heading"] = (log["heading"] + 0.2 * np.clip(t - 400.0, 0.0, 40.0)) % 360.0
+    wobble = (t >= 422.0) & (t < 430.0)
+    log.loc[wobble, "gyro_z"] += 0.8 * np.sin(2.0 * np.pi * 0.25 * (t[wobble] - 422.0))
+    return log
+
+
+def test_after_the_compass_moved_on_a_still_unit_its_next_interval_is_refused():
+    """The interval after one where the still unit's compass moved is labelled interference;
+    when its own zero-rate measurement is not taken (the wobble) and the gyro's mean rate
+    still agrees with the drift, its compass measurement is refused too, so the creeping
+    compass does not pull the drift."""
+    out = compensate(wobble_log(), CompensatorConfig(temperature="measured"))
+    window = (out["t"] > 400.0) & (out["t"] < 600.0)
+    assert np.abs(out["bias_z"] - out["true_bias_z"])[window].max() < 0.03

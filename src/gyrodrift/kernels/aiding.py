@@ -223,20 +223,21 @@ def zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_n
     the compass moved, not the unit (slowly wandering interference).
 
     ``a, b, c`` are the parameters in force (``estimator.drift``), ``cov`` the covariance
-    (``estimator.cov``). Returns (found, m, h_T, h_T', r, still_chain, held, explained): the mean
+    (``estimator.cov``). Returns (found, m, h_T, h_T', r, still_chain, held, explained, agrees): the mean
     gyro rate over the interval measures the drift (eq. 1 with zero true rate), variance
     ``N²/Δt`` (plus the squared slope standard error of a verified flat compass); ``held``:
     found by ``zaru_hold`` with a compass that is not flat (the compass moved, not the unit);
     ``explained``: the gyro saw no motion and its mean rate agrees with the predicted drift,
-    found or not (a compass that disagrees then moved itself).
+    found or not (a compass that disagrees then moved itself); ``agrees``: the mean rate
+    agrees with the predicted drift, whether the gyro saw motion or not.
     The window is read in place (its columns ``lo:hi``), its rates as :func:`add` stored them.
     ``gyro_noise`` is N, deg/s/√Hz (:func:`gyro_noise`).
     """
     if icfg[K_ZARU] == 0:
-        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, False
+        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, False, False
     lo, hi = _span(win, head, n, math.nan, end[W_T], True)
     if hi - lo < 10 or end[W_T] - win[W_T, lo] < 0.8 * cfg[C_ZARU_WINDOW_S]:
-        return False, 0.0, 0.0, 0.0, 0.0, False, False, False
+        return False, 0.0, 0.0, 0.0, 0.0, False, False, False, False
     dt = end[W_T] - start[W_T]
     m = (end[W_IRAW] - start[W_IRAW]) / dt
     h = np.empty(3)
@@ -251,13 +252,13 @@ def zaru_measurement(win, head, n, start, end, a, b, c, cov, still_chain, gyro_n
     # explain. A wobble the Allan test sees only skips this interval.
     still_chain = still_chain and consistent
     if not still:
-        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, False
+        return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, False, consistent
     slope_se = flat_compass(win, lo, hi, cfg[C_COMPASS_SD], cfg[C_ZARU_SLOPE_K], cfg[C_ZARU_RESID_K])
     if slope_se >= 0.0:
-        return True, m, h[0], h[1], r + slope_se**2, True, False, consistent
+        return True, m, h[0], h[1], r + slope_se**2, True, False, consistent, consistent
     if icfg[K_ZARU_HOLD] == 1 and still_chain:
-        return True, m, h[0], h[1], r, still_chain, True, True
-    return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, consistent
+        return True, m, h[0], h[1], r, still_chain, True, True, True
+    return False, 0.0, 0.0, 0.0, 0.0, still_chain, False, consistent, consistent
 
 
 @jit
@@ -517,8 +518,9 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
     zaru = False
     compass_moved = False
     explained = False
+    agrees = False
     if icfg[K_ZARU] == 1 and (reason == NO_STICKY or reason == R_INTERFERENCE) and ist[I_S0_OK] == 1 and end_ok:
-        zaru, zm, zh0, zh1, zr, chain, compass_moved, explained = zaru_measurement(
+        zaru, zm, zh0, zh1, zr, chain, compass_moved, explained, agrees = zaru_measurement(
             win, ist[I_WIN_HEAD], ist[I_WIN_N], s0, s1, fs[F_PA], fs[F_PB], fs[F_PC],
             fs[F_COV:F_COV + 9].reshape((3, 3)), ist[I_STILL_CHAIN] == 1, gyro_noise(cfg, fs), cfg, icfg,
         )
@@ -526,6 +528,10 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
         if zaru:  # still: the drift moved, not the heading; no lock-out
             m, h0, h1, r = zm, zh0, zh1, zr
             reason = NO_STICKY
+    if not zaru and reason == NO_STICKY and ist[I_AFTER_INT] == 1 and agrees:
+        # the compass moved while the unit was still in the last interval (its rows here are
+        # labelled interference) and the gyro's mean rate agrees with the drift: refused as such
+        reason = R_INTERFERENCE
     if not zaru and reason == R_INTERFERENCE and ist[I_S0_OK] == 1 and end_ok:
         if not have_meas:
             m, h0, h1, r, resid = compass_measurement(s0, s1, cfg[C_COMPASS_SD], gyro_noise(cfg, fs), 0.0, 0.0, False)
