@@ -481,7 +481,9 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei, inte
     interval apart; the measurement (eqs. 4–6, between edge means with edge averaging) is
     then refused for interference when its residual exceeds ``interference_deg``. With
     ZARU a still interval gives the zero-rate measurement instead, accepted even when the
-    compass disagrees. The estimator (``ef``, ``ei``) is updated with the stacked
+    compass disagrees; after an interval where a still unit's compass moved, an interval
+    without its own zero-rate measurement whose mean gyro rate agrees with the drift is
+    refused for interference. The estimator (``ef``, ``ei``) is updated with the stacked
     measurements (``depth`` rows, eq. 3) or held for ``intervals`` intervals (more than one
     when a time gap skipped some); in MODE_EXTERNAL the caller does it (``ist[I_PENDING]``,
     one hold).

@@ -83,7 +83,7 @@ QS_MAX = 64
 #: the sum of their N² (deg²/s) weighted by their steps, and the sum of those weights.
 F_RUN_D2 = F_QS_PTS + 2 * QS_MAX
 F_NOISE_SUM, F_NOISE_W = F_RUN_D2 + 1, F_RUN_D2 + 2
-#: Steps of the gyro in still runs before the measured noise replaces the setting.
+#: Steps of the gyro in still runs before the measured noise is used (when above the setting).
 NOISE_MIN_STEPS = 100
 N_FSTATE = F_NOISE_W + 1
 
