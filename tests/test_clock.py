@@ -200,3 +200,13 @@ def test_temperature_absent_after_the_first_sample_is_refused():
     comp.push(0.0, 0.1, 20.0)
     with pytest.raises(GyroDriftError, match="before the first sample"):
         comp.temperature_absent()
+
+
+def test_a_warm_started_file_in_chunks_keeps_the_temperature_as_the_batch_does(tmp_path):
+    prof = Profile(params=(0.03, 0.0, -0.8), cov=((1e-6, 0, 0), (0, 1.0, 0), (0, 0, 1e-3)), temp_range_c=(20, 50),
+                   samples=1, updates=1, estimator="adaptive", created="", software="")
+    path = tmp_path / "flat.csv"
+    warming_log(8).to_csv(path, index=False)
+    cfg = warm_config(prof)
+    stats = compensate_file(path, tmp_path / "out.parquet", cfg, chunk_rows=5000, stream=True)
+    assert stats.regressor == compensate(read_log(path), cfg).attrs["drift_regressor"] == "temperature"

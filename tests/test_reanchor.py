@@ -29,8 +29,8 @@ def reanchor_s(seed: int) -> float:
 
 
 def test_fused_heading_re_anchors_after_the_disturbance():
-    """Measured over seeds 0-9 (docs/results.md): 8 of 10 within 2 min; the median
-    within 2 min, none locked out for longer than 10 min."""
+    """Measured over seeds 0-9 (docs/results.md): 9 of 10 within 2 min (seed 3: 310 s).
+    Asked: the median within 2 min, at least 8 of 10, none locked out for over 10 min."""
     times = np.array([reanchor_s(seed) for seed in range(10)])
     assert np.median(times) <= 120.0, times
     assert (times <= 120.0).sum() >= 8, times

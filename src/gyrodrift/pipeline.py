@@ -38,7 +38,6 @@ from gyrodrift.compensator import (
 )
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
-from gyrodrift.model import temperature_is_flat
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -538,8 +537,9 @@ def _file_uses_clock(cfg: CompensatorConfig, first: pd.DataFrame, input_path: Pa
     temperature (the same decision as :func:`gyrodrift.compensate` on the whole log)."""
     from gyrodrift.io.chunked import iter_log_chunks
 
-    if cfg.temperature != "auto" or not temperature_is_flat(first[TEMP]):
-        return uses_clock(cfg, first[TEMP].to_numpy(float))
+    decided = uses_clock(cfg, first[TEMP].to_numpy(float))
+    if cfg.temperature != "auto" or not decided:  # set, warm-started, or a temperature that changes
+        return decided
     seen: list[float] = []
     with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks:
         for log in chunks:

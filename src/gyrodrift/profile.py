@@ -141,10 +141,13 @@ def profile_from_run(out) -> Profile:
         The run's drift model was in time, not temperature (a log whose temperature never
         changes; ``CompensatorConfig.temperature``): it does not carry over to another run.
     """
-    regressor = out.regressor if not hasattr(out, "attrs") else out.attrs.get("drift_regressor", "temperature")
+    if hasattr(out, "attrs"):
+        regressor, source = out.attrs.get("drift_regressor", "temperature"), out.attrs.get("source", "the log")
+    else:  # RunStats
+        regressor, source = out.regressor, out.source
     if regressor == "clock":
         raise ConfigError(
-            f"{getattr(out, 'source', None) or out.attrs.get('source', 'the log')}: no profile saved: the log's "
+            f"{source}: no profile saved: the log's "
             "temperature never changes, so its drift was modelled in time, which does not carry over to another "
             "run; a profile needs a log with the gyro temperature"
         )

@@ -14,8 +14,8 @@ The columns and their units are those of ``gyrodrift compensate`` (the input con
 (:func:`gyrodrift.io.validate.normalise_frame`). A column the input does not have is
 "no value" in every row: no ``heading`` (nor ``mag_*`` + ``acc_*``) is no compass, no
 ``temp`` is 0 degC and, with ``temperature = "auto"``, a drift model in elapsed time
-(:meth:`gyrodrift.Compensator.temperature_absent`; both said in a note). The first row needs ``gyro_z`` and ``temp``
-values; later empty cells hold the previous value, as in a log.
+(:meth:`gyrodrift.Compensator.temperature_absent`; both said in a note). The first row
+needs ``gyro_z`` and ``temp`` values; later empty cells hold the previous value, as in a log.
 
 * CSV: the first non-blank line is the header; every line after it one sample, with one
   cell per header column (an empty cell is no value).

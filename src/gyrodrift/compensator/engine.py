@@ -371,7 +371,7 @@ class ChunkEngine:
         if r is None:
             r = self._row = _RowMemory()
         if self._clock is not None:
-            T = float(self._clock(r.clock_t(t))[0])
+            T = float(self._clock((t,))[0])
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
         rows_before = self.rows_in
@@ -493,9 +493,3 @@ class _RowMemory:
             setattr(self, "ro_" + name, _read_only(getattr(self, name)))
         for name in ("g_held", "T_held", "h_wrapped"):
             setattr(self, "ro_" + name, _read_only(getattr(self.cols, name)))
-        self._one_t = np.zeros(1)
-
-    def clock_t(self, t: float) -> np.ndarray:
-        """``t`` as a one-element array (the clock's input), reused."""
-        self._one_t[0] = t
-        return self._one_t

@@ -70,11 +70,8 @@ class Compensator:
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         self._limits = _limits(self._gyro_max_dps)
         self._own_estimator = estimator is None
-        self._clock = uses_clock(self.config)  # "auto" takes the temperature: a stream has no whole log to look at
-        if self._clock:
-            self.config = clock_config(self.config)
-        self._est = estimator if estimator is not None else build_estimator(self.config)
-        self._engine = ChunkEngine(self.config, self._est, source, clock=self._clock)
+        self._est = estimator
+        self._start(uses_clock(self.config))  # "auto" takes the temperature: a stream has no whole log to look at
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
@@ -99,13 +96,18 @@ class Compensator:
         temperature (a bias); ``"clock"`` has the clock already."""
         if self._prev is not None:
             raise GyroDriftError(f"{self.source}: temperature_absent() must come before the first sample")
-        if self._clock or self.config.temperature != "auto":
-            return
-        self._clock = True
-        self.config = clock_config(self.config)
+        if not self._clock and self.config.temperature == "auto":
+            self._start(True)
+
+    def _start(self, clock: bool) -> None:
+        """The estimator (unless the caller gave one) and the engine, the drift model's ``T``
+        the elapsed time or not (``clock``)."""
+        self._clock = clock
+        if clock:
+            self.config = clock_config(self.config)
         if self._own_estimator:
             self._est = build_estimator(self.config)
-        self._engine = ChunkEngine(self.config, self._est, self.source, clock=True)
+        self._engine = ChunkEngine(self.config, self._est, self.source, clock=clock)
 
     # -- public state
     @property
