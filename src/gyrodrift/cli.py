@@ -436,12 +436,43 @@ def _names(values, what: str) -> list[str] | None:
     return names
 
 
+def _cmd_generated(args, splits) -> int:
+    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.heldout`)."""
+    import time
+
+    from gyrodrift import heldout
+    from gyrodrift.io import write_table
+
+    config = load_config(args.config) if args.config else CompensatorConfig()
+    methods = _names(args.methods, "methods") or list(heldout.METHODS)
+    start = time.monotonic()
+    df = heldout.run_generated(_names(args.families, "classes"), splits, args.seeds, methods, config=config,
+                               workers=args.workers, duration_scale=args.duration_scale,
+                               progress=_bar("monte carlo", "logs"))
+    if args.output:
+        write_table(df, args.output, spreadsheet_safe=True)
+    if args.markdown:
+        print(heldout.markdown(df))
+    else:
+        print(heldout.acceptance(heldout.summarise(df)).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    failed = df[df["status"] != "ok"]
+    print(f"{df['class'].nunique()} classes x {args.seeds} seeds x {len(splits)} split(s) x {len(methods)} methods in "
+          f"{time.monotonic() - start:.0f} s; {len(failed)} of {len(df)} runs failed"
+          + (f"; wrote {args.output}" if args.output else ""))
+    for _, row in failed.drop_duplicates("error").head(5).iterrows():
+        print(f"failed {row['class']} seed {row['seed']} {row['method']}: {row['error']}")
+    return 1 if len(failed) == len(df) else 0
+
+
 def _cmd_montecarlo(args) -> int:
     import time
 
     from gyrodrift.io import write_table
     from gyrodrift.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
 
+    splits = [name for name, on in (("tuning", args.tuning), ("held-out", args.held_out)) if on]
+    if splits:
+        return _cmd_generated(args, splits)
     if args.seeds < 1:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
     if args.first_seed < 0:
@@ -596,6 +627,10 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("--tuned-on", metavar="FAMILY", help="with --markdown: the family the settings were tuned on")
     mc.add_argument("-o", "--output", type=Path, metavar="OUT.csv", help="write every run (one row per family, seed, method)")
     mc.add_argument("--markdown", action="store_true", help="print the summary as Markdown")
+    mc.add_argument("--held-out", action="store_true",
+                    help="the procedural generator's classes on held-out seeds (gyrodrift.simulate.generator; "
+                    "--families then names classes)")
+    mc.add_argument("--tuning", action="store_true", help="the generator's classes on tuning seeds (with --held-out: both)")
     mc.set_defaults(func=_cmd_montecarlo)
 
     from gyrodrift.fleet import add_batch_parser

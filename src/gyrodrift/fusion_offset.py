@@ -28,7 +28,7 @@ import pandas as pd
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, T
 from gyrodrift.errors import ConfigError
 
-__all__ = ["PACKAGE", "available", "fusion_offset_drift"]
+__all__ = ["PACKAGE", "available", "fusion_offset_drift", "fusion_ahrs_heading"]
 
 #: The Python package that runs x-io Fusion.
 PACKAGE = "imufusion"
@@ -119,3 +119,71 @@ def fusion_offset_drift(
     for i, sample in enumerate(gyro):
         corrected_z[i] = update(sample)[2]
     return gyro[:, 2] - corrected_z
+
+
+def fusion_ahrs_heading(log: pd.DataFrame, compass_heading: np.ndarray | None = None) -> np.ndarray:
+    """Heading (deg, [0, 360)) of x-io Fusion's AHRS with its gyroscope offset correction, per row.
+
+    Per sample: ``Bias.update`` (the offset correction, settings as
+    :func:`fusion_offset_drift` with a 5-s stationary period), then ``Ahrs`` (NED, gain
+    0.5, acceleration and magnetic rejection 10 deg, recovery after 5 s, Fusion's
+    recommended settings): ``update`` with the raw magnetometer and accelerometer when
+    the log has them, else ``update_external_heading`` with a level accelerometer; a compass
+    slower than the gyro is held (the latest sample, as firmware holds its last reading) up to
+    1 s, ``update_no_magnetometer`` after that. The
+    sample period given to the AHRS is each row's own time step (the library's
+    ``set_sample_period``), so irregular logs integrate correctly; the rejection
+    timeout counts samples at the median rate. The heading is the yaw of its
+    quaternion.
+
+    Parameters
+    ----------
+    log : DataFrame
+        Input contract (deg/s, g, any magnetometer unit).
+    compass_heading : ndarray, optional
+        The compass heading per row, deg, NaN without a sample (default the log's
+        ``heading`` column); ignored when the log has the raw magnetometer.
+    """
+    imufusion = _imufusion()
+    if imufusion is None:
+        raise ConfigError(f"fusion-ahrs needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    t = log[T].to_numpy(float)
+    if t.size < 2:
+        raise ConfigError(f"fusion-ahrs needs at least 2 rows, got {t.size}")
+    step = np.diff(t, prepend=t[0] - np.median(np.diff(t)))
+    fs_hz = 1.0 / float(np.median(step))
+    bias = imufusion.Bias()
+    bias.set_settings(imufusion.BiasSettings(sample_rate=fs_hz, stationary_threshold=3.0, stationary_period=5.0))
+    ahrs = imufusion.Ahrs()
+    ahrs.set_settings(imufusion.AhrsSettings(
+        sample_rate=fs_hz, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
+        acceleration_rejection=10.0, magnetic_rejection=10.0, rejection_timeout=int(5 * fs_hz)))
+    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    raw = all(c in log.columns for c in ("mag_x", "mag_y", "mag_z", "acc_x", "acc_y", "acc_z"))
+    if raw:
+        mag = log[["mag_x", "mag_y", "mag_z"]].to_numpy(float)
+        acc = log[["acc_x", "acc_y", "acc_z"]].ffill().fillna(0.0).to_numpy(float)
+        acc = -acc / np.median(np.linalg.norm(acc, axis=1))  # g, whatever the unit; Fusion takes +1 g on z when level (NED)
+    else:
+        heading = np.asarray(log["heading"] if compass_heading is None else compass_heading, dtype=float)
+        level = np.array([0.0, 0.0, 1.0])  # level, as the raw path gives it
+    # A compass read slower than the gyro: each update takes the latest sample, as firmware
+    # holds its last magnetometer reading, until it is older than a second (an outage).
+    has = np.isfinite(mag[:, 0]) if raw else np.isfinite(heading)
+    last = np.where(has, np.arange(t.size), -1)
+    last = np.maximum.accumulate(last)
+    fresh = (last >= 0) & (t - t[np.maximum(last, 0)] <= 1.0)
+    out = np.empty(t.size)
+    for i in range(t.size):
+        g = bias.update(gyro[i])
+        ahrs.set_sample_period(float(step[i]))
+        j = last[i]
+        if not fresh[i]:
+            ahrs.update_no_magnetometer(g, acc[i] if raw else level)
+        elif raw:
+            ahrs.update(g, acc[i], mag[j])
+        else:
+            ahrs.update_external_heading(g, level, heading[j])
+        w, x, y, z = np.asarray(ahrs.get_quaternion(), dtype=float).ravel()[:4]
+        out[i] = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return np.mod(np.degrees(out), 360.0)

@@ -25,7 +25,7 @@ from gyrodrift.errors import ConfigError
 from gyrodrift.estimators.base import LinearDrift, Observation, Unaided, check_drift_triple, register
 from gyrodrift.estimators.kalman import KalmanConfig
 
-__all__ = ["fit_linear_drift", "WindowedLsm", "FixedParams"]
+__all__ = ["fit_linear_drift", "WindowedLsm", "CausalMlr", "FixedParams"]
 
 
 def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
@@ -110,6 +110,51 @@ class WindowedLsm(LinearDrift):
         for i in reversed(range(obs.n_new)):  # oldest first
             self._rows.append((float(obs.y[i]), obs.H[i].copy(), float(obs.R[i, i])))
         self._x = fit_linear_drift(*self._arrays(), prior=self.config)
+        return self.params
+
+    def hold(self) -> np.ndarray:
+        return self.params
+
+
+@register
+class CausalMlr(LinearDrift):
+    """The paper's MLR fitted on the past only (``mlr-causal``): at every update a, b, c are
+    the regularised weighted least squares of every measurement accepted so far
+    (:func:`fit_linear_drift` with the prior, accumulated as normal equations), so a row
+    is compensated with what was known when it was logged.
+
+    Parameters
+    ----------
+    config : KalmanConfig
+        The prior (``x0``, ``p0_sd``) that regularises the fit.
+    """
+
+    name: ClassVar[str] = "mlr-causal"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
+        self.config = config
+        x0 = np.array(config.x0, dtype=float)
+        self._info = np.diag(1.0 / np.square(np.array(config.p0_sd, dtype=float)))
+        self._vec = self._info @ x0
+        self._x = x0
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Covariance of the fit, ``(P0^-1 + H^T R^-1 H)^-1``."""
+        return np.linalg.inv(self._info)
+
+    def update(self, obs: Observation) -> np.ndarray:
+        for i in range(obs.n_new):
+            h = obs.H[i]
+            w = 1.0 / float(obs.R[i, i])
+            self._info = self._info + w * np.outer(h, h)
+            self._vec = self._vec + w * float(obs.y[i]) * h
+        self._x = np.linalg.solve(self._info, self._vec)
         return self.params
 
     def hold(self) -> np.ndarray:

@@ -1,0 +1,249 @@
+"""Every method on the generator's scenarios (:mod:`gyrodrift.simulate.generator`), scored
+against truth, tuning and held-out seeds reported side by side.
+
+One *case* is a (class, seed) pair. Every method runs on the same generated log:
+
+==================  ======================================================================
+method              what it is
+==================  ======================================================================
+``default``         gyrodrift's default estimator (:class:`gyrodrift.CompensatorConfig`)
+``stkf``, ``kf``    the paper's strong tracking filter and its KF baseline
+``mlr-causal``      the paper's MLR fitted on the past only
+``poly3``           a cubic in temperature fitted on a separate still heating run of the same
+                    device (PX4's and ArduPilot's thermal calibration)
+``fusion-offset``   x-io Fusion's gyroscope offset correction (no temperature model)
+``fusion-ahrs``     x-io Fusion's AHRS (its heading only: compared with ``heading_fused``)
+``smoothed``        gyrodrift's forward-backward pass over the whole log (not causal)
+==================  ======================================================================
+
+Scores of a case and method (:data:`COLUMNS`): heading RMS (deg, the gyro-integrated
+``heading`` against ``ref_heading``), bias RMS (deg/s, against ``true_bias_z``), the RMS of
+the fused heading (deg; ``heading_fused``, or Fusion's AHRS), and for gyrodrift's own
+estimators the honesty of what they say: the share of rows whose truth lies within one and
+two standard deviations (``bias_sd``, ``heading_fused_sd``), and the precision and recall of
+the ``interference`` and ``turning`` labels against the generator's truth
+(:func:`gyrodrift.simulate.generator.truth_labels`; interference on compass rows).
+
+:func:`acceptance` says per class whether the default is at or below the best causal
+baseline in the median (heading and bias) and its fused heading at or below Fusion's AHRS.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import replace
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.errors import ConfigError
+from gyrodrift.metrics import heading_error_deg
+from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
+
+__all__ = ["METHODS", "CAUSAL_BASELINES", "COLUMNS", "run_case", "run_generated", "summarise", "acceptance",
+           "markdown"]
+
+#: Methods of a run, in order (``default`` is gyrodrift's default estimator).
+METHODS = ("default", "stkf", "kf", "mlr-causal", "poly3", "fusion-offset", "fusion-ahrs", "smoothed")
+#: The causal baselines the default is held against (heading and bias).
+CAUSAL_BASELINES = ("stkf", "kf", "mlr-causal", "poly3", "fusion-offset")
+#: The fused-heading baseline.
+FUSED_BASELINE = "fusion-ahrs"
+
+COLUMNS = ("class", "seed", "split", "method", "rows", "heading_rms_deg", "bias_rms_dps", "fused_rms_deg",
+           "bias_in_1sd", "bias_in_2sd", "fused_in_1sd", "fused_in_2sd", "interference_precision",
+           "interference_recall", "turning_precision", "turning_recall", "status", "error")
+
+
+def _rms(x) -> float:
+    x = np.asarray(x, dtype=float)
+    x = x[np.isfinite(x)]
+    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+
+
+def _share_within(err, sd, k) -> float:
+    ok = np.isfinite(err) & np.isfinite(sd)
+    return float(np.mean(np.abs(err[ok]) <= k * sd[ok])) if ok.any() else math.nan
+
+
+def _precision_recall(said: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    """Precision and recall of boolean labels (NaN where undefined: nothing said, nothing true)."""
+    hit = int(np.sum(said & truth))
+    p = hit / int(said.sum()) if said.any() else math.nan
+    r = hit / int(truth.sum()) if truth.any() else math.nan
+    return p, r
+
+
+def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
+    ref = log["ref_heading"].to_numpy(float)
+    truth = log["true_bias_z"].to_numpy(float)
+    row = {"heading_rms_deg": _rms(heading_error_deg(out["heading"].to_numpy(float), ref)),
+           "bias_rms_dps": _rms(out["bias_z"].to_numpy(float) - truth)}
+    if "heading_fused" in out:
+        fused_err = heading_error_deg(out["heading_fused"].to_numpy(float), ref)
+        row["fused_rms_deg"] = _rms(fused_err)
+    if own:
+        bias_err = out["bias_z"].to_numpy(float) - truth
+        sd = out["bias_sd"].to_numpy(float)
+        fsd = out["heading_fused_sd"].to_numpy(float)
+        row.update(bias_in_1sd=_share_within(bias_err, sd, 1), bias_in_2sd=_share_within(bias_err, sd, 2),
+                   fused_in_1sd=_share_within(fused_err, fsd, 1), fused_in_2sd=_share_within(fused_err, fsd, 2))
+        labels = truth_labels(log)
+        reason = out["gate_reason"].astype(str).to_numpy()
+        compass = np.isfinite(out["compass_heading"].to_numpy(float))
+        p, r = _precision_recall((reason == "interference") & compass, labels["disturbed"].to_numpy() & compass)
+        row.update(interference_precision=p, interference_recall=r)
+        p, r = _precision_recall(reason == "turning", labels["turning"].to_numpy())
+        row.update(turning_precision=p, turning_recall=r)
+    return row
+
+
+def _one_line(err: BaseException) -> str:
+    return f"{type(err).__name__}: {' '.join(str(err).split())}"
+
+
+def _run(name: str, log: pd.DataFrame, config: CompensatorConfig, case) -> pd.DataFrame:
+    from gyrodrift.compare import run_method
+
+    if name == "default":
+        return run_method(config.estimator, log, config)
+    if name == "fusion-ahrs":
+        from gyrodrift.fusion_offset import fusion_ahrs_heading
+
+        if "heading" not in log and "mag_x" not in log:  # no compass: nothing to fuse
+            return pd.DataFrame({c: np.full(len(log), np.nan) for c in ("heading", "bias_z", "heading_fused")})
+        return pd.DataFrame({"heading": np.full(len(log), np.nan), "bias_z": np.full(len(log), np.nan),
+                             "heading_fused": fusion_ahrs_heading(log)})
+    if name == "poly3":
+        return run_method("poly3", log, config, calibration=case.calibration())
+    return run_method(name, log, config)
+
+
+def run_case(cls: str, seed: int, methods: Sequence[str] = METHODS, *, config: CompensatorConfig | None = None,
+             duration_scale: float = 1.0) -> list[dict]:
+    """Generate one case and run every method on it; one row (:data:`COLUMNS`) per method."""
+    config = config or CompensatorConfig()
+    base = {"class": cls, "seed": int(seed), "split": split_of(int(seed))}
+    blank = {c: math.nan for c in COLUMNS if c not in ("class", "seed", "split", "method", "status", "error")}
+    try:
+        case = generate(cls, seed, duration_scale=duration_scale)
+    except Exception as err:  # reported per case, never stops the whole run
+        return [{**base, **blank, "method": m, "status": "error", "error": "generator: " + _one_line(err)}
+                for m in methods]
+    rows = []
+    for name in methods:
+        row = {**base, **blank, "method": name, "rows": len(case.log), "status": "ok", "error": ""}
+        try:
+            out = _run(name, case.log, config, case)
+            row.update(_score(case.log, out, own=name == "default"))
+        except Exception as err:  # one failing method must not hide the others
+            row.update(status="error", error=_one_line(err))
+        rows.append(row)
+    return rows
+
+
+def _task(task):
+    cls, seed, methods, config, scale = task
+    return run_case(cls, seed, methods, config=config, duration_scale=scale)
+
+
+def _failed(task, err):
+    cls, seed, methods, _, _ = task
+    return [{"class": cls, "seed": seed, "split": split_of(seed), "method": m, "status": "error",
+             "error": "worker: " + _one_line(err)} for m in methods]
+
+
+def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = ("held-out",), n_seeds: int = 20,
+                  methods: Sequence[str] = METHODS, *, config: CompensatorConfig | None = None,
+                  workers: int | None = None, duration_scale: float = 1.0,
+                  progress: Callable | None = None) -> pd.DataFrame:
+    """Every method on ``n_seeds`` cases of each class in each split; one row per case and method.
+
+    The rows do not depend on ``workers``: each case comes from its own (class, seed).
+    """
+    classes = list(CLASSES) if classes is None else list(classes)
+    unknown = [c for c in classes if c not in CLASSES]
+    if unknown:
+        raise ConfigError(f"unknown scenario class(es) {', '.join(unknown)}; choose from: {', '.join(CLASSES)}")
+    bad = [m for m in methods if m not in METHODS]
+    if bad:
+        raise ConfigError(f"unknown method(s) {', '.join(bad)}; choose from: {', '.join(METHODS)}")
+    tasks = [(c, s, tuple(methods), config or CompensatorConfig(), duration_scale)
+             for split in splits for c in classes for s in seeds(split, n_seeds)]
+    workers = os.cpu_count() or 1 if workers is None else workers
+    if workers <= 1 or len(tasks) == 1:
+        items = progress(tasks, len(tasks)) if progress else tasks
+        results = [_task(t) for t in items]
+    else:
+        from gyrodrift._pool import map_processes
+
+        results = map_processes(_task, tasks, workers, progress, on_error=_failed)
+    df = pd.DataFrame([r for rows in results for r in rows], columns=list(COLUMNS))
+    order = {m: i for i, m in enumerate(methods)}
+    return df.sort_values(["split", "class", "seed", "method"], key=lambda s: s.map(order) if s.name == "method" else s,
+                          kind="stable").reset_index(drop=True)
+
+
+def summarise(df: pd.DataFrame) -> pd.DataFrame:
+    """Median per (split, class, method) of every score, and the cases that ran and failed."""
+    ok = df[df["status"] == "ok"]
+    scores = [c for c in COLUMNS if c not in ("class", "seed", "split", "method", "rows", "status", "error")]
+    med = ok.groupby(["split", "class", "method"], sort=False)[scores].median()
+    counts = df.groupby(["split", "class", "method"], sort=False)["status"].agg(
+        n=lambda s: int((s == "ok").sum()), failed=lambda s: int((s != "ok").sum()))
+    return counts.join(med).reset_index()
+
+
+def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
+    """Per (split, class): the default's medians against the best causal baseline and Fusion's AHRS.
+
+    Columns: ``heading`` and ``bias`` (the default's median RMS), ``best_heading`` and
+    ``best_bias`` (the lowest median of :data:`CAUSAL_BASELINES`, and which), ``fused`` and
+    ``ahrs``, and ``ok_heading``, ``ok_bias``, ``ok_fused``.
+    """
+    rows = []
+    for (split, cls), part in summary.groupby(["split", "class"], sort=False):
+        by = part.set_index("method")
+        if "default" not in by.index:
+            continue
+        base = by.loc[[m for m in CAUSAL_BASELINES if m in by.index]]
+        row = {"split": split, "class": cls, "heading": by.at["default", "heading_rms_deg"],
+               "bias": by.at["default", "bias_rms_dps"], "fused": by.at["default", "fused_rms_deg"]}
+        for what, col in (("heading", "heading_rms_deg"), ("bias", "bias_rms_dps")):
+            vals = base[col].dropna()
+            row[f"best_{what}"] = float(vals.min()) if len(vals) else math.nan
+            row[f"best_{what}_method"] = str(vals.idxmin()) if len(vals) else ""
+            row[f"ok_{what}"] = bool(row[what] <= row[f"best_{what}"]) if len(vals) else True
+        row["ahrs"] = by.at[FUSED_BASELINE, "fused_rms_deg"] if FUSED_BASELINE in by.index else math.nan
+        row["ok_fused"] = bool(row["fused"] <= row["ahrs"]) if math.isfinite(row["ahrs"]) else True
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def markdown(df: pd.DataFrame) -> str:
+    """The acceptance table and the per-method medians of a run, Markdown."""
+    from gyrodrift.metrics import markdown_table
+
+    summ = summarise(df)
+    acc = acceptance(summ)
+    parts = []
+    for split in dict.fromkeys(acc["split"]):
+        a = acc[acc["split"] == split].drop(columns=["split"])
+        parts += [f"**{split}** seeds: the default against the best causal baseline (median RMS per class)", "",
+                  markdown_table(a, ".3g", index=False), ""]
+    wide = summ.pivot_table(index=["split", "class"], columns="method",
+                            values=["heading_rms_deg", "bias_rms_dps", "fused_rms_deg"], sort=False)
+    parts += ["Medians per method", "", markdown_table(wide.reset_index(), ".3g", index=False)]
+    own = summ[summ["method"] == "default"][["split", "class", "bias_in_1sd", "bias_in_2sd", "fused_in_1sd",
+                                               "fused_in_2sd", "interference_precision", "interference_recall",
+                                               "turning_precision", "turning_recall"]]
+    parts += ["", "The default's honesty (medians over cases)", "", markdown_table(own, ".2f", index=False)]
+    return "\n".join(parts)
+
+
+def default_config(**overrides) -> CompensatorConfig:
+    """:class:`CompensatorConfig` with ``overrides`` (a helper for tuning scripts)."""
+    return replace(CompensatorConfig(), **overrides)

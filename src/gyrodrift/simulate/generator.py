@@ -1,0 +1,694 @@
+"""A procedural scenario generator that nobody tunes on: random compositions of motion,
+temperature, compass, sampling and device, in classes, with seeds split once.
+
+Every named scenario of :mod:`gyrodrift.simulate.scenarios` is one hand-written run; a
+setting tuned on them fits their shapes. This generator draws each log from a *class*
+(:data:`CLASSES`) by composing random segments:
+
+* **motion**: still, yaw sway, slow continuous turns, driving legs with stops and
+  cornering, multicopter flights (yaw manoeuvres, vibration on the gyro), turntable
+  rotations, hand turns;
+* **temperature**: power-on warm-up with fast drift, chamber ramps with non-linear
+  knees (and, on some devices, thermal lag and backlash hysteresis), day cycles,
+  heating in flight, or a temperature channel that is not measured;
+* **compass**: clean (noise, hard- and soft-iron deviation, tilt while accelerating),
+  interference steps, ramps and wander, an error that follows the motor throttle,
+  outages, the raw magnetometer and accelerometer instead of a heading;
+* **sampling**: 1-Hz telemetry with 0.5–4 s jitter, short bursts, 10–500 Hz;
+* **device**: a randomised gyro, from a quiet, nearly linear one to a hot-running
+  multicopter IMU whose drift moves by several deg/s in minutes.
+
+Seeds are split once (:data:`SPLITS`): ``tuning`` seeds choose every setting,
+``held-out`` seeds only report (:func:`seeds`). A case is fully determined by
+``(class, seed)``.
+
+Beside the input contract and ``ref_heading``/``true_bias_z``, a generated log has
+truth columns for the decisions a compensator makes:
+
+=========================  =====  ===============================================
+column                     unit   meaning
+=========================  =====  ===============================================
+``true_rate_z``            deg/s  true heading rate (0 exactly where still)
+``true_compass_offset``    deg    magnetic interference on the compass heading
+                                  (deviation and noise excluded)
+=========================  =====  ===============================================
+
+:func:`truth_labels` turns them into the row labels a compensator's ``gate_reason``
+is scored against (:data:`DISTURBED_DEG`, :data:`TURNING_DPS`).
+
+Examples
+--------
+>>> case = generate("sway-clean", seeds("tuning", 1)[0], duration_scale=0.05)
+>>> case.log.attrs["class"], bool(np.isfinite(case.log["heading"]).any())
+('sway-clean', True)
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+from typing import Callable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
+from gyrodrift.errors import ConfigError
+from gyrodrift.simulate.device import DeviceModel, gauss_markov, random_device, random_walk, temperature_reading
+from gyrodrift.simulate.motion import Motion, ramp_slice, smooth_step, smooth_step_slope
+from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
+
+__all__ = [
+    "CLASSES",
+    "SPLITS",
+    "TRUE_RATE_Z",
+    "TRUE_COMPASS_OFFSET",
+    "DISTURBED_DEG",
+    "TURNING_DPS",
+    "GeneratedCase",
+    "seeds",
+    "split_of",
+    "generate",
+    "truth_labels",
+]
+
+#: Truth column: the true heading rate, deg/s.
+TRUE_RATE_Z = "true_rate_z"
+#: Truth column: the magnetic interference on the compass heading, deg.
+TRUE_COMPASS_OFFSET = "true_compass_offset"
+#: A compass sample is disturbed when its interference exceeds this, deg.
+DISTURBED_DEG = 2.0
+#: The platform is turning when its true heading rate exceeds this, deg/s (the turning
+#: rate of :class:`gyrodrift.gating.GateConfig`).
+TURNING_DPS = 2.0
+
+#: The seed splits: the first seed of each and how many there are. Tuning seeds choose
+#: settings; held-out seeds only report.
+SPLITS: Mapping[str, range] = MappingProxyType({
+    "tuning": range(0, 100_000),
+    "held-out": range(1_000_000, 1_100_000),
+})
+
+
+def seeds(split: str, n: int) -> list[int]:
+    """The first ``n`` seeds of a split (``"tuning"`` or ``"held-out"``).
+
+    Examples
+    --------
+    >>> seeds("tuning", 3), seeds("held-out", 2)
+    ([0, 1, 2], [1000000, 1000001])
+    """
+    if split not in SPLITS:
+        raise ConfigError(f"unknown seed split {split!r}; choose from: {', '.join(SPLITS)}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= len(SPLITS[split]):
+        raise ConfigError(f"the number of seeds must be between 1 and {len(SPLITS[split])}, got {n!r}")
+    return list(SPLITS[split][: int(n)])
+
+
+def split_of(seed: int) -> str:
+    """The split a seed belongs to (ConfigError for a seed in neither)."""
+    for name, rng in SPLITS.items():
+        if seed in rng:
+            return name
+    raise ConfigError(f"seed {seed} is in no split ({', '.join(f'{k}: {v.start}..{v.stop - 1}' for k, v in SPLITS.items())})")
+
+
+@dataclass(frozen=True)
+class GeneratedCase:
+    """One generated log and what goes with it.
+
+    Attributes
+    ----------
+    cls : str
+        The class (:data:`CLASSES`).
+    seed : int
+    log : DataFrame
+        Input contract + ``ref_heading``, ``true_bias_z`` and the truth columns;
+        ``attrs`` say how it was made.
+    device : DeviceModel
+    compass : CompassModel
+    calibration : Callable[[], DataFrame]
+        A separate 2-h still heating run of the same device and compass (for a
+        ``poly3`` calibration), made on demand.
+    """
+
+    cls: str
+    seed: int
+    log: pd.DataFrame
+    device: DeviceModel
+    compass: CompassModel
+    calibration: Callable[[], pd.DataFrame] = field(repr=False, compare=False)
+
+
+# --------------------------------------------------------------------------- recipes
+
+
+@dataclass
+class _Recipe:
+    """What a class drew: the run on a fine grid, then how it is logged."""
+
+    duration_s: float
+    fs_sim_hz: float
+    device: DeviceModel
+    compass: CompassModel
+    temp: Callable[[np.ndarray], np.ndarray]
+    rate: Callable[[np.ndarray], np.ndarray] = lambda t: np.zeros(t.size)
+    accel_fwd: Callable[[np.ndarray], np.ndarray] | None = None
+    accel_lat: Callable[[np.ndarray], np.ndarray] | None = None
+    offset: Callable[[np.ndarray], np.ndarray] | None = None
+    vibration: Callable[[np.ndarray], np.ndarray] | None = None  # gyro noise multiplier (>= 1)
+    dropouts: tuple[tuple[float, float], ...] = ()
+    heading0_deg: float = 0.0
+    roll_deg: float = 0.0
+    pitch_deg: float = 0.0
+    log_fs_hz: float | None = None  # decimated point samples (None: every grid row)
+    telemetry: bool = False  # jittered 0.5-4 s spacing, a compass sample on every row
+    records: tuple[tuple[float, float], ...] = ()
+    compass_form: str = "heading"
+    temp_channel_c: float | None = None
+
+
+def _u(rng, lo, hi) -> float:
+    return float(rng.uniform(lo, hi))
+
+
+def _sign(rng) -> float:
+    return float(rng.choice([-1.0, 1.0]))
+
+
+def _device(rng, *, hot: bool = False, memory: bool = False, coarse_temp: bool = False) -> DeviceModel:
+    """A random gyro: :func:`random_device`, then a hot-running multicopter IMU (``hot``: a
+    steep, curved drift), thermal lag and backlash (``memory``), or a temperature read in
+    whole degrees (``coarse_temp``)."""
+    dev = random_device(rng)
+    if hot:
+        dev = replace(dev, c1_dps_per_c=_sign(rng) * _u(rng, 0.04, 0.15), c2_dps_per_c2=_sign(rng) * _u(rng, 5e-4, 3e-3),
+                      k_rate_dps_per_cps=_u(rng, -15.0, 15.0), noise_density_dps_rthz=_u(rng, 0.005, 0.02))
+    if memory:
+        dev = replace(dev, lag_tau_s=_u(rng, 60.0, 300.0), play_dps=_sign(rng) * _u(rng, 0.03, 0.15),
+                      play_width_c=_u(rng, 3.0, 10.0), c2_dps_per_c2=_sign(rng) * _u(rng, 3e-4, 1e-3))
+    if coarse_temp:
+        dev = replace(dev, temp_quant_c=1.0)
+    return dev
+
+
+def _compass(rng, *, noise=(0.3, 0.8), rate_hz=10.0) -> CompassModel:
+    return replace(random_compass(rng), noise_deg=_u(rng, *noise), rate_hz=float(rate_hz))
+
+
+# temperature profiles: functions of the grid times
+
+
+def _warmup(rng, start=(10.0, 30.0), rise=(10.0, 35.0), tau=(60.0, 400.0)):
+    t0, dT, tau_s = _u(rng, *start), _u(rng, *rise), _u(rng, *tau)
+    return lambda t: t0 + dT * (1.0 - np.exp(-t / tau_s))
+
+
+def _knots(times, temps):
+    """A monotone C1 profile through (time s, degC) knots, flat outside them."""
+    from scipy.interpolate import PchipInterpolator
+
+    spline = PchipInterpolator(np.asarray(times, float), np.asarray(temps, float))
+    return lambda t: spline(np.clip(t, times[0], times[-1]))
+
+
+def _chamber(rng, duration):
+    """Chamber ramps with plateaus and knees: 4–7 knots between -20 and 60 degC."""
+    n = int(rng.integers(4, 8))
+    times = np.sort(rng.uniform(0.05, 0.95, n - 2)) * duration
+    times = np.concatenate([[0.0], times, [duration]])
+    temps = [_u(rng, 15.0, 30.0)]
+    for _ in range(n - 1):
+        temps.append(float(np.clip(temps[-1] + _sign(rng) * _u(rng, 5.0, 30.0), -20.0, 60.0)))
+    return _knots(times, temps)
+
+
+def _day_cycle(rng, duration):
+    mean, amp, phase = _u(rng, 5.0, 30.0), _u(rng, 3.0, 12.0), _u(rng, 0.0, 2 * math.pi)
+    period = _u(rng, 1.5, 3.0) * duration  # a part of one day, squeezed into the run
+    return lambda t: mean + amp * np.sin(2 * math.pi * t / period + phase)
+
+
+# motion pieces, added over their own samples
+
+
+def _rotation(rate, t, t0, angle, peak, ramp=1.0):
+    """Add one rotation by ``angle`` deg (raised-cosine ramps, plateau ``peak`` deg/s)."""
+    dur = abs(angle) / peak + ramp
+    sl = ramp_slice(t, t0, t0 + dur)
+    x = t[sl]
+    rate[sl] += math.copysign(peak, angle) * (smooth_step((x - t0) / ramp) - smooth_step((x - (t0 + dur - ramp)) / ramp))
+    return t0 + dur
+
+
+def _sway(rng, t, amp_deg=(0.5, 4.0), period_s=(8.0, 120.0), n=3):
+    """Yaw sway: the rate of a few sinusoids of heading."""
+    out = np.zeros(t.size)
+    for _ in range(n):
+        a, p, ph = _u(rng, *amp_deg), _u(rng, *period_s), _u(rng, 0.0, 2 * math.pi)
+        out += a * 2 * math.pi / p * np.cos(2 * math.pi * t / p + ph)
+    return out
+
+
+def _pulse(t, t0, t1, ramp):
+    """1 inside [t0, t1] with raised-cosine edges of ``ramp`` s, 0 outside."""
+    ramp = max(min(ramp, 0.25 * (t1 - t0)), 1e-3)
+    return smooth_step((t - t0) / ramp) - smooth_step((t - (t1 - ramp)) / ramp)
+
+
+def _disturbances(rng, duration, n_range=(1, 4), size=(5.0, 40.0), dur=(20.0, 600.0), kinds=("step", "ramp", "wander")):
+    """Magnetic interference episodes: (kind, start, length, size, parameters)."""
+    out = []
+    for _ in range(int(rng.integers(n_range[0], n_range[1] + 1))):
+        length = min(_u(rng, *dur), 0.3 * duration)
+        start = _u(rng, 0.1 * duration, max(0.1 * duration, 0.95 * duration - length))
+        out.append((str(rng.choice(kinds)), start, length, _sign(rng) * _u(rng, *size), _u(rng, 1.0, 30.0),
+                    int(rng.integers(0, 2**31))))
+    return out
+
+
+def _offset_fn(episodes):
+    """The compass heading offset (deg) of interference episodes, as a function of time."""
+    def offset(t):
+        out = np.zeros(t.size)
+        for kind, start, length, size, ramp, seed in episodes:
+            sl = ramp_slice(t, start, start + length)
+            x = t[sl]
+            if kind == "step":
+                out[sl] += size * _pulse(x, start, start + length, ramp)
+            elif kind == "ramp":  # grows over the episode, then drops within `ramp` seconds
+                out[sl] += size * np.clip((x - start) / length, 0.0, 1.0) * _pulse(x, start, start + length, ramp)
+            else:  # wander: a smooth random process inside the episode
+                g = np.random.default_rng(seed)
+                knots = np.linspace(start, start + length, max(4, int(length / 40.0)))
+                vals = size * g.uniform(-1.0, 1.0, knots.size)
+                out[sl] += np.interp(x, knots, vals) * _pulse(x, start, start + length, ramp)
+        return out
+    return offset
+
+
+def _dropouts(rng, duration, n_range=(1, 3), length=(300.0, 1800.0)):
+    out = []
+    for _ in range(int(rng.integers(n_range[0], n_range[1] + 1))):
+        ln = min(_u(rng, *length), 0.25 * duration)
+        out.append((_u(rng, 0.1 * duration, 0.9 * duration - ln), ln))
+    return tuple(out)
+
+
+# --------------------------------------------------------------------------- the classes
+
+
+def _warmup_telemetry(rng, scale):
+    """A multicopter board still on the bench after power-on, its IMU warming up fast;
+    telemetry at about 1 Hz with 0.5–4 s jitter; the compass clean, once in a while a
+    short disturbance nearby."""
+    duration = _u(rng, 600.0, 1800.0) * scale
+    episodes = _disturbances(rng, duration, (0, 1), (5.0, 30.0), (20.0, 120.0), ("step",))
+    return _Recipe(duration, 50.0, _device(rng, hot=True, coarse_temp=rng.random() < 0.3),
+                   _compass(rng, noise=(0.5, 2.0), rate_hz=50.0), _warmup(rng, rise=(15.0, 40.0), tau=(60.0, 300.0)),
+                   offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), telemetry=True)
+
+
+def _multicopter(rng, scale):
+    """Warm-up on the ground, a flight with yaw manoeuvres, vibration on the gyro, an IMU
+    heating in flight and a compass error that follows the motor throttle; landing, still."""
+    ground = _u(rng, 120.0, 360.0) * scale
+    flight = _u(rng, 300.0, 900.0) * scale
+    duration = ground + flight + _u(rng, 60.0, 180.0) * scale
+    t_land = ground + flight
+    warm = _warmup(rng, rise=(8.0, 20.0), tau=(60.0, 300.0))
+    heat, heat_tau = _u(rng, 5.0, 15.0), _u(rng, 120.0, 400.0)
+    k_throttle = _sign(rng) * _u(rng, 5.0, 30.0)
+    hover = _u(rng, 0.4, 0.6)
+    man = [(_u(rng, ground + 20, t_land - 30), _u(rng, 5.0, 20.0), _u(rng, -0.2, 0.2)) for _ in range(6)]
+    turns = []
+    t0 = ground + _u(rng, 20.0, 60.0)
+    while t0 < t_land - 40.0:
+        angle = _sign(rng) * _u(rng, 20.0, 180.0)
+        turns.append((t0, angle, _u(rng, 15.0, 90.0)))
+        t0 += abs(angle) / 15.0 + 1.0 + _u(rng, 10.0, 60.0)
+
+    def throttle(t):
+        th = hover * _pulse(t, ground, t_land, 3.0)
+        for tm, dm, dth in man:
+            th += dth * _pulse(t, tm, tm + dm, 1.0)
+        return th
+
+    sway = _child(rng)
+    vib = _u(rng, 2.0, 8.0)
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for s, a, p in turns:
+            _rotation(r, t, s, a, p)
+        return r + 0.3 * _sway(sway(), t, (0.2, 1.0), (2.0, 10.0)) * _pulse(t, ground, t_land, 3.0)
+
+    return _Recipe(duration, 200.0, _device(rng, hot=rng.random() < 0.5), _compass(rng, rate_hz=float(rng.choice([10.0, 25.0, 50.0]))),
+                   lambda t: warm(t) + heat * np.clip(1.0 - np.exp(-(t - ground) / heat_tau), 0.0, None) * (t > ground),
+                   rate=rate, offset=lambda t: k_throttle * throttle(t),
+                   vibration=lambda t: 1.0 + vib * _pulse(t, ground, t_land, 3.0),
+                   heading0_deg=_u(rng, 0, 360), roll_deg=_u(rng, -2, 2), pitch_deg=_u(rng, -2, 2),
+                   log_fs_hz=float(rng.choice([50.0, 100.0])))
+
+
+def _child(rng) -> Callable[[], np.random.Generator]:
+    """A function giving a fresh generator of one seed drawn now: the same draws every call."""
+    seed = int(rng.integers(0, 2**31))
+    return lambda: np.random.default_rng(seed)
+
+
+def _vessel(rng, scale):
+    """A vessel making slow continuous turns (well under 0.1 deg/s) with wave yaw, through
+    long compass outages; temperature following the day."""
+    duration = _u(rng, 3600.0, 10800.0) * scale
+    legs = []
+    t0 = 0.0
+    while t0 < duration:
+        ln = _u(rng, 600.0, 2400.0)
+        legs.append((t0, ln, _sign(rng) * _u(rng, 0.01, 0.09)))
+        t0 += ln
+    wave = _child(rng)
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for s, ln, w in legs:
+            r += w * _pulse(t, s, s + ln, 60.0)
+        return r + _sway(wave(), t, (0.3, 2.0), (6.0, 15.0), 2)
+
+    return _Recipe(duration, 10.0, _device(rng), _compass(rng), _day_cycle(rng, duration), rate=rate,
+                   dropouts=_dropouts(rng, duration, (1, 3), (600.0, 1800.0)), heading0_deg=_u(rng, 0, 360),
+                   log_fs_hz=float(rng.choice([5.0, 10.0])))
+
+
+def _sway_clean(rng, scale):
+    """A moored or parked platform swaying in yaw, its compass clean all along."""
+    duration = _u(rng, 3600.0, 7200.0) * scale
+    sway = _child(rng)
+    return _Recipe(duration, 10.0, _device(rng), _compass(rng), _day_cycle(rng, duration),
+                   rate=lambda t: _sway(sway(), t, (0.5, 4.0), (10.0, 120.0)), heading0_deg=_u(rng, 0, 360))
+
+
+def _chamber_bursty(rng, scale):
+    """A still unit in a thermal chamber (ramps with non-linear knees, a device with thermal
+    lag and backlash), logged in 2–10-s bursts every 1–10 min; a compass on half."""
+    duration = _u(rng, 7200.0, 14400.0) * scale
+    spacing, length = _u(rng, 60.0, 600.0), _u(rng, 2.0, 10.0)
+    starts = np.arange(0.0, duration - length, spacing) + rng.uniform(-0.05, 0.05) * spacing
+    records = tuple((float(max(s, 0.0)), float(length)) for s in starts)
+    with_compass = rng.random() < 0.5
+    return _Recipe(duration, 50.0, _device(rng, memory=rng.random() < 0.7), _compass(rng), _chamber(rng, duration),
+                   heading0_deg=_u(rng, 0, 360), records=records, compass_form="heading" if with_compass else "none")
+
+
+def _drive_plan(rng, duration, still_s):
+    """Legs with cornering and stops: (speed steps (t0, dur, delta m/s), turns (t0, angle, peak))."""
+    cruise = _u(rng, 5.0, 20.0)
+    t = still_s
+    steps, turns = [(t, 6.0, cruise)], []
+    t += 6.0
+    while t < duration - 30.0:
+        t += _u(rng, 20.0, 150.0)
+        if rng.random() < 0.25:
+            steps.append((t, 5.0, -cruise))
+            t += 5.0 + _u(rng, 10.0, 90.0)
+            steps.append((t, 6.0, cruise))
+            t += 6.0
+        angle = _sign(rng) * _u(rng, 30.0, 180.0)
+        peak = _u(rng, 8.0, 30.0)
+        turns.append((t, angle, peak))
+        t += abs(angle) / peak + 2.0
+    return steps, turns, cruise
+
+
+def _drive_motion(rng, duration):
+    steps, turns, cruise = _drive_plan(rng, duration, _u(rng, 30.0, 120.0))
+    wobble = _child(rng)
+
+    def speed(t):
+        v = np.zeros(t.size)
+        for t0, d, dv in steps:
+            v += dv * smooth_step((t - t0) / d)
+        return v
+
+    def accel(t):
+        a = np.zeros(t.size)
+        for t0, d, dv in steps:
+            a += dv * smooth_step_slope((t - t0) / d) / d
+        return a
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for t0, a, p in turns:
+            _rotation(r, t, t0, a, p, ramp=2.0)
+        return r + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
+
+    return rate, accel, lambda t: speed(t) * np.radians(rate(t))
+
+
+def _drive(rng, scale):
+    """A car from a cold start: legs, cornering, stops, a compass tilted by braking and
+    cornering, and interference under bridges or in car parks."""
+    duration = _u(rng, 1800.0, 3600.0) * scale
+    rate, accel, lat = _drive_motion(rng, duration)
+    episodes = _disturbances(rng, duration, (0, 3), (10.0, 40.0), (10.0, 120.0))
+    return _Recipe(duration, 50.0, _device(rng), _compass(rng), _warmup(rng, start=(-10.0, 15.0), rise=(15.0, 35.0),
+                   tau=(300.0, 1200.0)), rate=rate, accel_fwd=accel, accel_lat=lat, offset=_offset_fn(episodes),
+                   heading0_deg=_u(rng, 0, 360))
+
+
+def _rawmag_drive(rng, scale):
+    """:func:`_drive` logged with the raw magnetometer and accelerometer instead of a heading,
+    the unit mounted with a small tilt."""
+    rec = _drive(rng, scale)
+    return replace(rec, compass_form="raw", roll_deg=_u(rng, -5, 5), pitch_deg=_u(rng, -5, 5))
+
+
+def _bench_interference(rng, scale):
+    """A bench unit heated or cooled, turned by hand now and then, with interference steps,
+    ramps and wander from things moved around it."""
+    duration = _u(rng, 1800.0, 5400.0) * scale
+    turns = []
+    t0 = _u(rng, 120.0, 600.0)
+    while t0 < duration - 60.0:
+        angle = _sign(rng) * _u(rng, 30.0, 180.0)
+        turns.append((t0, angle, _u(rng, 10.0, 60.0)))
+        t0 += _u(rng, 300.0, 900.0)
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for s, a, p in turns:
+            _rotation(r, t, s, a, p)
+        return r
+
+    return _Recipe(duration, float(rng.choice([20.0, 50.0, 100.0])), _device(rng), _compass(rng), _chamber(rng, duration),
+                   rate=rate, offset=_offset_fn(_disturbances(rng, duration, (2, 5), (5.0, 60.0), (30.0, 600.0))),
+                   heading0_deg=_u(rng, 0, 360))
+
+
+def _turntable(rng, scale):
+    """Turntable rotations of 90–720 deg at 30–300 deg/s between dwells, in a chamber ramp,
+    sampled at 200–500 Hz."""
+    duration = _u(rng, 600.0, 1800.0) * scale
+    turns = []
+    t0 = _u(rng, 30.0, 90.0)
+    while t0 < duration - 30.0:
+        angle = _sign(rng) * _u(rng, 90.0, 720.0)
+        peak = _u(rng, 30.0, 300.0)
+        turns.append((t0, angle, peak))
+        t0 += abs(angle) / peak + 1.0 + _u(rng, 10.0, 60.0)
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for s, a, p in turns:
+            _rotation(r, t, s, a, p)
+        return r
+
+    fs = float(rng.choice([200.0, 500.0]))
+    return _Recipe(duration, fs, _device(rng), _compass(rng, rate_hz=50.0), _chamber(rng, duration), rate=rate,
+                   heading0_deg=_u(rng, 0, 360))
+
+
+def _no_temp_robot(rng, scale):
+    """A ground robot indoors, stop and go with turns, near steel (wandering interference);
+    its IMU warms up but the log has no temperature."""
+    duration = _u(rng, 1200.0, 3600.0) * scale
+    turns = []
+    t0 = _u(rng, 20.0, 120.0)
+    while t0 < duration - 30.0:
+        angle = _sign(rng) * _u(rng, 20.0, 180.0)
+        turns.append((t0, angle, _u(rng, 10.0, 45.0)))
+        t0 += _u(rng, 20.0, 240.0)
+
+    def rate(t):
+        r = np.zeros(t.size)
+        for s, a, p in turns:
+            _rotation(r, t, s, a, p)
+        return r
+
+    episodes = _disturbances(rng, duration, (1, 4), (5.0, 25.0), (30.0, 300.0), ("wander", "step"))
+    return _Recipe(duration, 50.0, _device(rng), _compass(rng), _warmup(rng, rise=(5.0, 20.0), tau=(300.0, 1200.0)),
+                   rate=rate, offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), temp_channel_c=0.0)
+
+
+def _day_parked(rng, scale):
+    """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
+    outages and interference; logged at 1–2 Hz."""
+    duration = _u(rng, 10800.0, 21600.0) * scale
+    episodes = _disturbances(rng, duration, (1, 3), (5.0, 40.0), (300.0, 1800.0))
+    return _Recipe(duration, 10.0, _device(rng), _compass(rng, rate_hz=2.0), _day_cycle(rng, duration),
+                   offset=_offset_fn(episodes), dropouts=_dropouts(rng, duration, (1, 2), (1800.0, 5400.0)),
+                   heading0_deg=_u(rng, 0, 360), log_fs_hz=float(rng.choice([1.0, 2.0])))
+
+
+_BUILDERS: dict[str, Callable] = {
+    "warmup-telemetry": _warmup_telemetry,
+    "multicopter": _multicopter,
+    "vessel": _vessel,
+    "sway-clean": _sway_clean,
+    "chamber-bursty": _chamber_bursty,
+    "drive": _drive,
+    "rawmag-drive": _rawmag_drive,
+    "bench-interference": _bench_interference,
+    "turntable": _turntable,
+    "no-temp-robot": _no_temp_robot,
+    "day-parked": _day_parked,
+}
+
+#: The classes, by name, with one line each (the builders' docstrings).
+CLASSES: Mapping[str, str] = MappingProxyType(
+    {name: " ".join((fn.__doc__ or "").split()) for name, fn in _BUILDERS.items()}
+)
+
+
+# --------------------------------------------------------------------------- assembly
+
+
+def _streams(cls: str, seed: int) -> dict[str, np.random.Generator]:
+    names = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
+    root = np.random.SeedSequence([zlib.crc32(cls.encode()), int(seed)])
+    return {n: np.random.default_rng(c) for n, c in zip(names, root.spawn(len(names)))}
+
+
+def _telemetry_times(duration: float, rng: np.random.Generator) -> np.ndarray:
+    """Times of a telemetry log: mostly about 1 s apart, some 0.5 s, some 2–4 s."""
+    steps = np.where(rng.random(int(duration) + 10) < 0.8, rng.uniform(0.7, 1.3, int(duration) + 10),
+                     rng.choice([0.5, 2.0, 3.0, 4.0], int(duration) + 10))
+    t = np.cumsum(np.concatenate([[0.0], steps]))
+    return t[t <= duration]
+
+
+def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Indices of the grid rows the logger keeps."""
+    if rec.telemetry:
+        idx = np.unique(np.searchsorted(t, _telemetry_times(rec.duration_s, rng)))
+        return idx[idx < t.size]
+    keep = np.ones(t.size, dtype=bool)
+    if rec.log_fs_hz is not None and rec.log_fs_hz < rec.fs_sim_hz:
+        step = max(1, int(round(rec.fs_sim_hz / rec.log_fs_hz)))
+        keep[:] = False
+        keep[::step] = True
+    if rec.records:
+        inside = np.zeros(t.size, dtype=bool)
+        for start, dur in rec.records:
+            lo, hi = np.searchsorted(t, [start, start + dur])
+            inside[lo:hi] = True
+        keep &= inside
+    return np.flatnonzero(keep)
+
+
+def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCase:
+    """Generate the log of one case.
+
+    Parameters
+    ----------
+    cls : str
+        One of :data:`CLASSES`.
+    seed : int
+        A seed of a split (:func:`seeds`); the same ``(cls, seed)`` gives the same log.
+    duration_scale : float
+        Every length of the run (segments, outages, temperature profiles) times this
+        (for quick tests; the Monte Carlo uses 1).
+
+    Returns
+    -------
+    GeneratedCase
+    """
+    if cls not in _BUILDERS:
+        raise ConfigError(f"unknown scenario class {cls!r}; choose from: {', '.join(_BUILDERS)}")
+    split_of(int(seed))
+    if not (isinstance(duration_scale, (int, float)) and math.isfinite(duration_scale) and duration_scale > 0):
+        raise ConfigError(f"duration_scale must be a positive number, got {duration_scale!r}")
+    rng = _streams(cls, int(seed))
+    rec = _BUILDERS[cls](rng["recipe"], float(duration_scale))
+    fs = rec.fs_sim_hz
+    n = int(math.floor(rec.duration_s * fs)) + 1
+    t = np.arange(n) / fs
+    temp_true = rec.temp(t)
+    temp_rate = np.gradient(temp_true, t) if n > 1 else np.zeros(n)
+    rate = rec.rate(t)
+    from scipy.integrate import cumulative_trapezoid
+
+    heading_true = rec.heading0_deg + cumulative_trapezoid(rate, t, initial=0.0)
+    dev = rec.device
+    bias = (dev.drift_series(t, temp_true, temp_rate)
+            + gauss_markov(n, 1.0 / fs, dev.bias_instability_dps, dev.bias_tau_s, rng["bias"])
+            + random_walk(n, 1.0 / fs, dev.rate_random_walk_dps_rts, rng["rrw"]))
+    rows = _logged_rows(rec, t, rng["log"])
+    if rows.size < 3:
+        raise ConfigError(f"class {cls!r}, seed {seed}: fewer than 3 logged rows; use a larger duration_scale")
+    tl = t[rows]
+    sigma = dev.white_sigma_dps(fs) * (rec.vibration(tl) if rec.vibration is not None else 1.0)
+    body = math.cos(math.radians(rec.roll_deg)) * math.cos(math.radians(rec.pitch_deg))
+    gyro = body * rate[rows] + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
+    temp = temperature_reading(temp_true, dev, rng["temp"])[rows]
+    if rec.temp_channel_c is not None:
+        temp = np.full(rows.size, float(rec.temp_channel_c))
+    offset = rec.offset(tl) if rec.offset is not None else np.zeros(rows.size)
+    zero = np.zeros(rows.size)
+    motion = Motion(temp_c=temp_true[rows], temp_rate_cps=temp_rate[rows], heading_rate_dps=rate[rows],
+                    heading0_deg=rec.heading0_deg, roll_deg=rec.roll_deg, pitch_deg=rec.pitch_deg,
+                    accel_fwd_mps2=rec.accel_fwd(tl) if rec.accel_fwd is not None else zero,
+                    accel_lat_mps2=rec.accel_lat(tl) if rec.accel_lat is not None else zero,
+                    interference_offset_deg=offset)
+    mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
+    heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
+    for start, dur in rec.dropouts:
+        out = (tl >= start) & (tl < start + dur)
+        heading[out] = np.nan
+        mag[out] = np.nan
+    cols = {T: tl, GYRO_Z: gyro, TEMP: temp}
+    if rec.compass_form == "heading":
+        cols[HEADING] = heading
+    elif rec.compass_form == "raw":
+        cols.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
+        cols.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
+    cols.update({REF_HEADING: wrap_360(heading_true[rows]), TRUE_BIAS_Z: bias[rows], TRUE_RATE_Z: rate[rows],
+                 TRUE_COMPASS_OFFSET: offset})
+    log = pd.DataFrame(cols)
+    log.attrs = {"class": cls, "seed": int(seed), "split": split_of(int(seed)), "duration_s": float(rec.duration_s),
+                 "fs_sim_hz": fs, "compass_form": rec.compass_form, "telemetry": rec.telemetry,
+                 "bursts": len(rec.records)}
+
+    def calibration() -> pd.DataFrame:
+        from gyrodrift.simulate.scenarios import simulate
+
+        return simulate("calibration", seed=int(seed) % (2**31), duration_s=7200.0, fs_hz=10.0, device=dev,
+                        compass=replace(rec.compass, rate_hz=min(rec.compass.rate_hz, 10.0)))
+
+    return GeneratedCase(cls, int(seed), log, dev, rec.compass, calibration)
+
+
+def truth_labels(log: pd.DataFrame) -> pd.DataFrame:
+    """Per row of a generated log: ``disturbed`` (a compass sample whose interference
+    exceeds :data:`DISTURBED_DEG`; NaN-free bool, False on rows without a compass sample),
+    ``turning`` (true rate above :data:`TURNING_DPS`) and ``still`` (true rate exactly 0)."""
+    has_compass = log[HEADING].notna() if HEADING in log else log[MAG_COLS[0]].notna() if MAG_COLS[0] in log \
+        else pd.Series(False, index=log.index)
+    rate = log[TRUE_RATE_Z].to_numpy(float)
+    return pd.DataFrame({
+        "disturbed": has_compass.to_numpy() & (np.abs(log[TRUE_COMPASS_OFFSET].to_numpy(float)) > DISTURBED_DEG),
+        "turning": np.abs(rate) > TURNING_DPS,
+        "still": rate == 0.0,
+    }, index=log.index)
