@@ -556,7 +556,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     column_types: dict[str, str], progress=None) -> RunStats:
     from gyrodrift.attitude import RawTilt
     from gyrodrift.compass import compass_columns
-    from gyrodrift.compensator import ChunkEngine, output_frame
+    from gyrodrift.compensator import output_frame
+    from gyrodrift.compensator.model_engine import make_engine
     from gyrodrift.gyro_units import GyroUnitCheck
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
     from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
@@ -582,7 +583,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             # numba's start-up (importing it, loading the compiled kernels from its cache:
             # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
             # the reader thread reads the first chunks
-            engine = ChunkEngine(cfg, est, source)
+            engine = make_engine(cfg, est, source)
 
             def emit(cols) -> None:
                 """Write the rows the engine gave back, with their input columns."""
@@ -626,7 +627,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     if clock:
                         cfg = clock_config(cfg)
                         est = build_estimator(cfg)
-                        engine = ChunkEngine(cfg, est, source, clock=True)
+                        engine = make_engine(cfg, est, source, clock=True)
                 pending.append(log)
                 units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),

@@ -8,7 +8,7 @@ import pandas as pd
 from gyrodrift.attitude import RawTilt, accel_down
 from gyrodrift.compass import compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
-from gyrodrift.compensator.engine import ChunkEngine
+from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
@@ -111,7 +111,7 @@ def compensate_arrays(
     else:  # the engine wraps the heading itself
         heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
         norm = dip = None
-    engine = ChunkEngine(cfg, est, source, clock=clock)
+    engine = make_engine(cfg, est, source, clock=clock)
     if progress is None or n <= PROGRESS_ROWS:
         cols = engine.feed(t, g, T_in, heading, norm, dip, buffers)
         gated = None

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, replace
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig, KalmanConfig, make_estimator
+from gyrodrift.estimators.evidence import EvidenceConfig
 from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
@@ -93,6 +94,7 @@ class CompensatorConfig:
     gate: GateConfig = field(default_factory=GateConfig)
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
+    evidence: EvidenceConfig = field(default_factory=EvidenceConfig)
     declination_deg: float = 0.0
     tilt: str = "accel"
     mag_calibration: bool = False
@@ -178,4 +180,6 @@ def build_estimator(cfg: CompensatorConfig):
     sized = {"depth": cfg.stack_depth} if cls is not None and issubclass(cls, KernelFilter) else {}
     if cfg.estimator == "adaptive":
         return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.adaptive, **sized)
+    if cfg.estimator == "evidence":
+        return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.evidence)
     return make_estimator(cfg.estimator, config=cfg.kalman, **sized)

@@ -13,7 +13,7 @@ from gyrodrift import gating
 from gyrodrift.attitude import RawTilt
 from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
-from gyrodrift.compensator.engine import ChunkEngine
+from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
@@ -107,7 +107,7 @@ class Compensator:
             self.config = clock_config(self.config)
         if self._own_estimator:
             self._est = build_estimator(self.config)
-        self._engine = ChunkEngine(self.config, self._est, self.source, clock=clock)
+        self._engine = make_engine(self.config, self._est, self.source, clock=clock)
 
     # -- public state
     @property

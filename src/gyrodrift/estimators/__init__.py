@@ -26,7 +26,8 @@ from gyrodrift.estimators.base import (
 )
 from gyrodrift.estimators.adaptive import AdaptiveConfig, AdaptiveKalman
 from gyrodrift.estimators.kalman import BiasKalman, KalmanConfig, KalmanDrift, PlainKalmanDrift
-from gyrodrift.estimators.lsq import FixedParams, WindowedLsm, fit_linear_drift
+from gyrodrift.estimators.lsq import CausalMlr, FixedParams, WindowedLsm, fit_linear_drift
+from gyrodrift.estimators.evidence import EvidenceConfig, EvidenceModel
 from gyrodrift.estimators.poly import Poly3Calibration, fit_poly3
 
 __all__ = [
@@ -43,6 +44,9 @@ __all__ = [
     "PlainKalmanDrift",
     "BiasKalman",
     "WindowedLsm",
+    "CausalMlr",
+    "EvidenceConfig",
+    "EvidenceModel",
     "FixedParams",
     "fit_linear_drift",
     "Poly3Calibration",

@@ -1,0 +1,60 @@
+"""Run the evidence model on generator seeds and compare with stored baselines (a tuning aid).
+
+    python benchmarks/tune_evidence.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
+
+``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
+only ``default`` is recomputed here (with the settings given), so a setting can be tried in
+a minute. Prints per class the default's median heading, bias and fused RMS beside the best
+causal baseline's and Fusion's AHRS, and the honesty columns.
+"""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from dataclasses import replace
+
+import pandas as pd
+
+from gyrodrift import heldout
+from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.estimators.evidence import EvidenceConfig
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser()
+    p.add_argument("--baseline", required=True)
+    p.add_argument("--split", default="tuning")
+    p.add_argument("--seeds", type=int, default=10)
+    p.add_argument("--classes", nargs="+")
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--set", nargs="*", default=[], help="EvidenceConfig field=value")
+    p.add_argument("-o", "--output")
+    args = p.parse_args(argv)
+    warnings.simplefilter("ignore")
+    ev = EvidenceConfig(**{k: float(v) for k, v in (s.split("=") for s in args.set)})
+    cfg = CompensatorConfig(estimator="evidence", evidence=ev)
+    df = heldout.run_generated(args.classes, [args.split], args.seeds, ["default"], config=cfg, workers=args.workers)
+    if args.output:
+        df.to_csv(args.output, index=False)
+    base = pd.read_csv(args.baseline)
+    base = base[(base["split"] == args.split) & (base["method"] != "default") & base["seed"].isin(df["seed"])
+                & base["class"].isin(df["class"])]
+    summ = heldout.summarise(pd.concat([df, base]))
+    acc = heldout.acceptance(summ)
+    pd.set_option("display.width", 250)
+    print(acc.drop(columns=["split"]).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    own = summ[summ["method"] == "default"][["class", "bias_in_1sd", "bias_in_2sd", "fused_in_1sd", "fused_in_2sd",
+                                             "interference_precision", "interference_recall", "turning_precision",
+                                             "turning_recall"]]
+    print(own.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    print("ok heading", int(acc.ok_heading.sum()), "bias", int(acc.ok_bias.sum()), "fused", int(acc.ok_fused.sum()),
+          "of", len(acc), "; failed runs", int((df.status != "ok").sum()))
+    bad = df[df.status != "ok"]
+    for _, r in bad.head(3).iterrows():
+        print("failed", r["class"], r["seed"], r["error"])
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,143 @@
+"""The engine of the default estimator's model: :class:`ModelEngine`, and :func:`make_engine`.
+
+:class:`ModelEngine` is a :class:`~gyrodrift.compensator.engine.ChunkEngine` whose rows run
+through the model's row loop (:func:`gyrodrift.kernels.evloop.run`) instead of the paper's
+interval loop: the same chunked, resumable feeding, the same held init window (its rows
+come out when it is complete, their gyro-alone heading anchored on its first compass
+sample) and the same provisional rows while it fills, so the three entry points give the
+same bits. The model needs no initialisation from the window: it learns from the first row.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.compensator.engine import ChunkEngine, _read_only, settings_arrays
+from gyrodrift.estimators.evidence import EvidenceModel
+from gyrodrift.kernels import evloop
+from gyrodrift.kernels import layout as L
+from gyrodrift.kernels.numeric import wrap360_all
+from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
+
+__all__ = ["ModelEngine", "make_engine"]
+
+
+def make_engine(config, estimator, source: str = "arrays", *, clock: bool = False) -> ChunkEngine:
+    """The engine that runs ``estimator``: :class:`ModelEngine` for the model, else the paper's
+    interval engine (:class:`ChunkEngine`)."""
+    cls = ModelEngine if isinstance(estimator, EvidenceModel) else ChunkEngine
+    return cls(config, estimator, source, clock=clock)
+
+
+class ModelEngine(ChunkEngine):
+    """Resumable compensation of one log by the model (see the module notes and
+    :class:`ChunkEngine` for the interface)."""
+
+    def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False):
+        self.cfg = config
+        self.est = estimator
+        self.source = source
+        self._set, self._iset = settings_arrays(config, None)
+        self._set[L.C_MAX_GAP] = math.inf  # time gaps are the model's, relative to the log's spacing
+        self._external = False
+        self._fs = np.zeros(L.N_FSTATE)
+        self._ist = np.zeros(L.N_ISTATE, dtype=np.int64)
+        self._ist[L.I_INIT_END] = -1
+        self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
+        self._t0 = None
+        self._held = []
+        self._row = None
+        self._prov = (math.nan, 0.0, 0.0, math.nan, math.nan)
+        self._prov_model = None
+        self.notes = []
+        self._clock = ElapsedClock(config.gate.max_gap_s) if clock else None
+        if clock:
+            why = "asked for" if config.temperature == "clock" else "the log has no temperature, or it never changes"
+            self.notes.append(f"{source}: the drift model's T is the elapsed time, not the temperature ({why}): "
+                              f"c is the drift at the start and a its change per {CLOCK_UNIT_S:g} s, deg/s")
+        self._mc = None
+        self._rf = np.zeros(evloop.RF_N)
+        self._rc = np.zeros(evloop.RC_N)
+        gate = config.gate
+        self._rc[evloop.RC_TURN_RATE] = gate.turn_rate_dps
+        self._rc[evloop.RC_TURN_WIN] = gate.turn_window_s
+        self._rc[evloop.RC_MAX_AGE] = gate.compass_max_age_s
+        self._rc[evloop.RC_PRIOR_A] = config.kalman.p0_sd[0]
+        self._rc[evloop.RC_PRIOR_B] = config.kalman.p0_sd[1]
+
+    def _initialise(self, inputs, Tp) -> None:
+        t, g, T, heading, norm, dip = inputs
+        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
+        if t[e] < self._fs[L.F_TSTART]:
+            self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
+                              f"{self.cfg.init_s:g}-s init window: compensated from what it holds and the prior")
+        if not np.isfinite(heading[: e + 1]).any():
+            self.notes.append(f"{self.source}: no compass sample in the first {t[e] - t[0]:.1f} s: the heading "
+                              "starts at 0 deg at the first sample (relative)")
+        self._mc = self.est.start(float(T[0]), self.cfg.compass_sigma_deg, self.cfg.gyro_noise_dps_rthz,
+                                  self._clock is not None)
+        self._anchor_pending = True
+
+    def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols) -> None:
+        evloop.run(t, g, T, Tp, heading, held, norm, dip, 0, self.est.mf, self._mc, self._rf, self._rc,
+                   cols.out, cols.codes, cols.n)
+
+    def _run(self, inputs, cols) -> dict:
+        t, g, T, heading, norm, dip = inputs
+        Tp = _read_only(cols.column(L.O_TEMP_RATE))
+        held = _read_only(cols.code(L.OC_GAP).view(np.bool_))
+        self._loop(t, g, T, Tp, heading, held, norm, dip, cols)
+        if getattr(self, "_anchor_pending", False):  # the init window's rows: anchored once it is done
+            self._anchor_pending = False
+            self._anchor_rows(heading, cols)
+        return {
+            "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
+            "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
+            "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
+            "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
+            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
+            "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
+        }
+
+    def _anchor_rows(self, heading, cols) -> None:
+        """Rows of the init window before its first compass sample: their gyro-alone heading
+        (written relative) moves by the anchor, as the later rows'."""
+        seen = np.flatnonzero(np.isfinite(heading))
+        if not seen.size or self._rf[evloop.RF_SEEN] != 1.0:
+            return
+        first = int(seen[0])
+        col = cols.column(L.O_HEADING)
+        col[:first] += self._rf[evloop.RF_ANCHOR]
+        wrap360_all(col[:first].copy(), col[:first])
+
+    def feed_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
+                 dip: float = math.nan) -> tuple[list, list, float]:
+        from gyrodrift.compensator.engine import _RowMemory
+        from gyrodrift.errors import LogFormatError
+        from gyrodrift.kernels import loop
+
+        r = self._row
+        if r is None:
+            r = self._row = _RowMemory()
+        if self._clock is not None:
+            T = float(self._clock((t,))[0])
+        r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
+        cols = r.cols
+        rows_before = self.rows_in
+        bad, fix = loop.prepare(r.ro_t, r.ro_g, r.ro_T, r.ro_heading, self._fs, self._ist, self._set, self._iset,
+                                self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        if bad >= 0:
+            raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+        if self._clock is not None:
+            r.Tp[0] = 0.0
+        h = r.ro_h_wrapped if fix & 4 else r.ro_heading
+        g_in, T_in = r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T
+        self._loop(r.ro_t, g_in, T_in, r.ro_Tp, h, r.ro_gap, r.ro_norm, r.ro_dip, cols)
+        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
+
+    def accepted(self) -> np.ndarray:
+        """The model takes no interval measurements: an empty (0, 5) array."""
+        return np.zeros((0, L.N_MEAS))
+

@@ -1,0 +1,225 @@
+"""The default estimator: one model of gyro, compass and platform, judged by evidence.
+
+The model and its equations are in :mod:`gyrodrift.kernels.evidence` (states heading,
+the drift model of eq. 2 and the compass's slow error; four hypotheses — compass clean or
+disturbed, platform still or moving — weighted by how well each explains the data). This
+module holds its settings (:class:`EvidenceConfig`, each a physical quantity with its unit)
+and the estimator object the engine runs (:class:`EvidenceModel`): the model's arrays, the
+prior, and the paper's absolute ``[a, b, c]`` and their covariance for profiles and reports.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.estimators.kalman import KalmanConfig
+from gyrodrift.kernels import evidence as ev
+
+__all__ = ["EvidenceConfig", "EvidenceModel"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class EvidenceConfig:
+    """Settings of the default estimator's model (:mod:`gyrodrift.kernels.evidence`).
+
+    Attributes
+    ----------
+    epoch_s : float
+        Length of an epoch, s: the model weighs and updates once per epoch (the rows of a
+        log sampled more slowly make an epoch each).
+    clean_s, disturbed_s : float
+        Mean length of a spell of clean compass and of a magnetic disturbance, s (the
+        Markov chain of the compass hypotheses).
+    still_s, moving_s : float
+        Mean length of a still and of a moving spell of the platform, s.
+    slope_walk : float
+        Random walk of a per √degC of temperature change, deg/s/degC/√degC (a drift curved
+        in temperature has a slope that changes as the temperature moves).
+    rate_walk : float
+        Random walk of b per √s, deg/s/(degC/s)/√s.
+    drift_walk : float
+        Random walk of the drift c' in time, deg/s/√s (bias instability).
+    drift_walk_temp : float
+        Random walk of c' per √degC of temperature change, deg/s/√degC (hysteresis, lag
+        and curvature: drift the linear model does not explain moves when T moves).
+    compass_error_deg, compass_error_s : float
+        Standard deviation (deg) and correlation time (s) of the compass's slow error d
+        (deviation, tilt): a Gauss–Markov process.
+    deviation_per_deg : float
+        Growth of d's standard deviation per degree turned (deviation is a function of
+        heading; tilt while cornering), deg/deg.
+    slow_turn_walk, agile_turn_walk : float
+        Random walks of the true rate under the two motion models, deg/s/√s: slow turns
+        and sways, manoeuvres.
+    slow_share, agile_share : float
+        Prior shares of the slow and the agile motion models in a moving epoch; the rest is
+        a rate that neither predicts (a start, a stop), within ``rate_any_dps``.
+    rate_any_dps : float
+        Standard deviation of a rate neither motion model predicts, deg/s.
+    angular_accel_dps2 : float
+        Typical angular acceleration, deg/s² (the error of the trapezoid integral between
+        samples of a moving platform).
+    gap_turn_dps : float
+        Rate at which the heading of a moving platform is lost across a time gap, deg/s.
+    still_walk : float
+        Heading random walk of a still platform, deg/√s (micro-motion).
+    gap_factor : float
+        A time step longer than this many typical steps (a running estimate of the log's
+        own spacing) is a time gap.
+    field_norm_sd, field_dip_deg : float
+        Scatter of a clean raw magnetometer's field strength (fraction of the reference)
+        and dip (deg).
+    noise_memory_s : float
+        Memory of the running estimates of the gyro's and the compass's white noise, s.
+    p_clean0, p_still0 : float
+        Probabilities of a clean compass and of a still platform at the start.
+    heading_sd0 : float
+        Standard deviation of the heading before any compass sample, deg.
+    """
+
+    epoch_s: float = 1.0
+    clean_s: float = 3600.0
+    disturbed_s: float = 300.0
+    still_s: float = 300.0
+    moving_s: float = 300.0
+    slope_walk: float = 0.003
+    rate_walk: float = 0.01
+    drift_walk: float = 2e-4
+    drift_walk_temp: float = 0.02
+    compass_error_deg: float = 1.5
+    compass_error_s: float = 300.0
+    deviation_per_deg: float = 0.03
+    slow_turn_walk: float = 0.002
+    agile_turn_walk: float = 2.0
+    slow_share: float = 0.8
+    agile_share: float = 0.15
+    rate_any_dps: float = 100.0
+    angular_accel_dps2: float = 10.0
+    gap_turn_dps: float = 1.0
+    still_walk: float = 0.001
+    gap_factor: float = 20.0
+    field_norm_sd: float = 0.03
+    field_dip_deg: float = 2.0
+    noise_memory_s: float = 600.0
+    p_clean0: float = 0.9
+    p_still0: float = 0.5
+    heading_sd0: float = 100.0
+
+    def __post_init__(self):
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ConfigError(f"evidence setting {f.name} must be a finite number >= 0, got {v!r}")
+        for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
+                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"evidence setting {name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("p_clean0", "p_still0", "slow_share", "agile_share"):
+            if not 0.0 < getattr(self, name) < 1.0:
+                raise ConfigError(f"evidence setting {name} must be between 0 and 1, got {getattr(self, name)!r}")
+        if not self.slow_share + self.agile_share < 1.0:
+            raise ConfigError("evidence settings slow_share + agile_share must be below 1 (the rest is any rate)")
+
+    def settings_array(self, compass_sd_deg: float, gyro_noise_dps_rthz: float) -> np.ndarray:
+        """The kernel's settings ``mc`` (:mod:`gyrodrift.kernels.evidence`)."""
+        mc = np.zeros(ev.N_MC)
+        mc[ev.MC_EPOCH] = self.epoch_s
+        mc[ev.MC_TAU_CLEAN], mc[ev.MC_TAU_DIST] = self.clean_s, self.disturbed_s
+        mc[ev.MC_TAU_STILL], mc[ev.MC_TAU_MOVE] = self.still_s, self.moving_s
+        mc[ev.MC_Q_A], mc[ev.MC_Q_B] = self.slope_walk, self.rate_walk
+        mc[ev.MC_Q_C], mc[ev.MC_Q_CT] = self.drift_walk, self.drift_walk_temp
+        mc[ev.MC_SIG_D], mc[ev.MC_TAU_D] = self.compass_error_deg, self.compass_error_s
+        mc[ev.MC_K_TURN] = self.deviation_per_deg
+        mc[ev.MC_Q_W_SLOW], mc[ev.MC_Q_W_AGILE] = self.slow_turn_walk, self.agile_turn_walk
+        mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps
+        mc[ev.MC_Q_STILL] = self.still_walk
+        mc[ev.MC_GAP_FACTOR] = self.gap_factor
+        mc[ev.MC_COMPASS_SD] = compass_sd_deg
+        mc[ev.MC_GYRO_NOISE] = gyro_noise_dps_rthz
+        mc[ev.MC_SIG_NORM], mc[ev.MC_SIG_DIP] = self.field_norm_sd, self.field_dip_deg
+        mc[ev.MC_NOISE_MEMORY] = self.noise_memory_s
+        mc[ev.MC_P_CLEAN0], mc[ev.MC_P_STILL0] = self.p_clean0, self.p_still0
+        mc[ev.MC_DELTA_SD0] = self.heading_sd0
+        mc[ev.MC_W_SLOW], mc[ev.MC_W_AGILE], mc[ev.MC_RATE_ANY] = self.slow_share, self.agile_share, self.rate_any_dps
+        return mc
+
+
+@register
+class EvidenceModel(LinearDrift):
+    """The default estimator (``evidence``): the model of :mod:`gyrodrift.kernels.evidence`.
+
+    The engine (:class:`gyrodrift.compensator.engine.ModelEngine`) runs it row by row; this
+    object holds its arrays and the prior, and reports the paper's absolute ``[a, b, c]``
+    (:attr:`params`) and their covariance (:attr:`cov`).
+
+    Parameters
+    ----------
+    config : KalmanConfig
+        The prior of [a, b, c] (``x0``, ``p0_sd`` or ``p0_cov``), shared with the other
+        Kalman estimators (a profile's or a calibration's warm start sets it).
+    settings : EvidenceConfig
+    """
+
+    name: ClassVar[str] = "evidence"
+    causal: ClassVar[bool] = True
+
+    def __init__(self, config: KalmanConfig = KalmanConfig(), *, settings: EvidenceConfig | None = None, **_):
+        settings = settings if settings is not None else EvidenceConfig()
+        if not isinstance(settings, EvidenceConfig):
+            raise ConfigError(f"evidence settings must be an EvidenceConfig, got {type(settings).__name__}")
+        self.config = config
+        self.settings = settings
+        self.mf = np.zeros(ev.N_MF)
+        self._started = False
+        P0, _, _ = config.matrices()
+        self._x0 = np.array(config.x0, dtype=float)
+        self._P0 = P0
+
+    def start(self, t_ref_c: float, compass_sd_deg: float, gyro_noise_dps_rthz: float, clock: bool = False) -> np.ndarray:
+        """The model's arrays at the first row (temperature ``t_ref_c``; ``clock``: the drift
+        model's T is the elapsed time): returns ``mc``."""
+        mc = self.settings.settings_array(compass_sd_deg, gyro_noise_dps_rthz)
+        mc[ev.MC_CLOCK] = float(clock)
+        J = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [t_ref_c, 0.0, 1.0]])  # [a, b, c] -> [a, b, c']
+        x0 = np.zeros(ev.NX)
+        x0[ev.X_A:ev.X_C + 1] = J @ self._x0
+        P0 = np.zeros((ev.NX, ev.NX))
+        P0[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1] = J @ self._P0 @ J.T
+        P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
+        P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
+        ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
+        self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
+        self.mf[ev.MF_NORM_REF] = self.mf[ev.MF_DIP_REF] = math.nan
+        self.mf[ev.MF_LOG_H] = math.nan
+        self.mf[ev.MF_LAST_D] = math.nan
+        self._started = True
+        return mc
+
+    @property
+    def params(self) -> np.ndarray:
+        """The paper's absolute [a, b, c] (deg/s/degC, deg/s per degC/s, deg/s) in force."""
+        if not self._started:
+            return self._x0.copy()
+        x = self.mf[ev.MF_XC:ev.MF_XC + ev.NX]
+        return np.array([x[ev.X_A], x[ev.X_B], x[ev.X_C] - x[ev.X_A] * self.mf[ev.MF_TREF]])
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Covariance of the absolute [a, b, c]."""
+        if not self._started:
+            return self._P0.copy()
+        P = self.mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1]
+        Jinv = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-self.mf[ev.MF_TREF], 0.0, 1.0]])
+        return Jinv @ P @ Jinv.T
+
+    def update(self, obs: Observation) -> np.ndarray:
+        raise ConfigError("the evidence model is run by the engine row by row, not by interval measurements")
+
+    def hold(self) -> np.ndarray:
+        return self.params

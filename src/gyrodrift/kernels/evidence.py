@@ -1,0 +1,412 @@
+"""The default estimator's model: heading, drift and compass error, judged by evidence.
+
+One linear-Gaussian model of the gyro, the compass and the platform, written once:
+
+* states ``x = [δ, a, b, c, d]``: δ = heading − ∫gyro (deg; the heading is ``∫gyro + δ``),
+  the drift model of eq. (2) centred on ``T_ref`` (``bias = a (T − T_ref) + b T' + c``;
+  deg/s/degC, deg/s per degC/s, deg/s), and d, the compass's slowly varying error (deg:
+  hard- and soft-iron deviation that changes as the heading turns, tilt while accelerating);
+* the gyro is the input: over an *epoch* (about a second of rows) δ changes by minus the
+  integral of the drift (eq. 5 integrated), with the gyro's white noise;
+* the compass measures ``heading + d`` (the mean over the epoch's samples, with the compass's
+  white noise divided by their number): eqs. (4)–(6) as one measurement of δ whose change
+  over time carries the drift, as the paper's ΔA/Δt does;
+* the drift parameters random-walk: a and c' with the temperature change (curvature,
+  hysteresis and lag show as drift that moves when the temperature moves), c' also in time
+  (bias instability), b slowly; d is a first-order Gauss–Markov process whose variance
+  grows with the heading turned (deviation is a function of heading).
+
+The questions hand-written gates used to answer are *hypotheses* carried side by side, an
+interacting multiple model (IMM; Bar-Shalom, Li, Kirubarajan 2001, ch. 11): four filters of
+the model above, one per mode (compass clean / disturbed) × (platform still / moving),
+mixed every epoch by a Markov chain of mode changes and weighted by how well each explains
+the epoch's data:
+
+* **still** filters hold the heading (δ moves with the gyro integral) and take the epoch's
+  mean gyro rate as a measurement of the drift (eq. 1 with zero true rate);
+* **moving** filters propagate δ with the drift; the gyro is explained as drift plus a
+  true rate, which is predicted by two small random-walk filters of the rate (a slow one
+  for turns of hundredths of a deg/s, an agile one for manoeuvres) or is any rate at all
+  (a start or a stop): the mixture of the three is the moving platform's likelihood of the
+  epoch's gyro;
+* **clean** filters take the compass measurement (likelihood: its Gaussian innovation);
+* **disturbed** filters do not (likelihood: any heading, 1/360 per deg); with a raw
+  magnetometer the field strength and dip add their own likelihoods (near the reference
+  when clean, anywhere within ±50 % and ±30 deg when disturbed).
+
+The output is the moment-matched mixture; the mode probabilities are the labels
+(:mod:`gyrodrift.kernels.evloop`).
+
+Arrays: ``mf`` floats (layout ``MF_*``), ``mc`` settings (``MC_*``). All functions are pure
+numba on these arrays, so batch, chunked and streaming runs give the same bits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.kernels import jit
+from gyrodrift.kernels.numeric import wrap180
+
+__all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_noise"]
+
+#: Modes (rows of the filter bank) and states.
+NM, NX = 4, 5
+CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING = 0, 1, 2, 3
+X_DELTA, X_A, X_B, X_C, X_D = 0, 1, 2, 3, 4
+
+# ------------------------------------------------------------------ float state
+MF_X = 0                      # (NM, NX) states per mode
+MF_P = MF_X + NM * NX         # (NM, NX, NX) covariances
+MF_MU = MF_P + NM * NX * NX   # (NM,) mode probabilities
+MF_W = MF_MU + NM             # rate filters: slow (ω, P), agile (ω, P)
+MF_XC = MF_W + 4              # (NX,) combined state
+MF_PC = MF_XC + NX            # (NX, NX) combined covariance
+MF_TREF = MF_PC + NX * NX     # reference temperature (degC)
+MF_SIG_S2 = MF_TREF + 1       # per-sample gyro noise variance ((deg/s)^2), measured
+MF_SIG_W2 = MF_SIG_S2 + 1     # compass white noise variance (deg^2), measured
+MF_NORM_REF, MF_DIP_REF = MF_SIG_W2 + 1, MF_SIG_W2 + 2   # field reference (NaN: none yet)
+MF_LOG_H = MF_DIP_REF + 1     # log of the typical time step (s)
+# epoch accumulators: duration is t_end - t0
+MF_E_T0 = MF_LOG_H + 1        # epoch start time (s)
+MF_E_G = MF_E_T0 + 1          # ∫gyro over the epoch (deg)
+MF_E_TC = MF_E_G + 1          # ∫(T - T_ref) dt (degC s)
+MF_E_TP = MF_E_TC + 1         # ∫T' dt (degC)
+MF_E_H2 = MF_E_TP + 1         # Σ h² of the steps (s²)
+MF_E_H4 = MF_E_H2 + 1         # Σ h⁴ (s⁴)
+MF_E_NC = MF_E_H4 + 1         # compass samples
+MF_E_SD = MF_E_NC + 1         # Σ (D_j - D_ref), D = compass - ∫gyro (deg)
+MF_E_STC = MF_E_SD + 1        # Σ ∫(T - T_ref) to each compass sample
+MF_E_STP = MF_E_STC + 1       # Σ ∫T' to each compass sample
+MF_E_ST = MF_E_STP + 1        # Σ (t_j - t0)
+MF_E_SG = MF_E_ST + 1         # Σ ∫gyro to each compass sample
+MF_E_DREF = MF_E_SG + 1       # D_ref of the epoch
+MF_E_DG2 = MF_E_DREF + 1      # Σ (Δgyro)² of successive rows
+MF_E_NDG = MF_E_DG2 + 1       # their count
+MF_E_NORM = MF_E_NDG + 1      # Σ field strength of the compass samples
+MF_E_DIP = MF_E_NORM + 1      # Σ dip
+MF_E_NF = MF_E_DIP + 1        # field samples
+MF_E_DD2 = MF_E_NF + 1        # Σ (ΔD)² of successive compass samples
+MF_E_NDD = MF_E_DD2 + 1       # their count
+MF_E_T_START = MF_E_NDD + 1   # temperature at the epoch start (degC)
+MF_E_GAP = MF_E_T_START + 1   # 1: the epoch is a time gap (no gyro data in it)
+MF_LAST_D, MF_LAST_D_T = MF_E_GAP + 1, MF_E_GAP + 2  # last compass D and its time
+MF_PDIST, MF_PSTILL, MF_FIELD_DOM = MF_LAST_D_T + 1, MF_LAST_D_T + 2, MF_LAST_D_T + 3  # labels of the last epoch
+MF_UPDATED = MF_FIELD_DOM + 1  # the last epoch used a measurement (1) or not
+MF_NS_S, MF_NS_W = MF_UPDATED + 1, MF_UPDATED + 2  # the gyro noise: forgotten sums of ½(Δg)² and of steps
+MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same of ½(ΔD)²
+N_MF = MF_NW_W + 1
+
+#: Weight of the settings' noise values in the measured noise, in steps of data.
+NOISE_PRIOR_STEPS = 20.0
+
+# ------------------------------------------------------------------ settings
+MC_EPOCH, MC_TAU_CLEAN, MC_TAU_DIST, MC_TAU_STILL, MC_TAU_MOVE = 0, 1, 2, 3, 4
+MC_Q_A, MC_Q_B, MC_Q_C, MC_Q_CT = 5, 6, 7, 8
+MC_SIG_D, MC_TAU_D, MC_K_TURN = 9, 10, 11
+MC_Q_W_SLOW, MC_Q_W_AGILE, MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL = 12, 13, 14, 15, 16
+MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP = 17, 18, 19, 20, 21
+MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0 = 22, 23, 24, 25
+MC_W_SLOW, MC_W_AGILE, MC_RATE_ANY, MC_CLOCK = 26, 27, 28, 29
+N_MC = 30
+
+#: Log-likelihood of a disturbed compass sample: any heading, 1/360 per deg.
+LL_ANY_HEADING = -math.log(360.0)
+#: Log-likelihoods of a disturbed field: strength ratio within ±50 %, dip within ±30 deg.
+LL_ANY_NORM = -math.log(1.0)
+LL_ANY_DIP = -math.log(60.0)
+_LOG_2PI = math.log(2.0 * math.pi)
+#: Log-likelihood ratio (clean against disturbed) of the field below which a disturbance is
+#: labelled ``field``: the field strength and dip alone make it 20 times likelier.
+FIELD_SAYS_DISTURBED = -3.0
+
+
+@jit(inline=True)
+def _is_clean(j):
+    return j == CLEAN_STILL or j == CLEAN_MOVING
+
+
+@jit(inline=True)
+def _is_still(j):
+    return j == CLEAN_STILL or j == DIST_STILL
+
+
+@jit(inline=True)
+def _loggauss(nu, S):
+    return -0.5 * (_LOG_2PI + math.log(S) + nu * nu / S)
+
+
+@jit
+def init_state(mf, mc, x0, P0, t_ref):
+    """Start the bank: every mode at the prior ``x0`` (5,), ``P0`` (5, 5) (drift states centred
+    on ``t_ref``), mode probabilities from the settings, the rate filters at rest."""
+    mf[MF_TREF] = t_ref
+    pc, ps = mc[MC_P_CLEAN0], mc[MC_P_STILL0]
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    for j in range(NM):
+        X[j, :] = x0
+        P[j, :, :] = P0
+        mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps)
+    mf[MF_W] = 0.0
+    mf[MF_W + 1] = 1.0
+    mf[MF_W + 2] = 0.0
+    mf[MF_W + 3] = 100.0
+    combine(mf)
+
+
+@jit
+def combine(mf):
+    """The moment-matched mixture of the bank into MF_XC, MF_PC (δ averaged as an angle)."""
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    mu = mf[MF_MU:MF_MU + NM]
+    xc = np.zeros(NX)
+    ref = X[0, X_DELTA]
+    for j in range(NM):
+        for k in range(NX):
+            v = X[j, k]
+            if k == X_DELTA:
+                v = ref + wrap180(v - ref)
+            xc[k] += mu[j] * v
+    Pc = np.zeros((NX, NX))
+    for j in range(NM):
+        dx = X[j] - xc
+        dx[X_DELTA] = wrap180(X[j, X_DELTA] - xc[X_DELTA])
+        for r in range(NX):
+            for c in range(NX):
+                Pc[r, c] += mu[j] * (P[j, r, c] + dx[r] * dx[c])
+    mf[MF_XC:MF_XC + NX] = xc
+    mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
+
+
+@jit(inline=True)
+def bias_var(Pc, hT, hTp):
+    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (5, 5)."""
+    v = (Pc[1, 1] * hT * hT + Pc[2, 2] * hTp * hTp + Pc[3, 3] + 2.0 * Pc[1, 2] * hT * hTp
+         + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp)
+    return max(v, 0.0)
+
+
+@jit
+def _update(x, P, H, z, R, wrap):
+    """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
+    (``wrap``: the innovation is an angle, wrapped to ±180)."""
+    PH = np.dot(P, H)
+    S = np.dot(H, PH) + R
+    nu = z - np.dot(H, x)
+    if wrap:
+        nu = wrap180(nu)
+    K = PH / S
+    for r in range(NX):
+        x[r] += K[r] * nu
+    for r in range(NX):
+        for c in range(NX):
+            P[r, c] -= K[r] * PH[c]
+    for r in range(NX):  # symmetric, non-negative diagonal
+        for c in range(r + 1, NX):
+            m = 0.5 * (P[r, c] + P[c, r])
+            P[r, c] = m
+            P[c, r] = m
+        if P[r, r] < 0.0:
+            P[r, r] = 0.0
+    return _loggauss(nu, S)
+
+
+@jit
+def _mix(mf, Pi):
+    """IMM mixing: each mode's starting state and covariance from the bank, weighted by the
+    probabilities of having come from each mode; returns the predicted mode probabilities."""
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    mu = mf[MF_MU:MF_MU + NM].copy()
+    cbar = np.zeros(NM)
+    for j in range(NM):
+        for i in range(NM):
+            cbar[j] += Pi[i, j] * mu[i]
+    X0 = np.zeros((NM, NX))
+    P0 = np.zeros((NM, NX, NX))
+    for j in range(NM):
+        ref = X[j, X_DELTA]
+        for i in range(NM):
+            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
+            for k in range(NX):
+                v = X[i, k]
+                if k == X_DELTA:
+                    v = ref + wrap180(v - ref)
+                X0[j, k] += w * v
+        for i in range(NM):
+            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
+            if w == 0.0:
+                continue
+            dx = X[i] - X0[j]
+            dx[X_DELTA] = wrap180(X[i, X_DELTA] - X0[j, X_DELTA])
+            for r in range(NX):
+                for c in range(NX):
+                    P0[j, r, c] += w * (P[i, r, c] + dx[r] * dx[c])
+    X[:, :] = X0
+    P[:, :, :] = P0
+    return cbar
+
+
+@jit(inline=True)
+def _switch(dt, tau):
+    return 1.0 - math.exp(-dt / tau) if tau > 0.0 else 0.0
+
+
+@jit
+def epoch(mf, mc, t_end, temp_end):
+    """Close the epoch ending at ``t_end`` (temperature ``temp_end``): predict, weigh the
+    modes by the epoch's gyro and compass data, update, combine. The epoch's sums are in
+    ``mf`` (``MF_E_*``); the caller resets them."""
+    dt = t_end - mf[MF_E_T0]
+    if not dt > 0.0:
+        return
+    gap = mf[MF_E_GAP] == 1.0
+    dG, dTc, dTp = mf[MF_E_G], mf[MF_E_TC], mf[MF_E_TP]
+    # the temperature change over the epoch: from the smoothed T' (no quantisation flips), or
+    # exactly when T is the clock (whose T' is 0 in the model)
+    dtemp = abs(temp_end - mf[MF_E_T_START]) if mc[MC_CLOCK] == 1.0 else abs(dTp)
+    # Markov chain of mode changes over dt
+    pcd, pdc = _switch(dt, mc[MC_TAU_CLEAN]), _switch(dt, mc[MC_TAU_DIST])
+    psm, pms = _switch(dt, mc[MC_TAU_STILL]), _switch(dt, mc[MC_TAU_MOVE])
+    Pi = np.empty((NM, NM))
+    for i in range(NM):
+        for j in range(NM):
+            ci, cj = _is_clean(i), _is_clean(j)
+            si, sj = _is_still(i), _is_still(j)
+            pc = (1.0 - pcd if cj else pcd) if ci else (pdc if cj else 1.0 - pdc)
+            ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
+            Pi[i, j] = pc * ps
+    cbar = _mix(mf, Pi)
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    # process noise of the drift and the compass error, shared by every mode
+    phi_d = math.exp(-dt / mc[MC_TAU_D])
+    q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d) + (mc[MC_K_TURN] * dG) ** 2
+    q_a = mc[MC_Q_A] ** 2 * dtemp
+    q_b = mc[MC_Q_B] ** 2 * dt
+    q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
+    sig_s2 = mf[MF_SIG_S2]
+    arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
+    moving_q = arw + mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4] / 12.0
+    if gap:
+        moving_q += min((mc[MC_OMEGA_GAP] * dt) ** 2, 90.0**2)
+    ll = np.zeros(NM)
+    F = np.eye(NX)
+    for j in range(NM):
+        x = X[j]
+        Pj = P[j]
+        still = _is_still(j)
+        if still:  # the heading holds: δ moves with the gyro integral
+            x[X_DELTA] -= dG
+        else:  # δ moves by minus the drift integral (eq. 5)
+            x[X_DELTA] -= x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt
+        x[X_D] *= phi_d
+        F[0, 1] = 0.0 if still else -dTc
+        F[0, 2] = 0.0 if still else -dTp
+        F[0, 3] = 0.0 if still else -dt
+        F[4, 4] = phi_d
+        Pn = np.dot(np.dot(F, Pj), F.T)
+        Pn[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
+        Pn[X_A, X_A] += q_a
+        Pn[X_B, X_B] += q_b
+        Pn[X_C, X_C] += q_c
+        Pn[X_D, X_D] += q_d
+        Pj[:, :] = Pn
+    # the gyro: a drift measurement when still; drift plus a true rate when moving
+    if not gap:
+        Hg = np.array([0.0, dTc, dTp, dt, 0.0])
+        ws, Pws, wa, Pwa = mf[MF_W], mf[MF_W + 1], mf[MF_W + 2], mf[MF_W + 3]
+        Pws_pred = Pws + mc[MC_Q_W_SLOW] ** 2 * dt
+        Pwa_pred = Pwa + mc[MC_Q_W_AGILE] ** 2 * dt
+        for j in range(NM):
+            if _is_still(j):
+                ll[j] += _update(X[j], P[j], Hg, dG, arw, False)
+            else:
+                mean = np.dot(Hg, X[j])
+                base = np.dot(Hg, np.dot(P[j], Hg)) + arw
+                l1 = math.log(mc[MC_W_SLOW]) + _loggauss(dG - mean - ws * dt, base + Pws_pred * dt * dt)
+                l2 = math.log(mc[MC_W_AGILE]) + _loggauss(dG - mean - wa * dt, base + Pwa_pred * dt * dt)
+                l3 = math.log(1.0 - mc[MC_W_SLOW] - mc[MC_W_AGILE]) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
+                m = max(l1, max(l2, l3))
+                ll[j] += m + math.log(math.exp(l1 - m) + math.exp(l2 - m) + math.exp(l3 - m))
+    # the compass: the mean of D = compass - ∫gyro over the epoch's samples
+    n_c = mf[MF_E_NC]
+    field_ll = 0.0
+    if n_c > 0.0:
+        D = mf[MF_E_DREF] + mf[MF_E_SD] / n_c
+        Rc = mf[MF_SIG_W2] / n_c
+        h_still = dG - mf[MF_E_SG] / n_c  # ∫gyro from the mean sample to the epoch end
+        Hm = np.array([1.0, dTc - mf[MF_E_STC] / n_c, dTp - mf[MF_E_STP] / n_c, dt - mf[MF_E_ST] / n_c, 1.0])
+        Hs = np.array([1.0, 0.0, 0.0, 0.0, 1.0])
+        if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
+            ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
+            ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
+            field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
+                        - LL_ANY_NORM - LL_ANY_DIP)
+        for j in range(NM):
+            if _is_clean(j):
+                if _is_still(j):
+                    ll[j] += _update(X[j], P[j], Hs, D - h_still, Rc, True)
+                else:
+                    ll[j] += _update(X[j], P[j], Hm, D, Rc, True)
+                ll[j] += field_ll
+            else:
+                ll[j] += LL_ANY_HEADING
+    # mode probabilities
+    top = -math.inf
+    for j in range(NM):
+        ll[j] += math.log(max(cbar[j], 1e-300))
+        top = max(top, ll[j])
+    tot = 0.0
+    for j in range(NM):
+        ll[j] = math.exp(ll[j] - top)
+        tot += ll[j]
+    for j in range(NM):
+        mf[MF_MU + j] = max(ll[j] / tot, 1e-12)
+    combine(mf)
+    mu = mf[MF_MU:MF_MU + NM]
+    mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING]
+    mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
+    mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
+    mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0
+    # the rate filters follow the compensated mean rate
+    Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
+    if not gap:
+        xc = mf[MF_XC:MF_XC + NX]
+        r = (dG - (xc[X_A] * dTc + xc[X_B] * dTp + xc[X_C] * dt)) / dt
+        Rr = (arw + bias_var(Pc, dTc, dTp) * dt * dt) / (dt * dt)
+        for k, q in ((0, mc[MC_Q_W_SLOW]), (2, mc[MC_Q_W_AGILE])):
+            Pp = mf[MF_W + k + 1] + q * q * dt
+            K = Pp / (Pp + Rr)
+            mf[MF_W + k] += K * (r - mf[MF_W + k])
+            mf[MF_W + k + 1] = (1.0 - K) * Pp
+    else:
+        mf[MF_W + 1] += mc[MC_Q_W_SLOW] ** 2 * dt
+        mf[MF_W + 3] += mc[MC_Q_W_AGILE] ** 2 * dt
+    # the measured noise: the gyro's from successive rows while still, the compass's from
+    # successive samples while clean; sums forgotten over ``noise_memory_s``
+    keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
+    if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
+        mf[MF_NS_S] = keep * mf[MF_NS_S] + 0.5 * mf[MF_E_DG2]
+        mf[MF_NS_W] = keep * mf[MF_NS_W] + mf[MF_E_NDG]
+        mf[MF_SIG_S2] = mf[MF_NS_S] / mf[MF_NS_W]
+    if mf[MF_E_NDD] >= 1.0 and mf[MF_PDIST] < 0.5:
+        mf[MF_NW_S] = keep * mf[MF_NW_S] + 0.5 * mf[MF_E_DD2]
+        mf[MF_NW_W] = keep * mf[MF_NW_W] + mf[MF_E_NDD]
+        mf[MF_SIG_W2] = max(mf[MF_NW_S] / mf[MF_NW_W], 0.01 * mc[MC_COMPASS_SD] ** 2)
+
+
+@jit
+def seed_noise(mf, mc, sig_s2):
+    """The gyro's per-sample noise variance from the settings (``sig_s2``, (deg/s)², at the
+    log's first step) and the compass's, each worth ``NOISE_PRIOR_STEPS`` steps of data."""
+    mf[MF_SIG_S2] = sig_s2
+    mf[MF_NS_S] = NOISE_PRIOR_STEPS * sig_s2
+    mf[MF_NS_W] = NOISE_PRIOR_STEPS
+    mf[MF_SIG_W2] = mc[MC_COMPASS_SD] ** 2
+    mf[MF_NW_S] = NOISE_PRIOR_STEPS * mf[MF_SIG_W2]
+    mf[MF_NW_W] = NOISE_PRIOR_STEPS

@@ -1,0 +1,230 @@
+"""The row loop of the default estimator's model (:mod:`gyrodrift.kernels.evidence`).
+
+Per row: the drift in force (eq. 5, the mixture's a, b, c), the compensated rate, the
+trapezoid integrals, the epoch's sums; at the end of each epoch (the first row at least
+``epoch_s`` after its start) the model's step. A time step far longer than the log's own
+typical spacing (``gap_factor`` times a running typical step) is a time gap: the epoch
+before it closes, the gap is an epoch of its own without gyro data (the still modes hold
+the heading across it; the moving ones lose it), and the raw integral takes the drift over
+it (the gyro is taken to have read its drift). A held cell (an empty gyro or temperature)
+is a gap too.
+
+Outputs per row (columns of :mod:`gyrodrift.kernels.layout`): bias, rate, the gyro-alone
+heading (anchored on the first compass sample), a, b, c (the paper's absolute parameters),
+``bias_sd``, the fused heading (``∫gyro + δ``) and its standard deviation, the gyro-alone
+heading's standard deviation; codes: ``updated`` at an epoch end that used a measurement,
+and the reason, from the mode probabilities of the last epoch: ``gap``, ``no_compass`` (no
+compass sample for ``compass_max_age_s``), ``turning`` (the compensated rate, averaged over
+about the turning window, above the turning rate: the compass's errors grow with the turn,
+:mod:`~gyrodrift.kernels.evidence`), ``field`` or ``interference`` (the disturbed modes
+outweigh the clean ones; ``field`` when the field strength and dip are what say so), or none.
+
+State: ``mf`` (the model, :mod:`~gyrodrift.kernels.evidence`) and ``rf`` (the rows: ``R_*``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.kernels import jit
+from gyrodrift.kernels import evidence as ev
+from gyrodrift.kernels.evidence import (
+    MF_DIP_REF, MF_E_DD2, MF_E_DG2, MF_E_DIP, MF_E_DREF, MF_E_G, MF_E_GAP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_NDD,
+    MF_E_NDG, MF_E_NF, MF_E_NORM, MF_E_SD, MF_E_SG, MF_E_ST, MF_E_STC, MF_E_STP, MF_E_T0, MF_E_T_START, MF_E_TC,
+    MF_E_TP, MF_FIELD_DOM, MF_LAST_D, MF_LAST_D_T, MF_LOG_H, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2,
+    MF_TREF, MF_UPDATED, MF_XC, MC_COMPASS_SD, MC_EPOCH, MC_GAP_FACTOR, MC_GYRO_NOISE, NX, X_A, X_B, X_C, X_DELTA,
+)
+from gyrodrift.kernels.layout import (
+    O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON, OC_UNOBS,
+    OC_UPDATE, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
+    UNOBSERVABLE_SD_FRACTION,
+)
+from gyrodrift.kernels.numeric import wrap180, wrap360
+
+__all__ = ["run", "RF_N", "RC_N"]
+
+# ------------------------------------------------------------------ row state
+RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
+RF_IRAW, RF_IRATE, RF_IBIAS = 6, 7, 8  # integrals to it (deg)
+RF_ANCHOR, RF_T_ANCHOR, RF_ISD = 9, 10, 11  # gyro-alone heading: anchor, its time, ∫bias_sd since
+RF_IRAW_E, RF_IBIAS_E = 12, 13  # the integrals at the last epoch end
+RF_MEAN_RATE = 14  # the averaged compensated rate (turning)
+RF_T_COMPASS = 15  # time of the last compass sample
+RF_STARTED, RF_SEEN = 16, 17  # a row was taken; a compass sample came (1.0)
+RF_UNOBS = 18  # unobservable code in force
+RF_N = 19
+
+# ------------------------------------------------------------------ row settings
+RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
+RC_N = 5
+
+
+@jit(inline=True)
+def _open(mf, t, temp):
+    """A new epoch from ``t``."""
+    mf[MF_E_T0] = t
+    mf[MF_E_T_START] = temp
+    for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
+              MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP):
+        mf[k] = 0.0
+
+
+@jit
+def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias):
+    """The model's step for the epoch ending at ``t``, then the field reference and the
+    unobservable code; the integrals at the epoch end are kept for the fused heading."""
+    if mf[MF_E_NF] > 0.0 and not math.isfinite(mf[MF_NORM_REF]):
+        mf[MF_NORM_REF] = mf[MF_E_NORM] / mf[MF_E_NF]
+        mf[MF_DIP_REF] = mf[MF_E_DIP] / mf[MF_E_NF]
+    ev.epoch(mf, mc, t, temp)
+    if mf[MF_E_NF] > 0.0 and mf[MF_PDIST] < 0.1:  # the reference follows a clean field slowly
+        mf[MF_NORM_REF] += 0.01 * (mf[MF_E_NORM] / mf[MF_E_NF] - mf[MF_NORM_REF])
+        mf[MF_DIP_REF] += 0.01 * (mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF])
+    rf[RF_IRAW_E] = I_raw
+    rf[RF_IBIAS_E] = I_bias
+    Pc = mf[MF_PC:MF_PC + NX * NX]
+    code = 0
+    if math.sqrt(max(Pc[X_A * NX + X_A], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_A]:
+        code += UNOBS_A
+    if math.sqrt(max(Pc[X_B * NX + X_B], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_B]:
+        code += UNOBS_B
+    rf[RF_UNOBS] = code
+
+
+@jit
+def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, cap):
+    """Compensate rows ``i0..`` of a prepared chunk into ``out``/``codes`` (columns ``cap``
+    apart); returns ``t.size``.
+
+    ``held``: rows whose gyro or temperature cell was empty (held from the row before:
+    a gap). ``norm``, ``dip``: field strength and dip of a raw magnetometer per row, or
+    empty arrays.
+    """
+    has_field = norm.size == t.size
+    tref = mf[MF_TREF]
+    c_t, c_g, c_T, c_Tp, c_bias, c_rate = rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE]
+    I_raw, I_rate, I_bias = rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS]
+    epoch_s = mc[MC_EPOCH]
+    gap_factor = mc[MC_GAP_FACTOR]
+    tau_turn = 0.5 * rc[RC_TURN_WIN]
+    xc = mf[MF_XC:MF_XC + NX]
+    Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
+    o_bias, o_rate, o_heading = O_BIAS * cap, O_RATE * cap, O_HEADING * cap
+    for i in range(i0, t.size):
+        ti, gi, Ti, Tpi, hi = t[i], g[i], T[i], Tp[i], heading[i]
+        first = rf[RF_STARTED] == 0.0
+        if first:
+            c_t, c_g, c_T, c_Tp = ti, gi, Ti, Tpi
+            rf[RF_STARTED] = 1.0
+            _open(mf, ti, Ti)
+        a, b, c = xc[X_A], xc[X_B], xc[X_C]
+        bias = a * (Ti - tref) + b * Tpi + c
+        rate = gi - bias
+        h = ti - c_t
+        gap = False
+        reason_gap = False
+        if not first:
+            lh = mf[MF_LOG_H]
+            if math.isnan(lh):  # the first step: the typical spacing, the gyro noise per sample
+                mf[MF_LOG_H] = math.log(h)
+                ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / h)
+            else:
+                gap = h > gap_factor * math.exp(lh)
+                mf[MF_LOG_H] = lh + 0.05 * min(max(math.log(h) - lh, -0.5), 0.5)
+            gap = gap or held[i]
+            reason_gap = gap
+            if gap:
+                if mf[MF_E_NDG] > 0.0 or mf[MF_E_NC] > 0.0:  # close the epoch before the gap
+                    _close(mf, mc, rf, rc, c_t, c_T, I_raw, I_bias)
+                _open(mf, c_t, c_T)
+                mf[MF_E_GAP] = 1.0
+                # across the gap the raw integral takes the drift in force (the unit read its drift)
+                inc = 0.5 * (bias + c_bias) * h
+                I_raw += inc
+                mf[MF_E_G] += inc
+            else:
+                I_raw += 0.5 * (gi + c_g) * h
+                I_rate += 0.5 * (rate + c_rate) * h
+                mf[MF_E_G] += 0.5 * (gi + c_g) * h
+                mf[MF_E_H2] += h * h
+                mf[MF_E_H4] += h * h * h * h
+                dg = gi - c_g
+                mf[MF_E_DG2] += dg * dg
+                mf[MF_E_NDG] += 1.0
+            I_bias += 0.5 * (bias + c_bias) * h
+            mf[MF_E_TC] += 0.5 * (Ti + c_T - 2.0 * tref) * h
+            mf[MF_E_TP] += 0.5 * (Tpi + c_Tp) * h
+            w = 1.0 - math.exp(-h / tau_turn)
+            rf[RF_MEAN_RATE] += w * (rate - rf[RF_MEAN_RATE])
+        c_t, c_g, c_T, c_Tp, c_bias, c_rate = ti, gi, Ti, Tpi, bias, rate
+        if not math.isnan(hi):  # a compass sample: D = compass - ∫gyro
+            D = hi - I_raw
+            if mf[MF_E_NC] == 0.0:
+                mf[MF_E_DREF] = D
+            mf[MF_E_SD] += wrap180(D - mf[MF_E_DREF])
+            mf[MF_E_STC] += mf[MF_E_TC]
+            mf[MF_E_STP] += mf[MF_E_TP]
+            mf[MF_E_ST] += ti - mf[MF_E_T0]
+            mf[MF_E_SG] += mf[MF_E_G]
+            mf[MF_E_NC] += 1.0
+            if rf[RF_SEEN] == 1.0 and ti - mf[MF_LAST_D_T] <= 2.0:
+                dD = wrap180(D - mf[MF_LAST_D]) + bias * (ti - mf[MF_LAST_D_T])
+                mf[MF_E_DD2] += dD * dD
+                mf[MF_E_NDD] += 1.0
+            mf[MF_LAST_D] = D
+            mf[MF_LAST_D_T] = ti
+            if has_field and math.isfinite(norm[i]) and math.isfinite(dip[i]):
+                mf[MF_E_NORM] += norm[i]
+                mf[MF_E_DIP] += dip[i]
+                mf[MF_E_NF] += 1.0
+            if rf[RF_SEEN] == 0.0:  # the gyro-alone heading starts here
+                rf[RF_SEEN] = 1.0
+                rf[RF_ANCHOR] = hi - I_rate
+                rf[RF_T_ANCHOR] = ti
+                rf[RF_ISD] = 0.0
+            rf[RF_T_COMPASS] = ti
+        updated = 0
+        if gap or (not first and ti - mf[MF_E_T0] >= epoch_s):
+            _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias)
+            updated = 1 if mf[MF_UPDATED] == 1.0 and not gap else 0
+            _open(mf, ti, Ti)
+        bsd = math.sqrt(ev.bias_var(Pc, Ti - tref, Tpi))
+        if rf[RF_SEEN] == 1.0:
+            rf[RF_ISD] += bsd * h
+        ix = np.uint64(i)
+        out[o_bias + ix] = bias
+        out[o_rate + ix] = rate
+        out[O_BIAS_SD * cap + ix] = bsd
+        out[O_A * cap + ix] = xc[X_A]
+        out[O_B * cap + ix] = xc[X_B]
+        out[O_C * cap + ix] = xc[X_C] - xc[X_A] * tref
+        out[o_heading + ix] = wrap360(rf[RF_ANCHOR] + I_rate)
+        sig_w = mc[MC_COMPASS_SD]
+        if rf[RF_SEEN] == 1.0:
+            out[O_FUSED * cap + ix] = wrap360(I_raw + xc[X_DELTA] - (I_bias - rf[RF_IBIAS_E]))
+            out[O_FUSED_SD * cap + ix] = math.sqrt(max(Pc[X_DELTA, X_DELTA], 0.0))
+            since = ti - rf[RF_T_ANCHOR]
+            out[O_HEADING_SD * cap + ix] = math.sqrt(sig_w * sig_w + mf[MF_SIG_S2] * math.exp(mf[MF_LOG_H]) * since
+                                                     + rf[RF_ISD] ** 2) if math.isfinite(mf[MF_LOG_H]) else sig_w
+        else:
+            out[O_FUSED * cap + ix] = math.nan
+            out[O_FUSED_SD * cap + ix] = math.nan
+            out[O_HEADING_SD * cap + ix] = math.nan
+        if reason_gap:
+            reason = R_GAP
+        elif rf[RF_SEEN] == 0.0 or ti - rf[RF_T_COMPASS] > rc[RC_MAX_AGE]:
+            reason = R_NO_COMPASS
+        elif abs(rf[RF_MEAN_RATE]) > rc[RC_TURN_RATE]:
+            reason = R_TURNING
+        elif mf[MF_PDIST] >= 0.5:
+            reason = R_FIELD if mf[MF_FIELD_DOM] == 1.0 else R_INTERFERENCE
+        else:
+            reason = R_NONE
+        codes[OC_UPDATE * cap + ix] = updated
+        codes[OC_REASON * cap + ix] = reason
+        codes[OC_UNOBS * cap + ix] = int(rf[RF_UNOBS])
+    rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
+    rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
+    return t.size
