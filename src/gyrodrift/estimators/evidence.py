@@ -48,20 +48,26 @@ class EvidenceConfig:
     drift_walk_temp : float
         Random walk of c' per √degC of temperature change, deg/s/√degC (hysteresis, lag
         and curvature: drift the linear model does not explain moves when T moves).
+    drift_rate_dps2, drift_rate_s : float
+        Stationary standard deviation (deg/s²) and correlation time (s) of the rate at which
+        the drift departs from eq. (2).
     compass_error_deg, compass_error_s : float
         Standard deviation (deg) and correlation time (s) of the compass's slow error d
         (deviation, tilt): a Gauss–Markov process.
+    disturbance_step_deg, disturbance_walk, disturbance_s : float
+        A magnetic disturbance: the standard deviation of its step when it begins (deg), its
+        random walk (deg/√s) and the time over which it decays (s).
     deviation_per_deg : float
         Growth of d's standard deviation per degree turned (deviation is a function of
         heading; tilt while cornering), deg/deg.
-    slow_turn_walk, agile_turn_walk : float
-        Random walks of the true rate under the two motion models, deg/s/√s: slow turns
-        and sways, manoeuvres.
-    slow_share, agile_share : float
-        Prior shares of the slow and the agile motion models in a moving epoch; the rest is
-        a rate that neither predicts (a start, a stop), within ``rate_any_dps``.
+    turn_walks : tuple of 3 floats
+        Random walks of the true rate under the three motion models, deg/s/√s: slow turns,
+        sways and waves, manoeuvres.
+    turn_shares : tuple of 3 floats
+        Prior shares of the three motion models in a moving epoch (sum below 1); the rest
+        is a rate that none predicts (a start, a stop), within ``rate_any_dps``.
     rate_any_dps : float
-        Standard deviation of a rate neither motion model predicts, deg/s.
+        Standard deviation of a rate no motion model predicts, deg/s.
     angular_accel_dps2 : float
         Typical angular acceleration, deg/s² (the error of the trapezoid integral between
         samples of a moving platform).
@@ -92,13 +98,16 @@ class EvidenceConfig:
     rate_walk: float = 0.01
     drift_walk: float = 2e-4
     drift_walk_temp: float = 0.02
+    drift_rate_dps2: float = 0.001
+    drift_rate_s: float = 300.0
     compass_error_deg: float = 1.5
-    compass_error_s: float = 300.0
+    compass_error_s: float = 3600.0
+    disturbance_step_deg: float = 30.0
+    disturbance_walk: float = 0.5
+    disturbance_s: float = 1800.0
     deviation_per_deg: float = 0.03
-    slow_turn_walk: float = 0.002
-    agile_turn_walk: float = 2.0
-    slow_share: float = 0.8
-    agile_share: float = 0.15
+    turn_walks: tuple[float, float, float] = (0.005, 0.3, 5.0)
+    turn_shares: tuple[float, float, float] = (0.45, 0.35, 0.15)
     rate_any_dps: float = 100.0
     angular_accel_dps2: float = 10.0
     gap_turn_dps: float = 1.0
@@ -112,19 +121,29 @@ class EvidenceConfig:
     heading_sd0: float = 100.0
 
     def __post_init__(self):
+        for name in ("turn_walks", "turn_shares"):
+            v = getattr(self, name)
+            try:
+                ok = len(v) == ev.N_RATE and all(math.isfinite(float(e)) and float(e) > 0 for e in v)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ConfigError(f"evidence setting {name} must be {ev.N_RATE} positive numbers, got {v!r}")
+        if not sum(self.turn_shares) < 1.0:
+            raise ConfigError(f"evidence turn_shares must sum below 1 (the rest is any rate), got {self.turn_shares!r}")
         for f in fields(self):
+            if f.name in ("turn_walks", "turn_shares"):
+                continue
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ConfigError(f"evidence setting {f.name} must be a finite number >= 0, got {v!r}")
         for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
-                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s"):
+                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"evidence setting {name} must be > 0, got {getattr(self, name)!r}")
-        for name in ("p_clean0", "p_still0", "slow_share", "agile_share"):
+        for name in ("p_clean0", "p_still0"):
             if not 0.0 < getattr(self, name) < 1.0:
                 raise ConfigError(f"evidence setting {name} must be between 0 and 1, got {getattr(self, name)!r}")
-        if not self.slow_share + self.agile_share < 1.0:
-            raise ConfigError("evidence settings slow_share + agile_share must be below 1 (the rest is any rate)")
 
     def settings_array(self, compass_sd_deg: float, gyro_noise_dps_rthz: float) -> np.ndarray:
         """The kernel's settings ``mc`` (:mod:`gyrodrift.kernels.evidence`)."""
@@ -136,7 +155,11 @@ class EvidenceConfig:
         mc[ev.MC_Q_C], mc[ev.MC_Q_CT] = self.drift_walk, self.drift_walk_temp
         mc[ev.MC_SIG_D], mc[ev.MC_TAU_D] = self.compass_error_deg, self.compass_error_s
         mc[ev.MC_K_TURN] = self.deviation_per_deg
-        mc[ev.MC_Q_W_SLOW], mc[ev.MC_Q_W_AGILE] = self.slow_turn_walk, self.agile_turn_walk
+        mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
+        mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
+        mc[ev.MC_TAU_E] = self.disturbance_s
+        mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks
+        mc[ev.MC_SHARE:ev.MC_SHARE + ev.N_RATE] = self.turn_shares
         mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps
         mc[ev.MC_Q_STILL] = self.still_walk
         mc[ev.MC_GAP_FACTOR] = self.gap_factor
@@ -146,7 +169,7 @@ class EvidenceConfig:
         mc[ev.MC_NOISE_MEMORY] = self.noise_memory_s
         mc[ev.MC_P_CLEAN0], mc[ev.MC_P_STILL0] = self.p_clean0, self.p_still0
         mc[ev.MC_DELTA_SD0] = self.heading_sd0
-        mc[ev.MC_W_SLOW], mc[ev.MC_W_AGILE], mc[ev.MC_RATE_ANY] = self.slow_share, self.agile_share, self.rate_any_dps
+        mc[ev.MC_RATE_ANY] = self.rate_any_dps
         return mc
 
 
@@ -193,6 +216,7 @@ class EvidenceModel(LinearDrift):
         P0[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1] = J @ self._P0 @ J.T
         P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
         P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
+        P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
         self.mf[ev.MF_NORM_REF] = self.mf[ev.MF_DIP_REF] = math.nan

@@ -2,15 +2,20 @@
 
 One linear-Gaussian model of the gyro, the compass and the platform, written once:
 
-* states ``x = [δ, a, b, c, d]``: δ = heading − ∫gyro (deg; the heading is ``∫gyro + δ``),
+* states ``x = [δ, a, b, c, d, r, e]``: δ = heading − ∫gyro (deg; the heading is ``∫gyro + δ``),
   the drift model of eq. (2) centred on ``T_ref`` (``bias = a (T − T_ref) + b T' + c``;
-  deg/s/degC, deg/s per degC/s, deg/s), and d, the compass's slowly varying error (deg:
-  hard- and soft-iron deviation that changes as the heading turns, tilt while accelerating);
+  deg/s/degC, deg/s per degC/s, deg/s), d, the compass's slowly varying error (deg:
+  hard- and soft-iron deviation that changes as the heading turns, tilt while accelerating),
+  r, the rate at which the drift departs from eq. (2) (deg/s², a Gauss–Markov process that
+  c follows: knees, lag and curvature make the drift move for a while in one direction), and
+  e, the magnetic disturbance on the compass (deg; zero while the compass is clean);
 * the gyro is the input: over an *epoch* (about a second of rows) δ changes by minus the
   integral of the drift (eq. 5 integrated), with the gyro's white noise;
 * the compass measures ``heading + d`` (the mean over the epoch's samples, with the compass's
-  white noise divided by their number): eqs. (4)–(6) as one measurement of δ whose change
-  over time carries the drift, as the paper's ΔA/Δt does;
+  white noise divided by their number, plus the error an epoch's mean keeps — tilt while
+  accelerating, vibration — measured from the clean innovations' excess over their predicted
+  variance): eqs. (4)–(6) as one measurement of δ whose change over time carries the drift,
+  as the paper's ΔA/Δt does;
 * the drift parameters random-walk: a and c' with the temperature change (curvature,
   hysteresis and lag show as drift that moves when the temperature moves), c' also in time
   (bias instability), b slowly; d is a first-order Gauss–Markov process whose variance
@@ -25,14 +30,18 @@ the epoch's data:
 * **still** filters hold the heading (δ moves with the gyro integral) and take the epoch's
   mean gyro rate as a measurement of the drift (eq. 1 with zero true rate);
 * **moving** filters propagate δ with the drift; the gyro is explained as drift plus a
-  true rate, which is predicted by two small random-walk filters of the rate (a slow one
-  for turns of hundredths of a deg/s, an agile one for manoeuvres) or is any rate at all
+  true rate, which is predicted by small random-walk filters of the rate (from a slow one
+  for turns of hundredths of a deg/s to an agile one for manoeuvres) or is any rate at all
   (a start or a stop): the mixture of the three is the moving platform's likelihood of the
   epoch's gyro;
 * **clean** filters take the compass measurement (likelihood: its Gaussian innovation);
-* **disturbed** filters do not (likelihood: any heading, 1/360 per deg); with a raw
-  magnetometer the field strength and dip add their own likelihoods (near the reference
-  when clean, anywhere within ±50 % and ±30 deg when disturbed).
+* **disturbed** filters take it with a disturbance e on top (a state of their own: a step of
+  unknown size when the disturbance begins, then a fast random walk that decays; zero in
+  the clean filters), so a step, a ramp or a wander of the compass is explained by e, which
+  is the only state a disturbed compass corrects (a Schmidt update: heading and drift are
+  considered, not corrected); with a raw magnetometer the field strength
+  and dip add their own likelihoods (near the reference when clean, anywhere within ±50 % and
+  ±30 deg when disturbed).
 
 The output is the moment-matched mixture; the mode probabilities are the labels
 (:mod:`gyrodrift.kernels.evloop`).
@@ -53,16 +62,18 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 4, 5
+NM, NX = 4, 7
+#: Predictors of a moving platform's true rate (random walks, slow to agile).
+N_RATE = 3
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING = 0, 1, 2, 3
-X_DELTA, X_A, X_B, X_C, X_D = 0, 1, 2, 3, 4
+X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E = 0, 1, 2, 3, 4, 5, 6
 
 # ------------------------------------------------------------------ float state
 MF_X = 0                      # (NM, NX) states per mode
 MF_P = MF_X + NM * NX         # (NM, NX, NX) covariances
 MF_MU = MF_P + NM * NX * NX   # (NM,) mode probabilities
-MF_W = MF_MU + NM             # rate filters: slow (ω, P), agile (ω, P)
-MF_XC = MF_W + 4              # (NX,) combined state
+MF_W = MF_MU + NM             # rate predictors: (ω, P) each, slow to agile
+MF_XC = MF_W + 2 * N_RATE     # (NX,) combined state
 MF_PC = MF_XC + NX            # (NX, NX) combined covariance
 MF_TREF = MF_PC + NX * NX     # reference temperature (degC)
 MF_SIG_S2 = MF_TREF + 1       # per-sample gyro noise variance ((deg/s)^2), measured
@@ -97,23 +108,31 @@ MF_PDIST, MF_PSTILL, MF_FIELD_DOM = MF_LAST_D_T + 1, MF_LAST_D_T + 2, MF_LAST_D_
 MF_UPDATED = MF_FIELD_DOM + 1  # the last epoch used a measurement (1) or not
 MF_NS_S, MF_NS_W = MF_UPDATED + 1, MF_UPDATED + 2  # the gyro noise: forgotten sums of ½(Δg)² and of steps
 MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same of ½(ΔD)²
-N_MF = MF_NW_W + 1
+#: The compass error an epoch's mean keeps beyond the white noise (deg²; tilt while
+#: accelerating, vibration): from the clean innovations' excess over their predicted variance,
+#: forgotten sums and weight.
+MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
+N_MF = MF_RX_W + 1
 
 #: Weight of the settings' noise values in the measured noise, in steps of data.
 NOISE_PRIOR_STEPS = 20.0
 
 # ------------------------------------------------------------------ settings
-MC_EPOCH, MC_TAU_CLEAN, MC_TAU_DIST, MC_TAU_STILL, MC_TAU_MOVE = 0, 1, 2, 3, 4
-MC_Q_A, MC_Q_B, MC_Q_C, MC_Q_CT = 5, 6, 7, 8
-MC_SIG_D, MC_TAU_D, MC_K_TURN = 9, 10, 11
-MC_Q_W_SLOW, MC_Q_W_AGILE, MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL = 12, 13, 14, 15, 16
-MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP = 17, 18, 19, 20, 21
-MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0 = 22, 23, 24, 25
-MC_W_SLOW, MC_W_AGILE, MC_RATE_ANY, MC_CLOCK = 26, 27, 28, 29
-N_MC = 30
+(MC_EPOCH, MC_TAU_CLEAN, MC_TAU_DIST, MC_TAU_STILL, MC_TAU_MOVE,
+ MC_Q_A, MC_Q_B, MC_Q_C, MC_Q_CT,
+ MC_SIG_D, MC_TAU_D, MC_K_TURN,
+ MC_SIG_R, MC_TAU_R,
+ MC_SIG_STEP, MC_Q_E, MC_TAU_E,
+ MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
+ MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
+ MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
+ MC_RATE_ANY, MC_CLOCK) = range(31)
+#: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
+#: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
+MC_Q_W = 31
+MC_SHARE = MC_Q_W + N_RATE
+N_MC = MC_SHARE + N_RATE
 
-#: Log-likelihood of a disturbed compass sample: any heading, 1/360 per deg.
-LL_ANY_HEADING = -math.log(360.0)
 #: Log-likelihoods of a disturbed field: strength ratio within ±50 %, dip within ±30 deg.
 LL_ANY_NORM = -math.log(1.0)
 LL_ANY_DIP = -math.log(60.0)
@@ -149,11 +168,12 @@ def init_state(mf, mc, x0, P0, t_ref):
     for j in range(NM):
         X[j, :] = x0
         P[j, :, :] = P0
+        if not _is_clean(j):
+            P[j, X_E, X_E] = mc[MC_SIG_STEP] ** 2
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps)
-    mf[MF_W] = 0.0
-    mf[MF_W + 1] = 1.0
-    mf[MF_W + 2] = 0.0
-    mf[MF_W + 3] = 100.0
+    for k in range(N_RATE):
+        mf[MF_W + 2 * k] = 0.0
+        mf[MF_W + 2 * k + 1] = 1.0
     combine(mf)
 
 
@@ -191,20 +211,33 @@ def bias_var(Pc, hT, hTp):
 
 
 @jit
-def _update(x, P, H, z, R, wrap):
+def _update(x, P, H, z, R, wrap, only=-1):
     """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
-    (``wrap``: the innovation is an angle, wrapped to ±180)."""
+    (``wrap``: the innovation is an angle, wrapped to ±180). ``only`` >= 0: the measurement
+    corrects that state alone (the others are considered, not corrected: a Schmidt update)."""
     PH = np.dot(P, H)
     S = np.dot(H, PH) + R
     nu = z - np.dot(H, x)
     if wrap:
         nu = wrap180(nu)
+    if only >= 0:
+        for r in range(NX):
+            if r != only:
+                PH[r] = 0.0
     K = PH / S
     for r in range(NX):
         x[r] += K[r] * nu
-    for r in range(NX):
+    if only >= 0:  # Joseph form: (I - K H) P (I - K H)^T + K R K^T, with K nonzero in one row
+        A = np.eye(NX)
         for c in range(NX):
-            P[r, c] -= K[r] * PH[c]
+            A[only, c] -= K[only] * H[c]
+        Pn = np.dot(np.dot(A, P), A.T)
+        Pn[only, only] += K[only] * K[only] * R
+        P[:, :] = Pn
+    else:
+        for r in range(NX):
+            for c in range(NX):
+                P[r, c] -= K[r] * PH[c]
     for r in range(NX):  # symmetric, non-negative diagonal
         for c in range(r + 1, NX):
             m = 0.5 * (P[r, c] + P[c, r])
@@ -216,7 +249,7 @@ def _update(x, P, H, z, R, wrap):
 
 
 @jit
-def _mix(mf, Pi):
+def _mix(mf, Pi, step_var):
     """IMM mixing: each mode's starting state and covariance from the bank, weighted by the
     probabilities of having come from each mode; returns the predicted mode probabilities."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
@@ -236,6 +269,8 @@ def _mix(mf, Pi):
                 v = X[i, k]
                 if k == X_DELTA:
                     v = ref + wrap180(v - ref)
+                elif k == X_E and _is_clean(j):  # a clean compass has no disturbance
+                    v = 0.0
                 X0[j, k] += w * v
         for i in range(NM):
             w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
@@ -243,9 +278,15 @@ def _mix(mf, Pi):
                 continue
             dx = X[i] - X0[j]
             dx[X_DELTA] = wrap180(X[i, X_DELTA] - X0[j, X_DELTA])
+            if _is_clean(j):
+                dx[X_E] = 0.0
             for r in range(NX):
                 for c in range(NX):
+                    if _is_clean(j) and (r == X_E or c == X_E):
+                        continue
                     P0[j, r, c] += w * (P[i, r, c] + dx[r] * dx[c])
+            if _is_clean(i) and not _is_clean(j):  # a disturbance begins: a step of unknown size
+                P0[j, X_E, X_E] += w * step_var
     X[:, :] = X0
     P[:, :, :] = P0
     return cbar
@@ -280,11 +321,16 @@ def epoch(mf, mc, t_end, temp_end):
             pc = (1.0 - pcd if cj else pcd) if ci else (pdc if cj else 1.0 - pdc)
             ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
             Pi[i, j] = pc * ps
-    cbar = _mix(mf, Pi)
+    cbar = _mix(mf, Pi, mc[MC_SIG_STEP] ** 2)
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
     # process noise of the drift and the compass error, shared by every mode
     phi_d = math.exp(-dt / mc[MC_TAU_D])
+    phi_r = math.exp(-dt / mc[MC_TAU_R])
+    gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
+    q_r = mc[MC_SIG_R] ** 2 * (1.0 - phi_r * phi_r)
+    phi_e = math.exp(-dt / mc[MC_TAU_E])
+    q_e = mc[MC_Q_E] ** 2 * dt
     q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d) + (mc[MC_K_TURN] * dG) ** 2
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
@@ -303,59 +349,72 @@ def epoch(mf, mc, t_end, temp_end):
         if still:  # the heading holds: δ moves with the gyro integral
             x[X_DELTA] -= dG
         else:  # δ moves by minus the drift integral (eq. 5)
-            x[X_DELTA] -= x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt
+            x[X_DELTA] -= x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt
+        x[X_C] += x[X_R] * gain_r
+        x[X_R] *= phi_r
         x[X_D] *= phi_d
+        x[X_E] *= phi_e
         F[0, 1] = 0.0 if still else -dTc
         F[0, 2] = 0.0 if still else -dTp
         F[0, 3] = 0.0 if still else -dt
+        F[0, 5] = 0.0 if still else -0.5 * dt * dt
+        F[3, 5] = gain_r
         F[4, 4] = phi_d
+        F[5, 5] = phi_r
+        F[6, 6] = phi_e
         Pn = np.dot(np.dot(F, Pj), F.T)
         Pn[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
         Pn[X_A, X_A] += q_a
         Pn[X_B, X_B] += q_b
         Pn[X_C, X_C] += q_c
         Pn[X_D, X_D] += q_d
+        Pn[X_R, X_R] += q_r
+        if not _is_clean(j):
+            Pn[X_E, X_E] += q_e
         Pj[:, :] = Pn
     # the gyro: a drift measurement when still; drift plus a true rate when moving
     if not gap:
-        Hg = np.array([0.0, dTc, dTp, dt, 0.0])
-        ws, Pws, wa, Pwa = mf[MF_W], mf[MF_W + 1], mf[MF_W + 2], mf[MF_W + 3]
-        Pws_pred = Pws + mc[MC_Q_W_SLOW] ** 2 * dt
-        Pwa_pred = Pwa + mc[MC_Q_W_AGILE] ** 2 * dt
+        Hg = np.array([0.0, dTc, dTp, dt, 0.0, -0.5 * dt * dt, 0.0])  # c' and its rate at the epoch end
         for j in range(NM):
             if _is_still(j):
                 ll[j] += _update(X[j], P[j], Hg, dG, arw, False)
             else:
                 mean = np.dot(Hg, X[j])
                 base = np.dot(Hg, np.dot(P[j], Hg)) + arw
-                l1 = math.log(mc[MC_W_SLOW]) + _loggauss(dG - mean - ws * dt, base + Pws_pred * dt * dt)
-                l2 = math.log(mc[MC_W_AGILE]) + _loggauss(dG - mean - wa * dt, base + Pwa_pred * dt * dt)
-                l3 = math.log(1.0 - mc[MC_W_SLOW] - mc[MC_W_AGILE]) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
-                m = max(l1, max(l2, l3))
-                ll[j] += m + math.log(math.exp(l1 - m) + math.exp(l2 - m) + math.exp(l3 - m))
+                lk = np.empty(N_RATE + 1)
+                rest = 1.0
+                for k in range(N_RATE):
+                    Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
+                    lk[k] = math.log(mc[MC_SHARE + k]) + _loggauss(dG - mean - mf[MF_W + 2 * k] * dt, base + Pk * dt * dt)
+                    rest -= mc[MC_SHARE + k]
+                lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
+                m = np.max(lk)
+                ll[j] += m + math.log(np.sum(np.exp(lk - m)))
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
+    excess = np.zeros(NM)
     field_ll = 0.0
     if n_c > 0.0:
         D = mf[MF_E_DREF] + mf[MF_E_SD] / n_c
         Rc = mf[MF_SIG_W2] / n_c
         h_still = dG - mf[MF_E_SG] / n_c  # ∫gyro from the mean sample to the epoch end
-        Hm = np.array([1.0, dTc - mf[MF_E_STC] / n_c, dTp - mf[MF_E_STP] / n_c, dt - mf[MF_E_ST] / n_c, 1.0])
-        Hs = np.array([1.0, 0.0, 0.0, 0.0, 1.0])
+        Hm = np.array([1.0, dTc - mf[MF_E_STC] / n_c, dTp - mf[MF_E_STP] / n_c, dt - mf[MF_E_ST] / n_c, 1.0, 0.0, 1.0])
+        Hs = np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0])
         if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
             ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        for j in range(NM):
+        Rc += mf[MF_RX]
+        for j in range(NM):  # a disturbed compass carries its disturbance e (zero when clean)
+            only = -1 if _is_clean(j) else X_E  # and tells nothing else: only e is corrected
+            H = Hs if _is_still(j) else Hm
+            z = D - h_still if _is_still(j) else D
+            nu = wrap180(z - np.dot(H, X[j]))
+            excess[j] = nu * nu - (np.dot(H, np.dot(P[j], H)) + Rc - mf[MF_RX])
+            ll[j] += _update(X[j], P[j], H, z, Rc, True, only)
             if _is_clean(j):
-                if _is_still(j):
-                    ll[j] += _update(X[j], P[j], Hs, D - h_still, Rc, True)
-                else:
-                    ll[j] += _update(X[j], P[j], Hm, D, Rc, True)
                 ll[j] += field_ll
-            else:
-                ll[j] += LL_ANY_HEADING
     # mode probabilities
     top = -math.inf
     for j in range(NM):
@@ -369,6 +428,13 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_MU + j] = max(ll[j] / tot, 1e-12)
     combine(mf)
     mu = mf[MF_MU:MF_MU + NM]
+    p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
+    if n_c > 0.0 and p_clean > 0.9:  # the clean innovations' excess: the compass's epoch-level error
+        keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
+        ex = (mu[CLEAN_STILL] * excess[CLEAN_STILL] + mu[CLEAN_MOVING] * excess[CLEAN_MOVING]) / p_clean
+        mf[MF_RX_S] = keep * mf[MF_RX_S] + ex
+        mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
+        mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
     mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING]
     mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
@@ -379,14 +445,14 @@ def epoch(mf, mc, t_end, temp_end):
         xc = mf[MF_XC:MF_XC + NX]
         r = (dG - (xc[X_A] * dTc + xc[X_B] * dTp + xc[X_C] * dt)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp) * dt * dt) / (dt * dt)
-        for k, q in ((0, mc[MC_Q_W_SLOW]), (2, mc[MC_Q_W_AGILE])):
-            Pp = mf[MF_W + k + 1] + q * q * dt
+        for k in range(N_RATE):
+            Pp = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
             K = Pp / (Pp + Rr)
-            mf[MF_W + k] += K * (r - mf[MF_W + k])
-            mf[MF_W + k + 1] = (1.0 - K) * Pp
+            mf[MF_W + 2 * k] += K * (r - mf[MF_W + 2 * k])
+            mf[MF_W + 2 * k + 1] = (1.0 - K) * Pp
     else:
-        mf[MF_W + 1] += mc[MC_Q_W_SLOW] ** 2 * dt
-        mf[MF_W + 3] += mc[MC_Q_W_AGILE] ** 2 * dt
+        for k in range(N_RATE):
+            mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt
     # the measured noise: the gyro's from successive rows while still, the compass's from
     # successive samples while clean; sums forgotten over ``noise_memory_s``
     keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
@@ -410,3 +476,6 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_SIG_W2] = mc[MC_COMPASS_SD] ** 2
     mf[MF_NW_S] = NOISE_PRIOR_STEPS * mf[MF_SIG_W2]
     mf[MF_NW_W] = NOISE_PRIOR_STEPS
+    mf[MF_RX] = 0.0
+    mf[MF_RX_S] = 0.0
+    mf[MF_RX_W] = NOISE_PRIOR_STEPS
