@@ -53,19 +53,22 @@ class EvidenceConfig:
         the drift departs from eq. (2).
     compass_error_deg, compass_error_s : float
         Standard deviation (deg) and correlation time (s) of the compass's slow error d
-        (deviation, tilt): a Gauss–Markov process.
+        (deviation, slow wander): a Gauss–Markov process.
     disturbance_step_deg, disturbance_walk, disturbance_s : float
         A magnetic disturbance: the standard deviation of its step when it begins (deg), its
         random walk (deg/√s) and the time over which it decays (s).
-    deviation_per_deg : float
-        Growth of d's standard deviation per degree turned (deviation is a function of
-        heading; tilt while cornering), deg/deg.
-    turn_walks : tuple of 3 floats
-        Random walks of the true rate under the three motion models, deg/s/√s: slow turns,
-        sways and waves, manoeuvres.
-    turn_shares : tuple of 3 floats
-        Prior shares of the three motion models in a moving epoch (sum below 1); the rest
-        is a rate that none predicts (a start, a stop), within ``rate_any_dps``.
+    turn_error_s : float
+        The compass's error while turning per deg/s of turn rate, deg/(deg/s) = s (the
+        tilt of cornering, the compass's lag).
+    deviation_span_deg : float
+        Heading change over which the compass's slow error decorrelates, deg (deviation is
+        a function of heading).
+    turn_walks : tuple of 4 floats
+        Random walks of the true rate under the motion models, deg/s/√s, from slow turns
+        and long sways to waves and manoeuvres.
+    turn_shares : tuple of 4 floats
+        Prior shares of the motion models in a moving epoch (sum below 1); the rest is a
+        rate that none predicts (a start, a stop), within ``rate_any_dps``.
     rate_any_dps : float
         Standard deviation of a rate no motion model predicts, deg/s.
     angular_accel_dps2 : float
@@ -98,16 +101,17 @@ class EvidenceConfig:
     rate_walk: float = 0.01
     drift_walk: float = 2e-4
     drift_walk_temp: float = 0.02
-    drift_rate_dps2: float = 0.001
+    drift_rate_dps2: float = 0.0003
     drift_rate_s: float = 300.0
-    compass_error_deg: float = 1.5
+    compass_error_deg: float = 2.0
     compass_error_s: float = 3600.0
     disturbance_step_deg: float = 30.0
     disturbance_walk: float = 0.5
     disturbance_s: float = 1800.0
-    deviation_per_deg: float = 0.03
-    turn_walks: tuple[float, float, float] = (0.005, 0.3, 5.0)
-    turn_shares: tuple[float, float, float] = (0.45, 0.35, 0.15)
+    turn_error_s: float = 0.2
+    deviation_span_deg: float = 90.0
+    turn_walks: tuple[float, ...] = (0.003, 0.03, 0.3, 3.0)
+    turn_shares: tuple[float, ...] = (0.3, 0.3, 0.2, 0.15)
     rate_any_dps: float = 100.0
     angular_accel_dps2: float = 10.0
     gap_turn_dps: float = 1.0
@@ -138,7 +142,7 @@ class EvidenceConfig:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ConfigError(f"evidence setting {f.name} must be a finite number >= 0, got {v!r}")
         for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
-                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s"):
+                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s", "deviation_span_deg"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"evidence setting {name} must be > 0, got {getattr(self, name)!r}")
         for name in ("p_clean0", "p_still0"):
@@ -154,7 +158,8 @@ class EvidenceConfig:
         mc[ev.MC_Q_A], mc[ev.MC_Q_B] = self.slope_walk, self.rate_walk
         mc[ev.MC_Q_C], mc[ev.MC_Q_CT] = self.drift_walk, self.drift_walk_temp
         mc[ev.MC_SIG_D], mc[ev.MC_TAU_D] = self.compass_error_deg, self.compass_error_s
-        mc[ev.MC_K_TURN] = self.deviation_per_deg
+        mc[ev.MC_K_TURN] = self.turn_error_s
+        mc[ev.MC_L_DEV] = self.deviation_span_deg
         mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s
@@ -217,6 +222,7 @@ class EvidenceModel(LinearDrift):
         P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
         P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
         P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
+
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
         self.mf[ev.MF_NORM_REF] = self.mf[ev.MF_DIP_REF] = math.nan

@@ -4,8 +4,9 @@ One linear-Gaussian model of the gyro, the compass and the platform, written onc
 
 * states ``x = [δ, a, b, c, d, r, e]``: δ = heading − ∫gyro (deg; the heading is ``∫gyro + δ``),
   the drift model of eq. (2) centred on ``T_ref`` (``bias = a (T − T_ref) + b T' + c``;
-  deg/s/degC, deg/s per degC/s, deg/s), d, the compass's slowly varying error (deg:
-  hard- and soft-iron deviation that changes as the heading turns, tilt while accelerating),
+  deg/s/degC, deg/s per degC/s, deg/s), d, the compass's own slowly varying error (deg: the
+  deviation of hard and soft iron, a function of heading, and slow wander; a Gauss–Markov
+  process that decorrelates with time and with the heading turned),
   r, the rate at which the drift departs from eq. (2) (deg/s², a Gauss–Markov process that
   c follows: knees, lag and curvature make the drift move for a while in one direction), and
   e, the magnetic disturbance on the compass (deg; zero while the compass is clean);
@@ -14,8 +15,9 @@ One linear-Gaussian model of the gyro, the compass and the platform, written onc
 * the compass measures ``heading + d`` (the mean over the epoch's samples, with the compass's
   white noise divided by their number, plus the error an epoch's mean keeps — tilt while
   accelerating, vibration — measured from the clean innovations' excess over their predicted
-  variance): eqs. (4)–(6) as one measurement of δ whose change over time carries the drift,
-  as the paper's ΔA/Δt does;
+  variance, plus an error proportional to the turn rate: the tilt of cornering and the
+  compass's lag): eqs. (4)–(6) as one measurement of δ whose change over time carries the
+  drift, as the paper's ΔA/Δt does;
 * the drift parameters random-walk: a and c' with the temperature change (curvature,
   hysteresis and lag show as drift that moves when the temperature moves), c' also in time
   (bias instability), b slowly; d is a first-order Gauss–Markov process whose variance
@@ -64,7 +66,7 @@ __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_noise
 #: Modes (rows of the filter bank) and states.
 NM, NX = 4, 7
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
-N_RATE = 3
+N_RATE = 4
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING = 0, 1, 2, 3
 X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E = 0, 1, 2, 3, 4, 5, 6
 
@@ -114,6 +116,9 @@ MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 N_MF = MF_RX_W + 1
 
+#: A clean compass innovation says something of the compass's epoch-level error only when its
+#: predicted variance is below this, deg² (the heading known to a few degrees).
+RX_S_MAX = 25.0
 #: Weight of the settings' noise values in the measured noise, in steps of data.
 NOISE_PRIOR_STEPS = 20.0
 
@@ -126,10 +131,10 @@ NOISE_PRIOR_STEPS = 20.0
  MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
- MC_RATE_ANY, MC_CLOCK) = range(31)
+ MC_RATE_ANY, MC_CLOCK, MC_L_DEV) = range(32)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 31
+MC_Q_W = 32
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -325,13 +330,13 @@ def epoch(mf, mc, t_end, temp_end):
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
     # process noise of the drift and the compass error, shared by every mode
-    phi_d = math.exp(-dt / mc[MC_TAU_D])
+    phi_d = math.exp(-dt / mc[MC_TAU_D] - abs(dG) / mc[MC_L_DEV])  # d decorrelates in time and with heading
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
     q_r = mc[MC_SIG_R] ** 2 * (1.0 - phi_r * phi_r)
     phi_e = math.exp(-dt / mc[MC_TAU_E])
     q_e = mc[MC_Q_E] ** 2 * dt
-    q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d) + (mc[MC_K_TURN] * dG) ** 2
+    q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
@@ -374,7 +379,11 @@ def epoch(mf, mc, t_end, temp_end):
         Pj[:, :] = Pn
     # the gyro: a drift measurement when still; drift plus a true rate when moving
     if not gap:
-        Hg = np.array([0.0, dTc, dTp, dt, 0.0, -0.5 * dt * dt, 0.0])  # c' and its rate at the epoch end
+        Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
+        Hg[X_A] = dTc
+        Hg[X_B] = dTp
+        Hg[X_C] = dt
+        Hg[X_R] = -0.5 * dt * dt
         for j in range(NM):
             if _is_still(j):
                 ll[j] += _update(X[j], P[j], Hg, dG, arw, False)
@@ -398,20 +407,28 @@ def epoch(mf, mc, t_end, temp_end):
         D = mf[MF_E_DREF] + mf[MF_E_SD] / n_c
         Rc = mf[MF_SIG_W2] / n_c
         h_still = dG - mf[MF_E_SG] / n_c  # ∫gyro from the mean sample to the epoch end
-        Hm = np.array([1.0, dTc - mf[MF_E_STC] / n_c, dTp - mf[MF_E_STP] / n_c, dt - mf[MF_E_ST] / n_c, 1.0, 0.0, 1.0])
-        Hs = np.array([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0])
+        Hs = np.zeros(NX)
+        Hs[X_DELTA] = 1.0
+        Hs[X_D] = 1.0
+        Hs[X_E] = 1.0
+        Hm = Hs.copy()
+        Hm[X_A] = dTc - mf[MF_E_STC] / n_c
+        Hm[X_B] = dTp - mf[MF_E_STP] / n_c
+        Hm[X_C] = dt - mf[MF_E_ST] / n_c
         if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
             ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        Rc += mf[MF_RX]
+        Rc += mf[MF_RX] + (mc[MC_K_TURN] * dG / dt) ** 2  # the compass errs more while turning (tilt, lag)
         for j in range(NM):  # a disturbed compass carries its disturbance e (zero when clean)
             only = -1 if _is_clean(j) else X_E  # and tells nothing else: only e is corrected
             H = Hs if _is_still(j) else Hm
             z = D - h_still if _is_still(j) else D
             nu = wrap180(z - np.dot(H, X[j]))
-            excess[j] = nu * nu - (np.dot(H, np.dot(P[j], H)) + Rc - mf[MF_RX])
+            s_pred = np.dot(H, np.dot(P[j], H)) + Rc - mf[MF_RX]
+            # the excess says something of the compass only once the heading is known to a few deg
+            excess[j] = nu * nu - s_pred if s_pred < RX_S_MAX else math.nan
             ll[j] += _update(X[j], P[j], H, z, Rc, True, only)
             if _is_clean(j):
                 ll[j] += field_ll
@@ -429,9 +446,9 @@ def epoch(mf, mc, t_end, temp_end):
     combine(mf)
     mu = mf[MF_MU:MF_MU + NM]
     p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
-    if n_c > 0.0 and p_clean > 0.9:  # the clean innovations' excess: the compass's epoch-level error
+    ex = (mu[CLEAN_STILL] * excess[CLEAN_STILL] + mu[CLEAN_MOVING] * excess[CLEAN_MOVING]) / p_clean
+    if n_c > 0.0 and p_clean > 0.9 and math.isfinite(ex):  # the clean innovations' excess
         keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
-        ex = (mu[CLEAN_STILL] * excess[CLEAN_STILL] + mu[CLEAN_MOVING] * excess[CLEAN_MOVING]) / p_clean
         mf[MF_RX_S] = keep * mf[MF_RX_S] + ex
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)

@@ -71,6 +71,7 @@ def _open(mf, t, temp):
         mf[k] = 0.0
 
 
+
 @jit
 def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias):
     """The model's step for the epoch ending at ``t``, then the field reference and the
