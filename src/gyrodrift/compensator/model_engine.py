@@ -5,7 +5,9 @@ through the model's row loop (:func:`gyrodrift.kernels.evloop.run`) instead of t
 interval loop: the same chunked, resumable feeding, the same held init window (its rows
 come out when it is complete, their gyro-alone heading anchored on its first compass
 sample) and the same provisional rows while it fills, so the three entry points give the
-same bits. The model needs no initialisation from the window: it learns from the first row.
+same bits. The model needs no initialisation from the window: it learns from the first row;
+once the window is complete its rows are compensated again with the drift learned over it
+(:func:`gyrodrift.kernels.evloop.settle`), as the paper's initialisation compensates them.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 
 from gyrodrift.compensator.engine import ChunkEngine, _read_only, settings_arrays
 from gyrodrift.estimators.evidence import EvidenceModel
+from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
 from gyrodrift.kernels.numeric import wrap360_all
@@ -58,6 +61,7 @@ class ModelEngine(ChunkEngine):
             self.notes.append(f"{source}: the drift model's T is the elapsed time, not the temperature ({why}): "
                               f"c is the drift at the start and a its change per {CLOCK_UNIT_S:g} s, deg/s")
         self._mc = None
+        self._init_last = None  # last row of the init window, until its rows are settled
         self._rf = np.zeros(evloop.RF_N)
         self._rc = np.zeros(evloop.RC_N)
         gate = config.gate
@@ -78,7 +82,7 @@ class ModelEngine(ChunkEngine):
                               "starts at 0 deg at the first sample (relative)")
         self._mc = self.est.start(float(T[0]), self.cfg.compass_sigma_deg, self.cfg.gyro_noise_dps_rthz,
                                   self._clock is not None)
-        self._anchor_pending = True
+        self._init_last = e
 
     def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols) -> None:
         evloop.run(t, g, T, Tp, heading, held, norm, dip, 0, self.est.mf, self._mc, self._rf, self._rc,
@@ -89,8 +93,10 @@ class ModelEngine(ChunkEngine):
         Tp = _read_only(cols.column(L.O_TEMP_RATE))
         held = _read_only(cols.code(L.OC_GAP).view(np.bool_))
         self._loop(t, g, T, Tp, heading, held, norm, dip, cols)
-        if getattr(self, "_anchor_pending", False):  # the init window's rows: anchored once it is done
-            self._anchor_pending = False
+        if self._init_last is not None:  # the init window's rows, once it is done
+            evloop.settle(t, g, T, Tp, self._init_last, t.size, self.est.mf[ev.MF_TREF], self.est.mf, self._rf,
+                          cols.out, cols.codes, cols.n)
+            self._init_last = None
             self._anchor_rows(heading, cols)
         return {
             "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),

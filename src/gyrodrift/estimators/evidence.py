@@ -108,7 +108,7 @@ class EvidenceConfig:
     disturbance_step_deg: float = 30.0
     disturbance_walk: float = 0.5
     disturbance_s: float = 1800.0
-    turn_error_s: float = 0.2
+    turn_error_s: float = 0.5
     deviation_span_deg: float = 90.0
     turn_walks: tuple[float, ...] = (0.003, 0.03, 0.3, 3.0)
     turn_shares: tuple[float, ...] = (0.3, 0.3, 0.2, 0.15)

@@ -116,6 +116,8 @@ MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 N_MF = MF_RX_W + 1
 
+#: Largest heading variance a time gap adds to a moving platform, deg² (a heading anywhere).
+GAP_VAR_MAX = 90.0**2
 #: A clean compass innovation says something of the compass's epoch-level error only when its
 #: predicted variance is below this, deg² (the heading known to a few degrees).
 RX_S_MAX = 25.0
@@ -343,8 +345,8 @@ def epoch(mf, mc, t_end, temp_end):
     sig_s2 = mf[MF_SIG_S2]
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
     moving_q = arw + mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4] / 12.0
-    if gap:
-        moving_q += min((mc[MC_OMEGA_GAP] * dt) ** 2, 90.0**2)
+    if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
+        moving_q = min(moving_q + (mc[MC_OMEGA_GAP] * dt) ** 2 + mc[MC_SIG_ACC] ** 2 * dt**4 / 12.0, GAP_VAR_MAX)
     ll = np.zeros(NM)
     F = np.eye(NX)
     for j in range(NM):

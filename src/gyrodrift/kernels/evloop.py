@@ -4,10 +4,11 @@ Per row: the drift in force (eq. 5, the mixture's a, b, c), the compensated rate
 trapezoid integrals, the epoch's sums; at the end of each epoch (the first row at least
 ``epoch_s`` after its start) the model's step. A time step far longer than the log's own
 typical spacing (``gap_factor`` times a running typical step) is a time gap: the epoch
-before it closes, the gap is an epoch of its own without gyro data (the still modes hold
-the heading across it; the moving ones lose it), and the raw integral takes the drift over
-it (the gyro is taken to have read its drift). A held cell (an empty gyro or temperature)
-is a gap too.
+before it closes, the gap is an epoch of its own without a drift measurement (the still modes
+hold the heading across it; the moving ones lose some of it), and the integrals across it
+follow the likelier platform: still, the gyro is taken to have read its drift (the heading
+holds); moving, the trapezoid of the samples at its ends. A held cell (an empty gyro or
+temperature) is a gap too.
 
 Outputs per row (columns of :mod:`gyrodrift.kernels.layout`): bias, rate, the gyro-alone
 heading (anchored on the first compass sample), a, b, c (the paper's absolute parameters),
@@ -43,7 +44,7 @@ from gyrodrift.kernels.layout import (
 )
 from gyrodrift.kernels.numeric import wrap180, wrap360
 
-__all__ = ["run", "RF_N", "RC_N"]
+__all__ = ["run", "settle", "RF_N", "RC_N"]
 
 # ------------------------------------------------------------------ row state
 RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
@@ -54,7 +55,8 @@ RF_MEAN_RATE = 14  # the averaged compensated rate (turning)
 RF_T_COMPASS = 15  # time of the last compass sample
 RF_STARTED, RF_SEEN = 16, 17  # a row was taken; a compass sample came (1.0)
 RF_UNOBS = 18  # unobservable code in force
-RF_N = 19
+RF_FUSED_ON = 19  # an epoch with a compass sample has closed: the fused heading is known (1.0)
+RF_N = 20
 
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
@@ -85,6 +87,8 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias):
         mf[MF_DIP_REF] += 0.01 * (mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF])
     rf[RF_IRAW_E] = I_raw
     rf[RF_IBIAS_E] = I_bias
+    if mf[MF_E_NC] > 0.0:
+        rf[RF_FUSED_ON] = 1.0
     Pc = mf[MF_PC:MF_PC + NX * NX]
     code = 0
     if math.sqrt(max(Pc[X_A * NX + X_A], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_A]:
@@ -141,8 +145,14 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                     _close(mf, mc, rf, rc, c_t, c_T, I_raw, I_bias)
                 _open(mf, c_t, c_T)
                 mf[MF_E_GAP] = 1.0
-                # across the gap the raw integral takes the drift in force (the unit read its drift)
-                inc = 0.5 * (bias + c_bias) * h
+                # across the gap the integrals follow the likelier platform: still, the gyro read
+                # its drift and the heading holds; moving, the trapezoid of the two samples
+                if mf[MF_PSTILL] >= 0.5:
+                    inc = 0.5 * (bias + c_bias) * h
+                else:
+                    inc = 0.5 * (gi + c_g) * h
+                    I_rate += 0.5 * (rate + c_rate) * h
+                    mf[MF_E_H2] += h * h  # the trapezoid's noise, for the moving modes
                 I_raw += inc
                 mf[MF_E_G] += inc
             else:
@@ -203,15 +213,17 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         out[O_C * cap + ix] = xc[X_C] - xc[X_A] * tref
         out[o_heading + ix] = wrap360(rf[RF_ANCHOR] + I_rate)
         sig_w = mc[MC_COMPASS_SD]
-        if rf[RF_SEEN] == 1.0:
+        if rf[RF_FUSED_ON] == 1.0:
             out[O_FUSED * cap + ix] = wrap360(I_raw + xc[X_DELTA] - (I_bias - rf[RF_IBIAS_E]))
             out[O_FUSED_SD * cap + ix] = math.sqrt(max(Pc[X_DELTA, X_DELTA], 0.0))
+        else:
+            out[O_FUSED * cap + ix] = math.nan
+            out[O_FUSED_SD * cap + ix] = math.nan
+        if rf[RF_SEEN] == 1.0:
             since = ti - rf[RF_T_ANCHOR]
             out[O_HEADING_SD * cap + ix] = math.sqrt(sig_w * sig_w + mf[MF_SIG_S2] * math.exp(mf[MF_LOG_H]) * since
                                                      + rf[RF_ISD] ** 2) if math.isfinite(mf[MF_LOG_H]) else sig_w
         else:
-            out[O_FUSED * cap + ix] = math.nan
-            out[O_FUSED_SD * cap + ix] = math.nan
             out[O_HEADING_SD * cap + ix] = math.nan
         if reason_gap:
             reason = R_GAP
@@ -229,3 +241,32 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
     return t.size
+
+
+@jit
+def settle(t, g, T, Tp, last, n, tref, mf, rf, out, codes, cap):
+    """The init window's rows ``0..last`` compensated again with the drift known at its end
+    (as the paper's initialisation compensates them): bias, rate, a, b, c and ``bias_sd``;
+    the gyro-alone heading of every row of the block (``0..n-1``) moves by the change of the
+    integrated rate (not across the time gaps, where it held), and so does the loop's integral."""
+    xc = mf[MF_XC:MF_XC + NX]
+    Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
+    a, b, c = xc[X_A], xc[X_B], xc[X_C]
+    corr = 0.0
+    prev = 0.0
+    for i in range(last + 1):
+        bias = a * (T[i] - tref) + b * Tp[i] + c
+        db = bias - out[O_BIAS * cap + i]
+        if i > 0 and codes[OC_REASON * cap + i] != R_GAP:
+            corr -= 0.5 * (db + prev) * (t[i] - t[i - 1])
+        prev = db
+        out[O_BIAS * cap + i] = bias
+        out[O_RATE * cap + i] = g[i] - bias
+        out[O_A * cap + i] = a
+        out[O_B * cap + i] = b
+        out[O_C * cap + i] = c - a * tref
+        out[O_BIAS_SD * cap + i] = math.sqrt(ev.bias_var(Pc, T[i] - tref, Tp[i]))
+        out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
+    for i in range(last + 1, n):
+        out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
+    rf[RF_IRATE] += corr
