@@ -6,8 +6,9 @@ interval loop: the same chunked, resumable feeding, the same held init window (i
 come out when it is complete, their gyro-alone heading anchored on its first compass
 sample) and the same provisional rows while it fills, so the three entry points give the
 same bits. The model needs no initialisation from the window: it learns from the first row;
-once the window is complete its rows are compensated again with the drift learned over it
-(:func:`gyrodrift.kernels.evloop.settle`), as the paper's initialisation compensates them.
+once the window is complete, the rows of its first epoch, compensated with the prior while
+nothing was measured, are compensated again with the drift learned by that epoch's end
+(:func:`gyrodrift.kernels.evloop.settle`).
 """
 
 from __future__ import annotations
@@ -83,6 +84,7 @@ class ModelEngine(ChunkEngine):
         self._mc = self.est.start(float(T[0]), self.cfg.compass_sigma_deg, self.cfg.gyro_noise_dps_rthz,
                                   self._clock is not None)
         self._init_last = e
+        self._rf[evloop.RF_FIRST_ROW] = -1.0
 
     def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols) -> None:
         evloop.run(t, g, T, Tp, heading, held, norm, dip, 0, self.est.mf, self._mc, self._rf, self._rc,
@@ -94,8 +96,7 @@ class ModelEngine(ChunkEngine):
         held = _read_only(cols.code(L.OC_GAP).view(np.bool_))
         self._loop(t, g, T, Tp, heading, held, norm, dip, cols)
         if self._init_last is not None:  # the init window's rows, once it is done
-            evloop.settle(t, g, T, Tp, self._init_last, t.size, self.est.mf[ev.MF_TREF], self.est.mf, self._rf,
-                          cols.out, cols.codes, cols.n)
+            evloop.settle(t, g, T, Tp, t.size, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes, cols.n)
             self._init_last = None
             self._anchor_rows(heading, cols)
         return {

@@ -38,8 +38,9 @@ the epoch's data:
   epoch's gyro;
 * **clean** filters take the compass measurement (likelihood: its Gaussian innovation);
 * **disturbed** filters take it with a disturbance e on top (a state of their own: a step of
-  unknown size when the disturbance begins, then a fast random walk that decays; zero in
-  the clean filters), so a step, a ramp or a wander of the compass is explained by e, which
+  unknown size when the disturbance begins, then a fast random walk that decays in time and
+  decorrelates as the heading turns, so an offset that stays through turns is no disturbance;
+  zero in the clean filters), so a step, a ramp or a wander of the compass is explained by e, which
   is the only state a disturbed compass corrects (a Schmidt update: heading and drift are
   considered, not corrected); with a raw magnetometer the field strength
   and dip add their own likelihoods (near the reference when clean, anywhere within ±50 % and
@@ -336,8 +337,9 @@ def epoch(mf, mc, t_end, temp_end):
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
     q_r = mc[MC_SIG_R] ** 2 * (1.0 - phi_r * phi_r)
-    phi_e = math.exp(-dt / mc[MC_TAU_E])
-    q_e = mc[MC_Q_E] ** 2 * dt
+    # a disturbance decays in time and decorrelates as the heading turns (it depends on heading)
+    phi_e = math.exp(-dt / mc[MC_TAU_E] - abs(dG) / mc[MC_L_DEV])
+    q_e = mc[MC_Q_E] ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * abs(dG) / mc[MC_L_DEV]))
     q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt

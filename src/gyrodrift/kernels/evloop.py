@@ -56,7 +56,11 @@ RF_T_COMPASS = 15  # time of the last compass sample
 RF_STARTED, RF_SEEN = 16, 17  # a row was taken; a compass sample came (1.0)
 RF_UNOBS = 18  # unobservable code in force
 RF_FUSED_ON = 19  # an epoch with a compass sample has closed: the fused heading is known (1.0)
-RF_N = 20
+#: The first epoch: its last row (-1 until it closes) and the drift learned by its end: a, b,
+#: c' and their covariance (aa, bb, cc, ab, ac, bc).
+RF_FIRST_ROW = 20
+RF_FIRST_DRIFT = 21
+RF_N = RF_FIRST_DRIFT + 9
 
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
@@ -199,6 +203,13 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         updated = 0
         if gap or (not first and ti - mf[MF_E_T0] >= epoch_s):
             _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias)
+            if rf[RF_FIRST_ROW] < 0.0:
+                rf[RF_FIRST_ROW] = i
+                for k, (r, c_) in enumerate(((X_A, X_A), (X_B, X_B), (X_C, X_C), (X_A, X_B), (X_A, X_C), (X_B, X_C))):
+                    rf[RF_FIRST_DRIFT + 3 + k] = Pc[r, c_]
+                rf[RF_FIRST_DRIFT] = xc[X_A]
+                rf[RF_FIRST_DRIFT + 1] = xc[X_B]
+                rf[RF_FIRST_DRIFT + 2] = xc[X_C]
             updated = 1 if mf[MF_UPDATED] == 1.0 and not gap else 0
             _open(mf, ti, Ti)
         bsd = math.sqrt(ev.bias_var(Pc, Ti - tref, Tpi))
@@ -244,28 +255,34 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
 
 
 @jit
-def settle(t, g, T, Tp, last, n, tref, mf, rf, out, codes, cap):
-    """The init window's rows ``0..last`` compensated again with the drift known at its end
-    (as the paper's initialisation compensates them): bias, rate, a, b, c and ``bias_sd``;
-    the gyro-alone heading of every row of the block (``0..n-1``) moves by the change of the
-    integrated rate (not across the time gaps, where it held), and so does the loop's integral."""
-    xc = mf[MF_XC:MF_XC + NX]
-    Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
-    a, b, c = xc[X_A], xc[X_B], xc[X_C]
+def settle(t, g, T, Tp, n, tref, rf, out, codes, cap):
+    """The rows of the first epoch (to ``rf[RF_FIRST_ROW]``), compensated with the prior while
+    nothing was measured, compensated again with the drift learned by the epoch's end:
+    bias, rate, a, b, c and ``bias_sd``; the gyro-alone heading of every row of the block
+    (``0..n-1``) moves by the change of the integrated rate (not across time gaps, where it
+    held), and so does the loop's integral."""
+    last = int(rf[RF_FIRST_ROW])
+    if last < 0:
+        return
+    d = rf[RF_FIRST_DRIFT:RF_FIRST_DRIFT + 9]
+    a, b, c = d[0], d[1], d[2]
     corr = 0.0
     prev = 0.0
-    for i in range(last + 1):
-        bias = a * (T[i] - tref) + b * Tp[i] + c
+    for i in range(min(last + 1, n)):
+        hT = T[i] - tref
+        hTp = Tp[i]
+        bias = a * hT + b * hTp + c
         db = bias - out[O_BIAS * cap + i]
         if i > 0 and codes[OC_REASON * cap + i] != R_GAP:
             corr -= 0.5 * (db + prev) * (t[i] - t[i - 1])
         prev = db
+        var = (d[3] * hT * hT + d[4] * hTp * hTp + d[5] + 2.0 * d[6] * hT * hTp + 2.0 * d[7] * hT + 2.0 * d[8] * hTp)
         out[O_BIAS * cap + i] = bias
         out[O_RATE * cap + i] = g[i] - bias
         out[O_A * cap + i] = a
         out[O_B * cap + i] = b
         out[O_C * cap + i] = c - a * tref
-        out[O_BIAS_SD * cap + i] = math.sqrt(ev.bias_var(Pc, T[i] - tref, Tp[i]))
+        out[O_BIAS_SD * cap + i] = math.sqrt(max(var, 0.0))
         out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
     for i in range(last + 1, n):
         out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
