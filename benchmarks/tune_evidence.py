@@ -32,7 +32,8 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--output")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
-    ev = EvidenceConfig(**{k: float(v) for k, v in (s.split("=") for s in args.set)})
+    import ast
+    ev = EvidenceConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=") for s in args.set)})
     cfg = CompensatorConfig(estimator="evidence", evidence=ev)
     df = heldout.run_generated(args.classes, [args.split], args.seeds, ["default"], config=cfg, workers=args.workers)
     if args.output:
@@ -48,6 +49,11 @@ def main(argv=None) -> int:
                                              "interference_precision", "interference_recall", "turning_precision",
                                              "turning_recall"]]
     print(own.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    import numpy as np
+
+    score = float(np.nansum(np.log(acc["heading"] / acc["best_heading"])) + np.nansum(np.log(acc["bias"] / acc["best_bias"]))
+                  + np.nansum(np.log(acc["fused"] / acc["ahrs"])))
+    print(f"score {score:+.2f} (sum of log ratios to the best baseline; lower is better)")
     print("ok heading", int(acc.ok_heading.sum()), "bias", int(acc.ok_bias.sum()), "fused", int(acc.ok_fused.sum()),
           "of", len(acc), "; failed runs", int((df.status != "ok").sum()))
     bad = df[df.status != "ok"]

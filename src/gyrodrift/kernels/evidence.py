@@ -30,7 +30,9 @@ mixed every epoch by a Markov chain of mode changes and weighted by how well eac
 the epoch's data:
 
 * **still** filters hold the heading (δ moves with the gyro integral) and take the epoch's
-  mean gyro rate as a measurement of the drift (eq. 1 with zero true rate);
+  mean gyro rate as a measurement of the drift (eq. 1 with zero true rate), and expect the
+  gyro within the epoch to be white noise about it (the von Neumann ratio of the successive
+  differences to the variance near 2), where motion may leave structure;
 * **moving** filters propagate δ with the drift; the gyro is explained as drift plus a
   true rate, which is predicted by small random-walk filters of the rate (from a slow one
   for turns of hundredths of a deg/s to an agile one for manoeuvres) or is any rate at all
@@ -106,7 +108,9 @@ MF_E_DD2 = MF_E_NF + 1        # Σ (ΔD)² of successive compass samples
 MF_E_NDD = MF_E_DD2 + 1       # their count
 MF_E_T_START = MF_E_NDD + 1   # temperature at the epoch start (degC)
 MF_E_GAP = MF_E_T_START + 1   # 1: the epoch is a time gap (no gyro data in it)
-MF_LAST_D, MF_LAST_D_T = MF_E_GAP + 1, MF_E_GAP + 2  # last compass D and its time
+MF_E_G0, MF_E_S1, MF_E_S2, MF_E_NG = MF_E_GAP + 1, MF_E_GAP + 2, MF_E_GAP + 3, MF_E_GAP + 4  # gyro samples:
+#   the first, Σ and Σ² of the others minus it, and their number (the sample variance of the epoch)
+MF_LAST_D, MF_LAST_D_T = MF_E_NG + 1, MF_E_NG + 2  # last compass D and its time
 MF_PDIST, MF_PSTILL, MF_FIELD_DOM = MF_LAST_D_T + 1, MF_LAST_D_T + 2, MF_LAST_D_T + 3  # labels of the last epoch
 MF_UPDATED = MF_FIELD_DOM + 1  # the last epoch used a measurement (1) or not
 MF_NS_S, MF_NS_W = MF_UPDATED + 1, MF_UPDATED + 2  # the gyro noise: forgotten sums of ½(Δg)² and of steps
@@ -117,6 +121,11 @@ MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 N_MF = MF_RX_W + 1
 
+#: The von Neumann test of stillness needs this many gyro samples in an epoch.
+VN_MIN_SAMPLES = 8.0
+#: A moving epoch's gyro: white about its mean with this probability (a steady turn), else any
+#: serial structure (its ratio anywhere from 0 to 3 sd above the white value).
+VN_MOTION = 0.5
 #: Largest heading variance a time gap adds to a moving platform, deg² (a heading anywhere).
 GAP_VAR_MAX = 90.0**2
 #: A clean compass innovation says something of the compass's epoch-level error only when its
@@ -403,6 +412,19 @@ def epoch(mf, mc, t_end, temp_end):
                 lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
                 m = np.max(lk)
                 ll[j] += m + math.log(np.sum(np.exp(lk - m)))
+        # the gyro's serial structure: white noise about a constant when still (the von Neumann
+        # ratio of successive differences to the variance is near 2); any motion may lower it
+        ng = mf[MF_E_NG]
+        if ng >= VN_MIN_SAMPLES:
+            ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
+            if ss > 0.0:
+                vn = mf[MF_E_DG2] / ss
+                mean0 = 2.0 * ng / (ng - 1.0)
+                var0 = 4.0 * (ng - 2.0) / ((ng - 1.0) * (ng + 1.0))
+                l_white = _loggauss(vn - mean0, var0)
+                l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0)) + (1.0 - VN_MOTION) / (mean0 + 3.0 * math.sqrt(var0)))
+                for j in range(NM):
+                    ll[j] += l_white if _is_still(j) else l_any
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
     excess = np.zeros(NM)

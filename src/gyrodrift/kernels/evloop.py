@@ -73,7 +73,8 @@ def _open(mf, t, temp):
     mf[MF_E_T0] = t
     mf[MF_E_T_START] = temp
     for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
-              MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP):
+              MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
+              ev.MF_E_NG):
         mf[k] = 0.0
 
 
@@ -168,6 +169,13 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 dg = gi - c_g
                 mf[MF_E_DG2] += dg * dg
                 mf[MF_E_NDG] += 1.0
+                if mf[ev.MF_E_NG] == 0.0:  # the epoch's gyro samples, from the one before its first step
+                    mf[ev.MF_E_G0] = c_g
+                    mf[ev.MF_E_NG] = 1.0
+                dv = gi - mf[ev.MF_E_G0]
+                mf[ev.MF_E_S1] += dv
+                mf[ev.MF_E_S2] += dv * dv
+                mf[ev.MF_E_NG] += 1.0
             I_bias += 0.5 * (bias + c_bias) * h
             mf[MF_E_TC] += 0.5 * (Ti + c_T - 2.0 * tref) * h
             mf[MF_E_TP] += 0.5 * (Tpi + c_Tp) * h
