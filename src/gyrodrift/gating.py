@@ -1,11 +1,23 @@
 """When compass aiding is refused, and why (the ``gated`` / ``gate_reason`` columns).
 
-This module holds the thresholds (:class:`GateConfig`) and the names of the reasons; the
-decision itself is :func:`gyrodrift.kernels.aiding.row_condition` and
-:func:`gyrodrift.kernels.aiding.close`.
+This module holds the names of the reasons and the thresholds of the paper's gates
+(:class:`GateConfig`).
 
-Aiding is judged per update interval (10 s by default). An interval is refused for
-the first of these reasons seen in it (causal: a row shows what was known at that row):
+The default estimator (``adaptive``) has no gates: its model weighs hypotheses about the
+compass and the platform by how well each explains the data
+(:mod:`gyrodrift.kernels.evidence`), and a row's reason says what the model believes at
+that row (:mod:`gyrodrift.kernels.evloop`): ``gap`` (a time step far longer than the
+log's own spacing, or an empty gyro or temperature cell), ``no_compass`` (no compass
+sample for ``compass_max_age_s``), ``turning`` (the compensated rate, averaged over about
+``turn_window_s``, above ``turn_rate_dps``: the compass then errs more), ``interference``
+or ``field`` (a disturbed compass is likelier than a clean one; ``field`` when the field
+strength and dip say so), or none. ``init`` marks the streaming compensator's provisional
+rows while its init window fills.
+
+The paper's filters (``stkf``, ``kf``, ...) judge aiding per update interval (10 s by
+default, :func:`gyrodrift.kernels.aiding.row_condition` and
+:func:`gyrodrift.kernels.aiding.close`). An interval is refused for the first of these
+reasons seen in it (causal: a row shows what was known at that row):
 
 ==============  ================================================================
 reason          meaning
@@ -23,10 +35,7 @@ reason          meaning
                 change since the start of the interval by more than
                 ``interference_deg`` at some compass sample; the gyro does not feel
                 magnetic fields (Section 4.1). Also shown on the rows after a
-                refusal for interference until an interval is accepted again,
-                and (``adaptive``) on the rows after a still interval whose
-                compass moved: the zero-rate update was held (``zaru_hold``)
-                while the compass heading was not flat.
+                refusal for interference until an interval is accepted again.
 ==============  ================================================================
 """
 
@@ -62,9 +71,9 @@ class GateConfig:
     Attributes
     ----------
     turn_rate_dps : float
-        Turning when the 1-s mean compensated rate exceeds this, deg/s.
+        Turning when the 1-s mean compensated rate exceeds this, deg/s (every estimator).
     turn_window_s : float
-        Averaging window of the turning test, s.
+        Averaging window of the turning test, s (every estimator).
     interference_deg : float
         Largest accepted disagreement between compass and gyro heading change
         over one update interval, deg.
@@ -73,19 +82,16 @@ class GateConfig:
     dip_tol_deg : float
         Largest accepted change of dip angle, deg (raw mag only).
     compass_max_age_s : float
-        A compass sample older than this at an interval end counts as missing, s.
+        A compass sample older than this at an interval end counts as missing, s (every
+        estimator: ``no_compass``).
     max_gap_s : float
-        A time step longer than this refuses the interval, s.
+        A time step longer than this refuses the interval, s (the paper's filters; the
+        default estimator judges a gap against the log's own spacing).
     still_std_dps : float
         Initialisation: a sub-window is motionless when the gyro standard deviation
         is below this, deg/s ...
     still_heading_deg : float
         ... and the compass heading changes by less than this, deg.
-    still_run_s : float
-        Gyro-only stillness: a run of rows at least this long, s, whose gyro standard
-        deviation stays below ``still_std_dps``, measures the drift (its mean rate), when it
-        is ended by a time gap (a bursty log: records between gaps) or the log has no
-        compass; each run gives one measurement, at most every update interval.
     relock_intervals : int
         Lock-out recovery (0 = off, as in the paper; default 3): after this many
         consecutive intervals
@@ -104,7 +110,6 @@ class GateConfig:
     max_gap_s: float = 1.0
     still_std_dps: float = 1.0
     still_heading_deg: float = 2.0
-    still_run_s: float = 2.0
     relock_intervals: int = 3
 
     def __post_init__(self):

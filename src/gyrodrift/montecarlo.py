@@ -56,7 +56,7 @@ import pandas as pd
 from gyrodrift.compare import METHODS, run_method
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig
+from gyrodrift.estimators import ESTIMATORS
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats, markdown_table
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,
@@ -82,9 +82,6 @@ __all__ = [
     "run_monte_carlo",
     "summarise",
     "markdown",
-    "EVERY_FIX_OFF",
-    "ablation_variants",
-    "run_ablation",
 ]
 
 
@@ -653,77 +650,3 @@ def markdown(summary: pd.DataFrame, *, tuned_on: str | None = None, floatfmt: st
     if len(held):
         parts += ["", "Held-out families (settings frozen):", "", markdown_table(held, floatfmt, index=False)]
     return "\n".join(parts) + "\n\n" + legend
-
-
-# --------------------------------------------------------------------------- ablation
-
-#: The ``adaptive`` estimator with every fix off: the paper's stacked endpoint
-#: measurements, a fixed reference temperature, Zhou's recursive fading, the shared
-#: process noise, no stationarity updates.
-EVERY_FIX_OFF = AdaptiveConfig(
-    stacked=True, edge_s=0.0, recentre=False, outage_memory=False, zaru=False, zaru_hold=False,
-    normalised=False, softening=1.0, q_sd=None, slope_q_per_rtc=0.0, quasi_static_s=0.0,
-)
-
-
-def ablation_variants(base: AdaptiveConfig | None = None) -> dict[str, AdaptiveConfig]:
-    """The ``adaptive`` settings of the ablation, by label: every fix on, each fix off in turn, all off.
-
-    Parameters
-    ----------
-    base : AdaptiveConfig, optional
-        Settings with every fix on (default :class:`AdaptiveConfig`).
-
-    Examples
-    --------
-    >>> list(ablation_variants())[:2], list(ablation_variants())[-1]
-    (['all fixes', 'without one_measurement'], 'every fix off')
-    """
-    base = base or AdaptiveConfig()
-    out = {"all fixes": base}
-    out.update({f"without {fix}": base.ablated(fix) for fix in AdaptiveConfig.FIXES})
-    out["every fix off"] = EVERY_FIX_OFF
-    return out
-
-
-def run_ablation(
-    families: Iterable[str] | None = None,
-    seeds: int | Iterable[int] = 5,
-    duration_scale: float = 1.0,
-    workers: int | None = None,
-    *,
-    base: AdaptiveConfig | None = None,
-    fs_hz: float = 10.0,
-) -> pd.DataFrame:
-    """Ablation of the ``adaptive`` fixes: the Monte Carlo of ``adaptive`` alone per variant.
-
-    Each variant of :func:`ablation_variants` runs on the same cases (same seeds, so
-    the same devices and logs). Returns one row per (variant, family) with the mean
-    heading-error RMS (deg) and mean bias RMS (deg/s) over the cases that ran, and
-    the number that failed.
-
-    Parameters
-    ----------
-    families, seeds, duration_scale, workers, fs_hz :
-        As :func:`run_monte_carlo`.
-    base : AdaptiveConfig, optional
-        Settings with every fix on.
-
-    Returns
-    -------
-    DataFrame
-        Columns ``variant``, ``family``, ``n``, ``failed``, ``heading_rms_mean_deg``,
-        ``bias_rms_mean_dps``.
-    """
-    rows = []
-    for label, settings in ablation_variants(base).items():
-        df = run_monte_carlo(families, seeds, ["adaptive"], duration_scale, CompensatorConfig(adaptive=settings),
-                             workers, fs_hz=fs_hz)
-        for fam, part in df.groupby("family", sort=False):
-            ok = part[part["status"] == "ok"]
-            rows.append({
-                "variant": label, "family": fam, "n": int(len(ok)), "failed": int(len(part) - len(ok)),
-                "heading_rms_mean_deg": float(ok["heading_rms_deg"].mean()) if len(ok) else math.nan,
-                "bias_rms_mean_dps": float(ok["bias_rms_dps"].mean()) if len(ok) else math.nan,
-            })
-    return pd.DataFrame(rows)

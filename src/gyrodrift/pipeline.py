@@ -583,7 +583,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             # numba's start-up (importing it, loading the compiled kernels from its cache:
             # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
             # the reader thread reads the first chunks
-            engine = make_engine(cfg, est, source)
+            engine = make_engine(cfg, est, source, record=False)
 
             def emit(cols) -> None:
                 """Write the rows the engine gave back, with their input columns."""
@@ -627,7 +627,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     if clock:
                         cfg = clock_config(cfg)
                         est = build_estimator(cfg)
-                        engine = make_engine(cfg, est, source, clock=True)
+                        engine = make_engine(cfg, est, source, clock=True, record=False)
                 pending.append(log)
                 units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
                 cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),

@@ -1,47 +1,33 @@
-"""Fixed-interval smoothing of the drift estimate, for recorded logs (non-causal).
+"""The default estimator's model run backwards: fixed-interval smoothing for recorded logs.
 
-The compensator (:mod:`gyrodrift.compensator`) is causal: the drift of a row is what the
-filter knew *then*, so on a recorded log the first minutes, and the rows before an
-outage, are compensated with less than the log tells. On a recorded log the whole of
-it is available. This module re-estimates the drift from every accepted measurement,
-before and after each row, with a Rauch–Tung–Striebel smoother, and recompensates
-the log with it (:func:`smooth_output`, ``gyrodrift compensate --smooth``).
+The compensator is causal: the drift of a row is what the model knew *then*, so on a
+recorded log the first minutes, and the rows before an outage, are compensated with less
+than the log tells. This module runs the model's drift states backwards over the whole
+log with a Rauch–Tung–Striebel smoother and recompensates the log with them
+(:func:`smooth_output`, ``gyrodrift compensate --smooth``).
 
-Model (units deg/s, degC, s)
-----------------------------
-The states are those of the ``adaptive`` estimator (:mod:`gyrodrift.estimators.adaptive`):
-``z = [a, b, c']`` with the temperature centred on a reference ``T_ref`` that moves to
-the temperature of each epoch (``c' = a*T_ref + c``, the drift at ``T_ref``; the
-paper's model, eq. 2, is unchanged). The epochs are the times of the accepted
-measurements and, on recorded logs, every update interval in between (refused ones
-too, at the mean temperature of the interval), so that through an outage the states
-follow the temperature path. Between two epochs ``k-1`` and ``k``::
+Model (:mod:`gyrodrift.kernels.evidence`)
+-----------------------------------------
+The drift states ``z = [a, b, c', r]`` (the drift of eq. 2 centred on ``T_ref``,
+``bias = a (T − T_ref) + b T' + c'``, and the rate ``r`` at which it departs from eq. 2)
+evolve the same way whatever the hypotheses about compass and platform: between the ends
+of epochs ``k`` and ``k+1``::
 
-    z_k = J_k z_{k-1} + w_k,   J_k = I with J[2, 0] = T_k - T_{k-1}   (move T_ref)
-    w_k ~ N(0, n_k Q + diag(q_T² |T_k - T_{k-1}|, 0, 0))
+    z_{k+1} = F_k z_k + w_k,  F = I with F[c', r] = τ_r (1 − φ),  F[r, r] = φ = exp(−Δt/τ_r)
+    w_k ~ N(0, diag(q_a² |ΔT|,  q_b² Δt,  q_c² Δt + q_cT² |ΔT|,  σ_r² (1 − φ²)))
 
-``n_k = (t_k - t_{k-1}) / update_interval_s`` (so a refused interval adds ``Q`` as
-the filter's ``hold`` does), ``Q = diag(q_sd²)`` and ``q_T`` is
-``AdaptiveConfig.slope_q_per_rtc`` (the slope random walk in temperature); without the
-``adaptive`` process noise (``q_sd = None``) ``KalmanConfig.q_sd`` and no slope term.
-A measurement (eq. 6, or a zero-rate one) is ``m = [T - T_k, T', 1] z_k + v`` with
-``v ~ N(0, r)``; measurements at the same time (the initial stack) form one update.
-The prior is ``KalmanConfig.x0`` and ``p0_sd``. The filter's fading (eq. 10, ``s``) and
-covariance cap are left out: they protect a causal filter from its own lag, which a
-smoother that sees both sides does not have.
+with the settings of :class:`gyrodrift.estimators.AdaptiveConfig`. The forward pass is the
+model's own: its combined (mixture) estimate at every epoch end, recorded by the engine
+(``out.attrs["epochs"]``, :data:`gyrodrift.kernels.evloop.N_HIST` columns). Backward, for
+``k = K-2 … 0``::
 
-Forward: a Kalman filter (Joseph form). Backward: for ``k = K-2 … 0``::
+    P⁻ = F P_k Fᵀ + Q,  C_k = P_k Fᵀ (P⁻)⁻¹
+    z̃_k = z_k + C_k (z̃_{k+1} − F z_k),  P̃_k = P_k + C_k (P̃_{k+1} − P⁻) C_kᵀ
 
-    C_k = P_k Jᵀ_{k+1} (P⁻_{k+1})⁻¹
-    z̃_k = z_k + C_k (z̃_{k+1} - z⁻_{k+1})
-    P̃_k = P_k + C_k (P̃_{k+1} - P⁻_{k+1}) Cᵀ_k
-
-which is the minimum-variance estimate of every ``z_k`` from all ``K`` measurements
-(the tests check it against the solution of the whole linear system at once).
-
-A measurement at time ``t_k`` is the drift over the interval ending at ``t_k``, so the
-rows in ``(t_{k-1}, t_k]`` are compensated with ``z̃_k``, and the rows after the last
-epoch with the last.
+The rows of an epoch (from the end of the one before to its own end) are compensated with
+its smoothed drift. The gyro-alone ``heading`` keeps its anchor and moves by the integral of
+the change of the drift; the fused heading, the labels and the mode decisions stay the
+forward pass's (a decision taken knowing the future is not what the row's sensors said).
 """
 
 from __future__ import annotations
@@ -53,147 +39,84 @@ import pandas as pd
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError
+from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_P, H_T, H_X, N_HIST
 from gyrodrift.model import ElapsedClock
 
-__all__ = ["SmoothedDrift", "smooth_drift", "smooth_output"]
+__all__ = ["SmoothedDrift", "smooth_epochs", "smooth_output"]
 
 
 @dataclass(frozen=True)
 class SmoothedDrift:
-    """Smoothed drift parameters, one set per measurement time.
+    """Smoothed drift states, one set per epoch end.
 
     Attributes
     ----------
     t : (K,) ndarray
-        Measurement times, s (increasing, distinct).
-    params : (K, 3) ndarray
-        Absolute ``[a (deg/s/degC), b (deg/s per degC/s), c (deg/s)]`` (eq. 2).
-    cov : (K, 3, 3) ndarray
+        Epoch ends, s.
+    states : (K, 4) ndarray
+        ``[a (deg/s/degC), b (deg/s per degC/s), c' (deg/s at T_ref), r (deg/s²)]``.
+    cov : (K, 4, 4) ndarray
         Their covariance.
-    filtered : (K, 3) ndarray
-        The forward (causal) filter's absolute parameters, for comparison.
+    filtered : (K, 4) ndarray
+        The forward pass's states, for comparison.
     """
 
     t: np.ndarray
-    params: np.ndarray
+    states: np.ndarray
     cov: np.ndarray
     filtered: np.ndarray
 
 
-def _process_noise(config) -> tuple[np.ndarray, float]:
-    """``Q`` per update interval and the slope random walk ``q_T`` (see module notes)."""
-    st = config.adaptive
-    if st.q_sd is not None:
-        return np.diag(np.square(np.asarray(st.q_sd, dtype=float))), float(st.slope_q_per_rtc)
-    return np.diag(np.square(np.asarray(config.kalman.q_sd, dtype=float))), 0.0
+def _unpack(hist: np.ndarray):
+    """States (K, 4) and covariances (K, 4, 4) of the epoch history."""
+    x = hist[:, H_X:H_X + 4].copy()
+    P = np.empty((hist.shape[0], 4, 4))
+    m = 0
+    for r in range(4):
+        for c in range(r, 4):
+            P[:, r, c] = P[:, c, r] = hist[:, H_P + m]
+            m += 1
+    return x, P
 
 
-def _groups(meas: pd.DataFrame, epochs=None):
-    """Measurements grouped by time, merged with the extra epochs.
-
-    Returns a list of ``(t, T_ref, m, temp, temp_rate, r)`` in time order: ``T_ref`` the
-    mean temperature of the group's measurements, or the epoch's temperature for an epoch
-    without measurements (empty arrays).
-    """
-    t = meas["t"].to_numpy(float)
-    cols = [meas[c].to_numpy(float) for c in ("m", "temp", "temp_rate", "r")]
-    if not np.all(np.isfinite(t)) or any(not np.all(np.isfinite(c)) for c in cols):
-        raise ConfigError("smoothing needs finite measurements; got NaN or inf in the accepted measurements")
-    if np.any(np.diff(t) < 0):
-        raise ConfigError("smoothing needs measurements in time order")
-    groups = []
-    if t.size:
-        starts = np.flatnonzero(np.r_[True, np.diff(t) > 0])
-        ends = np.r_[starts[1:], t.size]
-        groups = [(t[s], float(np.mean(cols[1][s:e])), *(c[s:e] for c in cols)) for s, e in zip(starts, ends)]
-    if epochs is not None:
-        e_t, e_temp = (np.asarray(v, dtype=float) for v in epochs)
-        have = {g[0] for g in groups}
-        empty = np.empty(0)
-        groups += [(float(a), float(b), empty, empty, empty, empty)
-                   for a, b in zip(e_t, e_temp) if a not in have and np.isfinite(a) and np.isfinite(b)]
-        groups.sort(key=lambda g: g[0])
-    return groups
+def _transition(dt: float, dtemp: float, st) -> tuple[np.ndarray, np.ndarray]:
+    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC (module notes)."""
+    phi = np.exp(-dt / st.drift_rate_s)
+    F = np.eye(4)
+    F[2, 3] = st.drift_rate_s * (1.0 - phi)
+    F[3, 3] = phi
+    Q = np.diag([st.slope_walk**2 * dtemp, st.rate_walk**2 * dt, st.drift_walk**2 * dt + st.drift_walk_temp**2 * dtemp,
+                 st.drift_rate_dps2**2 * (1.0 - phi * phi)])
+    return F, Q
 
 
-def smooth_drift(measurements: pd.DataFrame, config=None, epochs=None) -> SmoothedDrift:
-    """Rauch–Tung–Striebel smoothing of the drift parameters over every accepted measurement.
+def smooth_epochs(hist: np.ndarray, config=None) -> SmoothedDrift:
+    """Rauch–Tung–Striebel smoothing of the model's drift states over its epoch history.
 
     Parameters
     ----------
-    measurements : DataFrame
-        ``out.attrs["measurements"]`` of :func:`gyrodrift.compensator.compensate`: columns
-        ``t`` (s), ``m`` (deg/s), ``temp`` (degC), ``temp_rate`` (degC/s), ``r`` ((deg/s)²).
+    hist : (K, N_HIST) ndarray
+        The engine's epoch history (``out.attrs["epochs"]``).
     config : CompensatorConfig, optional
-        Prior (``kalman``), process noise (``adaptive``) and ``update_interval_s``.
-    epochs : (t_s, temp_c) pair of arrays, optional
-        Extra times (s) with their temperatures (degC) at which to estimate the
-        parameters although nothing was measured there (refused intervals): the smoother
-        then carries the temperature path through an outage instead of jumping over it.
-
-    Returns
-    -------
-    SmoothedDrift
-        One entry per measurement time and per extra epoch, in time order.
-
-    Raises
-    ------
-    ConfigError
-        No measurement, or non-finite ones.
+        The settings the log was compensated with (``adaptive``: the process noise).
     """
     from gyrodrift.compensator import CompensatorConfig
 
     config = config or CompensatorConfig()
-    groups = _groups(measurements, epochs)
-    if not any(g[2].size for g in groups):
-        raise ConfigError("smoothing needs at least one accepted drift measurement; the log had none "
-                          "(every interval was refused: see gate_reason)")
-    Q, q_T = _process_noise(config)
-    P, _, _ = config.kalman.matrices()
-    a0, b0, c0 = (float(v) for v in config.kalman.x0)
-    K = len(groups)
-    tref = np.empty(K)
-    z_prior = np.empty((K, 3))
-    P_prior = np.empty((K, 3, 3))
-    z_post = np.empty((K, 3))
-    P_post = np.empty((K, 3, 3))
-    J = np.empty((K, 3, 3))
-    z = None
-    for k, (t_k, T_k, m, temp, temp_rate, r) in enumerate(groups):
-        Jk = np.eye(3)
-        if z is None:
-            z = np.array([a0, b0, c0 + a0 * T_k])
-            Pk = P.copy()
-        else:
-            Jk[2, 0] = T_k - tref[k - 1]
-            Qk = (t_k - groups[k - 1][0]) / config.update_interval_s * Q
-            Qk[0, 0] += q_T**2 * abs(T_k - tref[k - 1])
-            z = Jk @ z
-            Pk = Jk @ P @ Jk.T + Qk
-        tref[k], J[k], z_prior[k], P_prior[k] = T_k, Jk, z, Pk
-        P = Pk
-        if m.size:
-            H = np.column_stack([temp - T_k, temp_rate, np.ones(m.size)])
-            S = H @ Pk @ H.T + np.diag(r)
-            gain = np.linalg.solve(S, H @ Pk).T
-            A = np.eye(3) - gain @ H
-            z = z + gain @ (m - H @ z)
-            P = A @ Pk @ A.T + gain @ np.diag(r) @ gain.T
-            P = 0.5 * (P + P.T)
-        z_post[k], P_post[k] = z, P
-    z_s = z_post.copy()
-    P_s = P_post.copy()
-    for k in range(K - 2, -1, -1):
-        C = np.linalg.solve(P_prior[k + 1], J[k + 1] @ P_post[k]).T  # P_k Jᵀ (P⁻_{k+1})⁻¹
-        z_s[k] = z_post[k] + C @ (z_s[k + 1] - z_prior[k + 1])
-        Ps = P_post[k] + C @ (P_s[k + 1] - P_prior[k + 1]) @ C.T
-        P_s[k] = 0.5 * (Ps + Ps.T)
-    to_abs = np.repeat(np.eye(3)[None], K, axis=0)
-    to_abs[:, 2, 0] = -tref
-    params = np.einsum("kij,kj->ki", to_abs, z_s)
-    cov = to_abs @ P_s @ to_abs.transpose(0, 2, 1)
-    filtered = np.einsum("kij,kj->ki", to_abs, z_post)
-    return SmoothedDrift(t=np.array([g[0] for g in groups]), params=params, cov=cov, filtered=filtered)
+    hist = np.asarray(hist, dtype=float)
+    if hist.ndim != 2 or hist.shape[1] != N_HIST or not np.all(np.isfinite(hist)):
+        raise ConfigError(f"smoothing needs the model's epoch history: a finite (K, {N_HIST}) array")
+    x, P = _unpack(hist)
+    xs, Ps = x.copy(), P.copy()
+    st = config.adaptive
+    for k in range(x.shape[0] - 2, -1, -1):
+        F, Q = _transition(hist[k + 1, H_DT], hist[k + 1, H_DTEMP], st)
+        Pm = F @ P[k] @ F.T + Q
+        C = np.linalg.solve(Pm.T, (P[k] @ F.T).T).T  # P F^T Pm^-1 (Pm symmetric)
+        xs[k] = x[k] + C @ (xs[k + 1] - F @ x[k])
+        Ps[k] = P[k] + C @ (Ps[k + 1] - Pm) @ C.T
+        Ps[k] = 0.5 * (Ps[k] + Ps[k].T)
+    return SmoothedDrift(hist[:, H_T].copy(), xs, Ps, x)
 
 
 def _held(values: np.ndarray) -> np.ndarray:
@@ -202,10 +125,12 @@ def _held(values: np.ndarray) -> np.ndarray:
     return s.ffill().bfill().to_numpy()
 
 
-def _cumtrapz(y: np.ndarray, t: np.ndarray) -> np.ndarray:
+def _cumtrapz(y: np.ndarray, t: np.ndarray, hold: np.ndarray) -> np.ndarray:
+    """Trapezoid integral of ``y`` over ``t``, nothing added on the steps into ``hold`` rows."""
     out = np.zeros(y.size)
     if y.size > 1:
-        np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t), out=out[1:])
+        inc = np.where(hold[1:], 0.0, 0.5 * (y[1:] + y[:-1]) * np.diff(t))
+        np.cumsum(inc, out=out[1:])
     return out
 
 
@@ -215,8 +140,9 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensator.compensate` on a recorded log (with its
-        ``attrs["measurements"]`` and the input ``temp`` column).
+        Output of :func:`gyrodrift.compensate` by the default estimator on a recorded log
+        (with its ``attrs["epochs"]`` and ``attrs["temp_ref_c"]``, and the input ``temp``
+        column unless the model's T was the clock).
     config : CompensatorConfig, optional
         The settings ``out`` was compensated with.
 
@@ -224,88 +150,59 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     -------
     DataFrame
         A copy of ``out`` in which ``a, b, c``, ``bias_z``, ``rate_z``, ``heading``,
-        ``bias_sd`` and ``heading_sd`` come from the smoothed drift; ``unobservable``
-        is recomputed from the smoothed covariance. Every other column (gating, the
-        causal ``heading_fused``) is unchanged. ``attrs["smoothed"]`` holds the
+        ``bias_sd`` and ``heading_sd`` come from the smoothed drift; ``unobservable`` is
+        recomputed from the smoothed covariance; every other column (the labels, the
+        forward ``heading_fused``) is unchanged. ``attrs["smoothed"]`` holds the
         :class:`SmoothedDrift`.
-
-    Notes
-    -----
-    ``heading`` keeps its anchor and integration (trapezoid, as the compensator):
-    ``heading_smoothed = heading + ∫(bias_z − bias_smoothed) dt``. ``heading_sd`` is
-    recomputed as the compensator does (:mod:`gyrodrift.fusion`) with the smoothed
-    ``bias_sd``.
     """
     from gyrodrift.compensator import CompensatorConfig
-    from gyrodrift.kernels.aiding import unobservable_code
-    from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES
+    from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES, UNOBS_A, UNOBS_B, UNOBSERVABLE_SD_FRACTION
 
     config = config or CompensatorConfig()
-    meas = out.attrs.get("measurements")
-    if meas is None:
-        raise ConfigError("smoothing needs the accepted measurements (attrs['measurements'] of compensate())")
+    hist = out.attrs.get("epochs")
+    if hist is None or "temp_ref_c" not in out.attrs:
+        raise ConfigError("smoothing is the default estimator's (adaptive): compensate the log with it "
+                          "(its output carries the model's epoch history)")
     t = out["t"].to_numpy(float)
+    if len(hist) == 0:
+        return out.copy()
     if out.attrs.get("drift_regressor") == "clock":  # the model's T was the elapsed time
         T = ElapsedClock(config.gate.max_gap_s)(t)
     elif "temp" not in out.columns:
         raise ConfigError("smoothing needs the input 'temp' column (degC) in the compensated table")
     else:
         T = _held(out["temp"].to_numpy(float))
-    sm = smooth_drift(meas, config, epochs=_interval_epochs(meas["t"].to_numpy(float), t, T,
-                                                            config.update_interval_s))
+    sm = smooth_epochs(hist, config)
+    tref = float(out.attrs["temp_ref_c"])
     Tp = out["temp_rate"].to_numpy(float)
     k = np.minimum(np.searchsorted(sm.t, t, side="left"), sm.t.size - 1)
-    a, b, c = sm.params[k, 0], sm.params[k, 1], sm.params[k, 2]
-    bias = a * T + b * Tp + c
+    a, b, c = sm.states[k, 0], sm.states[k, 1], sm.states[k, 2]
+    bias = a * (T - tref) + b * Tp + c
     old_bias = out["bias_z"].to_numpy(float)
+    hold = (out["gate_reason"].astype(str) == "gap").to_numpy()
     res = out.copy()
-    res["a"], res["b"], res["c"] = a, b, c
+    res["a"], res["b"], res["c"] = a, b, c - a * tref
     res["bias_z"] = bias
     res["rate_z"] = out["rate_z"].to_numpy(float) + (old_bias - bias)
-    res["heading"] = wrap_360(out["heading"].to_numpy(float) + _cumtrapz(old_bias - bias, t))
-    h = np.stack([T, Tp, np.ones(t.size)], axis=1)
-    bias_sd = np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", h, sm.cov[k], h), 0.0))
+    res["heading"] = wrap_360(out["heading"].to_numpy(float) + _cumtrapz(old_bias - bias, t, hold))
+    h = np.stack([T - tref, Tp, np.ones(t.size)], axis=1)
+    bias_sd = np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", h, sm.cov[k][:, :3, :3], h), 0.0))
     res["bias_sd"] = bias_sd
-    if "heading_sd" in out.columns:
-        res["heading_sd"] = _heading_sd(out, t, bias_sd, config)
+    if "heading_sd" in out.columns:  # the forward variance with the smoothed bias_sd integrated instead
+        old_sd = out["bias_sd"].to_numpy(float)
+        var = out["heading_sd"].to_numpy(float) ** 2
+        anchor = np.isfinite(var)
+        if anchor.any():
+            i0 = int(np.argmax(anchor))
+            old_int = _cumtrapz(old_sd[i0:], t[i0:], hold[i0:])
+            new_int = _cumtrapz(bias_sd[i0:], t[i0:], hold[i0:])
+            var[i0:] = np.maximum(var[i0:] - old_int**2 + new_int**2, 0.0)
+        res["heading_sd"] = np.sqrt(var)
     prior_a, prior_b = (float(v) for v in config.kalman.p0_sd[:2])
-    codes = np.array([unobservable_code(np.ascontiguousarray(C), prior_a, prior_b) for C in sm.cov], dtype=np.int8)
+    sd_a, sd_b = np.sqrt(np.maximum(sm.cov[:, 0, 0], 0.0)), np.sqrt(np.maximum(sm.cov[:, 1, 1], 0.0))
+    codes = (np.where(sd_a > UNOBSERVABLE_SD_FRACTION * prior_a, UNOBS_A, 0)
+             + np.where(sd_b > UNOBSERVABLE_SD_FRACTION * prior_b, UNOBS_B, 0)).astype(np.int8)
     res["unobservable"] = pd.Categorical.from_codes(codes[k], categories=list(UNOBSERVABLE_NAMES))
     res.attrs = dict(out.attrs)
     res.attrs["smoothed"] = sm
     return res
-
-
-def _interval_epochs(t_meas: np.ndarray, t: np.ndarray, T: np.ndarray, interval_s: float):
-    """Epochs every ``interval_s`` from the first measurement to the last row, except within
-    half an interval of a measurement, each with the mean temperature (degC) of the rows
-    of the interval it ends."""
-    if t_meas.size == 0 or t.size == 0:
-        return np.empty(0), np.empty(0)
-    grid = t_meas[0] + interval_s * np.arange(1, int((t[-1] - t_meas[0]) // interval_s) + 1)
-    near = np.searchsorted(t_meas, grid)
-    gap = np.minimum(np.abs(grid - t_meas[np.minimum(near, t_meas.size - 1)]),
-                     np.abs(grid - t_meas[np.maximum(near - 1, 0)]))
-    grid = grid[gap >= 0.5 * interval_s]
-    cum = np.r_[0.0, np.cumsum(T)]
-    hi = np.searchsorted(t, grid, side="right")
-    lo = np.searchsorted(t, grid - interval_s, side="right")
-    ok = hi > lo
-    temp = np.where(ok, (cum[hi] - cum[lo]) / np.maximum(hi - lo, 1), np.nan)
-    return grid[ok], temp[ok]
-
-
-def _heading_sd(out: pd.DataFrame, t: np.ndarray, bias_sd: np.ndarray, config) -> np.ndarray:
-    """``heading_sd`` (deg) with the smoothed ``bias_sd``: the formula of :mod:`gyrodrift.fusion`
-    (compass σ at the anchor, gyro white noise, bias_sd integrated as fully correlated)."""
-    heading = out["heading"].to_numpy(float)
-    started = np.isfinite(out["heading_sd"].to_numpy(float)) & np.isfinite(heading)
-    sd = np.full(t.size, np.nan)
-    if not started.any():
-        return sd
-    i0 = int(np.argmax(started))
-    tt = t[i0:]
-    integral = _cumtrapz(bias_sd[i0:], tt)
-    var = (config.fusion_settings.heading_sigma_deg**2 + config.gyro_noise_dps_rthz**2 * (tt - tt[0]) + integral**2)
-    sd[i0:] = np.sqrt(var)
-    return sd

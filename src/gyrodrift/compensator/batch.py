@@ -119,7 +119,8 @@ def compensate_arrays(
             cols = engine.flush()
         elif buffers is not None:
             gated = buffers.gated[:n]
-        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor,
+                          engine)
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
@@ -129,7 +130,7 @@ def compensate_arrays(
     parts.append(engine.flush())
     parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor, engine)
 
 
 def compensate(

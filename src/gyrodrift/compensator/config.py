@@ -7,8 +7,6 @@ from dataclasses import dataclass, field, replace
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig, KalmanConfig, make_estimator
-from gyrodrift.estimators.evidence import EvidenceConfig
-from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
 from gyrodrift.model import TempRateConfig, temperature_is_flat
@@ -37,8 +35,9 @@ class CompensatorConfig:
         Gyro white-noise density, deg/s/√Hz (ADXRS623: 0.04).
     estimator : str
         Name of the drift estimator (see :mod:`gyrodrift.estimators`). Default
-        ``adaptive`` (the paper's model and filter with its weak points fixed;
-        ``docs/results.md``); ``stkf`` is the paper's strong tracking Kalman filter.
+        ``adaptive`` (heading, the paper's drift model and the compass's errors in one
+        model whose hypotheses are weighed by evidence; ``docs/results.md``); ``stkf`` is
+        the paper's strong tracking Kalman filter.
     kalman : KalmanConfig
         Fading factor s, x0, P0 and Q of the Kalman estimators.
     temp_rate : TempRateConfig
@@ -49,9 +48,8 @@ class CompensatorConfig:
         The fused heading (``heading_fused``; see :mod:`gyrodrift.fusion`). None
         (default): the settings that suit ``estimator`` (:attr:`fusion_settings`).
     adaptive : AdaptiveConfig
-        Settings of the ``adaptive`` estimator, each change beyond the paper switchable
-        (:class:`gyrodrift.estimators.AdaptiveConfig`); used only when ``estimator`` is
-        ``adaptive``.
+        Settings of the ``adaptive`` estimator's model (:class:`gyrodrift.estimators.AdaptiveConfig`);
+        used only when ``estimator`` is ``adaptive``.
     declination_deg : float
         Magnetic declination at the log's place, deg, east positive (true north =
         magnetic north + declination). It is added to every compass heading (given, or
@@ -94,7 +92,6 @@ class CompensatorConfig:
     gate: GateConfig = field(default_factory=GateConfig)
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
-    evidence: EvidenceConfig = field(default_factory=EvidenceConfig)
     declination_deg: float = 0.0
     tilt: str = "accel"
     mag_calibration: bool = False
@@ -102,19 +99,13 @@ class CompensatorConfig:
 
     @property
     def fusion_settings(self) -> FusionConfig:
-        """The fused-heading settings in force: ``fusion`` when given, else those that suit the
-        estimator. ``adaptive``: :class:`FusionConfig` defaults (B), which trust its
-        interference refusals. Every other estimator: :meth:`FusionConfig.tolerant` (A),
-        which re-anchors on the compass after 60 s of refusals. The paper's filter refuses
-        for good once its gate locks out; with (B) the fused heading then follows the gyro
-        alone. Measured on 10 seeds per Monte Carlo family (mean heading_fused RMS, deg):
-        soak ``stkf`` 23.1 with (B) against 8.1 with (A), ``kf`` 41.5 against 8.9; vehicle
-        ``stkf`` 1.11 against 1.35; the other four families within 0.05. ``adaptive``: soak
-        2.05 with (B) against 6.20 with (A), vehicle 1.08 against 1.27.
-        """
+        """The fused-heading settings of the paper's filters: ``fusion`` when given, else
+        :meth:`FusionConfig.tolerant`, which re-anchors on the compass after 60 s of refusals
+        (the paper's filter refuses for good once its gate locks out). The default estimator
+        fuses the heading in its own model and does not use them."""
         if self.fusion is not None:
             return self.fusion
-        return FusionConfig() if self.estimator == "adaptive" else FusionConfig.tolerant()
+        return FusionConfig.tolerant()
 
     def __post_init__(self):
         for name in ("update_interval_s", "init_s", "compass_sigma_deg", "gyro_noise_dps_rthz"):
@@ -174,12 +165,7 @@ def clock_config(cfg: CompensatorConfig) -> CompensatorConfig:
 
 
 def build_estimator(cfg: CompensatorConfig):
-    """A fresh estimator of ``cfg.estimator`` with its settings (``adaptive`` gets
-    ``cfg.adaptive``; the Kalman filters room for ``cfg.stack_depth`` stacked measurements)."""
-    cls = ESTIMATORS.get(cfg.estimator)
-    sized = {"depth": cfg.stack_depth} if cls is not None and issubclass(cls, KernelFilter) else {}
+    """A fresh estimator of ``cfg.estimator`` with its settings (``adaptive`` gets ``cfg.adaptive``)."""
     if cfg.estimator == "adaptive":
-        return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.adaptive, **sized)
-    if cfg.estimator == "evidence":
-        return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.evidence)
-    return make_estimator(cfg.estimator, config=cfg.kalman, **sized)
+        return make_estimator(cfg.estimator, config=cfg.kalman, settings=cfg.adaptive)
+    return make_estimator(cfg.estimator, config=cfg.kalman)

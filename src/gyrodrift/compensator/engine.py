@@ -8,10 +8,11 @@ of :mod:`gyrodrift.kernels.layout`, calls :func:`gyrodrift.kernels.loop.prepare`
 runs the initialisation once the init window is complete (its rows are held back
 until then).
 
-The estimator: a Kalman-family one (``stkf``, ``stkf-s1``, ``kf``, ``adaptive``) is
+The estimator: one of the paper's Kalman filters (``stkf``, ``stkf-s1``, ``kf``) is
 updated inside the row loop, on its own arrays; any other estimator with the linear
-drift of eq. (2) (``lsm``, ``fixed``, one of the user's) is updated here, in Python, at
-the end of each update interval (``MODE_EXTERNAL``).
+drift of eq. (2) (``lsm``, ``mlr-causal``, ``fixed``, one of the user's) is updated here,
+in Python, at the end of each update interval (``MODE_EXTERNAL``). The default estimator
+runs in :class:`gyrodrift.compensator.model_engine.ModelEngine`, a subclass.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import math
 import numpy as np
 
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
-from gyrodrift.estimators import AdaptiveConfig, Observation
+from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
 from gyrodrift.estimators.kalman import KernelFilter
 from gyrodrift.kernels import aiding, drift, loop, numeric
@@ -63,9 +64,7 @@ def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
 
 def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     """The kernels' float and integer settings (``cfg``, ``icfg``) for a configuration and
-    estimator (the ``adaptive`` estimator's aiding switches come from its settings)."""
-    st = getattr(estimator, "settings", None)
-    st = st if isinstance(st, AdaptiveConfig) else None
+    estimator."""
     gate, fusion = config.gate, config.fusion_settings
     cfg = np.zeros(L.N_CFG)
     cfg[L.C_INTERVAL] = config.update_interval_s
@@ -83,29 +82,16 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     cfg[L.C_DIP_TOL] = gate.dip_tol_deg
     cfg[L.C_STILL_STD] = gate.still_std_dps
     cfg[L.C_STILL_HEADING] = gate.still_heading_deg
-    cfg[L.C_RUN_MIN_S] = gate.still_run_s
     vector = fusion.vector(config.gyro_noise_dps_rthz)
     cfg[L.C_FUSION_R:L.C_FUSION_RELOCK + 1] = vector[:5]
     cfg[L.C_FUSION_CONSISTENT] = vector[5]
     icfg = np.zeros(L.N_KCFG, dtype=np.int64)
     icfg[L.K_RELOCK] = gate.relock_intervals
-    icfg[L.K_DEPTH] = config.stack_depth if st is None or st.stacked else 1
+    icfg[L.K_DEPTH] = config.stack_depth
     icfg[L.K_TP_WINDOW_BINS] = config.temp_rate.window_bins
     icfg[L.K_FUSE_INTERFERENCE] = int(bool(fusion.magnetic_gates))
     arrays = compiled_arrays(estimator)
     icfg[L.K_MODE] = L.MODE_EXTERNAL if arrays is None else int(arrays[1][L.EI_MODE])
-    if st is not None:
-        cfg[L.C_EDGE_S] = st.edge_s
-        cfg[L.C_WINDOW_S] = max(st.zaru_window_s, st.edge_s)
-        cfg[L.C_ZARU_WINDOW_S] = st.zaru_window_s
-        cfg[L.C_ZARU_SLOPE_K] = st.zaru_slope_k
-        cfg[L.C_ZARU_RESID_K] = st.zaru_resid_k
-        cfg[L.C_QS_S] = st.quasi_static_s
-        cfg[L.C_QS_DEG] = st.quasi_static_deg
-        icfg[L.K_ZARU] = int(st.zaru)
-        icfg[L.K_ZARU_HOLD] = int(st.zaru_hold)
-        icfg[L.K_EDGE] = int(st.edge_s > 0.0)
-        icfg[L.K_COLLECTS] = int(st.zaru or st.edge_s > 0.0)
     return cfg, icfg
 
 
@@ -144,12 +130,7 @@ class ChunkEngine:
         self.source = source
         arrays = compiled_arrays(estimator)
         if arrays is None:
-            arrays = (np.zeros(L.ef_size(1, 1)), np.zeros(L.N_EI, dtype=np.int64))
-            arrays[1][L.EI_DEPTH] = arrays[1][L.EI_NIS_W] = 1
-        elif arrays[1][L.EI_DEPTH] < config.stack_depth:
-            raise ConfigError(f"estimator {estimator.name!r} was built for {arrays[1][L.EI_DEPTH]} stacked "
-                              f"measurements, the settings stack {config.stack_depth}; build it with "
-                              "gyrodrift.compensator.build_estimator")
+            arrays = (np.zeros(L.N_EF), np.zeros(L.N_EI, dtype=np.int64))
         self._ef, self._ei = arrays
         self._set, self._iset = settings_arrays(config, estimator)
         self._external = self._iset[L.K_MODE] == L.MODE_EXTERNAL
@@ -160,7 +141,6 @@ class ChunkEngine:
         self._ist[L.I_ANCHOR_ROW] = -1
         self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
         self._lb = np.zeros((64, 2))
-        self._win = np.zeros((L.N_WIN, 256 if self._iset[L.K_COLLECTS] else 1))
         self._stack = np.zeros((config.stack_depth, L.N_MEAS))
         self._refused = np.zeros(max(config.gate.relock_intervals, 1))
         self._acc = np.zeros((_ACC_ROWS, L.N_MEAS))
@@ -175,7 +155,6 @@ class ChunkEngine:
         self.notes: list[str] = []
         self._clock = ElapsedClock(config.gate.max_gap_s) if clock else None
         if clock:
-            self._ei[L.EI_HOLD_DRIFT] = 1  # a trend in time is not extrapolated through an outage
             why = "asked for" if config.temperature == "clock" else "the log has no temperature, or it never changes"
             self.notes.append(f"{source}: the drift model's T is the elapsed time, not the temperature ({why}): "
                               f"c is the drift at the start and a its change per {CLOCK_UNIT_S:g} s, deg/s")
@@ -313,7 +292,7 @@ class ChunkEngine:
         i = 0
         while i < t.size:
             i = loop.run_chunk(t, g, T, Tp, heading, gap, norm, dip, i, self._fs, self._ist, self._set, self._iset,
-                               self._lb, self._win, self._stack, self._refused, self._acc, self._ef, self._ei,
+                               self._lb, self._stack, self._refused, self._acc, self._ef, self._ei,
                                cols.out, cols.codes, cols.n)
             self._after_stop()
         columns = {
@@ -346,12 +325,6 @@ class ChunkEngine:
             lb[:n] = self._lb[order]
             self._lb = lb
             ist[L.I_LB_HEAD] = 0
-        if 2 * ist[L.I_WIN_N] >= self._win.shape[1]:  # the compass window: keep it at most half full
-            head, n = int(ist[L.I_WIN_HEAD]), int(ist[L.I_WIN_N])
-            win = np.zeros((L.N_WIN, 2 * self._win.shape[1]))
-            win[:, :n] = self._win[:, head:head + n]
-            self._win = win
-            ist[L.I_WIN_HEAD] = 0
         if ist[L.I_N_ACC] >= self._acc.shape[0]:
             self._flush_accepted()
 
@@ -386,7 +359,7 @@ class ChunkEngine:
         done = 0
         while done < 1:  # 0: a ring was full before the row (grown by _after_stop)
             done = loop.run_chunk(r.ro_t, g_in, T_in, r.ro_Tp, h, r.ro_gap, r.ro_norm, r.ro_dip, 0, self._fs,
-                                  self._ist, self._set, self._iset, self._lb, self._win, self._stack, self._refused,
+                                  self._ist, self._set, self._iset, self._lb, self._stack, self._refused,
                                   self._acc, self._ef, self._ei, cols.out, cols.codes, 1)
             self._after_stop()
         return cols.out.tolist(), cols.codes.tolist(), float(h[0])

@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from gyrodrift.compensator.engine import ChunkEngine, _read_only, settings_arrays
-from gyrodrift.estimators.evidence import EvidenceModel
+from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
@@ -28,18 +28,19 @@ from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 __all__ = ["ModelEngine", "make_engine"]
 
 
-def make_engine(config, estimator, source: str = "arrays", *, clock: bool = False) -> ChunkEngine:
-    """The engine that runs ``estimator``: :class:`ModelEngine` for the model, else the paper's
-    interval engine (:class:`ChunkEngine`)."""
-    cls = ModelEngine if isinstance(estimator, EvidenceModel) else ChunkEngine
-    return cls(config, estimator, source, clock=clock)
+def make_engine(config, estimator, source: str = "arrays", *, clock: bool = False, record: bool = True) -> ChunkEngine:
+    """The engine that runs ``estimator``: :class:`ModelEngine` for the model (``record``: keep
+    the epoch history for the smoother), else the paper's interval engine (:class:`ChunkEngine`)."""
+    if isinstance(estimator, AdaptiveModel):
+        return ModelEngine(config, estimator, source, clock=clock, record=record)
+    return ChunkEngine(config, estimator, source, clock=clock)
 
 
 class ModelEngine(ChunkEngine):
     """Resumable compensation of one log by the model (see the module notes and
     :class:`ChunkEngine` for the interface)."""
 
-    def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False):
+    def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False, record: bool = True):
         self.cfg = config
         self.est = estimator
         self.source = source
@@ -64,6 +65,7 @@ class ModelEngine(ChunkEngine):
         self._mc = None
         self._init_last = None  # last row of the init window, until its rows are settled
         self._rf = np.zeros(evloop.RF_N)
+        self._hist = np.zeros((256, evloop.N_HIST)) if record else np.zeros((0, 0))
         self._rc = np.zeros(evloop.RC_N)
         gate = config.gate
         self._rc[evloop.RC_TURN_RATE] = gate.turn_rate_dps
@@ -87,8 +89,25 @@ class ModelEngine(ChunkEngine):
         self._rf[evloop.RF_FIRST_ROW] = -1.0
 
     def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols) -> None:
-        evloop.run(t, g, T, Tp, heading, held, norm, dip, 0, self.est.mf, self._mc, self._rf, self._rc,
-                   cols.out, cols.codes, cols.n)
+        i = 0
+        while i < t.size:
+            i = evloop.run(t, g, T, Tp, heading, held, norm, dip, i, self.est.mf, self._mc, self._rf, self._rc,
+                           cols.out, cols.codes, cols.n, self._hist)
+            if i < t.size:  # the epoch history is full: twice the room
+                hist = np.zeros((2 * self._hist.shape[0], evloop.N_HIST))
+                hist[:self._hist.shape[0]] = self._hist
+                self._hist = hist
+
+    def epochs(self) -> np.ndarray:
+        """The epoch history so far (rows of :data:`gyrodrift.kernels.evloop.N_HIST` columns;
+        empty when not recorded)."""
+        n = int(self._rf[evloop.RF_HIST_N])
+        return self._hist[:n].copy() if self._hist.shape[1] else np.zeros((0, evloop.N_HIST))
+
+    @property
+    def temp_ref_c(self) -> float:
+        """The model's reference temperature T_ref (degC; the clock's units when T is the clock)."""
+        return float(self.est.mf[ev.MF_TREF])
 
     def _run(self, inputs, cols) -> dict:
         t, g, T, heading, norm, dip = inputs

@@ -143,11 +143,14 @@ def updated_column(out: pd.DataFrame, what: str = "output table") -> pd.Series:
     raise LogFormatError(f"{what} needs the column updated, which the table lacks")
 
 
-def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=(), regressor: str = "temperature") -> pd.DataFrame:
+def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=(), regressor: str = "temperature",
+               engine=None) -> pd.DataFrame:
     """``out`` with its ``attrs``: the accepted measurements ``(M, 5)``, the estimator's name,
     final parameters and covariance, ``notes``: what could not be learned or was done
     instead (one-line sentences), and ``drift_regressor``: what the model's ``T`` was
-    (``"temperature"``, or ``"clock"``: the elapsed time, :class:`gyrodrift.model.ElapsedClock`)."""
+    (``"temperature"``, or ``"clock"``: the elapsed time, :class:`gyrodrift.model.ElapsedClock`);
+    with the default estimator's ``engine``, its epoch history (``epochs``) and reference
+    temperature (``temp_ref_c``), for the smoother (:mod:`gyrodrift.smooth`)."""
     out.attrs["measurements"] = pd.DataFrame(np.asarray(accepted, dtype=float).reshape(-1, 5),
                                              columns=list(MEASUREMENT_COLUMNS))
     out.attrs["estimator"] = est.name
@@ -155,6 +158,9 @@ def with_attrs(out: pd.DataFrame, accepted: np.ndarray, est, notes=(), regressor
     out.attrs["final_cov"] = est.cov
     out.attrs["notes"] = list(notes)
     out.attrs["drift_regressor"] = regressor
+    if engine is not None and hasattr(engine, "epochs"):
+        out.attrs["epochs"] = engine.epochs()
+        out.attrs["temp_ref_c"] = engine.temp_ref_c
     return out
 
 

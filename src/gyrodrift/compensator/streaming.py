@@ -107,7 +107,7 @@ class Compensator:
             self.config = clock_config(self.config)
         if self._own_estimator:
             self._est = build_estimator(self.config)
-        self._engine = make_engine(self.config, self._est, self.source, clock=clock)
+        self._engine = make_engine(self.config, self._est, self.source, clock=clock, record=False)
 
     # -- public state
     @property

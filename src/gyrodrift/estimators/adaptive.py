@@ -1,283 +1,255 @@
-"""The ``adaptive`` drift estimator: the paper's structure, with a memory that adapts itself.
+"""The default estimator: one model of gyro, compass and platform, judged by evidence.
 
-Same drift model and states as the paper (eq. 2), same constant-parameter filter
-(Φ = I, eq. 10), with these changes:
-
-* **Temperature centred** on a reference ``T_ref`` (the mean temperature of the first
-  observation): the filter estimates ``[a, b, c']`` with rows ``[T − T_ref, T', 1]``,
-  where ``c' = a*T_ref + c`` is the drift at ``T_ref``. Over a small temperature span
-  the paper's ``a`` and ``c`` are nearly collinear (``c`` must move by ``-T*Δa``); the
-  centred ``a`` and ``c'`` are not. :attr:`params` still reports the paper's absolute
-  ``[a, b, c]``.
-* **Innovation-based fading factor** of the strong tracking filter of Zhou et al.
-  (suboptimal fading factor; see ``shared/guide/field-notes.md`` §1.8) instead of the
-  paper's constant s: a running innovation covariance
-  ``V_k = (ρ V_{k-1} + γγᵀ)/(1 + ρ)`` is compared with what the filter predicts,
-  ``λ_k = max(1, tr(V_k − H Q Hᵀ − R) / tr(H P Hᵀ))``, capped at ``lambda_max``, and
-  ``P⁻ = λ_k P + Q``. While the model explains the measurements λ = 1 and the memory is
-  long (well-determined a and b, good extrapolation through outages); when the drift
-  departs from the model the innovations grow, λ > 1 and old measurements are
-  forgotten fast (tracking). By default the test uses the normalised innovations of the
-  last few updates against a χ² threshold (``AdaptiveConfig.normalised``, ``softening``).
-* **Moving reference temperature** and **per-parameter process noise**: ``T_ref`` follows
-  the sensor, ``c'`` (the drift at the current temperature) random-walks in time, ``a``
-  random-walks in temperature (``AdaptiveConfig.recentre``, ``q_sd``,
-  ``slope_q_per_rtc``).
-* **Outage memory**: a twin without the slope random walk supplies a and b for
-  extrapolating through refused intervals (eq. 5) (``AdaptiveConfig.outage_memory``).
-
-The covariance is bounded as in :mod:`gyrodrift.estimators.kalman` (capped at the
-prior, no fading in outages). The equations are in :mod:`gyrodrift.kernels.kalman`.
-
-Every change beyond the paper is a switch of :class:`AdaptiveConfig` (for the
-ablation); the compensator (:mod:`gyrodrift.compensator`) reads the switches that concern
-its measurements: one measurement per interval, compass averaging at the interval edges
-with an online compass-noise estimate, and zero-rate (stationarity, ZARU) measurements
-(:mod:`gyrodrift.kernels.aiding`). Results and the ablation: ``docs/results.md``.
+The model and its equations are in :mod:`gyrodrift.kernels.evidence` (states heading,
+the drift model of eq. 2 and the compass's slow error; four hypotheses — compass clean or
+disturbed, platform still or moving — weighted by how well each explains the data). This
+module holds its settings (:class:`AdaptiveConfig`, each a physical quantity with its unit)
+and the estimator object the engine runs (:class:`AdaptiveModel`): the model's arrays, the
+prior, and the paper's absolute ``[a, b, c]`` and their covariance for profiles and reports.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields
 from typing import ClassVar
 
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import check_drift_triple, register
-from gyrodrift.estimators.kalman import KalmanConfig, KernelFilter, filter_arrays
-from gyrodrift.kernels import kalman as kernel
-from gyrodrift.kernels import layout as L
+from gyrodrift.estimators.base import LinearDrift, Observation, register
+from gyrodrift.estimators.kalman import KalmanConfig
+from gyrodrift.kernels import evidence as ev
 
-__all__ = ["AdaptiveConfig", "AdaptiveKalman"]
+__all__ = ["AdaptiveConfig", "AdaptiveModel"]
 
 
 @dataclass(frozen=True, kw_only=True)
 class AdaptiveConfig:
-    """Settings of the ``adaptive`` estimator, each change beyond the paper switchable.
+    """Settings of the default estimator's model (:mod:`gyrodrift.kernels.evidence`).
 
     Attributes
     ----------
-    stacked : bool
-        Fix 1 off (``True``): the paper's stacked copies of the last ``stack_depth``
-        measurements in y (eq. 3), each measurement used in several updates with its
-        noise counted as new each time. ``False`` (default): one measurement per update
-        interval with its own variance.
-    edge_s : float
-        Fix 1, compass averaging at the window edges: each end of a compass measurement
-        (eq. 6) is the mean of ``D = ∫gyro − compass`` over the compass samples of the
-        last ``edge_s`` seconds, not one sample; its noise variance is divided by their
-        number, and consecutive intervals share their edge, so the measurements still
-        telescope. 0: one sample at each end (the paper).
-    recentre : bool
-        Fix 2, well-posed process noise: before each update the reference temperature
-        moves to the temperature of the new measurement (``c' ← c' + a (T_new − T_ref)``,
-        P transformed alike), so that ``q_sd`` of c' is the random walk of the drift *at
-        the current temperature* and that of ``a`` is not amplified by a growing
-        ``|T − T_ref|``. ``False``: T_ref stays the first measurement's temperature.
-    zaru : bool
-        Fix 4: a zero-rate (stationarity) measurement when the unit is still. The mean
-        gyro rate over the interval then measures the drift with only the gyro's white
-        noise, ``N²/Δt``, about 5 times more precise than a compass difference (eq. 6).
-        Still means: the compass heading over the last ``zaru_window_s`` fits a flat
-        line: slope within ``zaru_slope_k`` of its standard error, scatter about the
-        line within two compass sigmas and not above the compass white noise (estimated
-        online from successive differences) by more than ``zaru_resid_k`` standard
-        errors of a variance ratio; a slow turn, a sway or a wandering heading fails
-        this. And the gyro
-        rate between compass samples has a standard deviation below
-        ``GateConfig.still_std_dps``. A still interval is accepted even when the compass
-        and gyro disagree (the drift moved, not the heading).
-    zaru_hold : bool
-        Fix 3, deciding which sensor moved: once stillness was verified by the compass,
-        it holds while the gyro shows no motion and its mean rate agrees with the
-        predicted drift (NIS test against the predicted covariance), even when the
-        compass wanders (slow magnetic interference the disagreement gate cannot see).
-    zaru_window_s : float
-        Length of the compass stillness window, s.
-    zaru_slope_k, zaru_resid_k : float
-        Stillness thresholds (see ``zaru``).
-    fading : bool
-        Fix 5: the innovation-based fading factor of Zhou et al. (``False``: λ = 1, a
-        plain Kalman filter with process noise ``q_sd``).
-    lambda_max : float
-        Largest fading factor of one update.
-    rho : float
-        Forgetting of the innovation covariance estimate, 0 < rho < 1.
-    softening : float
-        Zhou's softening (weakening) factor β >= 1 of the fading test,
-        ``λ = max(1, tr(V − H Q Hᵀ − β R) / tr(H P Hᵀ))``: fade only when the innovations
-        exceed β times the measurement noise. With one measurement per interval, V is an
-        average over a few innovations only and exceeds R by chance about half the time;
-        β = 1 then fades on noise. Default 3.78, the 99 % quantile of χ² with 3 degrees
-        of freedom divided by 3 (``innovation_window`` = 3): about 1 % of updates of a
-        consistent filter fade. Not tuned (the ``static`` family cannot tell 1 to 6.6
-        apart).
-    normalised : bool
-        Fix 3 (robust fading test): True: the test uses the mean normalised innovation
-        squared (NIS, ``γᵀ S⁻¹ γ / m`` with ``S`` predicted without fading) of the last
-        ``innovation_window`` updates, ε̄, and fades by
-        ``λ = max(1, 1 + (ε̄ − β) tr(S) / tr(H P Hᵀ))``: Zhou's λ with V = ε̄ S, so only
-        a sustained excess over β (a χ² quantile of ``n`` degrees of freedom divided by
-        n) fades the memory, whatever the measurement type (compass or ZARU) and its R.
-        False: Zhou's recursive innovation covariance (``rho``), which mixes the
-        innovations of measurements with very different R (a compass difference
-        followed by a ZARU update looks like a model failure).
-    innovation_window : int
-        Number of updates averaged in the normalised test.
-    q_sd : tuple of 3 floats, optional
-        Fix 5, per-parameter process noise: random-walk standard deviations of
-        [a (deg/s/degC), b (deg/degC), c' (deg/s, the drift at T_ref)] per update interval.
-        A random-walk ``c'`` follows drift the linear model does not explain
-        (curvature, hysteresis, bias instability) while a and b keep a long memory.
-        None: ``KalmanConfig.q_sd``, shared with the other Kalman estimators (and no
-        ``slope_q_per_rtc``). ``q_sd``, ``slope_q_per_rtc`` and the ZARU thresholds
-        were tuned on the ``static`` Monte Carlo family alone (5 seeds, full length;
-        see ``docs/results.md``) and frozen for the others.
-    slope_q_per_rtc : float
-        Fix 5: random walk of ``a`` *in temperature*, deg/s/degC per √degC: the
-        variance ``slope_q_per_rtc² |ΔT|`` is added to that of ``a`` when the
-        temperature moves by ΔT between updates. A curved drift(T) has a slope that
-        changes with temperature, not with time: on a temperature plateau ``a`` keeps its
-        memory (and through an outage on a ramp it is not made noisier by the length of
-        the outage), while on a ramp it follows the local slope.
-    outage_memory : bool
-        Fix 2, well-posed extrapolation: a twin of the filter without the slope random
-        walk (long memory of a and b) runs on the same measurements. Through refused
-        intervals (outages) the drift is extrapolated with the twin's a and b from the
-        drift the tracking filter had at the last update: the short memory that
-        follows the drift while aided is too noisy a slope to extrapolate a ramp with.
-    quasi_static_s, quasi_static_deg : float
-        Quasi-static windows (:func:`gyrodrift.kernels.aiding.quasi_static`): through
-        ``quasi_static_s`` seconds of refused intervals (no compass, interference, ...), a
-        compensated heading that stays within ``quasi_static_deg`` peak to peak about a
-        straight line (a parked, moored or bench unit, swaying or not) gives its mean gyro
-        rate as a drift measurement, with the sway as its uncertainty, when the drift in
-        force agrees with it (a slow real turn does not). ``quasi_static_s`` = 0: off.
+    epoch_s : float
+        Length of an epoch, s: the model weighs and updates once per epoch (the rows of a
+        log sampled more slowly make an epoch each).
+    clean_s, disturbed_s : float
+        Mean length of a spell of clean compass and of a magnetic disturbance, s (the
+        Markov chain of the compass hypotheses).
+    still_s, moving_s : float
+        Mean length of a still and of a moving spell of the platform, s.
+    slope_walk : float
+        Random walk of a per √degC of temperature change, deg/s/degC/√degC (a drift curved
+        in temperature has a slope that changes as the temperature moves).
+    rate_walk : float
+        Random walk of b per √s, deg/s/(degC/s)/√s.
+    drift_walk : float
+        Random walk of the drift c' in time, deg/s/√s (bias instability).
+    drift_walk_temp : float
+        Random walk of c' per √degC of temperature change, deg/s/√degC (hysteresis, lag
+        and curvature: drift the linear model does not explain moves when T moves).
+    drift_rate_dps2, drift_rate_s : float
+        Stationary standard deviation (deg/s²) and correlation time (s) of the rate at which
+        the drift departs from eq. (2).
+    compass_error_deg, compass_error_s : float
+        Standard deviation (deg) and correlation time (s) of the compass's slow error d
+        (deviation, slow wander): a Gauss–Markov process.
+    disturbance_step_deg, disturbance_walk, disturbance_s : float
+        A magnetic disturbance: the standard deviation of its step when it begins (deg), its
+        random walk (deg/√s) and the time over which it decays (s).
+    turn_error_s : float
+        The compass's error while turning per deg/s of turn rate, deg/(deg/s) = s (the
+        tilt of cornering, the compass's lag).
+    deviation_span_deg : float
+        Heading change over which the compass's slow error decorrelates, deg (deviation is
+        a function of heading).
+    turn_walks : tuple of 4 floats
+        Random walks of the true rate under the motion models, deg/s/√s, from slow turns
+        and long sways to waves and manoeuvres.
+    turn_shares : tuple of 4 floats
+        Prior shares of the motion models in a moving epoch (sum below 1); the rest is a
+        rate that none predicts (a start, a stop), within ``rate_any_dps``.
+    rate_any_dps : float
+        Standard deviation of a rate no motion model predicts, deg/s.
+    angular_accel_dps2 : float
+        Typical angular acceleration, deg/s² (the error of the trapezoid integral between
+        samples of a moving platform).
+    gap_turn_dps : float
+        Rate at which the heading of a moving platform is lost across a time gap, deg/s.
+    still_walk : float
+        Heading random walk of a still platform, deg/√s (micro-motion).
+    gap_factor : float
+        A time step longer than this many typical steps (a running estimate of the log's
+        own spacing) is a time gap.
+    field_norm_sd, field_dip_deg : float
+        Scatter of a clean raw magnetometer's field strength (fraction of the reference)
+        and dip (deg).
+    noise_memory_s : float
+        Memory of the running estimates of the gyro's and the compass's white noise, s.
+    p_clean0, p_still0 : float
+        Probabilities of a clean compass and of a still platform at the start.
+    heading_sd0 : float
+        Standard deviation of the heading before any compass sample, deg.
     """
 
-    stacked: bool = False
-    edge_s: float = 2.0
-    recentre: bool = True
-    zaru: bool = True
-    zaru_hold: bool = True
-    zaru_window_s: float = 60.0
-    zaru_slope_k: float = 3.0
-    zaru_resid_k: float = 3.0
-    fading: bool = True
-    lambda_max: float = 20.0
-    rho: float = 0.8
-    softening: float = 3.78
-    innovation_window: int = 3
-    normalised: bool = True
-    q_sd: tuple[float, float, float] | None = (1e-4, 0.05, 5e-3)
-    slope_q_per_rtc: float = 0.06
-    outage_memory: bool = True
-    quasi_static_s: float = 300.0
-    quasi_static_deg: float = 10.0
+    epoch_s: float = 1.0
+    clean_s: float = 3600.0
+    disturbed_s: float = 300.0
+    still_s: float = 300.0
+    moving_s: float = 300.0
+    slope_walk: float = 0.003
+    rate_walk: float = 0.01
+    drift_walk: float = 2e-4
+    drift_walk_temp: float = 0.02
+    drift_rate_dps2: float = 0.0003
+    drift_rate_s: float = 300.0
+    compass_error_deg: float = 2.0
+    compass_error_s: float = 3600.0
+    disturbance_step_deg: float = 30.0
+    disturbance_walk: float = 0.5
+    disturbance_s: float = 1800.0
+    turn_error_s: float = 0.5
+    deviation_span_deg: float = 90.0
+    turn_walks: tuple[float, ...] = (0.003, 0.03, 0.3, 3.0)
+    turn_shares: tuple[float, ...] = (0.3, 0.3, 0.2, 0.15)
+    rate_any_dps: float = 100.0
+    angular_accel_dps2: float = 10.0
+    gap_turn_dps: float = 1.0
+    still_walk: float = 0.001
+    gap_factor: float = 20.0
+    field_norm_sd: float = 0.03
+    field_dip_deg: float = 2.0
+    noise_memory_s: float = 600.0
+    p_clean0: float = 0.9
+    p_still0: float = 0.5
+    heading_sd0: float = 100.0
 
     def __post_init__(self):
-        if not (math.isfinite(self.lambda_max) and self.lambda_max >= 1.0):
-            raise ConfigError(f"lambda_max must be >= 1, got {self.lambda_max!r}")
-        if not (0.0 < self.rho < 1.0):
-            raise ConfigError(f"rho must be between 0 and 1, got {self.rho!r}")
-        if not (math.isfinite(self.softening) and self.softening >= 1.0):
-            raise ConfigError(f"softening must be >= 1, got {self.softening!r}")
-        if not (isinstance(self.innovation_window, int) and self.innovation_window >= 1):
-            raise ConfigError(f"innovation_window must be a whole number >= 1, got {self.innovation_window!r}")
-        if not (isinstance(self.edge_s, (int, float)) and math.isfinite(self.edge_s) and self.edge_s >= 0):
-            raise ConfigError(f"adaptive setting edge_s must be a number >= 0, got {self.edge_s!r}")
-        for name in ("quasi_static_s", "quasi_static_deg"):
+        for name in ("turn_walks", "turn_shares"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
-                raise ConfigError(f"adaptive setting {name} must be a number >= 0, got {v!r}")
-        for name in ("zaru_window_s", "zaru_slope_k", "zaru_resid_k"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ConfigError(f"adaptive setting {name} must be a positive number, got {v!r}")
-        if self.q_sd is not None:
             try:
-                ok = len(self.q_sd) == 3 and all(math.isfinite(float(e)) and float(e) >= 0 for e in self.q_sd)
+                ok = len(v) == ev.N_RATE and all(math.isfinite(float(e)) and float(e) > 0 for e in v)
             except (TypeError, ValueError):
                 ok = False
             if not ok:
-                raise ConfigError(f"adaptive q_sd must be three numbers >= 0 (a, b, c'), got {self.q_sd!r}")
-            check_drift_triple("adaptive q_sd", self.q_sd)
+                raise ConfigError(f"adaptive setting {name} must be {ev.N_RATE} positive numbers, got {v!r}")
+        if not sum(self.turn_shares) < 1.0:
+            raise ConfigError(f"adaptive turn_shares must sum below 1 (the rest is any rate), got {self.turn_shares!r}")
+        for f in fields(self):
+            if f.name in ("turn_walks", "turn_shares"):
+                continue
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ConfigError(f"adaptive setting {f.name} must be a finite number >= 0, got {v!r}")
+        for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
+                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s", "deviation_span_deg"):
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"adaptive setting {name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("p_clean0", "p_still0"):
+            if not 0.0 < getattr(self, name) < 1.0:
+                raise ConfigError(f"adaptive setting {name} must be between 0 and 1, got {getattr(self, name)!r}")
 
-    #: The fixes that :meth:`ablated` switches off one at a time, by name.
-    FIXES: ClassVar[tuple[str, ...]] = ("one_measurement", "edge_averaging", "recentre", "outage_memory", "zaru", "zaru_hold", "fading",
-                                         "process_noise", "quasi_static")
-
-    def ablated(self, fix: str) -> "AdaptiveConfig":
-        """These settings with one fix of :attr:`FIXES` switched off."""
-        off = {"one_measurement": {"stacked": True}, "edge_averaging": {"edge_s": 0.0}, "recentre": {"recentre": False}, "zaru": {"zaru": False},
-               "zaru_hold": {"zaru_hold": False},
-               "fading": {"fading": False}, "process_noise": {"q_sd": None, "slope_q_per_rtc": 0.0},
-               "outage_memory": {"outage_memory": False}, "quasi_static": {"quasi_static_s": 0.0}}
-        if fix not in off:
-            raise ConfigError(f"unknown fix {fix!r}; choose from: {', '.join(self.FIXES)}")
-        return replace(self, **off[fix])
+    def settings_array(self, compass_sd_deg: float, gyro_noise_dps_rthz: float) -> np.ndarray:
+        """The kernel's settings ``mc`` (:mod:`gyrodrift.kernels.evidence`)."""
+        mc = np.zeros(ev.N_MC)
+        mc[ev.MC_EPOCH] = self.epoch_s
+        mc[ev.MC_TAU_CLEAN], mc[ev.MC_TAU_DIST] = self.clean_s, self.disturbed_s
+        mc[ev.MC_TAU_STILL], mc[ev.MC_TAU_MOVE] = self.still_s, self.moving_s
+        mc[ev.MC_Q_A], mc[ev.MC_Q_B] = self.slope_walk, self.rate_walk
+        mc[ev.MC_Q_C], mc[ev.MC_Q_CT] = self.drift_walk, self.drift_walk_temp
+        mc[ev.MC_SIG_D], mc[ev.MC_TAU_D] = self.compass_error_deg, self.compass_error_s
+        mc[ev.MC_K_TURN] = self.turn_error_s
+        mc[ev.MC_L_DEV] = self.deviation_span_deg
+        mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
+        mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
+        mc[ev.MC_TAU_E] = self.disturbance_s
+        mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks
+        mc[ev.MC_SHARE:ev.MC_SHARE + ev.N_RATE] = self.turn_shares
+        mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps
+        mc[ev.MC_Q_STILL] = self.still_walk
+        mc[ev.MC_GAP_FACTOR] = self.gap_factor
+        mc[ev.MC_COMPASS_SD] = compass_sd_deg
+        mc[ev.MC_GYRO_NOISE] = gyro_noise_dps_rthz
+        mc[ev.MC_SIG_NORM], mc[ev.MC_SIG_DIP] = self.field_norm_sd, self.field_dip_deg
+        mc[ev.MC_NOISE_MEMORY] = self.noise_memory_s
+        mc[ev.MC_P_CLEAN0], mc[ev.MC_P_STILL0] = self.p_clean0, self.p_still0
+        mc[ev.MC_DELTA_SD0] = self.heading_sd0
+        mc[ev.MC_RATE_ANY] = self.rate_any_dps
+        return mc
 
 
 @register
-class AdaptiveKalman(KernelFilter):
-    """Centred-temperature Kalman filter with innovation-based fading (``adaptive``).
+class AdaptiveModel(LinearDrift):
+    """The default estimator (``adaptive``): the model of :mod:`gyrodrift.kernels.evidence`.
+
+    The engine (:class:`gyrodrift.compensator.engine.ModelEngine`) runs it row by row; this
+    object holds its arrays and the prior, and reports the paper's absolute ``[a, b, c]``
+    (:attr:`params`) and their covariance (:attr:`cov`).
 
     Parameters
     ----------
     config : KalmanConfig
-        Prior (``x0`` absolute [a, b, c], ``p0_sd`` of [a, b, c'], cap ``max_sd``) and
-        process noise ``q_sd`` of [a, b, c'] per update interval, shared with the other
-        Kalman estimators; ``fading`` is ignored (the fading factor is adaptive).
+        The prior of [a, b, c] (``x0``, ``p0_sd`` or ``p0_cov``), shared with the other
+        Kalman estimators (a profile's or a calibration's warm start sets it).
     settings : AdaptiveConfig
-        The switches of this estimator (its own ``q_sd`` replaces ``config.q_sd``).
-    lambda_max, rho : float, optional
-        Override ``settings.lambda_max`` and ``settings.rho``.
-    depth : int
-        Largest number of measurements of one observation (the stacked ones of eq. 3, and
-        the initialisation's).
     """
 
     name: ClassVar[str] = "adaptive"
+    causal: ClassVar[bool] = True
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), *, settings: AdaptiveConfig | None = None,
-                 lambda_max: float | None = None, rho: float | None = None, depth: int = 3):
+    def __init__(self, config: KalmanConfig = KalmanConfig(), *, settings: AdaptiveConfig | None = None, **_):
         settings = settings if settings is not None else AdaptiveConfig()
         if not isinstance(settings, AdaptiveConfig):
             raise ConfigError(f"adaptive settings must be an AdaptiveConfig, got {type(settings).__name__}")
-        overrides = {k: v for k, v in (("lambda_max", lambda_max), ("rho", rho)) if v is not None}
-        settings = replace(settings, **overrides) if overrides else settings
-        self.settings = settings
         self.config = config
-        P0, max_var, Q = config.matrices()
-        if settings.q_sd is not None:
-            Q = np.diag(np.square(np.array(settings.q_sd, dtype=float)))
-        slope_walk = settings.slope_q_per_rtc > 0.0 and settings.q_sd is not None
-        super().__init__(*filter_arrays(
-            adaptive=True, x0=config.x0, P0=P0, Q=Q, max_var=max_var, depth=depth,
-            nis_window=settings.innovation_window, twin=settings.outage_memory and slope_walk,
-            normalised=settings.normalised, recentre=settings.recentre, softening=settings.softening,
-            lambda_max=float(settings.lambda_max) if settings.fading else 1.0, rho=settings.rho,
-            slope_q=settings.slope_q_per_rtc if slope_walk else 0.0,
-        ))
+        self.settings = settings
+        self.mf = np.zeros(ev.N_MF)
+        self._started = False
+        P0, _, _ = config.matrices()
+        self._x0 = np.array(config.x0, dtype=float)
+        self._P0 = P0
+
+    def start(self, t_ref_c: float, compass_sd_deg: float, gyro_noise_dps_rthz: float, clock: bool = False) -> np.ndarray:
+        """The model's arrays at the first row (temperature ``t_ref_c``; ``clock``: the drift
+        model's T is the elapsed time): returns ``mc``."""
+        mc = self.settings.settings_array(compass_sd_deg, gyro_noise_dps_rthz)
+        mc[ev.MC_CLOCK] = float(clock)
+        J = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [t_ref_c, 0.0, 1.0]])  # [a, b, c] -> [a, b, c']
+        x0 = np.zeros(ev.NX)
+        x0[ev.X_A:ev.X_C + 1] = J @ self._x0
+        P0 = np.zeros((ev.NX, ev.NX))
+        P0[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1] = J @ self._P0 @ J.T
+        P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
+        P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
+        P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
+
+        ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
+        self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
+        self.mf[ev.MF_NORM_REF] = self.mf[ev.MF_DIP_REF] = math.nan
+        self.mf[ev.MF_LOG_H] = math.nan
+        self.mf[ev.MF_LAST_D] = math.nan
+        self._started = True
+        return mc
 
     @property
-    def temp_ref_c(self) -> float | None:
-        """The reference temperature T_ref (degC) of the centred states; None before the
-        first observation."""
-        z, P, Q, max_var, af, V, nis, ai = kernel.views(*self.kernel_arrays)
-        return float(af[L.MAIN, L.AF_TREF]) if ai[L.MAIN, L.AI_TREF_SET] else None
+    def params(self) -> np.ndarray:
+        """The paper's absolute [a, b, c] (deg/s/degC, deg/s per degC/s, deg/s) in force."""
+        if not self._started:
+            return self._x0.copy()
+        x = self.mf[ev.MF_XC:ev.MF_XC + ev.NX]
+        return np.array([x[ev.X_A], x[ev.X_B], x[ev.X_C] - x[ev.X_A] * self.mf[ev.MF_TREF]])
 
     @property
-    def last_lambda(self) -> float:
-        """Fading factor λ of the last update (diagnostics)."""
-        z, P, Q, max_var, af, V, nis, ai = kernel.views(*self.kernel_arrays)
-        return float(af[L.MAIN, L.AF_LAMBDA])
+    def cov(self) -> np.ndarray:
+        """Covariance of the absolute [a, b, c]."""
+        if not self._started:
+            return self._P0.copy()
+        P = self.mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1]
+        Jinv = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-self.mf[ev.MF_TREF], 0.0, 1.0]])
+        return Jinv @ P @ Jinv.T
 
-    @property
-    def centred_cov(self) -> np.ndarray:
-        """Covariance of the filter's own states [a, b, c'] (centred on :attr:`temp_ref_c`):
-        the matrix the cap (``KalmanConfig.max_sd``, default the prior) bounds."""
-        z, P, Q, max_var, af, V, nis, ai = kernel.views(*self.kernel_arrays)
-        return P[L.MAIN].copy()
+    def update(self, obs: Observation) -> np.ndarray:
+        raise ConfigError("the adaptive model is run by the engine row by row, not by interval measurements")
+
+    def hold(self) -> np.ndarray:
+        return self.params

@@ -101,42 +101,21 @@ class KalmanConfig:
         return P0, max_var, np.diag(np.square(np.array(self.q_sd, dtype=float)))
 
 
-def filter_arrays(*, adaptive: bool, x0, P0, Q, max_var, active=(0, 1, 2), fading: float = 1.0, depth: int = 1,
-                  nis_window: int = 1, twin: bool = False, normalised: bool = False, recentre: bool = False,
-                  softening: float = 1.0, lambda_max: float = 1.0, rho: float = 0.5, slope_q: float = 0.0):
-    """The estimator arrays ``(ef, ei)`` of :mod:`gyrodrift.kernels.kalman` for a prior.
-
-    Both filters (MAIN and TWIN) start from the prior ``x0`` (absolute [a, b, c]), ``P0``,
-    with process noise ``Q`` and cap ``max_var``; ``depth`` is the largest number of rows
-    of one observation and ``nis_window`` the innovations of the normalised test.
-    """
-    ef = np.zeros(L.ef_size(depth, nis_window))
+def filter_arrays(*, x0, P0, Q, max_var, active=(0, 1, 2), fading: float = 1.0):
+    """The estimator arrays ``(ef, ei)`` of :mod:`gyrodrift.kernels.kalman` for a prior: the
+    filter starts from ``x0`` (absolute [a, b, c]) and ``P0``, with process noise ``Q``, cap
+    ``max_var``, fading factor ``fading`` and the ``active`` states."""
+    ef = np.zeros(L.N_EF)
     ei = np.zeros(L.N_EI, dtype=np.int64)
-    z, P, Qv, mv, af, V, nis, ai = kernel.views(ef, _ei_with(ei, depth, nis_window))
-    for row in (L.MAIN, L.TWIN):
-        z[row] = x0
-        P[row] = P0
-        Qv[row] = Q
-        mv[row] = max_var
-        af[row, L.AF_LAMBDA] = 1.0
-    ei[L.EI_MODE] = L.MODE_ADAPTIVE if adaptive else L.MODE_FIXED
-    ei[L.EI_TWIN] = int(twin)
-    ei[L.EI_NORMALISED] = int(normalised)
-    ei[L.EI_RECENTRE] = int(recentre)
+    ef[L.EF_Z:L.EF_Z + 3] = x0
+    ef[L.EF_P:L.EF_P + 9] = np.asarray(P0, dtype=float).ravel()
+    ef[L.EF_Q:L.EF_Q + 9] = np.asarray(Q, dtype=float).ravel()
+    ef[L.EF_MAX_VAR:L.EF_MAX_VAR + 3] = max_var
+    ef[L.EF_FADING] = fading
+    ei[L.EI_MODE] = L.MODE_FIXED
     ei[L.EI_N_ACTIVE] = len(active)
     ei[L.EI_ACTIVE:L.EI_ACTIVE + len(active)] = active
-    ef[L.EF_SET + L.ES_FADING] = fading
-    ef[L.EF_SET + L.ES_SOFTENING] = softening
-    ef[L.EF_SET + L.ES_LAMBDA_MAX] = lambda_max
-    ef[L.EF_SET + L.ES_RHO] = rho
-    ef[L.EF_SET + L.ES_SLOPE_Q] = slope_q
     return ef, ei
-
-
-def _ei_with(ei: np.ndarray, depth: int, nis_window: int) -> np.ndarray:
-    ei[L.EI_DEPTH] = depth
-    ei[L.EI_NIS_W] = nis_window
-    return ei
 
 
 class KernelFilter(LinearDrift):
@@ -192,11 +171,10 @@ class KalmanDrift(KernelFilter):
 
     name: ClassVar[str] = "stkf"
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), *, depth: int = 3):
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
         P0, max_var, Q = config.matrices()
-        super().__init__(*filter_arrays(adaptive=False, x0=config.x0, P0=P0, Q=Q, max_var=max_var,
-                                        fading=config.fading, depth=depth))
+        super().__init__(*filter_arrays(x0=config.x0, P0=P0, Q=Q, max_var=max_var, fading=config.fading))
 
     @property
     def fading(self) -> float:
@@ -209,8 +187,8 @@ class PlainKalmanDrift(KalmanDrift):
 
     name: ClassVar[str] = "stkf-s1"
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), *, depth: int = 3):
-        super().__init__(replace(config, fading=1.0), depth=depth)
+    def __init__(self, config: KalmanConfig = KalmanConfig()):
+        super().__init__(replace(config, fading=1.0))
 
 
 @register
@@ -234,7 +212,7 @@ class BiasKalman(KernelFilter):
 
     name: ClassVar[str] = "kf"
 
-    def __init__(self, config: KalmanConfig = KalmanConfig(), bias_q_sd: float = 0.02, *, depth: int = 3):
+    def __init__(self, config: KalmanConfig = KalmanConfig(), bias_q_sd: float = 0.02):
         if not (math.isfinite(bias_q_sd) and bias_q_sd >= 0):
             raise ConfigError(f"bias_q_sd must be >= 0 deg/s, got {bias_q_sd!r}")
         self.config = config
@@ -243,5 +221,4 @@ class BiasKalman(KernelFilter):
         Q = np.zeros((3, 3))
         Q[2, 2] = bias_q_sd**2
         max_var = np.array([1.0, 1.0, (config.max_sd or config.p0_sd)[2] ** 2])
-        super().__init__(*filter_arrays(adaptive=False, x0=(0.0, 0.0, config.x0[2]), P0=P0, Q=Q, max_var=max_var,
-                                        active=(2,), depth=depth))
+        super().__init__(*filter_arrays(x0=(0.0, 0.0, config.x0[2]), P0=P0, Q=Q, max_var=max_var, active=(2,)))

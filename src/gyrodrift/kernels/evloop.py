@@ -44,7 +44,7 @@ from gyrodrift.kernels.layout import (
 )
 from gyrodrift.kernels.numeric import wrap180, wrap360
 
-__all__ = ["run", "settle", "RF_N", "RC_N"]
+__all__ = ["run", "settle", "RF_N", "RC_N", "N_HIST"]
 
 # ------------------------------------------------------------------ row state
 RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
@@ -60,7 +60,15 @@ RF_FUSED_ON = 19  # an epoch with a compass sample has closed: the fused heading
 #: c' and their covariance (aa, bb, cc, ab, ac, bc).
 RF_FIRST_ROW = 20
 RF_FIRST_DRIFT = 21
-RF_N = RF_FIRST_DRIFT + 9
+RF_HIST_N = RF_FIRST_DRIFT + 9  # epochs recorded in the history
+RF_N = RF_HIST_N + 1
+
+# ------------------------------------------------------------------ epoch history
+#: One row per epoch, for the smoother (:mod:`gyrodrift.smooth`): its end time (s), length
+#: (s), temperature change (degC, the drift's random walk), the combined drift states
+#: [a, b, c', r] and their covariance (upper triangle, row by row: aa ab ac ar bb bc br cc cr rr).
+H_T, H_DT, H_DTEMP, H_X, H_P = 0, 1, 2, 3, 7
+N_HIST = 17
 
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
@@ -80,9 +88,12 @@ def _open(mf, t, temp):
 
 
 @jit
-def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias):
+def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
     """The model's step for the epoch ending at ``t``, then the field reference and the
-    unobservable code; the integrals at the epoch end are kept for the fused heading."""
+    unobservable code; the integrals at the epoch end are kept for the fused heading, and the
+    drift states in the history (when it has columns)."""
+    dt = t - mf[MF_E_T0]
+    dtemp = abs(temp - mf[MF_E_T_START]) if mc[ev.MC_CLOCK] == 1.0 else abs(mf[ev.MF_E_TP])
     if mf[MF_E_NF] > 0.0 and not math.isfinite(mf[MF_NORM_REF]):
         mf[MF_NORM_REF] = mf[MF_E_NORM] / mf[MF_E_NF]
         mf[MF_DIP_REF] = mf[MF_E_DIP] / mf[MF_E_NF]
@@ -101,12 +112,27 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias):
     if math.sqrt(max(Pc[X_B * NX + X_B], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_B]:
         code += UNOBS_B
     rf[RF_UNOBS] = code
+    if hist.shape[1] == N_HIST and dt > 0.0:
+        k = int(rf[RF_HIST_N])
+        hist[k, H_T] = t
+        hist[k, H_DT] = dt
+        hist[k, H_DTEMP] = dtemp
+        xs = (X_A, X_B, X_C, ev.X_R)
+        m = 0
+        for r in range(4):
+            hist[k, H_X + r] = mf[MF_XC + xs[r]]
+            for c in range(r, 4):
+                hist[k, H_P + m] = Pc[xs[r] * NX + xs[c]]
+                m += 1
+        rf[RF_HIST_N] = k + 1
 
 
 @jit
-def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, cap):
+def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, cap, hist):
     """Compensate rows ``i0..`` of a prepared chunk into ``out``/``codes`` (columns ``cap``
-    apart); returns ``t.size``.
+    apart); returns the next row to do: ``t.size``, or earlier when the epoch history
+    ``hist`` (N_HIST columns; none: not recorded) has room for fewer than two more epochs
+    (the caller grows it and calls again from that row).
 
     ``held``: rows whose gyro or temperature cell was empty (held from the row before:
     a gap). ``norm``, ``dip``: field strength and dip of a raw magnetometer per row, or
@@ -122,7 +148,12 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     xc = mf[MF_XC:MF_XC + NX]
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     o_bias, o_rate, o_heading = O_BIAS * cap, O_RATE * cap, O_HEADING * cap
+    stop = t.size
+    recording = hist.shape[1] == N_HIST
     for i in range(i0, t.size):
+        if recording and rf[RF_HIST_N] + 2 > hist.shape[0]:
+            stop = i
+            break
         ti, gi, Ti, Tpi, hi = t[i], g[i], T[i], Tp[i], heading[i]
         first = rf[RF_STARTED] == 0.0
         if first:
@@ -147,7 +178,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             reason_gap = gap
             if gap:
                 if mf[MF_E_NDG] > 0.0 or mf[MF_E_NC] > 0.0:  # close the epoch before the gap
-                    _close(mf, mc, rf, rc, c_t, c_T, I_raw, I_bias)
+                    _close(mf, mc, rf, rc, c_t, c_T, I_raw, I_bias, hist)
                 _open(mf, c_t, c_T)
                 mf[MF_E_GAP] = 1.0
                 # across the gap the integrals follow the likelier platform: still, the gyro read
@@ -210,7 +241,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             rf[RF_T_COMPASS] = ti
         updated = 0
         if gap or (not first and ti - mf[MF_E_T0] >= epoch_s):
-            _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias)
+            _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias, hist)
             if rf[RF_FIRST_ROW] < 0.0:
                 rf[RF_FIRST_ROW] = i
                 for k, (r, c_) in enumerate(((X_A, X_A), (X_B, X_B), (X_C, X_C), (X_A, X_B), (X_A, X_C), (X_B, X_C))):
@@ -259,7 +290,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         codes[OC_UNOBS * cap + ix] = int(rf[RF_UNOBS])
     rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
-    return t.size
+    return stop
 
 
 @jit

@@ -1,16 +1,17 @@
 """Layout of the arrays the kernels share: index names, codes, sizes.
 
-The engine's state is a handful of flat arrays (few arguments make a cheap call from
+These are the arrays of the paper's filters and their row loop (:mod:`gyrodrift.kernels.loop`);
+the default estimator's model keeps its own (:mod:`gyrodrift.kernels.evidence`). The
+engine's state is a handful of flat arrays (few arguments make a cheap call from
 Python, which the streaming path pays on every sample):
 
 * ``fs`` float state and ``ist`` integer state of one log (``F_*``, ``I_*``);
 * ``cfg`` float and ``icfg`` integer settings (``C_*``, ``K_*``);
-* ring buffers: ``bins`` (T' bins), ``lb`` (the turning window), ``win`` (the
-  compass window of the ``adaptive`` aiding), ``stack`` (measurements of eq. 3),
-  ``refused`` (lock-out recovery), ``acc`` (accepted measurements, for the caller);
-* the estimator's ``ef`` floats and ``ei`` integers (``EF_*``, ``EI_*``): two filters
-  of three states side by side (the ``adaptive`` estimator and its long-memory twin; the
-  fixed-fading filters use the first);
+* ring buffers: ``bins`` (T' bins), ``lb`` (the turning window), ``stack``
+  (measurements of eq. 3), ``refused`` (lock-out recovery), ``acc`` (accepted
+  measurements, for the caller);
+* the estimator's ``ef`` floats and ``ei`` integers (``EF_*``, ``EI_*``): one filter of
+  three states (:mod:`gyrodrift.kernels.kalman`);
 * the outputs ``out`` (float columns ``O_*``, each ``cap`` long, one after the other)
   and ``codes`` (int8 columns ``OC_*``).
 """
@@ -37,9 +38,9 @@ UNOBS_A, UNOBS_B = 1, 2
 #: confounded with c; T' ≡ 0 leaves b free).
 UNOBSERVABLE_SD_FRACTION = 0.5
 
-#: Estimator modes: fixed fading (``stkf``, ``stkf-s1``, ``kf``), ``adaptive``, or a
-#: Python estimator updated by the caller at interval ends (:data:`PENDING_UPDATE`).
-MODE_FIXED, MODE_ADAPTIVE, MODE_EXTERNAL = 0, 1, 2
+#: Estimator modes: fixed fading (``stkf``, ``stkf-s1``, ``kf``), or a Python estimator
+#: updated by the caller at interval ends (:data:`PENDING_UPDATE`).
+MODE_FIXED, MODE_EXTERNAL = 0, 2
 #: ``ist[I_PENDING]`` after an interval end in MODE_EXTERNAL: what the caller must do.
 PENDING_NONE, PENDING_UPDATE, PENDING_HOLD = 0, 1, 2
 
@@ -58,34 +59,15 @@ S_T, S_HEADING, S_IRAW, S_IT, S_ITP, S_IBIAS = 0, 1, 2, 3, 4, 5
 F_S0 = 14  # snap at the start of the interval
 F_S1 = 20  # the last compass snap
 F_PA, F_PB, F_PC = 26, 27, 28  # a, b, c in force
-F_E0 = 29  # start edge (edge averaging): a snap, then its compass variance at F_E0 + 6
-F_E1 = 36  # the end edge of the interval just closed (the next start edge), same layout
-F_COV = 43  # covariance of the a, b, c in force (3x3, row-major)
-F_TP_T0, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_RATE = 52, 53, 54, 55  # T' tracker
-F_FUSION = 56  # fused-heading state (FZ_* offsets)
-F_LAST_T, F_LAST_G, F_LAST_TEMP = 65, 66, 67  # last input row (time check, held cells)
-F_FIELD_NORM, F_FIELD_DIP = 68, 69  # reference field of the init window (NaN: none)
-#: The current still run (gyro-only stillness, :func:`gyrodrift.kernels.aiding.close_still_run`),
-#: kept here between calls of the row loop: its first row's time and integrals (t, I_raw, I_T,
-#: I_Tp), its first gyro value, and the sums of the gyro minus that value and of their squares.
-F_RUN_T0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_G0, F_RUN_SUM, F_RUN_SUMSQ = 70, 71, 72, 73, 74, 75, 76
+F_COV = 29  # covariance of the a, b, c in force (3x3, row-major)
+F_TP_T0, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_RATE = 38, 39, 40, 41  # T' tracker
+F_FUSION = 42  # fused-heading state (FZ_* offsets)
+F_LAST_T, F_LAST_G, F_LAST_TEMP = 51, 52, 53  # last input row (time check, held cells)
+F_FIELD_NORM, F_FIELD_DIP = 54, 55  # reference field of the init window (NaN: none)
 #: The fused heading's refused compass run: the innovation its consistency is counted from,
 #: and since when (:func:`gyrodrift.kernels.fusion.step`).
-F_FZ_NU0, F_FZ_CONS_T = 77, 78
-#: The open quasi-static window (:func:`gyrodrift.kernels.aiding.quasi_static`): its start's
-#: integrals (I_raw, I_T, I_Tp), then its points, ``QS_MAX`` pairs (t, I_rate) at the
-#: interval ends it spans, the first at its start.
-F_QS_IRAW0, F_QS_IT0, F_QS_ITP0 = 79, 80, 81
-F_QS_PTS = 82
-QS_MAX = 64
-#: The gyro's white noise measured from the log (:func:`gyrodrift.kernels.aiding.gyro_noise`):
-#: the open still run's sum of squared steps of the gyro, then over the closed still runs
-#: the sum of their N² (deg²/s) weighted by their steps, and the sum of those weights.
-F_RUN_D2 = F_QS_PTS + 2 * QS_MAX
-F_NOISE_SUM, F_NOISE_W = F_RUN_D2 + 1, F_RUN_D2 + 2
-#: Steps of the gyro in still runs before the measured noise is used (when above the setting).
-NOISE_MIN_STEPS = 100
-N_FSTATE = F_NOISE_W + 1
+F_FZ_NU0, F_FZ_CONS_T = 56, 57
+N_FSTATE = 58
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
@@ -95,19 +77,13 @@ N_FZ = 9
 
 I_S0_OK, I_S1_OK, I_STICKY, I_AFTER_INT = 0, 1, 2, 3
 I_STACK_N, I_REFUSED_N, I_LB_HEAD, I_LB_N, I_UNOBS, I_N_ACC = 4, 5, 6, 7, 8, 9
-I_WIN_HEAD, I_WIN_N, I_E0_OK, I_STILL_CHAIN, I_E1_OK = 10, 11, 12, 13, 14
-I_TP_BIN, I_TP_N, I_TP_HEAD, I_TP_LEN, I_TP_STARTED = 15, 16, 17, 18, 19
-I_ROWS = 20  # rows taken so far (0: the next is the first of the log)
-I_INIT_END = 21  # last row of the init window in this call (-1: none)
-I_INIT_UPDATED = 22  # the init window gave a measurement
-I_ANCHOR_ROW = 23  # first compass row of the init window
-I_PENDING = 24  # PENDING_* for the caller (MODE_EXTERNAL)
-I_RUN_N = 25  # rows in the current still run (0: none)
-I_COMPASS_SEEN = 26  # a compass sample has come
-I_RUN_MEASURED = 27  # a still run ended before this row measured the drift (its update flag)
-I_QS_N = 28  # points of the open quasi-static window (0: none open)
-I_QS_GAP = 29  # a time gap came in the open interval (kept between calls of the row loop)
-N_ISTATE = 30
+I_TP_BIN, I_TP_N, I_TP_HEAD, I_TP_LEN, I_TP_STARTED = 10, 11, 12, 13, 14
+I_ROWS = 15  # rows taken so far (0: the next is the first of the log)
+I_INIT_END = 16  # last row of the init window in this call (-1: none)
+I_INIT_UPDATED = 17  # the init window gave a measurement
+I_ANCHOR_ROW = 18  # first compass row of the init window
+I_PENDING = 19  # PENDING_* for the caller (MODE_EXTERNAL)
+N_ISTATE = 20
 
 # ----------------------------------------------------------- float settings
 
@@ -115,59 +91,24 @@ C_INTERVAL, C_COMPASS_SD, C_GYRO_NOISE, C_TURN_RATE, C_TURN_WIN = 0, 1, 2, 3, 4
 C_INTERF, C_MAX_AGE, C_PRIOR_A, C_PRIOR_B, C_MAX_GAP = 5, 6, 7, 8, 9
 C_TP_BIN_S, C_FIELD_NORM_TOL, C_DIP_TOL, C_STILL_STD, C_STILL_HEADING = 10, 11, 12, 13, 14
 C_FUSION_R, C_FUSION_N2, C_FUSION_TAU, C_FUSION_GATE, C_FUSION_RELOCK = 15, 16, 17, 18, 19
-C_EDGE_S, C_WINDOW_S, C_ZARU_WINDOW_S, C_ZARU_SLOPE_K, C_ZARU_RESID_K = 20, 21, 22, 23, 24
-C_RUN_MIN_S = 25  # shortest still run that measures the drift, s
-C_FUSION_CONSISTENT = 26  # refused compass samples consistent with the gyro this long re-anchor, s
-C_QS_S, C_QS_DEG = 27, 28  # quasi-static window: length (s; 0: off) and largest sway (deg)
-N_CFG = 29
+C_FUSION_CONSISTENT = 20  # refused compass samples consistent with the gyro this long re-anchor, s
+N_CFG = 21
 
 # --------------------------------------------------------- integer settings
 
 K_RELOCK, K_MODE, K_DEPTH, K_TP_WINDOW_BINS, K_FUSE_INTERFERENCE = 0, 1, 2, 3, 4
-K_ZARU, K_ZARU_HOLD, K_EDGE, K_COLLECTS = 5, 6, 7, 8
-N_KCFG = 9
+N_KCFG = 5
 
 # ----------------------------------------------------------------- estimator
 
-#: The two filters (rows) of the estimator arrays.
-MAIN, TWIN = 0, 1
-#: Floats: states (2, 3), covariances (2, 3, 3), process noise (2, 3, 3), caps (2, 3),
-#: scalars (2, N_AF), settings, then Zhou's innovation covariance V (2, d, d) and the last
-#: normalised innovations (2, w), d and w from ``ei``.
-EF_Z, EF_P, EF_Q, EF_MAX_VAR, EF_AF, EF_SET, EF_V = 0, 6, 24, 42, 48, 64, 72
-#: Scalars per filter: T_ref, last λ, last measurement's T, the last interval means
-#: (T, T'), the outage parameters a, b, c.
-AF_TREF, AF_LAMBDA, AF_LAST_T, AF_LAST_H_T, AF_LAST_H_TP, AF_ANCHOR = 0, 1, 2, 3, 4, 5
-N_AF = 8
-#: Settings (from EF_SET): fading factor s (fixed mode), β, λ_max, ρ, slope random walk.
-ES_FADING, ES_SOFTENING, ES_LAMBDA_MAX, ES_RHO, ES_SLOPE_Q = 0, 1, 2, 3, 4
-#: Integers: mode, d (rows of V), w (innovation window), twin, normalised test,
-#: recentre, number of active states, the active states (fixed mode), then per filter
-#: the flags and counts AI_* (2, N_AI).
-EI_MODE, EI_DEPTH, EI_NIS_W, EI_TWIN, EI_NORMALISED, EI_RECENTRE, EI_N_ACTIVE, EI_ACTIVE = 0, 1, 2, 3, 4, 5, 6, 7
-EI_AI = 10
-#: Per filter: T_ref set, rows of V in use, last T set, last (T, T') set, outage anchor
-#: set, number of normalised innovations held.
-AI_TREF_SET, AI_V_N, AI_LAST_T_SET, AI_LAST_H_SET, AI_ANCHOR_SET, AI_NIS_N = 0, 1, 2, 3, 4, 5
-N_AI = 6
-#: After the per-filter integers: 1 when the drift is held, not extrapolated, through refused
-#: intervals (the model's T is the elapsed time: a trend in time is not carried through an
-#: outage of unknown length; set by the engine).
-EI_HOLD_DRIFT = EI_AI + 2 * N_AI
-N_EI = EI_HOLD_DRIFT + 1
+#: Floats: states [a, b, c] (3), covariance (3x3), process noise (3x3), the variance cap
+#: (3), the fading factor s.
+EF_Z, EF_P, EF_Q, EF_MAX_VAR, EF_FADING = 0, 3, 12, 21, 24
+N_EF = 25
+#: Integers: mode, number of active states, the active states (3).
+EI_MODE, EI_N_ACTIVE, EI_ACTIVE = 0, 1, 2
+N_EI = 5
 
-
-def ef_size(depth: int, nis_window: int) -> int:
-    """Length of ``ef`` for measurements of up to ``depth`` rows and a NIS window ``nis_window``."""
-    return EF_V + 2 * depth * depth + 2 * nis_window
-
-
-# ------------------------------------------------------------- ring buffers
-
-#: Rows of the compass window ``win`` (one column per compass sample): a snap, then the
-#: time step and the mean gyro rate from the sample before.
-W_T, W_HEADING, W_IRAW, W_IT, W_ITP, W_IBIAS, W_DT, W_RATE = 0, 1, 2, 3, 4, 5, 6, 7
-N_WIN = 8
 #: Columns of a stacked or accepted measurement: m, mean T, mean T', 1, r (``stack``);
 #: time, m, mean T, mean T', r (``acc``).
 N_MEAS = 5
@@ -180,9 +121,6 @@ N_OUT = 11
 #: int8 output columns in ``codes``: update, reason, unobservable, gap.
 OC_UPDATE, OC_REASON, OC_UNOBS, OC_GAP = 0, 1, 2, 3
 N_CODES = 4
-
-#: χ²₁ at 99 %: the consistency test of a zero-rate measurement.
-ZARU_NIS = 6.63
 
 
 # =================================================================== the x/y axes

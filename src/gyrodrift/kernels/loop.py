@@ -1,4 +1,4 @@
-"""The row loop: every sample of a log, in chunks of any size, resumable.
+"""The row loop of the paper's filters: every sample of a log, in chunks of any size, resumable.
 
 :func:`prepare` checks a chunk and derives its inputs (held cells, wrapped compass, T');
 :func:`run_chunk` then compensates its rows. Per row (Feng, Li, Zhang 2015, Sections
@@ -8,9 +8,9 @@
 is taken as still: the heading holds and the gyro is taken to have read its drift), the gates of the current interval
 (:func:`gyrodrift.kernels.aiding.row_condition`), and at the first row of each new
 update interval the interval decision (:func:`gyrodrift.kernels.aiding.close`; the
-estimator holds for as many intervals as a time gap skipped) and, when it refused the
-interval, the quasi-static window (:func:`gyrodrift.kernels.aiding.quasi_static`, which
-never spans a time gap); then the fused heading (:func:`gyrodrift.kernels.fusion.step`).
+estimator holds for as many intervals as a time gap skipped); then the fused heading
+(:func:`gyrodrift.kernels.fusion.step`). The default estimator has a row loop of its own
+(:mod:`gyrodrift.kernels.evloop`).
 A gap outranks any refusal seen before it in the interval (``gap`` from that row on).
 
 The rows of the init window (``ist[I_INIT_END]`` ≥ 0, the first call after the window is
@@ -33,17 +33,14 @@ import numpy as np
 from gyrodrift.kernels import jit
 from gyrodrift.kernels import aiding, drift, fusion
 from gyrodrift.kernels.layout import (
-    C_DIP_TOL, C_FIELD_NORM_TOL, C_FUSION_CONSISTENT, C_FUSION_GATE, C_FUSION_N2, C_FUSION_R, C_FUSION_RELOCK, C_FUSION_TAU, C_INTERF,
-    C_INTERVAL, C_MAX_GAP, C_STILL_STD, C_TP_BIN_S, C_TURN_RATE, C_TURN_WIN, C_WINDOW_S, F_ANCHOR, F_BIAS, F_COV,
-    F_FIELD_DIP, F_FIELD_NORM, F_FUSION, F_FZ_CONS_T, F_FZ_NU0, F_G, F_IBIAS, F_IRATE, F_IRAW, F_IT, F_ITP, F_K, F_LAST_G, F_LAST_T,
-    F_LAST_TEMP, F_PA, F_PB, F_PC, F_RATE, F_S0, F_S1, F_T, F_TEMP, F_TP, F_TSTART, FZ_ISD, FZ_P, FZ_PSI,
-    FZ_REJ_T, FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END,
-    I_INIT_UPDATED, I_LB_HEAD, I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS,
-    I_WIN_HEAD, I_WIN_N, K_COLLECTS, K_FUSE_INTERFERENCE, K_MODE, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY,
-    F_RUN_D2, F_RUN_G0, F_RUN_IRAW0, F_RUN_IT0, F_RUN_ITP0, F_RUN_SUM, F_RUN_SUMSQ, F_RUN_T0, I_COMPASS_SEEN, I_RUN_MEASURED,
-    I_QS_GAP, I_RUN_N, O_A, O_B, O_BIAS, O_BIAS_SD, O_C,
-    O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON,
-    OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NONE,
+    C_DIP_TOL, C_FIELD_NORM_TOL, C_FUSION_CONSISTENT, C_FUSION_GATE, C_FUSION_N2, C_FUSION_R, C_FUSION_RELOCK, C_FUSION_TAU,
+    C_INTERF, C_INTERVAL, C_MAX_GAP, C_TP_BIN_S, C_TURN_RATE, C_TURN_WIN, F_ANCHOR, F_BIAS, F_COV, F_FIELD_DIP,
+    F_FIELD_NORM, F_FUSION, F_FZ_CONS_T, F_FZ_NU0, F_G, F_IBIAS, F_IRATE, F_IRAW, F_IT, F_ITP, F_K, F_LAST_G, F_LAST_T,
+    F_LAST_TEMP, F_PA, F_PB, F_PC, F_RATE, F_S0, F_S1, F_T, F_TEMP, F_TP, F_TSTART, FZ_ISD, FZ_P, FZ_PSI, FZ_REJ_T,
+    FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END, I_INIT_UPDATED, I_LB_HEAD,
+    I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS, K_FUSE_INTERFERENCE, K_MODE,
+    K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY, O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING,
+    O_HEADING_SD, O_RATE, OC_REASON, OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NONE,
 )
 from gyrodrift.kernels.numeric import near_boundary, wrap180, wrap360
 
@@ -116,13 +113,13 @@ def _hold(x, last, gap, out):
 
 @jit
 def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
-              fs, ist, cfg, icfg, lb, win, stack, refused, acc, ef, ei, out, codes, cap):
+              fs, ist, cfg, icfg, lb, stack, refused, acc, ef, ei, out, codes, cap):
     """Compensate rows ``i0..`` of a prepared chunk into ``out``/``codes`` (columns ``cap``
     apart); returns the next row to do (``t.size`` when done).
 
     ``norm``, ``dip``: field strength and dip of the raw magnetometer per row, or empty
     arrays without one. Returns early when the turning ring ``lb`` is full, the accepted
-    measurements ``acc`` are full, the compass window ``win`` is half full, or (MODE_EXTERNAL)
+    measurements ``acc`` are full, or (MODE_EXTERNAL)
     after an interval end: ``ist[I_PENDING]`` then says whether the caller must update or
     hold its estimator and put the new parameters in force (``fs[F_PA..]``, ``F_COV``).
     """
@@ -138,14 +135,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     t_start = fs[F_TSTART]
     anchor = fs[F_ANCHOR]
     external = icfg[K_MODE] == MODE_EXTERNAL
-    still_var = cfg[C_STILL_STD] ** 2
     max_gap = cfg[C_MAX_GAP]
     init_end = ist[I_INIT_END]
     lb_cap = lb.shape[0]
     acc_cap = acc.shape[0]
-    win_cap = win.shape[1]
-    collects = icfg[K_COLLECTS] == 1
-    window_s = cfg[C_WINDOW_S]
     fuse_interference = icfg[K_FUSE_INTERFERENCE] == 1
     # the previous row and the integrals
     c_t, c_g, c_T, c_Tp, c_bias, c_rate = fs[F_T], fs[F_G], fs[F_TEMP], fs[F_TP], fs[F_BIAS], fs[F_RATE]
@@ -160,7 +153,6 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     after_int = ist[I_AFTER_INT] == 1
     unobs = ist[I_UNOBS]
     lb_head, lb_n = ist[I_LB_HEAD], ist[I_LB_N]
-    win_head, win_n = ist[I_WIN_HEAD], ist[I_WIN_N]
     C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
     C10, C11, C12 = fs[F_COV + 3], fs[F_COV + 4], fs[F_COV + 5]
     C20, C21, C22 = fs[F_COV + 6], fs[F_COV + 7], fs[F_COV + 8]
@@ -176,20 +168,14 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     o_sd, o_hf, o_hf_sd = np.uint64(O_BIAS_SD * cap), np.uint64(O_FUSED * cap), np.uint64(O_FUSED_SD * cap)
     o_h_sd, oc_update, oc_reason = np.uint64(O_HEADING_SD * cap), np.uint64(OC_UPDATE * cap), np.uint64(OC_REASON * cap)
     seg = i0  # first row whose a, b, c and unobservable code are still to write (_fill_params)
-    # the still run (gyro-only stillness): its first row's time, integrals and gyro, the sums of
-    # the gyro minus that first value and of their squares, and its rows (0: none open)
-    run_t0, run_Iraw0, run_IT0, run_ITp0 = fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0]
-    run_g0, run_sum, run_sq, run_n = fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N]
-    run_d2 = fs[F_RUN_D2]  # the sum of squared steps of the gyro in the run (its noise)
     # bias and bias_sd of the last (T, T'), reused while they repeat (a quantised temperature)
     m_T = math.nan
     m_Tp = math.nan
     m_bias = 0.0
     m_sd = 0.0
-    time_gap_seen = ist[I_QS_GAP] == 1  # a time gap in the open interval (quasi-static windows)
     stop = t.size
     for i in range(i0, t.size):
-        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap or 2 * win_n >= win_cap:
+        if lb_n >= lb_cap or ist[I_N_ACC] >= acc_cap:
             stop = i
             break
         ix = np.uint64(i)  # an unsigned index: no negative-index fix-up on every access
@@ -199,47 +185,6 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         Tpi = Tp[ix]
         h = heading[ix]
         in_init = i <= init_end
-        run_update = 0
-        if i == i0 and ist[I_RUN_MEASURED] == 1:  # resumed after the caller's update for a still run
-            run_update = 1
-            ist[I_RUN_MEASURED] = 0
-        if not in_init and run_n > 0:
-            # the still run so far ends before this row when it moves, a gap comes, or it is an
-            # interval long; it measures the drift when a time gap ends it or there is no compass
-            d = gi - run_g0
-            s1 = run_sum + d
-            q1 = run_sq + d * d
-            n1 = run_n + 1
-            moving = q1 * n1 - s1 * s1 > still_var * n1 * n1  # the variance above still_std², without a division
-            time_gap = t_s - c_t > max_gap
-            held = gap[ix] and not time_gap  # an empty cell: the run ends without measuring
-            if moving or gap[ix] or t_s - run_t0 >= interval:
-                aiding.note_still_noise(run_d2, run_n, c_t - run_t0, fs)
-                measured = False
-                if (time_gap or ist[I_COMPASS_SEEN] == 0) and not held:
-                    measured = aiding.close_still_run(c_t, I_raw - run_Iraw0, I_T - run_IT0, I_Tp - run_ITp0,
-                                                      c_t - run_t0, run_n, run_sum, run_sq, fs, ist, cfg, icfg,
-                                                      stack, acc, ef, ei)
-                run_n = 0
-                if measured:
-                    run_update = 1
-                    if external:  # the caller updates its estimator; this row then runs with it
-                        ist[I_RUN_MEASURED] = 1
-                        stop = i
-                        break
-                    _fill_params(out, codes, cap, seg, i, pa, pb, pc, unobs)  # the rows before keep theirs
-                    seg = i
-                    pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
-                    C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
-                    C10, C11, C12 = fs[F_COV + 3], fs[F_COV + 4], fs[F_COV + 5]
-                    C20, C21, C22 = fs[F_COV + 6], fs[F_COV + 7], fs[F_COV + 8]
-                    unobs = ist[I_UNOBS]
-                    m_T = math.nan
-            else:
-                run_n = n1
-                run_sum = s1
-                run_sq = q1
-                run_d2 += (gi - c_g) * (gi - c_g)
         if Ti != m_T or Tpi != m_Tp:
             m_T = Ti
             m_Tp = Tpi
@@ -251,7 +196,6 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         dt = t_s - c_t
         if dt > max_gap:  # across a time gap the unit is taken as still: the gyro read its drift
             I_raw = I_raw + 0.5 * (bias + c_bias) * dt
-            time_gap_seen = True
         else:
             I_raw = I_raw + 0.5 * (gi + c_g) * dt
             I_rate = I_rate + 0.5 * (rate + c_rate) * dt
@@ -259,15 +203,8 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         I_Tp = I_Tp + 0.5 * (Tpi + c_Tp) * dt
         I_bias = I_bias + 0.5 * (bias + c_bias) * dt
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = t_s, gi, Ti, Tpi, bias, rate
-        if not in_init and run_n == 0:  # a still run opens at this row
-            run_t0, run_Iraw0, run_IT0, run_ITp0, run_g0 = t_s, I_raw, I_T, I_Tp, gi
-            run_sum = 0.0
-            run_sq = 0.0
-            run_d2 = 0.0
-            run_n = 1
         has_compass = not math.isnan(h)
         if has_compass:
-            ist[I_COMPASS_SEEN] = 1
             fs[F_S1] = t_s
             fs[F_S1 + 1] = h
             fs[F_S1 + 2] = I_raw
@@ -275,8 +212,6 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
             fs[F_S1 + 4] = I_Tp
             fs[F_S1 + 5] = I_bias
             ist[I_S1_OK] = 1
-            if collects and not in_init:
-                win_head, win_n = aiding.add(win, win_head, win_n, t_s, h, I_raw, I_T, I_Tp, I_bias, window_s)
         # 1-s mean compensated rate, from the oldest row inside the window
         window_start = t_s - turn_win
         while lb_n > 1 and lb[np.uint64(lb_head), 0] < window_start:
@@ -295,7 +230,7 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
         out[o_bias + ix] = bias
         out[o_rate + ix] = rate
         out[o_sd + ix] = bias_sd
-        update = run_update
+        update = 0
         if in_init:
             reason = R_INIT
             out[o_heading + ix] = I_rate  # anchored when the window is done
@@ -339,23 +274,15 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
                 k = math.floor((t_s - t_start) / interval)
                 ist[I_INIT_END] = -1
                 init_end = -1
-                aiding.quasi_static(t_s, True, R_NONE, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg, stack, acc, ef, ei)
             else:
                 ist[I_STICKY] = sticky
                 ist[I_AFTER_INT] = 1 if after_int else 0
-                ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
-                closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, win, ef, ei,
-                                              float(k - k_cur))
-                qs_reason = R_GAP if time_gap_seen else reason  # a window never spans a time gap
-                if aiding.quasi_static(t_s, closed == 1, qs_reason, I_raw, I_T, I_Tp, I_rate, fs, ist, cfg, icfg,
-                                       stack, acc, ef, ei):
-                    closed = 1
-                update = max(update, closed)
+                closed, reason = aiding.close(t_s, fs, ist, cfg, icfg, stack, refused, acc, ef, ei, float(k - k_cur))
+                update = closed
                 if not external:
                     aiding.in_force(fs, ist, cfg, ef, ei)
             k_cur = k
-            time_gap_seen = False
-            aiding.begin(t_s, fs, ist, cfg, icfg, win)
+            aiding.begin(t_s, fs, ist, cfg)
             pa, pb, pc = fs[F_PA], fs[F_PB], fs[F_PC]
             C00, C01, C02 = fs[F_COV], fs[F_COV + 1], fs[F_COV + 2]
             C10, C11, C12 = fs[F_COV + 3], fs[F_COV + 4], fs[F_COV + 5]
@@ -388,15 +315,10 @@ def run_chunk(t, g, T, Tp, heading, gap, norm, dip, i0,
     ist[I_STICKY] = sticky
     ist[I_AFTER_INT] = 1 if after_int else 0
     ist[I_UNOBS] = unobs
-    ist[I_QS_GAP] = 1 if time_gap_seen else 0
     ist[I_LB_HEAD], ist[I_LB_N] = lb_head, lb_n
-    ist[I_WIN_HEAD], ist[I_WIN_N] = win_head, win_n
     fs[zf + FZ_PSI], fs[zf + FZ_P], fs[zf + FZ_TPREV], fs[zf + FZ_RPREV], fs[zf + FZ_STARTED] = f_psi, f_P, f_tp, f_rp, f_started
     fs[zf + FZ_T0], fs[zf + FZ_ISD], fs[zf + FZ_SDPREV], fs[zf + FZ_REJ_T] = f_t0, f_isd, f_sdp, f_rej
     fs[F_FZ_NU0], fs[F_FZ_CONS_T] = f_nu0, f_cons
-    fs[F_RUN_T0], fs[F_RUN_IRAW0], fs[F_RUN_IT0], fs[F_RUN_ITP0] = run_t0, run_Iraw0, run_IT0, run_ITp0
-    fs[F_RUN_G0], fs[F_RUN_SUM], fs[F_RUN_SUMSQ], ist[I_RUN_N] = run_g0, run_sum, run_sq, run_n
-    fs[F_RUN_D2] = run_d2
     return stop
 
 
