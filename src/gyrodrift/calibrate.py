@@ -17,7 +17,9 @@ The fit
 2. ``T_ref`` is the middle of the temperatures seen, ``T_min``/``T_max`` their ends.
 3. Weighted least squares of ``sum_k c_k (T - T_ref)**k`` (k = 0..3) over the samples,
    each :data:`BIN_WIDTH_C` temperature bin weighing the same in total, so that a
-   plateau does not outweigh a ramp. Exact on noiseless cubic data.
+   plateau does not outweigh a ramp (a bin holding fewer than :data:`MIN_WINDOW_SAMPLES`
+   samples, such as the last sample alone at the highest temperature, is merged with
+   the next, :func:`temperature_bins`). Exact on noiseless cubic data.
 4. The residual RMS (deg/s) of an axis is the RMS over the bins of the bin's mean
    residual: how far the drift departs from a cubic in temperature, with the white
    noise averaged out. :attr:`Calibration.residual_rms_dps` is the largest of the axes.
@@ -28,12 +30,16 @@ Refusals (:class:`CalibrationError`, one line naming the log and what to do):
   a few degrees extrapolates wildly (ArduPilot's onboard learning needs 10 degC,
   ``TEMP_RANGE_MIN`` of ``AP_InertialSensor_tempcal.cpp``);
 * **moved**: a still unit's gyro reads only its drift, a smooth function of
-  temperature. The unit is taken to have moved when a 1-s mean of any axis's filtered
-  rate departs from the fitted curve by more than :data:`STILL_TOL_DPS` (0.5 deg/s,
-  ten times the drift departures seen on MEMS fits and far above the noise of a 1-s
-  mean), or, when the log has ``acc_x, acc_y, acc_z``, when a 1-s mean of the
-  specific force tilts more than :data:`STILL_TILT_DEG` (2 deg) from its median
-  direction. A drift that is not a function of temperature alone (heating and
+  temperature. The unit is taken to have moved when a window mean of any axis's
+  filtered rate departs from the fitted curve by more than :data:`STILL_TOL_DPS`
+  (0.5 deg/s, ten times the drift departures seen on MEMS fits and far above the noise
+  of a window mean), or, when the log has ``acc_x, acc_y, acc_z``, when a window mean
+  of the specific force tilts more than :data:`STILL_TILT_DEG` (2 deg) from its median
+  direction. A window spans whole seconds: 1 s, or as many as it takes to hold
+  :data:`MIN_WINDOW_SAMPLES` samples (a log at 1 Hz is judged over 10-s windows), and
+  the samples left at the end of the log join the window before them when they are
+  fewer, so that no mean rests on a few samples (at the ends of the log the median
+  filter's output is a raw sample). A drift that is not a function of temperature alone (heating and
   cooling in one log with hysteresis, a strong dependence on the heating rate) fails
   the rate test too, and the message says so. Known limit: a slow, steady turn about
   the vertical that the cubic can absorb is not detected (no sensor here sees it).
@@ -126,7 +132,7 @@ from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = [
-    "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MEDIAN_WINDOW", "BIN_WIDTH_C", "ARDUPILOT_TREF_C",
+    "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW", "temperature_bins", "BIN_WIDTH_C", "ARDUPILOT_TREF_C",
     "ARDUPILOT_SCALE", "FORMATS", "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_file",
     "px4_parameters", "ardupilot_parameters", "calibration_json", "write_calibration", "output_format",
     "read_px4_params", "read_ardupilot_params", "read_calibration_json", "read_prior", "start_temperature",
@@ -138,11 +144,13 @@ AXES = ("x", "y", "z")
 _COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
 #: Smallest temperature span (degC) a calibration is fitted over.
 MIN_SPAN_C = 5.0
-#: Largest departure (deg/s) of a 1-s mean rate from the fitted drift of a still unit.
+#: Largest departure (deg/s) of a window mean rate from the fitted drift of a still unit.
 STILL_TOL_DPS = 0.5
-#: Largest tilt (deg) of a 1-s mean specific force from its median direction.
+#: Largest tilt (deg) of a window mean specific force from its median direction.
 STILL_TILT_DEG = 2.0
 _STILL_WINDOW_S = 1.0
+#: Fewest samples in a window of the stillness checks (module notes).
+MIN_WINDOW_SAMPLES = 10
 #: Samples of the median filter applied to each rate before the fit (as PX4's tool).
 MEDIAN_WINDOW = 31
 #: Width (degC) of the temperature bins that weigh the same in the fit and the residual.
@@ -243,7 +251,7 @@ class Calibration:
 
 def _fit_axis(temp: np.ndarray, rate: np.ndarray, temp_ref: float, temp_min: float) -> tuple[np.ndarray, float]:
     """Coefficients (deg/s per degC**k, lowest first) and residual RMS (deg/s) of one axis."""
-    bins = np.floor((temp - temp_min) / BIN_WIDTH_C).astype(np.int64)
+    bins = temperature_bins(temp, temp_min)
     counts = np.bincount(bins)
     weight = 1.0 / counts[bins]  # each occupied bin weighs 1 in total
     half = max(0.5 * (float(temp.max()) - float(temp.min())), 1e-9)
@@ -258,9 +266,37 @@ def _fit_axis(temp: np.ndarray, rate: np.ndarray, temp_ref: float, temp_min: flo
     return coeffs, float(np.sqrt(np.mean(bin_mean**2)))
 
 
+def _groups(index: np.ndarray) -> np.ndarray:
+    """Group of every sample from its bin ``index`` (non-negative ints): consecutive bins
+    merged until a group holds MIN_WINDOW_SAMPLES samples; a short last group joins the one
+    before it (module notes)."""
+    counts = np.bincount(index)
+    group = np.empty(counts.size, dtype=np.int64)
+    number, held = 0, 0
+    for b, n in enumerate(counts):
+        group[b] = number
+        held += n
+        if held >= MIN_WINDOW_SAMPLES:
+            number, held = number + 1, 0
+    if 0 < held and number > 0:
+        group[group == number] = number - 1
+    return group[index]
+
+
+def _windows(t: np.ndarray) -> np.ndarray:
+    """Window number of every sample: whole seconds from the first, merged by :func:`_groups`."""
+    return _groups(np.floor((t - t[0]) / _STILL_WINDOW_S).astype(np.int64))
+
+
+def temperature_bins(temp: np.ndarray, temp_min: float) -> np.ndarray:
+    """Bin number of every sample: :data:`BIN_WIDTH_C` bins from ``temp_min`` (degC),
+    merged by :func:`_groups` so that none holds fewer than MIN_WINDOW_SAMPLES samples."""
+    return _groups(np.floor((temp - temp_min) / BIN_WIDTH_C).astype(np.int64))
+
+
 def _window_means(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """1-s means of ``values`` (rows) and the mean time of each window."""
-    window = np.floor((t - t[0]) / _STILL_WINDOW_S).astype(np.int64)
+    """Window means of ``values`` (rows; windows of :func:`_windows`) and the mean time of each."""
+    window = _windows(t)
     counts = np.bincount(window)
     occupied = counts > 0
     t_mean = np.bincount(window, t)[occupied] / counts[occupied]
@@ -279,7 +315,7 @@ def _refuse_motion(source: str, t: float, what: str, *, tilted: bool) -> Calibra
 
 
 def _check_tilt(log, ok: np.ndarray, t: np.ndarray, source: str) -> None:
-    """Refuse when the 1-s mean specific force tilts more than STILL_TILT_DEG (module notes)."""
+    """Refuse when a window mean of the specific force tilts more than STILL_TILT_DEG (module notes)."""
     if not all(c in log.columns for c in ACC_COLS):
         return
     acc = log.loc[ok, list(ACC_COLS)].to_numpy(dtype=float)
@@ -311,7 +347,7 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
     min_span_c : float
         Smallest temperature span accepted, degC (default :data:`MIN_SPAN_C`).
     still_tol_dps : float
-        Largest departure of a 1-s mean rate from the fitted drift, deg/s.
+        Largest departure of a window mean rate from the fitted drift, deg/s (module notes).
 
     Returns
     -------
@@ -364,7 +400,7 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
         departure = np.abs(means[:, 0] - np.polynomial.polynomial.polyval(means[:, 1] - t_ref, coeffs))
         worst = int(np.argmax(departure))
         if departure[worst] > still_tol_dps:
-            raise _refuse_motion(source, t_mean[worst], f"a 1-s mean of {col} departs {departure[worst]:.2f} deg/s "
+            raise _refuse_motion(source, t_mean[worst], f"the window mean of {col} departs {departure[worst]:.2f} deg/s "
                                                          f"from the drift curve, more than {still_tol_dps:g}",
                                  tilted=False)
         axes[axis] = AxisFit(tuple(float(c) for c in coeffs), residual)
