@@ -52,8 +52,8 @@ no calibration slot for the sensor's ``device_id``) the board rotation
 ``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X_OFF``,
 ``SENS_BOARD_Y_OFF``, ``SENS_BOARD_Z_OFF`` (deg) -- PX4's own order, checked on
 ``sample_log_small.ulg`` (board yaw 180 deg, trims ~3 deg) where it turns
-``sensor_accel`` into ``sensor_combined``. Rotation numbers 0..25 (PX4 ``Rotation``
-enum) are supported; others raise :class:`LogFormatError`. Calibration offsets and
+``sensor_accel`` into ``sensor_combined``. Every rotation number PX4 defines is
+supported (:mod:`gyrodrift.rotations`); others raise :class:`LogFormatError`. Calibration offsets and
 scales are *not* applied: those topics stay raw.
 
 Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
@@ -87,6 +87,7 @@ from gyrodrift.io.align import (
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
+from gyrodrift.rotations import euler_matrix, rotation_matrix
 
 __all__ = ["read_ulog", "FASTER"]
 
@@ -125,16 +126,6 @@ _XYZ = ("x", "y", "z")
 _MAG_VEHICLE = ("magnetometer_ga[0]", "magnetometer_ga[1]", "magnetometer_ga[2]")
 _QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
 
-#: PX4 ``enum Rotation`` 0..25 (src/lib/conversion/rotation.h): (roll, pitch, yaw) deg.
-_ROTATIONS = (
-    (0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135),
-    (0, 0, 180), (0, 0, 225), (0, 0, 270), (0, 0, 315),
-    (180, 0, 0), (180, 0, 45), (180, 0, 90), (180, 0, 135),
-    (0, 180, 0), (180, 0, 225), (180, 0, 270), (180, 0, 315),
-    (90, 0, 0), (90, 0, 45), (90, 0, 90), (90, 0, 135),
-    (270, 0, 0), (270, 0, 45), (270, 0, 90), (270, 0, 135),
-    (0, 90, 0), (0, 270, 0),
-)  # fmt: skip
 
 
 # ---------------------------------------------------------------------------
@@ -358,27 +349,15 @@ def _same_chip(ulog, topic: str, device: int | None, instance: int):
 # ---------------------------------------------------------------------------
 
 
-def _dcm(roll_deg: float, pitch_deg: float, yaw_deg_: float) -> np.ndarray:
-    """Rotation matrix Rz(yaw) Ry(pitch) Rx(roll) (PX4 ``Dcmf(Eulerf(...))``)."""
-    r, p, y = np.radians([roll_deg, pitch_deg, yaw_deg_])
-    rx = np.array([[1, 0, 0], [0, np.cos(r), -np.sin(r)], [0, np.sin(r), np.cos(r)]])
-    ry = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
-    rz = np.array([[np.cos(y), -np.sin(y), 0], [np.sin(y), np.cos(y), 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
 def _rotation(number: int, param: str, name: str) -> np.ndarray:
     """Matrix of PX4 rotation ``number`` (read from parameter ``param``)."""
-    if not 0 <= number < len(_ROTATIONS):
+    try:
+        return rotation_matrix("px4", number, where=f"{name}: parameter {param}")
+    except ConfigError as exc:
         raise LogFormatError(
-            message(
-                name,
-                f"parameter {param}={number} is a sensor rotation this reader does not support"
-                f" (supported: 0..{len(_ROTATIONS) - 1})",
-                "use the calibrated topics (sensor_combined, vehicle_magnetometer) or convert the log to CSV",
-            )
-        )
-    return _dcm(*_ROTATIONS[number])
+            message(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
+                    "vehicle_magnetometer) or convert the log to CSV")
+        ) from None
 
 
 def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
@@ -398,7 +377,7 @@ def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tu
         return _rotation(own, param, name), f"{param}={own}"
     board = int(params.get("SENS_BOARD_ROT", 0))
     trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
-    matrix = _dcm(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
+    matrix = euler_matrix(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
     how = f"SENS_BOARD_ROT={board}"
     return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
 
