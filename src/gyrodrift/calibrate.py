@@ -130,6 +130,7 @@ from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.config import DRIFT_PARAM_BOUNDS, read_utf8
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.onboard import ARDUPILOT_SCALE, ARDUPILOT_TREF_C
 
 __all__ = [
     "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW", "temperature_bins", "BIN_WIDTH_C", "ARDUPILOT_TREF_C",
@@ -156,9 +157,6 @@ MEDIAN_WINDOW = 31
 #: Width (degC) of the temperature bins that weigh the same in the fit and the residual.
 BIN_WIDTH_C = 0.25
 _ORDER = 3
-#: ArduPilot's fixed reference temperature, degC, and the scale of its stored coefficients.
-ARDUPILOT_TREF_C = 35.0
-ARDUPILOT_SCALE = 1.0e6
 _RAD_PER_DEG = math.pi / 180.0
 _PX4_INT32, _PX4_REAL32 = 6, 9  # MAVLink MAV_PARAM_TYPE of the id and of the floats
 #: Output formats of :func:`write_calibration` and the file endings that name them.

@@ -87,9 +87,10 @@ from gyrodrift.io.align import (
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
-from gyrodrift.rotations import euler_matrix, rotation_matrix
+from gyrodrift.onboard import px4_onboard
+from gyrodrift.rotations import euler_matrix, rotation_matrix, rotation_name
 
-__all__ = ["read_ulog", "FASTER"]
+__all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
 
 #: ``sensor_combined`` (or ``vehicle_magnetometer``) replaces the per-instance topic
 #: when its median sample rate is at least this many times higher.
@@ -374,11 +375,11 @@ def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tu
     own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
     if own >= 0:
         param = f"CAL_{kind}{slot}_ROT"
-        return _rotation(own, param, name), f"{param}={own}"
+        return _rotation(own, param, name), f"{param}={rotation_name('px4', own)}"
     board = int(params.get("SENS_BOARD_ROT", 0))
     trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
     matrix = euler_matrix(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
-    how = f"SENS_BOARD_ROT={board}"
+    how = f"SENS_BOARD_ROT={rotation_name('px4', board)}"
     return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
 
 
@@ -608,8 +609,10 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
         ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or
         "none"), ``mag_unit`` ("gauss", with the mag columns), ``acc_unit`` ("m/s^2",
         with the acc columns), ``topics`` (column group -> topic used, None for a
-        group without data), ``summary`` (one line) and, when the log has no compass
-        or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
+        group without data), ``summary`` (one line), ``onboard``
+        (:class:`gyrodrift.onboard.Onboard`: the gyro's device id, its sensor-to-body
+        rotation and the ``TC_G`` correction its rates hold) and, when the log has no
+        compass or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
 
     Raises
     ------
@@ -628,6 +631,24 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     the summary; see the module documentation for the topic and alignment rules.
     """
     _check_instance(instance, "instance")
+    return _read_instances(path, [instance], mag_instance, reference, gyro_max_dps)[0]
+
+
+def read_ulog_gyros(path, *, mag_instance: int | None = None, reference: bool = True,
+                    gyro_max_dps: float = GYRO_MAX_DPS) -> list[pd.DataFrame]:
+    """Every ``sensor_gyro`` instance of a ULog, each read as :func:`read_ulog` reads one,
+    in instance order (``attrs["onboard"].instance``).
+
+    Raises
+    ------
+    LogFormatError, ConfigError
+        As :func:`read_ulog`.
+    """
+    return _read_instances(path, None, mag_instance, reference, gyro_max_dps)
+
+
+def _read_instances(path, instances, mag_instance, reference, gyro_max_dps) -> list[pd.DataFrame]:
+    """The ``sensor_gyro`` ``instances`` of the ULog at ``path`` (None: all), parsed once."""
     gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     _check_instance(mag_instance, "mag_instance", allow_none=True)
     ulog_class = _import_pyulog()
@@ -636,7 +657,29 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     data = _read_file(path)
     corrupt = _check_framing(data, name)
     ulog = _parse(ulog_class, data, name)
+    if instances is None:
+        instances = sorted(_instances(ulog, "sensor_gyro")) or [0]
+    return [_read(ulog, name, corrupt, k, mag_instance, reference, gyro_max_dps) for k in instances]
 
+
+def _changed_parameters(ulog) -> set[str]:
+    """Parameters whose value changed during the log (``ulog.changed_parameters``)."""
+    initial = ulog.initial_parameters
+    return {n for _, n, v in getattr(ulog, "changed_parameters", []) if initial.get(n) != v}
+
+
+def _onboard(ulog, instance: int, gyro: Stream, temp, name: str):
+    """:class:`gyrodrift.onboard.Onboard` of the gyro ``instance`` whose rates ``gyro`` holds."""
+    params = ulog.initial_parameters
+    device = _device_id(_instances(ulog, "sensor_gyro")[instance])
+    rotation, how = _board_to_body(params, "GYRO", device, name)
+    return px4_onboard(params, instance, device, rotation, how, corrected=gyro.label == "sensor_combined",
+                       changed=_changed_parameters(ulog), temperature=temp is not None, where=name)
+
+
+def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | None, reference: bool,
+          gyro_max_dps: float) -> pd.DataFrame:
+    """The body of :func:`read_ulog` on a parsed log."""
     gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
         raise LogFormatError(
@@ -688,6 +731,7 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
             "ref_heading": ref.label if ref is not None else None,
         },
         "summary": _summary(name, t, gyro, temp, mag, mag_rows, acc, extra),
+        "onboard": _onboard(ulog, instance, gyro, temp, name),
     }
     if no_compass_why:
         add_note(attrs, no_compass_note(name, no_compass_why))
