@@ -14,14 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.calibrate import (
-    ARDUPILOT_SCALE,
-    ARDUPILOT_TREF_C,
-    BIN_WIDTH_C,
-    CalibrationError,
-    fit_calibration,
-    prior_config,
-    prior_notes,
+from gyrodrift.calibrate import BIN_WIDTH_C, CalibrationError, fit_calibration, prior_config, prior_notes
+from gyrodrift.onboard import ARDUPILOT_SCALE, ARDUPILOT_TREF_C
+from gyrodrift.paramfiles import (
     read_ardupilot_params,
     read_calibration_json,
     read_prior,

@@ -238,6 +238,8 @@ class Onboard:
         Why the correction the rates hold cannot be undone ("" when it can or there is none).
     rotation_problem : str
         Why ``rotation`` is None ("" otherwise).
+    system_id : int or None
+        The vehicle's MAVLink system id (PX4 ``MAV_SYS_ID``, ArduPilot ``SYSID_THISMAV``).
     """
 
     autopilot: str
@@ -248,6 +250,7 @@ class Onboard:
     correction: ThermalCorrection | None = None
     correction_problem: str = ""
     rotation_problem: str = ""
+    system_id: int | None = None
 
     @property
     def matrix(self) -> np.ndarray | None:
@@ -259,6 +262,11 @@ class Onboard:
         gyro = f"sensor_gyro {self.instance}" if self.autopilot == "px4" else f"IMU {self.instance}"
         dev = f" (device id {self.device_id})" if self.device_id else ""
         return f"{gyro}{dev}, {self.rotation_text}"
+
+
+def _system_id(params: Mapping, name: str) -> int | None:
+    value = params.get(name)
+    return int(value) if value is not None and 1 <= int(value) <= 255 else None
 
 
 def _as_tuple(matrix: np.ndarray) -> tuple:
@@ -315,7 +323,8 @@ def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature
     elif correction is not None and not temperature:
         problem = f"{where}: {p}ENABLE=1 but the log has no IMU temperature: the correction its rates hold " \
                   "cannot be undone; record the run with INS_TCAL disabled"
-    return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem)
+    return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem,
+                   _system_id(params, "SYSID_THISMAV"))
 
 
 def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation: np.ndarray, rotation_text: str,
@@ -359,5 +368,5 @@ def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation:
     rotation_problem = f"{where}: {moved[0]} changed during the log; cut the log where it is constant or give " \
                        "--board-rotation" if moved else ""
     return Onboard("px4", instance, device_id, None if moved else _as_tuple(rotation), rotation_text, correction,
-                   problem, rotation_problem)
+                   problem, rotation_problem, _system_id(params, "MAV_SYS_ID"))
 

@@ -25,18 +25,19 @@ import pandas as pd
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
-from gyrodrift.io.ardupilot import read_ardupilot
+from gyrodrift.io.ardupilot import read_ardupilot, read_ardupilot_imus
 from gyrodrift.io.formats import FORMATS, log_format
 from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
-from gyrodrift.io.ulog import read_ulog
+from gyrodrift.io.ulog import read_ulog, read_ulog_gyros
 from gyrodrift.io.validate import message
 
 __all__ = [
     "FORMATS",
     "log_format",
     "read_log",
+    "read_gyros",
     "read_ulog",
     "read_ardupilot",
     "read_rosbag",
@@ -160,3 +161,29 @@ def read_log(
     _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
     return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map,
                             time_unit=time_unit, gyro_max_dps=gyro_max_dps)
+
+
+def read_gyros(path, *, fmt: str | None = None, instance: int | None = None, mag_instance: int | None = None,
+               **options) -> list[pd.DataFrame]:
+    """Every gyro of a log, one frame each, as :func:`read_log` reads one.
+
+    A PX4 ULog gives each ``sensor_gyro`` instance and an ArduPilot DataFlash log each
+    IMU instance (``attrs["onboard"]`` says which); a table or a ROS bag its one gyro.
+    With ``instance``, only that one. Other keywords are those of :func:`read_log`.
+
+    Returns
+    -------
+    list of pandas.DataFrame
+        In instance order.
+    """
+    path = Path(path)
+    log_fmt = log_format(path, fmt)
+    if instance is None and log_fmt in ("ulog", "ardupilot"):
+        _check_stated_units(path, log_fmt, options.get("gyro_unit", "deg/s"), options.get("frame", "ned"),
+                            options.get("column_map"), options.get("time_unit"))
+        _refuse_options(path, log_fmt, {k: options[k] for k in ("imu_topic", "temp_topic", "mag_topic")
+                                        if options.get(k) is not None})
+        every = read_ulog_gyros if log_fmt == "ulog" else read_ardupilot_imus
+        return every(path, mag_instance=mag_instance, gyro_max_dps=options.get("gyro_max_dps", GYRO_MAX_DPS))
+    return [read_log(path, fmt=fmt, instance=0 if instance is None else instance, mag_instance=mag_instance,
+                     **options)]
