@@ -65,7 +65,7 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
     changed = {}
     if str(gyro_unit).strip().lower() not in _NEUTRAL_UNITS:
         changed["gyro_unit"] = gyro_unit
-    if str(frame).strip().lower() != _NEUTRAL_FRAME:
+    if frame is not None and str(frame).strip().lower() != _NEUTRAL_FRAME:
         changed["frame"] = frame
     if column_map:
         changed["column_map"] = dict(column_map)
@@ -88,7 +88,7 @@ def read_log(
     *,
     fmt: str | None = None,
     gyro_unit: str = "deg/s",
-    frame: str = "ned",
+    frame: str | None = None,
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
     instance: int = 0,
@@ -179,7 +179,7 @@ def read_gyros(path, *, fmt: str | None = None, instance: int | None = None, mag
     path = Path(path)
     log_fmt = log_format(path, fmt)
     if instance is None and log_fmt in ("ulog", "ardupilot"):
-        _check_stated_units(path, log_fmt, options.get("gyro_unit", "deg/s"), options.get("frame", "ned"),
+        _check_stated_units(path, log_fmt, options.get("gyro_unit", "deg/s"), options.get("frame"),
                             options.get("column_map"), options.get("time_unit"))
         _refuse_options(path, log_fmt, {k: options[k] for k in ("imu_topic", "temp_topic", "mag_topic")
                                         if options.get(k) is not None})
