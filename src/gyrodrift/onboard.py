@@ -49,11 +49,11 @@ from typing import Mapping
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.rotations import rotation_matrix, rotation_name
+from gyrodrift.rotations import euler_matrix, rotation_matrix, rotation_name
 
 __all__ = [
     "ThermalCorrection", "Onboard", "px4_correction", "px4_slots", "ardupilot_correction", "ardupilot_onboard",
-    "px4_onboard", "uint32", "ARDUPILOT_TREF_C", "ARDUPILOT_SCALE",
+    "px4_onboard", "px4_sensor_rotation", "uint32", "ARDUPILOT_TREF_C", "ARDUPILOT_SCALE",
 ]
 
 #: ArduPilot's fixed reference temperature, degC, and the scale of its stored coefficients.
@@ -325,6 +325,40 @@ def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature
                   "cannot be undone; record the run with INS_TCAL disabled"
     return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem,
                    _system_id(params, "SYSID_THISMAV"))
+
+
+def px4_sensor_rotation(params: Mapping, kind: str, device: int | None, *, where: str = "log"
+                        ) -> tuple[np.ndarray, str]:
+    """PX4's rotation from a sensor's frame to the body frame (module notes), and its description.
+
+    Parameters
+    ----------
+    params : mapping
+        The vehicle's parameters.
+    kind : {"GYRO", "ACC", "MAG"}
+        The calibration name (``CAL_GYROn_ID`` ...).
+    device : int or None
+        The sensor's device id: its calibration slot's ``CAL_<kind>n_ROT``, when >= 0
+        (external), rotates it; otherwise ``SENS_BOARD_ROT`` then the level trims.
+
+    Raises
+    ------
+    ConfigError
+        A rotation number PX4 does not define.
+    """
+    slot = None
+    if device is not None:
+        slot = next((n for n in range(4) if uint32(params.get(f"CAL_{kind}{n}_ID", 0)) == uint32(device)), None)
+    own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
+    if own >= 0:
+        param = f"CAL_{kind}{slot}_ROT"
+        return rotation_matrix("px4", own, where=f"{where}: parameter {param}"), \
+            f"{param}={rotation_name('px4', own)}"
+    board = int(params.get("SENS_BOARD_ROT", 0))
+    trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
+    matrix = euler_matrix(*trims) @ rotation_matrix("px4", board, where=f"{where}: parameter SENS_BOARD_ROT")
+    how = f"SENS_BOARD_ROT={rotation_name('px4', board)}"
+    return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
 
 
 def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation: np.ndarray, rotation_text: str,

@@ -87,8 +87,7 @@ from gyrodrift.io.align import (
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
-from gyrodrift.onboard import px4_onboard
-from gyrodrift.rotations import euler_matrix, rotation_matrix, rotation_name
+from gyrodrift.onboard import px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
 
@@ -350,37 +349,17 @@ def _same_chip(ulog, topic: str, device: int | None, instance: int):
 # ---------------------------------------------------------------------------
 
 
-def _rotation(number: int, param: str, name: str) -> np.ndarray:
-    """Matrix of PX4 rotation ``number`` (read from parameter ``param``)."""
+def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
+    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its
+    description (:func:`gyrodrift.onboard.px4_sensor_rotation`); an unknown rotation
+    number is a :class:`LogFormatError`."""
     try:
-        return rotation_matrix("px4", number, where=f"{name}: parameter {param}")
+        return px4_sensor_rotation(params, kind, device, where=name)
     except ConfigError as exc:
         raise LogFormatError(
             message(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
                     "vehicle_magnetometer) or convert the log to CSV")
         ) from None
-
-
-def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
-    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its description.
-
-    ``kind`` is the calibration name: ``"GYRO"``, ``"ACC"`` or ``"MAG"``.
-    """
-    slot = None
-    if device is not None:
-        slot = next(
-            (n for n in range(4) if int(params.get(f"CAL_{kind}{n}_ID", 0)) & 0xFFFFFFFF == device),
-            None,
-        )
-    own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
-    if own >= 0:
-        param = f"CAL_{kind}{slot}_ROT"
-        return _rotation(own, param, name), f"{param}={rotation_name('px4', own)}"
-    board = int(params.get("SENS_BOARD_ROT", 0))
-    trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
-    matrix = euler_matrix(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
-    how = f"SENS_BOARD_ROT={rotation_name('px4', board)}"
-    return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
 
 
 # ---------------------------------------------------------------------------
