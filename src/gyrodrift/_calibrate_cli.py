@@ -21,8 +21,8 @@ def _read_gyros(args) -> list:
     """The log's gyros (every one, or ``--instance``), as the options say."""
     from gyrodrift.io import log_format, read_gyros
 
-    # --instance picks a gyro of a ULog or .bin; for a table (one gyro) it is only the parameter slot
-    instances = log_format(args.input, args.log_format) in ("ulog", "ardupilot")
+    # --instance picks a gyro of a ULog, .bin or .tlog; for a table (one gyro) it is only the parameter slot
+    instances = log_format(args.input, args.log_format) in ("ulog", "ardupilot", "tlog")
     return read_gyros(args.input, fmt=args.log_format, instance=args.instance if instances else None,
                       mag_instance=args.mag_instance,
                       gyro_unit=args.gyro_unit, frame=args.frame, column_map=parse_map(args.map),

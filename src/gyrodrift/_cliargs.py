@@ -51,9 +51,11 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
     add_table_options(g)
     g.add_argument("--instance", type=int, default=0,
-                   help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); default 0")
+                   help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); .tlog: IMU "
+                   "instance (ArduPilot RAW_IMU = 0, SCALED_IMU2 = 1); default 0")
     g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected); "
-                   "ArduPilot .bin: MAG instance (default: COMPASS_PRIMARY, else the first)")
+                   "ArduPilot .bin: MAG instance (default: COMPASS_PRIMARY, else the first); .tlog: the IMU message "
+                   "whose magnetometer is the compass (default: the gyro's)")
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
     g.add_argument("--temp-topic", help="ROS bag: sensor_msgs/Temperature topic (default: the only one)")
     g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")

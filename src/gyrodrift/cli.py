@@ -449,7 +449,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Compensate the heading-axis gyro of a log; write the output table atomically.",
     )
-    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
+    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, .tlog, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     c.add_argument(
