@@ -307,3 +307,17 @@ def test_check_on_a_table_and_its_errors(tmp_path, capsys):
     assert "no autopilot's" in capsys.readouterr().err
     assert main(["calibrate", table]) == 2
     assert "-o OUTPUT" in capsys.readouterr().err
+
+
+def test_ardupilot_parameters_in_qgroundcontrols_file(tmp_path, capsys):
+    """QGroundControl loads only its own tab-separated lines, whatever the autopilot."""
+    t, temp, body = heating()
+    log = ardupilot_bin(tmp_path / "r.bin", t, temp, body, {"AHRS_ORIENTATION": 8, "SYSID_THISMAV": 5})
+    assert main(["calibrate", log, "-o", str(tmp_path / "q.params"), "--format", "ardupilot-qgc", "-q"]) == 0
+    assert main(["calibrate", log, "-o", str(tmp_path / "c.param"), "-q"]) == 0
+    text = (tmp_path / "q.params").read_text()
+    assert "5\t1\tINS_TCAL1_ENABLE\t1\t2" in text and "5\t1\tINS_TCAL1_GYR1_X\t" in text
+    q, c = parse(tmp_path / "q.params"), parse(tmp_path / "c.param")
+    assert {k: v[0] for k, v in q.items()} == {k: v[0] for k, v in c.items()}
+    assert main(["calibrate", "--check", str(tmp_path / "q.params"), log]) == 0
+    assert "ArduPilot applies INS_TCAL1_*" in capsys.readouterr().out

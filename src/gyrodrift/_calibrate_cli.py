@@ -45,7 +45,7 @@ def _board_rotation(args, autopilot: str | None):
 def _autopilot(logs, fmt: str | None) -> str | None:
     """The autopilot the output is for; a log of the other autopilot is refused."""
     found = {log.attrs["onboard"].autopilot for log in logs if log.attrs.get("onboard") is not None}
-    target = fmt if fmt in ("px4", "ardupilot") else None
+    target = {"px4": "px4", "ardupilot": "ardupilot", "ardupilot-qgc": "ardupilot"}.get(fmt)
     if target and found and found != {target}:
         names = {"px4": "PX4", "ardupilot": "ArduPilot"}
         raise ConfigError(f"{logs[0].attrs.get('source', 'log')}: a {names[found.pop()]} log, but the output is a "
@@ -140,7 +140,8 @@ def add_calibrate_parser(sub) -> None:
                      "every gyro); for a table, the parameter slot: TC_G<instance>, INS_TCAL<instance+1> (default 0)")
     cal.add_argument("--log-format", choices=list(LOG_FORMATS), help="input format (default: by file name)")
     cal.add_argument("--format", dest="output_format", choices=list(CAL_FORMATS),
-                     help="px4 (.params), ardupilot (.param) or json (default: by the output's name)")
+                     help="px4 (.params), ardupilot (.param: Mission Planner, MAVProxy), ardupilot-qgc (ArduPilot's "
+                     "parameters in QGroundControl's file) or json (default: by the output's name)")
     cal.add_argument("--device-id", type=int,
                      help="px4: TC_G<instance>_ID, the gyro's device id (its CAL_GYRO*_ID); default: the log's "
                      "(0 for a table: PX4 then applies nothing)")

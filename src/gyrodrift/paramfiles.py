@@ -119,8 +119,10 @@ _ORDER = 3
 _COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
 _RAD_PER_DEG = math.pi / 180.0
 _PX4_INT32, _PX4_REAL32 = 6, 9  # MAVLink MAV_PARAM_TYPE of the id and of the floats
-#: Output formats of :func:`write_calibration` and the file endings that name them.
-FORMATS = {"px4": (".params",), "ardupilot": (".param", ".parm"), "json": (".json",)}
+#: Output formats of :func:`write_calibration` and the file endings that name them
+#: (``ardupilot-qgc``: ArduPilot's parameters in QGroundControl's file, named by ``fmt`` only).
+FORMATS = {"px4": (".params",), "ardupilot": (".param", ".parm"), "ardupilot-qgc": (), "json": (".json",)}
+_MAV_INT8 = 2  # MAV_PARAM_TYPE of INS_TCALn_ENABLE (AP_Int8)
 _JSON_FORMAT, _JSON_VERSION = "gyrodrift-calibration", 1
 
 
@@ -292,7 +294,7 @@ def _check_slots(cals, fmt: str) -> None:
     twice = sorted({s for s in slots if slots.count(s) > 1})
     if twice:
         name = "TC_G{}" if fmt == "px4" else "INS_TCAL{}"
-        raise ConfigError(f"two calibrations for {name.format(twice[0] + (fmt == 'ardupilot'))}; "
+        raise ConfigError(f"two calibrations for {name.format(twice[0] + (fmt != 'px4'))}; "
                           "give one calibration per gyro")
 
 
@@ -358,14 +360,20 @@ def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None
             if name.endswith("_ID") and value == 0:
                 notes.append(f"{name} is 0: PX4 applies a slot only to the gyro whose device id it holds; "
                              "pass --device-id (the gyro's CAL_GYRO*_ID) or set it before loading the file")
-    elif fmt == "ardupilot":
+    elif fmt in ("ardupilot", "ardupilot-qgc"):
         rows = [r for c in cals for r in (ardupilot_parameters(c, **overrides) if overrides
                                           else ardupilot_parameters(c))]
         if any(c.temp_min_c < -70.0 or c.temp_max_c > 80.0 for c in cals):
             notes.append("ArduPilot documents INS_TCAL*_TMIN/TMAX for -70 to 80 degC only; a parameter editor "
                          "may refuse the range written")
         lines = [*(f"# {h}" for h in header), *(f"# {n}" for n in (*_ARDUPILOT_LOADING, *notes))]
-        lines += [f"{name},{_number(value)}" for name, value in rows]
+        if fmt == "ardupilot":
+            lines += [f"{name},{_number(value)}" for name, value in rows]
+        else:
+            lines += [f"# for the vehicle with system id (SYSID_THISMAV) {sysid} (gyrodrift calibrate --sysid)",
+                      "# Vehicle-Id Component-Id Name Value Type"]
+            lines += [f"{sysid}\t1\t{name}\t{_number(value)}\t{_MAV_INT8 if name.endswith('_ENABLE') else _PX4_REAL32}"
+                      for name, value in rows]
     else:
         one = cals[0] if not overrides else _with(cals[0], overrides)
         lines = [json.dumps(calibration_json(one), indent=2, allow_nan=False)]
@@ -391,8 +399,9 @@ def _bad(path, what: str) -> ConfigError:
 
 
 def param_values(path, fmt: str) -> dict[str, float]:
-    """``{name: value}`` of a parameter file: QGroundControl lines (``px4``) or
-    ``NAME,VALUE`` / ``NAME VALUE`` / ``NAME=VALUE`` lines (``ardupilot``); ``#`` starts a comment line."""
+    """``{name: value}`` of a parameter file: QGroundControl lines (tab-separated
+    ``vehicle component NAME VALUE type``, ``px4`` or ``ardupilot``) or ``NAME,VALUE`` /
+    ``NAME VALUE`` / ``NAME=VALUE`` lines (``ardupilot``); ``#`` starts a comment line."""
     what = {"px4": "PX4 parameter file", "ardupilot": "ArduPilot parameter file"}[fmt]
     text = read_utf8(path, what)
     values: dict[str, float] = {}
@@ -400,8 +409,8 @@ def param_values(path, fmt: str) -> dict[str, float]:
         body = line.strip()
         if not body or body.startswith("#"):
             continue
-        fields = body.split("\t") if fmt == "px4" and "\t" in body else re.split(r"\s*[,=]\s*|\s+", body)
-        if fmt == "px4" and len(fields) == 5:
+        fields = body.split("\t") if "\t" in body and body.count("\t") == 4 else re.split(r"\s*[,=]\s*|\s+", body)
+        if len(fields) == 5:  # QGroundControl's line, for either autopilot
             name, value = fields[2].strip(), fields[3].strip()
         elif fmt == "ardupilot" and len(fields) == 2:
             name, value = fields
@@ -521,7 +530,7 @@ def param_file_format(path) -> str:
         return "json"
     if re.search(r"(^|\s)TC_G(\d_|_ENABLE)", text, re.MULTILINE):
         return "px4"
-    if re.search(r"^\s*INS_TCAL\d_", text, re.MULTILINE):
+    if re.search(r"(^|\s)INS_TCAL\d_", text, re.MULTILINE):
         return "ardupilot"
     raise _bad(path, "no TC_G* (PX4) or INS_TCAL* (ArduPilot) parameters found; give the file the autopilot's "
                      "thermal calibration was saved in, or one written by gyrodrift calibrate")
