@@ -29,7 +29,7 @@ def add_table_options(g) -> None:
     """Options that say how to read a CSV or Parquet table (``--gyro-unit``, ``--frame``,
     ``--map``, ``--time-unit``), on a parser or an argument group."""
     g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
-    g.add_argument("--frame", choices=["ned", "enu"],
+    g.add_argument("--frame", choices=["ned", "enu"], type=str.lower,
                    help="tables: ned (FRD body; the default, and a table whose accelerometer shows z up is then "
                    "refused) or enu (ROS REP-103: FLU body, converted)")
     g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")

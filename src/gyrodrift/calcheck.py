@@ -177,8 +177,7 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
             after = after - after.mean()
         axes.append(AxisLeft(a, float(np.sqrt(np.mean((before - before.mean()) ** 2))),
                              float(np.sqrt(np.mean(after**2))), float(np.max(np.abs(after)))))
-    gyro = f"{onboard.describe()}" if onboard is not None and rotation is None else \
-        (f"{onboard.describe().split(',')[0]}, {frame}" if onboard is not None else frame)
+    gyro = frame if onboard is None else f"{onboard.gyro_name}, {frame}"
     return Check(where, source, gyro, autopilot, correction.names if correction is not None else "", why_not,
                  float(temp.min()), float(temp.max()),
                  correction.temp_min_c if correction is not None else math.nan,

@@ -257,11 +257,15 @@ class Onboard:
         """``rotation`` as a 3x3 array (None without one)."""
         return None if self.rotation is None else np.array(self.rotation, dtype=float)
 
+    @property
+    def gyro_name(self) -> str:
+        """The gyro, e.g. ``"IMU 0"`` or ``"sensor_gyro 1 (device id 2424842)"``."""
+        gyro = f"sensor_gyro {self.instance}" if self.autopilot == "px4" else f"IMU {self.instance}"
+        return gyro + (f" (device id {self.device_id})" if self.device_id else "")
+
     def describe(self) -> str:
         """One phrase: the gyro and its rotation, e.g. ``"IMU 0, AHRS_ORIENTATION=8 (ROLL_180)"``."""
-        gyro = f"sensor_gyro {self.instance}" if self.autopilot == "px4" else f"IMU {self.instance}"
-        dev = f" (device id {self.device_id})" if self.device_id else ""
-        return f"{gyro}{dev}, {self.rotation_text}"
+        return f"{self.gyro_name}, {self.rotation_text}"
 
 
 def _system_id(params: Mapping, name: str) -> int | None:

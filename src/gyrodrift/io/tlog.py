@@ -46,7 +46,6 @@ to do>``, as in :mod:`gyrodrift.io.validate`.
 
 from __future__ import annotations
 
-import math
 import struct
 from pathlib import Path
 from typing import NamedTuple
@@ -65,9 +64,10 @@ from gyrodrift.io.align import (
     interp_held,
     on_following_rows,
 )
+from gyrodrift.io.ardupilot import _check_instance  # the same rule for both MAVLink logs
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.validate import message
 from gyrodrift.onboard import ardupilot_onboard, px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_tlog", "read_tlog_imus", "REBOOT_S"]
@@ -264,13 +264,6 @@ def _onboard(autopilot, params, changed, instance: int, has_temp: bool, name: st
         return px4_onboard(params, instance, device, rotation, how, corrected=True, changed=changed,
                            temperature=has_temp, where=name)
     return None
-
-
-def _check_instance(value, option: str, allow_none: bool = False) -> None:
-    if value is None and allow_none:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise ConfigError(one_line(f"{option} must be a non-negative integer, got {value!r}"))
 
 
 def _open(path) -> tuple[str, _Packets]:
