@@ -41,9 +41,9 @@ Refusals (:class:`CalibrationError`, one line naming the log and what to do):
   :data:`MIN_WINDOW_SAMPLES` samples (a log at 1 Hz is judged over 10-s windows), and
   the samples left at the end of the log join the window before them when they are
   fewer, so that no mean rests on a few samples (at the ends of the log the median
-  filter's output is a raw sample). A drift that is not a function of temperature alone (heating and
-  cooling in one log with hysteresis, a strong dependence on the heating rate) fails
-  the rate test too, and the message says so. Known limit: a slow, steady turn about
+  filter's output is a raw sample). A drift that is not a function of temperature
+  alone (heating and cooling in one log with hysteresis, a strong dependence on the
+  heating rate) fails the rate test too, and the message says so. Known limit: a slow, steady turn about
   the vertical that the cubic can absorb is not detected (no sensor here sees it).
 
 The files the autopilots load, and their facts, are :mod:`gyrodrift.paramfiles`.

@@ -301,7 +301,7 @@ def _check_slots(cals, fmt: str) -> None:
 def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None = None,
                       device_id: int | None = None, body_to_board=None, sysid: int = 1) -> list[str]:
     """Write one calibration, or one per gyro, to ``path`` atomically as ``fmt`` (``px4``,
-    ``ardupilot``, ``json``; default by the file name, :func:`output_format`).
+    ``ardupilot``, ``ardupilot-qgc``, ``json``; default by the file name, :func:`output_format`).
 
     Parameters
     ----------
@@ -319,7 +319,8 @@ def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None
         One calibration only: rotation from body FRD to the sensor frame, in place of the
         calibration's own.
     sysid : int
-        PX4: the vehicle's system id (``MAV_SYS_ID``), the first column of every line.
+        ``px4`` and ``ardupilot-qgc``: the vehicle's system id (``MAV_SYS_ID``,
+        ``SYSID_THISMAV``), the first column of every line.
 
     Returns
     -------
@@ -348,7 +349,7 @@ def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None
                       f"sensor frame {c.rotation_text or 'the body frame (no board rotation)'}: residual RMS "
                       f"{c.residual_rms_dps:.4g} deg/s over {c.temp_min_c:.2f} to {c.temp_max_c:.2f} degC")
     if fmt == "px4":
-        rows = [r for c in cals for r in (px4_parameters(c, **overrides) if overrides else px4_parameters(c))]
+        rows = [r for c in cals for r in px4_parameters(c, **overrides)]
         rows = [r for i, r in enumerate(rows) if r[0] != "TC_G_ENABLE" or i == 0]  # one TC_G_ENABLE
         lines = [*(f"# {h}" for h in header),
                  f"# for the vehicle with system id (MAV_SYS_ID) {sysid}: QGroundControl refuses the file for another "
@@ -361,8 +362,8 @@ def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None
                 notes.append(f"{name} is 0: PX4 applies a slot only to the gyro whose device id it holds; "
                              "pass --device-id (the gyro's CAL_GYRO*_ID) or set it before loading the file")
     elif fmt in ("ardupilot", "ardupilot-qgc"):
-        rows = [r for c in cals for r in (ardupilot_parameters(c, **overrides) if overrides
-                                          else ardupilot_parameters(c))]
+        rows = [r for c in cals for r in ardupilot_parameters(c, **{k: v for k, v in overrides.items()
+                                                                    if k != "device_id"})]
         if any(c.temp_min_c < -70.0 or c.temp_max_c > 80.0 for c in cals):
             notes.append("ArduPilot documents INS_TCAL*_TMIN/TMAX for -70 to 80 degC only; a parameter editor "
                          "may refuse the range written")
