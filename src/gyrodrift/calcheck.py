@@ -14,8 +14,9 @@ The measure is the one of the fit's residual (:mod:`gyrodrift.calibrate`): the r
 filtered, its mean in each temperature bin, and the RMS of those means (deg/s), with the
 largest of them as the peak. For ArduPilot the means are taken about their average:
 ArduPilot leaves the constant to its gyro calibration at boot, so only the change with
-temperature is the file's to remove. The same measure of the rates without the file says
-how much there was to remove. A file that makes the autopilot apply nothing to a gyro
+temperature is the file's to remove; for PX4 the means themselves, since its ``X0`` is the
+offset. The same measure of the rates without the file says how much there was to remove
+(for PX4 it includes the gyro's constant offset). A file that makes the autopilot apply nothing to a gyro
 (``TC_G_ENABLE`` not 1, no slot with the gyro's device id, ``INS_TCALn_ENABLE`` not 1)
 is reported as such: :attr:`Check.applied` is empty.
 """
@@ -52,8 +53,8 @@ class AxisLeft:
     """The drift of one body axis before and after the file (module notes), deg/s."""
 
     axis: str
-    before_rms_dps: float  #: RMS of the bin means without the file, about their average
-    left_rms_dps: float  #: RMS of the bin means with the file (ArduPilot: about their average)
+    before_rms_dps: float  #: RMS of the bin means without the file (ArduPilot: about their average)
+    left_rms_dps: float  #: the same with the file
     left_peak_dps: float  #: largest |bin mean| with the file (same reference)
 
 
@@ -174,9 +175,9 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
         before = bin_means(smooth_rate(rates[finite, i]), bins)
         after = bin_means(smooth_rate(corrected[finite, i]), bins)
         if autopilot == "ardupilot":
-            after = after - after.mean()
-        axes.append(AxisLeft(a, float(np.sqrt(np.mean((before - before.mean()) ** 2))),
-                             float(np.sqrt(np.mean(after**2))), float(np.max(np.abs(after)))))
+            before, after = before - before.mean(), after - after.mean()
+        axes.append(AxisLeft(a, float(np.sqrt(np.mean(before**2))), float(np.sqrt(np.mean(after**2))),
+                             float(np.max(np.abs(after)))))
     gyro = frame if onboard is None else f"{onboard.gyro_name}, {frame}"
     return Check(where, source, gyro, autopilot, correction.names if correction is not None else "", why_not,
                  float(temp.min()), float(temp.max()),
