@@ -16,8 +16,8 @@ of noise: about 1 sample in 1500); a table resampled onto the gyro rows repeats 
 its samples (9 in 10 for a 10 Hz compass on 100 Hz rows). So the repeats count as held
 values only when they are at least :data:`HELD_MIN_SHARE` of the rows with a compass
 value (read in chunks: of the rows read so far); fewer, they are real samples and stay.
-:func:`held_note` says how many values were dropped. This module imports no module of gyrodrift.io, so that
-:mod:`gyrodrift.io.validate` can import it.
+:func:`held_note` says how many values were dropped. This module imports no module of
+gyrodrift.io, so that :mod:`gyrodrift.io.validate` can import it.
 """
 
 from __future__ import annotations
@@ -42,7 +42,8 @@ class Held(NamedTuple):
 
     frame: pd.DataFrame  #: the frame, held compass cells empty
     dropped: int  #: rows whose compass values were dropped
-    last: dict | None  #: each group's values in the frame's last row, as read, and the counts (for the next frame)
+    #: each group's values in the frame's last row, as read, and the counts so far (for the next frame)
+    last: dict | None
 
 
 def compass_groups(columns) -> list[tuple[str, ...]]:

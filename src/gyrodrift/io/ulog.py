@@ -53,8 +53,9 @@ no calibration slot for the sensor's ``device_id``) the board rotation
 ``SENS_BOARD_Y_OFF``, ``SENS_BOARD_Z_OFF`` (deg) -- PX4's own order, checked on
 ``sample_log_small.ulg`` (board yaw 180 deg, trims ~3 deg) where it turns
 ``sensor_accel`` into ``sensor_combined``. Every rotation number PX4 defines is
-supported (:mod:`gyrodrift.rotations`); others raise :class:`LogFormatError`. Calibration offsets and
-scales are *not* applied: those topics stay raw.
+supported (:mod:`gyrodrift.rotations`); others raise :class:`LogFormatError` when a
+raw topic must be rotated. Calibration offsets and scales are *not* applied: those
+topics stay raw.
 
 Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
 :mod:`gyrodrift.io.validate`.
@@ -65,6 +66,7 @@ from __future__ import annotations
 import contextlib
 import io
 import struct
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -125,8 +127,6 @@ _ACC_COMBINED = ("accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "acceleromete
 _XYZ = ("x", "y", "z")
 _MAG_VEHICLE = ("magnetometer_ga[0]", "magnetometer_ga[1]", "magnetometer_ga[2]")
 _QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
-
-
 
 # ---------------------------------------------------------------------------
 # file checks and parsing
@@ -651,9 +651,13 @@ def _onboard(ulog, instance: int, gyro: Stream, temp, name: str):
     """:class:`gyrodrift.onboard.Onboard` of the gyro ``instance`` whose rates ``gyro`` holds."""
     params = ulog.initial_parameters
     device = _device_id(_instances(ulog, "sensor_gyro")[instance])
-    rotation, how = _board_to_body(params, "GYRO", device, name)
-    return px4_onboard(params, instance, device, rotation, how, corrected=gyro.label == "sensor_combined",
-                       changed=_changed_parameters(ulog), temperature=temp is not None, where=name)
+    try:
+        rotation, how, problem = *_board_to_body(params, "GYRO", device, name), ""
+    except LogFormatError as exc:  # the rates came from sensor_combined: only a calibration needs it
+        rotation, how, problem = np.eye(3), "", str(exc)
+    onboard = px4_onboard(params, instance, device, rotation, how, corrected=gyro.label == "sensor_combined",
+                          changed=_changed_parameters(ulog), temperature=temp is not None, where=name)
+    return replace(onboard, rotation=None, rotation_problem=problem) if problem else onboard
 
 
 def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | None, reference: bool,
