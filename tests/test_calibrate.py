@@ -14,14 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.calibrate import (
-    ARDUPILOT_SCALE,
-    ARDUPILOT_TREF_C,
-    BIN_WIDTH_C,
-    CalibrationError,
-    fit_calibration,
-    prior_config,
-    prior_notes,
+from gyrodrift.calibrate import BIN_WIDTH_C, CalibrationError, fit_calibration, prior_config, prior_notes
+from gyrodrift.onboard import ARDUPILOT_SCALE, ARDUPILOT_TREF_C
+from gyrodrift.paramfiles import (
     read_ardupilot_params,
     read_calibration_json,
     read_prior,
@@ -206,6 +201,47 @@ def test_a_unit_that_moved_is_refused():
     tilted.loc[tilted["t"] > 900.0, ["acc_x", "acc_z"]] = [math.sin(0.1), -math.cos(0.1)]  # 5.7 deg
     with pytest.raises(CalibrationError, match=r"accelerometer tilted 5\.7 deg"):
         fit_calibration(tilted, source="tilted.csv")
+
+
+def noisy_still_log(fs_hz: float, duration_s: float, sigma_dps: float, seed: int = 3) -> pd.DataFrame:
+    """A still heating run 15 -> 45 degC with the KNOWN drift and white noise of ``sigma_dps``,
+    sampled from t = 0 to t = duration_s inclusive (the last sample alone in its second)."""
+    t = np.arange(0.0, duration_s + 0.5 / fs_hz, 1.0 / fs_hz)
+    log = known_log(duration_s=duration_s + 1.0 / fs_hz, fs_hz=fs_hz)
+    log = log.iloc[: t.size].copy()
+    log["t"] = t
+    log["temp"] = 15.0 + 30.0 * t / t[-1]
+    noise = np.random.default_rng(seed).normal(0.0, sigma_dps, (t.size, 3))
+    for i, a in enumerate("xyz"):
+        log[f"gyro_{a}"] = np.polynomial.polynomial.polyval(log["temp"] - 30.0, KNOWN[a]) + noise[:, i]
+    return log
+
+
+def test_a_last_second_holding_one_sample_is_no_false_motion():
+    """Issue 23, defect 4: the final second holds one sample, whose median-filtered rate is
+    the raw sample itself; its 1-s 'mean' was judged alone and a noise spike refused the log."""
+    log = noisy_still_log(fs_hz=50.0, duration_s=600.0, sigma_dps=0.2)
+    assert (np.floor(log["t"]) == 600.0).sum() == 1
+    clean = fit_calibration(log, source="clean.csv")
+    log.loc[log.index[-1], "gyro_x"] += 0.8  # a 4-sigma sample, last of the log
+    cal = fit_calibration(log, source="spike.csv")  # refused before (and weighed as a whole bin)
+    assert abs(cal.axes["x"].residual_rms_dps - clean.axes["x"].residual_rms_dps) < 0.002
+    np.testing.assert_allclose(cal.drift("x", [15.0, 30.0, 45.0]), clean.drift("x", [15.0, 30.0, 45.0]), atol=0.01)
+    # motion in the last second is still seen: the tail joins the window before it
+    moved = log.copy()
+    moved.loc[moved["t"] > 598.5, "gyro_z"] += 20.0
+    with pytest.raises(CalibrationError, match="moved"):
+        fit_calibration(moved, source="moved.csv")
+
+
+def test_a_log_at_1_hz_is_judged_over_windows_of_ten_samples():
+    """Irregular 1-10 Hz logs (telemetry): one sample a second is no mean of anything."""
+    log = noisy_still_log(fs_hz=1.0, duration_s=3600.0, sigma_dps=0.15)
+    cal = fit_calibration(log, source="slow.csv")
+    for a in "xyz":
+        np.testing.assert_allclose(cal.drift(a, [20.0, 30.0, 40.0]),
+                                   np.polynomial.polynomial.polyval(np.array([-10.0, 0.0, 10.0]), KNOWN[a]),
+                                   atol=0.05)
 
 
 def test_only_gyro_z_writes_zero_x_y_and_says_so(tmp_path):

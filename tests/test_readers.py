@@ -676,7 +676,7 @@ def test_read_log_fmt_overrides_suffix(tmp_path):
     msg = _raises(ConfigError, read_log, unknown)
     assert "flight.xyz" in msg and ".ulg" in msg and ".bin" in msg and ".bag" in msg and ".csv" in msg
     msg = _raises(ConfigError, read_log, renamed, fmt="xlsx")
-    assert "csv, parquet, ulog, ardupilot, rosbag" in msg
+    assert "csv, parquet, ulog, ardupilot, tlog, rosbag" in msg
 
 
 @pytest.mark.parametrize(

@@ -29,7 +29,9 @@ def add_table_options(g) -> None:
     """Options that say how to read a CSV or Parquet table (``--gyro-unit``, ``--frame``,
     ``--map``, ``--time-unit``), on a parser or an argument group."""
     g.add_argument("--gyro-unit", default="deg/s", help="tables: unit of gyro_* columns, deg/s (default) or rad/s")
-    g.add_argument("--frame", default="ned", help="tables: ned (default) or enu (ROS REP-103)")
+    g.add_argument("--frame", choices=["ned", "enu"], type=str.lower,
+                   help="tables: ned (FRD body; the default, and a table whose accelerometer shows z up is then "
+                   "refused) or enu (ROS REP-103: FLU body, converted)")
     g.add_argument("--map", metavar="NEW=OLD,...", help="tables: rename columns to contract names, e.g. gyro_z=gz,temp=T")
     g.add_argument(
         "--time-unit", choices=list(TIME_UNITS),
@@ -49,9 +51,11 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--format", choices=list(FORMATS), help="input format (default: by file name)")
     add_table_options(g)
     g.add_argument("--instance", type=int, default=0,
-                   help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); default 0")
+                   help="PX4 ULog: sensor_gyro instance; ArduPilot .bin: IMU instance, IMU.I (IMU2 = 1); .tlog: IMU "
+                   "instance (ArduPilot RAW_IMU = 0, SCALED_IMU2 = 1); default 0")
     g.add_argument("--mag-instance", type=int, help="PX4 ULog: sensor_mag instance (default: the one PX4 selected); "
-                   "ArduPilot .bin: MAG instance (default: COMPASS_PRIMARY, else the first)")
+                   "ArduPilot .bin: MAG instance (default: COMPASS_PRIMARY, else the first); .tlog: the IMU message "
+                   "whose magnetometer is the compass (default: the gyro's)")
     g.add_argument("--imu-topic", help="ROS bag: sensor_msgs/Imu topic (default: the only one)")
     g.add_argument("--temp-topic", help="ROS bag: sensor_msgs/Temperature topic (default: the only one)")
     g.add_argument("--mag-topic", help="ROS bag: sensor_msgs/MagneticField topic (default: the only one)")

@@ -12,6 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from gyrodrift import __version__
+from gyrodrift._calibrate_cli import add_calibrate_parser
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift._parser import SuggestingParser
 from gyrodrift.compensator import CompensatorConfig
@@ -144,7 +145,8 @@ def _cmd_compensate(args) -> int:
         cfg = warm_config(profile, cfg)
     prior = None
     if args.prior:  # the z drift model starts from an autopilot's thermal calibration (gyrodrift.calibrate)
-        from gyrodrift.calibrate import prior_config, read_prior, start_temperature
+        from gyrodrift.calibrate import prior_config, start_temperature
+        from gyrodrift.paramfiles import read_prior
 
         if profile is not None:
             raise ConfigError("--prior and --profile both give the starting drift model; use one of them")
@@ -249,53 +251,6 @@ def _add_stream_parser(sub) -> None:
     add_table_options(s.add_argument_group("input"))
     _add_method_options(s)
     s.set_defaults(func=_cmd_stream)
-
-
-def _cmd_calibrate(args) -> int:
-    from gyrodrift.calibrate import fit_calibration, output_format, write_calibration
-    from gyrodrift.io import log_format
-
-    check_output_path(args.input, args.output)
-    fmt = output_format(args.output, args.output_format)
-    # --format names the output here; --instance is also the parameter slot, read only from a ULog or .bin
-    has_instances = log_format(args.input, args.log_format) in ("ulog", "ardupilot")
-    read_args = argparse.Namespace(**{**vars(args), "format": args.log_format,
-                                      "instance": args.instance if has_instances else 0})
-    cal = fit_calibration(read_input(args.input, read_args), source=str(args.input))
-    notes = write_calibration(cal, args.output, fmt, instance=args.instance, device_id=args.device_id)
-    _warn(args.output, notes)
-    if not args.quiet:
-        print(f"{cal.summary()}; wrote {args.output}")
-    return 0
-
-
-def _add_calibrate_parser(sub) -> None:
-    from gyrodrift.calibrate import FORMATS as CAL_FORMATS, MIN_SPAN_C
-    from gyrodrift.io import FORMATS as LOG_FORMATS
-
-    # conflict_handler="resolve": this command's --format is the output's, so it replaces the
-    # input-format option of add_input_options, which is --log-format here
-    cal = sub.add_parser(
-        "calibrate", conflict_handler="resolve", formatter_class=argparse.RawDescriptionHelpFormatter,
-        help="fit the gyro's thermal drift from a still heating run; write PX4, ArduPilot or JSON parameters",
-        description="Fit the drift of every gyro axis of a still heating or cooling log as a cubic in temperature "
-        "(PX4 and ArduPilot style) and write it as a PX4 .params file (TC_G*), an ArduPilot .param file "
-        f"(INS_TCAL*) or gyrodrift JSON (gyrodrift.calibrate). Refused below {MIN_SPAN_C:g} degC of span or when "
-        "the unit moved. Axes: the log's body FRD axes are taken as the autopilot's board axes "
-        "(SENS_BOARD_ROT = 0 / AHRS_ORIENTATION = 0); rates in rad/s in the files. --instance also names the "
-        "parameter slot: TC_G<instance> (PX4), INS_TCAL<instance+1> (ArduPilot). The log is read as compensate "
-        "reads it; a bench log without compass columns is fine (the compass is not used).",
-    )
-    cal.add_argument("input", type=Path, help="the heating or cooling run (any log format of compensate)")
-    cal.add_argument("-o", "--output", type=Path, required=True, help="parameter file to write")
-    cal.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    add_input_options(cal)
-    cal.add_argument("--log-format", choices=list(LOG_FORMATS), help="input format (default: by file name)")
-    cal.add_argument("--format", dest="output_format", choices=list(CAL_FORMATS),
-                     help="px4 (.params), ardupilot (.param) or json (default: by the output's name)")
-    cal.add_argument("--device-id", type=int, default=0,
-                     help="px4: TC_G<instance>_ID, the gyro's device id (its CAL_GYRO*_ID); default 0 = not applied")
-    cal.set_defaults(func=_cmd_calibrate)
 
 
 def _read_options(args) -> dict:
@@ -525,7 +480,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Compensate the heading-axis gyro of a log; write the output table atomically.",
     )
-    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
+    c.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, .tlog, ROS bag)")
     c.add_argument("-o", "--output", type=Path, required=True, help="output table (.csv or .parquet)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     c.add_argument(
@@ -638,7 +593,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_report_parser(sub)
     add_batch_parser(sub)
-    _add_calibrate_parser(sub)
+    add_calibrate_parser(sub)
     _add_stream_parser(sub)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")

@@ -5,10 +5,16 @@ is compensated without any error, and wrongly: the heading turns 57.3 times too 
 (or too much). :class:`GyroUnitCheck` compares, over windows of :data:`WINDOW_S` (10 s)
 between compass samples, the compass's turn (unwrapped) with the integrated raw gyro's.
 Over the windows where the compass turned at least :data:`MIN_TURN_DEG` (10 deg), the
-median ratio compass turn / gyro turn is about 1 for a right unit, 57.3 for rad/s read as
-deg/s and 1/57.3 for the reverse (the drift, at most a few deg/s, shifts it little). With
-at least :data:`MIN_WINDOWS` such windows, a ratio beyond :data:`RATIO_LIMIT` (15) either
-way gives a note. Without a compass (or without turns) only the reverse can be seen:
+ratio compass turn / gyro turn is about 1 for a right unit, 57.3 for rad/s read as deg/s
+and 1/57.3 for the reverse (the drift, at most a few deg/s, shifts it little; read in the
+wrong unit the drift is scaled with the rate). A unit error is one scale for every turn,
+so the ratio is judged only when the windows agree: those of the majority sign whose
+ratio is within a factor :data:`AGREE_FACTOR` of their median must be at least
+:data:`MIN_WINDOWS` and two thirds of the windows that turned. A still unit whose compass
+swings in magnetic interference does not pass: its compass turns one way then the other
+while its gyro reads the drift, always the same way, and their ratios scatter in sign and
+size. With agreeing windows, a median ratio beyond :data:`RATIO_LIMIT` (15) either way
+gives a note. Without a compass (or without turns) only the reverse can be seen:
 rates above :data:`MAX_RATE_DPS` (2000 deg/s, beyond MEMS gyro ranges) after a rad/s
 conversion give a note. The data are fed chunk by chunk (:meth:`GyroUnitCheck.add`), so a
 log read in chunks gets the note a whole log gets.
@@ -20,7 +26,7 @@ import math
 
 import numpy as np
 
-__all__ = ["WINDOW_S", "MIN_TURN_DEG", "MIN_WINDOWS", "RATIO_LIMIT", "MAX_RATE_DPS", "GyroUnitCheck"]
+__all__ = ["WINDOW_S", "MIN_TURN_DEG", "MIN_WINDOWS", "AGREE_FACTOR", "RATIO_LIMIT", "MAX_RATE_DPS", "GyroUnitCheck"]
 
 #: Length of the windows whose compass and gyro turns are compared, s.
 WINDOW_S = 10.0
@@ -28,6 +34,8 @@ WINDOW_S = 10.0
 MIN_TURN_DEG = 10.0
 #: Windows needed before the ratio is judged.
 MIN_WINDOWS = 3
+#: Windows agree when their ratio is within this factor of the median of the majority sign.
+AGREE_FACTOR = 2.0
 #: Median compass/gyro turn ratio beyond which (or below whose inverse) the unit is suspect.
 RATIO_LIMIT = 15.0
 #: |rate| above this after a rad/s conversion is beyond any MEMS gyro's range, deg/s.
@@ -96,8 +104,18 @@ class GyroUnitCheck:
 
     @property
     def ratio(self) -> float:
-        """Median compass turn / gyro turn over the windows that turned (NaN: too few)."""
-        return float(np.median(self._ratios)) if len(self._ratios) >= MIN_WINDOWS else math.nan
+        """Median compass turn / gyro turn over the windows that turned and agree (module
+        notes; NaN: too few, or they do not agree)."""
+        ratios = np.asarray(self._ratios, dtype=float)
+        if ratios.size < MIN_WINDOWS:
+            return math.nan
+        sign = 1.0 if np.sum(ratios > 0) >= np.sum(ratios < 0) else -1.0
+        same = np.abs(ratios[np.sign(ratios) == sign])
+        middle = np.median(same)
+        agree = same[(same >= middle / AGREE_FACTOR) & (same <= middle * AGREE_FACTOR)]
+        if agree.size < MIN_WINDOWS or 3 * agree.size < 2 * ratios.size:
+            return math.nan
+        return float(sign * np.median(agree))
 
     def note(self) -> str | None:
         """The note when the gyro unit looks wrong (None when it does not)."""

@@ -90,6 +90,7 @@ from gyrodrift.io.validate import (
     Source,
     cell_label,
     check_input_path,
+    check_z_up,
     format_error,
     message,
     no_data_rows_error,
@@ -479,6 +480,8 @@ class _Stream:
         self._push(records, df)
 
     def _push(self, records, df: pd.DataFrame) -> None:
+        if self.prev_t_s is None and not self.opts.frame_stated:  # the first rows say which way z points
+            check_z_up(df, self._source([n for n, _ in records]))
         cols = {c: df[c].to_numpy(float).tolist() for c in (T, GYRO_Z, TEMP)}
         heading = df[HEADING].to_numpy(float).tolist() if HEADING in df.columns else None
         mag = df[list(MAG_COLS)].to_numpy(float).tolist() if self.has_mag else None
@@ -577,7 +580,7 @@ def stream_rows(
     fmt: str | None = None,
     out_format: str | None = None,
     gyro_unit: str = "deg/s",
-    frame: str = "ned",
+    frame: str | None = None,
     column_map=None,
     time_unit: str | None = None,
     source: str = "stdin",

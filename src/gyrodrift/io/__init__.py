@@ -6,6 +6,7 @@
   (parquet): :mod:`gyrodrift.io.tabular`;
 * ``.ulg`` (ulog, PX4 ULog): :mod:`gyrodrift.io.ulog`;
 * ``.bin`` (ardupilot, ArduPilot DataFlash): :mod:`gyrodrift.io.ardupilot`;
+* ``.tlog`` (tlog, MAVLink telemetry recorded by a ground station): :mod:`gyrodrift.io.tlog`;
 * ``.bag``, ``.db3``, ``.mcap`` or a directory holding ``metadata.yaml`` (rosbag):
   :mod:`gyrodrift.io.rosbag`;
 * a file with another ending that starts like a ULog or a DataFlash log: that format.
@@ -25,20 +26,23 @@ import pandas as pd
 
 from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
-from gyrodrift.io.ardupilot import read_ardupilot
+from gyrodrift.io.ardupilot import read_ardupilot, read_ardupilot_imus
 from gyrodrift.io.formats import FORMATS, log_format
 from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
-from gyrodrift.io.ulog import read_ulog
+from gyrodrift.io.tlog import read_tlog, read_tlog_imus
+from gyrodrift.io.ulog import read_ulog, read_ulog_gyros
 from gyrodrift.io.validate import message
 
 __all__ = [
     "FORMATS",
     "log_format",
     "read_log",
+    "read_gyros",
     "read_ulog",
     "read_ardupilot",
+    "read_tlog",
     "read_rosbag",
     "write_table",
     "check_output_path",
@@ -64,7 +68,7 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
     changed = {}
     if str(gyro_unit).strip().lower() not in _NEUTRAL_UNITS:
         changed["gyro_unit"] = gyro_unit
-    if str(frame).strip().lower() != _NEUTRAL_FRAME:
+    if frame is not None and str(frame).strip().lower() != _NEUTRAL_FRAME:
         changed["frame"] = frame
     if column_map:
         changed["column_map"] = dict(column_map)
@@ -87,7 +91,7 @@ def read_log(
     *,
     fmt: str | None = None,
     gyro_unit: str = "deg/s",
-    frame: str = "ned",
+    frame: str | None = None,
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
     instance: int = 0,
@@ -111,7 +115,8 @@ def read_log(
         ROS bags state their units and frames, so these must stay at their defaults for them.
     instance : int, default 0
         ULog: ``sensor_gyro`` instance (see :func:`gyrodrift.io.ulog.read_ulog`);
-        ArduPilot: IMU instance (see :func:`gyrodrift.io.ardupilot.read_ardupilot`).
+        ArduPilot: IMU instance (see :func:`gyrodrift.io.ardupilot.read_ardupilot`);
+        telemetry log: IMU instance (see :func:`gyrodrift.io.tlog.read_tlog`).
     mag_instance : int, optional
         ULog: ``sensor_mag`` instance, default the magnetometer PX4 selected;
         ArduPilot: ``MAG`` instance, default ``COMPASS_PRIMARY`` or the first.
@@ -152,6 +157,10 @@ def read_log(
         _check_stated_units(path, "ardupilot", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "ardupilot", set_ros)
         return read_ardupilot(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
+    if log_fmt == "tlog":
+        _check_stated_units(path, "tlog", gyro_unit, frame, column_map, time_unit)
+        _refuse_options(path, "tlog", set_ros)
+        return read_tlog(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
     if log_fmt == "rosbag":
         _check_stated_units(path, "rosbag", gyro_unit, frame, column_map, time_unit)
         _refuse_options(path, "rosbag", set_ulog)
@@ -160,3 +169,30 @@ def read_log(
     _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
     return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map,
                             time_unit=time_unit, gyro_max_dps=gyro_max_dps)
+
+
+def read_gyros(path, *, fmt: str | None = None, instance: int | None = None, mag_instance: int | None = None,
+               **options) -> list[pd.DataFrame]:
+    """Every gyro of a log, one frame each, as :func:`read_log` reads one.
+
+    A PX4 ULog gives each ``sensor_gyro`` instance, an ArduPilot DataFlash log and a
+    telemetry log each IMU instance (``attrs["onboard"]`` says which); a table or a ROS
+    bag its one gyro.
+    With ``instance``, only that one. Other keywords are those of :func:`read_log`.
+
+    Returns
+    -------
+    list of pandas.DataFrame
+        In instance order.
+    """
+    path = Path(path)
+    log_fmt = log_format(path, fmt)
+    if instance is None and log_fmt in ("ulog", "ardupilot", "tlog"):
+        _check_stated_units(path, log_fmt, options.get("gyro_unit", "deg/s"), options.get("frame"),
+                            options.get("column_map"), options.get("time_unit"))
+        _refuse_options(path, log_fmt, {k: options[k] for k in ("imu_topic", "temp_topic", "mag_topic")
+                                        if options.get(k) is not None})
+        every = {"ulog": read_ulog_gyros, "ardupilot": read_ardupilot_imus, "tlog": read_tlog_imus}[log_fmt]
+        return every(path, mag_instance=mag_instance, gyro_max_dps=options.get("gyro_max_dps", GYRO_MAX_DPS))
+    return [read_log(path, fmt=fmt, instance=0 if instance is None else instance, mag_instance=mag_instance,
+                     **options)]

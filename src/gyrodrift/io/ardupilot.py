@@ -67,8 +67,9 @@ from gyrodrift.io.align import (
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
+from gyrodrift.onboard import ardupilot_onboard
 
-__all__ = ["read_ardupilot", "MAGIC"]
+__all__ = ["read_ardupilot", "read_ardupilot_imus", "MAGIC"]
 
 _INSTALL = "pip install 'gyrodrift[ardupilot]'"
 #: Every DataFlash log starts with the FMT message (type 128) that defines FMT itself.
@@ -234,14 +235,19 @@ def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
     return out
 
 
-def _params(reader, name: str) -> dict[str, float]:
-    """The ``PARM`` messages: parameter name -> value (the last logged value wins)."""
+def _params(reader, name: str) -> tuple[dict[str, float], set[str]]:
+    """The ``PARM`` messages: parameter name -> value (the last logged value wins), and the
+    names logged with more than one value (changed during the log)."""
     found = _records(reader, name, "PARM")
     if found is None or not {"Name", "Value"} <= set(found[0].dtype.names):
-        return {}
+        return {}, set()
     records = found[0]
-    names = (n.split(b"\0", 1)[0].decode("ascii", "replace") for n in records["Name"])
-    return dict(zip(names, records["Value"].astype(np.float64).tolist()))
+    names = [n.split(b"\0", 1)[0].decode("ascii", "replace") for n in records["Name"]]
+    values = records["Value"].astype(np.float64).tolist()
+    seen: dict[str, set] = {}
+    for key, value in zip(names, values):
+        seen.setdefault(key, set()).add(value)
+    return dict(zip(names, values)), {k for k, v in seen.items() if len(v) > 1}
 
 
 def _time_s(fields: dict) -> np.ndarray | None:
@@ -452,8 +458,10 @@ def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, 
         ``frame`` ("ned"), ``compass`` ("mag", or "none"), ``mag_unit`` ("gauss", with
         the mag columns), ``acc_unit`` ("m/s^2", with the acc columns), ``topics``
         (column group -> message used, None for a group without data), ``summary``
-        (one line) and, when the log has no compass or no measured temperature,
-        ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
+        (one line), ``onboard`` (:class:`gyrodrift.onboard.Onboard`: the board rotation
+        ``AHRS_ORIENTATION``, the IMU and the ``INS_TCAL`` correction its rates hold)
+        and, when the log has no compass or no measured temperature, ``notes`` (one line
+        each, :mod:`gyrodrift.io.notes`).
 
     Raises
     ------
@@ -471,6 +479,24 @@ def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, 
     the summary; see the module documentation for the message rules.
     """
     _check_instance(instance, "instance")
+    return _read_instances(path, [instance], mag_instance, reference, gyro_max_dps)[0]
+
+
+def read_ardupilot_imus(path, *, mag_instance: int | None = None, reference: bool = True,
+                        gyro_max_dps: float = GYRO_MAX_DPS) -> list[pd.DataFrame]:
+    """Every IMU of a DataFlash log, each read as :func:`read_ardupilot` reads one, in
+    instance order (``attrs["onboard"].instance``).
+
+    Raises
+    ------
+    LogFormatError, ConfigError
+        As :func:`read_ardupilot`.
+    """
+    return _read_instances(path, None, mag_instance, reference, gyro_max_dps)
+
+
+def _read_instances(path, instances, mag_instance, reference, gyro_max_dps) -> list[pd.DataFrame]:
+    """The IMU ``instances`` of the log at ``path`` (None: all), the file opened once."""
     _check_instance(mag_instance, "mag_instance", allow_none=True)
     gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     dfreader = _import_dfreader()
@@ -479,7 +505,9 @@ def read_ardupilot(path, *, instance: int = 0, mag_instance: int | None = None, 
     _check_file(path)
     reader = _open(dfreader, path)
     try:
-        return _read(reader, name, instance, mag_instance, reference, gyro_max_dps)
+        if instances is None:
+            instances = sorted(_sources(reader, name, _IMU_TYPES, ())) or [0]
+        return [_read(reader, name, k, mag_instance, reference, gyro_max_dps) for k in instances]
     finally:
         with contextlib.suppress(Exception):
             reader.close()
@@ -517,7 +545,7 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
         temp, _ = increasing(temp)
         check_temperature(name, temp.label, temp.values)
         temp_on_rows = interp_held(temp.t, temp.values, t)  # the same messages: the values themselves
-    params = _params(reader, name)
+    params, changed = _params(reader, name)
     mag, unhealthy = _mag_stream(reader, params, mag_instance, name)
     mag = increasing(mag)[0] if mag is not None else None
     acc = gyro.values[:, 3:6] if acc_values is not None else None
@@ -540,8 +568,8 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
         extra.append(f"{skipped} bytes that are no message skipped")
     if partial:
         extra.append(f"the file ends inside a message ({partial} bytes at the end ignored)")
-    tcal = params.get(f"INS_TCAL{instance + 1}_ENABLE")
-    if tcal is not None and int(tcal) == 1:
+    onboard = ardupilot_onboard(params, instance, changed=changed, temperature=temp is not None, where=name)
+    if int(params.get(f"INS_TCAL{instance + 1}_ENABLE", 0)) == 1:
         extra.append(f"ArduPilot's gyro temperature calibration was on (INS_TCAL{instance + 1}_ENABLE=1)")
 
     attrs = {
@@ -560,6 +588,7 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
             "ref_heading": ref.label if ref is not None else None,
         },
         "summary": _summary(name, t, imu, temp, mag, mag_rows, acc is not None, extra),
+        "onboard": onboard,
     }
     if no_compass_why:
         add_note(attrs, no_compass_note(name, no_compass_why))

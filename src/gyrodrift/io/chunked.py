@@ -625,7 +625,7 @@ def iter_log_chunks(
     *,
     fmt: str | None = None,
     gyro_unit: str = "deg/s",
-    frame: str = "ned",
+    frame: str | None = None,
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
     gyro_max_dps: float = GYRO_MAX_DPS,

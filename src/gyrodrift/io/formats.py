@@ -16,7 +16,7 @@ __all__ = ["FORMATS", "READ_SUFFIXES", "WRITE_SUFFIXES", "table_format", "format
 
 
 #: Formats :func:`gyrodrift.io.read_log` accepts for ``fmt``.
-FORMATS = ("csv", "parquet", "ulog", "ardupilot", "rosbag")
+FORMATS = ("csv", "parquet", "ulog", "ardupilot", "tlog", "rosbag")
 #: File-name endings (lower case) and the table format each one means.
 READ_SUFFIXES = {
     ".csv": "csv",
@@ -32,6 +32,7 @@ _TABLE_FORMATS = ("csv", "parquet")
 #: File-name endings of the binary logs.
 _ULOG_SUFFIXES = (".ulg",)
 _ARDUPILOT_SUFFIXES = (".bin",)
+_TLOG_SUFFIXES = (".tlog",)
 _ROSBAG_SUFFIXES = (".bag", ".db3", ".mcap")
 #: First bytes of the binary logs, to tell a file with another ending: a ULog header,
 #: and the DataFlash FMT message that defines FMT (``0xA3 0x95``, type 128).
@@ -72,12 +73,14 @@ def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> st
 
 
 def format_from_path(path: Path) -> str | None:
-    """"ulog", "ardupilot" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
+    """"ulog", "ardupilot", "tlog" or "rosbag" from the path, "csv"/"parquet" for table endings, else None."""
     name = path.name.lower()
     if name.endswith(_ULOG_SUFFIXES):
         return "ulog"
     if name.endswith(_ARDUPILOT_SUFFIXES):
         return "ardupilot"
+    if name.endswith(_TLOG_SUFFIXES):
+        return "tlog"
     if name.endswith(_ROSBAG_SUFFIXES) or (path.is_dir() and (path / "metadata.yaml").is_file()):
         return "rosbag"
     for suffix, table_fmt in READ_SUFFIXES.items():
@@ -98,7 +101,7 @@ def log_format(path: Path, fmt: str | None) -> str | None:
     if found is None and path.is_file():
         found = _sniff(path)
     if found is None and path.is_file():
-        endings = sorted(READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ARDUPILOT_SUFFIXES + _ROSBAG_SUFFIXES)
+        endings = sorted(READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ARDUPILOT_SUFFIXES + _TLOG_SUFFIXES + _ROSBAG_SUFFIXES)
         raise ConfigError(
             message(
                 str(path),

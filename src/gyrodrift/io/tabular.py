@@ -138,7 +138,7 @@ def read_log(
     *,
     fmt: str | None = None,
     gyro_unit: str = "deg/s",
-    frame: str = "ned",
+    frame: str | None = None,
     column_map: Mapping[str, str] | None = None,
     time_unit: str | None = None,
     gyro_max_dps: float = GYRO_MAX_DPS,
@@ -156,11 +156,14 @@ def read_log(
         Unit of the gyro columns ``gyro_x``, ``gyro_y``, ``gyro_z`` in the file (and of
         their simulated biases ``true_bias_x``, ``true_bias_y``, ``true_bias_z``). Output is
         always deg/s.
-    frame : {"ned", "enu"}, default "ned"
+    frame : {"ned", "enu"}, optional
         Axis convention of the file. ``"enu"`` (ROS REP-103, body FLU) is converted to
         NED/FRD: ``heading`` and ``ref_heading`` become ``wrap_360(90 - value)``; the y
         and z components (``gyro_y``, ``gyro_z``, ``true_bias_y``, ``true_bias_z``,
-        ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign.
+        ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign. Default NED/FRD, and a
+        table whose accelerometer shows its z axis pointing up is then refused, naming
+        ``--frame enu`` (:func:`gyrodrift.io.validate.check_z_up`); ``"ned"`` given reads
+        it as it is (a unit lying upside down).
     column_map : mapping of str to str, optional
         ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
     time_unit : {"s", "ms", "us", "ns"}, optional

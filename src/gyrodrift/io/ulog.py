@@ -52,9 +52,10 @@ no calibration slot for the sensor's ``device_id``) the board rotation
 ``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X_OFF``,
 ``SENS_BOARD_Y_OFF``, ``SENS_BOARD_Z_OFF`` (deg) -- PX4's own order, checked on
 ``sample_log_small.ulg`` (board yaw 180 deg, trims ~3 deg) where it turns
-``sensor_accel`` into ``sensor_combined``. Rotation numbers 0..25 (PX4 ``Rotation``
-enum) are supported; others raise :class:`LogFormatError`. Calibration offsets and
-scales are *not* applied: those topics stay raw.
+``sensor_accel`` into ``sensor_combined``. Every rotation number PX4 defines is
+supported (:mod:`gyrodrift.rotations`); others raise :class:`LogFormatError` when a
+raw topic must be rotated. Calibration offsets and scales are *not* applied: those
+topics stay raw.
 
 Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
 :mod:`gyrodrift.io.validate`.
@@ -65,6 +66,7 @@ from __future__ import annotations
 import contextlib
 import io
 import struct
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -87,8 +89,9 @@ from gyrodrift.io.align import (
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 from gyrodrift.io.validate import message, one_line
+from gyrodrift.onboard import px4_onboard, px4_sensor_rotation
 
-__all__ = ["read_ulog", "FASTER"]
+__all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
 
 #: ``sensor_combined`` (or ``vehicle_magnetometer``) replaces the per-instance topic
 #: when its median sample rate is at least this many times higher.
@@ -124,18 +127,6 @@ _ACC_COMBINED = ("accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "acceleromete
 _XYZ = ("x", "y", "z")
 _MAG_VEHICLE = ("magnetometer_ga[0]", "magnetometer_ga[1]", "magnetometer_ga[2]")
 _QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
-
-#: PX4 ``enum Rotation`` 0..25 (src/lib/conversion/rotation.h): (roll, pitch, yaw) deg.
-_ROTATIONS = (
-    (0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135),
-    (0, 0, 180), (0, 0, 225), (0, 0, 270), (0, 0, 315),
-    (180, 0, 0), (180, 0, 45), (180, 0, 90), (180, 0, 135),
-    (0, 180, 0), (180, 0, 225), (180, 0, 270), (180, 0, 315),
-    (90, 0, 0), (90, 0, 45), (90, 0, 90), (90, 0, 135),
-    (270, 0, 0), (270, 0, 45), (270, 0, 90), (270, 0, 135),
-    (0, 90, 0), (0, 270, 0),
-)  # fmt: skip
-
 
 # ---------------------------------------------------------------------------
 # file checks and parsing
@@ -358,49 +349,17 @@ def _same_chip(ulog, topic: str, device: int | None, instance: int):
 # ---------------------------------------------------------------------------
 
 
-def _dcm(roll_deg: float, pitch_deg: float, yaw_deg_: float) -> np.ndarray:
-    """Rotation matrix Rz(yaw) Ry(pitch) Rx(roll) (PX4 ``Dcmf(Eulerf(...))``)."""
-    r, p, y = np.radians([roll_deg, pitch_deg, yaw_deg_])
-    rx = np.array([[1, 0, 0], [0, np.cos(r), -np.sin(r)], [0, np.sin(r), np.cos(r)]])
-    ry = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
-    rz = np.array([[np.cos(y), -np.sin(y), 0], [np.sin(y), np.cos(y), 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
-def _rotation(number: int, param: str, name: str) -> np.ndarray:
-    """Matrix of PX4 rotation ``number`` (read from parameter ``param``)."""
-    if not 0 <= number < len(_ROTATIONS):
-        raise LogFormatError(
-            message(
-                name,
-                f"parameter {param}={number} is a sensor rotation this reader does not support"
-                f" (supported: 0..{len(_ROTATIONS) - 1})",
-                "use the calibrated topics (sensor_combined, vehicle_magnetometer) or convert the log to CSV",
-            )
-        )
-    return _dcm(*_ROTATIONS[number])
-
-
 def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
-    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its description.
-
-    ``kind`` is the calibration name: ``"GYRO"``, ``"ACC"`` or ``"MAG"``.
-    """
-    slot = None
-    if device is not None:
-        slot = next(
-            (n for n in range(4) if int(params.get(f"CAL_{kind}{n}_ID", 0)) & 0xFFFFFFFF == device),
-            None,
-        )
-    own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
-    if own >= 0:
-        param = f"CAL_{kind}{slot}_ROT"
-        return _rotation(own, param, name), f"{param}={own}"
-    board = int(params.get("SENS_BOARD_ROT", 0))
-    trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
-    matrix = _dcm(*trims) @ _rotation(board, "SENS_BOARD_ROT", name)
-    how = f"SENS_BOARD_ROT={board}"
-    return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
+    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its
+    description (:func:`gyrodrift.onboard.px4_sensor_rotation`); an unknown rotation
+    number is a :class:`LogFormatError`."""
+    try:
+        return px4_sensor_rotation(params, kind, device, where=name)
+    except ConfigError as exc:
+        raise LogFormatError(
+            message(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
+                    "vehicle_magnetometer) or convert the log to CSV")
+        ) from None
 
 
 # ---------------------------------------------------------------------------
@@ -629,8 +588,10 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
         ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or
         "none"), ``mag_unit`` ("gauss", with the mag columns), ``acc_unit`` ("m/s^2",
         with the acc columns), ``topics`` (column group -> topic used, None for a
-        group without data), ``summary`` (one line) and, when the log has no compass
-        or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
+        group without data), ``summary`` (one line), ``onboard``
+        (:class:`gyrodrift.onboard.Onboard`: the gyro's device id, its sensor-to-body
+        rotation and the ``TC_G`` correction its rates hold) and, when the log has no
+        compass or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
 
     Raises
     ------
@@ -649,6 +610,24 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     the summary; see the module documentation for the topic and alignment rules.
     """
     _check_instance(instance, "instance")
+    return _read_instances(path, [instance], mag_instance, reference, gyro_max_dps)[0]
+
+
+def read_ulog_gyros(path, *, mag_instance: int | None = None, reference: bool = True,
+                    gyro_max_dps: float = GYRO_MAX_DPS) -> list[pd.DataFrame]:
+    """Every ``sensor_gyro`` instance of a ULog, each read as :func:`read_ulog` reads one,
+    in instance order (``attrs["onboard"].instance``).
+
+    Raises
+    ------
+    LogFormatError, ConfigError
+        As :func:`read_ulog`.
+    """
+    return _read_instances(path, None, mag_instance, reference, gyro_max_dps)
+
+
+def _read_instances(path, instances, mag_instance, reference, gyro_max_dps) -> list[pd.DataFrame]:
+    """The ``sensor_gyro`` ``instances`` of the ULog at ``path`` (None: all), parsed once."""
     gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
     _check_instance(mag_instance, "mag_instance", allow_none=True)
     ulog_class = _import_pyulog()
@@ -657,7 +636,33 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     data = _read_file(path)
     corrupt = _check_framing(data, name)
     ulog = _parse(ulog_class, data, name)
+    if instances is None:
+        instances = sorted(_instances(ulog, "sensor_gyro")) or [0]
+    return [_read(ulog, name, corrupt, k, mag_instance, reference, gyro_max_dps) for k in instances]
 
+
+def _changed_parameters(ulog) -> set[str]:
+    """Parameters whose value changed during the log (``ulog.changed_parameters``)."""
+    initial = ulog.initial_parameters
+    return {n for _, n, v in getattr(ulog, "changed_parameters", []) if initial.get(n) != v}
+
+
+def _onboard(ulog, instance: int, gyro: Stream, temp, name: str):
+    """:class:`gyrodrift.onboard.Onboard` of the gyro ``instance`` whose rates ``gyro`` holds."""
+    params = ulog.initial_parameters
+    device = _device_id(_instances(ulog, "sensor_gyro")[instance])
+    try:
+        rotation, how, problem = *_board_to_body(params, "GYRO", device, name), ""
+    except LogFormatError as exc:  # the rates came from sensor_combined: only a calibration needs it
+        rotation, how, problem = np.eye(3), "", str(exc)
+    onboard = px4_onboard(params, instance, device, rotation, how, corrected=gyro.label == "sensor_combined",
+                          changed=_changed_parameters(ulog), temperature=temp is not None, where=name)
+    return replace(onboard, rotation=None, rotation_problem=problem) if problem else onboard
+
+
+def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | None, reference: bool,
+          gyro_max_dps: float) -> pd.DataFrame:
+    """The body of :func:`read_ulog` on a parsed log."""
     gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
         raise LogFormatError(
@@ -709,6 +714,7 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
             "ref_heading": ref.label if ref is not None else None,
         },
         "summary": _summary(name, t, gyro, temp, mag, mag_rows, acc, extra),
+        "onboard": _onboard(ulog, instance, gyro, temp, name),
     }
     if no_compass_why:
         add_note(attrs, no_compass_note(name, no_compass_why))

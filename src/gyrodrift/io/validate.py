@@ -70,6 +70,8 @@ __all__ = [
     "row_label",
     "cell_label",
     "check_column_map",
+    "check_z_up",
+    "Z_UP_SHARE",
     "ReadOptions",
     "read_options",
     "check_input_path",
@@ -232,8 +234,10 @@ def _gyro_scale(gyro_unit: str) -> tuple[str, float]:
     return key, GYRO_UNITS[key]
 
 
-def _frame_name(frame: str) -> str:
-    """Return the canonical frame name, or raise :class:`ConfigError`."""
+def _frame_name(frame: str | None) -> str:
+    """Return the canonical frame name (None: "ned", not stated), or raise :class:`ConfigError`."""
+    if frame is None:
+        return "ned"
     key = str(frame).strip().lower()
     if key not in FRAMES:
         raise ConfigError(one_line(f"unknown frame {frame!r}; use one of: {', '.join(FRAMES)}"))
@@ -275,15 +279,20 @@ class ReadOptions(NamedTuple):
     time_scale: float = 1.0  #: multiplier from that unit to s
     #: plausible gyro full scale, deg/s (:mod:`gyrodrift.io.limits`)
     gyro_max_dps: float = GYRO_MAX_DPS
+    #: False when the frame was not given: a table whose accelerometer shows z up is refused
+    frame_stated: bool = True
 
 
-def read_options(gyro_unit: str, frame: str, column_map: Mapping[str, str] | None, time_unit: str | None = None,
-                 gyro_max_dps: float = GYRO_MAX_DPS) -> ReadOptions:
-    """Check the table options (raising :class:`ConfigError`) and return them canonical."""
+def read_options(gyro_unit: str, frame: str | None, column_map: Mapping[str, str] | None,
+                 time_unit: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> ReadOptions:
+    """Check the table options (raising :class:`ConfigError`) and return them canonical.
+
+    ``frame`` None means NED/FRD, not stated: :func:`check_z_up` then refuses a table
+    whose accelerometer shows its z axis pointing up."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
     return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
-                       check_gyro_max_dps(gyro_max_dps))
+                       check_gyro_max_dps(gyro_max_dps), frame is not None)
 
 
 # ---------------------------------------------------------------------------
@@ -679,6 +688,36 @@ def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
     return out
 
 
+#: Median share of the specific force along +z beyond which a table is taken as z up (a tilt under 26 deg).
+Z_UP_SHARE = 0.9
+
+
+def check_z_up(frame: pd.DataFrame, src: Source) -> None:
+    """Refuse a table read as NED/FRD whose accelerometer says its z axis points up.
+
+    A still or slowly moving unit measures a specific force of 1 g pointing up; in the
+    contract's FRD body frame a level unit reads ``acc_z`` = -1 g. When the median over
+    the rows of ``acc_z / |acc|`` is above :data:`Z_UP_SHARE`, the z axis points up, as
+    in ROS logs (REP-103: ENU world, FLU body), and reading it as FRD would flip the
+    sign of ``gyro_y``, ``gyro_z`` and the heading. One line names ``--frame enu``.
+    """
+    if not all(c in frame.columns for c in ACC_COLS):
+        return
+    acc = frame[list(ACC_COLS)].to_numpy(dtype=np.float64)
+    acc = acc[np.all(np.isfinite(acc), axis=1)]
+    norm = np.linalg.norm(acc, axis=1)
+    acc, norm = acc[norm > 0], norm[norm > 0]
+    if not norm.size:
+        return
+    share = float(np.median(acc[:, 2] / norm))
+    if share > Z_UP_SHARE:
+        raise format_error(
+            src, f"the accelerometer reads {share:.2f} of its magnitude along +z (median): the z axis points up "
+            "(ENU/FLU, as ROS logs), while the input contract is FRD (a level unit reads acc_z = -1 g)",
+            "pass --frame enu to convert it (frame='enu' in Python), or --frame ned if the unit lay upside down",
+            where="column 'acc_z'")
+
+
 def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
     """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
     out = frame.copy(deep=False)  # columns are replaced, never changed in place
@@ -775,6 +814,8 @@ def normalise_frame(
         _check_required_values(first, src)
         temp_empty = TEMP in first and first[TEMP] is None
     _check_time(df, src, prev_t_s)
+    if first_values is not None and not opts.frame_stated:
+        check_z_up(df, src)
     notes = time_base_notes(df[T].to_numpy(), opts.time_unit, src.name) if first_values is not None else ()
     df, held, last_compass = drop_held(df, prev_compass)
     if opts.time_scale != 1.0:

@@ -1,0 +1,410 @@
+"""What the autopilot did to a log's gyro rates, and what its thermal calibration does.
+
+A thermal calibration is fitted in the vehicle body frame (the frame every reader
+delivers) but applied by the autopilot in the frame of the sensor, before the board
+rotation; and a log recorded while the autopilot's own thermal calibration was on holds
+rates with that correction already taken off. :class:`Onboard` records both, read by the
+ULog, DataFlash and telemetry readers from the log's parameters (``attrs["onboard"]``):
+
+* the board rotation ``R`` (``v_body = R @ v_sensor``, :mod:`gyrodrift.rotations`): PX4
+  ``CAL_GYROn_ROT`` of the gyro's calibration slot when >= 0 (an external sensor), else
+  ``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X/Y/Z_OFF``
+  (``src/lib/sensor_calibration/Gyroscope.cpp``: the rotation that ``Correct`` applies
+  after subtracting the thermal and calibration offsets); ArduPilot
+  ``AHRS_ORIENTATION`` (custom 100..102 with their angle parameters): the
+  ``INS_TCALn`` correction is applied after the sensor's own rotation (fixed by the
+  board definition) and before ``AHRS_ORIENTATION``
+  (``AP_InertialSensor_Backend.cpp``, ``_rotate_and_correct_gyro``);
+* the gyro's identity: PX4 ``sensor_gyro`` instance and ``device_id``, ArduPilot IMU
+  instance (0 = ``INS_TCAL1``) and ``INS_GYR_ID``/``INS_GYR2_ID``/``INS_GYR3_ID``;
+* the thermal correction the logged rates hold (:class:`ThermalCorrection`), or why
+  it cannot be undone (a parameter of it missing or changed during the log, no
+  temperature).
+
+The corrections, as each autopilot applies them to the gyro of one sensor (rad/s, sensor
+axes 0, 1, 2; ``T`` that sensor's temperature, degC):
+
+* PX4 (``TemperatureCompensation::calc_thermal_offsets_3D``, ``set_sensor_id``): with
+  ``TC_G_ENABLE = 1`` and a slot ``i`` whose ``TC_G{i}_ID`` is the gyro's device id,
+  ``offset = X0 + X1 d + X2 d^2 + X3 d^3``, ``d = clip(T, TMIN, TMAX) - TREF``, is
+  subtracted (coefficients ``TC_G{i}_X{k}_{axis}``). No slot with that id: nothing.
+* ArduPilot (``AP_InertialSensor_tempcal.cpp``, ``correct_sensor``): with
+  ``INS_TCALn_ENABLE = 1``, ``P(clip(T)) - P(clip(T_cal))`` is subtracted, ``P(T) =
+  (GYR1 d + GYR2 d^2 + GYR3 d^3) 1e-6``, ``d = T - 35``, both temperatures clipped to
+  ``[TMIN, TMAX]``, ``T_cal = INS_GYRn_CALTEMP`` (the gyro offset calibration's; default
+  -300 when never calibrated, which the clip makes ``TMIN``). ``ENABLE = 2`` (learning)
+  applies nothing.
+
+Both autopilots hold these parameters and do this arithmetic in 32-bit floats;
+:meth:`ThermalCorrection.offset_rad_s` does the same with ``float32=True``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from gyrodrift.errors import ConfigError
+from gyrodrift.rotations import euler_matrix, rotation_matrix, rotation_name
+
+__all__ = [
+    "ThermalCorrection", "Onboard", "px4_correction", "px4_slots", "ardupilot_correction", "ardupilot_onboard",
+    "px4_onboard", "px4_sensor_rotation", "uint32", "ARDUPILOT_TREF_C", "ARDUPILOT_SCALE",
+]
+
+#: ArduPilot's fixed reference temperature, degC, and the scale of its stored coefficients.
+ARDUPILOT_TREF_C = 35.0
+ARDUPILOT_SCALE = 1.0e6
+_ORDER = 3
+#: ArduPilot's INS_GYRn_CALTEMP before any gyro calibration, degC.
+_NO_CALTEMP_C = -300.0
+
+
+def uint32(value) -> int:
+    """A device id as PX4 compares it: the 32 bits of an int32 parameter, unsigned."""
+    return int(value) & 0xFFFFFFFF
+
+
+@dataclass(frozen=True)
+class ThermalCorrection:
+    """An autopilot's thermal correction of one gyro, in its sensor axes.
+
+    Attributes
+    ----------
+    coeffs : tuple of 4 tuples of 3 floats
+        ``coeffs[k][axis]``: coefficient of ``(T - temp_ref_c)**k``, rad/s per degC**k.
+    temp_ref_c, temp_min_c, temp_max_c : float
+        Reference and clip range, degC.
+    cal_temp_c : float or None
+        ArduPilot: the temperature whose polynomial value is added back (``INS_GYRn_CALTEMP``);
+        None for PX4.
+    names : str
+        The parameters it comes from, for the messages (e.g. ``"TC_G0_* (TC_G_ENABLE=1)"``).
+    """
+
+    coeffs: tuple
+    temp_ref_c: float
+    temp_min_c: float
+    temp_max_c: float
+    cal_temp_c: float | None
+    names: str
+
+    def offset_rad_s(self, temp_c, *, float32: bool = False) -> np.ndarray:
+        """What the autopilot subtracts at ``temp_c`` (degC): (n, 3), rad/s, sensor axes.
+
+        ``float32`` evaluates as the autopilots do, in 32-bit floats (PX4 as a sum of
+        powers, ArduPilot by Horner's rule); the result is returned as float64.
+        """
+        kind = np.float32 if float32 else np.float64
+        temp = np.atleast_1d(np.asarray(temp_c, dtype=np.float64)).astype(kind)
+        c = np.asarray(self.coeffs, dtype=np.float64).astype(kind)
+        lo, hi, ref = (kind(v) for v in (self.temp_min_c, self.temp_max_c, self.temp_ref_c))
+
+        def poly(t):
+            d = (np.minimum(np.maximum(t, lo), hi) - ref)[:, None]
+            if self.cal_temp_c is None:  # PX4: X0 + X1 d + X2 d^2 + X3 d^3
+                d2 = d * d
+                return c[0] + c[1] * d + c[2] * d2 + c[3] * (d2 * d)
+            return ((c[3] * d + c[2]) * d + c[1]) * d + c[0]  # ArduPilot's polynomial_eval (c[0] = 0)
+
+        out = poly(temp)
+        if self.cal_temp_c is not None:
+            out = out - poly(np.array([self.cal_temp_c], dtype=kind))
+        return out.astype(np.float64)
+
+    def offset_dps(self, temp_c, rotation=None, *, float32: bool = False) -> np.ndarray:
+        """The offset in deg/s, turned to the body frame by ``rotation`` (``v_body = R v_sensor``)."""
+        off = np.degrees(self.offset_rad_s(temp_c, float32=float32))
+        return off if rotation is None else off @ np.asarray(rotation, dtype=float).T
+
+
+def _need(params: Mapping, names, where: str, what: str) -> list[float]:
+    missing = [n for n in names if n not in params]
+    if missing:
+        raise ConfigError(f"{where}: {what}, but {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''} "
+                          "not found")
+    values = [float(params[n]) for n in names]
+    bad = [n for n, v in zip(names, values) if not math.isfinite(v)]
+    if bad:
+        raise ConfigError(f"{where}: {what}, but {bad[0]} is not a finite number")
+    return values
+
+
+def px4_slots(params: Mapping) -> list[int]:
+    """The ``TC_G{i}`` slots a parameter set holds (those with a ``TC_G{i}_ID``)."""
+    return sorted({int(m.group(1)) for n in params if (m := re.fullmatch(r"TC_G(\d)_ID", n))})
+
+
+def px4_correction(params: Mapping, device_id: int | None, *, slot: int | None = None,
+                   where: str = "parameters") -> tuple[ThermalCorrection | None, str]:
+    """PX4's gyro thermal correction of the gyro with ``device_id`` (module notes).
+
+    Parameters
+    ----------
+    params : mapping
+        Parameter name -> value.
+    device_id : int or None
+        The gyro's device id; None (unknown, e.g. a CSV log): the slot ``slot`` is taken
+        as the one that applies.
+    slot : int, optional
+        With ``device_id`` None: the slot to use.
+    where : str
+        The file, for the messages.
+
+    Returns
+    -------
+    (ThermalCorrection or None, str)
+        The correction PX4 applies, or None and why it applies none.
+
+    Raises
+    ------
+    ConfigError
+        The slot that applies lacks a parameter.
+    """
+    enable = params.get("TC_G_ENABLE")
+    if enable is None or int(enable) != 1:
+        return None, f"TC_G_ENABLE is {'not set' if enable is None else int(enable)}, not 1"
+    slots = px4_slots(params)
+    if device_id is None:
+        if slot is None or slot not in slots:
+            return None, f"no TC_G{slot if slot is not None else ''} slot (slots: {slots or 'none'})"
+        chosen = slot
+    else:
+        matching = [i for i in slots if uint32(params[f"TC_G{i}_ID"]) == uint32(device_id)]
+        if not matching:
+            ids = ", ".join(f"TC_G{i}_ID={uint32(params[f'TC_G{i}_ID'])}" for i in slots) or "no TC_G slot"
+            return None, f"no TC_G slot holds the gyro's device id {uint32(device_id)} ({ids})"
+        chosen = matching[0]
+    g = f"TC_G{chosen}_"
+    what = f"TC_G_ENABLE=1 and {g}ID applies"
+    t_ref, t_min, t_max = _need(params, [g + "TREF", g + "TMIN", g + "TMAX"], where, what)
+    names = [f"{g}X{k}_{a}" for k in range(_ORDER + 1) for a in range(3)]
+    values = np.array(_need(params, names, where, what)).reshape(_ORDER + 1, 3)
+    coeffs = tuple(tuple(float(v) for v in row) for row in values)
+    return ThermalCorrection(coeffs, t_ref, t_min, t_max, None, f"{g}* (TC_G_ENABLE=1)"), ""
+
+
+def ardupilot_correction(params: Mapping, imu: int, *, where: str = "parameters",
+                         ) -> tuple[ThermalCorrection | None, str]:
+    """ArduPilot's gyro temperature correction of IMU ``imu`` (0 = ``INS_TCAL1``; module notes).
+
+    Returns
+    -------
+    (ThermalCorrection or None, str)
+        The correction ArduPilot applies, or None and why it applies none.
+
+    Raises
+    ------
+    ConfigError
+        ``INS_TCALn_ENABLE`` is 1 but a coefficient or the range is missing.
+    """
+    p = f"INS_TCAL{imu + 1}_"
+    enable = params.get(p + "ENABLE")
+    if enable is None or int(enable) != 1:
+        return None, f"{p}ENABLE is {'not set' if enable is None else int(enable)}, not 1"
+    what = f"{p}ENABLE=1"
+    t_min, t_max = _need(params, [p + "TMIN", p + "TMAX"], where, what)
+    names = [f"{p}GYR{k}_{'XYZ'[a]}" for k in range(1, _ORDER + 1) for a in range(3)]
+    stored = np.array(_need(params, names, where, what)).reshape(_ORDER, 3) / ARDUPILOT_SCALE
+    coeffs = ((0.0, 0.0, 0.0), *(tuple(float(v) for v in row) for row in stored))
+    cal_temp = float(params.get(f"INS_GYR{imu + 1}_CALTEMP", _NO_CALTEMP_C))
+    return ThermalCorrection(coeffs, ARDUPILOT_TREF_C, t_min, t_max, cal_temp, f"{p}* ({p}ENABLE=1)"), ""
+
+
+@dataclass(frozen=True)
+class Onboard:
+    """What the autopilot did to the gyro rates of a log (module notes).
+
+    Attributes
+    ----------
+    autopilot : {"px4", "ardupilot"}
+    instance : int
+        The gyro in the log: PX4 ``sensor_gyro`` instance (its ``TC_G`` slot), ArduPilot
+        IMU instance (0 = ``INS_TCAL1``).
+    device_id : int or None
+        PX4 ``sensor_gyro.device_id``; ArduPilot ``INS_GYR_ID`` (``INS_GYR2_ID`` ...).
+    rotation : tuple of 3 tuples, or None
+        ``R`` with ``v_body = R @ v_sensor``; None when the log's rotation is unusable
+        (``rotation_problem`` says why).
+    rotation_text : str
+        Where ``R`` comes from, e.g. ``"AHRS_ORIENTATION=8 (ROLL_180)"``.
+    correction : ThermalCorrection or None
+        The thermal correction the logged rates hold (None: they hold none).
+    correction_problem : str
+        Why the correction the rates hold cannot be undone ("" when it can or there is none).
+    rotation_problem : str
+        Why ``rotation`` is None ("" otherwise).
+    system_id : int or None
+        The vehicle's MAVLink system id (PX4 ``MAV_SYS_ID``, ArduPilot ``SYSID_THISMAV``).
+    """
+
+    autopilot: str
+    instance: int
+    device_id: int | None
+    rotation: tuple | None
+    rotation_text: str
+    correction: ThermalCorrection | None = None
+    correction_problem: str = ""
+    rotation_problem: str = ""
+    system_id: int | None = None
+
+    @property
+    def matrix(self) -> np.ndarray | None:
+        """``rotation`` as a 3x3 array (None without one)."""
+        return None if self.rotation is None else np.array(self.rotation, dtype=float)
+
+    @property
+    def gyro_name(self) -> str:
+        """The gyro, e.g. ``"IMU 0"`` or ``"sensor_gyro 1 (device id 2424842)"``."""
+        gyro = f"sensor_gyro {self.instance}" if self.autopilot == "px4" else f"IMU {self.instance}"
+        return gyro + (f" (device id {self.device_id})" if self.device_id else "")
+
+    def describe(self) -> str:
+        """One phrase: the gyro and its rotation, e.g. ``"IMU 0, AHRS_ORIENTATION=8 (ROLL_180)"``."""
+        return f"{self.gyro_name}, {self.rotation_text}"
+
+
+def _system_id(params: Mapping, name: str) -> int | None:
+    value = params.get(name)
+    return int(value) if value is not None and 1 <= int(value) <= 255 else None
+
+
+def _as_tuple(matrix: np.ndarray) -> tuple:
+    return tuple(tuple(float(v) for v in row) for row in np.asarray(matrix, dtype=float))
+
+
+def _changed(changed, names) -> list[str]:
+    return sorted(n for n in names if n in changed)
+
+
+def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature: bool = True,
+                      where: str = "log") -> Onboard:
+    """:class:`Onboard` of IMU ``instance`` of an ArduPilot log whose rates are those the
+    firmware logs (after ``INS_TCALn`` and ``AHRS_ORIENTATION``).
+
+    Parameters
+    ----------
+    params : mapping
+        The log's parameters (the last value of each).
+    instance : int
+        IMU instance (0 = the first).
+    changed : collection of str
+        Parameters whose value changed during the log.
+    temperature : bool
+        Whether the log holds the IMU's temperature (needed to undo a correction).
+    where : str
+        The log, for the messages.
+    """
+    number = int(params.get("AHRS_ORIENTATION", 0))
+    rotation, rotation_problem = None, ""
+    try:
+        rotation = _as_tuple(rotation_matrix("ardupilot", number, params, where=f"{where}: AHRS_ORIENTATION"))
+    except ConfigError as exc:
+        rotation_problem = str(exc)
+    moved = _changed(changed, ["AHRS_ORIENTATION", "CUST_ROT1_ROLL", "CUST_ROT1_PITCH", "CUST_ROT1_YAW",
+                               "CUST_ROT2_ROLL", "CUST_ROT2_PITCH", "CUST_ROT2_YAW"])
+    if moved and not rotation_problem:
+        rotation, rotation_problem = None, f"{where}: {moved[0]} changed during the log; cut the log where it is " \
+                                           "constant or give --board-rotation"
+    text = f"AHRS_ORIENTATION={rotation_name('ardupilot', number)}" + ("" if "AHRS_ORIENTATION" in params
+                                                                       else " (not in the log: 0 taken)")
+    dev_name = "INS_GYR_ID" if instance == 0 else f"INS_GYR{instance + 1}_ID"
+    device = uint32(params[dev_name]) if dev_name in params else None
+    correction, problem = None, ""
+    p = f"INS_TCAL{instance + 1}_"
+    tcal = [n for n in changed if n.startswith(p) or n == f"INS_GYR{instance + 1}_CALTEMP"]
+    try:
+        correction, _ = ardupilot_correction(params, instance, where=where)
+    except ConfigError as exc:
+        problem = f"{exc}: the correction the log's rates hold cannot be undone"
+    if tcal:
+        problem = f"{where}: {sorted(tcal)[0]} changed during the log, so the correction its rates hold changed: " \
+                  "cut the log where it is constant, or record the run again with the setting fixed"
+    elif correction is not None and not temperature:
+        problem = f"{where}: {p}ENABLE=1 but the log has no IMU temperature: the correction its rates hold " \
+                  "cannot be undone; record the run with INS_TCAL disabled"
+    return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem,
+                   _system_id(params, "SYSID_THISMAV"))
+
+
+def px4_sensor_rotation(params: Mapping, kind: str, device: int | None, *, where: str = "log"
+                        ) -> tuple[np.ndarray, str]:
+    """PX4's rotation from a sensor's frame to the body frame (module notes), and its description.
+
+    Parameters
+    ----------
+    params : mapping
+        The vehicle's parameters.
+    kind : {"GYRO", "ACC", "MAG"}
+        The calibration name (``CAL_GYROn_ID`` ...).
+    device : int or None
+        The sensor's device id: its calibration slot's ``CAL_<kind>n_ROT``, when >= 0
+        (external), rotates it; otherwise ``SENS_BOARD_ROT`` then the level trims.
+
+    Raises
+    ------
+    ConfigError
+        A rotation number PX4 does not define.
+    """
+    slot = None
+    if device is not None:
+        slot = next((n for n in range(4) if uint32(params.get(f"CAL_{kind}{n}_ID", 0)) == uint32(device)), None)
+    own = int(params.get(f"CAL_{kind}{slot}_ROT", -1)) if slot is not None else -1
+    if own >= 0:
+        param = f"CAL_{kind}{slot}_ROT"
+        return rotation_matrix("px4", own, where=f"{where}: parameter {param}"), \
+            f"{param}={rotation_name('px4', own)}"
+    board = int(params.get("SENS_BOARD_ROT", 0))
+    trims = [float(params.get(f"SENS_BOARD_{a}_OFF", 0.0)) for a in "XYZ"]
+    matrix = euler_matrix(*trims) @ rotation_matrix("px4", board, where=f"{where}: parameter SENS_BOARD_ROT")
+    how = f"SENS_BOARD_ROT={rotation_name('px4', board)}"
+    return matrix, how + (" and the SENS_BOARD_*_OFF level trims" if any(trims) else "")
+
+
+def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation: np.ndarray, rotation_text: str,
+                *, corrected: bool, changed=(), temperature: bool = True, where: str = "log") -> Onboard:
+    """:class:`Onboard` of ``sensor_gyro`` instance ``instance`` of a PX4 log.
+
+    Parameters
+    ----------
+    params : mapping
+        The log's parameters (initial values).
+    instance, device_id : int
+        The gyro's ``sensor_gyro`` instance and device id.
+    rotation : 3x3 array
+        Its sensor-to-body rotation as the reader applied it (``v_body = R v_sensor``).
+    rotation_text : str
+        Where it comes from.
+    corrected : bool
+        True when the rates are PX4's corrected ones (``sensor_combined``: thermal
+        correction applied when it was on); False for raw ``sensor_gyro``.
+    changed : collection of str
+        Parameters that changed during the log.
+    temperature : bool
+        Whether the log holds the gyro's temperature.
+    where : str
+        The log, for the messages.
+    """
+    correction, problem = None, ""
+    if corrected:
+        try:
+            correction, _ = px4_correction(params, device_id, slot=instance, where=where)
+        except ConfigError as exc:
+            problem = f"{exc}: the correction the log's rates hold cannot be undone"
+        tc = sorted(n for n in changed if n.startswith("TC_G"))
+        if tc:
+            problem = f"{where}: {tc[0]} changed during the log, so the correction its rates hold changed: cut " \
+                      "the log where it is constant, or record the run again with the setting fixed"
+        elif correction is not None and not temperature:
+            problem = f"{where}: TC_G_ENABLE=1 but the log has no gyro temperature: the correction its rates " \
+                      "hold cannot be undone; record the run with TC_G_ENABLE=0"
+    moved = sorted(n for n in changed if n.startswith("SENS_BOARD_") or re.fullmatch(r"CAL_GYRO\d_ROT", n))
+    rotation_problem = f"{where}: {moved[0]} changed during the log; cut the log where it is constant or give " \
+                       "--board-rotation" if moved else ""
+    return Onboard("px4", instance, device_id, None if moved else _as_tuple(rotation), rotation_text, correction,
+                   problem, rotation_problem, _system_id(params, "MAV_SYS_ID"))
+
