@@ -101,16 +101,14 @@ def test_measurement_sign_by_hand():
     # snaps: t, heading, ∫gyro, ∫T, ∫T', ∫bias
     s0 = np.array([0.0, 10.0, 0.0, 0.0, 0.0, 0.0])
     s1 = np.array([10.0, 15.0, 8.0, 300.0, 0.1, 1.0])
-    m, h_T, h_Tp, r, residual = compass_measurement(s0, s1, 0.5, 0.04, 0.0, 0.0, False)
+    m, h_T, h_Tp, r, residual = compass_measurement(s0, s1, 0.5, 0.04)
     assert m == pytest.approx(0.3)
     np.testing.assert_allclose([h_T, h_Tp], [30.0, 0.01])
     assert residual == pytest.approx(2.0)  # 3 deg minus the 1 deg already removed
     assert r == pytest.approx(2 * 0.5**2 / 100 + 0.04**2 / 10)
-    # edge means: their own compass variances
-    assert compass_measurement(s0, s1, 0.5, 0.04, 0.01, 0.02, True)[3] == pytest.approx(0.03 / 100 + 0.04**2 / 10)
     # Across north: 359 -> 1 is +2 deg of compass change.
     s0[1], s1[1], s1[2] = 359.0, 1.0, 2.0
-    assert compass_measurement(s0, s1, 0.5, 0.04, 0.0, 0.0, False)[0] == pytest.approx(0.0)
+    assert compass_measurement(s0, s1, 0.5, 0.04)[0] == pytest.approx(0.0)
 
 
 def turning_heading(t):

@@ -22,7 +22,6 @@ from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
-from gyrodrift.kernels.numeric import wrap360_all
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 
 __all__ = ["ModelEngine", "make_engine"]
@@ -87,9 +86,10 @@ class ModelEngine(ChunkEngine):
                                   self._clock is not None)
         self._init_last = e
         self._rf[evloop.RF_FIRST_ROW] = -1.0
+        self._rf[evloop.RF_INIT_RAW] = 1.0
 
-    def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols) -> None:
-        i = 0
+    def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols, i=0) -> None:
+        """Rows ``i..`` of the arrays through the model's row loop (growing the epoch history)."""
         while i < t.size:
             i = evloop.run(t, g, T, Tp, heading, held, norm, dip, i, self.est.mf, self._mc, self._rf, self._rc,
                            cols.out, cols.codes, cols.n, self._hist)
@@ -113,11 +113,15 @@ class ModelEngine(ChunkEngine):
         t, g, T, heading, norm, dip = inputs
         Tp = _read_only(cols.column(L.O_TEMP_RATE))
         held = _read_only(cols.code(L.OC_GAP).view(np.bool_))
-        self._loop(t, g, T, Tp, heading, held, norm, dip, cols)
-        if self._init_last is not None:  # the init window's rows, once it is done
-            evloop.settle(t, g, T, Tp, t.size, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes, cols.n)
+        start = 0
+        if self._init_last is not None:  # the init window's rows first, then settled; the rest after
+            last = self._init_last
+            self._loop(t[:last + 1], g[:last + 1], T[:last + 1], Tp[:last + 1], heading[:last + 1], held[:last + 1],
+                       norm[:last + 1] if norm.size else norm, dip[:last + 1] if dip.size else dip, cols)
+            evloop.settle(t, g, T, Tp, heading, last, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes, cols.n)
             self._init_last = None
-            self._anchor_rows(heading, cols)
+            start = last + 1
+        self._loop(t, g, T, Tp, heading, held, norm, dip, cols, start)
         return {
             "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
             "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
@@ -126,17 +130,6 @@ class ModelEngine(ChunkEngine):
             "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
             "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
         }
-
-    def _anchor_rows(self, heading, cols) -> None:
-        """Rows of the init window before its first compass sample: their gyro-alone heading
-        (written relative) moves by the anchor, as the later rows'."""
-        seen = np.flatnonzero(np.isfinite(heading))
-        if not seen.size or self._rf[evloop.RF_SEEN] != 1.0:
-            return
-        first = int(seen[0])
-        col = cols.column(L.O_HEADING)
-        col[:first] += self._rf[evloop.RF_ANCHOR]
-        wrap360_all(col[:first].copy(), col[:first])
 
     def feed_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
                  dip: float = math.nan) -> tuple[list, list, float]:

@@ -39,7 +39,7 @@ from gyrodrift.kernels.evidence import (
 )
 from gyrodrift.kernels.layout import (
     O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON, OC_UNOBS,
-    OC_UPDATE, R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
+    OC_UPDATE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, UNOBS_A, UNOBS_B,
     UNOBSERVABLE_SD_FRACTION,
 )
 from gyrodrift.kernels.numeric import wrap180, wrap360
@@ -61,7 +61,8 @@ RF_FUSED_ON = 19  # an epoch with a compass sample has closed: the fused heading
 RF_FIRST_ROW = 20
 RF_FIRST_DRIFT = 21
 RF_HIST_N = RF_FIRST_DRIFT + 9  # epochs recorded in the history
-RF_N = RF_HIST_N + 1
+RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading column holds ∫rate (settle anchors it)
+RF_N = RF_INIT_RAW + 1
 
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother (:mod:`gyrodrift.smooth`): its end time (s), length
@@ -261,7 +262,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         out[O_A * cap + ix] = xc[X_A]
         out[O_B * cap + ix] = xc[X_B]
         out[O_C * cap + ix] = xc[X_C] - xc[X_A] * tref
-        out[o_heading + ix] = wrap360(rf[RF_ANCHOR] + I_rate)
+        out[o_heading + ix] = I_rate if rf[RF_INIT_RAW] == 1.0 else wrap360(rf[RF_ANCHOR] + I_rate)
         sig_w = mc[MC_COMPASS_SD]
         if rf[RF_FUSED_ON] == 1.0:
             out[O_FUSED * cap + ix] = wrap360(I_raw + xc[X_DELTA] - (I_bias - rf[RF_IBIAS_E]))
@@ -294,20 +295,20 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
 
 
 @jit
-def settle(t, g, T, Tp, n, tref, rf, out, codes, cap):
-    """The rows of the first epoch (to ``rf[RF_FIRST_ROW]``), compensated with the prior while
-    nothing was measured, compensated again with the drift learned by the epoch's end:
-    bias, rate, a, b, c and ``bias_sd``; the gyro-alone heading of every row of the block
-    (``0..n-1``) moves by the change of the integrated rate (not across time gaps, where it
-    held), and so does the loop's integral."""
-    last = int(rf[RF_FIRST_ROW])
-    if last < 0:
-        return
+def settle(t, g, T, Tp, heading, last, tref, rf, out, codes, cap):
+    """The init window's rows ``0..last``, once it is complete: the rows of its first epoch
+    (to ``rf[RF_FIRST_ROW]``), compensated with the prior while nothing was measured, are
+    compensated again with the drift learned by that epoch's end (bias, rate, a, b, c and
+    ``bias_sd``; reason ``init`` where nothing else refused the compass); the integrated rate moves by the change (not across time gaps, where it
+    held), and so does the loop's integral; the gyro-alone heading (the column holds the
+    integrated rate while the window is held) is anchored on the window's first compass
+    sample, or left relative to the first row without one."""
+    first = int(rf[RF_FIRST_ROW])
     d = rf[RF_FIRST_DRIFT:RF_FIRST_DRIFT + 9]
     a, b, c = d[0], d[1], d[2]
     corr = 0.0
     prev = 0.0
-    for i in range(min(last + 1, n)):
+    for i in range(min(first + 1, last + 1)):
         hT = T[i] - tref
         hTp = Tp[i]
         bias = a * hT + b * hTp + c
@@ -322,7 +323,19 @@ def settle(t, g, T, Tp, n, tref, rf, out, codes, cap):
         out[O_B * cap + i] = b
         out[O_C * cap + i] = c - a * tref
         out[O_BIAS_SD * cap + i] = math.sqrt(max(var, 0.0))
-        out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
-    for i in range(last + 1, n):
-        out[O_HEADING * cap + i] = wrap360(out[O_HEADING * cap + i] + corr)
+        out[O_HEADING * cap + i] += corr
+        if codes[OC_REASON * cap + i] == R_NONE:
+            codes[OC_REASON * cap + i] = R_INIT
+    for i in range(first + 1, last + 1):
+        out[O_HEADING * cap + i] += corr
     rf[RF_IRATE] += corr
+    anchor = 0.0
+    for i in range(last + 1):
+        if not math.isnan(heading[i]):
+            anchor = heading[i] - out[O_HEADING * cap + i]
+            break
+    if rf[RF_SEEN] == 1.0:
+        rf[RF_ANCHOR] = anchor
+    for i in range(last + 1):
+        out[O_HEADING * cap + i] = wrap360(anchor + out[O_HEADING * cap + i])
+    rf[RF_INIT_RAW] = 0.0
