@@ -328,10 +328,12 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     assert (locked["gate_reason"] == "interference").mean() > 0.4
     assert (recovered["gate_reason"] == "interference").mean() < 0.25
     assert heading_error_stats(aligned(recovered))["rms"] < 0.5 * heading_error_stats(aligned(locked))["rms"]
-    # adaptive's zero-rate updates on the still unit keep it from locking out in the first place
-    assert (compensate(log)["gate_reason"] == "interference").mean() < 0.25
-    cfg = CompensatorConfig()
-    assert_same(compensate(log), stream(log, cfg))
+    # adaptive weighs a jump of the drift (heating turning to cooling) against a disturbance:
+    # the clean compass stays clean, and the heading follows it
+    out = compensate(log)
+    assert (out["gate_reason"] == "interference").mean() < 0.05
+    assert heading_error_stats(aligned(out))["rms"] < 0.5 * heading_error_stats(aligned(recovered))["rms"]
+    assert_same(out, stream(log, CompensatorConfig()))
 
 
 def test_bias_sd_does_not_understate_the_error():

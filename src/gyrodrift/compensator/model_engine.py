@@ -87,6 +87,7 @@ class ModelEngine(ChunkEngine):
         self._init_last = e
         self._rf[evloop.RF_FIRST_ROW] = -1.0
         self._rf[evloop.RF_INIT_RAW] = 1.0
+        self._rf[evloop.RF_UNOBS] = evloop.unobservable(self.est.mf, self._rc)
 
     def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols, i=0) -> None:
         """Rows ``i..`` of the arrays through the model's row loop (growing the epoch history)."""

@@ -51,6 +51,10 @@ class AdaptiveConfig:
     drift_rate_dps2, drift_rate_s : float
         Stationary standard deviation (deg/s²) and correlation time (s) of the rate at which
         the drift departs from eq. (2).
+    drift_jump_dps, drift_jump_s : float
+        A jump of the drift (a knee, a hysteresis switching as heating turns to cooling, a
+        thermal shock): its standard deviation (deg/s) and the mean time between jumps (s);
+        every epoch is weighed with and without one (``drift_jump_dps`` 0: never).
     compass_error_deg, compass_error_s : float
         Standard deviation (deg) and correlation time (s) of the compass's slow error d
         (deviation, slow wander): a Gauss–Markov process.
@@ -103,6 +107,8 @@ class AdaptiveConfig:
     drift_walk_temp: float = 0.02
     drift_rate_dps2: float = 0.0003
     drift_rate_s: float = 300.0
+    drift_jump_dps: float = 0.3
+    drift_jump_s: float = 600.0
     compass_error_deg: float = 2.0
     compass_error_s: float = 3600.0
     disturbance_step_deg: float = 30.0
@@ -142,7 +148,8 @@ class AdaptiveConfig:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ConfigError(f"adaptive setting {f.name} must be a finite number >= 0, got {v!r}")
         for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
-                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s", "deviation_span_deg"):
+                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s", "deviation_span_deg",
+                     "drift_jump_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"adaptive setting {name} must be > 0, got {getattr(self, name)!r}")
         for name in ("p_clean0", "p_still0"):
@@ -161,6 +168,7 @@ class AdaptiveConfig:
         mc[ev.MC_K_TURN] = self.turn_error_s
         mc[ev.MC_L_DEV] = self.deviation_span_deg
         mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
+        mc[ev.MC_SIG_JUMP], mc[ev.MC_TAU_JUMP] = self.drift_jump_dps, self.drift_jump_s
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s
         mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks

@@ -143,10 +143,10 @@ NOISE_PRIOR_STEPS = 20.0
  MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
- MC_RATE_ANY, MC_CLOCK, MC_L_DEV) = range(32)
+ MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP) = range(34)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 32
+MC_Q_W = 34
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -315,6 +315,47 @@ def _switch(dt, tau):
 
 
 @jit
+def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll):
+    """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
+    when still; drift plus a true rate when moving, the rate from the random-walk predictors
+    or any rate), its serial structure, the compass (with the disturbance e in a disturbed
+    mode, which alone it corrects) and the field. Returns the log-likelihood and the compass
+    innovation's excess over its predicted variance (NaN: none, or the heading not known to
+    a few degrees)."""
+    ll = 0.0
+    still = _is_still(j)
+    if not gap:
+        if still:
+            ll += _update(x, P, Hg, dG, arw, False)
+        else:
+            mean = np.dot(Hg, x)
+            base = np.dot(Hg, np.dot(P, Hg)) + arw
+            lk = np.empty(N_RATE + 1)
+            rest = 1.0
+            for k in range(N_RATE):
+                Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
+                lk[k] = math.log(mc[MC_SHARE + k]) + _loggauss(dG - mean - mf[MF_W + 2 * k] * dt, base + Pk * dt * dt)
+                rest -= mc[MC_SHARE + k]
+            lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
+            m = np.max(lk)
+            ll += m + math.log(np.sum(np.exp(lk - m)))
+        ll += l_white if still else l_any
+    excess = math.nan
+    if n_c > 0.0:
+        only = -1 if _is_clean(j) else X_E  # a disturbed compass tells nothing but its e
+        H = Hs if still else Hm
+        z = D - h_still if still else D
+        nu = wrap180(z - np.dot(H, x))
+        s_pred = np.dot(H, np.dot(P, H)) + Rc - mf[MF_RX]
+        if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
+            excess = nu * nu - s_pred
+        ll += _update(x, P, H, z, Rc, True, only)
+        if _is_clean(j):
+            ll += field_ll
+    return ll, excess
+
+
+@jit
 def epoch(mf, mc, t_end, temp_end):
     """Close the epoch ending at ``t_end`` (temperature ``temp_end``): predict, weigh the
     modes by the epoch's gyro and compass data, update, combine. The epoch's sums are in
@@ -390,54 +431,37 @@ def epoch(mf, mc, t_end, temp_end):
         if not _is_clean(j):
             Pn[X_E, X_E] += q_e
         Pj[:, :] = Pn
-    # the gyro: a drift measurement when still; drift plus a true rate when moving
-    if not gap:
-        Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
-        Hg[X_A] = dTc
-        Hg[X_B] = dTp
-        Hg[X_C] = dt
-        Hg[X_R] = -0.5 * dt * dt
-        for j in range(NM):
-            if _is_still(j):
-                ll[j] += _update(X[j], P[j], Hg, dG, arw, False)
-            else:
-                mean = np.dot(Hg, X[j])
-                base = np.dot(Hg, np.dot(P[j], Hg)) + arw
-                lk = np.empty(N_RATE + 1)
-                rest = 1.0
-                for k in range(N_RATE):
-                    Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
-                    lk[k] = math.log(mc[MC_SHARE + k]) + _loggauss(dG - mean - mf[MF_W + 2 * k] * dt, base + Pk * dt * dt)
-                    rest -= mc[MC_SHARE + k]
-                lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
-                m = np.max(lk)
-                ll[j] += m + math.log(np.sum(np.exp(lk - m)))
-        # the gyro's serial structure: white noise about a constant when still (the von Neumann
-        # ratio of successive differences to the variance is near 2); any motion may lower it
-        ng = mf[MF_E_NG]
-        if ng >= VN_MIN_SAMPLES:
-            ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
-            if ss > 0.0:
-                vn = mf[MF_E_DG2] / ss
-                mean0 = 2.0 * ng / (ng - 1.0)
-                var0 = 4.0 * (ng - 2.0) / ((ng - 1.0) * (ng + 1.0))
-                l_white = _loggauss(vn - mean0, var0)
-                l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0)) + (1.0 - VN_MOTION) / (mean0 + 3.0 * math.sqrt(var0)))
-                for j in range(NM):
-                    ll[j] += l_white if _is_still(j) else l_any
+    # the epoch's data, shared by every mode: the gyro's integral and its serial structure
+    Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
+    Hg[X_A] = dTc
+    Hg[X_B] = dTp
+    Hg[X_C] = dt
+    Hg[X_R] = -0.5 * dt * dt
+    l_white = l_any = 0.0
+    ng = mf[MF_E_NG]
+    if not gap and ng >= VN_MIN_SAMPLES:
+        # white noise about a constant when still (the von Neumann ratio of successive
+        # differences to the variance is near 2); any motion may lower it
+        ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
+        if ss > 0.0:
+            vn = mf[MF_E_DG2] / ss
+            mean0 = 2.0 * ng / (ng - 1.0)
+            var0 = 4.0 * (ng - 2.0) / ((ng - 1.0) * (ng + 1.0))
+            l_white = _loggauss(vn - mean0, var0)
+            l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0)) + (1.0 - VN_MOTION) / (mean0 + 3.0 * math.sqrt(var0)))
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
-    excess = np.zeros(NM)
+    D = Rc = h_still = 0.0
     field_ll = 0.0
+    Hs = np.zeros(NX)
+    Hm = np.zeros(NX)
     if n_c > 0.0:
         D = mf[MF_E_DREF] + mf[MF_E_SD] / n_c
-        Rc = mf[MF_SIG_W2] / n_c
         h_still = dG - mf[MF_E_SG] / n_c  # ∫gyro from the mean sample to the epoch end
-        Hs = np.zeros(NX)
         Hs[X_DELTA] = 1.0
         Hs[X_D] = 1.0
         Hs[X_E] = 1.0
-        Hm = Hs.copy()
+        Hm[:] = Hs
         Hm[X_A] = dTc - mf[MF_E_STC] / n_c
         Hm[X_B] = dTp - mf[MF_E_STP] / n_c
         Hm[X_C] = dt - mf[MF_E_ST] / n_c
@@ -446,18 +470,34 @@ def epoch(mf, mc, t_end, temp_end):
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        Rc += mf[MF_RX] + (mc[MC_K_TURN] * dG / dt) ** 2  # the compass errs more while turning (tilt, lag)
-        for j in range(NM):  # a disturbed compass carries its disturbance e (zero when clean)
-            only = -1 if _is_clean(j) else X_E  # and tells nothing else: only e is corrected
-            H = Hs if _is_still(j) else Hm
-            z = D - h_still if _is_still(j) else D
-            nu = wrap180(z - np.dot(H, X[j]))
-            s_pred = np.dot(H, np.dot(P[j], H)) + Rc - mf[MF_RX]
-            # the excess says something of the compass only once the heading is known to a few deg
-            excess[j] = nu * nu - s_pred if s_pred < RX_S_MAX else math.nan
-            ll[j] += _update(X[j], P[j], H, z, Rc, True, only)
-            if _is_clean(j):
-                ll[j] += field_ll
+        # the compass errs more while turning (tilt, lag)
+        Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX] + (mc[MC_K_TURN] * dG / dt) ** 2
+    # each mode weighs the data twice: with the drift as the model carries it, and with a jump
+    # of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown size);
+    # the mode's likelihood is their sum, its state the likelier one's
+    p_jump = _switch(dt, mc[MC_TAU_JUMP])
+    jump_var = mc[MC_SIG_JUMP] ** 2
+    excess = np.zeros(NM)
+    for j in range(NM):
+        xa, Pa = X[j].copy(), P[j].copy()
+        lla, exa = _measure(xa, Pa, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+        if p_jump > 0.0 and jump_var > 0.0:
+            xb, Pb = X[j].copy(), P[j].copy()
+            Pb[X_C, X_C] += jump_var
+            llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+            la, lb = math.log(1.0 - p_jump) + lla, math.log(p_jump) + llb
+            top = max(la, lb)
+            ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
+            if lb > la:  # the likelier of the two is kept (a jump rarely is: merged, its
+                xa, Pa, exa = xb, Pb, exb  # variance would be process noise every epoch)
+            excess[j] = exa
+            X[j, :] = xa
+            P[j, :, :] = Pa
+        else:
+            ll[j] = lla
+            excess[j] = exa
+            X[j, :] = xa
+            P[j, :, :] = Pa
     # mode probabilities
     top = -math.inf
     for j in range(NM):

@@ -106,14 +106,9 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
     rf[RF_IBIAS_E] = I_bias
     if mf[MF_E_NC] > 0.0:
         rf[RF_FUSED_ON] = 1.0
-    Pc = mf[MF_PC:MF_PC + NX * NX]
-    code = 0
-    if math.sqrt(max(Pc[X_A * NX + X_A], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_A]:
-        code += UNOBS_A
-    if math.sqrt(max(Pc[X_B * NX + X_B], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_B]:
-        code += UNOBS_B
-    rf[RF_UNOBS] = code
+    rf[RF_UNOBS] = unobservable(mf, rc)
     if hist.shape[1] == N_HIST and dt > 0.0:
+        Pc = mf[MF_PC:MF_PC + NX * NX]
         k = int(rf[RF_HIST_N])
         hist[k, H_T] = t
         hist[k, H_DT] = dt
@@ -292,6 +287,19 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
     return stop
+
+
+@jit
+def unobservable(mf, rc):
+    """The ``unobservable`` code of the model's state: a and/or b while their standard
+    deviation is above ``UNOBSERVABLE_SD_FRACTION`` of the prior's."""
+    Pc = mf[MF_PC:MF_PC + NX * NX]
+    code = 0
+    if math.sqrt(max(Pc[X_A * NX + X_A], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_A]:
+        code += UNOBS_A
+    if math.sqrt(max(Pc[X_B * NX + X_B], 0.0)) > UNOBSERVABLE_SD_FRACTION * rc[RC_PRIOR_B]:
+        code += UNOBS_B
+    return float(code)
 
 
 @jit

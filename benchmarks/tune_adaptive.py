@@ -1,6 +1,6 @@
-"""Run the evidence model on generator seeds and compare with stored baselines (a tuning aid).
+"""Run the default (adaptive) model on generator seeds and compare with stored baselines (a tuning aid).
 
-    python benchmarks/tune_evidence.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
+    python benchmarks/tune_adaptive.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
 
 ``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
 only ``default`` is recomputed here (with the settings given), so a setting can be tried in
@@ -18,7 +18,7 @@ import pandas as pd
 
 from gyrodrift import heldout
 from gyrodrift.compensator import CompensatorConfig
-from gyrodrift.estimators.evidence import EvidenceConfig
+from gyrodrift.estimators.adaptive import AdaptiveConfig
 
 
 def main(argv=None) -> int:
@@ -28,13 +28,13 @@ def main(argv=None) -> int:
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--classes", nargs="+")
     p.add_argument("--workers", type=int, default=2)
-    p.add_argument("--set", nargs="*", default=[], help="EvidenceConfig field=value")
+    p.add_argument("--set", nargs="*", default=[], help="AdaptiveConfig field=value")
     p.add_argument("-o", "--output")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
     import ast
-    ev = EvidenceConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=") for s in args.set)})
-    cfg = CompensatorConfig(estimator="evidence", evidence=ev)
+    ev = AdaptiveConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=") for s in args.set)})
+    cfg = CompensatorConfig(adaptive=ev)
     df = heldout.run_generated(args.classes, [args.split], args.seeds, ["default"], config=cfg, workers=args.workers)
     if args.output:
         df.to_csv(args.output, index=False)
