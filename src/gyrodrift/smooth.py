@@ -14,7 +14,11 @@ evolve the same way whatever the hypotheses about compass and platform: between 
 of epochs ``k`` and ``k+1``::
 
     z_{k+1} = F_k z_k + w_k,  F = I with F[c', r] = τ_r (1 − φ),  F[r, r] = φ = exp(−Δt/τ_r)
-    w_k ~ N(0, diag(q_a² |ΔT|,  q_b² Δt,  q_c² Δt + q_cT² |ΔT|,  σ_r² (1 − φ²)))
+    w_k ~ N(0, diag(q_a² |ΔT|,  q_b² Δt,  q_c² Δt + q_cT² |ΔT| + p_k σ_j²,  σ_r² (1 − φ²)))
+
+where ``p_k`` is the probability that the forward pass kept a jump of the drift (standard
+deviation σ_j) in epoch k+1: the smoother does not carry a step back across the epoch it
+happened in.
 
 with the settings of :class:`gyrodrift.estimators.AdaptiveConfig`. The forward pass is the
 model's own: its combined (mixture) estimate at every epoch end, recorded by the engine
@@ -39,7 +43,7 @@ import pandas as pd
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_P, H_T, H_X, N_HIST
+from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_HIST
 from gyrodrift.model import ElapsedClock
 
 __all__ = ["SmoothedDrift", "smooth_epochs", "smooth_output"]
@@ -79,14 +83,15 @@ def _unpack(hist: np.ndarray):
     return x, P
 
 
-def _transition(dt: float, dtemp: float, st) -> tuple[np.ndarray, np.ndarray]:
-    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC (module notes)."""
+def _transition(dt: float, dtemp: float, jump: float, st) -> tuple[np.ndarray, np.ndarray]:
+    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC in which the
+    forward pass kept a jump of the drift with probability ``jump`` (module notes)."""
     phi = np.exp(-dt / st.drift_rate_s)
     F = np.eye(4)
     F[2, 3] = st.drift_rate_s * (1.0 - phi)
     F[3, 3] = phi
-    Q = np.diag([st.slope_walk**2 * dtemp, st.rate_walk**2 * dt, st.drift_walk**2 * dt + st.drift_walk_temp**2 * dtemp,
-                 st.drift_rate_dps2**2 * (1.0 - phi * phi)])
+    Q = np.diag([st.slope_walk**2 * dtemp, st.rate_walk**2 * dt, st.drift_walk**2 * dt + st.drift_walk_temp**2 * dtemp
+                  + jump * st.drift_jump_dps**2, st.drift_rate_dps2**2 * (1.0 - phi * phi)])
     return F, Q
 
 
@@ -110,7 +115,7 @@ def smooth_epochs(hist: np.ndarray, config=None) -> SmoothedDrift:
     xs, Ps = x.copy(), P.copy()
     st = config.adaptive
     for k in range(x.shape[0] - 2, -1, -1):
-        F, Q = _transition(hist[k + 1, H_DT], hist[k + 1, H_DTEMP], st)
+        F, Q = _transition(hist[k + 1, H_DT], hist[k + 1, H_DTEMP], hist[k + 1, H_JUMP], st)
         Pm = F @ P[k] @ F.T + Q
         C = np.linalg.solve(Pm.T, (P[k] @ F.T).T).T  # P F^T Pm^-1 (Pm symmetric)
         xs[k] = x[k] + C @ (xs[k + 1] - F @ x[k])

@@ -119,7 +119,9 @@ MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same
 #: accelerating, vibration): from the clean innovations' excess over their predicted variance,
 #: forgotten sums and weight.
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
-N_MF = MF_RX_W + 1
+#: Probability that the last epoch's drift jumped (the modes' weights where the jump was kept).
+MF_JUMP = MF_RX_W + 1
+N_MF = MF_JUMP + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
@@ -478,6 +480,7 @@ def epoch(mf, mc, t_end, temp_end):
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
+    jumped = np.zeros(NM)
     for j in range(NM):
         xa, Pa = X[j].copy(), P[j].copy()
         lla, exa = _measure(xa, Pa, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
@@ -490,6 +493,7 @@ def epoch(mf, mc, t_end, temp_end):
             ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
             if lb > la:  # the likelier of the two is kept (a jump rarely is: merged, its
                 xa, Pa, exa = xb, Pb, exb  # variance would be process noise every epoch)
+                jumped[j] = 1.0
             excess[j] = exa
             X[j, :] = xa
             P[j, :, :] = Pa
@@ -519,6 +523,7 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
     mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING]
+    mf[MF_JUMP] = np.dot(mu, jumped)
     mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
     mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0

@@ -67,9 +67,10 @@ RF_N = RF_INIT_RAW + 1
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother (:mod:`gyrodrift.smooth`): its end time (s), length
 #: (s), temperature change (degC, the drift's random walk), the combined drift states
-#: [a, b, c', r] and their covariance (upper triangle, row by row: aa ab ac ar bb bc br cc cr rr).
-H_T, H_DT, H_DTEMP, H_X, H_P = 0, 1, 2, 3, 7
-N_HIST = 17
+#: [a, b, c', r] and their covariance (upper triangle, row by row: aa ab ac ar bb bc br cc cr rr),
+#: and the probability that the drift jumped in it.
+H_T, H_DT, H_DTEMP, H_X, H_P, H_JUMP = 0, 1, 2, 3, 7, 17
+N_HIST = 18
 
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
@@ -113,6 +114,7 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
         hist[k, H_T] = t
         hist[k, H_DT] = dt
         hist[k, H_DTEMP] = dtemp
+        hist[k, H_JUMP] = mf[ev.MF_JUMP]
         xs = (X_A, X_B, X_C, ev.X_R)
         m = 0
         for r in range(4):
