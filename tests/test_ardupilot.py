@@ -281,10 +281,12 @@ def test_cli_compensate_bin_equals_compensating_the_simulated_csv(sim, flight, t
     a, b = pd.read_csv(out_bin), pd.read_csv(out_csv)
     assert len(a) == len(b) == len(sim)
     np.testing.assert_allclose(a["t"], b["t"], rtol=0, atol=1e-12)  # TimeUS * 1e-6 against t + 5.0
-    # float32 rates and whole milligauss in the log: the drift agrees to far below its own size; the
-    # magnetometer's rounding (up to 0.5 mG of ~250 mG horizontal) moves the compass heading by a few
-    # hundredths of a degree, which shifts the start heading and flips a few borderline gate decisions
-    assert np.abs(a["bias_z"] - b["bias_z"]).max() < 1e-4
+    # float32 rates and whole milligauss in the log: the magnetometer's rounding (up to 0.5 mG of
+    # ~250 mG horizontal) moves the compass heading by a few hundredths of a degree; the drift the
+    # model learns on this 2-min drive (0.2 deg/s RMS from the truth) moves by a twentieth of that
+    # at most
+    err = float(np.sqrt(np.mean((b["bias_z"] - sim["true_bias_z"].to_numpy()) ** 2)))
+    assert np.abs(a["bias_z"] - b["bias_z"]).max() < 0.1 * err
     assert np.abs((a["heading"] - b["heading"] + 180.0) % 360.0 - 180.0).max() < 0.1
     assert (a["gate_reason"] == b["gate_reason"]).mean() > 0.9  # 93.5 % with the gyro-aided tilt
     # --instance reaches the reader

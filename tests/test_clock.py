@@ -12,6 +12,7 @@ import pytest
 from conftest import synthetic_log
 from gyrodrift.compensator import Compensator, CompensatorConfig, compensate, uses_clock
 from gyrodrift.errors import ConfigError
+from gyrodrift.estimators import AdaptiveConfig
 from gyrodrift.fleet import process_one
 from gyrodrift.io import read_log
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock, temperature_is_flat
@@ -79,17 +80,24 @@ def test_noiseless_linear_trend_in_time_is_recovered_exactly():
     slope_dps_per_s = 2e-4
     log = synthetic_log(duration_s=1800.0, fs_hz=10.0, temp_c=lambda t: np.full_like(t, 31.0),
                         drift_dps=lambda t, T: -0.1 + slope_dps_per_s * t)
-    out = compensate(log)
+    frozen = AdaptiveConfig(slope_walk=0.0, rate_walk=0.0, drift_walk=0.0, drift_walk_temp=0.0,
+                            drift_rate_dps2=1e-9)  # the model without process noise: exact, as
+    out = compensate(log, CompensatorConfig(adaptive=frozen))  # fast as its gyro noise floor allows
     assert out.attrs["drift_regressor"] == "clock"
     late = out["t"] > 900.0
-    assert np.abs(out["bias_z"] - out["true_bias_z"])[late].max() < 2e-3
-    assert out["a"].iloc[-1] == pytest.approx(slope_dps_per_s * CLOCK_UNIT_S, rel=0.05)
+    err = np.abs(out["bias_z"] - out["true_bias_z"])
+    assert err[late].max() < 1e-3 and err.iloc[-1] < 4e-4
+    assert out["a"].iloc[-1] == pytest.approx(slope_dps_per_s * CLOCK_UNIT_S, rel=0.02)
     assert np.all(out["temp_rate"] == 0.0)
+    # with the default process noise the drift rate is shared between a and r: a small lag
+    out = compensate(log)
+    assert np.abs(out["bias_z"] - out["true_bias_z"])[late].max() < 5e-3
 
 
 def test_warm_up_without_temperature_the_clock_beats_a_constant_bias():
-    """The drift of a warming unit whose temperature is not logged: a bias with a random walk
-    lags it and the heading walks away; the clock follows it (heading RMS at least 2x lower)."""
+    """The drift of a warming unit whose temperature is not logged: a bias that follows it by
+    its own rate lags it; the clock, a regressor that keeps changing, follows it better
+    (heading RMS at least 30 % lower)."""
     errors = {}
     for mode in ("measured", "auto"):
         rms = []
@@ -98,7 +106,7 @@ def test_warm_up_without_temperature_the_clock_beats_a_constant_bias():
             err = (out["heading"] - out["ref_heading"] + 180.0) % 360.0 - 180.0
             rms.append(float(np.sqrt(np.mean((err - err.iloc[0]) ** 2))))
         errors[mode] = np.mean(rms)
-    assert errors["auto"] < 0.5 * errors["measured"], errors
+    assert errors["auto"] < 0.7 * errors["measured"], errors
 
 
 def test_the_note_says_what_t_is():

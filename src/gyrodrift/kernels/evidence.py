@@ -326,6 +326,9 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     a few degrees)."""
     ll = 0.0
     still = _is_still(j)
+    # the compass errs more while the platform turns (the tilt of cornering, the compass's lag):
+    # not at all when still; when moving, with the rate the mode's drift leaves of the gyro
+    turn = 0.0 if still or gap else mc[MC_K_TURN] * (dG - np.dot(Hg, x)) / dt
     if not gap:
         if still:
             ll += _update(x, P, Hg, dG, arw, False)
@@ -348,10 +351,10 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         H = Hs if still else Hm
         z = D - h_still if still else D
         nu = wrap180(z - np.dot(H, x))
-        s_pred = np.dot(H, np.dot(P, H)) + Rc - mf[MF_RX]
+        s_pred = np.dot(H, np.dot(P, H)) + Rc + turn * turn - mf[MF_RX]
         if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
             excess = nu * nu - s_pred
-        ll += _update(x, P, H, z, Rc, True, only)
+        ll += _update(x, P, H, z, Rc + turn * turn, True, only)
         if _is_clean(j):
             ll += field_ll
     return ll, excess
@@ -472,8 +475,7 @@ def epoch(mf, mc, t_end, temp_end):
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        # the compass errs more while turning (tilt, lag)
-        Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX] + (mc[MC_K_TURN] * dG / dt) ** 2
+        Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
     # each mode weighs the data twice: with the drift as the model carries it, and with a jump
     # of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown size);
     # the mode's likelihood is their sum, its state the likelier one's
@@ -547,7 +549,8 @@ def epoch(mf, mc, t_end, temp_end):
     if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
         mf[MF_NS_S] = keep * mf[MF_NS_S] + 0.5 * mf[MF_E_DG2]
         mf[MF_NS_W] = keep * mf[MF_NS_W] + mf[MF_E_NDG]
-        mf[MF_SIG_S2] = mf[MF_NS_S] / mf[MF_NS_W]
+        # not below a hundredth of the setting's (a noiseless or quantised gyro is no proof of stillness)
+        mf[MF_SIG_S2] = max(mf[MF_NS_S] / mf[MF_NS_W], 0.01 * mc[MC_GYRO_NOISE] ** 2 / math.exp(mf[MF_LOG_H]))
     if mf[MF_E_NDD] >= 1.0 and mf[MF_PDIST] < 0.5:
         mf[MF_NW_S] = keep * mf[MF_NW_S] + 0.5 * mf[MF_E_DD2]
         mf[MF_NW_W] = keep * mf[MF_NW_W] + mf[MF_E_NDD]
