@@ -133,6 +133,8 @@ GAP_VAR_MAX = 90.0**2
 #: A clean compass innovation says something of the compass's epoch-level error only when its
 #: predicted variance is below this, deg² (the heading known to a few degrees).
 RX_S_MAX = 25.0
+#: Mean time a motion keeps its character, s: the rate filters' chance of handing over.
+RATE_SWITCH_S = 10.0
 #: Weight of the settings' noise values in the measured noise, in steps of data.
 NOISE_PRIOR_STEPS = 20.0
 
@@ -387,15 +389,10 @@ def epoch(mf, mc, t_end, temp_end):
     cbar = _mix(mf, Pi, mc[MC_SIG_STEP] ** 2)
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    # process noise of the drift and the compass error, shared by every mode
-    phi_d = math.exp(-dt / mc[MC_TAU_D] - abs(dG) / mc[MC_L_DEV])  # d decorrelates in time and with heading
+    # process noise of the drift, shared by every mode
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
     q_r = mc[MC_SIG_R] ** 2 * (1.0 - phi_r * phi_r)
-    # a disturbance decays in time and decorrelates as the heading turns (it depends on heading)
-    phi_e = math.exp(-dt / mc[MC_TAU_E] - abs(dG) / mc[MC_L_DEV])
-    q_e = mc[MC_Q_E] ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * abs(dG) / mc[MC_L_DEV]))
-    q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
@@ -410,10 +407,18 @@ def epoch(mf, mc, t_end, temp_end):
         x = X[j]
         Pj = P[j]
         still = _is_still(j)
+        drift_int = x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt
         if still:  # the heading holds: δ moves with the gyro integral
             x[X_DELTA] -= dG
         else:  # δ moves by minus the drift integral (eq. 5)
-            x[X_DELTA] -= x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt
+            x[X_DELTA] -= drift_int
+        # the compass's slow error d and a disturbance e decorrelate in time and as the heading
+        # turns (deviation is a function of heading): by the turn this mode sees, none when still
+        turned = 0.0 if still or gap else abs(dG - drift_int)
+        phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
+        phi_e = math.exp(-dt / mc[MC_TAU_E] - turned / mc[MC_L_DEV])
+        q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
+        q_e = mc[MC_Q_E] ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
         x[X_D] *= phi_d
@@ -476,9 +481,11 @@ def epoch(mf, mc, t_end, temp_end):
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
         Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
-    # each mode weighs the data twice: with the drift as the model carries it, and with a jump
-    # of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown size);
-    # the mode's likelihood is their sum, its state the likelier one's
+    # each clean mode weighs the data twice: with the drift as the model carries it, and with a
+    # jump of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown size);
+    # the mode's likelihood is their sum, its state the likelier one's. Only a clean compass can
+    # tell a jump from the start of a motion: under a disturbed one the drift keeps its slow
+    # dynamics (a jump there would be two coincidences explaining one change)
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
@@ -486,7 +493,7 @@ def epoch(mf, mc, t_end, temp_end):
     for j in range(NM):
         xa, Pa = X[j].copy(), P[j].copy()
         lla, exa = _measure(xa, Pa, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-        if p_jump > 0.0 and jump_var > 0.0:
+        if p_jump > 0.0 and jump_var > 0.0 and _is_clean(j):
             xb, Pb = X[j].copy(), P[j].copy()
             Pb[X_C, X_C] += jump_var
             llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
@@ -529,17 +536,42 @@ def epoch(mf, mc, t_end, temp_end):
     mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
     mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0
-    # the rate filters follow the compensated mean rate
+    # the rate filters follow the compensated mean rate, and interact (an IMM of their own): each
+    # starts the next epoch from the filters (and the "any rate" model, whose estimate is the
+    # measured rate) weighted by how well they explained this one, so a new steady turn is
+    # predicted by the slow filters once the agile ones have found it
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     if not gap:
-        xc = mf[MF_XC:MF_XC + NX]
-        r = (dG - (xc[X_A] * dTc + xc[X_B] * dTp + xc[X_C] * dt)) / dt
+        # the rate a moving platform had: the gyro less the moving hypotheses' drift
+        xm = (mu[CLEAN_MOVING] * X[CLEAN_MOVING] + mu[DIST_MOVING] * X[DIST_MOVING]) / (mu[CLEAN_MOVING] + mu[DIST_MOVING])
+        r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp) * dt * dt) / (dt * dt)
+        lw = np.empty(N_RATE + 1)
+        ws = np.empty(N_RATE + 1)
+        Ps = np.empty(N_RATE + 1)
+        rest = 1.0
         for k in range(N_RATE):
+            w = mf[MF_W + 2 * k]
             Pp = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
+            lw[k] = math.log(mc[MC_SHARE + k]) + _loggauss(r - w, Pp + Rr)
             K = Pp / (Pp + Rr)
-            mf[MF_W + 2 * k] += K * (r - mf[MF_W + 2 * k])
-            mf[MF_W + 2 * k + 1] = (1.0 - K) * Pp
+            ws[k] = w + K * (r - w)
+            Ps[k] = (1.0 - K) * Pp
+            rest -= mc[MC_SHARE + k]
+        lw[N_RATE] = math.log(rest) + _loggauss(r, mc[MC_RATE_ANY] ** 2 + Rr)
+        ws[N_RATE] = r
+        Ps[N_RATE] = Rr
+        pw = np.exp(lw - np.max(lw))
+        pw /= np.sum(pw)
+        switch = _switch(dt, RATE_SWITCH_S)
+        for k in range(N_RATE):
+            wk = np.empty(N_RATE + 1)
+            for i in range(N_RATE + 1):
+                wk[i] = pw[i] * ((1.0 - switch) if i == k else switch / N_RATE)
+            wk /= np.sum(wk)
+            m = np.dot(wk, ws)
+            mf[MF_W + 2 * k] = m
+            mf[MF_W + 2 * k + 1] = np.dot(wk, Ps + (ws - m) ** 2)
     else:
         for k in range(N_RATE):
             mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt

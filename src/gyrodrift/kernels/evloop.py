@@ -309,7 +309,8 @@ def settle(t, g, T, Tp, heading, last, tref, rf, out, codes, cap):
     """The init window's rows ``0..last``, once it is complete: the rows of its first epoch
     (to ``rf[RF_FIRST_ROW]``), compensated with the prior while nothing was measured, are
     compensated again with the drift learned by that epoch's end (bias, rate, a, b, c and
-    ``bias_sd``; reason ``init`` where nothing else refused the compass); the integrated rate moves by the change (not across time gaps, where it
+    ``bias_sd``); every row of the window gets reason ``init`` where nothing else refused the
+    compass, and ``updated`` 0 (what the window taught is in the rows after it); the integrated rate moves by the change (not across time gaps, where it
     held), and so does the loop's integral; the gyro-alone heading (the column holds the
     integrated rate while the window is held) is anchored on the window's first compass
     sample, or left relative to the first row without one."""
@@ -334,10 +335,12 @@ def settle(t, g, T, Tp, heading, last, tref, rf, out, codes, cap):
         out[O_C * cap + i] = c - a * tref
         out[O_BIAS_SD * cap + i] = math.sqrt(max(var, 0.0))
         out[O_HEADING * cap + i] += corr
-        if codes[OC_REASON * cap + i] == R_NONE:
-            codes[OC_REASON * cap + i] = R_INIT
     for i in range(first + 1, last + 1):
         out[O_HEADING * cap + i] += corr
+    for i in range(last + 1):  # the window's rows are the init's (as streamed provisional rows)
+        codes[OC_UPDATE * cap + i] = 0
+        if codes[OC_REASON * cap + i] == R_NONE:
+            codes[OC_REASON * cap + i] = R_INIT
     rf[RF_IRATE] += corr
     anchor = 0.0
     for i in range(last + 1):
