@@ -23,11 +23,13 @@ FROZEN = AdaptiveConfig(slope_walk=0.0, rate_walk=0.0, drift_walk=0.0, drift_wal
 def test_a_noiseless_still_log_gives_a_b_c_exactly():
     """Still, the temperature rising and falling at changing rates (T and T' both vary): the
     drift a*T + b*T' + c (T' as the compensator measures it) is recovered from the zero-rate
-    measurements alone (no compass)."""
+    measurements alone (no compass). The gyro has white noise: without a compass, stillness is
+    told by the gyro's noise being white about its drift (a noiseless gyro whose drift ramps
+    within each epoch looks like a slow turn)."""
     a, b, c = 0.02, 40.0, -0.3
     log = synthetic_log(duration_s=1200.0, fs_hz=20.0, compass_hz=1e-9,
                         temp_c=lambda t: 25.0 + 10.0 * np.sin(np.pi * t / 1200.0) ** 2,
-                        drift_dps=lambda t, T: a * T + b * temp_rate(t, T) + c, gyro_noise_dps=1e-4)
+                        drift_dps=lambda t, T: a * T + b * temp_rate(t, T) + c, gyro_noise_dps=0.01)
     log["heading"] = np.nan
     out = compensate(log, CompensatorConfig(adaptive=FROZEN, temperature="measured"))
     assert out.attrs["final_params"] == pytest.approx([a, b, c], rel=2e-3, abs=2e-3)

@@ -329,10 +329,14 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     assert (recovered["gate_reason"] == "interference").mean() < 0.25
     assert heading_error_stats(aligned(recovered))["rms"] < 0.5 * heading_error_stats(aligned(locked))["rms"]
     # adaptive weighs a jump of the drift (heating turning to cooling) against a disturbance:
-    # the clean compass stays clean, and the heading follows it
+    # the clean compass stays clean and the fused heading follows it (closer to the truth than
+    # the compass itself); the gyro heading keeps what the drift's fast fall cost it, less than
+    # the paper's filter loses
     out = compensate(log)
     assert (out["gate_reason"] == "interference").mean() < 0.05
-    assert heading_error_stats(aligned(out))["rms"] < 0.5 * heading_error_stats(aligned(recovered))["rms"]
+    assert heading_error_stats(aligned(out))["rms"] < 0.8 * heading_error_stats(aligned(recovered))["rms"]
+    rms = lambda col: float(np.sqrt(np.mean(wrap_180(out[col] - log["ref_heading"]).dropna() ** 2)))  # noqa: E731
+    assert rms("heading_fused") < rms("compass_heading")
     assert_same(out, stream(log, CompensatorConfig()))
 
 

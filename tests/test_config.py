@@ -19,15 +19,42 @@ def test_toml_settings_reach_every_level(tmp_path):
 
 
 def test_toml_fusion_and_adaptive_tables(tmp_path):
-    """The fused-heading settings (B) of docs/results.md and the adaptive switches from TOML."""
+    """The fused-heading settings (B) of docs/results.md and the default model's settings from TOML."""
+    from gyrodrift.estimators import AdaptiveConfig
+
     path = tmp_path / "b.toml"
     path.write_text(
         'estimator = "adaptive"\n[fusion]\nmagnetic_gates = true\nbias_corr_s = 30.0\nrelock_s = inf\n'
-        "[adaptive]\nzaru = false\n"
+        "[adaptive]\ndisturbed_s = 600\ndrift_jump_dps = 0.0\nturn_walks = [0.01, 0.1, 1, 10.0]\n"
     )
     cfg = load_config(path)
     assert cfg.fusion.magnetic_gates and cfg.fusion.bias_corr_s == 30.0 and cfg.fusion.relock_s == float("inf")
-    assert cfg.estimator == "adaptive" and cfg.adaptive.zaru is False
+    assert cfg.estimator == "adaptive"
+    assert cfg.adaptive.disturbed_s == 600.0 and isinstance(cfg.adaptive.disturbed_s, float)
+    assert cfg.adaptive.drift_jump_dps == 0.0  # 0: the drift never jumps
+    assert cfg.adaptive.turn_walks == (0.01, 0.1, 1.0, 10.0) and isinstance(cfg.adaptive.turn_walks, tuple)
+    assert cfg.adaptive.clean_s == AdaptiveConfig().clean_s  # untouched default
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("zaru = false\n", r"\[adaptive\]: unknown setting\(s\) zaru; known: .*turn_walks"),
+        ("q_sd = [1e-4, 0.05, 60.0]\n", r"\[adaptive\]: unknown setting\(s\) q_sd"),
+        ('clean_s = "long"\n', r"\[adaptive\]: clean_s = \"long\" is refused: give a number, e.g. clean_s = 3600.0"),
+        ("turn_walks = [0.01, 0.1]\n", r"\[adaptive\]: .*turn_walks must be 4 positive numbers"),
+        ('turn_shares = [0.3, "x", 0.2, 0.1]\n', r"\[adaptive\]: turn_shares = .* is refused: give a list of numbers"),
+        ("p_still0 = 1.5\n", r"\[adaptive\]: .*p_still0 must be between 0 and 1"),
+        ("drift_walk = 1e300\n", r"\[adaptive\]: drift_walk = 1e\+300 is outside the plausible range"),
+        ("heading_sd0 = 1e300\n", r"\[adaptive\]: heading_sd0 = 1e\+300 is outside the plausible range"),
+    ],
+)
+def test_toml_adaptive_table_is_checked_against_the_model_settings(tmp_path, text, match):
+    path = tmp_path / "m.toml"
+    path.write_text("[adaptive]\n" + text, encoding="utf-8")
+    with pytest.raises(ConfigError, match=match) as info:
+        load_config(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize(
@@ -55,37 +82,42 @@ def test_bad_toml_file_names_the_file(tmp_path, capsys):
     assert "bad.toml" in capsys.readouterr().err
 
 
-def test_fused_heading_settings_suit_the_estimator():
+def test_fused_heading_settings_are_the_tolerant_ones_unless_given():
     from dataclasses import replace
 
     from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.fusion import FusionConfig
 
     assert CompensatorConfig().fusion is None
-    assert CompensatorConfig().fusion_settings == FusionConfig()  # (B) for adaptive
-    for name in ("stkf", "kf", "lsm"):
-        assert CompensatorConfig(estimator=name).fusion_settings == FusionConfig.tolerant()  # (A)
-        assert replace(CompensatorConfig(), estimator=name).fusion_settings == FusionConfig.tolerant()
+    assert FusionConfig.tolerant() != FusionConfig()  # (A) is not (B): the check below can fail
+    assert CompensatorConfig().fusion_settings == FusionConfig.tolerant()  # (A), the default estimator too
+    for name in ("adaptive", "stkf", "kf", "stkf-s1", "lsm", "mlr-causal"):  # whatever the estimator
+        assert CompensatorConfig(estimator=name).fusion_settings == FusionConfig.tolerant(), name
+        assert replace(CompensatorConfig(), estimator=name).fusion_settings == FusionConfig.tolerant(), name
     explicit = FusionConfig(nis_gate=4.0)
     assert CompensatorConfig(estimator="stkf", fusion=explicit).fusion_settings is explicit
     with pytest.raises(ConfigError, match="fusion must be a FusionConfig"):
         CompensatorConfig(fusion={"nis_gate": 4.0})
 
 
-def test_toml_fusion_table_changes_the_settings_that_suit_the_estimator(tmp_path):
+def test_toml_fusion_table_changes_the_tolerant_settings(tmp_path):
+    from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.fusion import FusionConfig
 
     path = tmp_path / "a.toml"
     path.write_text('estimator = "stkf"\n[fusion]\nnis_gate = 4.0\n')
     assert load_config(path).fusion_settings == FusionConfig.tolerant(nis_gate=4.0)
     path.write_text("[fusion]\nnis_gate = 4.0\n")
-    assert load_config(path).fusion_settings == FusionConfig(nis_gate=4.0)
+    assert load_config(path).fusion_settings == FusionConfig.tolerant(nis_gate=4.0)
+    # a [fusion] table changes the settings in force: given ones are kept where it is silent
+    base = CompensatorConfig(fusion=FusionConfig(bias_corr_s=30.0))
+    assert config_from_dict({"fusion": {"nis_gate": 4.0}}, base=base).fusion == FusionConfig(bias_corr_s=30.0, nis_gate=4.0)
     path.write_text('estimator = "nope"\n[fusion]\nnis_gate = 4.0\n')
     with pytest.raises(ConfigError, match="nope"):
         load_config(path)
 
 
-def test_cli_estimator_chooses_the_fused_settings_a_fusion_table_adjusts(tmp_path):
+def test_cli_fusion_table_adjusts_the_fused_settings_whatever_the_estimator(tmp_path):
     from gyrodrift.cli import _config, build_parser
     from gyrodrift.fusion import FusionConfig
 
@@ -95,4 +127,5 @@ def test_cli_estimator_chooses_the_fused_settings_a_fusion_table_adjusts(tmp_pat
     cfg = _config(args)
     assert cfg.estimator == "stkf" and cfg.fusion_settings == FusionConfig.tolerant(nis_gate=4.0)
     args = build_parser().parse_args(["compensate", "in.csv", "-o", "out.csv", "--config", str(path)])
-    assert _config(args).fusion_settings == FusionConfig(nis_gate=4.0)
+    cfg = _config(args)
+    assert cfg.estimator == "adaptive" and cfg.fusion_settings == FusionConfig.tolerant(nis_gate=4.0)

@@ -139,12 +139,13 @@ def test_joseph_form_is_symmetric_and_matches_the_textbook_update():
 
 
 def test_registry():
-    assert {"stkf", "kf", "stkf-s1", "lsm", "fixed", "adaptive"} <= set(ESTIMATORS)
-    for name in ("stkf", "kf", "stkf-s1", "lsm", "fixed", "adaptive"):
+    assert {"stkf", "kf", "stkf-s1", "lsm", "mlr-causal", "fixed", "adaptive"} <= set(ESTIMATORS)
+    for name in ("stkf", "kf", "stkf-s1", "lsm", "mlr-causal", "fixed", "adaptive"):
         est = make_estimator(name)
         assert isinstance(est, DriftEstimator)
+        assert est.name == name and est.causal is True
         assert est.params.shape == (3,) and est.cov.shape == (3, 3)
-    with pytest.raises(ConfigError, match="choose one of: adaptive, fixed, kf, lsm, stkf, stkf-s1"):
+    with pytest.raises(ConfigError, match="choose one of: adaptive, fixed, kf, lsm, mlr-causal, stkf, stkf-s1"):
         make_estimator("nope")
 
 

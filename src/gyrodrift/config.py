@@ -6,7 +6,8 @@ hold the fields of :class:`~gyrodrift.estimators.KalmanConfig`,
 :class:`~gyrodrift.gating.GateConfig`, :class:`~gyrodrift.model.TempRateConfig`,
 :class:`~gyrodrift.estimators.AdaptiveConfig` and :class:`~gyrodrift.fusion.FusionConfig`.
 Anything left out keeps its default; a ``[fusion]`` table changes the fused-heading
-settings that suit the estimator (``CompensatorConfig.fusion_settings``)::
+settings of the paper's filters, which start from the tolerant ones
+(``CompensatorConfig.fusion_settings``, :meth:`~gyrodrift.fusion.FusionConfig.tolerant`)::
 
     update_interval_s = 10.0
     init_s = 30.0
@@ -17,6 +18,10 @@ settings that suit the estimator (``CompensatorConfig.fusion_settings``)::
 
     [gate]
     turn_rate_dps = 2.0
+
+    [adaptive]                 # the default estimator's model (AdaptiveConfig)
+    disturbed_s = 600.0        # mean length of a magnetic disturbance, s
+    turn_walks = [0.003, 0.03, 0.3, 3.0]   # deg/s/√s, slow turns to manoeuvres
 
     [fusion]                   # the fused-heading settings (B) of docs/results.md
     magnetic_gates = true
@@ -35,9 +40,16 @@ The settings in drift-model units are also checked against physics: ``[kalman]``
 ``x0`` must lie within :data:`DRIFT_PARAM_BOUNDS` (``|a| <= 1`` deg/s/degC, ``|b| <=
 1000`` deg, ``|c| <= 50`` deg/s; the bounds of a device profile, see
 :mod:`gyrodrift.profile`), and the standard deviations ``p0_sd``, ``q_sd``, ``max_sd``
-(and those on the diagonal of ``p0_cov``; ``[adaptive] q_sd`` too) within the same
-bounds. Every problem is a :class:`~gyrodrift.errors.ConfigError` of one line that
-names the file, the table and the key.
+(and those on the diagonal of ``p0_cov``) within the same bounds. So are the
+``[adaptive]`` settings in those units: the random walks ``slope_walk`` (of a),
+``rate_walk`` (of b), ``drift_walk`` and ``drift_walk_temp`` (of c), the jump
+``drift_jump_dps`` and the drift's rate ``drift_rate_dps2`` (at most c's bound per second);
+its angles ``heading_sd0``, ``compass_error_deg``, ``disturbance_step_deg`` and the walks
+``disturbance_walk`` and ``still_walk`` (deg per √s) are at most a turn, 360 deg (a larger
+value is no angle, and its square can overflow). The settings class checks the rest (a
+list such as ``turn_walks`` of exactly four positive numbers). Every problem is a
+:class:`~gyrodrift.errors.ConfigError` of one line that names the file, the table and
+the key.
 """
 
 from __future__ import annotations
@@ -73,7 +85,24 @@ _TABLES = ("kalman", "gate", "temp_rate", "adaptive", "fusion")
 MAX_FILE_BYTES = 1 << 20
 _INT64 = (-(2**63), 2**63 - 1)
 #: Per table: the settings that are triples (a, b, c) of drift-model values.
-_DRIFT_TRIPLES = {"kalman": ("x0", "p0_sd", "q_sd", "max_sd"), "adaptive": ("q_sd",)}
+_DRIFT_TRIPLES = {"kalman": ("x0", "p0_sd", "q_sd", "max_sd")}
+_A_MAX, _B_MAX, _C_MAX = DRIFT_PARAM_BOUNDS
+#: Per table: single settings and their plausible largest magnitude, with its unit.
+_BOUNDED = {
+    "adaptive": {
+        "slope_walk": (_A_MAX, "deg/s/degC per √degC"),
+        "rate_walk": (_B_MAX, "deg/degC per √s"),
+        "drift_walk": (_C_MAX, "deg/s per √s"),
+        "drift_walk_temp": (_C_MAX, "deg/s per √degC"),
+        "drift_jump_dps": (_C_MAX, "deg/s"),
+        "drift_rate_dps2": (_C_MAX, "deg/s²"),
+        "heading_sd0": (360.0, "deg"),
+        "compass_error_deg": (360.0, "deg"),
+        "disturbance_step_deg": (360.0, "deg"),
+        "disturbance_walk": (360.0, "deg per √s"),
+        "still_walk": (360.0, "deg per √s"),
+    },
+}
 
 
 def _one_line(text) -> str:
@@ -268,10 +297,15 @@ def _declared_types(cls) -> dict:
 
 def _within_drift_bounds(table: str):
     """A check for :func:`apply_settings`: the drift-model triples of ``table`` (and the
-    variances of ``[kalman] p0_cov``) within :data:`DRIFT_PARAM_BOUNDS`."""
+    variances of ``[kalman] p0_cov``) within :data:`DRIFT_PARAM_BOUNDS`, and the single
+    settings of ``table`` that have a plausible largest value (module notes)."""
     unit = DRIFT_BOUNDS_TEXT
 
     def check(converted: dict, where: str) -> None:
+        for key, (bound, what) in _BOUNDED.get(table, {}).items():
+            v = converted.get(key)
+            if isinstance(v, float) and abs(v) > bound:
+                raise ConfigError(f"{where}: {key} = {_show(v)} is outside the plausible range (at most {bound:g} {what})")
         for key in _DRIFT_TRIPLES.get(table, ()):
             v = converted.get(key)
             if v is not None and any(abs(x) > b for x, b in zip(v, DRIFT_PARAM_BOUNDS)):
@@ -374,8 +408,8 @@ def config_from_dict(values: dict, *, where: str = "config", base: CompensatorCo
         if name in values:
             if not isinstance(values[name], dict):
                 raise ConfigError(f"{where}: [{name}] must be a table of settings, got {_show(values[name])}")
-            if name == "fusion":  # settings given change those that suit the estimator chosen
-                start = apply_settings(base, {k: v for k, v in top.items() if k == "estimator"}, where).fusion_settings
+            if name == "fusion":  # settings given change those in force (the tolerant ones unless set)
+                start = base.fusion_settings
             else:
                 start = getattr(base, name)
             nested[name] = apply_settings(start, values[name], f"{where} [{name}]", _within_drift_bounds(name))

@@ -19,6 +19,7 @@ import numpy as np
 
 from gyrodrift.compensator.engine import ChunkEngine, _read_only, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
+from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
@@ -75,6 +76,8 @@ class ModelEngine(ChunkEngine):
 
     def _initialise(self, inputs, Tp) -> None:
         t, g, T, heading, norm, dip = inputs
+        if t.size < 2:  # as the paper's filters: a log is at least two samples (a time span)
+            raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
         e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
         if t[e] < self._fs[L.F_TSTART]:
             self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "

@@ -112,7 +112,7 @@ class AdaptiveConfig:
     compass_error_deg: float = 2.0
     compass_error_s: float = 3600.0
     disturbance_step_deg: float = 30.0
-    disturbance_walk: float = 0.5
+    disturbance_walk: float = 1.0
     disturbance_s: float = 1800.0
     turn_error_s: float = 0.5
     deviation_span_deg: float = 90.0

@@ -481,11 +481,12 @@ def epoch(mf, mc, t_end, temp_end):
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
         Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
-    # each clean mode weighs the data twice: with the drift as the model carries it, and with a
-    # jump of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown size);
-    # the mode's likelihood is their sum, its state the likelier one's. Only a clean compass can
-    # tell a jump from the start of a motion: under a disturbed one the drift keeps its slow
-    # dynamics (a jump there would be two coincidences explaining one change)
+    # the still, clean mode weighs the data twice: with the drift as the model carries it, and
+    # with a jump of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown
+    # size); the mode's likelihood is their sum, its state the likelier one's. Only there can a
+    # jump be told from a motion: the gyro measures the drift and the compass says the heading
+    # held. A moving platform's rate, or a disturbed compass, would explain a jump as readily as
+    # the jump explains them, so there the drift keeps its slow dynamics
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
@@ -493,7 +494,7 @@ def epoch(mf, mc, t_end, temp_end):
     for j in range(NM):
         xa, Pa = X[j].copy(), P[j].copy()
         lla, exa = _measure(xa, Pa, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-        if p_jump > 0.0 and jump_var > 0.0 and _is_clean(j):
+        if p_jump > 0.0 and jump_var > 0.0 and j == CLEAN_STILL:
             xb, Pb = X[j].copy(), P[j].copy()
             Pb[X_C, X_C] += jump_var
             llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
@@ -581,8 +582,7 @@ def epoch(mf, mc, t_end, temp_end):
     if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
         mf[MF_NS_S] = keep * mf[MF_NS_S] + 0.5 * mf[MF_E_DG2]
         mf[MF_NS_W] = keep * mf[MF_NS_W] + mf[MF_E_NDG]
-        # not below a hundredth of the setting's (a noiseless or quantised gyro is no proof of stillness)
-        mf[MF_SIG_S2] = max(mf[MF_NS_S] / mf[MF_NS_W], 0.01 * mc[MC_GYRO_NOISE] ** 2 / math.exp(mf[MF_LOG_H]))
+        mf[MF_SIG_S2] = mf[MF_NS_S] / mf[MF_NS_W]
     if mf[MF_E_NDD] >= 1.0 and mf[MF_PDIST] < 0.5:
         mf[MF_NW_S] = keep * mf[MF_NW_S] + 0.5 * mf[MF_E_DD2]
         mf[MF_NW_W] = keep * mf[MF_NW_W] + mf[MF_E_NDD]
