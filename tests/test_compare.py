@@ -35,6 +35,21 @@ def test_mlr_recovers_exact_parameters_from_noiseless_linear_data():
     assert not CAUSAL["mlr"]
 
 
+def test_mlr_fits_the_paper_kf_interval_measurements_whatever_the_estimator():
+    from dataclasses import replace
+
+    from gyrodrift.compensator import CompensatorConfig, compensate
+
+    log, _ = linear_noiseless_log()
+    kf = compensate(log, replace(CompensatorConfig(), estimator="kf")).attrs["measurements"]
+    assert len(kf) > 400 and np.allclose(np.diff(np.unique(kf["t"])), 10.0)  # the paper's 10-s intervals (and init)
+    for estimator in ("adaptive", "stkf"):  # the default records no interval measurements
+        out = run_method("mlr", log, CompensatorConfig(estimator=estimator))
+        pd.testing.assert_frame_equal(out.attrs["measurements"], kf)
+        H = np.column_stack([kf["temp"], kf["temp_rate"], np.ones(len(kf))])
+        np.testing.assert_array_equal(out[["a", "b", "c"]].iloc[0], fit_linear_drift(kf["m"], H, kf["r"]))
+
+
 def test_filters_recover_noiseless_linear_drift():
     log, truth = linear_noiseless_log()
     for name in ("stkf", "stkf-s1"):

@@ -238,15 +238,3 @@ def test_cli_montecarlo_errors_are_one_line(argv, match, capsys):
     assert rc == 2
     err = capsys.readouterr().err
     assert err.startswith("gyrodrift: error:") and match in err and len(err.strip().splitlines()) == 1
-
-
-def test_ablation_runs_every_variant_on_the_same_cases():
-    from gyrodrift.estimators import AdaptiveConfig
-    from gyrodrift.montecarlo import ablation_variants, run_ablation
-
-    variants = ablation_variants()
-    assert len(variants) == len(AdaptiveConfig.FIXES) + 2
-    assert variants["without zaru"].zaru is False and variants["every fix off"].stacked is True
-    df = run_ablation(["vehicle"], 1, duration_scale=TINY, workers=1)
-    assert list(df["variant"]) == list(variants)
-    assert (df["n"] == 1).all() and (df["failed"] == 0).all()
