@@ -122,7 +122,9 @@ class ModelEngine(ChunkEngine):
             last = self._init_last
             self._loop(t[:last + 1], g[:last + 1], T[:last + 1], Tp[:last + 1], heading[:last + 1], held[:last + 1],
                        norm[:last + 1] if norm.size else norm, dip[:last + 1] if dip.size else dip, cols)
-            evloop.settle(t, g, T, Tp, heading, last, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes, cols.n)
+            n_init = last if t[last] >= self._fs[L.F_TSTART] else last + 1  # the rows before the window's end
+            evloop.settle(t, g, T, Tp, heading, last, n_init, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes,
+                          cols.n)
             self._init_last = None
             start = last + 1
         self._loop(t, g, T, Tp, heading, held, norm, dip, cols, start)

@@ -248,6 +248,14 @@ class AdaptiveModel(LinearDrift):
         return np.array([x[ev.X_A], x[ev.X_B], x[ev.X_C] - x[ev.X_A] * self.mf[ev.MF_TREF]])
 
     @property
+    def centred_cov(self) -> np.ndarray:
+        """Covariance of the model's own drift states [a, b, c'] (c' the drift at ``T_ref``, the
+        first sample's temperature; before it, the prior's covariance)."""
+        if not self._started:
+            return self._P0.copy()
+        return self.mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1].copy()
+
+    @property
     def cov(self) -> np.ndarray:
         """Covariance of the absolute [a, b, c]."""
         if not self._started:

@@ -44,7 +44,7 @@ the epoch's data:
   decorrelates as the heading turns, so an offset that stays through turns is no disturbance;
   zero in the clean filters), so a step, a ramp or a wander of the compass is explained by e, which
   is the only state a disturbed compass corrects (a Schmidt update: heading and drift are
-  considered, not corrected); with a raw magnetometer the field strength
+  considered, not corrected) while the heading is known better than a disturbance is large; with a raw magnetometer the field strength
   and dip add their own likelihoods (near the reference when clean, anywhere within ±50 % and
   ±30 deg when disturbed).
 
@@ -64,7 +64,7 @@ import numpy as np
 from gyrodrift.kernels import jit
 from gyrodrift.kernels.numeric import wrap180
 
-__all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_noise"]
+__all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
 NM, NX = 4, 7
@@ -195,6 +195,17 @@ def init_state(mf, mc, x0, P0, t_ref):
     for k in range(N_RATE):
         mf[MF_W + 2 * k] = 0.0
         mf[MF_W + 2 * k + 1] = 1.0
+    combine(mf)
+
+
+@jit
+def seed_heading(mf, delta):
+    """The heading's prior mean from the first compass sample (``delta`` = its heading minus
+    the gyro integral, deg), its variance unchanged: the model then depends on no constant
+    rotation of the compass (a declination)."""
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    for j in range(NM):
+        X[j, X_DELTA] = delta
     combine(mf)
 
 
@@ -349,7 +360,9 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         ll += l_white if still else l_any
     excess = math.nan
     if n_c > 0.0:
-        only = -1 if _is_clean(j) else X_E  # a disturbed compass tells nothing but its e
+        # a disturbed compass tells nothing but its e, unless the heading is known less well than
+        # a disturbance is large (at the start, after a long gap): then it still says that much
+        only = -1 if _is_clean(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
         nu = wrap180(z - np.dot(H, x))

@@ -231,7 +231,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mf[MF_E_NORM] += norm[i]
                 mf[MF_E_DIP] += dip[i]
                 mf[MF_E_NF] += 1.0
-            if rf[RF_SEEN] == 0.0:  # the gyro-alone heading starts here
+            if rf[RF_SEEN] == 0.0:  # the gyro-alone heading starts here, and the model's
+                ev.seed_heading(mf, D)  # heading prior is centred on it
                 rf[RF_SEEN] = 1.0
                 rf[RF_ANCHOR] = hi - I_rate
                 rf[RF_T_ANCHOR] = ti
@@ -305,12 +306,13 @@ def unobservable(mf, rc):
 
 
 @jit
-def settle(t, g, T, Tp, heading, last, tref, rf, out, codes, cap):
+def settle(t, g, T, Tp, heading, last, n_init, tref, rf, out, codes, cap):
     """The init window's rows ``0..last``, once it is complete: the rows of its first epoch
     (to ``rf[RF_FIRST_ROW]``), compensated with the prior while nothing was measured, are
     compensated again with the drift learned by that epoch's end (bias, rate, a, b, c and
-    ``bias_sd``); every row of the window gets reason ``init`` where nothing else refused the
-    compass, and ``updated`` 0 (what the window taught is in the rows after it); the integrated rate moves by the change (not across time gaps, where it
+    ``bias_sd``); the window's first ``n_init`` rows (those before its end time) get reason
+    ``init`` where nothing else refused the compass, and ``updated`` 0 (what the window taught
+    is in the rows after it); the integrated rate moves by the change (not across time gaps, where it
     held), and so does the loop's integral; the gyro-alone heading (the column holds the
     integrated rate while the window is held) is anchored on the window's first compass
     sample, or left relative to the first row without one."""
@@ -337,7 +339,7 @@ def settle(t, g, T, Tp, heading, last, tref, rf, out, codes, cap):
         out[O_HEADING * cap + i] += corr
     for i in range(first + 1, last + 1):
         out[O_HEADING * cap + i] += corr
-    for i in range(last + 1):  # the window's rows are the init's (as streamed provisional rows)
+    for i in range(n_init):  # the window's rows are the init's (as streamed provisional rows)
         codes[OC_UPDATE * cap + i] = 0
         if codes[OC_REASON * cap + i] == R_NONE:
             codes[OC_REASON * cap + i] = R_INIT
