@@ -31,7 +31,7 @@ def test_the_papers_filter_relocks_on_a_steady_disagreement():
     steady disagreement as a drift change."""
     out = compensate(steady_interference_log(), CompensatorConfig(estimator="stkf", temperature="measured"))
     window = (out["t"] > 400.0) & (out["t"] < 500.0)
-    assert np.abs(out["bias_z"] - out["true_bias_z"])[window].max() > 0.2
+    assert np.abs(out["bias_z"] - out["true_bias_z"])[window].max() > 0.1  # the 0.6 deg/s creep pulls it
 
 
 def wobble_log():

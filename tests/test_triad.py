@@ -353,9 +353,9 @@ def test_row_by_row_equals_whole_on_random_logs(seed, acc_mps2, nan_share, gap_a
 
 def xy_columns(args) -> dict:
     """The x/y columns and refusals of one log (arrays t, gx, gy, T, Tp, acc, rz) with a Kalman
-    filter run inside the kernel (stkf, adaptive) and a Python estimator (lsm)."""
+    filter run inside the kernel (stkf, kf) and a Python estimator (lsm)."""
     out = {}
-    for est in ("stkf", "adaptive", "lsm"):
+    for est in ("stkf", "kf", "lsm"):
         tc = TriadCompensator(triad=TriadConfig(estimator=est))
         cols = tc.feed(*(args[k] for k in ("t", "gx", "gy", "T", "Tp", "acc", "rz")))
         out.update({f"{est}/{c}": cols[c] for c in TRIAD_COLUMNS})
@@ -398,3 +398,11 @@ def test_the_source_without_the_compiler_gives_the_same_numbers(tmp_path):
     for key in plain.files:
         np.testing.assert_array_equal(plain[key], compiled[key], err_msg=key)
     assert plain["stkf/tilt_gated"].sum() > 0 and plain["lsm/reasons"].sum() > 0
+
+
+def test_the_x_y_axes_refuse_the_heading_model():
+    """The x/y axes learn from interval measurements; the adaptive model is the heading axis's."""
+    from gyrodrift.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="x/y axes learn from interval measurements"):
+        TriadConfig(estimator="adaptive")

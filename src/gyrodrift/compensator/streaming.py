@@ -59,8 +59,15 @@ class Compensator:
     >>> out = []
     >>> for i in range(500):
     ...     out += comp.push(i * 0.01, gyro_z_dps=0.2, temp_c=30.0, heading_deg=90.0)
-    >>> round(out[-1].bias_z, 3), round(out[-1].heading, 3)
+    >>> round(out[-1].bias_z, 3), round(out[-1].heading_fused, 3)
     (0.2, 90.0)
+
+    A noiseless gyro cannot tell stillness from a steady turn by its noise, so the drift is
+    learned from the compass over the first seconds: the gyro-alone heading keeps what they
+    cost it.
+
+    >>> round(out[-1].heading, 1)
+    90.2
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",

@@ -337,6 +337,13 @@ def settle(t, g, T, Tp, heading, last, n_init, tref, rf, out, codes, cap):
         out[O_C * cap + i] = c - a * tref
         out[O_BIAS_SD * cap + i] = math.sqrt(max(var, 0.0))
         out[O_HEADING * cap + i] += corr
+    end = min(first, last)
+    if 0 <= end < last:  # the step after the epoch: the loop integrated the row's old rate
+        if codes[OC_REASON * cap + end + 1] != R_GAP:
+            corr -= 0.5 * prev * (t[end + 1] - t[end])
+    elif end == last and end >= 0:  # the loop resumes from the settled row
+        rf[RF_BIAS] = out[O_BIAS * cap + end]
+        rf[RF_RATE] = out[O_RATE * cap + end]
     for i in range(first + 1, last + 1):
         out[O_HEADING * cap + i] += corr
     for i in range(n_init):  # the window's rows are the init's (as streamed provisional rows)
