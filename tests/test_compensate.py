@@ -334,7 +334,7 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     out = compensate(log)
     assert (out["gate_reason"] == "interference").mean() < 0.05
     assert heading_error_stats(aligned(out))["rms"] < 0.8 * heading_error_stats(aligned(recovered))["rms"]
-    rms = lambda col: float(np.sqrt(np.mean(wrap_180(out[col] - log["ref_heading"]).dropna() ** 2)))  # noqa: E731
+    rms = lambda col: float(np.sqrt(np.nanmean(np.asarray(wrap_180(out[col] - log["ref_heading"])) ** 2)))  # noqa: E731
     assert rms("heading_fused") < rms("compass_heading")
     assert_same(out, stream(log, CompensatorConfig()))
 

@@ -329,7 +329,10 @@ def _gap_log(gap_s: float) -> pd.DataFrame:
 
 
 def test_a_gap_inside_a_refused_interval_is_labelled_gap():
-    out = compensate(_gap_log(3600.0))
+    log = _gap_log(3600.0)
+    t = log["t"].to_numpy()
+    log["heading"] = np.where((t > 200.0) & (t < 300.0), 80.0, 50.0)  # a magnet by the still unit
+    out = compensate(log)
     before, after = out.iloc[2999], out.iloc[3000]
     assert before["gate_reason"] == "interference"
     assert after["gate_reason"] == "gap"  # the gap outranks the refusal seen before it
