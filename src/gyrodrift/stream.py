@@ -669,5 +669,7 @@ def stream_rows(
     state.stats.notes += comp.notes
     run = state.stats.run
     run.final_params, run.final_cov, run.estimator = comp.params, comp.cov, comp.estimator.name
+    if comp.compass_dead:
+        run.compass = "none"
     return state.stats
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.attitude import RawTilt, accel_down
-from gyrodrift.compass import compass_columns
+from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
@@ -92,7 +92,10 @@ def compensate_arrays(
         cfg = clock_config(cfg)
     est = estimator if estimator is not None else build_estimator(cfg)
     notes = []
+    dead = DeadField()
     if mag is not None and acc is not None:
+        mag = dead.mask(mag)  # a sample without a field is no compass sample (gyrodrift.compass)
+        notes += filter(None, [dead.note(source, _has_heading(heading_deg))])
         tilt = RawTilt(cfg.tilt, gyro_xy is not None, source)
         down = None
         if tilt.uses_gyro:
@@ -119,7 +122,8 @@ def compensate_arrays(
             cols = engine.flush()
         elif buffers is not None:
             gated = buffers.gated[:n]
-        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+        out = with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+        return _without_compass(out, dead, heading_deg)
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
@@ -129,7 +133,21 @@ def compensate_arrays(
     parts.append(engine.flush())
     parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+    out = with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor)
+    return _without_compass(out, dead, heading_deg)
+
+
+def _has_heading(heading_deg) -> bool:
+    """Whether a heading column was given with at least one value."""
+    return heading_deg is not None and bool(np.isfinite(np.asarray(heading_deg, dtype=float)).any())
+
+
+def _without_compass(out: pd.DataFrame, dead: DeadField, heading_deg) -> pd.DataFrame:
+    """``out`` with ``attrs["compass"]`` "none" when the magnetometer read no field and no
+    heading was given (a log without compass, :mod:`gyrodrift.compass`)."""
+    if dead.none_usable() and not _has_heading(heading_deg):
+        out.attrs["compass"] = "none"
+    return out
 
 
 def compensate(

@@ -11,7 +11,7 @@ import numpy as np
 
 from gyrodrift import gating
 from gyrodrift.attitude import RawTilt
-from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+from gyrodrift.compass import DeadField, field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
@@ -81,6 +81,8 @@ class Compensator:
         self._tilt_note = None
         self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
+        self._dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
+        self._heading_seen = False  # a heading_deg given: a compass even when the magnetometer is dead
         self._sf = None  # ScaleFactorTracker when a scale factor was asked for
         if scale_factor is not None:
             from gyrodrift.scale_factor import CompensatedSFSample, ScaleFactorTracker
@@ -201,6 +203,9 @@ class Compensator:
                                    _float_triple(acc))[0]
         if mag is not None and acc is not None and self._tilt_note is None:
             self._tilt_note = self._tilt.note()
+        if mag is not None and not self._dead.sample(*mag):
+            mag = None  # a sample without a field is no compass sample (gyrodrift.compass)
+        self._heading_seen = self._heading_seen or math.isfinite(heading_deg)
         heading, norm, dip = _compass_values(heading_deg, mag, acc if down is None else -down)
         if not self._triad_started:
             self._start_triad(gyro_x_dps, gyro_y_dps, acc)
@@ -229,9 +234,16 @@ class Compensator:
         return self._released(self._engine.flush())
 
     @property
+    def compass_dead(self) -> bool:
+        """True when magnetometer samples came, none read a field and no heading was given:
+        the stream has no compass (:class:`gyrodrift.compass.DeadField`)."""
+        return self._dead.none_usable() and not self._heading_seen
+
+    @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._tilt_note]), *self._engine.notes]
+        return [*filter(None, [self._dead.note(self.source, self._heading_seen), self._tilt_note]),
+                *self._engine.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
