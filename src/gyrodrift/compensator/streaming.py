@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
+from gyrodrift._arguments import check_config, check_estimator, check_source
 from gyrodrift.attitude import RawTilt
 from gyrodrift.compass import DeadField, field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
@@ -65,8 +66,9 @@ class Compensator:
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
                  scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True):
-        self.config = config or CompensatorConfig()
-        self.source = source
+        self.config = check_config(config)
+        check_estimator(estimator)
+        self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         self._limits = _limits(self._gyro_max_dps)
         self._own_estimator = estimator is None
