@@ -14,6 +14,7 @@ from pathlib import Path
 from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift._parser import SuggestingParser
+from gyrodrift._paths import check_paths
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.config import TEMPERATURE_MODES
 from gyrodrift.config import config_from_dict, load_config, load_toml
@@ -681,6 +682,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     _say_if_compiling(args.command)
     try:
+        check_paths(args.command, args)  # no output onto an input, every output writable before any work
         with _sigterm_interrupts():
             return args.func(args)
     except GyroDriftError as err:

@@ -6,11 +6,13 @@ file that is empty or not Parquet. :func:`arrow_table` turns a DataFrame into th
 table a Parquet file stores (and the CSV writer prints, :mod:`gyrodrift.io.csvfile`), and
 :func:`parquet_options` gives the writer settings, for
 :func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
-alike.
+alike; :func:`open_sink` opens the file both write to.
 """
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,52 @@ import pyarrow as pa
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.validate import Source, empty_file_error, format_error, message, one_line
 
-__all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options"]
+__all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options", "open_sink"]
+
+
+class _Counted:
+    """A binary file written in order, telling its position by counting the bytes written:
+    what pyarrow's Parquet writer asks of its sink, which a FIFO cannot answer by seeking."""
+
+    def __init__(self, fh) -> None:
+        self._fh, self._written, self.closed = fh, 0, False
+
+    def write(self, data) -> int:
+        self._fh.write(data)
+        self._written += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self._written
+
+    def flush(self) -> None:
+        self._fh.flush()
+
+    def close(self) -> None:
+        self._fh.close()
+        self.closed = True
+
+    def writable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return False
+
+    def readable(self) -> bool:
+        return False
+
+
+def open_sink(path) -> pa.NativeFile:
+    """Open ``path`` for writing a table: a :class:`pyarrow.OSFile` (written without the
+    GIL), or for a FIFO a Python file that counts its position (pyarrow's own file asks a
+    pipe for its position by seeking, which fails)."""
+    try:
+        fifo = stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        fifo = False
+    if fifo:
+        return pa.PythonFile(_Counted(open(path, "wb")), mode="w")
+    return pa.OSFile(str(path), "w")
 
 
 _PARQUET_EMPTY_ADVICE = "give a Parquet log with at least one data row"

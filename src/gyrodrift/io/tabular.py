@@ -16,7 +16,6 @@ settings (:mod:`gyrodrift.io.parquetfile`), so both paths give identical results
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -46,7 +45,7 @@ from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
 from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
-from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
+from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, open_sink, parquet_error, parquet_options
 from gyrodrift.io.validate import (
     Source,
     check_input_path,
@@ -304,7 +303,7 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_s
     writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
     if spreadsheet_safe and table_fmt == "csv":
         df = formula_safe(df)
-    with atomic_path(path) as tmp, pa.OSFile(str(tmp), "w") as sink:  # pyarrow's file: no GIL, no copy
+    with atomic_path(path) as tmp, open_sink(tmp) as sink:  # pyarrow's file: no GIL, no copy
         writer(df, sink)
 
 
@@ -322,10 +321,9 @@ def check_output_path(in_path, out_path) -> None:
         If both resolve to the same file (same real path, or the same file through a
         hard link when both exist).
     """
-    same = os.path.realpath(in_path) == os.path.realpath(out_path)
-    if not same and os.path.exists(in_path) and os.path.exists(out_path):
-        same = os.path.samefile(in_path, out_path)
-    if same:
+    from gyrodrift._paths import same_file
+
+    if same_file(in_path, out_path):
         raise ConfigError(
             message(
                 str(out_path),
