@@ -121,6 +121,7 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
+from gyrodrift._text import printable
 from gyrodrift.config import DRIFT_PARAM_BOUNDS, read_utf8
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -551,7 +552,7 @@ def write_calibration(cal: Calibration, path, fmt: str | None = None, *, instanc
     """
     fmt = output_format(path, fmt)
     notes = [] if fmt == "json" else _missing_note(cal)
-    header = f"gyro thermal calibration by gyrodrift {__version__} from {cal.source}; residual RMS " \
+    header = f"gyro thermal calibration by gyrodrift {__version__} from {printable(cal.source)}; residual RMS " \
              f"{cal.residual_rms_dps:.4g} deg/s over {cal.temp_min_c:.2f} to {cal.temp_max_c:.2f} degC"
     if fmt == "px4":
         rows = px4_parameters(cal, instance=instance, device_id=device_id, body_to_board=body_to_board)

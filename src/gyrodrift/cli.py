@@ -15,6 +15,7 @@ from gyrodrift import __version__
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift._parser import SuggestingParser
 from gyrodrift._paths import check_paths
+from gyrodrift._text import printable
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.config import TEMPERATURE_MODES
 from gyrodrift.config import config_from_dict, load_config, load_toml
@@ -125,10 +126,16 @@ def _bar(desc: str, unit: str = "it"):
     return progress
 
 
+def _say(*lines, file=None) -> None:
+    """Print each of ``lines`` as one line, its user text made printable (:mod:`gyrodrift._text`:
+    a line end or an escape code in a file name is shown, not obeyed)."""
+    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
+
+
 def _warn(source, notes) -> None:
     """Print each note as one warning line on stderr, naming its ``source`` file."""
     for note in notes:
-        print(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
+        _say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
 
 
 def _cmd_compensate(args) -> int:
@@ -163,9 +170,9 @@ def _cmd_compensate(args) -> int:
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
-        print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
+        _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
         if args.save_profile:
-            print(f"saved device profile {args.save_profile}")
+            _say(f"saved device profile {args.save_profile}")
     return 0
 
 
@@ -184,7 +191,7 @@ def _cmd_stream(args) -> int:
         cfg = warm_config(profile, cfg)
 
     def warn(line: str) -> None:
-        print(f"gyrodrift: warning: {line}", file=sys.stderr, flush=True)
+        _say(f"gyrodrift: warning: {line}", file=sys.stderr)
 
     with deferred_signals() as signals, \
             input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
@@ -208,7 +215,7 @@ def _cmd_stream(args) -> int:
             lines.append(f"skipped {stats.skipped} bad line(s)")
         if args.save_profile:
             lines.append(f"saved device profile {args.save_profile}")
-        print("\n".join(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
+        _say(*(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
     if stats.signal is not None:
         print("gyrodrift: " + ("terminated" if stats.signal == signal.SIGTERM else "interrupted"), file=sys.stderr)
         return 143 if stats.signal == signal.SIGTERM else 130
@@ -266,7 +273,7 @@ def _cmd_calibrate(args) -> int:
     notes = write_calibration(cal, args.output, fmt, instance=args.instance, device_id=args.device_id)
     _warn(args.output, notes)
     if not args.quiet:
-        print(f"{cal.summary()}; wrote {args.output}")
+        _say(f"{cal.summary()}; wrote {args.output}")
     return 0
 
 
@@ -325,7 +332,7 @@ def _cmd_demo(args) -> int:
     )
     stats = compensate_file(path, args.output, _config(args))
     stats.source = path.name
-    print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
+    _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
     return 0
 
 
@@ -359,7 +366,7 @@ def _cmd_simulate(args) -> int:
     log.attrs = {}
     write_table(log, args.output)
     if not args.quiet:
-        print(
+        _say(
             f"wrote {args.output}: scenario {args.scenario}, seed {args.seed}, {len(log)} rows, "
             f"{log['t'].iloc[-1]:.0f} s at {args.fs_hz:g} Hz, temperature {log['temp'].min():.1f} to "
             f"{log['temp'].max():.1f} degC, true drift {log['true_bias_z'].min():.3f} to "
@@ -397,12 +404,12 @@ def _cmd_compare(args) -> int:
         }
         print(json.dumps(payload, indent=2))
         return 0
-    print(describe_log(log, args.input))
+    _say(describe_log(log, args.input))
     print(markdown_table(table.rename(index=method_label), floatfmt=".4g"))
     print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
           "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")
     for name, why in skipped.items():
-        print(f"skipped {name}: {why}")
+        _say(f"skipped {name}: {why}")
     return 0
 
 
@@ -422,7 +429,7 @@ def _cmd_paper(args) -> int:
             print(f"[{time.monotonic() - start:6.1f} s] {step}", file=sys.stderr)
 
     written = write_paper(args.output, settings, progress=progress, figures=not args.no_figures)
-    print(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
+    _say(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
           f"{args.output / 'table2.md'}")
     return 0
 
@@ -469,13 +476,13 @@ def _cmd_montecarlo(args) -> int:
     else:
         print(summary.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     failed = df[df["status"] != "ok"]
-    print(
+    _say(
         f"{df['family'].nunique()} families x {args.seeds} seeds x {len(methods)} methods "
         f"(durations x {args.duration_scale:g}, {args.fs_hz:g} Hz) in {seconds:.0f} s; "
         f"{len(failed)} of {len(df)} runs failed" + (f"; wrote {args.output}" if args.output else "")
     )
     for _, row in failed.drop_duplicates("error").head(5).iterrows():
-        print(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
+        _say(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
     return 0
 
 
@@ -686,7 +693,7 @@ def main(argv: list[str] | None = None) -> int:
         with _sigterm_interrupts():
             return args.func(args)
     except GyroDriftError as err:
-        print(f"gyrodrift: error: {err}", file=sys.stderr)
+        _say(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
     except Terminated:
         print("gyrodrift: terminated", file=sys.stderr)
