@@ -20,7 +20,7 @@ from gyrodrift._text import printable
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.config import TEMPERATURE_MODES
 from gyrodrift.config import config_from_dict, load_config, load_toml
-from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import ESTIMATORS
 from gyrodrift.io import check_output_path
 
@@ -194,14 +194,20 @@ def _cmd_stream(args) -> int:
     def warn(line: str) -> None:
         _say(f"gyrodrift: warning: {line}", file=sys.stderr)
 
+    stopped = None  # a bad line: the rows before it are written (to the -o file too), then exit 2
     with deferred_signals() as signals, \
             input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
             output_writer(args.output) as write:
-        stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
-                            frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
-                            source=name, skip_bad=args.skip_bad,
-                            warn=warn,
-                            compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
+        try:
+            stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
+                                frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
+                                source=name, skip_bad=args.skip_bad, warn=warn,
+                                compensator=Compensator(cfg, source=name, provisional=not args.hold_init,
+                                                        time_unit="s"))
+        except LogFormatError as err:
+            stopped = err
+    if stopped is not None:
+        raise stopped
     run = stats.run
     if profile is not None and run.rows:
         _warn(args.profile, profile_notes(profile, temp_range_c=(run.temp_min_c, run.temp_max_c)))
@@ -235,7 +241,9 @@ def _add_stream_parser(sub) -> None:
         "sample from the first, those of the initialisation window provisional (the prior's or the profile's drift, "
         "gate_reason init), then the rows 'gyrodrift compensate' gives; --hold-init holds the window's rows back and "
         "writes them when it ends, every row then equal to compensate's. A bad line stops the stream "
-        "with one error line naming the line and column (exit 2); --skip-bad skips it with a warning instead. "
+        "with one error line naming the line and column (exit 2), after writing the rows of every line before it "
+        "(to the -o file too); --skip-bad skips it with a warning instead. Time stamps that look like another unit "
+        "than --time-unit, or a rate above 100 kHz, stop it as they stop compensate. "
         "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
         "(gyrodrift.stream).",
     )

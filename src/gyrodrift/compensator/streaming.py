@@ -19,6 +19,7 @@ from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps, limit_of, outside_problem
+from gyrodrift.io.timebase import TimeBaseWatch, time_scale
 from gyrodrift.kernels import layout as L
 
 __all__ = ["Compensator"]
@@ -54,6 +55,13 @@ class Compensator:
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
+    ``time_unit`` is the unit of the times pushed, as a table's ``time_unit``: None
+    (default) for seconds not stated, whose time stamps are refused when they look like
+    another unit (epoch milliseconds, whole-number steps of milliseconds) as a file's are;
+    ``"s"`` for seconds stated; ``"ms"``, ``"us"``, ``"ns"`` converted to seconds. Every
+    stream is refused above a sample rate of 100 kHz, as a file is
+    (:class:`gyrodrift.io.timebase.TimeBaseWatch`, judged on the first samples).
+
     Examples
     --------
     >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
@@ -65,11 +73,15 @@ class Compensator:
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
-                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True):
+                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True,
+                 time_unit: str | None = None):
         self.config = check_config(config)
         check_estimator(estimator)
         self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
+        unit, self._time_scale = time_scale(time_unit)
+        self._time_base = TimeBaseWatch(unit)  # the time base judged as a file's (gyrodrift.io.timebase)
+        self._time_note = None
         self._limits = _limits(self._gyro_max_dps)
         self._own_estimator = estimator is None
         self._est = estimator
@@ -146,7 +158,7 @@ class Compensator:
         Parameters
         ----------
         t_s : float
-            Sample time, s (strictly increasing).
+            Sample time, s, or in ``time_unit`` (strictly increasing).
         gyro_z_dps : float
             Raw heading-axis rate, deg/s (NED: positive = heading increases).
             NaN: hold the previous value (the interval is refused as ``gap``).
@@ -174,8 +186,9 @@ class Compensator:
             value outside its plausible range, as a log's cell is refused
             (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
             temperature, heading, magnetometer and accelerometer; NaN is no value and
-            holds); a time that is not finite or does not increase. The refused
-            sample is not taken: the compensator stays as it was.
+            holds); a time that is not finite or does not increase, or a time base a
+            file is refused for (``time_unit``, class notes). The refused sample is not
+            taken: the compensator stays as it was.
         """
         if self._clock and temp_c is None:
             temp_c = math.nan
@@ -184,18 +197,17 @@ class Compensator:
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
+        t_raw, t_s = t_s, t_s * self._time_scale
+        if self._prev is not None and not t_s > self._prev[0]:
+            raise GyroDriftError(f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}")
+        self._judge_time_base(self._time_base.add(t_raw))
         if self._prev is None:
             if self._clock and not math.isfinite(T):
                 T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
             if not (math.isfinite(g) and math.isfinite(T)):
                 raise GyroDriftError(f"{self.source}: the first sample needs gyro_z and temp values")
-        else:
-            if not t_s > self._prev[0]:
-                raise GyroDriftError(
-                    f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}"
-                )
-            if not math.isfinite(T):
-                T = self._prev[2]
+        elif not math.isfinite(T):
+            T = self._prev[2]
         self._prev = (t_s, g, T)
         down = None
         if self._tilt is None:  # decided on the first sample, as the x/y axes are
@@ -232,8 +244,24 @@ class Compensator:
         (a short log, ``provisional=False``): compensated from what they give (the window ends
         at the last sample). Empty when no row is held, and with provisional rows (every
         sample already has its row; the window is still closed, so samples pushed afterwards
-        come out one by one, as after a complete window)."""
+        come out one by one, as after a complete window).
+
+        Raises
+        ------
+        GyroDriftError
+            The samples were too few for their time base to be judged as they came, and it
+            is one a file is refused for (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
+        """
+        self._judge_time_base(self._time_base.end())
         return self._released(self._engine.flush())
+
+    def _judge_time_base(self, found) -> None:
+        """Refuse a time base a file is refused for; keep the note of a low rate."""
+        if found is None:
+            return
+        if found.problem:
+            raise GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
+        self._time_note = f"{self.source}: {found.note}"
 
     @property
     def compass_dead(self) -> bool:
@@ -244,7 +272,7 @@ class Compensator:
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._dead.note(self.source, self._heading_seen), self._tilt_note]),
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._tilt_note]),
                 *self._engine.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
