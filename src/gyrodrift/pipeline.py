@@ -27,9 +27,9 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift import gating
+from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import (
     CompensatorConfig,
-    append_input_columns,
     build_estimator,
     check_input_columns,
     clock_config,
@@ -597,7 +597,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 if has_triad_inputs(rows.columns):
                     triad = triad or TriadCompensator(cfg)
                     add_triad_columns(out, rows, tc=triad)
-                out = append_input_columns(out, rows)
+                out = join_input_columns(out, rows)
                 behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
                 stats.add(out)
 

@@ -92,7 +92,8 @@ import pandas as pd
 import pyarrow as pa
 
 from gyrodrift._atomic import atomic_output
-from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig, append_input_columns
+from gyrodrift._columns import join_input_columns
+from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
@@ -568,7 +569,7 @@ class _Stream:
         """The output table of these rows: the columns ``gyrodrift compensate`` writes."""
         names = _Z_COLUMNS + (TRIAD_COLUMNS if self.has_triad else ())
         out = pd.DataFrame({name: [getattr(s, name) for s in samples] for name in names})
-        return append_input_columns(out, inputs)
+        return join_input_columns(out, inputs)
 
     def emit(self, samples: list[CompensatedSample]) -> None:
         """Write output rows (one call of ``write``) and account for them."""

@@ -21,7 +21,8 @@ from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.engine import ChunkEngine
 from gyrodrift.compensator.memory import OutputBuffers
-from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
+from gyrodrift._columns import join_input_columns
+from gyrodrift.compensator.output import check_input_columns, output_frame, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
 from gyrodrift.gyro_units import GyroUnitCheck
@@ -278,4 +279,4 @@ def compensate(
     units = GyroUnitCheck(source, log.attrs.get("gyro_unit"))
     units.add(out[T].to_numpy(), numbers[GYRO_Z], out["compass_heading"].to_numpy())
     out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"], *filter(None, [units.note()])]
-    return append_input_columns(out, log)
+    return join_input_columns(out, log)  # the input columns at once (a wide log: thousands of them)

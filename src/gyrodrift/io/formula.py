@@ -60,13 +60,27 @@ def _safe_column(column: pa.ChunkedArray) -> pa.ChunkedArray | None:
     return None
 
 
+def _holds_text(arrow_type: pa.DataType) -> bool:
+    """True for a text column, or a dictionary (categorical) column of text."""
+    if pa.types.is_dictionary(arrow_type):
+        arrow_type = arrow_type.value_type
+    return _is_text(arrow_type)
+
+
 def formula_safe_table(table: pa.Table) -> pa.Table:
-    """``table`` with formula-like text cells and column names quoted (module notes)."""
-    for i, column in enumerate(table.columns):
-        safe = _safe_column(column)
+    """``table`` with formula-like text cells and column names quoted (module notes).
+    Only its text columns are looked at, and the table is rebuilt once if any changes."""
+    columns, changed = None, False
+    for i, field in enumerate(table.schema):
+        if not _holds_text(field.type):
+            continue
+        safe = _safe_column(table.column(i))
         if safe is not None:
-            table = table.set_column(i, table.field(i).name, safe)
+            columns = columns if columns is not None else list(table.columns)
+            columns[i], changed = safe, True
     names = [formula_safe_text(n) for n in table.column_names]
+    if changed:
+        return pa.Table.from_arrays(columns, names=names)
     return table.rename_columns(names) if names != table.column_names else table
 
 

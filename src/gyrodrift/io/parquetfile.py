@@ -117,7 +117,7 @@ def arrow_table(df: pd.DataFrame) -> pa.Table:
     names = [str(c) for c in df.columns]
     categorical = any(isinstance(dtype, pd.CategoricalDtype) for dtype in df.dtypes)
     if categorical and len(set(names)) == len(names):  # duplicate names: from_pandas refuses them
-        return pa.Table.from_arrays([_arrow_column(df.iloc[:, i]) for i in range(df.shape[1])], names=names)
+        return pa.Table.from_arrays([_arrow_column(column) for _, column in df.items()], names=names)
     plain = df.copy(deep=False).set_axis(names, axis=1)
     plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
     return pa.Table.from_pandas(plain, preserve_index=False)
