@@ -150,3 +150,16 @@ def test_stream_says_no_compass_when_the_field_is_never_read(tmp_path, capsys):
     assert main(["stream", str(path), "-o", str(tmp_path / "s.csv")]) == 0
     err = capsys.readouterr().err
     assert "compass from none" in err and "no compass (the magnetometer is dead" in err
+
+
+def test_a_dataflash_log_with_a_dead_magnetometer(tmp_path, capsys):
+    from dataflash_writer import write_simulated
+    from gyrodrift.simulate import TriadModel, simulate
+
+    sim = simulate("vehicle-rawmag", seed=3, duration_s=60.0, fs_hz=50.0, raw_mag=True, triad=TriadModel())
+    sim.loc[np.isfinite(sim["mag_x"].to_numpy()), MAG] = 0.0
+    path = write_simulated(tmp_path / "dead.bin", sim, instances=1)
+    assert main(["compensate", str(path), "-o", str(tmp_path / "o.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "no compass (the magnetometer is dead" in out
+    assert np.isfinite(pd.read_csv(tmp_path / "o.csv")["rate_z"]).all()
