@@ -1,6 +1,6 @@
 """Fuzzing the edges of issue 24: the file system, injection, and streaming against files.
 
-Each test runs :data:`FUZZ_EXAMPLES` hypothesis examples (60 by default;
+Each test runs ``FUZZ_EXAMPLES`` hypothesis examples (:mod:`test_fuzz`; 60 by default,
 ``GYRODRIFT_FUZZ_EXAMPLES=2000`` for the long run of ``benchmarks/fuzz_long.py``).
 Properties:
 
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import event, given
 from hypothesis import strategies as st
 
 from conftest import synthetic_log
@@ -47,14 +47,8 @@ from gyrodrift.io import read_log, write_table
 from gyrodrift.io.chunked import ChunkWriter
 from gyrodrift.io.formula import FORMULA_STARTS
 from gyrodrift.stream import stream_rows
+from test_fuzz import FUZZ  # the examples per test of every fuzz file (GYRODRIFT_FUZZ_EXAMPLES)
 
-FUZZ_EXAMPLES = int(os.environ.get("GYRODRIFT_FUZZ_EXAMPLES", "60"))
-FUZZ = settings(
-    max_examples=FUZZ_EXAMPLES,
-    deadline=None,
-    database=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
-)
 SHORT = CompensatorConfig(init_s=2.0, update_interval_s=2.0)
 _LOG = synthetic_log(duration_s=20.0, fs_hz=2.0, compass_hz=2.0)
 _CONFIG = "init_s = 2.0\nupdate_interval_s = 2.0\n"
