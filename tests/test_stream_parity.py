@@ -175,3 +175,10 @@ def test_the_push_time_base_refusal_keeps_the_compensator_as_it_was():
     with pytest.raises(GyroDriftError, match="above 100 kHz"):
         comp.push(8e-6, 0.1, 25.0)
     assert len(rows) == 8 and math.isfinite(rows[-1].rate_z)
+
+
+def test_a_bad_header_makes_no_output_file(tmp_path, capsys):
+    path = tmp_path / "in.csv"
+    path.write_text("a,b\n1,2\n")
+    assert main(["stream", str(path), "-o", str(tmp_path / "out.csv")]) == 2
+    assert not (tmp_path / "out.csv").exists()

@@ -205,6 +205,8 @@ def _cmd_stream(args) -> int:
                                 compensator=Compensator(cfg, source=name, provisional=not args.hold_init,
                                                         time_unit="s"))
         except LogFormatError as err:
+            if not getattr(err, "stream_stats", None) or not err.stream_stats.rows_in:
+                raise  # nothing compensated: no output file is made
             stopped = err
     if stopped is not None:
         raise stopped

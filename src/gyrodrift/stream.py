@@ -701,7 +701,8 @@ def stream_rows(
         A bad line (without ``skip_bad``; every row before it is written first, the
         held ones too), a bad header, a line longer than :data:`MAX_LINE_CHARS`, a time
         base a file is refused for (:class:`~gyrodrift.io.timebase.TimeBaseWatch`), or an
-        input without data rows.
+        input without data rows. Its ``stream_stats`` (:class:`StreamStats`) say what was
+        read and written before it.
     ConfigError
         A bad ``fmt``, ``out_format``, ``gyro_unit``, ``frame`` or ``column_map``.
     """
@@ -744,12 +745,13 @@ def stream_rows(
         if tail.strip():
             state.lines([(line_no + 1, tail.rstrip("\r"))])
         state.end_time_base()
-    except LogFormatError:  # a bad line stops the stream: every row before it is written first
+    except LogFormatError as stop:  # a bad line stops the stream: every row before it is written first
         if state.stats.rows_in:
             try:
                 state.finish()
             except GyroDriftError:  # the first problem is the one to report
                 pass
+        stop.stream_stats = state.stats  # what was read and written before it
         raise
     if state.stats.rows_in == 0 and state.stats.signal is None:
         where = Source(source, "csv", None)
