@@ -27,9 +27,9 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import synthetic_log
-from gyrodrift import Compensator, compensate, compensate_arrays
+from gyrodrift import Compensator, compensate, compensate_arrays, errors
 from gyrodrift.compensator import CompensatorConfig
-from gyrodrift.errors import ArgumentTypeError, GyroDriftError, LogFormatError
+from gyrodrift.errors import GyroDriftError, LogFormatError
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = CompensatorConfig(init_s=0.5, update_interval_s=0.5)
@@ -98,7 +98,7 @@ def test_the_rows_computed_do_not_depend_on_memory_past_the_inputs(log):
     (lambda log: log.to_numpy(), "pandas DataFrame"),
 ])
 def test_compensate_wants_a_dataframe(log, make, words):
-    with pytest.raises(ArgumentTypeError, match=words) as info:
+    with pytest.raises(errors.ArgumentTypeError, match=words) as info:
         compensate(make(log))
     assert isinstance(info.value, TypeError) and "\n" not in str(info.value)
 
@@ -122,16 +122,16 @@ def test_a_number_column_of_text_is_refused_naming_it(log):
     ({"progress": 5}, "progress must be a callable"),
 ])
 def test_wrong_kinds_of_settings_are_one_type_error(log, kwargs, words):
-    with pytest.raises(ArgumentTypeError, match=words):
+    with pytest.raises(errors.ArgumentTypeError, match=words):
         compensate(log, **kwargs)
-    with pytest.raises(ArgumentTypeError, match=words):
+    with pytest.raises(errors.ArgumentTypeError, match=words):
         compensate_arrays(log["t"], log["gyro_z"], log["temp"], **kwargs)
 
 
 @pytest.mark.parametrize("kwargs", [{"config": "x"}, {"estimator": object()}, {"source": None}])
 def test_compensator_checks_its_arguments_when_made(kwargs):
     config = kwargs.pop("config", None)
-    with pytest.raises(ArgumentTypeError):
+    with pytest.raises(errors.ArgumentTypeError):
         Compensator(config, **kwargs)
 
 

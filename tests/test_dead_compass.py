@@ -17,7 +17,6 @@ import pytest
 from conftest import synthetic_log
 from gyrodrift import Compensator, compensate
 from gyrodrift.cli import main
-from gyrodrift.compass import MIN_FIELD, DeadField, usable_field
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.io import read_log
 
@@ -54,12 +53,16 @@ SHORT = CompensatorConfig(init_s=30.0, update_interval_s=5.0)
 
 
 def test_usable_field_refuses_zero_tiny_and_nan():
+    from gyrodrift.compass import MIN_FIELD, usable_field
+
     ok = usable_field([[0.0, 0.0, 0.0], [1e-300, 0.0, 0.0], [np.nan, 20.0, 40.0], [np.inf, 0, 0], [20.0, 0.0, 40.0],
                        [MIN_FIELD, 0.0, 0.0]])
     assert ok.tolist() == [False, False, False, False, True, True]
 
 
 def test_dead_field_counts_samples_not_empty_rows():
+    from gyrodrift.compass import DeadField
+
     dead = DeadField()
     out = dead.mask(np.array([[0.0, 0.0, 0.0], [np.nan] * 3, [20.0, 0.0, 40.0], [np.nan, 1.0, 1.0]]))
     assert (dead.samples, dead.dead) == (3, 2)

@@ -17,11 +17,9 @@ import pyarrow as pa
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift._text import printable
 from gyrodrift.cli import main
 from gyrodrift.io import write_table
 from gyrodrift.io.chunked import ChunkWriter
-from gyrodrift.io.formula import formula_safe_frame, formula_safe_table
 from gyrodrift.simulate import simulate
 
 FORMULAS = ["=HYPERLINK(\"http://x\",\"y\")", "+1+1", "-2+3", "@SUM(A1)", "plain", "a=b"]
@@ -93,6 +91,8 @@ def test_chunks_and_the_whole_table_quote_alike(tmp_path):
 
 
 def test_arrow_and_pandas_quoting_agree():
+    from gyrodrift.io.formula import formula_safe_frame, formula_safe_table
+
     df = pd.DataFrame({"=x": FORMULAS, "n": np.linspace(-1, 1, 6)})
     via_arrow = formula_safe_table(pa.Table.from_pandas(df, preserve_index=False)).to_pandas()
     pd.testing.assert_frame_equal(via_arrow, formula_safe_frame(df))
@@ -100,6 +100,8 @@ def test_arrow_and_pandas_quoting_agree():
 
 
 def test_printable_escapes_line_ends_and_escape_codes():
+    from gyrodrift._text import printable
+
     assert printable("a\nb\r\x1b[31m\x07\u202e\u2028") == "a\\nb\\r\\x1b[31m\\x07\\u202e\\u2028"
     assert printable("plain name é.csv") == "plain name é.csv"
 

@@ -19,7 +19,6 @@ import pytest
 
 from conftest import synthetic_log
 from gyrodrift._atomic import atomic_output, write_bytes_atomic
-from gyrodrift._paths import NAME_MAX, same_file
 from gyrodrift.cli import main
 from gyrodrift.errors import ConfigError
 
@@ -49,6 +48,8 @@ def refused(capsys, argv, *words) -> str:
 
 
 def test_same_file_sees_through_links(tmp_path, log):
+    from gyrodrift._paths import same_file
+
     (tmp_path / "soft.csv").symlink_to(log)
     os.link(log, tmp_path / "hard.csv")
     assert same_file(log, tmp_path / "soft.csv") and same_file(log, tmp_path / "hard.csv")
@@ -180,6 +181,8 @@ def test_output_onto_a_socket_is_refused(tmp_path, log, capsys):
 
 
 def test_a_file_name_too_long_is_one_line(tmp_path, log, capsys):
+    from gyrodrift._paths import NAME_MAX
+
     refused(capsys, ["compensate", str(log), "-o", str(tmp_path / ("x" * 252 + ".csv"))],
             f"longer than the {NAME_MAX}")
 

@@ -25,7 +25,6 @@ from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.model import TempRateConfig
-from gyrodrift.settings_bounds import NUMBER_RANGE, check_settings, setting_problem
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -88,6 +87,8 @@ def test_simulate_refuses_what_it_cannot_make(tmp_path, capsys, argv, words):
 
 
 def test_the_python_api_refuses_the_same_values():
+    from gyrodrift.settings_bounds import check_settings
+
     log = synthetic_log(duration_s=60.0, fs_hz=10.0)
     for config in (replace(CompensatorConfig(), compass_sigma_deg=1e308),
                    replace(CompensatorConfig(), temp_rate=TempRateConfig(window_s=60.0, bin_s=1e-4))):
@@ -98,6 +99,8 @@ def test_the_python_api_refuses_the_same_values():
 
 
 def test_setting_problem_is_none_within_range():
+    from gyrodrift.settings_bounds import NUMBER_RANGE, setting_problem
+
     lo, hi = NUMBER_RANGE
     assert setting_problem("init_s", lo) is None and setting_problem("init_s", hi) is None
     assert setting_problem("relock_s", float("inf")) is None and setting_problem("x0", (0.0, 0.0, 0.0)) is None
@@ -106,6 +109,8 @@ def test_setting_problem_is_none_within_range():
 
 def _floats_at_their_bounds():
     """(table, key, value): every number setting of the defaults at both ends of its range."""
+    from gyrodrift.settings_bounds import NUMBER_RANGE
+
     d = CompensatorConfig()
     tables = {"": d, "kalman": d.kalman, "gate": d.gate, "temp_rate": d.temp_rate, "adaptive": d.adaptive,
               "fusion": d.fusion_settings}

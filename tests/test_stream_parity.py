@@ -23,7 +23,7 @@ from gyrodrift import Compensator
 from gyrodrift.cli import main
 from gyrodrift.errors import GyroDriftError, LogFormatError
 from gyrodrift.io import read_log
-from gyrodrift.stream import MAX_LINE_CHARS, stream_rows
+from gyrodrift.stream import stream_rows
 
 N = 60  #: rows of each case
 
@@ -157,6 +157,8 @@ def test_a_ragged_line_in_a_block_keeps_the_lines_before_it():
 
 
 def test_a_line_without_end_is_refused_in_bounded_memory():
+    from gyrodrift.stream import MAX_LINE_CHARS
+
     def pieces():
         yield "t,gyro_z,temp\n0,0.1,25\n"
         chunk = "x" * (1 << 16)

@@ -16,7 +16,6 @@ import pytest
 
 from conftest import synthetic_log
 from gyrodrift import compensate
-from gyrodrift._columns import join_input_columns
 from gyrodrift.cli import main
 from gyrodrift.compensator import append_input_columns
 
@@ -29,6 +28,8 @@ def wide_log(extra: int, seconds: float = 60.0) -> pd.DataFrame:
 
 
 def test_join_gives_what_one_at_a_time_gives():
+    from gyrodrift._columns import join_input_columns
+
     log = synthetic_log(duration_s=5.0, fs_hz=10.0)
     log["note"] = ["a", None] * (len(log) // 2)
     log["rate_z"] = 1.0  # a name the output has: in_rate_z
@@ -43,6 +44,8 @@ def test_join_gives_what_one_at_a_time_gives():
 
 
 def test_no_input_column_is_ever_replaced():
+    from gyrodrift._columns import join_input_columns
+
     out = pd.DataFrame({"t": [0.0], "rate_z": [1.0]})
     log = pd.DataFrame({"in_rate_z": [2.0], "rate_z": [3.0]})
     got = join_input_columns(out, log)
