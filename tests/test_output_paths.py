@@ -145,11 +145,12 @@ def test_output_onto_a_fifo_writes_through_it(tmp_path, log, name):
         with open(fifo, "rb") as fh:
             got.extend(fh.read())
 
-    reader = threading.Thread(target=read)
+    reader = threading.Thread(target=read, daemon=True)  # blocked for good if nothing writes into the FIFO
     reader.start()
     assert main(["compensate", str(log), "-o", str(fifo), "-q"]) == 0
     reader.join(timeout=60)
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)  # still the FIFO, not a regular file
+    assert not reader.is_alive()
     if name.endswith(".parquet"):
         (tmp_path / "copy.parquet").write_bytes(bytes(got))
         assert len(pd.read_parquet(tmp_path / "copy.parquet")) == 1200
