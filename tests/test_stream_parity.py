@@ -2,8 +2,9 @@
 
 One parametrised test runs every file-side refusal case through the file reader
 (``read_log``, as ``compensate`` reads), through ``stream_rows`` and, where the case is
-about values and times rather than text, through ``Compensator.push``: all three
-refuse it, naming the same column. The time base of a stream is judged on its first
+about values and the sample rate rather than text and units, through ``Compensator.push``:
+all refuse it, naming the same column. ``Compensator.push`` and ``compensate_arrays``,
+both of which take seconds, judge the time base alike. The time base of a stream is judged on its first
 samples (:class:`gyrodrift.io.timebase.TimeBaseWatch`), a file's on all of them.
 """
 
@@ -46,14 +47,16 @@ def _cell(column: str, value, row: int = 30) -> pd.DataFrame:
     return log
 
 
-#: (case, log, column named, push applies): every one is refused by the file reader.
+#: (case, log, column named, push applies): every one is refused by the file reader. The
+#: time-unit guesses of text without a stated unit (epoch or whole-number milliseconds)
+#: do not apply to push, which takes seconds as compensate_arrays does (a test below).
 CASES = {
-    "integer ms": (lambda: _times(np.arange(N) * 10), "t", True),
-    "integer us": (lambda: _times(np.arange(N) * 10_000), "t", True),
-    "epoch ms": (lambda: _times(1_700_000_000_000 + np.arange(N) * 100), "t", True),
-    "epoch ns": (lambda: _times(1_700_000_000_000_000_000 + np.arange(N) * 10_000_000), "t", True),
+    "integer ms": (lambda: _times(np.arange(N) * 10), "t", False),
+    "integer us": (lambda: _times(np.arange(N) * 10_000), "t", False),
+    "epoch ms": (lambda: _times(1_700_000_000_000 + np.arange(N) * 100), "t", False),
+    "epoch ns": (lambda: _times(1_700_000_000_000_000_000 + np.arange(N) * 10_000_000), "t", False),
     "1 MHz": (lambda: _times(np.arange(N) * 1e-6), "t", True),
-    "short integer ms": (lambda: _times(np.arange(5) * 10), "t", True),
+    "short integer ms": (lambda: _times(np.arange(5) * 10), "t", False),
     "temperature 200 degC": (lambda: _cell("temp", 200.0), "temp", True),
     "gyro 1e6 deg/s": (lambda: _cell("gyro_z", 1e6), "gyro_z", True),
     "heading 1e7 deg": (lambda: _cell("heading", 1e7), "heading", True),
@@ -184,3 +187,27 @@ def test_a_bad_header_makes_no_output_file(tmp_path, capsys):
     path.write_text("a,b\n1,2\n")
     assert main(["stream", str(path), "-o", str(tmp_path / "out.csv")]) == 2
     assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.parametrize("values", [np.arange(N) * 10.0, 1.7e12 + np.arange(N) * 0.1, np.arange(N) * 1e-6,
+                                    np.arange(5) * 1e-6])
+def test_push_and_compensate_arrays_judge_times_in_seconds_alike(values):
+    from gyrodrift import compensate_arrays
+
+    n = len(values)
+    try:
+        compensate_arrays(values, np.full(n, 0.1), np.full(n, 25.0), heading_deg=np.full(n, 10.0))
+        batch = None
+    except GyroDriftError as err:
+        batch = err
+    try:
+        comp = Compensator()
+        for v in values:
+            comp.push(float(v), 0.1, 25.0, heading_deg=10.0)
+        comp.flush()
+        pushed = None
+    except GyroDriftError as err:
+        pushed = err
+    assert (batch is None) == (pushed is None), (batch, pushed)
+    if batch is not None:
+        assert "100 kHz" in str(batch) and "100 kHz" in str(pushed)

@@ -202,8 +202,7 @@ def _cmd_stream(args) -> int:
             stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
                                 frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
                                 source=name, skip_bad=args.skip_bad, warn=warn,
-                                compensator=Compensator(cfg, source=name, provisional=not args.hold_init,
-                                                        time_unit="s"))
+                                compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
         except LogFormatError as err:
             if not getattr(err, "stream_stats", None) or not err.stream_stats.rows_in:
                 raise  # nothing compensated: no output file is made

@@ -686,8 +686,7 @@ def stream_rows(
         default: dropped.
     compensator : Compensator, optional
         The compensator to feed (e.g. warm-started); default a new one from ``config``.
-        It gets the times in seconds, converted and judged here: make it with
-        ``time_unit="s"``.
+        It gets the times in seconds (its default ``time_unit``), converted and judged here.
 
     Returns
     -------
@@ -710,7 +709,7 @@ def stream_rows(
         if value is not None and value not in FORMATS:
             raise ConfigError(f"unknown {option} {value!r}; use one of: {', '.join(FORMATS)}")
     opts = read_options(gyro_unit, frame, column_map, time_unit)
-    comp = compensator if compensator is not None else Compensator(config, source=source, time_unit="s")
+    comp = compensator if compensator is not None else Compensator(config, source=source)
     state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
                     warn=warn or (lambda line: None))
     carry: list[str] = []  # the pieces of an unfinished line, which waits for the rest

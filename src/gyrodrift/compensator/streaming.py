@@ -55,12 +55,13 @@ class Compensator:
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
-    ``time_unit`` is the unit of the times pushed, as a table's ``time_unit``: None
-    (default) for seconds not stated, whose time stamps are refused when they look like
-    another unit (epoch milliseconds, whole-number steps of milliseconds) as a file's are;
-    ``"s"`` for seconds stated; ``"ms"``, ``"us"``, ``"ns"`` converted to seconds. Every
-    stream is refused above a sample rate of 100 kHz, as a file is
-    (:class:`gyrodrift.io.timebase.TimeBaseWatch`, judged on the first samples).
+    ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
+    :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
+    to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
+    own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
+    the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
+    without a unit (epoch or whole-number milliseconds) belong to text without a stated
+    unit: ``gyrodrift stream`` makes them on the text before it pushes.
 
     Examples
     --------
@@ -80,7 +81,7 @@ class Compensator:
         self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         unit, self._time_scale = time_scale(time_unit)
-        self._time_base = TimeBaseWatch(unit)  # the time base judged as a file's (gyrodrift.io.timebase)
+        self._time_base = TimeBaseWatch(unit or "s")  # as compensate_arrays judges its times (gyrodrift.io.timebase)
         self._time_note = None
         self._limits = _limits(self._gyro_max_dps)
         self._own_estimator = estimator is None
@@ -186,9 +187,9 @@ class Compensator:
             value outside its plausible range, as a log's cell is refused
             (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
             temperature, heading, magnetometer and accelerometer; NaN is no value and
-            holds); a time that is not finite or does not increase, or a time base a
-            file is refused for (``time_unit``, class notes). The refused sample is not
-            taken: the compensator stays as it was.
+            holds); a time that is not finite or does not increase, or a sample rate
+            above 100 kHz (class notes). The refused sample is not taken: the
+            compensator stays as it was.
         """
         if self._clock and temp_c is None:
             temp_c = math.nan
@@ -249,8 +250,8 @@ class Compensator:
         Raises
         ------
         GyroDriftError
-            The samples were too few for their time base to be judged as they came, and it
-            is one a file is refused for (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
+            The samples were too few for their sample rate to be judged as they came, and
+            it is above 100 kHz (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
         """
         self._judge_time_base(self._time_base.end())
         return self._released(self._engine.flush())
