@@ -1,9 +1,11 @@
-"""The long fuzz run of issue 16: tests/test_fuzz.py with 2000 examples per entry point.
+"""The long fuzz run of issues 16 and 24: the fuzz tests with 2000 examples per entry point.
 
     PYTHONPATH=src python benchmarks/fuzz_long.py [EXAMPLES]
 
-Runs pytest on ``tests/test_fuzz.py`` with ``GYRODRIFT_FUZZ_EXAMPLES`` set (default 2000),
-hypothesis statistics on, and prints the examples run and the failures found per test.
+Runs pytest on ``tests/test_fuzz.py`` (readers, streaming, loaders; issue 16) and
+``tests/test_fuzz_edges.py`` (file system, injection, streaming against files; issue 24)
+with ``GYRODRIFT_FUZZ_EXAMPLES`` set (default 2000), hypothesis statistics on, and prints
+the examples run and the failures found per test.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The test files run.
+FUZZ_FILES = ("tests/test_fuzz.py", "tests/test_fuzz_edges.py")
 
 
 def main(argv: list[str]) -> int:
@@ -23,12 +27,14 @@ def main(argv: list[str]) -> int:
     start = time.monotonic()
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--hypothesis-show-statistics",
-         str(ROOT / "tests" / "test_fuzz.py")],
+         *(str(ROOT / f) for f in FUZZ_FILES)],
         cwd=ROOT, env=env, capture_output=True, text=True,
     )
     seconds = time.monotonic() - start
     for line in proc.stdout.splitlines():
-        if line.startswith(("FAILED", "E       Failing test case", "E           data=", "E           samples=")):
+        failure = line.startswith(("FAILED", "E       Failing test case", "E           data=", "E           samples="))
+        statistics = ("::test_" in line and line.endswith(":")) or "passing," in line  # per test: examples run
+        if failure or statistics:
             print(line)
     print(proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else proc.stderr)
     print(f"examples per test: {examples}; wall time {seconds:.0f} s; exit {proc.returncode}")

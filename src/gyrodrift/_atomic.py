@@ -11,6 +11,11 @@ host therefore removes the temporaries of that output whose process is no longer
 alive (:func:`remove_stale_temporaries`). Temporaries of other outputs, of live
 processes and of other hosts (a shared file system) are left alone; so is everything
 on systems without POSIX process signals, where liveness is not checked.
+
+The node at the output's name is never replaced by another kind: a FIFO or a character
+device (``/dev/null``, a terminal) is written through, in place, as a user piping on
+purpose expects; a symbolic link is written through too, the file it names replaced
+atomically (the link stays); a socket or a block device is refused.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import os
 import re
 import secrets
 import socket
+import stat
 import threading
 from contextlib import contextmanager
 from functools import lru_cache
@@ -138,6 +144,41 @@ def _replacing(path: Path, tmp: Path):
         raise
 
 
+def _destination(path: Path) -> tuple[Path, bool]:
+    """The file to write for the output ``path``, and whether it is written through in
+    place (a FIFO or a character device) rather than replaced (module notes)."""
+    try:
+        st = os.stat(path)  # through symbolic links
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:  # a name too long, a loop of links, no permission
+        raise ConfigError(f"{path}: cannot write there ({exc.strerror or exc}); choose another path") from exc
+    if st is not None and (stat.S_ISFIFO(st.st_mode) or stat.S_ISCHR(st.st_mode)):
+        return path, True
+    if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode)):
+        from gyrodrift._paths import node_kind
+
+        raise ConfigError(f"{path}: output path is {node_kind(st.st_mode)}, not a file; choose a file name")
+    if path.is_symlink():  # the file it names is replaced, the link kept (also a link to a file not made yet)
+        return Path(os.path.realpath(path)), False
+    return path, False
+
+
+@contextmanager
+def _through(path: Path):
+    """A FIFO or character device opened for writing in place; OS errors become a
+    :class:`ConfigError` naming it."""
+    try:
+        fh = open(path, "wb")
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot write to it ({exc.strerror or exc}); choose another path") from exc
+    try:
+        with fh:
+            yield fh
+    except OSError as exc:
+        raise ConfigError(f"{path}: writing failed ({exc.strerror or exc})") from exc
+
+
 @contextmanager
 def atomic_output(path):
     """Open a hidden temporary file beside ``path`` for binary writing; on success it
@@ -145,9 +186,14 @@ def atomic_output(path):
 
     A missing folder, a folder given as the path, or an OS error is a
     :class:`ConfigError` naming the path; on any failure the temporary file is
-    removed and an existing ``path`` is left untouched.
+    removed and an existing ``path`` is left untouched. A FIFO or a character device is
+    written through in place, a symbolic link through to its file (module notes).
     """
-    path = Path(path)
+    path, through = _destination(Path(path))
+    if through:
+        with _through(path) as fh:
+            yield fh
+        return
     fd, tmp = _create_temporary(path)
     with _replacing(path, tmp):
         with os.fdopen(fd, "wb") as fh:
@@ -170,7 +216,10 @@ def atomic_path(path, *, sync_every_s: float | None = None):
     at that interval, so that the disk writes overlap the writing instead of all waiting
     for the end (for a file written over seconds, e.g. by a pipeline).
     """
-    path = Path(path)
+    path, through = _destination(Path(path))
+    if through:  # the writer opens the FIFO or device itself
+        yield path
+        return
     fd, tmp = _create_temporary(path)
     with _replacing(path, tmp):
         try:

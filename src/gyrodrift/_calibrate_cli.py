@@ -7,14 +7,20 @@ import sys
 from pathlib import Path
 
 from gyrodrift._cliargs import add_input_options, parse_map
+from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError
 
 __all__ = ["add_calibrate_parser"]
 
 
+def _say(*lines, file=None) -> None:
+    """Print each of ``lines`` as one line, its user text made printable (as ``gyrodrift.cli``)."""
+    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
+
+
 def _warn(source, notes) -> None:
     for note in notes:
-        print(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
+        _say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
 
 
 def _read_gyros(args) -> list:
@@ -84,7 +90,7 @@ def _cmd_calibrate(args) -> int:
     if not args.quiet:
         lines = [c.summary() if len(cals) == 1 else f"gyro {c.instance}: {c.summary()}" for c in cals]
         lines[-1] += f"; wrote {args.output}"
-        print("\n".join(lines))
+        _say(*lines)
     return 0
 
 
@@ -101,7 +107,7 @@ def _cmd_check(args) -> int:
                            instance=args.instance if log.attrs.get("onboard") is None else None,
                            source=str(args.input))
         _warn(args.input, result.notes)
-        print("\n".join(result.lines()))
+        _say(*result.lines())
         applied &= bool(result.applied)
     return 0 if applied else 1
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 
@@ -15,10 +16,12 @@ from gyrodrift import __version__
 from gyrodrift._calibrate_cli import add_calibrate_parser
 from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
 from gyrodrift._parser import SuggestingParser
+from gyrodrift._paths import check_paths
+from gyrodrift._text import printable
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.config import TEMPERATURE_MODES
 from gyrodrift.config import config_from_dict, load_config, load_toml
-from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import ESTIMATORS
 from gyrodrift.io import check_output_path
 
@@ -125,10 +128,16 @@ def _bar(desc: str, unit: str = "it"):
     return progress
 
 
+def _say(*lines, file=None) -> None:
+    """Print each of ``lines`` as one line, its user text made printable (:mod:`gyrodrift._text`:
+    a line end or an escape code in a file name is shown, not obeyed)."""
+    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
+
+
 def _warn(source, notes) -> None:
     """Print each note as one warning line on stderr, naming its ``source`` file."""
     for note in notes:
-        print(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
+        _say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
 
 
 def _cmd_compensate(args) -> int:
@@ -164,9 +173,9 @@ def _cmd_compensate(args) -> int:
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
-        print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
+        _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
         if args.save_profile:
-            print(f"saved device profile {args.save_profile}")
+            _say(f"saved device profile {args.save_profile}")
     return 0
 
 
@@ -185,16 +194,23 @@ def _cmd_stream(args) -> int:
         cfg = warm_config(profile, cfg)
 
     def warn(line: str) -> None:
-        print(f"gyrodrift: warning: {line}", file=sys.stderr, flush=True)
+        _say(f"gyrodrift: warning: {line}", file=sys.stderr)
 
+    stopped = None  # a bad line: the rows before it are written (to the -o file too), then exit 2
     with deferred_signals() as signals, \
             input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
             output_writer(args.output) as write:
-        stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
-                            frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
-                            source=name, skip_bad=args.skip_bad,
-                            warn=warn,
-                            compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
+        try:
+            stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
+                                frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
+                                source=name, skip_bad=args.skip_bad, warn=warn,
+                                compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
+        except LogFormatError as err:
+            if not getattr(err, "stream_stats", None) or not err.stream_stats.rows_in:
+                raise  # nothing compensated: no output file is made
+            stopped = err
+    if stopped is not None:
+        raise stopped
     run = stats.run
     if profile is not None and run.rows:
         _warn(args.profile, profile_notes(profile, temp_range_c=(run.temp_min_c, run.temp_max_c)))
@@ -209,7 +225,7 @@ def _cmd_stream(args) -> int:
             lines.append(f"skipped {stats.skipped} bad line(s)")
         if args.save_profile:
             lines.append(f"saved device profile {args.save_profile}")
-        print("\n".join(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
+        _say(*(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
     if stats.signal is not None:
         print("gyrodrift: " + ("terminated" if stats.signal == signal.SIGTERM else "interrupted"), file=sys.stderr)
         return 143 if stats.signal == signal.SIGTERM else 130
@@ -228,7 +244,9 @@ def _add_stream_parser(sub) -> None:
         "sample from the first, those of the initialisation window provisional (the prior's or the profile's drift, "
         "gate_reason init), then the rows 'gyrodrift compensate' gives; --hold-init holds the window's rows back and "
         "writes them when it ends, every row then equal to compensate's. A bad line stops the stream "
-        "with one error line naming the line and column (exit 2); --skip-bad skips it with a warning instead. "
+        "with one error line naming the line and column (exit 2), after writing the rows of every line before it "
+        "(to the -o file too); --skip-bad skips it with a warning instead. Time stamps that look like another unit "
+        "than --time-unit, or a rate above 100 kHz, stop it as they stop compensate. "
         "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
         "(gyrodrift.stream).",
     )
@@ -279,7 +297,7 @@ def _cmd_demo(args) -> int:
     )
     stats = compensate_file(path, args.output, _config(args))
     stats.source = path.name
-    print("\n".join([stats.read_line(), *stats.result_lines(), f"wrote {args.output}"]))
+    _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
     return 0
 
 
@@ -295,6 +313,7 @@ def _cmd_simulate(args) -> int:
 
     if args.scenario not in SCENARIOS:
         raise ConfigError(f"unknown scenario {args.scenario!r}; choose one of: {', '.join(SCENARIOS)}")
+    _check_simulated_rows(args)
     device, compass = DeviceModel(), CompassModel()
     if args.config:
         values = load_toml(args.config)
@@ -313,13 +332,36 @@ def _cmd_simulate(args) -> int:
     log.attrs = {}
     write_table(log, args.output)
     if not args.quiet:
-        print(
+        _say(
             f"wrote {args.output}: scenario {args.scenario}, seed {args.seed}, {len(log)} rows, "
             f"{log['t'].iloc[-1]:.0f} s at {args.fs_hz:g} Hz, temperature {log['temp'].min():.1f} to "
             f"{log['temp'].max():.1f} degC, true drift {log['true_bias_z'].min():.3f} to "
             f"{log['true_bias_z'].max():.3f} deg/s"
         )
     return 0
+
+
+#: Least memory ``simulate`` takes per row of the log, bytes: a floor (a static log took about
+#: 260 B/row, one with --raw-mag --triad about 440, measured with GNU time over 1 M rows).
+SIMULATE_MIN_BYTES_PER_ROW = 250
+
+
+def _check_simulated_rows(args) -> None:
+    """Refuse, before simulating, a log that cannot fit in this machine's memory, naming
+    the options that make it that long (Linux; elsewhere the run goes on)."""
+    from gyrodrift.pipeline import _available_memory_bytes
+    from gyrodrift.simulate import DEFAULT_DURATION_S
+
+    duration_s = args.duration_s if args.duration_s is not None else DEFAULT_DURATION_S[args.scenario]
+    rows = duration_s * args.fs_hz
+    available = _available_memory_bytes()
+    if available is None or rows * SIMULATE_MIN_BYTES_PER_ROW <= available:
+        return
+    raise ConfigError(
+        f"simulate: --duration-s {duration_s:g} at --fs-hz {args.fs_hz:g} is {rows:.3g} rows, at least "
+        f"{rows * SIMULATE_MIN_BYTES_PER_ROW / 2**30:.3g} GiB, and this machine has {available / 2**30:.1f} GiB "
+        "available; shorten --duration-s or lower --fs-hz"
+    )
 
 
 def _cmd_compare(args) -> int:
@@ -351,12 +393,12 @@ def _cmd_compare(args) -> int:
         }
         print(json.dumps(payload, indent=2))
         return 0
-    print(describe_log(log, args.input))
+    _say(describe_log(log, args.input))
     print(markdown_table(table.rename(index=method_label), floatfmt=".4g"))
     print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
           "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")
     for name, why in skipped.items():
-        print(f"skipped {name}: {why}")
+        _say(f"skipped {name}: {why}")
     return 0
 
 
@@ -376,7 +418,7 @@ def _cmd_paper(args) -> int:
             print(f"[{time.monotonic() - start:6.1f} s] {step}", file=sys.stderr)
 
     written = write_paper(args.output, settings, progress=progress, figures=not args.no_figures)
-    print(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
+    _say(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
           f"{args.output / 'table2.md'}")
     return 0
 
@@ -454,14 +496,14 @@ def _cmd_montecarlo(args) -> int:
     else:
         print(summary.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     failed = df[df["status"] != "ok"]
-    print(
+    _say(
         f"{df['family'].nunique()} families x {args.seeds} seeds x {len(methods)} methods "
         f"(durations x {args.duration_scale:g}, {args.fs_hz:g} Hz) in {seconds:.0f} s; "
         f"{len(failed)} of {len(df)} runs failed" + (f"; wrote {args.output}" if args.output else "")
     )
     for _, row in failed.drop_duplicates("error").head(5).iterrows():
-        print(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
-    return 0
+        _say(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
+    return 1 if len(failed) == len(df) else 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -563,7 +605,8 @@ def build_parser() -> argparse.ArgumentParser:
         "montecarlo", help="Monte Carlo of every method over the simulated scenario families",
         description="Simulate each scenario family with randomised gyros and compasses (one per seed), run "
         "every method on the same logs, and print per family and method the mean and median heading-error "
-        "and bias RMS, and how often adaptive beats each method on both. Families: "
+        "and bias RMS, and how often adaptive beats each method on both; exit status 1 when every run failed. "
+        "Families: "
         + "; ".join(f"{k}: {v.description}" for k, v in FAMILIES.items()),
     )
     mc.add_argument(
@@ -618,6 +661,28 @@ def _say_if_compiling(command: str) -> None:
               file=sys.stderr, flush=True)
 
 
+def _check_numbers(parser: argparse.ArgumentParser, args) -> None:
+    """Refuse a number option outside the range of every setting
+    (:func:`gyrodrift.settings_bounds.setting_problem`: 0, or a magnitude from 1e-9 to 1e9;
+    whole numbers of the settings with their own maximum), and a sample rate above the
+    highest a file may have (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`), naming the option."""
+    from gyrodrift.io.timebase import MAX_RATE_HZ
+    from gyrodrift.settings_bounds import WHOLE_MAXIMA, setting_problem
+
+    for action in parser._actions:
+        value = getattr(args, action.dest, None)
+        if not action.option_strings or value is None or action.type not in (float, int):
+            continue
+        flag = action.option_strings[-1]
+        if action.type is float or action.dest in WHOLE_MAXIMA:
+            problem = setting_problem(action.dest, value)
+            if problem is not None:
+                raise ConfigError(f"{flag}: {problem}")
+        if action.dest == "fs_hz" and value > MAX_RATE_HZ:
+            raise ConfigError(f"{flag} {value:g}: above {MAX_RATE_HZ:g} Hz, the highest sample rate gyrodrift reads; "
+                              "give a lower rate")
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM received while :func:`main` runs.
 
@@ -661,8 +726,10 @@ def main(argv: list[str] | None = None) -> int:
     int
         0 on success; 2 for bad input or usage, with one ``gyrodrift: error:`` line on
         stderr; 130 when interrupted (SIGINT) and 143 when terminated (SIGTERM), after
-        removing the partial output; 1 when out of memory (and as a command documents,
-        e.g. ``batch`` when some logs failed).
+        removing the partial output; 141 (128 + SIGPIPE), quietly, when the program
+        reading the standard output closes it (``| head``); 1 when out of memory (and as a
+        command documents: ``batch`` when some logs failed, ``montecarlo`` when every run
+        failed).
     """
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -671,10 +738,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     _say_if_compiling(args.command)
     try:
+        _check_numbers(parser._subparser(args), args)
+        check_paths(args.command, args)  # no output onto an input, every output writable before any work
         with _sigterm_interrupts():
-            return args.func(args)
+            code = args.func(args)
+            sys.stdout.flush()  # here, where a reader gone away is caught, not at the exit
+            return code
     except GyroDriftError as err:
-        print(f"gyrodrift: error: {err}", file=sys.stderr)
+        _say(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
     except Terminated:
         print("gyrodrift: terminated", file=sys.stderr)
@@ -682,11 +753,33 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("gyrodrift: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of the output went away (| head): nothing more to say
+        _drop_stdout()
+        return 141
     except MemoryError:
-        print(
-            f"gyrodrift: error: {args.command}: out of memory (an output file is written whole or not at all). "
-            "Logs longer than memory stream in constant memory from CSV or Parquet, without --smooth or "
-            "--scale-factor (gyrodrift compensate); otherwise split the log",
-            file=sys.stderr,
-        )
+        print(f"gyrodrift: error: {args.command}: out of memory (an output file is written whole or not at all). "
+              f"{_MEMORY_ADVICE.get(args.command, _LOG_MEMORY_ADVICE)}", file=sys.stderr)
         return 1
+
+
+def _drop_stdout() -> None:
+    """Point the standard output at the null device, so that what is still buffered in it
+    goes nowhere at exit instead of raising a second BrokenPipeError there."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # no file descriptor (a captured stdout): nothing buffered
+        pass
+
+
+#: What to do when a command that reads a log runs out of memory.
+_LOG_MEMORY_ADVICE = ("Logs longer than memory stream in constant memory from CSV or Parquet, without --smooth or "
+                      "--scale-factor (gyrodrift compensate); otherwise split the log")
+#: ... and a command whose options set the size of what it makes.
+_MEMORY_ADVICE = {
+    "simulate": "--duration-s times --fs-hz is the number of rows: shorten --duration-s or lower --fs-hz",
+    "montecarlo": "--duration-scale and --fs-hz set the length of every run and --workers how many run at once: "
+                  "lower them",
+    "paper": "--fs-hz sets the length of every run: lower it, or use --quick",
+}

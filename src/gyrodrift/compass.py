@@ -9,15 +9,32 @@ functions are vectorised, unit-agnostic (only ratios are used) and pure.
 The tilt estimate assumes the accelerometer sees gravity only: linear acceleration
 (braking, cornering) tilts the computed heading. That is the compass the paper uses
 (Section 2); the gating of :mod:`gyrodrift.gating` refuses aiding while turning.
+
+A magnetometer sample is a compass sample only when it reads a field
+(:func:`usable_field`): finite components and a strength of at least :data:`MIN_FIELD`.
+A dead or unplugged sensor reads (0, 0, 0), which has no direction; every entry point
+(:func:`gyrodrift.compensate`, the chunked file path, :class:`gyrodrift.Compensator`)
+empties such samples with :class:`DeadField` before anything else sees them, and a
+magnetometer that never reads a field leaves the log without a compass, with a note.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from gyrodrift.conventions import wrap_360
+from gyrodrift.io.notes import no_compass_note
 
-__all__ = ["roll_pitch_deg", "tilt_compensated_heading", "field_norm_dip", "compass_columns"]
+__all__ = ["MIN_FIELD", "roll_pitch_deg", "tilt_compensated_heading", "field_norm_dip", "compass_columns",
+           "usable_field", "DeadField"]
+
+#: Weakest field strength a magnetometer sample must read to be a compass sample, in the
+#: sample's own unit (only ratios are used, so any unit is allowed). The Earth's field is
+#: at least about 2e-5 T (0.2 gauss, 20 uT, 20 000 nT) and raw counts are whole numbers,
+#: so every reading in any of those units is far above it; a dead sensor reads 0.
+MIN_FIELD = 1e-9
 
 
 def roll_pitch_deg(acc_x, acc_y, acc_z):
@@ -129,3 +146,76 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
     with np.errstate(invalid="ignore"):
         heading = np.where(np.isfinite(heading), wrap_360(heading), np.nan)
     return heading, norm, dip
+
+
+def usable_field(mag) -> np.ndarray:
+    """Which magnetometer samples read a field: finite components and a strength of at
+    least :data:`MIN_FIELD`.
+
+    Parameters
+    ----------
+    mag : (n, 3) array_like
+        Raw magnetometer samples, any unit.
+
+    Returns
+    -------
+    (n,) ndarray of bool
+    """
+    mag = np.asarray(mag, dtype=float).reshape(-1, 3)
+    with np.errstate(over="ignore", invalid="ignore"):
+        strength = np.sqrt(np.einsum("ij,ij->i", mag, mag))
+    return np.isfinite(strength) & (strength >= MIN_FIELD)
+
+
+class DeadField:
+    """The magnetometer samples that read no field (:func:`usable_field`), emptied and
+    counted over a whole log, chunk by chunk (:meth:`mask`) or sample by sample
+    (:meth:`sample`).
+
+    A row whose three components are all NaN is no sample (a compass slower than the
+    gyro); any other row is a sample, and a dead one when it reads no field.
+    """
+
+    def __init__(self) -> None:
+        self.samples = 0  #: magnetometer samples seen
+        self.dead = 0  #: of those, the ones that read no field
+
+    def mask(self, mag) -> np.ndarray:
+        """``mag`` ((n, 3)) with its dead samples NaN (a copy when there is one), counted."""
+        mag = np.asarray(mag, dtype=float)
+        present = ~np.isnan(mag).all(axis=1)
+        dead = present & ~usable_field(mag)
+        self.samples += int(np.count_nonzero(present))
+        n_dead = int(np.count_nonzero(dead))
+        if n_dead:
+            self.dead += n_dead
+            mag = mag.copy()
+            mag[dead] = math.nan
+        return mag
+
+    def sample(self, x: float, y: float, z: float) -> bool:
+        """Count one sample (floats); whether it reads a field (all NaN: no sample, False)."""
+        if math.isnan(x) and math.isnan(y) and math.isnan(z):
+            return False
+        self.samples += 1
+        strength = math.sqrt(x * x + y * y + z * z)  # a square beyond the float range is inf: dead
+        if math.isfinite(strength) and strength >= MIN_FIELD:
+            return True
+        self.dead += 1
+        return False
+
+    def none_usable(self) -> bool:
+        """True when there were samples and none read a field."""
+        return self.samples > 0 and self.dead == self.samples
+
+    def note(self, source: str, other_compass: bool) -> str | None:
+        """One line on the dead samples (None without any); a "no compass" note
+        (:func:`gyrodrift.io.notes.no_compass_note`) when no sample read a field and
+        ``other_compass`` (a ``heading`` column with values) is False."""
+        if not self.dead:
+            return None
+        what = (f"{self.dead} of {self.samples} magnetometer samples read no field (zero, NaN or weaker than "
+                f"{MIN_FIELD:g} in the file's unit)")
+        if self.none_usable() and not other_compass:
+            return no_compass_note(source, f"the magnetometer is dead or unplugged: {what}")
+        return f"{source}: {what}; they are not compass samples: check the magnetometer and its wiring"

@@ -47,9 +47,11 @@ The settings in drift-model units are also checked against physics: ``[kalman]``
 its angles ``heading_sd0``, ``compass_error_deg``, ``disturbance_step_deg`` and the walks
 ``disturbance_walk`` and ``still_walk`` (deg per √s) are at most a turn, 360 deg (a larger
 value is no angle, and its square can overflow). The settings class checks the rest (a
-list such as ``turn_walks`` of exactly four positive numbers). Every problem is a
-:class:`~gyrodrift.errors.ConfigError` of one line that names the file, the table and
-the key.
+list such as ``turn_walks`` of exactly four positive numbers). Every number must also lie
+in the range of :mod:`gyrodrift.settings_bounds` (0, or a magnitude from 1e-9 to 1e9; whole
+numbers and the ``[temp_rate]`` window bounded too), so that no finite value reaches
+arithmetic that cannot take it. Every problem is a :class:`~gyrodrift.errors.ConfigError`
+of one line that names the file, the table and the key.
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ from pathlib import Path
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators.base import DRIFT_BOUNDS_TEXT, DRIFT_PARAM_BOUNDS
+from gyrodrift.settings_bounds import check_table, check_values
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -368,13 +371,16 @@ def apply_settings(obj, values: dict, where: str, check=None):
             raise ConfigError(f"{where}: {key} = {_show(value)} is refused: give {bad.expected}{example}") from None
     if check is not None:
         check(converted, where)
+    check_values(converted, where)  # every number within the range arithmetic takes (gyrodrift.settings_bounds)
     try:
-        return replace(obj, **converted)
+        changed = replace(obj, **converted)
     except ConfigError as err:
         raise ConfigError(f"{where}: {_one_line(err)}") from None
     except (TypeError, ValueError, ArithmeticError) as err:  # a settings class that checks less than it should
         keys = ", ".join(_key(k) for k in converted)
         raise ConfigError(f"{where}: the values of {keys} are not accepted ({_one_line(err)})") from None
+    check_table(changed, where)  # settings bounded together ([temp_rate] window)
+    return changed
 
 
 def config_from_dict(values: dict, *, where: str = "config", base: CompensatorConfig | None = None) -> CompensatorConfig:

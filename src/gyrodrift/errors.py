@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["GyroDriftError", "LogFormatError", "ConfigError"]
+__all__ = ["GyroDriftError", "LogFormatError", "ConfigError", "ArgumentTypeError"]
 
 
 class GyroDriftError(Exception):
@@ -18,3 +18,8 @@ class LogFormatError(GyroDriftError, ValueError):
 
 class ConfigError(GyroDriftError, ValueError):
     """An option or configuration value is invalid."""
+
+
+class ArgumentTypeError(GyroDriftError, TypeError):
+    """An argument of a Python function is of the wrong kind (e.g. a dict where a
+    DataFrame is expected); the message says what is expected."""

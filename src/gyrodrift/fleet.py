@@ -62,6 +62,7 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift._cliargs import add_table_options, table_read_options
+from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = [
@@ -455,6 +456,8 @@ def summary_markdown(summary: pd.DataFrame) -> str:
     for col in ("rows", "updates"):
         shown[col] = [("" if pd.isna(v) else str(int(v))) for v in shown[col]]
     shown["seconds"] = [f"{v:.2f}" for v in shown["seconds"]]
+    for col in ("file", "error"):  # user text: one line each, shown, not obeyed by the terminal
+        shown[col] = [printable(v) if isinstance(v, str) else v for v in shown[col]]
     return markdown_table(shown, floatfmt=".4g", index=False)
 
 
@@ -540,10 +543,10 @@ def batch_command(args: argparse.Namespace) -> int:
         )
         write_summary(summary, summary_path)
     except GyroDriftError as err:
-        print(f"gyrodrift: error: {err}", file=sys.stderr)
+        print(printable(f"gyrodrift: error: {err}"), file=sys.stderr)
         return 2
     n_bad = int((summary["status"] != "ok").sum())
     print(summary_markdown(summary))
     print(f"{len(summary) - n_bad} ok, {n_bad} failed")
-    print(f"wrote {summary_path}")
+    print(printable(f"wrote {summary_path}"))
     return 1 if n_bad else 0

@@ -103,6 +103,7 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
+from gyrodrift._text import printable
 from gyrodrift.calibrate import AXES, AxisFit, Calibration
 from gyrodrift.config import read_utf8
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z
@@ -345,7 +346,7 @@ def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None
     notes = [] if fmt == "json" else [n for c in cals for n in _missing_note(c)]
     header = [f"gyro thermal calibration by gyrodrift {__version__}"]
     for c in cals:
-        header.append(f"gyro {c.instance}{f' (device id {c.device_id})' if c.device_id else ''} from {c.source}, "
+        header.append(f"gyro {c.instance}{f' (device id {c.device_id})' if c.device_id else ''} from {printable(c.source)}, "
                       f"sensor frame {c.rotation_text or 'the body frame (no board rotation)'}: residual RMS "
                       f"{c.residual_rms_dps:.4g} deg/s over {c.temp_min_c:.2f} to {c.temp_max_c:.2f} degC")
     if fmt == "px4":

@@ -27,9 +27,9 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift import gating
+from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import (
     CompensatorConfig,
-    append_input_columns,
     build_estimator,
     check_input_columns,
     clock_config,
@@ -295,7 +295,8 @@ def compensate_file(
         if scale_factor:
             out = _with_scale_factor(out)
         write_table(out, output_path)
-        stats = RunStats(str(input_path), read_summary=log.attrs.get("summary"), compass=log.attrs.get("compass", "?"))
+        stats = RunStats(str(input_path), read_summary=log.attrs.get("summary"),
+                         compass=out.attrs.get("compass") or log.attrs.get("compass", "?"))
         stats.add(out)
         stats.final_params, stats.final_cov = out.attrs["final_params"], out.attrs["final_cov"]
         stats.estimator = str(out.attrs.get("estimator", ""))
@@ -514,6 +515,7 @@ def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dic
     reading of its chunks: the same samples and tilt as :func:`gyrodrift.compensate` uses."""
     from gyrodrift import magcal
     from gyrodrift.attitude import RawTilt, accel_down
+    from gyrodrift.compass import DeadField
     from gyrodrift.io.chunked import iter_log_chunks
 
     samples, tilt = magcal.MagSamples(), None
@@ -526,7 +528,7 @@ def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dic
                 tilt = RawTilt(cfg.tilt, {GYRO_X, GYRO_Y} <= set(log.columns), source)
             down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float), log[GYRO_Y].to_numpy(float),
                              log[GYRO_Z].to_numpy(float), acc) if tilt.uses_gyro else accel_down(acc)
-            samples.add(log[list(MAG_COLS)].to_numpy(float), down)
+            samples.add(DeadField().mask(log[list(MAG_COLS)].to_numpy(float)), down)
     return magcal.fit(*samples.arrays())
 
 
@@ -555,7 +557,7 @@ def _file_uses_clock(cfg: CompensatorConfig, first: pd.DataFrame, input_path: Pa
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
                     column_types: dict[str, str], progress=None) -> RunStats:
     from gyrodrift.attitude import RawTilt
-    from gyrodrift.compass import compass_columns
+    from gyrodrift.compass import DeadField, compass_columns
     from gyrodrift.compensator import output_frame
     from gyrodrift.compensator.model_engine import make_engine
     from gyrodrift.gyro_units import GyroUnitCheck
@@ -570,6 +572,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     cal = None  # the magnetometer calibration (gyrodrift.magcal), fitted before the first chunk with a compass
     clock = None  # whether the drift model's T is the elapsed time (gyrodrift.model.ElapsedClock)
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
+    dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
+    heading_seen = False  # a heading column with a value: a compass even when the magnetometer is dead
     units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
     table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
     # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
@@ -594,7 +598,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 if has_triad_inputs(rows.columns):
                     triad = triad or TriadCompensator(cfg)
                     add_triad_columns(out, rows, tc=triad)
-                out = append_input_columns(out, rows)
+                out = join_input_columns(out, rows)
                 behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
                 stats.add(out)
 
@@ -604,6 +608,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 has_mag = check_input_columns(log, source)
                 n = len(log)
                 heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
+                heading_seen = heading_seen or (heading_in is not None and bool(np.isfinite(heading_in).any()))
                 if has_mag:
                     acc = log[list(ACC_COLS)].to_numpy(float)
                     gyro_xy = {GYRO_X, GYRO_Y} <= set(log.columns)
@@ -614,7 +619,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     if tilt.uses_gyro:
                         down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float),
                                          log[GYRO_Y].to_numpy(float), log[GYRO_Z].to_numpy(float), acc)
-                    mag = log[list(MAG_COLS)].to_numpy(float)
+                    mag = dead.mask(log[list(MAG_COLS)].to_numpy(float))
                     if cfg.mag_calibration:
                         if cal is None:  # a first reading of the whole file: the fit (gyrodrift.magcal)
                             cal = _mag_calibration(input_path, cfg, column_types, table_opts, chunk_rows, source)
@@ -641,8 +646,9 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
         finally:
             reader.close()
             behind.close()
-        stats.compass = chunks.compass or "?"
-        stats.notes = [*getattr(chunks, "notes", ()), *filter(None, [tilt_note, cal and cal.note(source)]),
+        stats.compass = "none" if dead.none_usable() and not heading_seen else chunks.compass or "?"
+        stats.notes = [*getattr(chunks, "notes", ()), *filter(None, [dead.note(source, heading_seen), tilt_note,
+                                                                     cal and cal.note(source)]),
                        *engine.notes,
                        *filter(None, [units.note()])]
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name

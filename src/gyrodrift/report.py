@@ -56,6 +56,7 @@ from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift._cliargs import add_input_options
 from gyrodrift._progress import progress_iter as _progress
+from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
 
 __all__ = ["ALLAN_METHODS", "build_report", "write_report", "report_command", "add_report_parser"]
@@ -601,9 +602,9 @@ def build_report(
     skipped : mapping of str to str, optional
         Method name → why it did not run (listed in the header).
     title : str
-        Page title and heading.
+        Page title and heading (control characters shown as escapes, :mod:`gyrodrift._text`).
     source : str
-        What was read (file name), shown in the header.
+        What was read (file name), shown in the header (likewise).
     config : CompensatorConfig, optional
         Settings the methods ran with (default: the defaults), listed at the end
         and used for the motion test of the Allan figure.
@@ -622,6 +623,7 @@ def build_report(
     config = config or CompensatorConfig()
     skipped = dict(skipped or {})
     outputs = dict(outputs)
+    title, source = printable(title), printable(source)  # one line each, whatever the file name holds
     from gyrodrift import __version__
 
     from gyrodrift.plots import require_matplotlib
@@ -740,7 +742,7 @@ def report_command(args: argparse.Namespace) -> int:
     page = build_report(log, outputs, skipped, title=title, source=str(args.input), config=config)
     write_report(out_path, page)
     if not getattr(args, "quiet", False):
-        print(f"wrote {out_path}: {len(outputs)} method(s) ({', '.join(outputs)}), {len(page) / 1e6:.1f} MB")
+        print(printable(f"wrote {out_path}: {len(outputs)} method(s) ({', '.join(outputs)}), {len(page) / 1e6:.1f} MB"))
     return 0
 
 

@@ -48,10 +48,21 @@ Bad lines
 ---------
 A line that cannot be read (wrong number of cells, not JSON, not a number, time not
 increasing, ...) is a :class:`~gyrodrift.errors.LogFormatError` of one line naming the
-source, the line number and the column, and what to do. It stops the stream (the rows
-written so far stay written); with ``skip_bad`` the line is skipped instead, with that
-message as a warning. Problems of the header (a required column missing, a bad
-``column_map``) always stop.
+source, the line number and the column, and what to do. It stops the stream after the
+rows of every line before it are written (those the compensator holds too); with
+``skip_bad`` the line is skipped instead, with that message as a warning. Problems of the
+header (a required column missing, a bad ``column_map``), a line longer than
+:data:`MAX_LINE_CHARS` and a time base a file is refused for always stop.
+
+Time base
+---------
+The stream refuses what a file is refused for (:mod:`gyrodrift.io.timebase`): time
+stamps that look like another unit than the one given (epoch milliseconds, whole-number
+steps of milliseconds), and a sample rate above 100 kHz. A file is judged on all its
+time stamps; the stream on its first ones as they come
+(:class:`~gyrodrift.io.timebase.TimeBaseWatch`: the first time stamp's magnitude at
+once, the steps from the ninth sample on), so such a stream stops within its first
+lines, or at its end when it is shorter.
 
 Signals
 -------
@@ -81,10 +92,12 @@ import pandas as pd
 import pyarrow as pa
 
 from gyrodrift._atomic import atomic_output
-from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig, append_input_columns
+from gyrodrift._columns import join_input_columns
+from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
+from gyrodrift.io.timebase import TimeBaseWatch
 from gyrodrift.io.validate import (
     TEMP_ABSENT,
     Source,
@@ -118,6 +131,9 @@ SERIAL_ADVICE = "pip install 'gyrodrift[serial]'"
 BOM = "\ufeff"
 #: Bytes asked for in one read of a file descriptor (a read returns what is there, up to this).
 READ_BYTES = 1 << 16
+#: Longest line taken, characters: a longer one (a stream without line ends, a binary
+#: file) stops the stream instead of being gathered in memory.
+MAX_LINE_CHARS = 1 << 24
 #: Output rows gathered before they are added to the run's account (:class:`gyrodrift.pipeline.RunStats`),
 #: which costs about as much for one row as for a thousand.
 ACCOUNT_ROWS = 1000
@@ -391,6 +407,7 @@ class _Stream:
         self.has_mag = self.has_triad = False
         self.written: list[pd.DataFrame] = []  # output rows not yet in the run's account (:meth:`_account`)
         self.written_rows = 0
+        self.time_base = TimeBaseWatch(opts.time_unit)  # judged as a file's, on the first samples
 
     # -- header
     def _source(self, line_nos: list[int]) -> Source:
@@ -438,6 +455,8 @@ class _Stream:
             try:
                 records.append((line_no, self.reader.record(line, line_no)))
             except LogFormatError as exc:
+                if not self.skip_bad and records:
+                    self.block(records)  # the lines before it are written before it stops the stream
                 self._bad(exc)
         if records:
             self.block(records)
@@ -466,6 +485,8 @@ class _Stream:
         try:
             df = self._convert(records)
         except LogFormatError as exc:
+            if len(records) > 1 and not self.skip_bad:
+                self._good_part(records)  # the lines before the bad one, written before it stops
             if len(records) == 1 or not self.skip_bad:
                 self._bad(exc)
                 return
@@ -479,6 +500,31 @@ class _Stream:
             return
         self._push(records, df)
 
+    def _good_part(self, records: list[tuple[int, list]]) -> None:
+        """Push the longest run of ``records`` from the first that converts (the block has a
+        bad line): halving, a few conversions whatever the size of the block."""
+        good, bad, df = 0, len(records), None
+        while bad - good > 1:
+            mid = (good + bad) // 2
+            try:
+                df, good = self._convert(records[:mid]), mid
+            except LogFormatError:
+                bad = mid
+        if good:
+            self._push(records[:good], df if df is not None and len(df) == good else self._convert(records[:good]))
+
+    def _time_base(self, t_s: float, line_no: int) -> None:
+        """Judge the time base with the next sample (raw time: the file's unit), as a file's
+        is judged (:class:`~gyrodrift.io.timebase.TimeBaseWatch`); a problem stops the stream."""
+        found = self.time_base.add(t_s / self.opts.time_scale)
+        if found is None:
+            return
+        if found.problem:
+            raise LogFormatError(message(self.name, found.problem, found.advice, where=f"line {line_no}, column 't'"))
+        note = f"{self.name}: {found.note}"
+        self.stats.notes.append(note)
+        self.warn(note)
+
     def _push(self, records, df: pd.DataFrame) -> None:
         if self.prev_t_s is None and not self.opts.frame_stated:  # the first rows say which way z points
             check_z_up(df, self._source([n for n, _ in records]))
@@ -490,13 +536,19 @@ class _Stream:
         gy = df[GYRO_Y].to_numpy(float).tolist() if self.has_triad else None
         self.pending.append(df)
         rows: list[CompensatedSample] = []
-        for i, t_s in enumerate(cols[T]):
-            rows += self.comp.push(
-                t_s, cols[GYRO_Z][i], cols[TEMP][i], heading_deg=math.nan if heading is None else heading[i],
-                mag=None if mag is None else mag[i], acc=None if acc is None else acc[i],
-                gyro_x_dps=None if gx is None else gx[i], gyro_y_dps=None if gy is None else gy[i],
-            )
-        self.stats.rows_in += len(df)
+        try:
+            for i, t_s in enumerate(cols[T]):
+                if self.time_base.decided is False:
+                    self._time_base(t_s, records[i][0])
+                rows += self.comp.push(
+                    t_s, cols[GYRO_Z][i], cols[TEMP][i], heading_deg=math.nan if heading is None else heading[i],
+                    mag=None if mag is None else mag[i], acc=None if acc is None else acc[i],
+                    gyro_x_dps=None if gx is None else gx[i], gyro_y_dps=None if gy is None else gy[i],
+                )
+                self.stats.rows_in += 1
+        except GyroDriftError:
+            self.emit(rows)  # the rows of the samples before it
+            raise
         self.prev_t_s, self.prev_line = cols[T][-1], records[-1][0]
         self.emit(rows)
 
@@ -520,7 +572,7 @@ class _Stream:
         """The output table of these rows: the columns ``gyrodrift compensate`` writes."""
         names = _Z_COLUMNS + (TRIAD_COLUMNS if self.has_triad else ())
         out = pd.DataFrame({name: [getattr(s, name) for s in samples] for name in names})
-        return append_input_columns(out, inputs)
+        return join_input_columns(out, inputs)
 
     def emit(self, samples: list[CompensatedSample]) -> None:
         """Write output rows (one call of ``write``) and account for them."""
@@ -543,6 +595,23 @@ class _Stream:
         """The rows the compensator still holds (end of input); the run's account complete."""
         self.emit(self.comp.flush())
         self._account()
+
+    def end_time_base(self) -> None:
+        """At the end of the input: judge the time base of a stream too short to be judged
+        as it came (its rows are written); a problem stops it."""
+        found = self.time_base.end()
+        if found is not None and found.problem:
+            raise LogFormatError(message(self.name, found.problem, found.advice, where="column 't'"))
+        if found is not None and found.note:
+            self.stats.notes.append(f"{self.name}: {found.note}")
+            self.warn(f"{self.name}: {found.note}")
+
+
+def _too_long(source: str, line_no: int) -> LogFormatError:
+    """The error for a line longer than :data:`MAX_LINE_CHARS`."""
+    return LogFormatError(message(source, f"longer than {MAX_LINE_CHARS:,} characters without a line end",
+                                  "give one sample per line (is the input text, one line per sample?)",
+                                  where=f"line {line_no}"))
 
 
 def _csv_text(out: pd.DataFrame) -> str:
@@ -620,6 +689,7 @@ def stream_rows(
         default: dropped.
     compensator : Compensator, optional
         The compensator to feed (e.g. warm-started); default a new one from ``config``.
+        It gets the times in seconds (its default ``time_unit``), converted and judged here.
 
     Returns
     -------
@@ -630,7 +700,11 @@ def stream_rows(
     Raises
     ------
     LogFormatError
-        A bad line (without ``skip_bad``) or header, or an input without data rows.
+        A bad line (without ``skip_bad``; every row before it is written first, the
+        held ones too), a bad header, a line longer than :data:`MAX_LINE_CHARS`, a time
+        base a file is refused for (:class:`~gyrodrift.io.timebase.TimeBaseWatch`), or an
+        input without data rows. Its ``stream_stats`` (:class:`StreamStats`) say what was
+        read and written before it.
     ConfigError
         A bad ``fmt``, ``out_format``, ``gyro_unit``, ``frame`` or ``column_map``.
     """
@@ -641,25 +715,46 @@ def stream_rows(
     comp = compensator if compensator is not None else Compensator(config, source=source)
     state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
                     warn=warn or (lambda line: None))
-    carry, line_no, started = "", 0, False
+    carry: list[str] = []  # the pieces of an unfinished line, which waits for the rest
+    carry_chars, line_no, started = 0, 0, False
     try:
-        for piece in blocks:
-            if not started and piece:  # a UTF-8 byte-order mark, as some programs write, is not text
-                piece, started = piece.removeprefix(BOM), True
-            lines = (carry + piece).split("\n")
-            carry = lines.pop()  # an unfinished line waits for the rest
-            numbered = []
-            for line in lines:
-                line_no += 1
-                if line.strip():
-                    numbered.append((line_no, line.rstrip("\r")))
-            if numbered:
-                state.lines(numbered)
-    except StreamInterrupted as stop:
-        state.stats.signal = stop.signum
-        carry = ""  # an unfinished line is not a sample
-    if carry.strip():
-        state.lines([(line_no + 1, carry.rstrip("\r"))])
+        try:
+            for piece in blocks:
+                if not started and piece:  # a UTF-8 byte-order mark, as some programs write, is not text
+                    piece, started = piece.removeprefix(BOM), True
+                if "\n" not in piece:
+                    carry.append(piece)
+                    carry_chars += len(piece)
+                    if carry_chars > MAX_LINE_CHARS:
+                        raise _too_long(source, line_no + 1)
+                    continue
+                lines = ("".join(carry) + piece).split("\n")
+                tail = lines.pop()
+                carry, carry_chars = [tail], len(tail)
+                numbered = []
+                for line in lines:
+                    line_no += 1
+                    if len(line) > MAX_LINE_CHARS:
+                        raise _too_long(source, line_no)
+                    if line.strip():
+                        numbered.append((line_no, line.rstrip("\r")))
+                if numbered:
+                    state.lines(numbered)
+        except StreamInterrupted as stop:
+            state.stats.signal = stop.signum
+            carry = []  # an unfinished line is not a sample
+        tail = "".join(carry)
+        if tail.strip():
+            state.lines([(line_no + 1, tail.rstrip("\r"))])
+        state.end_time_base()
+    except LogFormatError as stop:  # a bad line stops the stream: every row before it is written first
+        if state.stats.rows_in:
+            try:
+                state.finish()
+            except GyroDriftError:  # the first problem is the one to report
+                pass
+        stop.stream_stats = state.stats  # what was read and written before it
+        raise
     if state.stats.rows_in == 0 and state.stats.signal is None:
         where = Source(source, "csv", None)
         if state.reader is None:
@@ -672,5 +767,7 @@ def stream_rows(
     state.stats.notes += comp.notes
     run = state.stats.run
     run.final_params, run.final_cov, run.estimator = comp.params, comp.cov, comp.estimator.name
+    if comp.compass_dead:
+        run.compass = "none"
     return state.stats
 

@@ -5,22 +5,54 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from gyrodrift._arguments import (
+    check_buffers,
+    check_callable,
+    check_config,
+    check_estimator,
+    check_log,
+    check_source,
+    column,
+    frame_column,
+    rows,
+)
 from gyrodrift.attitude import RawTilt, accel_down
-from gyrodrift.compass import compass_columns
+from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.memory import OutputBuffers
-from gyrodrift.compensator.output import append_input_columns, check_input_columns, output_frame, with_attrs
+from gyrodrift._columns import join_input_columns
+from gyrodrift.compensator.output import check_input_columns, output_frame, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_columns, check_gyro_max_dps
+from gyrodrift.io.timebase import check_time_base
 from gyrodrift.triad import add_triad_columns, has_triad_inputs
 
 __all__ = ["compensate", "compensate_arrays"]
 
 #: Rows per chunk when a progress display is asked for.
 PROGRESS_ROWS = 1 << 20
+
+
+#: Rows whose time steps are checked against the plausible sample rate of a file (the first
+#: chunk, as the chunked file reader checks it).
+TIME_BASE_ROWS = 250_000
+
+
+def _check_rate(t: np.ndarray, source: str) -> None:
+    """Refuse strictly increasing times whose median step gives a sample rate above that of
+    a plausible file (:func:`gyrodrift.io.timebase.check_time_base`); other times are the
+    engine's to judge."""
+    if t.size < 2:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):  # times of any size: the engine refuses them
+        if not (np.diff(t) > 0).all():
+            return
+        rate = check_time_base(t, "s")
+    if rate.problem:
+        raise LogFormatError(f"{source}: t_s: {rate.problem}; give the times in seconds")
 
 
 def compensate_arrays(
@@ -72,17 +104,33 @@ def compensate_arrays(
     Raises
     ------
     LogFormatError
-        No samples; a first sample without gyro or temperature; a value outside its
-        plausible range (:mod:`gyrodrift.io.limits`: the gyro beyond ``gyro_max_dps``,
-        the temperature, heading, magnetometer or accelerometer), naming the row.
+        No samples; arrays of another shape than given above, or of unequal lengths; a
+        median time step giving a sample rate above the plausible one of a file
+        (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`); a first sample without gyro or temperature; a value outside its plausible range
+        (:mod:`gyrodrift.io.limits`: the gyro beyond ``gyro_max_dps``, the temperature,
+        heading, magnetometer or accelerometer), naming the row.
+    ArgumentTypeError
+        An argument of the wrong kind (an array that is not numbers, a ``config`` that is
+        not a :class:`CompensatorConfig`, an ``estimator`` that is not a drift estimator
+        instance, ...), saying what is expected; a :class:`TypeError` too.
     """
-    cfg = config or CompensatorConfig()
-    t = np.asarray(t_s, dtype=float)
+    source = check_source(source)
+    cfg = check_config(config)
+    check_estimator(estimator)
+    check_callable(progress, "progress")
+    check_buffers(buffers)
+    # one length for every array before the compiled code, which indexes them unchecked
+    t = column(t_s, "t_s", source)
     n = t.size
-    g = np.asarray(gyro_z_dps, dtype=float)
-    T_in = np.asarray(temp_c, dtype=float)
+    g = column(gyro_z_dps, "gyro_z_dps", source, n)
+    T_in = column(temp_c, "temp_c", source, n)
+    heading_deg = None if heading_deg is None else column(heading_deg, "heading_deg", source, n)
+    mag = None if mag is None else rows(mag, "mag", source, n, 3)
+    acc = None if acc is None else rows(acc, "acc", source, n, 3)
+    gyro_xy = None if gyro_xy is None else rows(gyro_xy, "gyro_xy", source, n, 2)
     if n == 0:
         raise LogFormatError(f"{source}: the log has no samples")
+    _check_rate(t[:TIME_BASE_ROWS], source)
     if not (np.isfinite(g[0]) and np.isfinite(T_in[0])):
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
@@ -92,7 +140,10 @@ def compensate_arrays(
         cfg = clock_config(cfg)
     est = estimator if estimator is not None else build_estimator(cfg)
     notes = []
+    dead = DeadField()
     if mag is not None and acc is not None:
+        mag = dead.mask(mag)  # a sample without a field is no compass sample (gyrodrift.compass)
+        notes += filter(None, [dead.note(source, _has_heading(heading_deg))])
         tilt = RawTilt(cfg.tilt, gyro_xy is not None, source)
         down = None
         if tilt.uses_gyro:
@@ -119,8 +170,9 @@ def compensate_arrays(
             cols = engine.flush()
         elif buffers is not None:
             gated = buffers.gated[:n]
-        return with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor,
-                          engine)
+        out = with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor,
+                         engine)
+        return _without_compass(out, dead, heading_deg)
     parts = []
     starts = range(0, n, PROGRESS_ROWS)
     for lo in progress(starts, len(starts)):
@@ -130,7 +182,21 @@ def compensate_arrays(
     parts.append(engine.flush())
     parts = [p for p in parts if p is not None]
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor, engine)
+    out = with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor, engine)
+    return _without_compass(out, dead, heading_deg)
+
+
+def _has_heading(heading_deg) -> bool:
+    """Whether a heading column was given with at least one value."""
+    return heading_deg is not None and bool(np.isfinite(np.asarray(heading_deg, dtype=float)).any())
+
+
+def _without_compass(out: pd.DataFrame, dead: DeadField, heading_deg) -> pd.DataFrame:
+    """``out`` with ``attrs["compass"]`` "none" when the magnetometer read no field and no
+    heading was given (a log without compass, :mod:`gyrodrift.compass`)."""
+    if dead.none_usable() and not _has_heading(heading_deg):
+        out.attrs["compass"] = "none"
+    return out
 
 
 def compensate(
@@ -177,28 +243,41 @@ def compensate(
         ``tilt_gated`` come before the input columns (:mod:`gyrodrift.triad`).
         ``attrs["notes"]`` has the log's notes, the compensator's, and one when the gyro
         unit looks wrong against the compass (:mod:`gyrodrift.gyro_units`).
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``log`` is not a DataFrame, or another argument is of the wrong kind (see
+        :func:`compensate_arrays`); a :class:`TypeError` too.
+    LogFormatError
+        A column name given twice, a required column missing, a number column holding
+        text, or what :func:`compensate_arrays` refuses.
     """
-    source = source or log.attrs.get("source", "log")
+    check_log(log, "log")
+    source = check_source(source or log.attrs.get("source", "log"))
+    check_config(config)
     has_mag = check_input_columns(log, source)
-    check_columns(source, {c: log[c].to_numpy(float) for c in (GYRO_X, GYRO_Y) if c in log.columns},
-                  check_gyro_max_dps(gyro_max_dps))
+    numbers = {c: frame_column(log, c, source) for c in (T, GYRO_Z, TEMP, HEADING, GYRO_X, GYRO_Y, *MAG_COLS, *ACC_COLS)
+               if c in log.columns}
+    check_columns(source, {c: numbers[c] for c in (GYRO_X, GYRO_Y) if c in numbers}, check_gyro_max_dps(gyro_max_dps))
     out = compensate_arrays(
-        log[T].to_numpy(float),
-        log[GYRO_Z].to_numpy(float),
-        log[TEMP].to_numpy(float),
-        heading_deg=log[HEADING].to_numpy(float) if HEADING in log.columns else None,
-        mag=log[list(MAG_COLS)].to_numpy(float) if has_mag else None,
-        acc=log[list(ACC_COLS)].to_numpy(float) if has_mag else None,
+        numbers[T],
+        numbers[GYRO_Z],
+        numbers[TEMP],
+        heading_deg=numbers.get(HEADING),
+        mag=np.column_stack([numbers[c] for c in MAG_COLS]) if has_mag else None,
+        acc=np.column_stack([numbers[c] for c in ACC_COLS]) if has_mag else None,
         config=config,
         estimator=estimator,
         source=source,
         progress=progress,
         gyro_max_dps=gyro_max_dps,
-        gyro_xy=log[[GYRO_X, GYRO_Y]].to_numpy(float) if has_mag and {GYRO_X, GYRO_Y} <= set(log.columns) else None,
+        gyro_xy=np.column_stack([numbers[GYRO_X], numbers[GYRO_Y]]) if has_mag and {GYRO_X, GYRO_Y} <= set(numbers)
+        else None,
     )
     if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
         add_triad_columns(out, log, config)
     units = GyroUnitCheck(source, log.attrs.get("gyro_unit"))
-    units.add(out[T].to_numpy(), log[GYRO_Z].to_numpy(float), out["compass_heading"].to_numpy())
+    units.add(out[T].to_numpy(), numbers[GYRO_Z], out["compass_heading"].to_numpy())
     out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"], *filter(None, [units.note()])]
-    return append_input_columns(out, log)
+    return join_input_columns(out, log)  # the input columns at once (a wide log: thousands of them)

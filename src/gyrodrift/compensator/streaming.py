@@ -10,14 +10,16 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
+from gyrodrift._arguments import check_config, check_estimator, check_source
 from gyrodrift.attitude import RawTilt
-from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+from gyrodrift.compass import DeadField, field_norm_dip, tilt_compensated_heading
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps, limit_of, outside_problem
+from gyrodrift.io.timebase import TimeBaseWatch, time_scale
 from gyrodrift.kernels import layout as L
 
 __all__ = ["Compensator"]
@@ -53,6 +55,14 @@ class Compensator:
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
+    ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
+    :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
+    to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
+    own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
+    the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
+    without a unit (epoch or whole-number milliseconds) belong to text without a stated
+    unit: ``gyrodrift stream`` makes them on the text before it pushes.
+
     Examples
     --------
     >>> comp = Compensator(CompensatorConfig(init_s=3.0, update_interval_s=1.0))
@@ -71,10 +81,15 @@ class Compensator:
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
-                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True):
-        self.config = config or CompensatorConfig()
-        self.source = source
+                 scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True,
+                 time_unit: str | None = None):
+        self.config = check_config(config)
+        check_estimator(estimator)
+        self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
+        unit, self._time_scale = time_scale(time_unit)
+        self._time_base = TimeBaseWatch(unit or "s")  # as compensate_arrays judges its times (gyrodrift.io.timebase)
+        self._time_note = None
         self._limits = _limits(self._gyro_max_dps)
         self._own_estimator = estimator is None
         self._est = estimator
@@ -88,6 +103,8 @@ class Compensator:
         self._tilt_note = None
         self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
+        self._dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
+        self._heading_seen = False  # a heading_deg given: a compass even when the magnetometer is dead
         self._sf = None  # ScaleFactorTracker when a scale factor was asked for
         if scale_factor is not None:
             from gyrodrift.scale_factor import CompensatedSFSample, ScaleFactorTracker
@@ -149,7 +166,7 @@ class Compensator:
         Parameters
         ----------
         t_s : float
-            Sample time, s (strictly increasing).
+            Sample time, s, or in ``time_unit`` (strictly increasing).
         gyro_z_dps : float
             Raw heading-axis rate, deg/s (NED: positive = heading increases).
             NaN: hold the previous value (the interval is refused as ``gap``).
@@ -177,8 +194,9 @@ class Compensator:
             value outside its plausible range, as a log's cell is refused
             (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
             temperature, heading, magnetometer and accelerometer; NaN is no value and
-            holds); a time that is not finite or does not increase. The refused
-            sample is not taken: the compensator stays as it was.
+            holds); a time that is not finite or does not increase, or a sample rate
+            above 100 kHz (class notes). The refused sample is not taken: the
+            compensator stays as it was.
         """
         if self._clock and temp_c is None:
             temp_c = math.nan
@@ -187,18 +205,17 @@ class Compensator:
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
+        t_raw, t_s = t_s, t_s * self._time_scale
+        if self._prev is not None and not t_s > self._prev[0]:
+            raise GyroDriftError(f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}")
+        self._judge_time_base(self._time_base.add(t_raw))
         if self._prev is None:
             if self._clock and not math.isfinite(T):
                 T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
             if not (math.isfinite(g) and math.isfinite(T)):
                 raise GyroDriftError(f"{self.source}: the first sample needs gyro_z and temp values")
-        else:
-            if not t_s > self._prev[0]:
-                raise GyroDriftError(
-                    f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}"
-                )
-            if not math.isfinite(T):
-                T = self._prev[2]
+        elif not math.isfinite(T):
+            T = self._prev[2]
         self._prev = (t_s, g, T)
         down = None
         if self._tilt is None:  # decided on the first sample, as the x/y axes are
@@ -208,6 +225,9 @@ class Compensator:
                                    _float_triple(acc))[0]
         if mag is not None and acc is not None and self._tilt_note is None:
             self._tilt_note = self._tilt.note()
+        if mag is not None and not self._dead.sample(*mag):
+            mag = None  # a sample without a field is no compass sample (gyrodrift.compass)
+        self._heading_seen = self._heading_seen or math.isfinite(heading_deg)
         heading, norm, dip = _compass_values(heading_deg, mag, acc if down is None else -down)
         if not self._triad_started:
             self._start_triad(gyro_x_dps, gyro_y_dps, acc)
@@ -232,13 +252,36 @@ class Compensator:
         (a short log, ``provisional=False``): compensated from what they give (the window ends
         at the last sample). Empty when no row is held, and with provisional rows (every
         sample already has its row; the window is still closed, so samples pushed afterwards
-        come out one by one, as after a complete window)."""
+        come out one by one, as after a complete window).
+
+        Raises
+        ------
+        GyroDriftError
+            The samples were too few for their sample rate to be judged as they came, and
+            it is above 100 kHz (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
+        """
+        self._judge_time_base(self._time_base.end())
         return self._released(self._engine.flush())
+
+    def _judge_time_base(self, found) -> None:
+        """Refuse a time base a file is refused for; keep the note of a low rate."""
+        if found is None:
+            return
+        if found.problem:
+            raise GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
+        self._time_note = f"{self.source}: {found.note}"
+
+    @property
+    def compass_dead(self) -> bool:
+        """True when magnetometer samples came, none read a field and no heading was given:
+        the stream has no compass (:class:`gyrodrift.compass.DeadField`)."""
+        return self._dead.none_usable() and not self._heading_seen
 
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._tilt_note]), *self._engine.notes]
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._tilt_note]),
+                *self._engine.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional

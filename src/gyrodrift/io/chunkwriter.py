@@ -89,7 +89,7 @@ class ChunkWriter:
             raise RuntimeError("ChunkWriter is already open")
         with ExitStack() as stack:
             tmp = stack.enter_context(atomic_path(self.path, sync_every_s=self.sync_every_s))
-            self._sink = stack.enter_context(pa.OSFile(str(tmp), "w"))
+            self._sink = stack.enter_context(parquetfile.open_sink(tmp))
             self._stack = stack.pop_all()
         return self
 

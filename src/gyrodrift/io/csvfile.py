@@ -12,7 +12,8 @@ Writing: :func:`csv_header` prints the header line and :func:`write_csv_rows` th
 lines of the Arrow table :func:`csv_table` makes of a DataFrame, for
 :func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
 alike, so a table written in chunks is byte for byte the table written whole;
-:func:`write_csv_with_pandas` prints the tables pyarrow cannot.
+:func:`write_csv_with_pandas` prints the tables pyarrow cannot. Both quote the text cells
+and column names a spreadsheet would run as formulas (:mod:`gyrodrift.io.formula`).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ import pyarrow.compute as pa_compute
 import pyarrow.csv as pa_csv
 
 from gyrodrift.errors import LogFormatError
+from gyrodrift.io.formula import formula_safe_frame, formula_safe_table, formula_safe_text
 from gyrodrift.io.parquetfile import arrow_table
 from gyrodrift.io.validate import NUMERIC_COLS, Source, format_error, message, one_line
 
@@ -208,8 +210,9 @@ def _csv_field(text: str) -> str:
 
 
 def csv_header(names) -> bytes:
-    """The CSV header line (UTF-8, ``\n``-terminated) for column ``names``."""
-    return (",".join(_csv_field(str(n)) for n in names) + "\n").encode("utf-8")
+    """The CSV header line (UTF-8, ``\n``-terminated) for column ``names`` (a name that starts
+    like a formula quoted, :mod:`gyrodrift.io.formula`)."""
+    return (",".join(_csv_field(formula_safe_text(str(n))) for n in names) + "\n").encode("utf-8")
 
 
 def _is_text(arrow_type: pa.DataType) -> bool:
@@ -258,10 +261,11 @@ def _csv_lines(table: pa.Table) -> list:
 
 
 def csv_table(df: pd.DataFrame) -> pa.Table | None:
-    """``df`` as the Arrow table :func:`write_csv_rows` prints, or None if pyarrow cannot
-    convert it (pandas writes it then)."""
+    """``df`` as the Arrow table :func:`write_csv_rows` prints (text cells that start like a
+    formula quoted, :mod:`gyrodrift.io.formula`), or None if pyarrow cannot convert it
+    (pandas writes it then)."""
     try:
-        return arrow_table(df)
+        return formula_safe_table(arrow_table(df))
     except _ARROW_WRITE_ERRORS:
         return None
 
@@ -301,8 +305,9 @@ def write_csv_rows(table: pa.Table, sink, header: bytes = b"") -> bool:
 
 
 def write_csv_with_pandas(df: pd.DataFrame, sink, *, header: bool) -> None:
-    """Write ``df`` as CSV with pandas to a binary ``sink`` (for values pyarrow cannot print)."""
+    """Write ``df`` as CSV with pandas to a binary ``sink`` (for values pyarrow cannot print),
+    text cells and names that start like a formula quoted (:mod:`gyrodrift.io.formula`)."""
     text = io.TextIOWrapper(sink, encoding="utf-8", newline="")
-    df.to_csv(text, index=False, header=header, lineterminator="\n")
+    formula_safe_frame(df).to_csv(text, index=False, header=header, lineterminator="\n")
     text.flush()
     text.detach()  # leave ``sink`` open for the caller

@@ -6,6 +6,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 from typing import Mapping
 
@@ -49,8 +51,18 @@ def _sniff(path: Path) -> str | None:
     return next((fmt for magic, fmt in _MAGIC if head.startswith(magic)), None)
 
 
+def _pipe_or_device(path: Path) -> bool:
+    """True when ``path`` is a FIFO or a character device (``/dev/null``, a terminal)."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISCHR(mode)
+
+
 def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> str:
-    """Return "csv" or "parquet" from ``fmt`` or else from the file-name ending."""
+    """Return "csv" or "parquet" from ``fmt`` or else from the file-name ending (a FIFO or
+    a character device without a table ending: "csv")."""
     if fmt is not None:
         key = str(fmt).strip().lower()
         if key not in _TABLE_FORMATS:
@@ -62,6 +74,8 @@ def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> st
     for suffix in sorted(suffixes, key=len, reverse=True):
         if name.endswith(suffix):
             return suffixes[suffix]
+    if _pipe_or_device(path):  # a FIFO or /dev/stdout-like device without an ending carries text: CSV
+        return "csv"
     accepted = ", ".join(sorted(suffixes))
     raise ConfigError(
         message(

@@ -6,11 +6,13 @@ file that is empty or not Parquet. :func:`arrow_table` turns a DataFrame into th
 table a Parquet file stores (and the CSV writer prints, :mod:`gyrodrift.io.csvfile`), and
 :func:`parquet_options` gives the writer settings, for
 :func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
-alike.
+alike; :func:`open_sink` opens the file both write to.
 """
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,52 @@ import pyarrow as pa
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.validate import Source, empty_file_error, format_error, message, one_line
 
-__all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options"]
+__all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options", "open_sink"]
+
+
+class _Counted:
+    """A binary file written in order, telling its position by counting the bytes written:
+    what pyarrow's Parquet writer asks of its sink, which a FIFO cannot answer by seeking."""
+
+    def __init__(self, fh) -> None:
+        self._fh, self._written, self.closed = fh, 0, False
+
+    def write(self, data) -> int:
+        self._fh.write(data)
+        self._written += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self._written
+
+    def flush(self) -> None:
+        self._fh.flush()
+
+    def close(self) -> None:
+        self._fh.close()
+        self.closed = True
+
+    def writable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return False
+
+    def readable(self) -> bool:
+        return False
+
+
+def open_sink(path) -> pa.NativeFile:
+    """Open ``path`` for writing a table: a :class:`pyarrow.OSFile` (written without the
+    GIL), or for a FIFO a Python file that counts its position (pyarrow's own file asks a
+    pipe for its position by seeking, which fails)."""
+    try:
+        fifo = stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        fifo = False
+    if fifo:
+        return pa.PythonFile(_Counted(open(path, "wb")), mode="w")
+    return pa.OSFile(str(path), "w")
 
 
 _PARQUET_EMPTY_ADVICE = "give a Parquet log with at least one data row"
@@ -70,7 +117,7 @@ def arrow_table(df: pd.DataFrame) -> pa.Table:
     names = [str(c) for c in df.columns]
     categorical = any(isinstance(dtype, pd.CategoricalDtype) for dtype in df.dtypes)
     if categorical and len(set(names)) == len(names):  # duplicate names: from_pandas refuses them
-        return pa.Table.from_arrays([_arrow_column(df.iloc[:, i]) for i in range(df.shape[1])], names=names)
+        return pa.Table.from_arrays([_arrow_column(column) for _, column in df.items()], names=names)
     plain = df.copy(deep=False).set_axis(names, axis=1)
     plain.attrs = {}  # run diagnostics stay in memory; the file holds the table only
     return pa.Table.from_pandas(plain, preserve_index=False)

@@ -16,7 +16,6 @@ settings (:mod:`gyrodrift.io.parquetfile`), so both paths give identical results
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -42,11 +41,12 @@ from gyrodrift.io.csvfile import (
     write_csv_rows,
     write_csv_with_pandas,
 )
+from gyrodrift.io.formula import FORMULA_STARTS, formula_safe_frame
 from gyrodrift.io.limits import GYRO_MAX_DPS
 from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
 from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
-from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, parquet_error, parquet_options
+from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, open_sink, parquet_error, parquet_options
 from gyrodrift.io.validate import (
     Source,
     check_input_path,
@@ -255,26 +255,12 @@ def _write_parquet(df: pd.DataFrame, sink) -> None:
     pa_pq.write_table(table, sink, **parquet_options(table.schema))
 
 
-#: First characters that make a spreadsheet read a cell as a formula (OWASP's CSV injection list).
-FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
-
-
-def _as_text_cell(value):
-    """``value`` with a leading ``'`` if it is text a spreadsheet would run as a formula."""
-    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
-        return "'" + value
-    return value
-
-
 def formula_safe(df: pd.DataFrame) -> pd.DataFrame:
-    """A copy of ``df`` whose text cells that start like a formula (:data:`FORMULA_STARTS`)
-    get a leading ``'``, so that a spreadsheet shows them as text; number columns are left
-    as they are."""
-    safe = df.copy()
-    for col in safe.columns:
-        if safe[col].dtype == object or pd.api.types.is_string_dtype(safe[col].dtype):
-            safe[col] = safe[col].map(_as_text_cell)
-    return safe
+    """A copy of ``df`` whose text cells and column names that start like a formula
+    (:data:`FORMULA_STARTS`) get a leading ``'``, so that a spreadsheet shows them as
+    text; number columns are left as they are (:mod:`gyrodrift.io.formula`, which every
+    CSV writer applies)."""
+    return formula_safe_frame(df)
 
 
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_safe: bool = False) -> None:
@@ -293,8 +279,8 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_s
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
     spreadsheet_safe : bool, default False
-        CSV only: write :func:`formula_safe` of ``df`` (for tables of file names and
-        error messages a user may open in a spreadsheet); ``df`` itself is not changed.
+        Kept for callers that ask for it: every CSV is written with its formula-like
+        text cells and names quoted (:func:`formula_safe`); ``df`` itself is not changed.
 
     Raises
     ------
@@ -305,9 +291,7 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_s
     path = Path(path)
     table_fmt = table_format(path, fmt, WRITE_SUFFIXES)
     writer: Callable[[pd.DataFrame, object], None] = _write_csv if table_fmt == "csv" else _write_parquet
-    if spreadsheet_safe and table_fmt == "csv":
-        df = formula_safe(df)
-    with atomic_path(path) as tmp, pa.OSFile(str(tmp), "w") as sink:  # pyarrow's file: no GIL, no copy
+    with atomic_path(path) as tmp, open_sink(tmp) as sink:  # pyarrow's file: no GIL, no copy
         writer(df, sink)
 
 
@@ -325,10 +309,9 @@ def check_output_path(in_path, out_path) -> None:
         If both resolve to the same file (same real path, or the same file through a
         hard link when both exist).
     """
-    same = os.path.realpath(in_path) == os.path.realpath(out_path)
-    if not same and os.path.exists(in_path) and os.path.exists(out_path):
-        same = os.path.samefile(in_path, out_path)
-    if same:
+    from gyrodrift._paths import same_file
+
+    if same_file(in_path, out_path):
         raise ConfigError(
             message(
                 str(out_path),

@@ -15,7 +15,9 @@ milliseconds read as seconds runs at a thousandth of its rate without any error:
 
 Each is refused with the ``--time-unit`` to pass (the unit whose sample rate is the most
 ordinary). A sample rate below :data:`MIN_RATE_HZ` (1 Hz) that none of these catches is
-read, with a note. This module imports no other module of gyrodrift.io but
+read, with a note. A file is judged on all its time stamps (on its first chunk when read
+in chunks); times that come one by one (``gyrodrift stream``, :class:`gyrodrift.Compensator`)
+are judged by :class:`TimeBaseWatch` on their first ones, with the same rules. This module imports no other module of gyrodrift.io but
 :mod:`gyrodrift.io.notes`, so that :mod:`gyrodrift.io.validate` can import it.
 """
 
@@ -39,6 +41,7 @@ __all__ = [
     "TimeBase",
     "check_time_base",
     "time_base_notes",
+    "TimeBaseWatch",
 ]
 
 #: Highest plausible sample rate, Hz.
@@ -83,9 +86,9 @@ class TimeBase(NamedTuple):
 
 def _rate_text(rate_hz: float) -> str:
     """``rate_hz`` in Hz, kHz or MHz, three significant digits."""
-    if rate_hz < 1e3:
+    if rate_hz < 999.5:  # the unit chosen after rounding to three digits: 999.9999 kHz is 1 MHz
         return f"{rate_hz:.3g} Hz"
-    return f"{rate_hz / 1e3:.3g} kHz" if rate_hz < 1e6 else f"{rate_hz / 1e6:.3g} MHz"
+    return f"{rate_hz / 1e3:.3g} kHz" if rate_hz < 999.5e3 else f"{rate_hz / 1e6:.3g} MHz"
 
 
 def _suggest(step_raw: float, t_max_raw: float, unit: str | None) -> str | None:
@@ -113,7 +116,7 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
     ----------
     t_raw : numpy.ndarray
         The ``t`` column as in the file (before the unit's factor), strictly increasing;
-        at least two values are needed for a step (one value passes).
+        at least two values are needed for a step (one value is judged on its magnitude only).
     unit : str or None
         The canonical ``time_unit`` given (None: seconds, not stated; then the marks of
         another unit are looked for too).
@@ -126,6 +129,11 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
     """
     t_raw = np.asarray(t_raw, dtype=np.float64)
     if t_raw.size < 2:
+        t_max_raw = float(np.max(np.abs(t_raw))) if t_raw.size else 0.0
+        if unit is None and t_max_raw > EPOCH_LIMIT:
+            suggested = _suggest(math.inf, t_max_raw, unit)
+            return TimeBase(f"time stamps up to {t_max_raw:.6g} cannot be seconds (since 1970 or since boot)",
+                            _advice(suggested), None)
         return TimeBase(None, None, None)
     step_raw = float(np.median(np.diff(t_raw)))
     step_s = step_raw * TIME_UNITS[unit or "s"]
@@ -140,13 +148,7 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
     elif unit is None and (step_raw >= MAX_STEP_S or (step_raw >= MAX_WHOLE_STEP_S and np.all(t_raw == np.floor(t_raw)))):
         problem = f"the median time step {step_raw:.6g} {read_as} gives {_rate_text(rate_hz)}"
     if problem is not None:
-        suggested = _suggest(step_raw, t_max_raw, unit)
-        advice = (
-            f"t looks like {suggested}: pass --time-unit {suggested} (time_unit={suggested!r} in Python)"
-            if suggested
-            else f"check the t column (it must be a time; units: {', '.join(TIME_UNITS)} with --time-unit)"
-        )
-        return TimeBase(problem, advice, None)
+        return TimeBase(problem, _advice(_suggest(step_raw, t_max_raw, unit)), None)
     if rate_hz < MIN_RATE_HZ:
         return TimeBase(
             None, None,
@@ -154,6 +156,68 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
             "if t is not in seconds, pass --time-unit ms, us or ns (time_unit in Python)",
         )
     return TimeBase(None, None, None)
+
+
+def _advice(suggested: str | None) -> str:
+    """What to do about an implausible time base, the unit it looks like being ``suggested``."""
+    if suggested:
+        return f"t looks like {suggested}: pass --time-unit {suggested} (time_unit={suggested!r} in Python)"
+    return f"check the t column (it must be a time; units: {', '.join(TIME_UNITS)} with --time-unit)"
+
+
+class TimeBaseWatch:
+    """:func:`check_time_base` for time stamps that come one by one.
+
+    The first time stamp is judged on its magnitude; the steps once :data:`STEPS` of them
+    have come (a single odd first step does not decide), and again at every time stamp
+    until :data:`DECIDED` have come (as a file read in chunks is judged on its first
+    chunk); :meth:`end` judges a stream that ended before :data:`STEPS` steps. Each
+    returns the :class:`TimeBase` found (a problem stops the stream; a note is said once).
+
+    Parameters
+    ----------
+    unit : str or None
+        The canonical time unit given (None: seconds, not stated), as for a file.
+    """
+
+    #: Steps needed before the steps are judged.
+    STEPS = 8
+    #: Time stamps after which the time base is decided and no longer checked.
+    DECIDED = 256
+
+    def __init__(self, unit: str | None) -> None:
+        self.unit = unit
+        self._first: list[float] = []
+        self._noted = False
+
+    @property
+    def decided(self) -> bool:
+        """True once :data:`DECIDED` time stamps have come (no more are judged)."""
+        return len(self._first) >= self.DECIDED
+
+    def add(self, t_raw: float) -> TimeBase | None:
+        """Take the next time stamp (in the stream's own unit); what it shows, or None."""
+        first = self._first
+        if len(first) >= self.DECIDED:
+            return None
+        first.append(float(t_raw))
+        found = self._judged() if len(first) == 1 or len(first) > self.STEPS else None
+        if found is not None and found.problem:
+            first.pop()  # a refused time stamp is not taken
+        return found
+
+    def end(self) -> TimeBase | None:
+        """At the end of the stream: the judgement of a stream of fewer than :data:`STEPS` steps."""
+        return self._judged() if 1 < len(self._first) <= self.STEPS else None
+
+    def _judged(self) -> TimeBase | None:
+        found = check_time_base(np.asarray(self._first), self.unit)
+        if found.problem:
+            return found
+        if found.note and not self._noted:
+            self._noted = True
+            return found
+        return None
 
 
 def time_base_notes(t_raw: np.ndarray, unit: str | None, name: str) -> tuple[str, ...]:

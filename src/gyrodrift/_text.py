@@ -1,0 +1,34 @@
+"""User text made safe to show on one line: in terminal lines, parameter files and reports.
+
+File names, titles and other text a user gives can hold line ends, which would start a
+new line of a message or a new parameter in a file written for an autopilot, and
+control characters such as the escape codes a terminal obeys (ANSI colours, cursor
+moves, window titles). :func:`printable` writes each of them as its Python escape
+(``\\n``, ``\\x1b``, ``\\u202e``), so the text stays one line and is shown, not obeyed.
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["printable"]
+
+#: C0 and C1 control characters, DEL, the Unicode line and paragraph separators and the
+#: bidirectional controls that reorder what a terminal or an editor shows.
+_UNSAFE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+
+
+def _escape(match: re.Match) -> str:
+    return match.group().encode("unicode_escape").decode("ascii")
+
+
+def printable(text) -> str:
+    """``str(text)`` with every control character, line or paragraph separator and
+    bidirectional control written as its escape (module notes).
+
+    Examples
+    --------
+    >>> printable("log\\n1.csv\\x1b[31m")
+    'log\\\\n1.csv\\\\x1b[31m'
+    """
+    return _UNSAFE.sub(_escape, str(text))
