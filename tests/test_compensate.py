@@ -9,6 +9,7 @@ from conftest import synthetic_log
 from gyrodrift.compensator import CompensatorConfig, Compensator, compensate
 from gyrodrift.conventions import OUTPUT_COLS, wrap_180
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.estimators import AdaptiveConfig
 from gyrodrift.gating import GateConfig
 from gyrodrift.io import read_log
 from gyrodrift.kernels.aiding import compass_measurement
@@ -327,16 +328,22 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     assert (locked["gate_reason"] == "interference").mean() > 0.4
     assert (recovered["gate_reason"] == "interference").mean() < 0.25
     assert heading_error_stats(aligned(recovered))["rms"] < 0.5 * heading_error_stats(aligned(locked))["rms"]
-    # adaptive weighs a jump of the drift (heating turning to cooling) against a disturbance:
-    # the clean compass stays clean and the fused heading follows it (closer to the truth than
-    # the compass itself); the gyro heading keeps what the drift's fast fall cost it, less than
-    # the paper's filter loses
-    out = compensate(log)
+    # adaptive, told that this device's drift may jump (drift_jump_dps; off by default: a jump
+    # also explains the start of a slow turn), weighs a jump as heating turns to cooling against
+    # a disturbance: the clean compass stays clean and the fused heading follows it (closer to
+    # the truth than the compass itself); the gyro heading keeps what the drift's fast fall cost
+    # it, less than the paper's filter loses
+    jumps = CompensatorConfig(adaptive=AdaptiveConfig(drift_jump_dps=0.3))
+    out = compensate(log, jumps)
     assert (out["gate_reason"] == "interference").mean() < 0.05
     assert heading_error_stats(aligned(out))["rms"] < 0.8 * heading_error_stats(aligned(recovered))["rms"]
     rms = lambda col: float(np.sqrt(np.nanmean(np.asarray(wrap_180(out[col] - log["ref_heading"])) ** 2)))  # noqa: E731
     assert rms("heading_fused") < rms("compass_heading")
-    assert_same(out, stream(log, CompensatorConfig()))
+    assert_same(out, stream(log, jumps))
+    # without jumps the fused heading still follows the compass, less closely
+    out = compensate(log)
+    assert (out["gate_reason"] == "interference").mean() < 0.05
+    assert rms("heading_fused") < 2.5 * rms("compass_heading")
 
 
 def test_bias_sd_does_not_understate_the_error():

@@ -37,11 +37,11 @@ from gyrodrift.montecarlo import draw_case, simulate_case
 from test_compensate import complex_log
 
 ESTIMATORS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm")
-#: Settings of the model that change its paths: no drift jumps, short and long epochs, a
+#: Settings of the model that change its paths: drift jumps, short and long epochs, a
 #: time gap at a few typical steps, no still spells.
 VARIANTS = {
     "default": AdaptiveConfig(),
-    "no-jump": AdaptiveConfig(drift_jump_dps=0.0),
+    "jumps": AdaptiveConfig(drift_jump_dps=0.3),
     "short-epoch": AdaptiveConfig(epoch_s=0.25),
     "long-epoch": AdaptiveConfig(epoch_s=5.0),
     "eager-gap": AdaptiveConfig(gap_factor=2.0),

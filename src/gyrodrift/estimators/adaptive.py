@@ -54,7 +54,9 @@ class AdaptiveConfig:
     drift_jump_dps, drift_jump_s : float
         A jump of the drift (a knee, a hysteresis switching as heating turns to cooling, a
         thermal shock): its standard deviation (deg/s) and the mean time between jumps (s);
-        every epoch is weighed with and without one (``drift_jump_dps`` 0: never).
+        the still, clean hypothesis weighs every epoch with and without one. Off (0) by
+        default: a jump also explains the start of a slow turn, whose compass the model then
+        takes for disturbed; set it (0.3 deg/s, say) for a still device whose drift switches.
     compass_error_deg, compass_error_s : float
         Standard deviation (deg) and correlation time (s) of the compass's slow error d
         (deviation, slow wander): a Gauss–Markov process.
@@ -107,7 +109,7 @@ class AdaptiveConfig:
     drift_walk_temp: float = 0.02
     drift_rate_dps2: float = 0.0003
     drift_rate_s: float = 300.0
-    drift_jump_dps: float = 0.3
+    drift_jump_dps: float = 0.0
     drift_jump_s: float = 600.0
     compass_error_deg: float = 2.0
     compass_error_s: float = 3600.0

@@ -590,13 +590,13 @@ def epoch(mf, mc, t_end, temp_end):
         for k in range(N_RATE):
             mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt
     # the measured noise: the gyro's from successive rows while still, the compass's from
-    # successive samples while clean; sums forgotten over ``noise_memory_s``
+    # successive samples; sums forgotten over ``noise_memory_s``
     keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
     if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
         mf[MF_NS_S] = keep * mf[MF_NS_S] + 0.5 * mf[MF_E_DG2]
         mf[MF_NS_W] = keep * mf[MF_NS_W] + mf[MF_E_NDG]
         mf[MF_SIG_S2] = mf[MF_NS_S] / mf[MF_NS_W]
-    if mf[MF_E_NDD] >= 1.0 and mf[MF_PDIST] < 0.5:
+    if mf[MF_E_NDD] >= 1.0:  # the sensor's white noise, disturbed or not (steps clipped by the loop)
         mf[MF_NW_S] = keep * mf[MF_NW_S] + 0.5 * mf[MF_E_DD2]
         mf[MF_NW_W] = keep * mf[MF_NW_W] + mf[MF_E_NDD]
         mf[MF_SIG_W2] = max(mf[MF_NW_S] / mf[MF_NW_W], 0.01 * mc[MC_COMPASS_SD] ** 2)

@@ -34,7 +34,7 @@ from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels.evidence import (
     MF_DIP_REF, MF_E_DD2, MF_E_DG2, MF_E_DIP, MF_E_DREF, MF_E_G, MF_E_GAP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_NDD,
     MF_E_NDG, MF_E_NF, MF_E_NORM, MF_E_SD, MF_E_SG, MF_E_ST, MF_E_STC, MF_E_STP, MF_E_T0, MF_E_T_START, MF_E_TC,
-    MF_E_TP, MF_FIELD_DOM, MF_LAST_D, MF_LAST_D_T, MF_LOG_H, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2,
+    MF_E_TP, MF_FIELD_DOM, MF_LAST_D, MF_LAST_D_T, MF_LOG_H, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2, MF_SIG_W2,
     MF_TREF, MF_UPDATED, MF_XC, MC_COMPASS_SD, MC_EPOCH, MC_GAP_FACTOR, MC_GYRO_NOISE, NX, X_A, X_B, X_C, X_DELTA,
 )
 from gyrodrift.kernels.layout import (
@@ -223,7 +223,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             mf[MF_E_NC] += 1.0
             if rf[RF_SEEN] == 1.0 and ti - mf[MF_LAST_D_T] <= 2.0:
                 dD = wrap180(D - mf[MF_LAST_D]) + bias * (ti - mf[MF_LAST_D_T])
-                mf[MF_E_DD2] += dD * dD
+                # clipped at 4 sd of a difference: a disturbance's step is no white noise
+                mf[MF_E_DD2] += min(dD * dD, 32.0 * mf[MF_SIG_W2])
                 mf[MF_E_NDD] += 1.0
             mf[MF_LAST_D] = D
             mf[MF_LAST_D_T] = ti

@@ -1,0 +1,217 @@
+"""What a user expects of the default estimator, as properties over random conditions (hypothesis).
+
+Each property draws a device (drift a*T + c, noise), a temperature course, a motion (still,
+sway, or a steady turn, starting after a still minute) and a compass (its noise; a disturbance
+of random size and length), compensates a 10-min log at 10 Hz and checks:
+
+* where the compass is clean, ``heading_fused`` is no worse than the compass alone (RMS
+  against the truth);
+* where the compass is disturbed, ``heading_fused`` is no worse than the gyro-alone heading,
+  and no worse than the disturbed compass;
+* with no compass at all, a slow steady turn is not learned as drift beyond ``bias_sd`` (the
+  drift error stays within 3 sd on 99 % of the rows);
+* aiding adds: started from a calibration of the drift that is off by a little (as ``--prior``
+  gives), the drift is no worse than the calibration alone (within 0.005 deg/s RMS).
+
+The default run draws a few examples per property; the slow suite draws 200 (``-m slow``);
+both are derandomized, so every run sees the same examples. Only the disturbance property
+holds today: the others are strict xfails naming the counterexample hypothesis found (issue
+21's invariants not met; an xpass fails the run, so a fix is noticed), as is a platform already
+in a slow steady turn in its first second (``test_a_turn_from_the_first_second``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from conftest import synthetic_log
+from gyrodrift.compensator import CompensatorConfig, compensate
+from gyrodrift.conventions import wrap_180
+
+DURATION_S, FS_HZ, STILL_S = 600.0, 10.0, 60.0
+
+
+def _profile(n: int):
+    return settings(max_examples=n, derandomize=True, database=None, deadline=None,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+SHORT, LONG = _profile(4), _profile(200)
+
+
+UNMET_CLEAN = pytest.mark.xfail(strict=True, reason=(
+    "issue 21 invariant not met: a small fast sway (5 deg, 30-s period) under a 1-deg compass "
+    "(seed 79) gives heading_fused 10.3 deg RMS against the compass's 1.0: an unlucky epoch in the "
+    "first seconds, before the compass noise is learned, makes the disturbed hypothesis the likelier "
+    "and it stays; docs/results.md"))
+UNMET_SLOW_TURN = pytest.mark.xfail(strict=True, reason=(
+    "issue 21 invariant not met: without a compass a steady 0.06 deg/s turn is taken for drift, "
+    "beyond 3 bias_sd on 97 % of the rows (the still hypothesis explains it; nothing in the gyro "
+    "alone tells them apart, and bias_sd does not say so); docs/results.md"))
+UNMET_PRIOR = pytest.mark.xfail(strict=True, reason=(
+    "issue 21 invariant not met: from a calibration off by 0.002 deg/s/degC and 0.03 deg/s, on a "
+    "still unit with a noisy gyro, the drift RMS is 0.0098 deg/s against the calibration's 0.0042; "
+    "docs/results.md"))
+
+
+@st.composite
+def scenarios(draw):
+    """A scenario's parameters (shown as they are when a property fails) and its disturbance."""
+    p = dict(a=draw(st.floats(-0.02, 0.02)), c=draw(st.floats(-0.5, 0.5)), t0=draw(st.floats(10.0, 40.0)),
+             rise=draw(st.floats(0.0, 20.0)), kind=draw(st.sampled_from(["still", "sway", "turn"])),
+             h0=draw(st.floats(0.0, 359.0)), amp=draw(st.floats(5.0, 60.0)), period=draw(st.floats(30.0, 300.0)),
+             rate=draw(st.floats(-5.0, 5.0)), gyro_noise=draw(st.floats(0.01, 0.2)),
+             compass_noise=draw(st.floats(0.3, 3.0)), seed=draw(st.integers(0, 10_000)))
+    window = (draw(st.floats(120.0, 400.0)), draw(st.floats(20.0, 150.0)),
+              draw(st.floats(10.0, 60.0)) * draw(st.sampled_from([-1.0, 1.0])), draw(st.sampled_from(["step", "ramp"])))
+    return p, window
+
+
+def scenario_log(p: dict):
+    """The 10-min log of a scenario: still for a minute, then still, swaying or turning steadily."""
+
+    def heading(t):
+        moving = np.maximum(t - STILL_S, 0.0)
+        if p["kind"] == "still":
+            return np.full_like(t, p["h0"])
+        if p["kind"] == "sway":
+            return p["h0"] + p["amp"] * np.sin(2.0 * np.pi * moving / p["period"])
+        return p["h0"] + p["rate"] * moving
+
+    return synthetic_log(duration_s=DURATION_S, fs_hz=FS_HZ,
+                         temp_c=lambda t: p["t0"] + p["rise"] * (1.0 - np.exp(-t / 200.0)),
+                         drift_dps=lambda t, T: p["a"] * T + p["c"], heading_deg=heading,
+                         gyro_noise_dps=p["gyro_noise"], compass_noise_deg=p["compass_noise"], seed=p["seed"])
+
+
+def _rms(err, rows) -> float:
+    e = np.asarray(err, dtype=float)[rows]
+    e = e[np.isfinite(e)]
+    return float(np.sqrt(np.mean(e**2)))
+
+
+def _clean(p) -> None:
+    log = scenario_log(p) if isinstance(p, dict) and "kind" in p else synthetic_log(**p)
+    out = compensate(log)
+    truth = log["ref_heading"]
+    rows = (out["t"] > 30.0).to_numpy() & out["compass_heading"].notna().to_numpy()
+    fused = _rms(wrap_180(out["heading_fused"] - truth), rows)
+    compass = _rms(wrap_180(out["compass_heading"] - truth), rows)
+    assert fused <= compass, (fused, compass)
+
+
+def _disturbed(p, window) -> None:
+    log = scenario_log(p)
+    start, length, size, shape = window
+    t = log["t"].to_numpy()
+    inside = (t >= start) & (t < start + length)
+    offset = size * (np.ones(t.size) if shape == "step" else (t - start) / length)
+    log["heading"] = np.where(inside, np.mod(log["heading"] + offset, 360.0), log["heading"])
+    out = compensate(log)
+    truth = log["ref_heading"]
+    fused = _rms(wrap_180(out["heading_fused"] - truth), inside)
+    gyro = _rms(wrap_180(out["heading"] - truth), inside)
+    compass = _rms(wrap_180(out["compass_heading"] - truth), inside)
+    assert fused <= max(gyro, 1.0) + 1.0 and fused < compass, (fused, gyro, compass)
+
+
+@UNMET_CLEAN
+@given(scenarios())
+@SHORT
+def test_fused_heading_no_worse_than_a_clean_compass(case):
+    _clean(case[0])
+
+
+@pytest.mark.slow
+@UNMET_CLEAN
+@given(scenarios())
+@LONG
+def test_fused_heading_no_worse_than_a_clean_compass_200(case):
+    _clean(case[0])
+
+
+@given(scenarios())
+@SHORT
+def test_fused_heading_no_worse_than_the_gyro_through_a_disturbance(case):
+    _disturbed(*case)
+
+
+@pytest.mark.slow
+@given(scenarios())
+@LONG
+def test_fused_heading_no_worse_than_the_gyro_through_a_disturbance_200(case):
+    _disturbed(*case)
+
+
+def _slow_turn(rate_dps, a, c, seed) -> None:
+    log = synthetic_log(duration_s=DURATION_S, fs_hz=FS_HZ, temp_c=lambda t: 25.0 + 5.0 * (1.0 - np.exp(-t / 200.0)),
+                        drift_dps=lambda t, T: a * T + c, heading_deg=lambda t: 10.0 + rate_dps * np.maximum(t - STILL_S, 0.0),
+                        gyro_noise_dps=0.05, seed=seed)
+    log["heading"] = np.nan
+    out = compensate(log)
+    late = (out["t"] > STILL_S).to_numpy()
+    z = (np.abs(out["bias_z"] - out["true_bias_z"]) / out["bias_sd"]).to_numpy()[late]
+    assert np.mean(z <= 3.0) >= 0.99, float(np.mean(z <= 3.0))
+
+
+@UNMET_SLOW_TURN
+@given(st.floats(-0.1, 0.1), st.floats(-0.02, 0.02), st.floats(-0.5, 0.5), st.integers(0, 10_000))
+@SHORT
+def test_a_slow_turn_without_compass_is_not_learned_as_drift(rate, a, c, seed):
+    _slow_turn(rate, a, c, seed)
+
+
+@pytest.mark.slow
+@UNMET_SLOW_TURN
+@given(st.floats(-0.1, 0.1), st.floats(-0.02, 0.02), st.floats(-0.5, 0.5), st.integers(0, 10_000))
+@LONG
+def test_a_slow_turn_without_compass_is_not_learned_as_drift_200(rate, a, c, seed):
+    _slow_turn(rate, a, c, seed)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 21 invariant not met: a steady 0.77 deg/s turn from the first "
+                   "second is taken for drift, and the compass then for disturbed (heading_fused 95 deg RMS "
+                   "against a 0.4-deg compass); docs/results.md")
+def test_a_turn_from_the_first_second():
+    kwargs = dict(duration_s=DURATION_S, fs_hz=FS_HZ, temp_c=lambda t: 20.0 + 10.0 * (1.0 - np.exp(-t / 200.0)),
+                  drift_dps=lambda t, T: -0.02 * T + 0.357, heading_deg=lambda t: 100.0 - 0.77 * t,
+                  gyro_noise_dps=0.034, compass_noise_deg=0.38, seed=5)
+    _clean(kwargs)
+
+
+def _prior(case, err_a, err_c) -> None:
+    """A calibration off by ``err_a`` and ``err_c`` as the prior (its sd the size of its error)."""
+    from gyrodrift.estimators import KalmanConfig
+
+    log = scenario_log(case[0])
+    truth = log["true_bias_z"].to_numpy()
+    # the calibration: the true drift's a and c (from two points of the truth), off by the errors
+    T = log["temp"].to_numpy()
+    i, j = int(np.argmin(T)), int(np.argmax(T))
+    a = (truth[j] - truth[i]) / (T[j] - T[i]) if T[j] - T[i] > 1.0 else 0.0
+    c = truth[i] - a * T[i]
+    cal = KalmanConfig(x0=(a + err_a, 0.0, c + err_c), p0_sd=(max(abs(err_a), 1e-4), 1e-3, max(abs(err_c), 1e-3)))
+    out = compensate(log, CompensatorConfig(kalman=cal))
+    prior_alone = (a + err_a) * T + (c + err_c)
+    late = (log["t"] > 30.0).to_numpy()
+    aided = float(np.sqrt(np.mean((out["bias_z"].to_numpy() - truth)[late] ** 2)))
+    alone = float(np.sqrt(np.mean((prior_alone - truth)[late] ** 2)))
+    assert aided <= alone + 0.005, (aided, alone)
+
+
+@UNMET_PRIOR
+@given(scenarios(), st.floats(-0.002, 0.002), st.floats(-0.05, 0.05))
+@SHORT
+def test_aiding_adds_to_a_good_calibration(case, err_a, err_c):
+    _prior(case, err_a, err_c)
+
+
+@pytest.mark.slow
+@UNMET_PRIOR
+@given(scenarios(), st.floats(-0.002, 0.002), st.floats(-0.05, 0.05))
+@LONG
+def test_aiding_adds_to_a_good_calibration_200(case, err_a, err_c):
+    _prior(case, err_a, err_c)
