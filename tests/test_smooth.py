@@ -90,7 +90,7 @@ def test_rts_equals_the_whole_linear_system_solved_at_once(seed):
 
 def test_a_jump_is_not_carried_back_across_its_epoch():
     """A step of c' the forward pass kept: the epochs before it keep their own level."""
-    st = AdaptiveConfig()
+    st = AdaptiveConfig(drift_jump_dps=0.3)  # the jump variant on
     rng = np.random.default_rng(5)
     hist, _ = _forward(rng, 60, st, jump_at=30, jump=1.0, truth=(0.0, 0.0, 0.2, 0.0))
     sm = smooth_epochs(hist, CompensatorConfig(adaptive=st))
