@@ -189,8 +189,12 @@ def init_state(mf, mc, x0, P0, t_ref):
     for j in range(NM):
         X[j, :] = x0
         P[j, :, :] = P0
+        # a disturbance present from the first sample cannot be told from the heading: the
+        # disturbed filters start with the compass's own error scale, not a step's; with a
+        # step's they would know the heading to tens of degrees only, and the mixing would
+        # start the clean filters from that every epoch (clean could then never win back)
         if not _is_clean(j):
-            P[j, X_E, X_E] = mc[MC_SIG_STEP] ** 2
+            P[j, X_E, X_E] = mc[MC_SIG_D] ** 2
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps)
     for k in range(N_RATE):
         mf[MF_W + 2 * k] = 0.0
