@@ -228,8 +228,10 @@ def combine(mf):
                 v = ref + wrap180(v - ref)
             xc[k] += mu[j] * v
     Pc = np.zeros((NX, NX))
+    dx = np.empty(NX)
     for j in range(NM):
-        dx = X[j] - xc
+        for k in range(NX):
+            dx[k] = X[j, k] - xc[k]
         dx[X_DELTA] = wrap180(X[j, X_DELTA] - xc[X_DELTA])
         for r in range(NX):
             for c in range(NX):
@@ -246,34 +248,56 @@ def bias_var(Pc, hT, hTp):
     return max(v, 0.0)
 
 
+@jit(inline=True)
+def _quad(P, H):
+    """``H P Hᵀ`` for a row ``H`` (no temporary)."""
+    acc = 0.0
+    for r in range(NX):
+        for c in range(NX):
+            acc += H[r] * P[r, c] * H[c]
+    return acc
+
+
 @jit
 def _update(x, P, H, z, R, wrap, only=-1):
     """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
     (``wrap``: the innovation is an angle, wrapped to ±180). ``only`` >= 0: the measurement
     corrects that state alone (the others are considered, not corrected: a Schmidt update)."""
-    PH = np.dot(P, H)
-    S = np.dot(H, PH) + R
-    nu = z - np.dot(H, x)
+    PH = np.empty(NX)
+    S = R
+    nu = z
+    for r in range(NX):
+        acc = 0.0
+        for c in range(NX):
+            acc += P[r, c] * H[c]
+        PH[r] = acc
+        S += H[r] * acc
+        nu -= H[r] * x[r]
     if wrap:
         nu = wrap180(nu)
     if only >= 0:
-        for r in range(NX):
-            if r != only:
-                PH[r] = 0.0
-    K = PH / S
-    for r in range(NX):
-        x[r] += K[r] * nu
-    if only >= 0:  # Joseph form: (I - K H) P (I - K H)^T + K R K^T, with K nonzero in one row
-        A = np.eye(NX)
+        # Joseph form (I - K H) P (I - K H)^T + K R K^T with K nonzero in row ``only`` alone:
+        # only that row and column of P change; PH is reused for the new row
+        k = PH[only] / S
+        x[only] += k * nu
         for c in range(NX):
-            A[only, c] -= K[only] * H[c]
-        Pn = np.dot(np.dot(A, P), A.T)
-        Pn[only, only] += K[only] * K[only] * R
-        P[:, :] = Pn
+            acc = P[only, c]
+            for m in range(NX):
+                acc -= k * H[m] * P[m, c]
+            PH[c] = acc
+        corner = k * k * R
+        for m in range(NX):
+            corner += PH[m] * ((1.0 if m == only else 0.0) - k * H[m])
+        for c in range(NX):
+            P[only, c] = PH[c]
+            P[c, only] = PH[c]
+        P[only, only] = corner
     else:
         for r in range(NX):
+            x[r] += PH[r] / S * nu
+        for r in range(NX):
             for c in range(NX):
-                P[r, c] -= K[r] * PH[c]
+                P[r, c] -= PH[r] / S * PH[c]
     for r in range(NX):  # symmetric, non-negative diagonal
         for c in range(r + 1, NX):
             m = 0.5 * (P[r, c] + P[c, r])
@@ -282,6 +306,26 @@ def _update(x, P, H, z, R, wrap, only=-1):
         if P[r, r] < 0.0:
             P[r, r] = 0.0
     return _loggauss(nu, S)
+
+
+@jit(inline=True)
+def _rows(P, f01, f02, f03, f05, g, pd, pr, pe):
+    """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05: its a, b,
+    c', r entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
+    for k in range(NX):
+        P[X_DELTA, k] += f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k]
+        P[X_C, k] += g * P[X_R, k]
+        P[X_D, k] *= pd
+        P[X_R, k] *= pr
+        P[X_E, k] *= pe
+
+
+@jit(inline=True)
+def _transition(P, f01, f02, f03, f05, g, pd, pr, pe):
+    """``P`` ← F P Fᵀ in place, no temporary (F as :func:`_rows` has it): rows, then columns."""
+    _rows(P, f01, f02, f03, f05, g, pd, pr, pe)
+    Pt = P.T
+    _rows(Pt, f01, f02, f03, f05, g, pd, pr, pe)
 
 
 @jit
@@ -297,6 +341,7 @@ def _mix(mf, Pi, step_var):
             cbar[j] += Pi[i, j] * mu[i]
     X0 = np.zeros((NM, NX))
     P0 = np.zeros((NM, NX, NX))
+    dx = np.empty(NX)
     for j in range(NM):
         ref = X[j, X_DELTA]
         for i in range(NM):
@@ -312,7 +357,8 @@ def _mix(mf, Pi, step_var):
             w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
             if w == 0.0:
                 continue
-            dx = X[i] - X0[j]
+            for k in range(NX):
+                dx[k] = X[i, k] - X0[j, k]
             dx[X_DELTA] = wrap180(X[i, X_DELTA] - X0[j, X_DELTA])
             if _is_clean(j):
                 dx[X_E] = 0.0
@@ -351,7 +397,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
             ll += _update(x, P, Hg, dG, arw, False)
         else:
             mean = np.dot(Hg, x)
-            base = np.dot(Hg, np.dot(P, Hg)) + arw
+            base = _quad(P, Hg) + arw
             lk = np.empty(N_RATE + 1)
             rest = 1.0
             for k in range(N_RATE):
@@ -370,7 +416,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         H = Hs if still else Hm
         z = D - h_still if still else D
         nu = wrap180(z - np.dot(H, x))
-        s_pred = np.dot(H, np.dot(P, H)) + Rc + turn * turn - mf[MF_RX]
+        s_pred = _quad(P, H) + Rc + turn * turn - mf[MF_RX]
         if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
             excess = nu * nu - s_pred
         ll += _update(x, P, H, z, Rc + turn * turn, True, only)
@@ -419,7 +465,6 @@ def epoch(mf, mc, t_end, temp_end):
     if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
         moving_q = min(moving_q + (mc[MC_OMEGA_GAP] * dt) ** 2 + mc[MC_SIG_ACC] ** 2 * dt**4 / 12.0, GAP_VAR_MAX)
     ll = np.zeros(NM)
-    F = np.eye(NX)
     for j in range(NM):
         x = X[j]
         Pj = P[j]
@@ -440,24 +485,18 @@ def epoch(mf, mc, t_end, temp_end):
         x[X_R] *= phi_r
         x[X_D] *= phi_d
         x[X_E] *= phi_e
-        F[0, 1] = 0.0 if still else -dTc
-        F[0, 2] = 0.0 if still else -dTp
-        F[0, 3] = 0.0 if still else -dt
-        F[0, 5] = 0.0 if still else -0.5 * dt * dt
-        F[3, 5] = gain_r
-        F[4, 4] = phi_d
-        F[5, 5] = phi_r
-        F[6, 6] = phi_e
-        Pn = np.dot(np.dot(F, Pj), F.T)
-        Pn[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
-        Pn[X_A, X_A] += q_a
-        Pn[X_B, X_B] += q_b
-        Pn[X_C, X_C] += q_c
-        Pn[X_D, X_D] += q_d
-        Pn[X_R, X_R] += q_r
+        if still:
+            _transition(Pj, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
+        else:
+            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, gain_r, phi_d, phi_r, phi_e)
+        Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
+        Pj[X_A, X_A] += q_a
+        Pj[X_B, X_B] += q_b
+        Pj[X_C, X_C] += q_c
+        Pj[X_D, X_D] += q_d
+        Pj[X_R, X_R] += q_r
         if not _is_clean(j):
-            Pn[X_E, X_E] += q_e
-        Pj[:, :] = Pn
+            Pj[X_E, X_E] += q_e
     # the epoch's data, shared by every mode: the gyro's integral and its serial structure
     Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
     Hg[X_A] = dTc
@@ -509,26 +548,23 @@ def epoch(mf, mc, t_end, temp_end):
     excess = np.zeros(NM)
     jumped = np.zeros(NM)
     for j in range(NM):
-        xa, Pa = X[j].copy(), P[j].copy()
-        lla, exa = _measure(xa, Pa, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
         if p_jump > 0.0 and jump_var > 0.0 and j == CLEAN_STILL:
             xb, Pb = X[j].copy(), P[j].copy()
             Pb[X_C, X_C] += jump_var
+            lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
             llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
             la, lb = math.log(1.0 - p_jump) + lla, math.log(p_jump) + llb
             top = max(la, lb)
             ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
+            excess[j] = exa
             if lb > la:  # the likelier of the two is kept (a jump rarely is: merged, its
-                xa, Pa, exa = xb, Pb, exb  # variance would be process noise every epoch)
+                X[j, :] = xb  # variance would be process noise every epoch)
+                P[j, :, :] = Pb
+                excess[j] = exb
                 jumped[j] = 1.0
-            excess[j] = exa
-            X[j, :] = xa
-            P[j, :, :] = Pa
         else:
-            ll[j] = lla
-            excess[j] = exa
-            X[j, :] = xa
-            P[j, :, :] = Pa
+            ll[j], excess[j] = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
+                                        Hs, Hm, field_ll)
     # mode probabilities
     top = -math.inf
     for j in range(NM):
@@ -582,8 +618,8 @@ def epoch(mf, mc, t_end, temp_end):
         pw = np.exp(lw - np.max(lw))
         pw /= np.sum(pw)
         switch = _switch(dt, RATE_SWITCH_S)
+        wk = np.empty(N_RATE + 1)
         for k in range(N_RATE):
-            wk = np.empty(N_RATE + 1)
             for i in range(N_RATE + 1):
                 wk[i] = pw[i] * ((1.0 - switch) if i == k else switch / N_RATE)
             wk /= np.sum(wk)

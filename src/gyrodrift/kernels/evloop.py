@@ -141,7 +141,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     c_t, c_g, c_T, c_Tp, c_bias, c_rate = rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE]
     I_raw, I_rate, I_bias = rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS]
     epoch_s = mc[MC_EPOCH]
-    gap_factor = mc[MC_GAP_FACTOR]
+    log_gap_factor = math.log(mc[MC_GAP_FACTOR])
     tau_turn = 0.5 * rc[RC_TURN_WIN]
     xc = mf[MF_XC:MF_XC + NX]
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
@@ -170,8 +170,9 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mf[MF_LOG_H] = math.log(h)
                 ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / h)
             else:
-                gap = h > gap_factor * math.exp(lh)
-                mf[MF_LOG_H] = lh + 0.05 * min(max(math.log(h) - lh, -0.5), 0.5)
+                log_h = math.log(h)
+                gap = log_h > log_gap_factor + lh
+                mf[MF_LOG_H] = lh + 0.05 * min(max(log_h - lh, -0.5), 0.5)
             gap = gap or held[i]
             reason_gap = gap
             if gap:
