@@ -60,6 +60,7 @@ import numpy as np
 from gyrodrift.config import DRIFT_PARAM_BOUNDS
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.kernels.thermal import fit_polynomial
 
 __all__ = [
     "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW", "BIN_WIDTH_C",
@@ -194,12 +195,7 @@ def _fit_axis(temp: np.ndarray, rate: np.ndarray, temp_ref: float, temp_min: flo
     bins = temperature_bins(temp, temp_min)
     counts = np.bincount(bins)
     weight = 1.0 / counts[bins]  # each occupied bin weighs 1 in total
-    half = max(0.5 * (float(temp.max()) - float(temp.min())), 1e-9)
-    u = (temp - temp_ref) / half  # scaled for conditioning; coefficients scaled back below
-    vander = np.vander(u, _ORDER + 1, increasing=True)
-    root_w = np.sqrt(weight)
-    scaled, *_ = np.linalg.lstsq(vander * root_w[:, None], rate * root_w, rcond=None)
-    coeffs = scaled / half ** np.arange(_ORDER + 1)
+    coeffs = fit_polynomial(temp, rate, temp_ref, _ORDER, weight)
     residual = rate - np.polynomial.polynomial.polyval(temp - temp_ref, coeffs)
     return coeffs, float(np.sqrt(np.mean(bin_means(residual, bins) ** 2)))
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrodrift.errors import ConfigError
+from gyrodrift.kernels.thermal import fit_polynomial
 
 __all__ = ["Poly3Calibration", "fit_poly3"]
 
@@ -65,5 +66,5 @@ def fit_poly3(temp_c, gyro_z_dps, *, median_window: int = 31, order: int = 3) ->
     rate = median_filter(rate, size=median_window, mode="nearest")
     t_min, t_max = float(temp_c.min()), float(temp_c.max())
     t_ref = 0.5 * (t_min + t_max)
-    coeffs = np.polyfit(temp_c - t_ref, rate, order)
+    coeffs = fit_polynomial(temp_c, rate, t_ref, order)[::-1]  # highest power first, as polyval
     return Poly3Calibration(tuple(float(c) for c in coeffs), t_ref, t_min, t_max)

@@ -19,6 +19,9 @@ module              what it holds
 :mod:`.loop`        the row loop: input checks, compensation, integration,
                     gating, interval decisions, fused heading
 :mod:`.tilt`        the x and y axes: their row loop, aided by the gravity direction
+:mod:`.evidence`    the default estimator's model (hypotheses weighed by evidence)
+:mod:`.evloop`      its row loop
+:mod:`.thermal`     the thermal calibration's polynomial (numpy, not compiled)
 ==================  ============================================================
 
 The functions are compiled on first use and cached on disk (``cache=True``); with
