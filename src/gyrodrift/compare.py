@@ -52,6 +52,7 @@ from gyrodrift.fusion import FusionState
 from gyrodrift.fusion_offset import PACKAGE as FUSION_OFFSET_PACKAGE
 from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
+from gyrodrift.kernels.integrate import trapezoid
 from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "method_label", "run_method",
@@ -117,9 +118,7 @@ def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.nda
     out = compensate(log, config, estimator=FixedParams())  # the columns and the anchor row
     t = out["t"].to_numpy()
     rate = log["gyro_z"].ffill().to_numpy(float) - drift_dps
-    step = np.diff(t)
-    inc = np.where(step > config.gate.max_gap_s, 0.0, 0.5 * (rate[1:] + rate[:-1]) * step)  # as the engine: still across a gap
-    integral = np.r_[0.0, np.cumsum(inc)]
+    integral = trapezoid(t, rate, hold=np.r_[False, np.diff(t) > config.gate.max_gap_s])  # held across a gap, as the engine
     compass = out["compass_heading"].to_numpy()
     seen = np.flatnonzero(np.isfinite(compass))
     anchor = int(seen[0]) if seen.size else 0  # no compass: relative to the first row, as the engine

@@ -25,6 +25,7 @@ import pandas as pd
 
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.kernels.integrate import trapezoid
 
 __all__ = [
     "heading_error_deg",
@@ -56,10 +57,7 @@ def heading_error_deg(heading_deg, ref_heading_deg) -> np.ndarray:
 
 def raw_heading_deg(t_s, gyro_z_dps, start_deg: float) -> np.ndarray:
     """Heading integrated (trapezoid rule) from the uncompensated gyro, deg (unwrapped)."""
-    t_s = np.asarray(t_s, dtype=float)
-    g = np.asarray(gyro_z_dps, dtype=float)
-    inc = 0.5 * (g[1:] + g[:-1]) * np.diff(t_s)
-    return start_deg + np.r_[0.0, np.cumsum(inc)]
+    return start_deg + trapezoid(t_s, gyro_z_dps)
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ import pandas as pd
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_HIST
+from gyrodrift.kernels.integrate import trapezoid
 from gyrodrift.model import ElapsedClock
 
 __all__ = ["SmoothedDrift", "smooth_epochs", "smooth_output"]
@@ -130,15 +131,6 @@ def _held(values: np.ndarray) -> np.ndarray:
     return s.ffill().bfill().to_numpy()
 
 
-def _cumtrapz(y: np.ndarray, t: np.ndarray, hold: np.ndarray) -> np.ndarray:
-    """Trapezoid integral of ``y`` over ``t``, nothing added on the steps into ``hold`` rows."""
-    out = np.zeros(y.size)
-    if y.size > 1:
-        inc = np.where(hold[1:], 0.0, 0.5 * (y[1:] + y[:-1]) * np.diff(t))
-        np.cumsum(inc, out=out[1:])
-    return out
-
-
 def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     """The compensated log recompensated with the smoothed drift (non-causal).
 
@@ -189,7 +181,7 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     res["a"], res["b"], res["c"] = a, b, c - a * tref
     res["bias_z"] = bias
     res["rate_z"] = out["rate_z"].to_numpy(float) + (old_bias - bias)
-    res["heading"] = wrap_360(out["heading"].to_numpy(float) + _cumtrapz(old_bias - bias, t, hold))
+    res["heading"] = wrap_360(out["heading"].to_numpy(float) + trapezoid(t, old_bias - bias, hold))
     h = np.stack([T - tref, Tp, np.ones(t.size)], axis=1)
     bias_sd = np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", h, sm.cov[k][:, :3, :3], h), 0.0))
     res["bias_sd"] = bias_sd
@@ -199,8 +191,8 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
         anchor = np.isfinite(var)
         if anchor.any():
             i0 = int(np.argmax(anchor))
-            old_int = _cumtrapz(old_sd[i0:], t[i0:], hold[i0:])
-            new_int = _cumtrapz(bias_sd[i0:], t[i0:], hold[i0:])
+            old_int = trapezoid(t[i0:], old_sd[i0:], hold[i0:])
+            new_int = trapezoid(t[i0:], bias_sd[i0:], hold[i0:])
             var[i0:] = np.maximum(var[i0:] - old_int**2 + new_int**2, 0.0)
         res["heading_sd"] = np.sqrt(var)
     prior_a, prior_b = (float(v) for v in config.kalman.p0_sd[:2])
