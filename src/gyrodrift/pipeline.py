@@ -300,6 +300,7 @@ def compensate_file(
         stats.add(out)
         stats.final_params, stats.final_cov = out.attrs["final_params"], out.attrs["final_cov"]
         stats.estimator = str(out.attrs.get("estimator", ""))
+        stats.regressor = str(out.attrs.get("drift_regressor", "temperature"))
         stats.notes = list(out.attrs.get("notes", ()))
         return stats
     return _stream(input_path, output_path, cfg, opts, chunk_rows, progress)

@@ -345,6 +345,7 @@ class ChunkEngine:
             r = self._row = _RowMemory()
         if self._clock is not None:
             T = float(self._clock((t,))[0])
+        heading += self.cfg.declination_deg  # magnetic to true north, as in feed
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
         rows_before = self.rows_in

@@ -101,6 +101,7 @@ class Compensator:
         self._triad_started = False
         self._tilt = None  # RawTilt, decided on the first sample (gyrodrift.attitude)
         self._tilt_note = None
+        self._magcal_note = None
         self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
         self._dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
@@ -137,6 +138,11 @@ class Compensator:
     @property
     def initialised(self) -> bool:
         return self._engine.initialised
+
+    @property
+    def regressor(self) -> str:
+        """What the drift model's ``T`` is: ``"temperature"`` or ``"clock"`` (the elapsed time)."""
+        return self._engine.regressor
 
     @property
     def scale_factor(self):
@@ -225,6 +231,9 @@ class Compensator:
                                    _float_triple(acc))[0]
         if mag is not None and acc is not None and self._tilt_note is None:
             self._tilt_note = self._tilt.note()
+            if self.config.mag_calibration:  # the fit needs the whole log (gyrodrift.magcal)
+                self._magcal_note = (f"{self.source}: magnetometer not calibrated: a stream does not see the whole "
+                                     "log the fit needs (mag_calibration)")
         if mag is not None and not self._dead.sample(*mag):
             mag = None  # a sample without a field is no compass sample (gyrodrift.compass)
         self._heading_seen = self._heading_seen or math.isfinite(heading_deg)
@@ -280,7 +289,8 @@ class Compensator:
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._tilt_note]),
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._tilt_note,
+                                 self._magcal_note]),
                 *self._engine.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
