@@ -140,11 +140,13 @@ class CompensatorConfig:
 
 def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:
     """Whether the drift model's ``T`` is the elapsed time (``cfg.temperature``): ``temp_c``
-    is the whole log's temperature column, degC (None: not known, as in streaming).
-    ``"auto"`` keeps the temperature for a warm start (a profile's or a calibration's
-    ``x0``): its model gives the drift at a constant temperature too."""
+    is the whole log's temperature column, degC, or whether it never changes (a bool; None:
+    not known, as in streaming). ``"auto"`` keeps the temperature for a warm start (a
+    profile's or a calibration's ``x0``): its model gives the drift at a constant
+    temperature too."""
     if cfg.temperature == "auto":
-        return temp_c is not None and temperature_is_flat(temp_c) and not _warm(cfg)
+        flat = temp_c if temp_c is None or isinstance(temp_c, bool) else temperature_is_flat(temp_c)
+        return bool(flat) and not _warm(cfg)
     return cfg.temperature == "clock"
 
 
