@@ -280,10 +280,12 @@ class Intake:
     def row_compass(self, t: float, g: float, heading: float, mag, acc, gx, gy) -> tuple[float, float, float]:
         """Heading, field strength and dip of one row (floats; ``mag``, ``acc`` triples or
         None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
-        calibration (a stream does not see the whole log)."""
+        calibration (a stream does not see the whole log). The first row decides the tilt
+        and the x/y axes (:attr:`xy`)."""
         self._stream = True
-        if self._tilt is None:  # decided on the first row, as the x/y axes are
+        if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
+            self._decide_xy(gx is not None and gy is not None and acc is not None)
         down = None
         if self._tilt.uses_gyro:  # every row: the gravity filter runs over all of them
             down = self._tilt.down((t,), (_float(gx),), (_float(gy),), (g,),
@@ -302,11 +304,6 @@ class Intake:
         if not math.isfinite(heading):
             heading = float(tilt_compensated_heading(*mag, *f))
         return heading, norm, dip
-
-    def decide_xy_row(self, gx, gy, acc) -> None:
-        """The x/y axes of a stream, decided on its first row."""
-        if not self._xy_decided:
-            self._decide_xy(gx is not None and gy is not None and acc is not None)
 
 
 def _float(v) -> float:

@@ -12,7 +12,7 @@ import numpy as np
 from gyrodrift import gating
 from gyrodrift._arguments import check_config, check_estimator, check_source
 from gyrodrift.compensator.config import CompensatorConfig
-from gyrodrift.compensator.intake import Intake
+from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
@@ -211,7 +211,6 @@ class Compensator:
             T = self._prev[2]
         self._prev = (t_s, g, T)
         heading, norm, dip = self._intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
-        self._intake.decide_xy_row(gyro_x_dps, gyro_y_dps, acc)
         if self._intake.xy is not None:
             ax = (math.nan,) * 3 if acc is None else tuple(float(v) for v in acc)
             self._triad_in.append((t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax))
@@ -332,7 +331,7 @@ class Compensator:
         inputs = [self._triad_in.popleft() for _ in rows]
         t, gx, gy, T, acc = (np.array(v, dtype=float) for v in zip(*inputs))
         cols = self._intake.xy.feed(t, gx, gy, T, np.array([r.temp_rate for r in rows]), acc,
-                                np.array([r.rate_z for r in rows]))
+                                    np.array([r.rate_z for r in rows]))
         return [
             replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
                     bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
@@ -345,11 +344,6 @@ class Compensator:
 _FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
                   "heading_sd", "temp_rate")
 _CODE_COLUMNS = ("updated", "reason", "unobs")
-
-
-def _float(v) -> float:
-    """A float from an optional number (None: NaN)."""
-    return math.nan if v is None else float(v)
 
 
 def _limits(gyro_max_dps: float) -> dict:
