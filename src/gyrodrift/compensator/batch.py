@@ -140,27 +140,23 @@ def compensate_arrays(
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
                   check_gyro_max_dps(gyro_max_dps))
     whole = WholeLog(temp_flat=temperature_is_flat(T_in))
-    if progress is None or n <= PROGRESS_ROWS:
-        intake = Intake(cfg, source, estimator=estimator, whole=whole, gyro_unit=gyro_unit)
-        cols = intake.feed(t, g, T_in, heading_deg, mag, acc, gyro_xy, buffers)
-        gated = None
-        if cols is None:  # shorter than the init window
-            cols = intake.flush()
-        elif buffers is not None:
-            gated = buffers.gated[:n]
-        return _with_attrs(intake.frame(cols, gated), intake)
-    if cfg.mag_calibration and mag is not None and acc is not None:  # the fit takes every row, the chunks follow
+    step = n if progress is None else PROGRESS_ROWS
+    if n > step and cfg.mag_calibration and mag is not None and acc is not None:  # the fit takes every row first
         fit = MagFit(cfg, source)
         fit.add(t, g, mag, acc, gyro_xy)
         whole = replace(whole, magcal=fit.fit())
     intake = Intake(cfg, source, estimator=estimator, whole=whole, gyro_unit=gyro_unit)
-    parts = []
-    starts = range(0, n, PROGRESS_ROWS)
-    for lo in progress(starts, len(starts)):
-        sl = slice(lo, lo + PROGRESS_ROWS)
-        parts.append(intake.feed(*(None if a is None else a[sl] for a in (t, g, T_in, heading_deg, mag, acc, gyro_xy))))
-    parts.append(intake.flush())
-    parts = [p for p in parts if p is not None]
+    if n <= step:  # one piece, in the buffers when given
+        cols = intake.feed(t, g, T_in, heading_deg, mag, acc, gyro_xy, buffers)
+        if cols is not None:
+            return _with_attrs(intake.frame(cols, None if buffers is None else buffers.gated[:n]), intake)
+        parts = []
+    else:
+        starts = range(0, n, step)
+        parts = [intake.feed(*(None if a is None else a[lo:lo + step] for a in (t, g, T_in, heading_deg, mag, acc,
+                                                                                gyro_xy)))
+                 for lo in progress(starts, len(starts))]
+    parts = [p for p in (*parts, intake.flush()) if p is not None]  # flush: a log shorter than the init window
     return _with_attrs(intake.frame({k: np.concatenate([p[k] for p in parts]) for k in parts[0]}), intake)
 
 

@@ -275,30 +275,12 @@ class Compensator:
     def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
         """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
         axis only, the x/y and scale-factor fields NaN."""
-        if cols is None:
-            return []
         kind = CompensatedSample if self._sf is None else self._sf_sample
-        return [kind(*self._values(t, out, codes, compass))
-                for t, out, codes, compass in zip(
-                    cols["t"].tolist(),
-                    zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-                    zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
-                    cols["compass_heading"].tolist())]
+        return [kind(*self._values(*row)) for row in _engine_rows(cols)]
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
-        if cols is None:
-            return []
-        rows = [
-            self._sample(t, out, codes, compass)
-            for t, out, codes, compass in zip(
-                cols["t"].tolist(),
-                zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
-                cols["compass_heading"].tolist(),
-            )
-        ]
-        return self._with_triad(rows)
+        return self._with_triad([self._sample(*row) for row in _engine_rows(cols)])
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
@@ -344,6 +326,15 @@ class Compensator:
 _FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
                   "heading_sd", "temp_rate")
 _CODE_COLUMNS = ("updated", "reason", "unobs")
+
+
+def _engine_rows(cols: dict | None):
+    """(t, float outputs, codes, compass heading) of each row of the engine's output columns
+    (none for None), the outputs and codes in the order of :mod:`gyrodrift.kernels.layout`."""
+    if cols is None:
+        return ()
+    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
+               zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
 def _limits(gyro_max_dps: float) -> dict:
