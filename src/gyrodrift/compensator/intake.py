@@ -1,28 +1,20 @@
-"""The front end of every entry point: a log's inputs to the engine and back (:class:`Intake`).
+"""The front end of every entry point, written once (:class:`Intake`).
 
-:func:`gyrodrift.compensate` (a whole log), the chunked file path
-(:func:`gyrodrift.pipeline.compensate_file`) and the streaming :class:`gyrodrift.Compensator`
-(one row at a time) drive one :class:`Intake`, which runs the same stages in this order:
+:func:`gyrodrift.compensate` (a whole log), the chunked file path and the streaming
+:class:`gyrodrift.Compensator` (one row at a time) drive one :class:`Intake`, which runs:
 
-1. the magnetometer samples that read no field are emptied (:class:`gyrodrift.compass.DeadField`);
-2. the tilt of a raw compass (:class:`gyrodrift.attitude.RawTilt`), decided on the first
-   rows with a raw compass: the gyro-aided gravity when ``config.tilt`` is ``"gyro"`` and
-   they have ``gyro_x`` and ``gyro_y``;
-3. the magnetometer calibration (:mod:`gyrodrift.magcal`), fitted on the whole log before
-   its first row is compensated (a stream does not calibrate, and says so);
+1. dead magnetometer samples emptied (:class:`gyrodrift.compass.DeadField`);
+2. the tilt of a raw compass (:class:`gyrodrift.attitude.RawTilt`, decided on the first rows);
+3. the magnetometer calibration of the whole log (:mod:`gyrodrift.magcal`; a stream has none);
 4. the compass heading, field strength and dip (:func:`gyrodrift.compass.compass_columns`);
-5. the engine (:func:`gyrodrift.compensator.model_engine.make_engine`, built once), whose
-   drift model's ``T`` is the temperature or the elapsed time (:func:`uses_clock`, decided
-   before the first row); it adds the declination;
-6. the x and y axes (:class:`gyrodrift.triad.TriadCompensator`) of the rows out of the
-   engine, when the first rows have ``gyro_x``, ``gyro_y`` and the accelerometer;
-7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`);
-8. the notes of all of them (:attr:`Intake.notes`).
+5. the engine, built once, its ``T`` the temperature or the elapsed time (:func:`uses_clock`);
+   it adds the declination;
+6. the x and y axes of the rows out of the engine (:class:`gyrodrift.triad.TriadCompensator`,
+   decided on the first rows);
+7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
 
-What needs the whole log (the calibration, and whether the temperature ever changes) is
-given as a :class:`WholeLog`: the chunked file path reads the file once for it
-(:func:`survey`) when the first chunk says it is needed; without one, a chunk path takes it
-from the first chunk fed (then the whole log).
+What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
+once for it (:func:`survey`); without one, the first chunk fed is taken as the whole log.
 """
 
 from __future__ import annotations
@@ -47,18 +39,9 @@ __all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey"]
 
 @dataclass(frozen=True)
 class WholeLog:
-    """What the front end takes from the whole log before its first row.
-
-    Attributes
-    ----------
-    temp_flat : bool or None
-        Whether the temperature never changes over the log (:func:`gyrodrift.model.temperature_is_flat`);
-        None: not known (a stream).
-    magcal : MagCalibration or None
-        The magnetometer calibration of the whole log; None: not fitted.
-    rows : int or None
-        The log's rows, when they were counted.
-    """
+    """What the front end takes from the whole log before its first row: whether its
+    temperature never changes (None: not known), its magnetometer calibration (None: not
+    fitted) and its rows (None: not counted)."""
 
     temp_flat: bool | None = None
     magcal: object = None
@@ -133,7 +116,6 @@ class Intake:
     estimator : DriftEstimator, optional
         A fresh estimator to use instead of one built from ``config``.
     whole : WholeLog, optional
-        What the whole log gave (module notes).
     gyro_unit : str, optional
         The unit the gyro was read in, for the unit check's advice.
     record : bool
@@ -141,8 +123,8 @@ class Intake:
 
     Attributes
     ----------
-    engine : ChunkEngine
-    estimator : DriftEstimator
+    engine, estimator
+        The engine (built once) and its estimator.
     xy : TriadCompensator or None
         The x and y axes, once the first rows had their inputs.
     """
