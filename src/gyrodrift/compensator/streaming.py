@@ -50,6 +50,11 @@ class Compensator:
     ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
     fields are NaN and no work is done for them.
 
+    The front end is that of :func:`gyrodrift.compensate`
+    (:class:`gyrodrift.compensator.intake.Intake`), less what needs the whole log: the
+    magnetometer is not calibrated (``mag_calibration``; a note says so), and
+    ``temperature="auto"`` takes the column unless told :meth:`temperature_absent`.
+
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
