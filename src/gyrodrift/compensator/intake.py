@@ -220,11 +220,11 @@ class Intake:
             gxy = np.asarray(gyro_xy, dtype=float)
             self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
                                 np.asarray(acc, dtype=float)))
-        return self._with_xy(self.engine.feed(t, g, T, heading, norm, dip, buffers))
+        return self.with_xy(self.engine.feed(t, g, T, heading, norm, dip, buffers))
 
     def flush(self) -> dict | None:
         """The rows still held when the log ends inside the init window (:meth:`ChunkEngine.flush`)."""
-        return self._with_xy(self.engine.flush())
+        return self.with_xy(self.engine.flush())
 
     def _decide_xy(self, inputs: bool) -> None:
         """Decided on the first rows: the x/y axes when they have their inputs."""
@@ -234,7 +234,11 @@ class Intake:
 
             self.xy = TriadCompensator(self.config)
 
-    def _with_xy(self, cols: dict | None) -> dict | None:
+    def hold_xy(self, t: float, gx: float, gy: float, T: float, acc) -> None:
+        """Keep the x/y inputs of one row until the engine gives it back (:meth:`with_xy`)."""
+        self._xy_in.append((np.array([t]), np.array([gx]), np.array([gy]), np.array([T]), np.array([acc], dtype=float)))
+
+    def with_xy(self, cols: dict | None) -> dict | None:
         """``cols`` with the x/y columns of its rows (the inputs held since they came in)."""
         if cols is None or self.xy is None:
             return cols

@@ -19,6 +19,7 @@ from gyrodrift.errors import GyroDriftError
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps, limit_of, outside_problem
 from gyrodrift.io.timebase import TimeBaseWatch, time_scale
 from gyrodrift.kernels import layout as L
+from gyrodrift.triad import TRIAD_COLUMNS
 
 __all__ = ["Compensator"]
 
@@ -99,7 +100,6 @@ class Compensator:
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
-        self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
         self._sf = None  # ScaleFactorTracker when a scale factor was asked for
         if scale_factor is not None:
@@ -216,14 +216,21 @@ class Compensator:
             T = self._prev[2]
         self._prev = (t_s, g, T)
         heading, norm, dip = self._intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
-        if self._intake.xy is not None:
-            ax = (math.nan,) * 3 if acc is None else tuple(float(v) for v in acc)
-            self._triad_in.append((t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax))
+        xy = self._intake.xy
+        ax = (math.nan,) * 3 if acc is None else acc
         if self._sf is not None:
             self._held_T.append(T)
-        if self._engine.initialised:
+        if self._engine.initialised:  # floats in, floats out
             out, codes, compass = self._engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
-            return self._with_triad([self._sample(t_s, out, codes, compass)])
+            row = self._sample(t_s, out, codes, compass)
+            if xy is not None:
+                values = xy.feed_row(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
+                                     row.rate_z)
+                for name, value in zip(TRIAD_COLUMNS, values):
+                    object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
+            return [row]
+        if xy is not None:  # the x/y inputs wait with the row in the engine's init window
+            self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
         cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
                                  np.array([norm]), np.array([dip]))
         if cols is None and self._provisional:
@@ -285,7 +292,13 @@ class Compensator:
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
-        return self._with_triad([self._sample(*row) for row in _engine_rows(cols)])
+        cols = self._intake.with_xy(cols)
+        rows = [self._sample(*row) for row in _engine_rows(cols)]
+        if cols is None or self._intake.xy is None:
+            return rows
+        return [replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
+                        bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
+                        tilt_gated=int(cols["tilt_gated"][i])) for i, r in enumerate(rows)]
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
@@ -303,28 +316,6 @@ class Compensator:
                 codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
                 UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
                 out[L.O_HEADING_SD])
-
-    def _with_triad(self, rows: list[CompensatedSample]) -> list[CompensatedSample]:
-        """The x/y columns of these rows (:class:`gyrodrift.triad.TriadCompensator`)."""
-        if self._intake.xy is None or not rows:
-            return rows
-        if len(rows) == 1:  # one push after initialisation: floats in, floats out
-            t, gx, gy, T, acc = self._triad_in.popleft()
-            row = rows[0]
-            values = self._intake.xy.feed_row(t, gx, gy, T, row.temp_rate, acc, row.rate_z)
-            for name, value in zip(("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated"), values):
-                object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
-            return rows
-        inputs = [self._triad_in.popleft() for _ in rows]
-        t, gx, gy, T, acc = (np.array(v, dtype=float) for v in zip(*inputs))
-        cols = self._intake.xy.feed(t, gx, gy, T, np.array([r.temp_rate for r in rows]), acc,
-                                    np.array([r.rate_z for r in rows]))
-        return [
-            replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
-                    bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
-                    tilt_gated=int(cols["tilt_gated"][i]))
-            for i, r in enumerate(rows)
-        ]
 
 
 #: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
