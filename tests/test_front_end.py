@@ -198,3 +198,30 @@ def test_declination_is_added_to_the_streamed_compass_after_the_init_window(esti
     np.testing.assert_array_equal(stream["compass_heading"], batch["compass_heading"])
     np.testing.assert_array_equal(stream["heading_fused"], batch["heading_fused"])
     assert (stream["gate_reason"] == batch["gate_reason"]).all()
+
+
+def test_a_file_is_read_once_before_its_pass_and_the_engine_built_once(tmp_path, monkeypatch):
+    """The calibration and the flat-temperature check share one reading of the file; the
+    engine is built once the clock is decided."""
+    import gyrodrift.io.chunked as chunked
+    from gyrodrift.compensator.model_engine import ModelEngine
+
+    calls = {"read": 0, "engine": 0}
+    read, init = chunked.iter_log_chunks, ModelEngine.__init__
+
+    def counted_read(*args, **kwargs):
+        calls["read"] += 1
+        return read(*args, **kwargs)
+
+    def counted_init(*args, **kwargs):
+        calls["engine"] += 1
+        init(*args, **kwargs)
+
+    monkeypatch.setattr(chunked, "iter_log_chunks", counted_read)
+    monkeypatch.setattr(ModelEngine, "__init__", counted_init)
+    log = simulate("no-temp", seed=5, duration_s=200.0, fs_hz=20.0, raw_mag=True).drop(columns="heading")
+    log.to_parquet(tmp_path / "in.parquet")
+    stats = compensate_file(tmp_path / "in.parquet", tmp_path / "out.parquet", C(mag_calibration=True), stream=True,
+                            chunk_rows=CHUNK_ROWS)
+    assert calls == {"read": 2, "engine": 1}
+    assert stats.regressor == "clock" and any("magnetometer" in n and "calibrated" in n for n in stats.notes)

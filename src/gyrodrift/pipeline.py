@@ -28,14 +28,7 @@ import pandas as pd
 
 from gyrodrift import gating
 from gyrodrift._columns import join_input_columns
-from gyrodrift.compensator import (
-    CompensatorConfig,
-    build_estimator,
-    check_input_columns,
-    clock_config,
-    compensate,
-    uses_clock,
-)
+from gyrodrift.compensator import CompensatorConfig, check_input_columns, compensate
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
 
@@ -510,148 +503,82 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
         sys.setswitchinterval(switch)
 
 
-def _mag_calibration(input_path: Path, cfg: CompensatorConfig, column_types: dict, table_opts: dict,
-                     chunk_rows: int, source: str):
-    """The magnetometer calibration of a whole file (:func:`gyrodrift.magcal.fit`), from a first
-    reading of its chunks: the same samples and tilt as :func:`gyrodrift.compensate` uses."""
-    from gyrodrift import magcal
-    from gyrodrift.attitude import RawTilt, accel_down
-    from gyrodrift.compass import DeadField
-    from gyrodrift.io.chunked import iter_log_chunks
-
-    samples, tilt = magcal.MagSamples(), None
-    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks:
-        for log in chunks:
-            if not set(MAG_COLS) | set(ACC_COLS) <= set(log.columns):
-                continue
-            acc = log[list(ACC_COLS)].to_numpy(float)
-            if tilt is None:
-                tilt = RawTilt(cfg.tilt, {GYRO_X, GYRO_Y} <= set(log.columns), source)
-            down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float), log[GYRO_Y].to_numpy(float),
-                             log[GYRO_Z].to_numpy(float), acc) if tilt.uses_gyro else accel_down(acc)
-            samples.add(DeadField().mask(log[list(MAG_COLS)].to_numpy(float)), down)
-    return magcal.fit(*samples.arrays())
-
-
-def _file_uses_clock(cfg: CompensatorConfig, first: pd.DataFrame, input_path: Path, column_types: dict,
-                     table_opts: dict, chunk_rows: int) -> bool:
-    """:func:`gyrodrift.compensator.uses_clock` for a file read in chunks: decided on the first
-    chunk when its temperature changes, else on a first reading of the whole file's
-    temperature (the same decision as :func:`gyrodrift.compensate` on the whole log)."""
-    from gyrodrift.io.chunked import iter_log_chunks
-
-    decided = uses_clock(cfg, first[TEMP].to_numpy(float))
-    if cfg.temperature != "auto" or not decided:  # set, warm-started, or a temperature that changes
-        return decided
-    seen: list[float] = []
-    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks:
-        for log in chunks:
-            temp = log[TEMP].to_numpy(float)
-            temp = temp[np.isfinite(temp)]
-            if temp.size:
-                seen += [float(temp.min()), float(temp.max())]
-                if min(seen) != max(seen):
-                    return False
-    return True
-
-
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
                     column_types: dict[str, str], progress=None) -> RunStats:
-    from gyrodrift.attitude import RawTilt
-    from gyrodrift.compass import DeadField, compass_columns
-    from gyrodrift.compensator import output_frame
-    from gyrodrift.compensator.model_engine import make_engine
-    from gyrodrift.gyro_units import GyroUnitCheck
+    import itertools
+
+    from gyrodrift.compensator.intake import Intake, needs_survey, survey
+    from gyrodrift.errors import LogFormatError
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
-    from gyrodrift.triad import TriadCompensator, add_triad_columns, has_triad_inputs
 
     source = str(input_path)
     stats = RunStats(source, streamed=True)
-    est = build_estimator(cfg)
-    triad = None  # the x/y axes (gyrodrift.triad), continued chunk by chunk, when the log has them
-    tilt, tilt_note = None, None  # the raw compass's tilt (gyrodrift.attitude), continued chunk by chunk
-    cal = None  # the magnetometer calibration (gyrodrift.magcal), fitted before the first chunk with a compass
-    clock = None  # whether the drift model's T is the elapsed time (gyrodrift.model.ElapsedClock)
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
-    dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
-    heading_seen = False  # a heading column with a value: a compass even when the magnetometer is dead
-    units = GyroUnitCheck(source, opts.get("gyro_unit", "deg/s"))  # the gyro's unit against the compass
     table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
+
+    def chunks_of(path):
+        return iter_log_chunks(path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts)
+
     # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
     # (gathered into bigger groups, it idled and then held up the compute thread, and
     # the last group was encoded after the compute had finished).
-    with iter_log_chunks(input_path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts) as chunks, \
-            ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
+    with chunks_of(input_path) as chunks, ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
         reader = _Ahead(chunks, depth=READ_AHEAD)
         behind = _Behind(writer.write)
         try:
+            read = iter(reader)
+            first = next(read, None)
+            if first is None:
+                raise LogFormatError(f"{source}: the log has no samples")
+            check_input_columns(first, source)
+            whole = None
+            if needs_survey(cfg, first):  # one reading of the whole file first (gyrodrift.compensator.intake)
+                with chunks_of(input_path) as again:
+                    whole = survey(again, cfg, source)
             # numba's start-up (importing it, loading the compiled kernels from its cache:
             # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
-            # the reader thread reads the first chunks
-            engine = make_engine(cfg, est, source, record=False)
+            # the reader thread reads the next chunks
+            intake = Intake(cfg, source, whole=whole, gyro_unit=opts.get("gyro_unit", "deg/s"), record=False)
 
             def emit(cols) -> None:
                 """Write the rows the engine gave back, with their input columns."""
-                nonlocal pending, triad
+                nonlocal pending
                 rows = (pd.concat(pending) if len(pending) > 1 else pending[0]).reset_index(drop=True)
                 pending = []
-                out = output_frame(cols)
-                if has_triad_inputs(rows.columns):
-                    triad = triad or TriadCompensator(cfg)
-                    add_triad_columns(out, rows, tc=triad)
-                out = join_input_columns(out, rows)
+                out = join_input_columns(intake.frame(cols), rows)
                 behind.put(writer.encode(out))  # Arrow conversion here: the writer thread is the busiest
                 stats.add(out)
 
-            chunks_read = reader if progress is None else progress(
-                reader, _estimated_rows(input_path, opts.get("fmt")), unit="rows", size=len)
+            chunks_read = itertools.chain([first], read)
+            if progress is not None:
+                rows = whole.rows if whole is not None and whole.rows else _estimated_rows(input_path, opts.get("fmt"))
+                chunks_read = progress(chunks_read, rows, unit="rows", size=len)
             for log in chunks_read:
                 has_mag = check_input_columns(log, source)
-                n = len(log)
-                heading_in = log[HEADING].to_numpy(float) if HEADING in log.columns else None
-                heading_seen = heading_seen or (heading_in is not None and bool(np.isfinite(heading_in).any()))
-                if has_mag:
-                    acc = log[list(ACC_COLS)].to_numpy(float)
-                    gyro_xy = {GYRO_X, GYRO_Y} <= set(log.columns)
-                    if tilt is None:  # decided on the first chunk, as the batch decides on the log's columns
-                        tilt = RawTilt(cfg.tilt, gyro_xy, source)
-                        tilt_note = tilt.note()
-                    down = None
-                    if tilt.uses_gyro:
-                        down = tilt.down(log[T].to_numpy(float), log[GYRO_X].to_numpy(float),
-                                         log[GYRO_Y].to_numpy(float), log[GYRO_Z].to_numpy(float), acc)
-                    mag = dead.mask(log[list(MAG_COLS)].to_numpy(float))
-                    if cfg.mag_calibration:
-                        if cal is None:  # a first reading of the whole file: the fit (gyrodrift.magcal)
-                            cal = _mag_calibration(input_path, cfg, column_types, table_opts, chunk_rows, source)
-                        mag = cal.apply(mag)
-                    heading, norm, dip = compass_columns(n, heading_in, mag, acc, down)
-                else:
-                    heading, norm, dip = (np.full(n, np.nan) if heading_in is None else heading_in), None, None
-                if clock is None:  # what the drift model's T is, decided on the first chunk
-                    clock = _file_uses_clock(cfg, log, input_path, column_types, table_opts, chunk_rows)
-                    if clock:
-                        cfg = clock_config(cfg)
-                        est = build_estimator(cfg)
-                        engine = make_engine(cfg, est, source, clock=True, record=False)
                 pending.append(log)
-                units.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), heading)
-                cols = engine.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
-                                   heading, norm, dip)
+                cols = intake.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
+                                   _columns(log, (HEADING,), 1), _columns(log, MAG_COLS) if has_mag else None,
+                                   _columns(log, ACC_COLS), _columns(log, (GYRO_X, GYRO_Y)))
                 if cols is not None:
                     emit(cols)
-            cols = engine.flush()  # a log shorter than the init window
+            cols = intake.flush()  # a log shorter than the init window
             if cols is not None:
                 emit(cols)
-            engine.finish()
+            intake.engine.finish()
         finally:
             reader.close()
             behind.close()
-        stats.compass = "none" if dead.none_usable() and not heading_seen else chunks.compass or "?"
-        stats.notes = [*getattr(chunks, "notes", ()), *filter(None, [dead.note(source, heading_seen), tilt_note,
-                                                                     cal and cal.note(source)]),
-                       *engine.notes,
-                       *filter(None, [units.note()])]
+        stats.compass = "none" if intake.compass_dead else chunks.compass or "?"
+        stats.notes = [*getattr(chunks, "notes", ()), *intake.notes]
+    est = intake.estimator
     stats.final_params, stats.final_cov, stats.estimator = est.params, est.cov, est.name
-    stats.regressor = engine.regressor
+    stats.regressor = intake.engine.regressor
     return stats
+
+
+def _columns(log: pd.DataFrame, names, ndim: int = 2) -> np.ndarray | None:
+    """The (n, k) array of these columns of a chunk (``ndim`` 1: the (n,) array of one), or
+    None when one is missing."""
+    if not set(names) <= set(log.columns):
+        return None
+    return log[names[0]].to_numpy(float) if ndim == 1 else log[list(names)].to_numpy(float)

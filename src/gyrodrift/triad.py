@@ -112,7 +112,7 @@ import pandas as pd
 
 from gyrodrift.compensator.config import CompensatorConfig, build_estimator
 from gyrodrift.compensator.engine import compiled_arrays
-from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, TEMP, T
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
@@ -123,7 +123,6 @@ __all__ = [
     "TriadConfig",
     "TriadCompensator",
     "compensate_triad",
-    "add_triad_columns",
     "has_triad_inputs",
     "TRIAD_COLUMNS",
     "TRIAD_REASONS",
@@ -473,30 +472,3 @@ def compensate_triad(
 def has_triad_inputs(columns) -> bool:
     """Whether a log has what the x/y compensation needs: ``gyro_x, gyro_y`` and ``acc_x..z``."""
     return all(c in columns for c in (GYRO_X, GYRO_Y, *ACC_COLS))
-
-
-def triad_inputs(out: pd.DataFrame, log: pd.DataFrame) -> tuple:
-    """Arguments of :meth:`TriadCompensator.feed` from input rows and their z output rows."""
-    return (
-        log[T].to_numpy(float),
-        log[GYRO_X].to_numpy(float),
-        log[GYRO_Y].to_numpy(float),
-        log[TEMP].to_numpy(float),
-        out["temp_rate"].to_numpy(float),
-        log[list(ACC_COLS)].to_numpy(float),
-        out["rate_z"].to_numpy(float),
-    )
-
-
-def add_triad_columns(out: pd.DataFrame, log: pd.DataFrame, config=None, tc: TriadCompensator | None = None):
-    """Append :data:`TRIAD_COLUMNS` to the z output ``out`` of the rows of ``log`` (in place).
-
-    ``tc`` continues a run chunk by chunk (:func:`gyrodrift.pipeline.compensate_file`);
-    None compensates these rows as a whole log. The x/y estimators are built from
-    ``config`` (their name from :attr:`TriadConfig.estimator`), also when the z axis was
-    given an estimator instance. Returns ``out``.
-    """
-    tc = tc or TriadCompensator(config)
-    for name, col in tc.feed(*triad_inputs(out, log)).items():
-        out[name] = col
-    return out

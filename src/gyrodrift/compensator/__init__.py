@@ -43,14 +43,16 @@ then the elapsed time (``CompensatorConfig.temperature``, :func:`uses_clock`).
 
 Causality: every output row depends only on earlier rows, except init rows, which
 depend on the whole init window. The equations are in :mod:`gyrodrift.kernels`;
-:class:`ChunkEngine` runs them for :class:`Compensator`, :func:`compensate` and the
-chunked file path alike, so all three give the same numbers.
+:class:`ChunkEngine` runs them and :class:`~gyrodrift.compensator.intake.Intake` (the
+compass, tilt, clock and x/y axes before and after it) feeds it for :class:`Compensator`,
+:func:`compensate` and the chunked file path alike, so all three give the same numbers.
 
 ==================  ================================================================
 module              what it holds
 ==================  ================================================================
 :mod:`.config`      :class:`CompensatorConfig`, :func:`build_estimator`, :func:`uses_clock`
 :mod:`.engine`      :class:`ChunkEngine`: the state, chunk by chunk
+:mod:`.intake`      :class:`Intake`: the front end of every entry point
 :mod:`.memory`      output memory (:class:`OutputBuffers`)
 :mod:`.output`      :class:`CompensatedSample`, the output table
 :mod:`.batch`       :func:`compensate`, :func:`compensate_arrays`

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
@@ -16,19 +18,16 @@ from gyrodrift._arguments import (
     frame_column,
     rows,
 )
-from gyrodrift.attitude import RawTilt, accel_down
-from gyrodrift.compass import DeadField, compass_columns
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
-from gyrodrift.compensator.model_engine import make_engine
-from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift._columns import join_input_columns
-from gyrodrift.compensator.output import check_input_columns, output_frame, with_attrs
+from gyrodrift.compensator.config import CompensatorConfig
+from gyrodrift.compensator.intake import Intake, MagFit, WholeLog
+from gyrodrift.compensator.memory import OutputBuffers
+from gyrodrift.compensator.output import check_input_columns, with_attrs
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
-from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_columns, check_gyro_max_dps
 from gyrodrift.io.timebase import check_time_base
-from gyrodrift.triad import add_triad_columns, has_triad_inputs
+from gyrodrift.model import temperature_is_flat
 
 __all__ = ["compensate", "compensate_arrays"]
 
@@ -70,6 +69,7 @@ def compensate_arrays(
     buffers: OutputBuffers | None = None,
     gyro_max_dps: float = GYRO_MAX_DPS,
     gyro_xy=None,
+    gyro_unit: str | None = None,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -98,8 +98,12 @@ def compensate_arrays(
     gyro_max_dps : float, default 10000
         Plausible full scale of the gyro, deg/s.
     gyro_xy : (N, 2) array_like, optional
-        Raw ``gyro_x``, ``gyro_y`` (deg/s, FRD): with ``mag`` and ``acc``, the compass is
+        Raw ``gyro_x``, ``gyro_y`` (deg/s, FRD): with ``acc``, the x and y axes are
+        compensated too (:mod:`gyrodrift.triad`); with ``mag`` and ``acc``, the compass is
         tilt-compensated with the gyro-aided gravity (``config.tilt``, :mod:`gyrodrift.attitude`).
+    gyro_unit : str, optional
+        The unit the gyro was read in, for the advice of the unit check's note
+        (:mod:`gyrodrift.gyro_units`).
 
     Raises
     ------
@@ -135,66 +139,33 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
                   check_gyro_max_dps(gyro_max_dps))
-    clock = uses_clock(cfg, T_in)
-    if clock:
-        cfg = clock_config(cfg)
-    est = estimator if estimator is not None else build_estimator(cfg)
-    notes = []
-    dead = DeadField()
-    if mag is not None and acc is not None:
-        mag = dead.mask(mag)  # a sample without a field is no compass sample (gyrodrift.compass)
-        notes += filter(None, [dead.note(source, _has_heading(heading_deg))])
-        tilt = RawTilt(cfg.tilt, gyro_xy is not None, source)
-        down = None
-        if tilt.uses_gyro:
-            gxy = np.asarray(gyro_xy, dtype=float)
-            down = tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
-        notes.append(tilt.note())
-        if cfg.mag_calibration:
-            from gyrodrift import magcal
-
-            samples = magcal.MagSamples()
-            samples.add(mag, accel_down(acc) if down is None else down)
-            cal = magcal.fit(*samples.arrays())
-            mag = cal.apply(mag)
-            notes.append(cal.note(source))
-        heading, norm, dip = compass_columns(n, heading_deg, mag, acc, down)
-    else:  # the engine wraps the heading itself
-        heading = np.full(n, np.nan) if heading_deg is None else np.asarray(heading_deg, dtype=float)
-        norm = dip = None
-    engine = make_engine(cfg, est, source, clock=clock)
-    if progress is None or n <= PROGRESS_ROWS:
-        cols = engine.feed(t, g, T_in, heading, norm, dip, buffers)
-        gated = None
-        if cols is None:  # shorter than the init window
-            cols = engine.flush()
-        elif buffers is not None:
-            gated = buffers.gated[:n]
-        out = with_attrs(output_frame(cols, gated), engine.finish(), est, [*notes, *engine.notes], engine.regressor,
-                         engine)
-        return _without_compass(out, dead, heading_deg)
-    parts = []
-    starts = range(0, n, PROGRESS_ROWS)
-    for lo in progress(starts, len(starts)):
-        sl = slice(lo, lo + PROGRESS_ROWS)
-        parts.append(engine.feed(t[sl], g[sl], T_in[sl], heading[sl], None if norm is None else norm[sl],
-                                 None if dip is None else dip[sl]))
-    parts.append(engine.flush())
-    parts = [p for p in parts if p is not None]
-    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    out = with_attrs(output_frame(cols), engine.finish(), est, [*notes, *engine.notes], engine.regressor, engine)
-    return _without_compass(out, dead, heading_deg)
+    whole = WholeLog(temp_flat=temperature_is_flat(T_in))
+    step = n if progress is None else PROGRESS_ROWS
+    if n > step and cfg.mag_calibration and mag is not None and acc is not None:  # the fit takes every row first
+        fit = MagFit(cfg, source)
+        fit.add(t, g, mag, acc, gyro_xy)
+        whole = replace(whole, magcal=fit.fit())
+    intake = Intake(cfg, source, estimator=estimator, whole=whole, gyro_unit=gyro_unit)
+    if n <= step:  # one piece, in the buffers when given
+        cols = intake.feed(t, g, T_in, heading_deg, mag, acc, gyro_xy, buffers)
+        if cols is not None:
+            return _with_attrs(intake.frame(cols, None if buffers is None else buffers.gated[:n]), intake)
+        parts = []
+    else:
+        starts = range(0, n, step)
+        parts = [intake.feed(*(None if a is None else a[lo:lo + step] for a in (t, g, T_in, heading_deg, mag, acc,
+                                                                                gyro_xy)))
+                 for lo in progress(starts, len(starts))]
+    parts = [p for p in (*parts, intake.flush()) if p is not None]  # flush: a log shorter than the init window
+    return _with_attrs(intake.frame({k: np.concatenate([p[k] for p in parts]) for k in parts[0]}), intake)
 
 
-def _has_heading(heading_deg) -> bool:
-    """Whether a heading column was given with at least one value."""
-    return heading_deg is not None and bool(np.isfinite(np.asarray(heading_deg, dtype=float)).any())
-
-
-def _without_compass(out: pd.DataFrame, dead: DeadField, heading_deg) -> pd.DataFrame:
-    """``out`` with ``attrs["compass"]`` "none" when the magnetometer read no field and no
-    heading was given (a log without compass, :mod:`gyrodrift.compass`)."""
-    if dead.none_usable() and not _has_heading(heading_deg):
+def _with_attrs(out: pd.DataFrame, intake: Intake) -> pd.DataFrame:
+    """``out`` with the run's attributes (:func:`with_attrs`); ``attrs["compass"]`` "none" when
+    the magnetometer read no field and no heading was given (a log without compass)."""
+    engine = intake.engine
+    out = with_attrs(out, engine.finish(), intake.estimator, intake.notes, engine.regressor, engine)
+    if intake.compass_dead:
         out.attrs["compass"] = "none"
     return out
 
@@ -266,18 +237,14 @@ def compensate(
         numbers[TEMP],
         heading_deg=numbers.get(HEADING),
         mag=np.column_stack([numbers[c] for c in MAG_COLS]) if has_mag else None,
-        acc=np.column_stack([numbers[c] for c in ACC_COLS]) if has_mag else None,
+        acc=np.column_stack([numbers[c] for c in ACC_COLS]) if set(ACC_COLS) <= set(numbers) else None,
         config=config,
         estimator=estimator,
         source=source,
         progress=progress,
         gyro_max_dps=gyro_max_dps,
-        gyro_xy=np.column_stack([numbers[GYRO_X], numbers[GYRO_Y]]) if has_mag and {GYRO_X, GYRO_Y} <= set(numbers)
-        else None,
+        gyro_xy=np.column_stack([numbers[GYRO_X], numbers[GYRO_Y]]) if {GYRO_X, GYRO_Y} <= set(numbers) else None,
+        gyro_unit=log.attrs.get("gyro_unit"),
     )
-    if has_triad_inputs(log.columns):  # gyro_x, gyro_y and acc_x..z: the whole triad (gyrodrift.triad)
-        add_triad_columns(out, log, config)
-    units = GyroUnitCheck(source, log.attrs.get("gyro_unit"))
-    units.add(out[T].to_numpy(), numbers[GYRO_Z], out["compass_heading"].to_numpy())
-    out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"], *filter(None, [units.note()])]
+    out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"]]
     return join_input_columns(out, log)  # the input columns at once (a wide log: thousands of them)

@@ -61,22 +61,21 @@ class CompensatorConfig:
         The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``): ``"accel"`` (default) the
         accelerometer alone; ``"gyro"`` the gravity propagated with ``gyro_x``, ``gyro_y``,
         ``gyro_z`` and corrected by the accelerometer near 1 g (:mod:`gyrodrift.attitude`)
-        when the log has ``gyro_x`` and ``gyro_y`` (else the accelerometer alone). Not the
-        default: on the real hand-turned ``mpu6050_rotate_z`` log (24 s, turns above the
-        10 °/s correction limit before the x/y gyro bias is learned) it moved the compass's
-        two turns from −719.6° to −730.2°, and on the simulated ``vehicle-rawmag`` family it
-        refuses far fewer rows but left the drift no better (``docs/results.md``).
+        when the log has ``gyro_x`` and ``gyro_y`` (else the accelerometer alone); why it is
+        not the default: ``docs/results.md``.
     mag_calibration : bool
         Fit a hard-iron offset and axis scales to a raw magnetometer over the whole log and
         apply them before the heading, when the log turns through more than 270° of
         heading (:mod:`gyrodrift.magcal`; a note says whether and how well). Not causal:
-        the streaming :class:`~gyrodrift.Compensator` does not calibrate. Default False.
+        the streaming :class:`~gyrodrift.Compensator` does not calibrate, and its notes say
+        so. Default False.
     temperature : str
         What ``T`` of the drift model is. ``"auto"`` (default): the temperature column,
         unless it never changes over the log (a sensor without a temperature, a column
         filled with a constant), then the elapsed time (:class:`gyrodrift.model.ElapsedClock`:
         ``a`` becomes the drift's change per 300 s, and a note says so); the streaming
-        :class:`~gyrodrift.Compensator` cannot see the whole log and takes the column.
+        :class:`~gyrodrift.Compensator` cannot see the whole log and takes the column
+        (unless told :meth:`~gyrodrift.Compensator.temperature_absent`).
         ``"measured"``: always the column. ``"clock"``: always the elapsed time (a stream
         without temperature).
     """
@@ -140,11 +139,13 @@ class CompensatorConfig:
 
 def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:
     """Whether the drift model's ``T`` is the elapsed time (``cfg.temperature``): ``temp_c``
-    is the whole log's temperature column, degC (None: not known, as in streaming).
-    ``"auto"`` keeps the temperature for a warm start (a profile's or a calibration's
-    ``x0``): its model gives the drift at a constant temperature too."""
+    is the whole log's temperature column, degC, or whether it never changes (a bool; None:
+    not known, as in streaming). ``"auto"`` keeps the temperature for a warm start (a
+    profile's or a calibration's ``x0``): its model gives the drift at a constant
+    temperature too."""
     if cfg.temperature == "auto":
-        return temp_c is not None and temperature_is_flat(temp_c) and not _warm(cfg)
+        flat = temp_c if temp_c is None or isinstance(temp_c, bool) else temperature_is_flat(temp_c)
+        return bool(flat) and not _warm(cfg)
     return cfg.temperature == "clock"
 
 

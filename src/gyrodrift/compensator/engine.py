@@ -125,26 +125,30 @@ class ChunkEngine:
         if owner is not LinearDrift:
             raise ConfigError(f"estimator {estimator.name!r}: its drift is not a*T + b*T' + c (eq. 2), which the "
                               "engine compensates with; run it as a baseline of gyrodrift.compare")
-        self.cfg = config
-        self.est = estimator
-        self.source = source
+        self._start_state(config, estimator, source, clock)
         arrays = compiled_arrays(estimator)
         if arrays is None:
             arrays = (np.zeros(L.N_EF), np.zeros(L.N_EI, dtype=np.int64))
         self._ef, self._ei = arrays
         self._set, self._iset = settings_arrays(config, estimator)
         self._external = self._iset[L.K_MODE] == L.MODE_EXTERNAL
+        self._lb = np.zeros((64, 2))
+        self._stack = np.zeros((config.stack_depth, L.N_MEAS))
+        self._refused = np.zeros(max(config.gate.relock_intervals, 1))
+        self._acc = np.zeros((_ACC_ROWS, L.N_MEAS))
+        self._accepted: list[np.ndarray] = []
+
+    def _start_state(self, config, estimator, source: str, clock: bool) -> None:
+        """The state of every engine before its first row (the row loop's own arrays aside)."""
+        self.cfg = config
+        self.est = estimator
+        self.source = source
         self._fs = np.zeros(L.N_FSTATE)
         self._fs[L.F_FIELD_NORM] = self._fs[L.F_FIELD_DIP] = math.nan
         self._ist = np.zeros(L.N_ISTATE, dtype=np.int64)
         self._ist[L.I_INIT_END] = -1
         self._ist[L.I_ANCHOR_ROW] = -1
         self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
-        self._lb = np.zeros((64, 2))
-        self._stack = np.zeros((config.stack_depth, L.N_MEAS))
-        self._refused = np.zeros(max(config.gate.relock_intervals, 1))
-        self._acc = np.zeros((_ACC_ROWS, L.N_MEAS))
-        self._accepted: list[np.ndarray] = []
         self._t0: float | None = None
         self._held: list[tuple] | None = []  # prepared chunks of the init window, until it is complete
         self._row: _RowMemory | None = None
@@ -356,14 +360,17 @@ class ChunkEngine:
         if self._clock is not None:
             r.Tp[0] = 0.0
         h = r.ro_h_wrapped if fix & 4 else r.ro_heading
-        g_in, T_in = r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T
+        self._run_row(r, r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T, h)
+        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
+
+    def _run_row(self, r: _RowMemory, g, T, heading) -> None:
+        """The prepared row of :meth:`feed_row` through the row loop."""
         done = 0
         while done < 1:  # 0: a ring was full before the row (grown by _after_stop)
-            done = loop.run_chunk(r.ro_t, g_in, T_in, r.ro_Tp, h, r.ro_gap, r.ro_norm, r.ro_dip, 0, self._fs,
+            done = loop.run_chunk(r.ro_t, g, T, r.ro_Tp, heading, r.ro_gap, r.ro_norm, r.ro_dip, 0, self._fs,
                                   self._ist, self._set, self._iset, self._lb, self._stack, self._refused,
-                                  self._acc, self._ef, self._ei, cols.out, cols.codes, 1)
+                                  self._acc, self._ef, self._ei, r.cols.out, r.cols.codes, 1)
             self._after_stop()
-        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
 
     # --------------------------------------------------------------- finish
     def provisional(self) -> dict | None:

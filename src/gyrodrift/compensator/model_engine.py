@@ -23,7 +23,6 @@ from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
-from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 
 __all__ = ["ModelEngine", "make_engine"]
 
@@ -41,27 +40,10 @@ class ModelEngine(ChunkEngine):
     :class:`ChunkEngine` for the interface)."""
 
     def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False, record: bool = True):
-        self.cfg = config
-        self.est = estimator
-        self.source = source
+        self._start_state(config, estimator, source, clock)
         self._set, self._iset = settings_arrays(config, None)
         self._set[L.C_MAX_GAP] = math.inf  # time gaps are the model's, relative to the log's spacing
         self._external = False
-        self._fs = np.zeros(L.N_FSTATE)
-        self._ist = np.zeros(L.N_ISTATE, dtype=np.int64)
-        self._ist[L.I_INIT_END] = -1
-        self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
-        self._t0 = None
-        self._held = []
-        self._row = None
-        self._prov = (math.nan, 0.0, 0.0, math.nan, math.nan)
-        self._prov_model = None
-        self.notes = []
-        self._clock = ElapsedClock(config.gate.max_gap_s) if clock else None
-        if clock:
-            why = "asked for" if config.temperature == "clock" else "the log has no temperature, or it never changes"
-            self.notes.append(f"{source}: the drift model's T is the elapsed time, not the temperature ({why}): "
-                              f"c is the drift at the start and a its change per {CLOCK_UNIT_S:g} s, deg/s")
         self._mc = None
         self._init_last = None  # last row of the init window, until its rows are settled
         self._rf = np.zeros(evloop.RF_N)
@@ -137,31 +119,8 @@ class ModelEngine(ChunkEngine):
             "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
         }
 
-    def feed_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
-                 dip: float = math.nan) -> tuple[list, list, float]:
-        from gyrodrift.compensator.engine import _RowMemory
-        from gyrodrift.errors import LogFormatError
-        from gyrodrift.kernels import loop
-
-        r = self._row
-        if r is None:
-            r = self._row = _RowMemory()
-        if self._clock is not None:
-            T = float(self._clock((t,))[0])
-        heading += self.cfg.declination_deg  # magnetic to true north, as in feed
-        r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
-        cols = r.cols
-        rows_before = self.rows_in
-        bad, fix = loop.prepare(r.ro_t, r.ro_g, r.ro_T, r.ro_heading, self._fs, self._ist, self._set, self._iset,
-                                self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
-        if bad >= 0:
-            raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
-        if self._clock is not None:
-            r.Tp[0] = 0.0
-        h = r.ro_h_wrapped if fix & 4 else r.ro_heading
-        g_in, T_in = r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T
-        self._loop(r.ro_t, g_in, T_in, r.ro_Tp, h, r.ro_gap, r.ro_norm, r.ro_dip, cols)
-        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
+    def _run_row(self, r, g, T, heading) -> None:
+        self._loop(r.ro_t, g, T, r.ro_Tp, heading, r.ro_gap, r.ro_norm, r.ro_dip, r.cols)
 
     def accepted(self) -> np.ndarray:
         """The model takes no interval measurements: an empty (0, 5) array."""

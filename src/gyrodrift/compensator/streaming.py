@@ -11,16 +11,15 @@ import numpy as np
 
 from gyrodrift import gating
 from gyrodrift._arguments import check_config, check_estimator, check_source
-from gyrodrift.attitude import RawTilt
-from gyrodrift.compass import DeadField, field_norm_dip, tilt_compensated_heading
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator, clock_config, uses_clock
-from gyrodrift.compensator.model_engine import make_engine
+from gyrodrift.compensator.config import CompensatorConfig
+from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps, limit_of, outside_problem
 from gyrodrift.io.timebase import TimeBaseWatch, time_scale
 from gyrodrift.kernels import layout as L
+from gyrodrift.triad import TRIAD_COLUMNS
 
 __all__ = ["Compensator"]
 
@@ -51,6 +50,11 @@ class Compensator:
     as it is output, with the held temperature): the same numbers as
     ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
     fields are NaN and no work is done for them.
+
+    The front end is that of :func:`gyrodrift.compensate`
+    (:class:`gyrodrift.compensator.intake.Intake`), less what needs the whole log: the
+    magnetometer is not calibrated (``mag_calibration``; a note says so), and
+    ``temperature="auto"`` takes the column unless told :meth:`temperature_absent`.
 
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
@@ -91,21 +95,12 @@ class Compensator:
         self._time_base = TimeBaseWatch(unit or "s")  # as compensate_arrays judges its times (gyrodrift.io.timebase)
         self._time_note = None
         self._limits = _limits(self._gyro_max_dps)
-        self._own_estimator = estimator is None
-        self._est = estimator
-        self._start(uses_clock(self.config))  # "auto" takes the temperature: a stream has no whole log to look at
+        # "auto" takes the temperature: a stream has no whole log to look at
+        self._intake = Intake(self.config, source, estimator=estimator, record=False)
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
-        self._triad = None  # TriadCompensator once the first sample brought gyro_x, gyro_y, acc
-        self._triad_started = False
-        self._tilt = None  # RawTilt, decided on the first sample (gyrodrift.attitude)
-        self._tilt_note = None
-        self._magcal_note = None
-        self._triad_in: deque[tuple] = deque()  # x/y inputs of the samples not yet output
         self._held_T: deque[float] = deque()  # temperature of the rows not yet output (scale factor)
-        self._dead = DeadField()  # magnetometer samples that read no field (gyrodrift.compass)
-        self._heading_seen = False  # a heading_deg given: a compass even when the magnetometer is dead
         self._sf = None  # ScaleFactorTracker when a scale factor was asked for
         if scale_factor is not None:
             from gyrodrift.scale_factor import CompensatedSFSample, ScaleFactorTracker
@@ -121,18 +116,15 @@ class Compensator:
         temperature (a bias); ``"clock"`` has the clock already."""
         if self._prev is not None:
             raise GyroDriftError(f"{self.source}: temperature_absent() must come before the first sample")
-        if not self._clock and self.config.temperature == "auto":
-            self._start(True)
+        self._intake.temperature_absent()
 
-    def _start(self, clock: bool) -> None:
-        """The estimator (unless the caller gave one) and the engine, the drift model's ``T``
-        the elapsed time or not (``clock``)."""
-        self._clock = clock
-        if clock:
-            self.config = clock_config(self.config)
-        if self._own_estimator:
-            self._est = build_estimator(self.config)
-        self._engine = make_engine(self.config, self._est, self.source, clock=clock, record=False)
+    @property
+    def _engine(self):
+        return self._intake.engine
+
+    @property
+    def _clock(self) -> bool:
+        return self._intake.engine.regressor == "clock"
 
     # -- public state
     @property
@@ -153,17 +145,17 @@ class Compensator:
     @property
     def estimator(self):
         """The drift estimator (updated in place as samples come)."""
-        return self._est
+        return self._intake.estimator
 
     @property
     def params(self) -> np.ndarray:
         """[a (deg/s/degC), b (deg/degC), c (deg/s)] now in force."""
-        return self._est.params
+        return self._intake.estimator.params
 
     @property
     def cov(self) -> np.ndarray:
         """Covariance of :attr:`params`."""
-        return self._est.cov
+        return self._intake.estimator.cov
 
     def push(self, t_s, gyro_z_dps, temp_c, heading_deg=math.nan, mag=None, acc=None, gyro_x_dps=None,
              gyro_y_dps=None):
@@ -223,31 +215,22 @@ class Compensator:
         elif not math.isfinite(T):
             T = self._prev[2]
         self._prev = (t_s, g, T)
-        down = None
-        if self._tilt is None:  # decided on the first sample, as the x/y axes are
-            self._tilt = RawTilt(self.config.tilt, gyro_x_dps is not None and gyro_y_dps is not None, self.source)
-        if self._tilt.uses_gyro:  # every sample, as the batch runs the filter over every row
-            down = self._tilt.down((t_s,), (_float(gyro_x_dps),), (_float(gyro_y_dps),), (gyro_z_dps,),
-                                   _float_triple(acc))[0]
-        if mag is not None and acc is not None and self._tilt_note is None:
-            self._tilt_note = self._tilt.note()
-            if self.config.mag_calibration:  # the fit needs the whole log (gyrodrift.magcal)
-                self._magcal_note = (f"{self.source}: magnetometer not calibrated: a stream does not see the whole "
-                                     "log the fit needs (mag_calibration)")
-        if mag is not None and not self._dead.sample(*mag):
-            mag = None  # a sample without a field is no compass sample (gyrodrift.compass)
-        self._heading_seen = self._heading_seen or math.isfinite(heading_deg)
-        heading, norm, dip = _compass_values(heading_deg, mag, acc if down is None else -down)
-        if not self._triad_started:
-            self._start_triad(gyro_x_dps, gyro_y_dps, acc)
-        if self._triad is not None:
-            ax = (math.nan,) * 3 if acc is None else tuple(float(v) for v in acc)
-            self._triad_in.append((t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax))
+        heading, norm, dip = self._intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        xy = self._intake.xy
+        ax = (math.nan,) * 3 if acc is None else acc
         if self._sf is not None:
             self._held_T.append(T)
-        if self._engine.initialised:
+        if self._engine.initialised:  # floats in, floats out
             out, codes, compass = self._engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
-            return self._with_triad([self._sample(t_s, out, codes, compass)])
+            row = self._sample(t_s, out, codes, compass)
+            if xy is not None:
+                values = xy.feed_row(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
+                                     row.rate_z)
+                for name, value in zip(TRIAD_COLUMNS, values):
+                    object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
+            return [row]
+        if xy is not None:  # the x/y inputs wait with the row in the engine's init window
+            self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
         cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
                                  np.array([norm]), np.array([dip]))
         if cols is None and self._provisional:
@@ -284,14 +267,12 @@ class Compensator:
     def compass_dead(self) -> bool:
         """True when magnetometer samples came, none read a field and no heading was given:
         the stream has no compass (:class:`gyrodrift.compass.DeadField`)."""
-        return self._dead.none_usable() and not self._heading_seen
+        return self._intake.compass_dead
 
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._tilt_note,
-                                 self._magcal_note]),
-                *self._engine.notes]
+        return [*filter(None, [self._time_note]), *self._intake.notes]
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
@@ -299,37 +280,25 @@ class Compensator:
         skip, self._n_provisional = self._n_provisional, 0
         if cols is None or not skip:
             return self._rows(cols)
-        if self._triad is None and self._sf is None:  # only the rows not yet out are made
+        if self._intake.xy is None and self._sf is None:  # only the rows not yet out are made
             return self._rows({k: v[skip:] for k, v in cols.items()})
         return self._rows(cols)[skip:]
 
     def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
         """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
         axis only, the x/y and scale-factor fields NaN."""
-        if cols is None:
-            return []
         kind = CompensatedSample if self._sf is None else self._sf_sample
-        return [kind(*self._values(t, out, codes, compass))
-                for t, out, codes, compass in zip(
-                    cols["t"].tolist(),
-                    zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-                    zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
-                    cols["compass_heading"].tolist())]
+        return [kind(*self._values(*row)) for row in _engine_rows(cols)]
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
-        if cols is None:
-            return []
-        rows = [
-            self._sample(t, out, codes, compass)
-            for t, out, codes, compass in zip(
-                cols["t"].tolist(),
-                zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)),
-                cols["compass_heading"].tolist(),
-            )
-        ]
-        return self._with_triad(rows)
+        cols = self._intake.with_xy(cols)
+        rows = [self._sample(*row) for row in _engine_rows(cols)]
+        if cols is None or self._intake.xy is None:
+            return rows
+        return [replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
+                        bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
+                        tilt_gated=int(cols["tilt_gated"][i])) for i, r in enumerate(rows)]
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
@@ -348,36 +317,6 @@ class Compensator:
                 UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
                 out[L.O_HEADING_SD])
 
-    def _start_triad(self, gyro_x_dps, gyro_y_dps, acc) -> None:
-        """Decided on the first sample: x/y axes when it has gyro_x, gyro_y and acc."""
-        self._triad_started = True
-        if gyro_x_dps is not None and gyro_y_dps is not None and acc is not None:
-            from gyrodrift.triad import TriadCompensator
-
-            self._triad = TriadCompensator(self.config)
-
-    def _with_triad(self, rows: list[CompensatedSample]) -> list[CompensatedSample]:
-        """The x/y columns of these rows (:class:`gyrodrift.triad.TriadCompensator`)."""
-        if self._triad is None or not rows:
-            return rows
-        if len(rows) == 1:  # one push after initialisation: floats in, floats out
-            t, gx, gy, T, acc = self._triad_in.popleft()
-            row = rows[0]
-            values = self._triad.feed_row(t, gx, gy, T, row.temp_rate, acc, row.rate_z)
-            for name, value in zip(("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated"), values):
-                object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
-            return rows
-        inputs = [self._triad_in.popleft() for _ in rows]
-        t, gx, gy, T, acc = (np.array(v, dtype=float) for v in zip(*inputs))
-        cols = self._triad.feed(t, gx, gy, T, np.array([r.temp_rate for r in rows]), acc,
-                                np.array([r.rate_z for r in rows]))
-        return [
-            replace(r, rate_x=float(cols["rate_x"][i]), rate_y=float(cols["rate_y"][i]),
-                    bias_x=float(cols["bias_x"][i]), bias_y=float(cols["bias_y"][i]),
-                    tilt_gated=int(cols["tilt_gated"][i]))
-            for i, r in enumerate(rows)
-        ]
-
 
 #: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
 _FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
@@ -385,28 +324,13 @@ _FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "head
 _CODE_COLUMNS = ("updated", "reason", "unobs")
 
 
-def _compass_values(heading_deg, mag, acc) -> tuple[float, float, float]:
-    """Heading (deg, NaN = none) and field strength and dip of one sample."""
-    heading = float(heading_deg) if heading_deg is not None else math.nan
-    norm = dip = math.nan
-    if mag is not None and acc is not None:
-        mag = [float(v) for v in mag]
-        acc = [float(v) for v in acc]
-        if all(math.isfinite(v) for v in mag + acc):
-            norm, dip = (float(v) for v in field_norm_dip(*mag, *acc))
-            if not math.isfinite(heading):
-                heading = float(tilt_compensated_heading(*mag, *acc))
-    return heading, norm, dip
-
-
-def _float_triple(v) -> np.ndarray:
-    """An optional triple as a (1, 3) array (None: NaN)."""
-    return np.full((1, 3), math.nan) if v is None else np.array([v], dtype=float)
-
-
-def _float(v) -> float:
-    """A float from an optional number (None: NaN)."""
-    return math.nan if v is None else float(v)
+def _engine_rows(cols: dict | None):
+    """(t, float outputs, codes, compass heading) of each row of the engine's output columns
+    (none for None), the outputs and codes in the order of :mod:`gyrodrift.kernels.layout`."""
+    if cols is None:
+        return ()
+    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
+               zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
 def _limits(gyro_max_dps: float) -> dict:

@@ -1,0 +1,297 @@
+"""The front end of every entry point, written once (:class:`Intake`).
+
+:func:`gyrodrift.compensate` (a whole log), the chunked file path and the streaming
+:class:`gyrodrift.Compensator` (one row at a time) drive one :class:`Intake`, which runs:
+
+1. dead magnetometer samples emptied (:class:`gyrodrift.compass.DeadField`);
+2. the tilt of a raw compass (:class:`gyrodrift.attitude.RawTilt`, decided on the first rows);
+3. the magnetometer calibration of the whole log (:mod:`gyrodrift.magcal`; a stream has none);
+4. the compass heading, field strength and dip (:func:`gyrodrift.compass.compass_columns`);
+5. the engine, built once, its ``T`` the temperature or the elapsed time (:func:`uses_clock`);
+   it adds the declination;
+6. the x and y axes of the rows out of the engine (:class:`gyrodrift.triad.TriadCompensator`,
+   decided on the first rows);
+7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
+
+What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
+once for it (:func:`survey`); without one, the first chunk fed is taken as the whole log.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from gyrodrift.attitude import RawTilt, accel_down
+from gyrodrift.compass import DeadField, compass_columns, field_norm_dip, tilt_compensated_heading
+from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
+from gyrodrift.compensator.model_engine import make_engine
+from gyrodrift.compensator.output import output_frame
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, MAG_COLS, TEMP, T
+from gyrodrift.gyro_units import GyroUnitCheck
+from gyrodrift.triad import TRIAD_COLUMNS
+
+__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey"]
+
+
+@dataclass(frozen=True)
+class WholeLog:
+    """What the front end takes from the whole log before its first row: whether its
+    temperature never changes (None: not known), its magnetometer calibration (None: not
+    fitted) and its rows (None: not counted)."""
+
+    temp_flat: bool | None = None
+    magcal: object = None
+    rows: int | None = None
+
+
+def needs_survey(config, first) -> bool:
+    """Whether a log read in chunks must be read once before it is compensated, decided on
+    its ``first`` chunk (a DataFrame): for the magnetometer calibration of a raw compass, or
+    when ``temperature="auto"`` would take the clock for the first chunk's temperature alone."""
+    if config.mag_calibration and all(c in first.columns for c in (*MAG_COLS, *ACC_COLS)):
+        return True
+    return config.temperature == "auto" and uses_clock(config, first[TEMP].to_numpy(float))
+
+
+class MagFit:
+    """The magnetometer calibration of a whole log (:func:`gyrodrift.magcal.fit`), its rows
+    added in order (:meth:`add`) with the tilt :class:`Intake` uses."""
+
+    def __init__(self, config, source: str):
+        from gyrodrift import magcal
+
+        self.config, self.source = config, source
+        self.samples = magcal.MagSamples()
+        self.tilt: RawTilt | None = None
+
+    def add(self, t, g, mag, acc, gyro_xy=None, down=None) -> None:
+        """Rows with a raw compass (``down``: their tilt when already known)."""
+        if self.tilt is None:
+            self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
+        if down is None and self.tilt.uses_gyro:
+            gxy = np.asarray(gyro_xy, dtype=float)
+            down = self.tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
+
+    def fit(self):
+        """The :class:`gyrodrift.magcal.MagCalibration`, or None when no row was added."""
+        from gyrodrift import magcal
+
+        return None if self.tilt is None else magcal.fit(*self.samples.arrays())
+
+
+def survey(chunks, config, source: str) -> WholeLog:
+    """One reading of a whole log in chunks (DataFrames) for what :class:`WholeLog` holds:
+    the magnetometer calibration when ``config.mag_calibration`` asks for it and whether the
+    temperature changes."""
+    fit = MagFit(config, source) if config.mag_calibration else None
+    temp_lo, temp_hi, rows = math.inf, -math.inf, 0
+    for log in chunks:
+        rows += len(log)
+        temp = log[TEMP].to_numpy(float)
+        temp = temp[np.isfinite(temp)]
+        if temp.size:
+            temp_lo, temp_hi = min(temp_lo, float(temp.min())), max(temp_hi, float(temp.max()))
+        if fit is None and temp_lo < temp_hi:  # all that was needed is known
+            return WholeLog(temp_flat=False)
+        if fit is not None and all(c in log.columns for c in (*MAG_COLS, *ACC_COLS)):
+            gyro_xy = log[[GYRO_X, GYRO_Y]].to_numpy(float) if {GYRO_X, GYRO_Y} <= set(log.columns) else None
+            fit.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[list(MAG_COLS)].to_numpy(float),
+                    log[list(ACC_COLS)].to_numpy(float), gyro_xy)
+    return WholeLog(temp_flat=not temp_lo < temp_hi, magcal=None if fit is None else fit.fit(), rows=rows)
+
+
+class Intake:
+    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row`).
+
+    Parameters
+    ----------
+    config : CompensatorConfig
+    source : str
+        Name for notes and error messages.
+    estimator : DriftEstimator, optional
+        A fresh estimator to use instead of one built from ``config``.
+    whole : WholeLog, optional
+    gyro_unit : str, optional
+        The unit the gyro was read in, for the unit check's advice.
+    record : bool
+        Keep the default engine's epoch history (for the smoother).
+
+    Attributes
+    ----------
+    engine, estimator
+        The engine (built once) and its estimator.
+    xy : TriadCompensator or None
+        The x and y axes, once the first rows had their inputs.
+    """
+
+    def __init__(self, config, source: str = "log", *, estimator=None, whole: WholeLog | None = None,
+                 gyro_unit: str | None = None, record: bool = True):
+        self.config = config
+        self.source = source
+        self._whole = whole or WholeLog()
+        self._cal = self._whole.magcal
+        self._given = estimator
+        self._record = record
+        self._tilt: RawTilt | None = None
+        self._raw_seen = False  # a raw compass sample came: the tilt note (and the stream's calibration note)
+        self._dead = DeadField()
+        self._heading_seen = False  # a heading with a value: a compass even when the magnetometer is dead
+        self.units = GyroUnitCheck(source, gyro_unit)
+        self.xy = None
+        self._xy_decided = False
+        self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
+        self._stream = False  # rows were fed one by one (no calibration)
+        self._start(uses_clock(config, self._whole.temp_flat))
+
+    def _start(self, clock: bool) -> None:
+        """The estimator (unless one was given) and the engine, its ``T`` the elapsed time or not."""
+        cfg = clock_config(self.config) if clock else self.config
+        self.estimator = self._given if self._given is not None else build_estimator(cfg)
+        self.engine = make_engine(cfg, self.estimator, self.source, clock=clock, record=self._record)
+
+    def temperature_absent(self) -> None:
+        """The log has no temperature: with ``temperature="auto"`` the drift model's ``T``
+        becomes the elapsed time (before the first row)."""
+        if self.engine.regressor == "temperature" and self.config.temperature == "auto":
+            self._start(True)
+
+    @property
+    def compass_dead(self) -> bool:
+        """True when magnetometer samples came, none read a field and no heading was given."""
+        return self._dead.none_usable() and not self._heading_seen
+
+    @property
+    def notes(self) -> list[str]:
+        """What the front end and the engine could not learn or did instead (one-line sentences)."""
+        raw = []
+        if self._raw_seen:
+            raw.append(self._tilt.note())
+            if self.config.mag_calibration and self._stream:
+                raw.append(f"{self.source}: magnetometer not calibrated: a stream does not see the whole log the fit "
+                           "needs (mag_calibration)")
+            elif self.config.mag_calibration and self._cal is not None:
+                raw.append(self._cal.note(self.source))
+        return [*filter(None, [self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
+                *filter(None, [self.units.note()])]
+
+    # ------------------------------------------------------------------ chunks
+    def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None):
+        """Heading (deg, NaN = no sample), field strength and dip (None without a raw
+        compass) of these rows: stages 1 to 4 of the module notes."""
+        n = len(t)
+        if heading is not None and not self._heading_seen:
+            self._heading_seen = bool(np.isfinite(heading).any())
+        if mag is None or acc is None:  # the engine wraps the heading itself
+            return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None
+        mag = self._dead.mask(mag)
+        if self._tilt is None:
+            self._tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
+        self._raw_seen = True
+        down = None
+        if self._tilt.uses_gyro:
+            gxy = np.asarray(gyro_xy, dtype=float)
+            down = self._tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        if self.config.mag_calibration:
+            if self._cal is None:  # no WholeLog calibration: these rows are the whole log
+                fit = MagFit(self.config, self.source)
+                fit.add(t, g, mag, acc, gyro_xy, down)
+                self._cal = fit.fit()
+            mag = self._cal.apply(mag)
+        return compass_columns(n, heading, mag, acc, down)
+
+    def feed(self, t, g, T, heading=None, mag=None, acc=None, gyro_xy=None, buffers=None) -> dict | None:
+        """Add rows (a whole log or a chunk); return the output columns of the rows that
+        became available (:meth:`ChunkEngine.feed`, with the x/y columns when the first rows
+        had ``gyro_xy`` and ``acc``), or None while the init window fills.
+
+        ``t, g, T, heading``: (n,) arrays; ``mag``, ``acc``: (n, 3) raw FRD magnetometer and
+        accelerometer (the compass when both are given; ``acc`` the x/y axes' tilt);
+        ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``."""
+        heading, norm, dip = self.compass(t, g, heading, mag, acc, gyro_xy)
+        self.units.add(t, g, heading)
+        if not self._xy_decided:
+            self._decide_xy(gyro_xy is not None and acc is not None)
+        if self.xy is not None:
+            gxy = np.asarray(gyro_xy, dtype=float)
+            self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
+                                np.asarray(acc, dtype=float)))
+        return self.with_xy(self.engine.feed(t, g, T, heading, norm, dip, buffers))
+
+    def flush(self) -> dict | None:
+        """The rows still held when the log ends inside the init window (:meth:`ChunkEngine.flush`)."""
+        return self.with_xy(self.engine.flush())
+
+    def _decide_xy(self, inputs: bool) -> None:
+        """Decided on the first rows: the x/y axes when they have their inputs."""
+        self._xy_decided = True
+        if inputs:
+            from gyrodrift.triad import TriadCompensator
+
+            self.xy = TriadCompensator(self.config)
+
+    def hold_xy(self, t: float, gx: float, gy: float, T: float, acc) -> None:
+        """Keep the x/y inputs of one row until the engine gives it back (:meth:`with_xy`)."""
+        self._xy_in.append((np.array([t]), np.array([gx]), np.array([gy]), np.array([T]), np.array([acc], dtype=float)))
+
+    def with_xy(self, cols: dict | None) -> dict | None:
+        """``cols`` with the x/y columns of its rows (the inputs held since they came in)."""
+        if cols is None or self.xy is None:
+            return cols
+        n, parts = len(cols["t"]), []
+        while n:
+            part = self._xy_in.popleft()
+            if len(part[0]) > n:  # the rest of this chunk comes out later
+                self._xy_in.appendleft(tuple(v[n:] for v in part))
+                part = tuple(v[:n] for v in part)
+            parts.append(part)
+            n -= len(part[0])
+        t, gx, gy, T, acc = (np.concatenate(v) if len(parts) > 1 else v[0] for v in zip(*parts))
+        return {**cols, **self.xy.feed(t, gx, gy, T, cols["temp_rate"], acc, cols["rate_z"])}
+
+    @staticmethod
+    def frame(cols: dict, gated=None):
+        """The output table of :meth:`feed`'s columns (:func:`output_frame`, then the x/y columns)."""
+        out = output_frame(cols, gated)
+        for name in TRIAD_COLUMNS:
+            if name in cols:
+                out[name] = cols[name]
+        return out
+
+    # ------------------------------------------------------------------ rows
+    def row_compass(self, t: float, g: float, heading: float, mag, acc, gx, gy) -> tuple[float, float, float]:
+        """Heading, field strength and dip of one row (floats; ``mag``, ``acc`` triples or
+        None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
+        calibration (a stream does not see the whole log). The first row decides the tilt
+        and the x/y axes (:attr:`xy`)."""
+        self._stream = True
+        if self._tilt is None:
+            self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
+            self._decide_xy(gx is not None and gy is not None and acc is not None)
+        down = None
+        if self._tilt.uses_gyro:  # every row: the gravity filter runs over all of them
+            down = self._tilt.down((t,), (_float(gx),), (_float(gy),), (g,),
+                                   np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))[0]
+        if mag is not None and acc is not None:
+            self._raw_seen = True
+        if mag is not None and not self._dead.sample(*mag):
+            mag = None  # a sample without a field is no compass sample
+        self._heading_seen = self._heading_seen or math.isfinite(heading)
+        if mag is None or (acc is None and down is None):
+            return heading, math.nan, math.nan
+        f = [float(v) for v in acc] if down is None else [-float(v) for v in down]
+        if not all(math.isfinite(v) for v in (*mag, *f)):
+            return heading, math.nan, math.nan
+        norm, dip = (float(v) for v in field_norm_dip(*mag, *f))
+        if not math.isfinite(heading):
+            heading = float(tilt_compensated_heading(*mag, *f))
+        return heading, norm, dip
+
+
+def _float(v) -> float:
+    """A float from an optional number (None: NaN)."""
+    return math.nan if v is None else float(v)
