@@ -14,7 +14,7 @@
 7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
 
 What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
-once for it (:func:`survey`); without one, the first chunk fed is taken as the whole log.
+once for it (:func:`survey`), :func:`gyrodrift.compensate` takes it from the log in memory.
 """
 
 from __future__ import annotations
@@ -68,11 +68,12 @@ class MagFit:
         self.samples = magcal.MagSamples()
         self.tilt: RawTilt | None = None
 
-    def add(self, t, g, mag, acc, gyro_xy=None, down=None) -> None:
-        """Rows with a raw compass (``down``: their tilt when already known)."""
+    def add(self, t, g, mag, acc, gyro_xy=None) -> None:
+        """Rows with a raw compass, in order."""
         if self.tilt is None:
             self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
-        if down is None and self.tilt.uses_gyro:
+        down = None
+        if self.tilt.uses_gyro:
             gxy = np.asarray(gyro_xy, dtype=float)
             down = self.tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
@@ -196,11 +197,7 @@ class Intake:
         if self._tilt.uses_gyro:
             gxy = np.asarray(gyro_xy, dtype=float)
             down = self._tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
-        if self.config.mag_calibration:
-            if self._cal is None:  # no WholeLog calibration: these rows are the whole log
-                fit = MagFit(self.config, self.source)
-                fit.add(t, g, mag, acc, gyro_xy, down)
-                self._cal = fit.fit()
+        if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)
 
