@@ -107,7 +107,7 @@ def survey(chunks, config, source: str) -> WholeLog:
 
 
 class Intake:
-    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row`).
+    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
 
     Parameters
     ----------
@@ -134,8 +134,8 @@ class Intake:
                  gyro_unit: str | None = None, record: bool = True):
         self.config = config
         self.source = source
-        self._whole = whole or WholeLog()
-        self._cal = self._whole.magcal
+        whole = whole or WholeLog()
+        self._cal = whole.magcal
         self._given = estimator
         self._record = record
         self._tilt: RawTilt | None = None
@@ -146,8 +146,7 @@ class Intake:
         self.xy = None
         self._xy_decided = False
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
-        self._stream = False  # rows were fed one by one (no calibration)
-        self._start(uses_clock(config, self._whole.temp_flat))
+        self._start(uses_clock(config, whole.temp_flat))
 
     def _start(self, clock: bool) -> None:
         """The estimator (unless one was given) and the engine, its ``T`` the elapsed time or not."""
@@ -172,11 +171,9 @@ class Intake:
         raw = []
         if self._raw_seen:
             raw.append(self._tilt.note())
-            if self.config.mag_calibration and self._stream:
-                raw.append(f"{self.source}: magnetometer not calibrated: a stream does not see the whole log the fit "
-                           "needs (mag_calibration)")
-            elif self.config.mag_calibration and self._cal is not None:
-                raw.append(self._cal.note(self.source))
+            if self.config.mag_calibration:  # no calibration without the whole log: a stream has none
+                raw.append(self._cal.note(self.source) if self._cal is not None else f"{self.source}: magnetometer "
+                           "not calibrated: a stream does not see the whole log the fit needs (mag_calibration)")
         return [*filter(None, [self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
                 *filter(None, [self.units.note()])]
 
@@ -265,7 +262,6 @@ class Intake:
         None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
         calibration (a stream does not see the whole log). The first row decides the tilt
         and the x/y axes (:attr:`xy`)."""
-        self._stream = True
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
             self._decide_xy(gx is not None and gy is not None and acc is not None)
