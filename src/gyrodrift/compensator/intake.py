@@ -30,11 +30,11 @@ from gyrodrift.compass import DeadField, compass_columns, field_norm_dip, tilt_c
 from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
-from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, MAG_COLS, TEMP, T
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.triad import TRIAD_COLUMNS
 
-__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey"]
+__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,18 @@ class WholeLog:
     temp_flat: bool | None = None
     magcal: object = None
     rows: int | None = None
+
+
+def chunk_arrays(log) -> tuple:
+    """The arguments of :meth:`Intake.feed` from a chunk of a log (a DataFrame in the input
+    contract): ``t, gyro_z, temp`` and, None where the chunk lacks them, ``heading``, the
+    magnetometer, the accelerometer and ``gyro_x, gyro_y``."""
+    def get(names):
+        return log[list(names)].to_numpy(float) if set(names) <= set(log.columns) else None
+
+    return (log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
+            log[HEADING].to_numpy(float) if HEADING in log.columns else None, get(MAG_COLS), get(ACC_COLS),
+            get((GYRO_X, GYRO_Y)))
 
 
 def needs_survey(config, first) -> bool:
@@ -99,10 +111,9 @@ def survey(chunks, config, source: str) -> WholeLog:
             temp_lo, temp_hi = min(temp_lo, float(temp.min())), max(temp_hi, float(temp.max()))
         if fit is None and temp_lo < temp_hi:  # all that was needed is known
             return WholeLog(temp_flat=False)
-        if fit is not None and all(c in log.columns for c in (*MAG_COLS, *ACC_COLS)):
-            gyro_xy = log[[GYRO_X, GYRO_Y]].to_numpy(float) if {GYRO_X, GYRO_Y} <= set(log.columns) else None
-            fit.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[list(MAG_COLS)].to_numpy(float),
-                    log[list(ACC_COLS)].to_numpy(float), gyro_xy)
+        t, g, _, _, mag, acc, gyro_xy = chunk_arrays(log)
+        if fit is not None and mag is not None and acc is not None:
+            fit.add(t, g, mag, acc, gyro_xy)
     return WholeLog(temp_flat=not temp_lo < temp_hi, magcal=None if fit is None else fit.fit(), rows=rows)
 
 
