@@ -29,7 +29,7 @@ import pandas as pd
 from gyrodrift import gating
 from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import CompensatorConfig, check_input_columns, compensate
-from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, ACC_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
+from gyrodrift.conventions import GYRO_Z, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
@@ -507,7 +507,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                     column_types: dict[str, str], progress=None) -> RunStats:
     import itertools
 
-    from gyrodrift.compensator.intake import Intake, needs_survey, survey
+    from gyrodrift.compensator.intake import Intake, chunk_arrays, needs_survey, survey
     from gyrodrift.errors import LogFormatError
     from gyrodrift.io.chunked import ChunkWriter, iter_log_chunks
 
@@ -554,11 +554,9 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
                 rows = whole.rows if whole is not None and whole.rows else _estimated_rows(input_path, opts.get("fmt"))
                 chunks_read = progress(chunks_read, rows, unit="rows", size=len)
             for log in chunks_read:
-                has_mag = check_input_columns(log, source)
+                check_input_columns(log, source)
                 pending.append(log)
-                cols = intake.feed(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
-                                   _columns(log, (HEADING,), 1), _columns(log, MAG_COLS) if has_mag else None,
-                                   _columns(log, ACC_COLS), _columns(log, (GYRO_X, GYRO_Y)))
+                cols = intake.feed(*chunk_arrays(log))
                 if cols is not None:
                     emit(cols)
             cols = intake.flush()  # a log shorter than the init window
@@ -575,10 +573,3 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     stats.regressor = intake.engine.regressor
     return stats
 
-
-def _columns(log: pd.DataFrame, names, ndim: int = 2) -> np.ndarray | None:
-    """The (n, k) array of these columns of a chunk (``ndim`` 1: the (n,) array of one), or
-    None when one is missing."""
-    if not set(names) <= set(log.columns):
-        return None
-    return log[names[0]].to_numpy(float) if ndim == 1 else log[list(names)].to_numpy(float)

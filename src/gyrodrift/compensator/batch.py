@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pandas as pd
 
@@ -139,13 +137,12 @@ def compensate_arrays(
         raise LogFormatError(f"{source}: the first sample needs gyro_z and temp values")
     check_columns(source, {TEMP: T_in, GYRO_Z: g, HEADING: heading_deg, "mag": mag, "acc": acc},
                   check_gyro_max_dps(gyro_max_dps))
-    whole = WholeLog(temp_flat=temperature_is_flat(T_in))
-    step = n if progress is None else PROGRESS_ROWS
-    if n > step and cfg.mag_calibration and mag is not None and acc is not None:  # the fit takes every row first
-        fit = MagFit(cfg, source)
+    fit = MagFit(cfg, source) if cfg.mag_calibration and mag is not None and acc is not None else None
+    if fit is not None:
         fit.add(t, g, mag, acc, gyro_xy)
-        whole = replace(whole, magcal=fit.fit())
+    whole = WholeLog(temp_flat=temperature_is_flat(T_in), magcal=None if fit is None else fit.fit())
     intake = Intake(cfg, source, estimator=estimator, whole=whole, gyro_unit=gyro_unit)
+    step = n if progress is None else PROGRESS_ROWS
     if n <= step:  # one piece, in the buffers when given
         cols = intake.feed(t, g, T_in, heading_deg, mag, acc, gyro_xy, buffers)
         if cols is not None:

@@ -30,7 +30,7 @@ from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -299,15 +299,7 @@ class ChunkEngine:
                                self._lb, self._stack, self._refused, self._acc, self._ef, self._ei,
                                cols.out, cols.codes, cols.n)
             self._after_stop()
-        columns = {
-            "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
-            "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
-            "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
-            "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
-            "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
-        }
-        return columns
+        return output_columns(t, heading, cols)
 
     def _after_stop(self) -> None:
         """What the row loop stopped for: the external estimator's update, or a full buffer."""
@@ -446,6 +438,19 @@ class ChunkEngine:
         """The accepted measurements so far (see :meth:`finish`)."""
         self._flush_accepted()
         return np.concatenate(self._accepted) if self._accepted else np.zeros((0, L.N_MEAS))
+
+
+def output_columns(t: np.ndarray, heading: np.ndarray, cols: Columns) -> dict:
+    """The output columns of :meth:`ChunkEngine.feed` (views of ``cols``) for rows at times
+    ``t`` whose compass heading was ``heading``."""
+    return {
+        "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
+        "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
+        "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
+        "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
+        "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
+        "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
+    }
 
 
 def _joined(held: list[tuple]) -> tuple[tuple, Columns]:

@@ -14,7 +14,7 @@
 7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
 
 What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
-once for it (:func:`survey`); without one, the first chunk fed is taken as the whole log.
+once for it (:func:`survey`), :func:`gyrodrift.compensate` takes it from the log in memory.
 """
 
 from __future__ import annotations
@@ -30,11 +30,11 @@ from gyrodrift.compass import DeadField, compass_columns, field_norm_dip, tilt_c
 from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
-from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, MAG_COLS, TEMP, T
+from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.triad import TRIAD_COLUMNS
 
-__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey"]
+__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,18 @@ class WholeLog:
     temp_flat: bool | None = None
     magcal: object = None
     rows: int | None = None
+
+
+def chunk_arrays(log) -> tuple:
+    """The arguments of :meth:`Intake.feed` from a chunk of a log (a DataFrame in the input
+    contract): ``t, gyro_z, temp`` and, None where the chunk lacks them, ``heading``, the
+    magnetometer, the accelerometer and ``gyro_x, gyro_y``."""
+    def get(names):
+        return log[list(names)].to_numpy(float) if set(names) <= set(log.columns) else None
+
+    return (log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[TEMP].to_numpy(float),
+            log[HEADING].to_numpy(float) if HEADING in log.columns else None, get(MAG_COLS), get(ACC_COLS),
+            get((GYRO_X, GYRO_Y)))
 
 
 def needs_survey(config, first) -> bool:
@@ -68,11 +80,12 @@ class MagFit:
         self.samples = magcal.MagSamples()
         self.tilt: RawTilt | None = None
 
-    def add(self, t, g, mag, acc, gyro_xy=None, down=None) -> None:
-        """Rows with a raw compass (``down``: their tilt when already known)."""
+    def add(self, t, g, mag, acc, gyro_xy=None) -> None:
+        """Rows with a raw compass, in order."""
         if self.tilt is None:
             self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
-        if down is None and self.tilt.uses_gyro:
+        down = None
+        if self.tilt.uses_gyro:
             gxy = np.asarray(gyro_xy, dtype=float)
             down = self.tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
@@ -98,15 +111,14 @@ def survey(chunks, config, source: str) -> WholeLog:
             temp_lo, temp_hi = min(temp_lo, float(temp.min())), max(temp_hi, float(temp.max()))
         if fit is None and temp_lo < temp_hi:  # all that was needed is known
             return WholeLog(temp_flat=False)
-        if fit is not None and all(c in log.columns for c in (*MAG_COLS, *ACC_COLS)):
-            gyro_xy = log[[GYRO_X, GYRO_Y]].to_numpy(float) if {GYRO_X, GYRO_Y} <= set(log.columns) else None
-            fit.add(log[T].to_numpy(float), log[GYRO_Z].to_numpy(float), log[list(MAG_COLS)].to_numpy(float),
-                    log[list(ACC_COLS)].to_numpy(float), gyro_xy)
+        t, g, _, _, mag, acc, gyro_xy = chunk_arrays(log)
+        if fit is not None and mag is not None and acc is not None:
+            fit.add(t, g, mag, acc, gyro_xy)
     return WholeLog(temp_flat=not temp_lo < temp_hi, magcal=None if fit is None else fit.fit(), rows=rows)
 
 
 class Intake:
-    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row`).
+    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
 
     Parameters
     ----------
@@ -133,8 +145,8 @@ class Intake:
                  gyro_unit: str | None = None, record: bool = True):
         self.config = config
         self.source = source
-        self._whole = whole or WholeLog()
-        self._cal = self._whole.magcal
+        whole = whole or WholeLog()
+        self._cal = whole.magcal
         self._given = estimator
         self._record = record
         self._tilt: RawTilt | None = None
@@ -145,8 +157,7 @@ class Intake:
         self.xy = None
         self._xy_decided = False
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
-        self._stream = False  # rows were fed one by one (no calibration)
-        self._start(uses_clock(config, self._whole.temp_flat))
+        self._start(uses_clock(config, whole.temp_flat))
 
     def _start(self, clock: bool) -> None:
         """The estimator (unless one was given) and the engine, its ``T`` the elapsed time or not."""
@@ -171,11 +182,9 @@ class Intake:
         raw = []
         if self._raw_seen:
             raw.append(self._tilt.note())
-            if self.config.mag_calibration and self._stream:
-                raw.append(f"{self.source}: magnetometer not calibrated: a stream does not see the whole log the fit "
-                           "needs (mag_calibration)")
-            elif self.config.mag_calibration and self._cal is not None:
-                raw.append(self._cal.note(self.source))
+            if self.config.mag_calibration:  # no calibration without the whole log: a stream has none
+                raw.append(self._cal.note(self.source) if self._cal is not None else f"{self.source}: magnetometer "
+                           "not calibrated: a stream does not see the whole log the fit needs (mag_calibration)")
         return [*filter(None, [self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
                 *filter(None, [self.units.note()])]
 
@@ -196,11 +205,7 @@ class Intake:
         if self._tilt.uses_gyro:
             gxy = np.asarray(gyro_xy, dtype=float)
             down = self._tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
-        if self.config.mag_calibration:
-            if self._cal is None:  # no WholeLog calibration: these rows are the whole log
-                fit = MagFit(self.config, self.source)
-                fit.add(t, g, mag, acc, gyro_xy, down)
-                self._cal = fit.fit()
+        if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)
 
@@ -268,7 +273,6 @@ class Intake:
         None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
         calibration (a stream does not see the whole log). The first row decides the tilt
         and the x/y axes (:attr:`xy`)."""
-        self._stream = True
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
             self._decide_xy(gx is not None and gy is not None and acc is not None)

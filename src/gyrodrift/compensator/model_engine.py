@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from gyrodrift.compensator.engine import ChunkEngine, _read_only, settings_arrays
+from gyrodrift.compensator.engine import ChunkEngine, _read_only, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
@@ -110,14 +110,7 @@ class ModelEngine(ChunkEngine):
             self._init_last = None
             start = last + 1
         self._loop(t, g, T, Tp, heading, held, norm, dip, cols, start)
-        return {
-            "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
-            "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
-            "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
-            "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-            "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
-            "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
-        }
+        return output_columns(t, heading, cols)
 
     def _run_row(self, r, g, T, heading) -> None:
         self._loop(r.ro_t, g, T, r.ro_Tp, heading, r.ro_gap, r.ro_norm, r.ro_dip, r.cols)
