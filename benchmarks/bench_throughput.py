@@ -32,10 +32,12 @@ import pyarrow.parquet as pa_pq
 
 FS_HZ = 100.0
 COMPASS_EVERY = 10
-#: Targets: core >= 20 % of the copy rate; end-to-end <= 1.5 x the I/O limit; streaming <= 20 µs/sample.
+#: Targets: core >= 20 % of the copy rate; end-to-end <= 1.5 x the I/O limit; streaming <= 20 µs/sample
+#: inside the init window and <= 10 µs/sample after it.
 CORE_VS_COPY_MIN = 0.20
 E2E_VS_IO_MAX = 1.5
 STREAM_US_MAX = 20.0
+STREAM_AFTER_INIT_US_MAX = 10.0
 
 
 # --------------------------------------------------------------------------- data
@@ -247,17 +249,29 @@ def bench_inprocess(in_path: Path, out_path: Path) -> dict[str, float]:
     return {"read_log": t_read, "compensate": t_comp, "write_table": t_write}
 
 
-def bench_stream(cols, m: int) -> float:
-    """µs per sample of ``Compensator.push`` over the first ``m`` rows."""
+def bench_stream(cols, m: int) -> tuple[float, float, float]:
+    """µs per sample of ``Compensator.push`` over the first ``m`` rows, over the rows of its
+    init window (``config.init_s``; the push that completes it, which compensates the
+    window's rows, included) and over the rows after it; after an untimed stream of the
+    window and 100 rows more, as the other rows are timed after the warm-up."""
     from gyrodrift.compensator import Compensator
 
     t, g, T, h = (cols[k][:m].tolist() for k in ("t", "gyro_z", "temp", "heading"))
     comp = Compensator()
+    end = min(m, int(np.searchsorted(cols["t"][:m], cols["t"][0] + comp.config.init_s, "left")) + 1)
+    for i in range(min(m, end + 100)):  # untimed: the streaming kernels loaded from numba's cache
+        comp.push(t[i], g[i], T[i], heading_deg=h[i])
+    comp = Compensator()
     push = comp.push
     start = time.perf_counter()
-    for i in range(m):
+    for i in range(end):
         push(t[i], g[i], T[i], heading_deg=h[i])
-    return (time.perf_counter() - start) / m * 1e6
+    inside = time.perf_counter() - start
+    start = time.perf_counter()
+    for i in range(end, m):
+        push(t[i], g[i], T[i], heading_deg=h[i])
+    after = time.perf_counter() - start
+    return (inside + after) / m * 1e6, inside / end * 1e6, after / max(m - end, 1) * 1e6
 
 
 def bench_filterpy(cols, m: int, interval_s: float = 10.0) -> tuple[float, str]:
@@ -461,10 +475,14 @@ def main(argv=None) -> int:
             long_in.unlink()
             long_out.unlink()
 
-        us_stream = bench_stream(cols, m)
-        rows.append(Row("(e) streaming Compensator.push", us_stream, "µs/sample", f"<= {STREAM_US_MAX:g} µs/sample",
-                        us_stream / STREAM_US_MAX, verdict(us_stream <= STREAM_US_MAX)))
-        print(f"streaming {us_stream:.1f} µs/sample", flush=True)
+        us_stream, us_init, us_after = bench_stream(cols, m)
+        rows.append(Row("(e) streaming Compensator.push, init window", us_init, "µs/sample",
+                        f"<= {STREAM_US_MAX:g} µs/sample", us_init / STREAM_US_MAX, verdict(us_init <= STREAM_US_MAX)))
+        rows.append(Row("(e) streaming Compensator.push, after the init window", us_after, "µs/sample",
+                        f"<= {STREAM_AFTER_INIT_US_MAX:g} µs/sample", us_after / STREAM_AFTER_INIT_US_MAX,
+                        verdict(us_after <= STREAM_AFTER_INIT_US_MAX)))
+        rows.append(Row("    streaming, all the rows (the (f) ratios are to this)", us_stream, "µs/sample"))
+        print(f"streaming {us_init:.1f} µs/sample in the init window, {us_after:.1f} after it", flush=True)
         for name, fn, package in (
             ("(f) filterpy KalmanFilter per-sample loop", bench_filterpy, "filterpy"),
             ("(f) imufusion Bias + Ahrs per sample", bench_imufusion, "imufusion"),

@@ -11,6 +11,18 @@ import pytest
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
+def pytest_sessionstart(session):
+    """Every kernel compiled, or loaded from numba's cache, before the first test: a command a
+    test runs in a subprocess then never compiles, so its stderr holds only what the test
+    expects (a compile says so there: :func:`gyrodrift.kernels.say_when_compiling`)."""
+    import io
+
+    from gyrodrift.kernels import warm
+
+    if hasattr(warm.dispatcher("kernels.evloop.run"), "compile"):  # not with NUMBA_DISABLE_JIT=1
+        warm.compile_group(warm.SIGNATURES, out=io.StringIO())
+
+
 def synthetic_log(
     *,
     duration_s: float = 1800.0,

@@ -200,24 +200,29 @@ def test_bad_settings_or_profile_file_is_one_line_from_the_real_command(small_lo
     assert not (tmp_path / "o.csv").exists()
 
 
-def test_a_terminal_is_told_when_the_engine_compiles(monkeypatch, capsys):
-    """The first run after an install compiles the kernels for about a minute: on a terminal,
-    one line says so; not once they are cached, nor for a command that does not run them."""
-    import io
+def test_the_user_is_told_when_numba_compiles(capsys):
+    """A command that compiles a kernel missing from numba's cache pauses: one line on stderr
+    says so, terminal or not, once however many functions compile; nothing when all come
+    from the cache."""
+    import numba
+    from numba.core import event
 
-    from gyrodrift import cli, kernels
+    from gyrodrift import kernels
+    from gyrodrift.kernels import numeric
 
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
-
-    for is_cached, command, said in ((False, "compensate", True), (True, "compensate", False),
-                                     (False, "simulate", False)):
-        err = Terminal()
-        monkeypatch.setattr(kernels, "cached", lambda: is_cached)
-        monkeypatch.setattr(cli.sys, "stderr", err)
-        cli._say_if_compiling(command)
-        assert ("compiling the engine" in err.getvalue()) is said, (is_cached, command)
+    numeric.wrap360(370.0)  # compiled (or loaded from the cache) before the listener
+    for _ in range(2):  # armed again by each command of a process: one listener, one line per command
+        listener = kernels.say_when_compiling()
+        try:
+            assert numeric.wrap360(-10.0) == 350.0
+            assert capsys.readouterr().err == ""
+            numba.njit(lambda x: x + 1)(1)
+            numba.njit(lambda x: x + 2)(1.0)
+        finally:
+            listener.armed = False
+        err = capsys.readouterr().err
+        assert err.count("compiling the engine") == 1 and err.count("\n") == 1, err
+    assert len([x for x in event._registered["numba:compile"] if x is listener]) == 1
 
 
 def test_a_log_without_compass_is_compensated_with_notes(tmp_path):

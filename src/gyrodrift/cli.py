@@ -646,19 +646,13 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-#: Commands that run the compensator (whose kernels numba compiles on first use).
-_ENGINE_COMMANDS = frozenset({"compensate", "demo", "report", "compare", "batch", "paper", "montecarlo", "stream"})
+def _say_if_compiling() -> None:
+    """One line on stderr (a terminal, a file or a pipe) if the command compiles a kernel that
+    is not in numba's cache: ``pip install .`` compiles them all, so this is for an editable
+    install, or another numba or processor than the one the package was built with."""
+    from gyrodrift.kernels import say_when_compiling
 
-
-def _say_if_compiling(command: str) -> None:
-    """One line on a terminal's stderr when the engine is not yet compiled: the first run after
-    an install pauses for about a minute while numba compiles and caches it. (Not when stderr
-    is a file or a pipe, whose readers expect one line per error.)"""
-    from gyrodrift.kernels import cached
-
-    if command in _ENGINE_COMMANDS and sys.stderr.isatty() and not cached():
-        print("gyrodrift: compiling the engine (numba, once after an install; about a minute) ...",
-              file=sys.stderr, flush=True)
+    say_when_compiling()
 
 
 def _check_numbers(parser: argparse.ArgumentParser, args) -> None:
@@ -736,7 +730,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    _say_if_compiling(args.command)
+    _say_if_compiling()
     try:
         _check_numbers(parser._subparser(args), args)
         check_paths(args.command, args)  # no output onto an input, every output writable before any work

@@ -24,10 +24,12 @@ module              what it holds
 :mod:`.thermal`     the thermal calibration's polynomial (numpy, not compiled)
 ==================  ============================================================
 
-The functions are compiled on first use and cached on disk (``cache=True``); with
+The functions are cached on disk (``cache=True``): ``pip install .`` compiles every one
+of them into the package (:mod:`.warm`, run by ``setup.py``), and a function missing from
+the cache (an editable install, another numba or processor) is compiled on first use; with
 ``NUMBA_DISABLE_JIT=1`` the same source runs as plain Python (slow; for debugging,
-and as an oracle in the tests). :func:`cached` says whether a compiled copy is on
-disk, so a command line can say why the first run pauses.
+and as an oracle in the tests). :func:`say_when_compiling` prints one line when numba
+starts compiling, so a command line says why it pauses.
 
 numba checks a cached function against its own file only, while the row loop inlines
 functions of the other modules here: importing this package therefore compares a digest
@@ -38,11 +40,13 @@ they differ.
 from __future__ import annotations
 
 import hashlib
+import sys
 from pathlib import Path
 
 from numba import njit
+from numba.core import event
 
-__all__ = ["jit", "cached"]
+__all__ = ["jit", "say_when_compiling"]
 
 _HERE = Path(__file__).parent
 _CACHE = _HERE / "__pycache__"
@@ -83,7 +87,38 @@ def jit(fn=None, *, inline: bool = False):
     return njit(**options)(fn)
 
 
-def cached() -> bool:
-    """True when the compiled row loops (heading axis, x/y axes) are in numba's cache next to
-    this package (the first run after an install compiles them, about a minute)."""
-    return any(_CACHE.glob("loop.run_chunk-*.nbi")) and any(_CACHE.glob("tilt.*.nbi"))
+class _SayWhenCompiling(event.Listener):
+    """Listens to numba's compile events (``numba:compile``): one line at the first one
+    after it is armed (:func:`say_when_compiling`)."""
+
+    def __init__(self):
+        self.armed = False
+        self.stream = None
+        self.registered = False
+
+    def on_start(self, ev):
+        if self.armed:
+            self.armed = False
+            print("gyrodrift: compiling the engine with numba (not in its cache; once, up to a minute; "
+                  "python -m gyrodrift.kernels.warm compiles every path) ...",
+                  file=self.stream or sys.stderr, flush=True)
+
+    def on_end(self, ev):
+        pass
+
+
+_SAY = _SayWhenCompiling()
+
+
+def say_when_compiling(stream=None) -> _SayWhenCompiling:
+    """From now on in this process, print one line on ``stream`` (default: stderr, looked up
+    when printing) the first time numba starts compiling: a function not in its cache, which
+    pauses the command for seconds to a minute. Each call arms the line again (once per
+    command when :func:`gyrodrift.cli.main` runs several in one process); one listener in all.
+    Returns it (``.armed = False`` disarms it)."""
+    if not _SAY.registered:
+        event.register("numba:compile", _SAY)
+        _SAY.registered = True
+    _SAY.stream = stream
+    _SAY.armed = True
+    return _SAY
