@@ -67,3 +67,18 @@ def test_a_quantised_compass_repeating_by_chance_keeps_its_samples(tmp_path):
     log.to_csv(tmp_path / "q.csv", index=False)
     read = read_log(tmp_path / "q.csv")
     assert read["heading"].notna().sum() == n and not read.attrs.get("notes")
+
+
+def test_the_unit_check_ends_on_times_coarser_than_its_window():
+    """Times so large that a window's length is below their resolution (4e17 s: steps of 64 s
+    that 10 s does not move): every window still ends at a later sample."""
+    import threading
+
+    n = 50
+    check = GyroUnitCheck("far.csv", "deg/s")
+    worker = threading.Thread(target=check.add, args=(4e17 + 64.0 * np.arange(n), np.ones(n),
+                                                      np.mod(20.0 * np.arange(n), 360.0)), daemon=True)
+    worker.start()
+    worker.join(20.0)
+    assert not worker.is_alive()
+    assert len(check._ratios) == n - 1

@@ -94,7 +94,9 @@ class GyroUnitCheck:
         if self._start is None:
             self._start = (float(tc[0]), float(unwrapped[0]), float(ic[0]))
         while True:
-            j = int(np.searchsorted(tc, self._start[0] + WINDOW_S, "left"))
+            # a later sample even where the window's length is below the times' resolution
+            j = max(int(np.searchsorted(tc, self._start[0] + WINDOW_S, "left")),
+                    int(np.searchsorted(tc, self._start[0], "right")))
             if j >= tc.size:
                 return
             d_compass, d_gyro = unwrapped[j] - self._start[1], ic[j] - self._start[2]

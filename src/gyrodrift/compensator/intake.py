@@ -218,14 +218,15 @@ class Intake:
         accelerometer (the compass when both are given; ``acc`` the x/y axes' tilt);
         ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``."""
         heading, norm, dip = self.compass(t, g, heading, mag, acc, gyro_xy)
-        self.units.add(t, g, heading)
         if not self._xy_decided:
             self._decide_xy(gyro_xy is not None and acc is not None)
         if self.xy is not None:
             gxy = np.asarray(gyro_xy, dtype=float)
             self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
                                 np.asarray(acc, dtype=float)))
-        return self.with_xy(self.engine.feed(t, g, T, heading, norm, dip, buffers))
+        cols = self.engine.feed(t, g, T, heading, norm, dip, buffers)
+        self.units.add(t, g, heading)  # on times the engine took (finite, increasing)
+        return self.with_xy(cols)
 
     def flush(self) -> dict | None:
         """The rows still held when the log ends inside the init window (:meth:`ChunkEngine.flush`)."""
