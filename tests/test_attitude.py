@@ -122,7 +122,7 @@ def test_the_compensator_uses_the_gyro_tilt_with_gyro_x_y_and_says_so():
     without = gyrodrift.compensate(log.drop(columns=["gyro_x", "gyro_y"]), CompensatorConfig(tilt="gyro"))
     assert np.array_equal(without["compass_heading"], accel["compass_heading"], equal_nan=True)
     assert any("no gyro_x, gyro_y" in n for n in without.attrs["notes"])
-    with pytest.raises(gyrodrift.errors.ConfigError, match="tilt must be"):
+    with pytest.raises(gyrodrift.errors.ConfigError, match="tilt = .* must be one of"):
         CompensatorConfig(tilt="mag")
 
 

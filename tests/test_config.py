@@ -42,9 +42,9 @@ def test_toml_fusion_and_adaptive_tables(tmp_path):
         ("zaru = false\n", r"\[adaptive\]: unknown setting\(s\) zaru; known: .*turn_walks"),
         ("q_sd = [1e-4, 0.05, 60.0]\n", r"\[adaptive\]: unknown setting\(s\) q_sd"),
         ('clean_s = "long"\n', r"\[adaptive\]: clean_s = \"long\" is refused: give a number, e.g. clean_s = 3600.0"),
-        ("turn_walks = [0.01, 0.1]\n", r"\[adaptive\]: .*turn_walks must be 4 positive numbers"),
+        ("turn_walks = [0.01, 0.1]\n", r"\[adaptive\]: .*turn_walks = .* must be a list of 4 numbers"),
         ('turn_shares = [0.3, "x", 0.2, 0.1]\n', r"\[adaptive\]: turn_shares = .* is refused: give a list of numbers"),
-        ("p_still0 = 1.5\n", r"\[adaptive\]: .*p_still0 must be between 0 and 1"),
+        ("p_still0 = 1.5\n", r"\[adaptive\]: .*p_still0 = 1.5 must be between 0 and 1"),
         ("drift_walk = 1e300\n", r"\[adaptive\]: drift_walk = 1e\+300 is outside the plausible range"),
         ("heading_sd0 = 1e300\n", r"\[adaptive\]: heading_sd0 = 1e\+300 is outside the plausible range"),
     ],
@@ -96,7 +96,7 @@ def test_fused_heading_settings_are_the_tolerant_ones_unless_given():
         assert replace(CompensatorConfig(), estimator=name).fusion_settings == FusionConfig.tolerant(), name
     explicit = FusionConfig(nis_gate=4.0)
     assert CompensatorConfig(estimator="stkf", fusion=explicit).fusion_settings is explicit
-    with pytest.raises(ConfigError, match="fusion must be a FusionConfig"):
+    with pytest.raises(ConfigError, match="fusion = a table is refused: give a FusionConfig"):
         CompensatorConfig(fusion={"nis_gate": 4.0})
 
 

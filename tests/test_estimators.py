@@ -153,7 +153,7 @@ def test_registry():
 @pytest.mark.parametrize(
     "kwargs, match",
     [({"fading": 0.99}, "fading"), ({"p0_sd": (1.0, 0.0, 1.0)}, "p0_sd"), ({"q_sd": (1.0, 2.0)}, "q_sd"),
-     ({"q_sd": (1e-4, -0.05, 1e-3)}, "q_sd must be >= 0")],
+     ({"q_sd": (1e-4, -0.05, 1e-3)}, r"q_sd = .*: -0.05 must be >= 0")],
 )
 def test_config_validation(kwargs, match):
     with pytest.raises(ConfigError, match=match):

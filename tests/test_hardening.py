@@ -104,7 +104,7 @@ def test_utf8_bom_is_accepted(tmp_path):
         ("init_s = 1979-05-27\n", ["init_s", "number"]),
         ("estimator = 3\n", ["estimator", "text"]),
         ("[adaptive]\nclean_s = \"1h\"\n", ["[adaptive]", "clean_s", "number"]),
-        ("[adaptive]\nturn_walks = [0.003, 0.03, 0.3]\n", ["[adaptive]", "turn_walks", "4 positive numbers"]),
+        ("[adaptive]\nturn_walks = [0.003, 0.03, 0.3]\n", ["[adaptive]", "turn_walks", "list of 4 numbers"]),
         ("[adaptive]\nturn_walks = 0.3\n", ["[adaptive]", "turn_walks", "list of numbers"]),
         ("[adaptive]\nzaru = true\n", ["[adaptive]", "zaru", "unknown"]),
         ("[fusion]\nmagnetic_gates = \"yes\"\n", ["[fusion]", "magnetic_gates", "true or false"]),

@@ -156,7 +156,7 @@ def test_declination_puts_the_headings_in_true_north(log, tmp_path, capsys):
     assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--declination", "7"]) == 0
     assert "compensated RMS 0." in capsys.readouterr().out
     assert main(["compensate", str(path), "-o", str(tmp_path / "out.csv"), "--declination", "200"]) == 2
-    assert "declination_deg must be" in capsys.readouterr().err
+    assert "declination_deg = 200.0 must be within -180 to 180" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------------------- held compass

@@ -248,7 +248,7 @@ def test_kalman_settings_from_python_are_bounded_like_settings_files(kwargs, nam
 
 
 def test_estimator_parameters_from_python_are_bounded():
-    with pytest.raises(ConfigError, match=r"adaptive setting drift_walk must be a finite number"):
+    with pytest.raises(ConfigError, match=r"drift_walk = nan is refused: give a number \(not nan\)"):
         AdaptiveConfig(drift_walk=float("nan"))
     with pytest.raises(ConfigError, match=r"fixed parameters .*\|c\| <= 50"):
         FixedParams((0.0, 0.0, 1e308))

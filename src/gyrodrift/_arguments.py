@@ -17,7 +17,6 @@ import numpy as np
 import pandas as pd
 
 from gyrodrift.errors import ArgumentTypeError, LogFormatError
-from gyrodrift.settings_bounds import check_settings
 
 __all__ = ["shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
            "column", "rows", "check_log", "frame_column"]
@@ -40,8 +39,8 @@ def check_source(source) -> str:
 
 
 def check_config(config):
-    """``config`` as a :class:`~gyrodrift.compensator.CompensatorConfig` (None: the defaults),
-    its settings within their range (:func:`gyrodrift.settings_bounds.check_settings`)."""
+    """``config`` as a :class:`~gyrodrift.compensator.CompensatorConfig` (None: the defaults;
+    its settings were checked when it was made, :mod:`gyrodrift.settings`)."""
     from gyrodrift.compensator.config import CompensatorConfig
 
     if config is None:
@@ -51,7 +50,6 @@ def check_config(config):
             f"config must be a CompensatorConfig (gyrodrift.config.load_config reads one from a TOML file) or None, "
             f"got {shown(config)}"
         )
-    check_settings(config)  # every number within the range arithmetic takes
     return config
 
 

@@ -50,8 +50,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gyrodrift.errors import ConfigError
 from gyrodrift.kernels import fusion as fusion_kernel
+from gyrodrift.settings import check, setting
 
 __all__ = ["FusionConfig", "FusionState", "fuse_rows"]
 
@@ -97,11 +97,11 @@ class FusionConfig:
     soak seeds, (A) with ``stkf`` 2.47°.
     """
 
-    heading_sigma_deg: float = 2.0
-    bias_corr_s: float = 30.0
-    nis_gate: float = 9.0
-    relock_s: float = math.inf
-    consistent_s: float = 300.0
+    heading_sigma_deg: float = setting(2.0, "deg", gt=0.0)
+    bias_corr_s: float = setting(30.0, "s", gt=0.0)
+    nis_gate: float = setting(9.0, gt=0.0)
+    relock_s: float = setting(math.inf, "s", gt=0.0, inf=True)
+    consistent_s: float = setting(300.0, "s", gt=0.0, inf=True)
     magnetic_gates: bool = True
 
     @classmethod
@@ -115,13 +115,7 @@ class FusionConfig:
         return cls(**settings)
 
     def __post_init__(self):
-        for name in ("heading_sigma_deg", "bias_corr_s", "nis_gate", "relock_s", "consistent_s"):
-            v = getattr(self, name)
-            finite = math.isfinite(v) if isinstance(v, (int, float)) else False
-            if not (isinstance(v, (int, float)) and v > 0 and (finite or name in ("relock_s", "consistent_s"))):
-                raise ConfigError(f"fusion setting {name} must be a positive number, got {v!r}")
-        if not isinstance(self.magnetic_gates, bool):
-            raise ConfigError(f"fusion setting magnetic_gates must be true or false, got {self.magnetic_gates!r}")
+        check(self)
 
     def vector(self, gyro_noise_dps_rthz: float) -> np.ndarray:
         """The settings as the kernel takes them: [σ_c², N², τ_b, nis_gate, relock_s, consistent_s]."""

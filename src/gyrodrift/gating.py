@@ -41,11 +41,10 @@ reason          meaning
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
-from gyrodrift.errors import ConfigError
 from gyrodrift.kernels.layout import REASON_NAMES
+from gyrodrift.settings import check, setting
 
 __all__ = [
     "GateConfig",
@@ -101,22 +100,17 @@ class GateConfig:
         interval is accepted.
     """
 
-    turn_rate_dps: float = 2.0
-    turn_window_s: float = 1.0
-    interference_deg: float = 3.0
-    field_norm_tol: float = 0.1
-    dip_tol_deg: float = 5.0
-    compass_max_age_s: float = 2.0
-    max_gap_s: float = 1.0
-    still_std_dps: float = 1.0
-    still_heading_deg: float = 2.0
-    relock_intervals: int = 3
+    turn_rate_dps: float = setting(2.0, "deg/s", gt=0.0, flag="--turn-rate-dps", help="turning threshold")
+    turn_window_s: float = setting(1.0, "s", gt=0.0)
+    interference_deg: float = setting(3.0, "deg", gt=0.0, flag="--interference-deg",
+                                      help="largest compass-vs-gyro disagreement per interval")
+    field_norm_tol: float = setting(0.1, gt=0.0)
+    dip_tol_deg: float = setting(5.0, "deg", gt=0.0)
+    compass_max_age_s: float = setting(2.0, "s", gt=0.0)
+    max_gap_s: float = setting(1.0, "s", gt=0.0)
+    still_std_dps: float = setting(1.0, "deg/s", gt=0.0)
+    still_heading_deg: float = setting(2.0, "deg", gt=0.0)
+    relock_intervals: int = setting(3, ge=0)
 
     def __post_init__(self):
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if f.name == "relock_intervals":
-                if not (isinstance(v, int) and v >= 0):
-                    raise ConfigError(f"gate setting relock_intervals must be a whole number >= 0, got {v!r}")
-            elif not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ConfigError(f"gate setting {f.name} must be a positive number, got {v!r}")
+        check(self)

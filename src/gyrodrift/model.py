@@ -30,12 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gyrodrift.settings import SettingError, check, setting
+
 __all__ = ["TempRateConfig", "temp_rate", "drift", "regressors", "CLOCK_UNIT_S", "ElapsedClock", "temperature_is_flat"]
 
 #: Seconds per unit of the clock regressor (:class:`ElapsedClock`): ``a`` is then the
 #: drift's change per 300 s, deg/s. Chosen on the ``no-temp`` Monte Carlo family, seeds
 #: 0–3 (180, 300, 600, 1200 and 3600 s tried; ``docs/results.md``).
 CLOCK_UNIT_S = 300.0
+#: Largest number of temperature bins in the T' window (``window_s / bin_s``).
+MAX_TEMP_RATE_BINS = 100_000
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -50,8 +54,8 @@ class TempRateConfig:
         Temperature averaging bin, s.
     """
 
-    window_s: float = 60.0
-    bin_s: float = 1.0
+    window_s: float = setting(60.0, "s", gt=0.0)
+    bin_s: float = setting(1.0, "s", gt=0.0)
 
     @property
     def window_bins(self) -> int:
@@ -59,12 +63,14 @@ class TempRateConfig:
         return int(round(self.window_s / self.bin_s))
 
     def __post_init__(self):
-        if not (self.bin_s > 0 and math.isfinite(self.bin_s)):
-            raise ValueError(f"bin_s must be a positive number of seconds, got {self.bin_s!r}")
-        if not (self.window_s >= 2 * self.bin_s and math.isfinite(self.window_s)):
-            raise ValueError(
-                f"window_s must be at least two bins ({2 * self.bin_s} s), got {self.window_s!r}"
-            )
+        check(self)
+
+    def _check_together(self):
+        if not self.window_s >= 2 * self.bin_s:
+            raise SettingError(f"window_s = {self.window_s!r} must be at least two bins ({2 * self.bin_s:g} s)")
+        if self.window_s / self.bin_s > MAX_TEMP_RATE_BINS:
+            raise SettingError(f"window_s / bin_s = {self.window_s / self.bin_s:.3g} bins is beyond "
+                               f"{MAX_TEMP_RATE_BINS:,}; lengthen bin_s or shorten window_s")
 
 
 def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndarray:

@@ -15,7 +15,8 @@ The correlation between a and c, which a flat-temperature run leaves strong, is 
 Checks
 ------
 A profile is read as UTF-8 bytes (:func:`gyrodrift.config.read_utf8`) and checked
-field by field, on loading and before saving; anything else is a
+field by field, on loading and before saving, by the validator of every setting
+(:func:`gyrodrift.settings.check`: :class:`Profile` declares each field's type and bounds); anything else is a
 :class:`~gyrodrift.errors.ConfigError` of one line naming the file and the field:
 
 * exactly the fields :meth:`Profile.to_json` writes, each of its JSON type (``true``
@@ -56,10 +57,11 @@ import numpy as np
 from gyrodrift import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.compensator import CompensatorConfig, compensate
-from gyrodrift.config import DRIFT_PARAM_BOUNDS, read_utf8
+from gyrodrift.config import read_utf8
 from gyrodrift.conventions import TEMP, TEMP_RANGE_C
 from gyrodrift.errors import ConfigError
 from gyrodrift.kernels.numeric import cap_covariance
+from gyrodrift.settings import DRIFT_PARAM_BOUNDS, SettingError, check, check_covariance, setting, show
 
 __all__ = [
     "FORMAT", "VERSION", "PARAM_BOUNDS", "TEMP_MARGIN_C", "Profile", "profile_from_run", "save_profile",
@@ -78,11 +80,7 @@ PARAM_BOUNDS = dict(zip(("a_dps_per_c", "b_deg", "c_dps"), DRIFT_PARAM_BOUNDS))
 TEMP_MARGIN_C = 2.0
 _FIELDS = ("format", "version", "software", "created", "estimator", "params", "cov", "temp_range_c", "samples",
            "updates")
-_LONGEST_TEXT = 200  # characters of software, created and estimator
-_SYMMETRY_RTOL = 1e-6
-# smallest eigenvalue of the correlation matrix of a positive definite covariance: below,
-# a correlation is 1 to within rounding
-_MIN_CORR_EIGENVALUE = 1e-12
+_NAMES = tuple(PARAM_BOUNDS)
 _INT64_MAX = 2**63 - 1
 
 
@@ -107,14 +105,30 @@ class Profile:
         ``gyrodrift X.Y.Z``.
     """
 
-    params: tuple[float, float, float]
-    cov: tuple[tuple[float, float, float], ...]
-    temp_range_c: tuple[float, float]
-    samples: int
-    updates: int
-    estimator: str
-    created: str
-    software: str
+    params: tuple[float, float, float] = setting(drift=_NAMES, measured=True)
+    cov: tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]] = \
+        setting(measured=True)
+    temp_range_c: tuple[float, float] = setting(unit="degC", ge=TEMP_RANGE_C[0], le=TEMP_RANGE_C[1], measured=True)
+    samples: int = setting(ge=0, whole_max=_INT64_MAX)
+    updates: int = setting(ge=0, whole_max=_INT64_MAX)
+    estimator: str = setting(longest=200)
+    created: str = setting(longest=200)
+    software: str = setting(longest=200)
+
+    def _check_together(self) -> None:
+        """The checks of the module notes that involve more than one value (:func:`check` runs them)."""
+        check_covariance("cov", self.cov, _NAMES)
+        lo, hi = self.temp_range_c
+        if not lo <= hi:
+            raise SettingError(f"temp_range_c = [{lo:g}, {hi:g}] must be [lowest, highest]")
+        if self.updates > self.samples:
+            raise SettingError(f"updates = {self.updates} is more than samples = {self.samples}")
+        if not self.estimator:
+            raise SettingError('estimator = "" must name the estimator')
+        try:
+            _dt.datetime.fromisoformat(self.created)
+        except ValueError:
+            raise SettingError(f"created = {show(self.created)} is not an ISO 8601 date and time") from None
 
     def to_json(self) -> dict:
         return {
@@ -192,10 +206,6 @@ def save_profile(profile: Profile, path) -> None:
     write_bytes_atomic(path, (json.dumps(checked.to_json(), indent=2) + "\n").encode("utf-8"))
 
 
-class _Refused(Exception):
-    """A profile field fails a check; the message names the field."""
-
-
 def _is_number(v) -> bool:
     return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
 
@@ -204,133 +214,41 @@ def _is_count(v) -> bool:
     return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
 
 
-def _show(v) -> str:
-    """A JSON value for a message: short, one line."""
-    if _is_count(v) and abs(int(v)) >= 10**40:
-        return "a very long integer"
-    try:
-        text = json.dumps(v.item() if isinstance(v, np.generic) else v, ensure_ascii=False, allow_nan=True)
-    except (TypeError, ValueError):
-        text = type(v).__name__
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _text(data: dict, name: str, *, non_empty: bool = False) -> str:
-    v = data[name]
-    if not isinstance(v, str) or len(v) > _LONGEST_TEXT or (non_empty and not v):
-        need = "a non-empty string" if non_empty else "a string"
-        raise _Refused(f"{name} = {_show(v)} must be {need} of at most {_LONGEST_TEXT} characters")
-    return v
-
-
-def _count(data: dict, name: str) -> int:
-    v = data[name]
-    if not _is_count(v) or not 0 <= v <= _INT64_MAX:
-        raise _Refused(f"{name} = {_show(v)} must be a whole number >= 0")
-    return int(v)
-
-
-def _numbers(v, n: int, name: str) -> list[float]:
-    """``v`` as ``n`` finite floats (JSON array), else :class:`_Refused` naming ``name``."""
-    if not isinstance(v, (list, tuple)) or len(v) != n or not all(_is_number(x) for x in v):
-        raise _Refused(f"{name} = {_show(v)} must be a list of {n} numbers")
-    try:
-        out = [float(x) for x in v]
-    except OverflowError:
-        out = [math.inf]
-    if not all(math.isfinite(x) for x in out):
-        raise _Refused(f"{name} = {_show(v)} must hold finite numbers")
-    return out
-
-
-def _params(v) -> tuple[float, float, float]:
-    if not isinstance(v, dict):
-        raise _Refused(f"params = {_show(v)} must be an object with {', '.join(PARAM_BOUNDS)}")
-    names = list(PARAM_BOUNDS)
-    odd = sorted((k for k in v if k not in PARAM_BOUNDS), key=repr)
-    if odd:
-        raise _Refused(f"params has unknown field(s) {', '.join(map(repr, odd))}; known: {', '.join(names)}")
-    missing = [k for k in names if k not in v]
-    if missing:
-        raise _Refused(f"params lacks {', '.join(missing)}")
-    out = []
-    for name, bound in PARAM_BOUNDS.items():
-        x = v[name]
-        if not _is_number(x):
-            raise _Refused(f"params.{name} = {_show(x)} must be a number")
-        try:
-            x = float(x)
-        except OverflowError:
-            x = math.inf
-        if not math.isfinite(x):
-            raise _Refused(f"params.{name} = {_show(v[name])} must be a finite number")
-        if abs(x) > bound:
-            raise _Refused(f"params.{name} = {x:g} is outside the plausible range |{name}| <= {bound:g}")
-        out.append(x)
-    return tuple(out)
-
-
-def _covariance(v) -> tuple[tuple[float, float, float], ...]:
-    if not isinstance(v, (list, tuple)) or len(v) != 3:
-        raise _Refused(f"cov = {_show(v)} must be a 3x3 matrix (a list of 3 lists of 3 numbers)")
-    rows = [_numbers(row, 3, f"cov[{i}]") for i, row in enumerate(v)]
-    cov = np.array(rows, dtype=float)
-    not_pd = "cov is not positive definite (a variance is zero or negative, or a correlation is 1 or more)"
-    var = np.diag(cov)
-    if not np.all(var > 0):
-        raise _Refused(not_pd)
-    sd = np.sqrt(var)
-    for (name, bound), s in zip(PARAM_BOUNDS.items(), sd):
-        if s > bound:
-            raise _Refused(f"cov gives {name} a standard deviation of {s:g}, above the plausible {bound:g}")
-    if not np.all(np.abs(cov - cov.T) <= _SYMMETRY_RTOL * np.outer(sd, sd)):
-        raise _Refused("cov is not symmetric")
-    corr = 0.5 * (cov + cov.T) / np.outer(sd, sd)  # scale-free: variances of 1e-12 and 1e3 side by side
-    if not np.linalg.eigvalsh(corr).min() > _MIN_CORR_EIGENVALUE:
-        raise _Refused(not_pd)
-    return tuple(map(tuple, rows))
-
-
-def _temp_range(v) -> tuple[float, float]:
-    lo, hi = _numbers(v, 2, "temp_range_c")
-    t_min, t_max = TEMP_RANGE_C
-    if not lo <= hi:
-        raise _Refused(f"temp_range_c = [{lo:g}, {hi:g}] must be [lowest, highest]")
-    if lo < t_min or hi > t_max:
-        raise _Refused(f"temp_range_c = [{lo:g}, {hi:g}] is outside the plausible {t_min:g} to {t_max:g} degC")
-    return lo, hi
-
-
 def _from_json(data, path, advice: str) -> Profile:
     """The :class:`Profile` of parsed JSON after every check (module notes); a
     :class:`ConfigError` ``"{path}: not a valid gyrodrift device profile: ..."`` else."""
     try:
         if not isinstance(data, dict):
-            raise _Refused(f"the file holds {_show(data)}, not a JSON object")
+            raise SettingError(f"the file holds {show(data)}, not a JSON object")
         if data.get("format") != FORMAT or not isinstance(data.get("format"), str):
-            raise _Refused(f"'format' is not {FORMAT!r}")
+            raise SettingError(f"'format' is not {FORMAT!r}")
         version = data.get("version")
         if not _is_count(version) or version != VERSION:
-            raise _Refused(f"version {_show(version)} is not supported (this gyrodrift reads version {VERSION})")
+            raise SettingError(f"version {show(version)} is not supported (this gyrodrift reads version {VERSION})")
         odd = sorted((k for k in data if k not in _FIELDS), key=repr)
         if odd:
-            raise _Refused(f"unknown field(s) {', '.join(map(repr, odd))}")
+            raise SettingError(f"unknown field(s) {', '.join(map(repr, odd))}")
         missing = [k for k in _FIELDS if k not in data]
         if missing:
-            raise _Refused(f"missing field(s) {', '.join(missing)}")
-        software, estimator = _text(data, "software"), _text(data, "estimator", non_empty=True)
-        created = _text(data, "created")
-        try:
-            _dt.datetime.fromisoformat(created)
-        except ValueError:
-            raise _Refused(f"created = {_show(created)} is not an ISO 8601 date and time") from None
-        params, cov, temp_range = _params(data["params"]), _covariance(data["cov"]), _temp_range(data["temp_range_c"])
-        samples, updates = _count(data, "samples"), _count(data, "updates")
-        if updates > samples:
-            raise _Refused(f"updates = {updates} is more than samples = {samples}")
-    except _Refused as why:
-        raise _bad(path, str(why), advice) from None
-    return Profile(params, cov, temp_range, samples, updates, estimator, created, software)
+            raise SettingError(f"missing field(s) {', '.join(missing)}")
+        params = data["params"]
+        if not isinstance(params, dict):
+            raise SettingError(f"params = {show(params)} must be an object with {', '.join(_NAMES)}")
+        odd = sorted((k for k in params if k not in PARAM_BOUNDS), key=repr)
+        if odd:
+            raise SettingError(f"params has unknown field(s) {', '.join(map(repr, odd))}; known: {', '.join(_NAMES)}")
+        missing = [k for k in _NAMES if k not in params]
+        if missing:
+            raise SettingError(f"params lacks {', '.join(missing)}")
+        for name in _NAMES:  # each named, as in the file (the validator names the element of a triple)
+            if not _is_number(params[name]) or not math.isfinite(params[name]):
+                raise SettingError(f"params.{name} = {show(params[name])} must be a finite number")
+        profile = Profile(tuple(params[k] for k in _NAMES), *(data[k] for k in _FIELDS[6:]), data["estimator"],
+                          data["created"], data["software"])
+        check(profile)  # the validator of every setting (gyrodrift.settings): types, bounds, _check_together
+    except SettingError as why:
+        raise _bad(path, why.text, advice) from None
+    return profile
 
 
 def _bad(path, what: str, advice: str = "correct it or save a new one with --save-profile") -> ConfigError:

@@ -118,6 +118,7 @@ from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
 from gyrodrift.kernels import layout as L
 from gyrodrift.kernels import tilt
+from gyrodrift.settings import check, setting
 
 __all__ = [
     "TriadConfig",
@@ -136,6 +137,14 @@ TRIAD_COLUMNS = ("rate_x", "rate_y", "bias_x", "bias_y", "tilt_gated")
 #: Reasons an x/y interval is refused, in the order the gates are tried
 #: (:attr:`TriadCompensator.reasons` counts them).
 TRIAD_REASONS = L.TILT_REASON_NAMES
+
+
+def _interval_estimators() -> tuple:
+    """The estimators of the x and y axes: those that learn from interval measurements (the
+    ``adaptive`` model, heading and compass, is the heading axis's)."""
+    from gyrodrift.estimators import ESTIMATORS
+
+    return tuple(sorted(n for n in ESTIMATORS if n != "adaptive"))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -169,31 +178,18 @@ class TriadConfig:
         heading axis's.
     """
 
-    edge_s: float = 1.0
-    acc_unit: str = "auto"
-    acc_norm_tol_g: float = 0.03
-    acc_spread_g: float = 0.02
-    acc_noise_g: float = 0.003
-    max_tilt_deg: float = 30.0
-    residual_deg: float = 0.5
-    residual_k: float = 5.0
-    estimator: str = "stkf"
+    edge_s: float = setting(1.0, "s", gt=0.0)
+    acc_unit: str = setting("auto", choices=("auto", "g", "m/s2"))
+    acc_norm_tol_g: float = setting(0.03, "g", gt=0.0)
+    acc_spread_g: float = setting(0.02, "g", gt=0.0)
+    acc_noise_g: float = setting(0.003, "g", gt=0.0)
+    max_tilt_deg: float = setting(30.0, "deg", gt=0.0, lt=80.0)
+    residual_deg: float = setting(0.5, "deg", gt=0.0)
+    residual_k: float = setting(5.0, gt=0.0)
+    estimator: str = setting("stkf", choices=_interval_estimators)
 
     def __post_init__(self):
-        for name in ("edge_s", "acc_norm_tol_g", "acc_spread_g", "acc_noise_g", "residual_deg", "residual_k"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ConfigError(f"triad setting {name} must be a positive number, got {v!r}")
-        if not (isinstance(self.max_tilt_deg, (int, float)) and 0 < self.max_tilt_deg < 80):
-            raise ConfigError(f"triad setting max_tilt_deg must be in (0, 80) deg, got {self.max_tilt_deg!r}")
-        if self.acc_unit not in ("auto", "g", "m/s2"):
-            raise ConfigError(f"triad setting acc_unit must be 'auto', 'g' or 'm/s2', got {self.acc_unit!r}")
-        from gyrodrift.estimators import ESTIMATORS
-
-        interval = sorted(n for n in ESTIMATORS if n != "adaptive")  # the model is the heading axis's
-        if self.estimator not in interval:
-            raise ConfigError(f"triad setting estimator must be one of {', '.join(interval)} (the x/y axes "
-                              f"learn from interval measurements), got {self.estimator!r}")
+        check(self)
 
 
 def tilt_angles(acc_g):

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
-from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, AdaptiveConfig, KalmanConfig, make_estimator
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
 from gyrodrift.model import TempRateConfig, temperature_is_flat
+from gyrodrift.settings import SettingError, check, setting, show
 
 __all__ = ["CompensatorConfig", "build_estimator", "uses_clock", "clock_config", "TEMPERATURE_MODES"]
 
@@ -80,21 +79,29 @@ class CompensatorConfig:
         without temperature).
     """
 
-    update_interval_s: float = 10.0
-    init_s: float = 30.0
-    stack_depth: int = 3
-    compass_sigma_deg: float = 0.5
-    gyro_noise_dps_rthz: float = 0.04
-    estimator: str = "adaptive"
-    kalman: KalmanConfig = field(default_factory=KalmanConfig)
-    temp_rate: TempRateConfig = field(default_factory=TempRateConfig)
-    gate: GateConfig = field(default_factory=GateConfig)
+    update_interval_s: float = setting(10.0, "s", gt=0.0, flag="--update-interval-s",
+                                       help="filter update interval")
+    init_s: float = setting(30.0, "s", gt=0.0, flag="--init-s", help="initialisation window at the start")
+    stack_depth: int = setting(3, ge=1, whole_max=1000, flag="--stack-depth", help="measurements stacked per update")
+    compass_sigma_deg: float = setting(0.5, "deg", gt=0.0, flag="--compass-sigma-deg", help="compass noise")
+    gyro_noise_dps_rthz: float = setting(0.04, "deg/s/√Hz", gt=0.0, least=1e-6)
+    estimator: str = setting("adaptive", choices=lambda: tuple(sorted(ESTIMATORS)), flag="--estimator",
+                             help="drift estimator")
+    kalman: KalmanConfig = setting(factory=KalmanConfig)
+    temp_rate: TempRateConfig = setting(factory=TempRateConfig)
+    gate: GateConfig = setting(factory=GateConfig)
     fusion: FusionConfig | None = None
-    adaptive: AdaptiveConfig = field(default_factory=AdaptiveConfig)
-    declination_deg: float = 0.0
-    tilt: str = "accel"
+    adaptive: AdaptiveConfig = setting(factory=AdaptiveConfig)
+    declination_deg: float = setting(0.0, "deg", ge=-180.0, le=180.0, flag="--declination",
+                                     help="magnetic declination, east positive: added to the compass heading, so "
+                                     "that compass_heading, heading and heading_fused are in true north like "
+                                     "ref_heading (0: magnetic north)")
+    tilt: str = setting("accel", choices=("gyro", "accel"))
     mag_calibration: bool = False
-    temperature: str = "auto"
+    temperature: str = setting("auto", choices=TEMPERATURE_MODES, flag="--temperature",
+                               help="what T of the drift model is: auto, the temperature column, or the "
+                               "elapsed time when that never changes over the log; measured: always the column; "
+                               "clock: always the elapsed time (a stream without temperature)")
 
     @property
     def fusion_settings(self) -> FusionConfig:
@@ -107,34 +114,16 @@ class CompensatorConfig:
         return FusionConfig.tolerant()
 
     def __post_init__(self):
-        for name in ("update_interval_s", "init_s", "compass_sigma_deg", "gyro_noise_dps_rthz"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ConfigError(f"{name} must be a positive number, got {v!r}")
-        d = self.declination_deg
-        if isinstance(d, bool) or not (isinstance(d, (int, float)) and math.isfinite(d) and -180.0 <= d <= 180.0):
-            raise ConfigError(f"declination_deg must be a number of degrees in -180..180 (east positive), got {d!r}")
-        if self.tilt not in ("gyro", "accel"):
-            raise ConfigError(f"tilt must be 'gyro' or 'accel', got {self.tilt!r}")
-        if self.temperature not in TEMPERATURE_MODES:
-            raise ConfigError(f"temperature must be one of {', '.join(map(repr, TEMPERATURE_MODES))}, "
-                              f"got {self.temperature!r}")
-        if not (isinstance(self.stack_depth, int) and self.stack_depth >= 1):
-            raise ConfigError(f"stack_depth must be a whole number >= 1, got {self.stack_depth!r}")
-        if self.init_s < self.stack_depth * 0.1:
-            raise ConfigError(f"init_s={self.init_s} s is too short for {self.stack_depth} sub-windows")
-        if not isinstance(self.adaptive, AdaptiveConfig):
-            raise ConfigError(f"adaptive must be an AdaptiveConfig, got {type(self.adaptive).__name__}")
-        if self.fusion is not None and not isinstance(self.fusion, FusionConfig):
-            raise ConfigError(f"fusion must be a FusionConfig or None, got {type(self.fusion).__name__}")
-        try:
-            build_estimator(self)  # validates the name
-        except TypeError:
-            raise ConfigError(
-                f"estimator {self.estimator!r} cannot be built from settings alone; "
-                "pass an instance as compensate(..., estimator=...)"
-            ) from None
+        check(self)
 
+    def _check_together(self):
+        if self.init_s < self.stack_depth * 0.1:
+            raise SettingError(f"init_s = {self.init_s!r} s is too short for {self.stack_depth} sub-windows")
+        try:
+            build_estimator(self)
+        except TypeError:
+            raise SettingError(f"estimator = {show(self.estimator)} cannot be built from settings alone; pass an "
+                               "instance as compensate(..., estimator=...)") from None
 
 
 def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:

@@ -11,7 +11,7 @@ prior, and the paper's absolute ``[a, b, c]`` and their covariance for profiles 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -20,6 +20,7 @@ from gyrodrift.errors import ConfigError
 from gyrodrift.estimators.base import LinearDrift, Observation, register
 from gyrodrift.estimators.kalman import KalmanConfig
 from gyrodrift.kernels import evidence as ev
+from gyrodrift.settings import SettingError, check, setting, show
 
 __all__ = ["AdaptiveConfig", "AdaptiveModel"]
 
@@ -98,65 +99,46 @@ class AdaptiveConfig:
         Standard deviation of the heading before any compass sample, deg.
     """
 
-    epoch_s: float = 1.0
-    clean_s: float = 3600.0
-    disturbed_s: float = 300.0
-    still_s: float = 300.0
-    moving_s: float = 300.0
-    slope_walk: float = 0.003
-    rate_walk: float = 0.01
-    drift_walk: float = 2e-4
-    drift_walk_temp: float = 0.02
-    drift_rate_dps2: float = 0.0003
-    drift_rate_s: float = 300.0
-    drift_jump_dps: float = 0.0
-    drift_jump_s: float = 600.0
-    compass_error_deg: float = 2.0
-    compass_error_s: float = 3600.0
-    disturbance_step_deg: float = 30.0
-    disturbance_walk: float = 1.0
-    disturbance_s: float = 1800.0
-    turn_error_s: float = 0.5
-    deviation_span_deg: float = 90.0
-    turn_walks: tuple[float, ...] = (0.003, 0.03, 0.3, 3.0)
-    turn_shares: tuple[float, ...] = (0.3, 0.3, 0.2, 0.15)
-    rate_any_dps: float = 100.0
-    angular_accel_dps2: float = 10.0
-    gap_turn_dps: float = 1.0
-    still_walk: float = 0.001
-    gap_factor: float = 20.0
-    field_norm_sd: float = 0.03
-    field_dip_deg: float = 2.0
-    noise_memory_s: float = 600.0
-    p_clean0: float = 0.9
-    p_still0: float = 0.5
-    heading_sd0: float = 100.0
+    epoch_s: float = setting(1.0, "s", gt=0.0)
+    clean_s: float = setting(3600.0, "s", gt=0.0)
+    disturbed_s: float = setting(300.0, "s", gt=0.0)
+    still_s: float = setting(300.0, "s", gt=0.0)
+    moving_s: float = setting(300.0, "s", gt=0.0)
+    slope_walk: float = setting(0.003, "deg/s/degC per √degC", ge=0.0, most=1.0)
+    rate_walk: float = setting(0.01, "deg/degC per √s", ge=0.0, most=1000.0)
+    drift_walk: float = setting(2e-4, "deg/s per √s", ge=0.0, most=50.0)
+    drift_walk_temp: float = setting(0.02, "deg/s per √degC", ge=0.0, most=50.0)
+    drift_rate_dps2: float = setting(0.0003, "deg/s²", ge=0.0, most=50.0)
+    drift_rate_s: float = setting(300.0, "s", gt=0.0)
+    drift_jump_dps: float = setting(0.0, "deg/s", ge=0.0, most=50.0)
+    drift_jump_s: float = setting(600.0, "s", gt=0.0)
+    compass_error_deg: float = setting(2.0, "deg", ge=0.0, most=360.0)
+    compass_error_s: float = setting(3600.0, "s", gt=0.0)
+    disturbance_step_deg: float = setting(30.0, "deg", gt=0.0, most=360.0)
+    disturbance_walk: float = setting(1.0, "deg per √s", ge=0.0, most=360.0)
+    disturbance_s: float = setting(1800.0, "s", gt=0.0)
+    turn_error_s: float = setting(0.5, "s", ge=0.0)
+    deviation_span_deg: float = setting(90.0, "deg", gt=0.0)
+    turn_walks: tuple[float, ...] = setting((0.003, 0.03, 0.3, 3.0), "deg/s per √s", gt=0.0, size=ev.N_RATE)
+    turn_shares: tuple[float, ...] = setting((0.3, 0.3, 0.2, 0.15), gt=0.0, size=ev.N_RATE)
+    rate_any_dps: float = setting(100.0, "deg/s", ge=0.0)
+    angular_accel_dps2: float = setting(10.0, "deg/s²", ge=0.0)
+    gap_turn_dps: float = setting(1.0, "deg/s", ge=0.0)
+    still_walk: float = setting(0.001, "deg per √s", ge=0.0, most=360.0)
+    gap_factor: float = setting(20.0, gt=0.0)
+    field_norm_sd: float = setting(0.03, gt=0.0)
+    field_dip_deg: float = setting(2.0, "deg", gt=0.0)
+    noise_memory_s: float = setting(600.0, "s", gt=0.0)
+    p_clean0: float = setting(0.9, gt=0.0, lt=1.0)
+    p_still0: float = setting(0.5, gt=0.0, lt=1.0)
+    heading_sd0: float = setting(100.0, "deg", gt=0.0, most=360.0)
 
     def __post_init__(self):
-        for name in ("turn_walks", "turn_shares"):
-            v = getattr(self, name)
-            try:
-                ok = len(v) == ev.N_RATE and all(math.isfinite(float(e)) and float(e) > 0 for e in v)
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise ConfigError(f"adaptive setting {name} must be {ev.N_RATE} positive numbers, got {v!r}")
+        check(self)
+
+    def _check_together(self):
         if not sum(self.turn_shares) < 1.0:
-            raise ConfigError(f"adaptive turn_shares must sum below 1 (the rest is any rate), got {self.turn_shares!r}")
-        for f in fields(self):
-            if f.name in ("turn_walks", "turn_shares"):
-                continue
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ConfigError(f"adaptive setting {f.name} must be a finite number >= 0, got {v!r}")
-        for name in ("epoch_s", "clean_s", "disturbed_s", "still_s", "moving_s", "compass_error_s", "gap_factor",
-                     "field_norm_sd", "field_dip_deg", "heading_sd0", "noise_memory_s", "drift_rate_s", "disturbance_step_deg", "disturbance_s", "deviation_span_deg",
-                     "drift_jump_s"):
-            if not getattr(self, name) > 0:
-                raise ConfigError(f"adaptive setting {name} must be > 0, got {getattr(self, name)!r}")
-        for name in ("p_clean0", "p_still0"):
-            if not 0.0 < getattr(self, name) < 1.0:
-                raise ConfigError(f"adaptive setting {name} must be between 0 and 1, got {getattr(self, name)!r}")
+            raise SettingError(f"turn_shares = {show(self.turn_shares)} must sum below 1 (the rest is any rate)")
 
     def settings_array(self, compass_sd_deg: float, gyro_noise_dps_rthz: float) -> np.ndarray:
         """The kernel's settings ``mc`` (:mod:`gyrodrift.kernels.evidence`)."""

@@ -16,27 +16,12 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-
-#: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
-#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
-#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`). Settings, profiles and
-#: fixed parameters beyond them are refused, from files and from Python alike.
-DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
-#: :data:`DRIFT_PARAM_BOUNDS` in words, for messages.
-DRIFT_BOUNDS_TEXT = "|a| <= {:g} deg/s/degC, |b| <= {:g} deg/degC, |c| <= {:g} deg/s".format(*DRIFT_PARAM_BOUNDS)
+from gyrodrift.settings import DRIFT_BOUNDS_TEXT, DRIFT_PARAM_BOUNDS
 
 
 def check_drift_triple(name: str, values) -> None:
     """Raise :class:`ConfigError` naming ``name`` unless ``values`` are three finite numbers
-    (a, b, c) within :data:`DRIFT_PARAM_BOUNDS`.
-
-    Parameters
-    ----------
-    name : str
-        The setting, for the message (``"x0"``, ``"fixed parameters"``).
-    values : sequence of 3 numbers
-        Drift-model values in the units of a, b, c (parameters or standard deviations).
-    """
+    (a, b, c) within :data:`~gyrodrift.settings.DRIFT_PARAM_BOUNDS`."""
     try:
         x = [float(v) for v in values]
     except (TypeError, ValueError, OverflowError):

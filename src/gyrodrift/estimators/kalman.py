@@ -18,11 +18,16 @@ from typing import ClassVar
 import numpy as np
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators.base import LinearDrift, Observation, check_drift_triple, register
+from gyrodrift.estimators.base import LinearDrift, Observation, register
 from gyrodrift.kernels import kalman as kernel
 from gyrodrift.kernels import layout as L
+from gyrodrift.settings import check, check_covariance, setting
 
 __all__ = ["KalmanConfig", "KernelFilter", "filter_arrays", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
+
+
+#: Names of the elements of a drift-model triple, for messages.
+_ABC = ("a", "b", "c")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -52,44 +57,20 @@ class KalmanConfig:
         profile keeps the strong a–c correlation); the cap stays ``max_sd``/``p0_sd``.
     """
 
-    fading: float = 1.2
-    x0: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    p0_sd: tuple[float, float, float] = (0.05, 5.0, 5.0)
-    q_sd: tuple[float, float, float] = (1e-4, 0.05, 1e-3)
-    max_sd: tuple[float, float, float] | None = None
-    p0_cov: tuple[tuple[float, float, float], ...] | None = None
+    fading: float = setting(1.2, ge=1.0, flag="--fading", help="fading factor s >= 1 of the STKF")
+    x0: tuple[float, float, float] = setting((0.0, 0.0, 0.0), drift=_ABC, measured=True)
+    p0_sd: tuple[float, float, float] = setting((0.05, 5.0, 5.0), drift=_ABC, gt=0.0)
+    q_sd: tuple[float, float, float] = setting((1e-4, 0.05, 1e-3), drift=_ABC, ge=0.0)
+    max_sd: tuple[float, float, float] | None = setting(None, gt=0.0)
+    p0_cov: tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]] | None = \
+        setting(None, measured=True)
 
     def __post_init__(self):
-        if not (isinstance(self.fading, (int, float)) and math.isfinite(self.fading) and self.fading >= 1.0):
-            raise ConfigError(f"fading factor s must be a number >= 1, got {self.fading!r}")
-        for name in ("x0", "p0_sd", "q_sd", "max_sd"):
-            v = getattr(self, name)
-            if v is None and name == "max_sd":
-                continue
-            try:
-                ok = len(v) == 3 and all(math.isfinite(float(e)) for e in v)
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise ConfigError(f"{name} must be three finite numbers (a, b, c), got {v!r}")
-        for name in ("p0_sd", "max_sd"):
-            v = getattr(self, name)
-            if v is not None and not all(float(e) > 0 for e in v):
-                raise ConfigError(f"{name} must be positive, got {v!r}")
-        if not all(float(e) >= 0 for e in self.q_sd):
-            raise ConfigError(f"q_sd must be >= 0, got {self.q_sd!r}")
-        for name in ("x0", "p0_sd", "q_sd"):
-            check_drift_triple(name, getattr(self, name))
+        check(self)
+
+    def _check_together(self):
         if self.p0_cov is not None:
-            try:
-                P = np.array(self.p0_cov, dtype=float)
-                ok = P.shape == (3, 3) and np.all(np.isfinite(P)) and np.allclose(P, P.T)
-                ok = ok and bool(np.all(np.linalg.eigvalsh(P) > 0))
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise ConfigError("p0_cov must be a symmetric positive definite 3x3 matrix")
-            check_drift_triple("p0_cov's standard deviations", np.sqrt(np.diag(P)))
+            check_covariance("p0_cov", self.p0_cov)
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Initial covariance P0, the variance cap (diagonal) and Q of these settings."""

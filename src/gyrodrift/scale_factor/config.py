@@ -2,29 +2,11 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-import numpy as np
-
-from gyrodrift.errors import ConfigError
+from gyrodrift.settings import check, setting
 
 __all__ = ["ScaleFactorConfig"]
-
-
-def _pair(name: str, value, *, positive: bool = False, nonneg: bool = False) -> tuple[float, float]:
-    try:
-        out = tuple(float(v) for v in value)
-        ok = len(out) == 2 and all(math.isfinite(v) for v in out)
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise ConfigError(f"ScaleFactorConfig.{name} must be two finite numbers (s0, s1), got {value!r}")
-    if positive and not all(v > 0 for v in out):
-        raise ConfigError(f"ScaleFactorConfig.{name} must be positive, got {value!r}")
-    if nonneg and not all(v >= 0 for v in out):
-        raise ConfigError(f"ScaleFactorConfig.{name} must be >= 0, got {value!r}")
-    return out
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,9 +49,11 @@ class ScaleFactorConfig:
     max_compass_gap_s : float
         Longest gap between compass samples inside a measurement span, s.
     compass_sigma_deg : float
-        Compass heading noise standard deviation, deg.
+        Compass heading noise standard deviation, deg. The same setting as
+        ``CompensatorConfig.compass_sigma_deg``: ``compensate --scale-factor`` takes the
+        compensator's (:meth:`with_sensor`).
     gyro_noise_dps_rthz : float
-        Gyro white-noise density (angle random walk), deg/s/√Hz.
+        Gyro white-noise density (angle random walk), deg/s/√Hz; the compensator's too.
     residual_drift_dps : float
         Typical drift left after the drift compensation, deg/s (enters R). Default
         0.02: the bias error of the drift compensator on the simulated heating run is
@@ -84,47 +68,31 @@ class ScaleFactorConfig:
         5 deg/s threshold takes 72 s.
     """
 
-    t_ref_c: float = 25.0
-    fading: float = 1.25
-    x0: tuple[float, float] = (1.0, 0.0)
-    p0_sd: tuple[float, float] = (0.05, 1.0e-3)
-    q_sd: tuple[float, float] = (1.0e-4, 2.0e-6)
-    turn_rate_dps: float = 5.0
-    turn_window_s: float = 1.0
-    guard_s: float = 2.0
-    still_s: float = 5.0
-    min_turn_deg: float = 90.0
-    max_sf_error: float = 0.2
-    min_compass_samples: int = 5
-    max_compass_gap_s: float = 1.0
-    compass_sigma_deg: float = 0.5
-    gyro_noise_dps_rthz: float = 0.04
-    residual_drift_dps: float = 0.02
-    fixed_turns: int = 3
-    max_turn_s: float = 300.0
+    t_ref_c: float = setting(25.0, "degC", measured=True)
+    fading: float = setting(1.25, ge=1.0)
+    x0: tuple[float, float] = setting((1.0, 0.0), measured=True)
+    p0_sd: tuple[float, float] = setting((0.05, 1.0e-3), gt=0.0)
+    q_sd: tuple[float, float] = setting((1.0e-4, 2.0e-6), ge=0.0)
+    turn_rate_dps: float = setting(5.0, "deg/s", gt=0.0)
+    turn_window_s: float = setting(1.0, "s", gt=0.0)
+    guard_s: float = setting(2.0, "s", gt=0.0)
+    still_s: float = setting(5.0, "s", gt=0.0)
+    min_turn_deg: float = setting(90.0, "deg", gt=0.0)
+    max_sf_error: float = setting(0.2, gt=0.0)
+    min_compass_samples: int = setting(5, ge=1)
+    max_compass_gap_s: float = setting(1.0, "s", gt=0.0)
+    compass_sigma_deg: float = setting(0.5, "deg", gt=0.0)
+    gyro_noise_dps_rthz: float = setting(0.04, "deg/s/√Hz", gt=0.0)
+    residual_drift_dps: float = setting(0.02, "deg/s", ge=0.0)
+    fixed_turns: int = setting(3, ge=1)
+    max_turn_s: float = setting(300.0, "s", gt=0.0)
 
     def __post_init__(self):
-        def number(name):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ConfigError(f"ScaleFactorConfig.{name} must be a finite number, got {v!r}")
-            return float(v)
+        check(self)
 
-        number("t_ref_c")
-        if number("fading") < 1.0:
-            raise ConfigError(f"ScaleFactorConfig.fading must be >= 1, got {self.fading!r}")
-        for name in (
-            "turn_rate_dps", "turn_window_s", "guard_s", "still_s", "min_turn_deg", "max_sf_error",
-            "max_compass_gap_s", "compass_sigma_deg", "gyro_noise_dps_rthz", "max_turn_s",
-        ):
-            if number(name) <= 0:
-                raise ConfigError(f"ScaleFactorConfig.{name} must be > 0, got {getattr(self, name)!r}")
-        if number("residual_drift_dps") < 0:
-            raise ConfigError(f"ScaleFactorConfig.residual_drift_dps must be >= 0, got {self.residual_drift_dps!r}")
-        for name in ("min_compass_samples", "fixed_turns"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ConfigError(f"ScaleFactorConfig.{name} must be a whole number >= 1, got {v!r}")
-        object.__setattr__(self, "x0", _pair("x0", self.x0))
-        object.__setattr__(self, "p0_sd", _pair("p0_sd", self.p0_sd, positive=True))
-        object.__setattr__(self, "q_sd", _pair("q_sd", self.q_sd, nonneg=True))
+    def with_sensor(self, config) -> "ScaleFactorConfig":
+        """These settings with the sensors' noise (``compass_sigma_deg``,
+        ``gyro_noise_dps_rthz``) of the compensator's ``config`` (a
+        :class:`~gyrodrift.compensator.CompensatorConfig`), so that the two estimates of one
+        run describe the same sensors."""
+        return replace(self, compass_sigma_deg=config.compass_sigma_deg, gyro_noise_dps_rthz=config.gyro_noise_dps_rthz)
