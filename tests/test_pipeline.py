@@ -33,8 +33,8 @@ def test_streamed_file_equals_in_memory_file(logs, tmp_path, kind):
     before = src.read_bytes()
     suffix = "parquet" if kind == "parquet" else "csv"
     whole, parts = tmp_path / f"whole.{suffix}", tmp_path / f"parts.{suffix}"
-    s_whole = compensate_file(src, whole, stream=False)
-    s_parts = compensate_file(src, parts, stream=True, chunk_rows=1000)  # 18 chunks, init inside the first
+    s_whole = compensate_file(src, whole, chunked=False)
+    s_parts = compensate_file(src, parts, chunked=True, chunk_rows=1000)  # 18 chunks, init inside the first
     assert src.read_bytes() == before
     if suffix == "csv":
         assert parts.read_bytes() == whole.read_bytes()
@@ -71,7 +71,7 @@ def test_a_bad_row_in_a_later_chunk_is_named_and_nothing_is_written(tmp_path):
 def test_a_log_shorter_than_the_init_window_streams_like_in_memory_with_a_note(tmp_path):
     write_table(synthetic_log(duration_s=20.0), tmp_path / "short.csv")
     streamed = compensate_file(tmp_path / "short.csv", tmp_path / "s.csv", chunk_rows=100)
-    whole = compensate_file(tmp_path / "short.csv", tmp_path / "w.csv", stream=False)
+    whole = compensate_file(tmp_path / "short.csv", tmp_path / "w.csv", chunked=False)
     assert streamed.streamed and (tmp_path / "s.csv").read_bytes() == (tmp_path / "w.csv").read_bytes()
     for stats in (streamed, whole):
         assert any("shorter than the 30-s init window" in n for n in stats.notes)
@@ -82,10 +82,10 @@ def test_python_estimators_stream_too(logs, tmp_path):
     cfg = CompensatorConfig(estimator="lsm")
     stats = compensate_file(logs["csv"], tmp_path / "o.csv", cfg, chunk_rows=997)
     assert stats.streamed
-    compensate_file(logs["csv"], tmp_path / "o2.csv", cfg, stream=False)
+    compensate_file(logs["csv"], tmp_path / "o2.csv", cfg, chunked=False)
     assert (tmp_path / "o.csv").read_bytes() == (tmp_path / "o2.csv").read_bytes()
-    with pytest.raises(ConfigError, match="cannot stream"):
-        compensate_file(tmp_path / "x.ulg", tmp_path / "o3.csv", cfg, stream=True)  # a ULog is read whole
+    with pytest.raises(ConfigError, match="cannot read this log in chunks"):
+        compensate_file(tmp_path / "x.ulg", tmp_path / "o3.csv", cfg, chunked=True)  # a ULog is read whole
 
 
 def test_scale_factor_columns_run_in_memory(tmp_path):
@@ -103,7 +103,7 @@ def test_scale_factor_columns_run_in_memory(tmp_path):
     assert np.sqrt(np.mean(err**2)) < 0.002 and np.abs(err).max() < 0.01  # the SF itself moves by 0.03
     assert any(line.startswith("heading_sf error") for line in stats.result_lines())
     with pytest.raises(ConfigError, match="scale-factor"):
-        compensate_file(tmp_path / "sf.csv", tmp_path / "o2.csv", scale_factor=True, stream=True)
+        compensate_file(tmp_path / "sf.csv", tmp_path / "o2.csv", scale_factor=True, chunked=True)
 
 
 def _late_type_change_log(n: int = 40_000, *, late_text_in_numbers: bool = False) -> pd.DataFrame:
@@ -130,8 +130,8 @@ def test_a_column_that_changes_type_late_is_read_again_with_its_type(tmp_path):
     before = src.read_bytes()
     for suffix in ("csv", "parquet"):
         whole, parts = tmp_path / f"whole.{suffix}", tmp_path / f"parts.{suffix}"
-        s_whole = compensate_file(src, whole, stream=False)
-        s_parts = compensate_file(src, parts, stream=True, chunk_rows=5000)
+        s_whole = compensate_file(src, whole, chunked=False)
+        s_parts = compensate_file(src, parts, chunked=True, chunk_rows=5000)
         if suffix == "csv":
             assert parts.read_bytes() == whole.read_bytes()
         else:
@@ -148,8 +148,8 @@ def test_a_number_column_that_later_holds_text_is_read_as_text(tmp_path):
     src = tmp_path / "late.csv"
     _late_type_change_log(late_text_in_numbers=True).to_csv(src, index=False)
     whole, parts = tmp_path / "whole.csv", tmp_path / "parts.csv"
-    compensate_file(src, whole, stream=False)
-    stats = compensate_file(src, parts, stream=True, chunk_rows=5000)  # read 3 times: 'count' numbers, then text
+    compensate_file(src, whole, chunked=False)
+    stats = compensate_file(src, parts, chunked=True, chunk_rows=5000)  # read 3 times: 'count' numbers, then text
     assert parts.read_bytes() == whole.read_bytes()
     assert any("'count' read as text" in n and "'many'" in n for n in stats.notes)
     assert not any("'count' read as numbers" in n for n in stats.notes)
@@ -182,7 +182,7 @@ def test_no_row_estimate_for_a_compressed_csv(logs, tmp_path):
     [
         ({"smooth": True}, r"--smooth needs the whole log in memory.*Drop --smooth to stream it"),
         ({"scale_factor": True, "smooth": True}, r"--scale-factor and --smooth need the whole .*Drop --scale-factor and --smooth"),
-        ({"stream": False}, r"kept in memory \(stream=False\).*Let it stream"),
+        ({"chunked": False}, r"kept in memory \(chunked=False\).*Let it run in chunks"),
     ],
 )
 def test_a_log_that_cannot_fit_in_memory_is_refused_before_reading(logs, tmp_path, monkeypatch, options, expected):

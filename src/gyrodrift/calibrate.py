@@ -462,27 +462,27 @@ def calibrate_file(path, **read_options) -> Calibration:
 # ---------------------------------------------------------------------------- prior for the compensator
 
 
-def start_temperature(path, read_options: dict | None = None) -> float:
+def start_temperature(path, read_options=None) -> float:
     """The first finite temperature (degC) of the log at ``path``.
 
     CSV and Parquet logs are read only up to it (in small chunks); ULog and ROS bag logs
     are read whole (:func:`gyrodrift.io.read_log`).
     """
-    from gyrodrift.io import log_format, read_log
+    from gyrodrift.io import log_format
     from gyrodrift.io.chunked import iter_log_chunks
+    from gyrodrift.io.validate import ReadOptions
 
-    opts = dict(read_options or {})
+    opts = ReadOptions.of(read_options)  # a ReadOptions, or a dict of its fields
     path = Path(path)
-    if log_format(path, opts.get("fmt")) in ("csv", "parquet"):
-        table = {k: opts[k] for k in ("fmt", "gyro_unit", "frame", "column_map", "time_unit") if opts.get(k) is not None}
-        with iter_log_chunks(path, chunk_rows=4096, **table) as chunks:
+    if log_format(path, opts.fmt) in ("csv", "parquet"):
+        with iter_log_chunks(path, chunk_rows=4096, **opts.table_keywords()) as chunks:
             for chunk in chunks:
                 temps = chunk[TEMP].to_numpy(dtype=float)
                 finite = temps[np.isfinite(temps)]
                 if finite.size:
                     return float(finite[0])
         raise ConfigError(f"{path}: no temperature in the log; the temp column must have values")
-    temps = read_log(path, **opts)[TEMP].to_numpy(dtype=float)
+    temps = opts.read(path)[TEMP].to_numpy(dtype=float)
     return float(temps[np.isfinite(temps)][0])
 
 

@@ -20,6 +20,7 @@ import math
 import queue
 import sys
 import threading
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import CompensatorConfig, check_input_columns, compensate
 from gyrodrift.conventions import GYRO_Z, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.io.validate import ReadOptions
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -39,8 +41,6 @@ CHUNK_ROWS = 250_000
 #: Chunks the reader thread reads ahead of the compensation: it reads on while numba starts,
 #: so the second core is not idle then.
 READ_AHEAD = 4
-#: The read options of :func:`gyrodrift.io.read_log` that the table readers take.
-_TABLE_OPTIONS = ("fmt", "gyro_unit", "frame", "column_map", "time_unit")
 
 
 @dataclass
@@ -62,7 +62,10 @@ class RunStats:
     estimator: str = ""
     #: What the drift model's T was: "temperature", or "clock" (the elapsed time).
     regressor: str = "temperature"
+    #: True when the rows went through in pieces (the chunked path, or ``gyrodrift stream``), not whole in memory.
     streamed: bool = False
+    #: ``bias_z`` of the last row, deg/s (the final drift, whatever the drift model's T).
+    last_bias_dps: float = math.nan
     #: Things the run had to do that the user may want to know (e.g. a column read again with another type).
     notes: list = field(default_factory=list)
     # accuracy accumulators (sum of squares, max |error|, count)
@@ -86,6 +89,7 @@ class RunStats:
             self.temp_min_c = min(self.temp_min_c, float(np.nanmin(temp)))
             self.temp_max_c = max(self.temp_max_c, float(np.nanmax(temp)))
         self.updates += int(out["updated"].to_numpy().sum(dtype=np.int64))
+        self.last_bias_dps = float(out["bias_z"].iloc[-1])
         codes = pd.Categorical(out["gate_reason"], categories=gating.REASONS).codes
         self.refused += np.bincount(codes[codes >= 0], minlength=len(gating.REASONS))
         if REF_HEADING in out.columns and GYRO_Z in out.columns:
@@ -215,12 +219,13 @@ def compensate_file(
     output_path,
     config: CompensatorConfig | None = None,
     *,
-    read_options: dict | None = None,
+    read_options: ReadOptions | dict | None = None,
     chunk_rows: int = CHUNK_ROWS,
-    stream: bool | None = None,
+    chunked: bool | None = None,
     progress=None,
     scale_factor: bool = False,
     smooth: bool = False,
+    stream: bool | None = None,
 ) -> RunStats:
     """Compensate the log at ``input_path`` and write the output table to ``output_path``.
 
@@ -231,13 +236,14 @@ def compensate_file(
         (CSV or Parquet by its name). The input is never modified; the output is
         written atomically.
     config : CompensatorConfig, optional
-    read_options : dict, optional
-        Keyword arguments of :func:`gyrodrift.io.read_log` (``fmt``, ``gyro_unit``,
-        ``frame``, ``column_map``, ``time_unit``, ULog/ArduPilot/ROS options).
+    read_options : ReadOptions or dict, optional
+        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`, or a dict of its
+        fields: the keywords of :func:`gyrodrift.io.read_log`).
     chunk_rows : int
-        Rows per chunk when streaming.
-    stream : bool, optional
-        Force (True) or forbid (False) the streaming path; default: stream when it can.
+        Rows per chunk of the chunked path.
+    chunked : bool, optional
+        Force (True) or forbid (False) the chunked path; default: chunked when it can
+        (a CSV or Parquet log without ``scale_factor`` or ``smooth``).
     progress : callable, optional
         ``progress(iterable, total, **options)`` wraps a loop of the run and yields the
         same items (e.g. :func:`gyrodrift._progress.progress_iter` with a label). The
@@ -254,39 +260,42 @@ def compensate_file(
         Recompensate with the drift smoothed over the whole log, before and after each
         row (:func:`gyrodrift.smooth.smooth_output`; non-causal, for recorded logs). Runs
         in memory.
+    stream : bool, optional
+        The old name of ``chunked`` (a DeprecationWarning).
 
     Returns
     -------
     RunStats
     """
     from gyrodrift.errors import ConfigError
-    from gyrodrift.io import read_log, write_table
+    from gyrodrift.io import write_table
 
+    if stream is not None:
+        warnings.warn("compensate_file(stream=...) is now chunked=...", DeprecationWarning, stacklevel=2)
+        chunked = stream if chunked is None else chunked
     cfg = config or CompensatorConfig()
-    opts = dict(read_options or {})
+    opts = ReadOptions.of(read_options)
     input_path, output_path = Path(input_path), Path(output_path)
-    table = _table_format(input_path, opts.get("fmt")) in ("csv", "parquet")
-    ulog_or_ros = {k: v for k, v in opts.items() if k not in _TABLE_OPTIONS}
-    table_options = not any(v not in (None, 0) for v in ulog_or_ros.values())  # else the reader refuses them
-    can_stream = table and table_options
-    if stream and not can_stream:
-        raise ConfigError(f"{input_path}: cannot stream this run (needs a CSV or Parquet log)")
-    if stream and (scale_factor or smooth):
+    table = _table_format(input_path, opts.fmt) in ("csv", "parquet")
+    can_chunk = table and opts.tables_only  # else the reader refuses the options
+    if chunked and not can_chunk:
+        raise ConfigError(f"{input_path}: cannot read this log in chunks (needs a CSV or Parquet log)")
+    if chunked and (scale_factor or smooth):
         raise ConfigError(f"{input_path}: the scale-factor estimate and smoothing need the whole log in memory; "
-                          "do not force streaming")
-    if stream is None:
-        stream = can_stream and not (scale_factor or smooth)
-    if not stream:
-        if table and table_options:
-            _check_fits_in_memory(input_path, opts.get("fmt"), *_why_in_memory(scale_factor, smooth))
-        log = read_log(input_path, **opts)
+                          "do not force the chunked path")
+    if chunked is None:
+        chunked = can_chunk and not (scale_factor or smooth)
+    if not chunked:
+        if can_chunk:
+            _check_fits_in_memory(input_path, opts.fmt, *_why_in_memory(scale_factor, smooth))
+        log = opts.read(input_path)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
             from gyrodrift.smooth import smooth_output
 
             out = smooth_output(out, cfg)
         if scale_factor:
-            out = _with_scale_factor(out)
+            out = _with_scale_factor(out, cfg)
         write_table(out, output_path)
         stats = RunStats(str(input_path), read_summary=log.attrs.get("summary"),
                          compass=out.attrs.get("compass") or log.attrs.get("compass", "?"))
@@ -433,7 +442,7 @@ def _why_in_memory(scale_factor: bool, smooth: bool) -> tuple[str, str]:
         what = " and ".join(n for n, on in (("--scale-factor", scale_factor), ("--smooth", smooth)) if on)
         verb = "need" if scale_factor and smooth else "needs"
         return f"{what} {verb} the whole log in memory", f"drop {what} to stream it in constant memory"
-    return "this run is kept in memory (stream=False)", "let it stream (stream=None)"
+    return "this run is kept in memory (chunked=False)", "let it run in chunks (chunked=None)"
 
 
 def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) -> None:
@@ -451,11 +460,12 @@ def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) ->
     )
 
 
-def _with_scale_factor(out: pd.DataFrame) -> pd.DataFrame:
-    """``out`` with the scale-factor columns inserted after ``heading_sd``."""
-    from gyrodrift.scale_factor import estimate_scale_factor
+def _with_scale_factor(out: pd.DataFrame, cfg: CompensatorConfig) -> pd.DataFrame:
+    """``out`` with the scale-factor columns inserted after ``heading_sd``, estimated with the
+    sensors' noise of ``cfg``."""
+    from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor
 
-    sf = estimate_scale_factor(out)
+    sf = estimate_scale_factor(out, ScaleFactorConfig().with_sensor(cfg))
     at = list(out.columns).index("heading_sd") + 1
     for k, name in enumerate(SF_COLUMNS):
         out.insert(at + k, name, sf[name].to_numpy())
@@ -463,7 +473,7 @@ def _with_scale_factor(out: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
+def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: ReadOptions, chunk_rows: int,
             progress=None) -> RunStats:
     """The chunked path: read ahead in one thread, write behind in another, compensate here
     (the compiled kernels and pyarrow's readers and writers release the GIL)."""
@@ -503,7 +513,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: d
         sys.setswitchinterval(switch)
 
 
-def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: dict, chunk_rows: int,
+def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: ReadOptions, chunk_rows: int,
                     column_types: dict[str, str], progress=None) -> RunStats:
     import itertools
 
@@ -514,7 +524,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     source = str(input_path)
     stats = RunStats(source, streamed=True)
     pending: list[pd.DataFrame] = []  # input rows not yet out of the engine
-    table_opts = {k: opts[k] for k in _TABLE_OPTIONS if k in opts}
+    table_opts = opts.table_keywords()
 
     def chunks_of(path):
         return iter_log_chunks(path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts)
@@ -538,7 +548,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             # numba's start-up (importing it, loading the compiled kernels from its cache:
             # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
             # the reader thread reads the next chunks
-            intake = Intake(cfg, source, whole=whole, gyro_unit=opts.get("gyro_unit", "deg/s"), record=False)
+            intake = Intake(cfg, source, whole=whole, gyro_unit=opts.gyro_unit, record=False)
 
             def emit(cols) -> None:
                 """Write the rows the engine gave back, with their input columns."""
@@ -551,7 +561,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
 
             chunks_read = itertools.chain([first], read)
             if progress is not None:
-                rows = whole.rows if whole is not None and whole.rows else _estimated_rows(input_path, opts.get("fmt"))
+                rows = whole.rows if whole is not None and whole.rows else _estimated_rows(input_path, opts.fmt)
                 chunks_read = progress(chunks_read, rows, unit="rows", size=len)
             for log in chunks_read:
                 check_input_columns(log, source)

@@ -25,6 +25,7 @@ the same style.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Callable, Iterable, Mapping, NamedTuple
 
@@ -73,6 +74,7 @@ __all__ = [
     "check_z_up",
     "Z_UP_SHARE",
     "ReadOptions",
+    "TableOptions",
     "read_options",
     "check_input_path",
     "read_error",
@@ -268,7 +270,57 @@ def check_column_map(column_map: Mapping[str, str] | None) -> dict[str, str]:
     return out
 
 
-class ReadOptions(NamedTuple):
+@dataclass(frozen=True)
+class ReadOptions:
+    """How to read a log: the options of :func:`gyrodrift.io.read_log`, as one value.
+
+    Every entry point takes its read options as one of these (the command line builds it
+    once, :func:`gyrodrift._cliargs.read_options`); :meth:`read` reads a log with them. The
+    fields are :func:`gyrodrift.io.read_log`'s keywords, with its defaults.
+    """
+
+    fmt: str | None = None
+    gyro_unit: str = "deg/s"
+    frame: str | None = None
+    column_map: Mapping[str, str] | None = None
+    time_unit: str | None = None
+    instance: int = 0
+    mag_instance: int | None = None
+    imu_topic: str | None = None
+    temp_topic: str | None = None
+    mag_topic: str | None = None
+    gyro_max_dps: float = GYRO_MAX_DPS
+
+    #: The options the CSV and Parquet readers take (the others are the binary logs').
+    TABLE = ("fmt", "gyro_unit", "frame", "column_map", "time_unit", "gyro_max_dps")
+
+    @classmethod
+    def of(cls, options) -> "ReadOptions":
+        """``options`` as ReadOptions: ReadOptions, a dict of read_log keywords, or None."""
+        return options if isinstance(options, cls) else cls(**(options or {}))
+
+    def keywords(self) -> dict:
+        """The keywords of :func:`gyrodrift.io.read_log`."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def table_keywords(self) -> dict:
+        """The keywords of the table readers (:func:`gyrodrift.io.chunked.iter_log_chunks`)."""
+        return {k: getattr(self, k) for k in self.TABLE}
+
+    @property
+    def tables_only(self) -> bool:
+        """Whether no option of a binary log (instance, topics) is set: a table reader takes these."""
+        return self.instance in (None, 0) and not any((self.mag_instance, self.imu_topic, self.temp_topic,
+                                                       self.mag_topic))
+
+    def read(self, path):
+        """The log at ``path`` read with these options (:func:`gyrodrift.io.read_log`)."""
+        from gyrodrift.io import read_log
+
+        return read_log(path, **self.keywords())
+
+
+class TableOptions(NamedTuple):
     """The table options of :func:`gyrodrift.io.tabular.read_log`, checked."""
 
     gyro_unit: str  #: canonical unit name of the gyro columns in the file
@@ -284,14 +336,14 @@ class ReadOptions(NamedTuple):
 
 
 def read_options(gyro_unit: str, frame: str | None, column_map: Mapping[str, str] | None,
-                 time_unit: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> ReadOptions:
+                 time_unit: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> TableOptions:
     """Check the table options (raising :class:`ConfigError`) and return them canonical.
 
     ``frame`` None means NED/FRD, not stated: :func:`check_z_up` then refuses a table
     whose accelerometer shows its z axis pointing up."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
-    return ReadOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
+    return TableOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
                        check_gyro_max_dps(gyro_max_dps), frame is not None)
 
 
@@ -583,7 +635,7 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
         )
 
 
-def _check_limits(frame: pd.DataFrame, src: Source, opts: "ReadOptions") -> None:
+def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> None:
     """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`): temperature,
     gyro rates (in the file's unit, against ``opts.gyro_max_dps``), headings, magnetometer
     and accelerometer components."""
@@ -760,7 +812,7 @@ class Normalised(NamedTuple):
 def normalise_frame(
     frame: pd.DataFrame,
     src: Source,
-    opts: ReadOptions,
+    opts: TableOptions,
     *,
     prev_t_s: float | None = None,
     first_values: Callable[[pd.DataFrame], Mapping[str, int | None]] | None = first_value_rows,
@@ -786,7 +838,7 @@ def normalise_frame(
         Rows as read (:func:`table_to_frame`), names stripped.
     src : Source
         Where the rows are; ``src.row0`` is the file row of the frame's first row.
-    opts : ReadOptions
+    opts : TableOptions
     prev_t_s : float, optional
         Time (s) of the file row just before the frame, for the strictly-increasing check.
     first_values : callable, optional
