@@ -126,7 +126,7 @@ def test_process_one_never_raises(fleet_dir, tmp_path, monkeypatch):
     def boom(*args, **kwargs):
         raise RuntimeError("boom\nwith a second line")
 
-    monkeypatch.setattr(sys.modules["gyrodrift.compensator"], "compensate", boom)
+    monkeypatch.setattr(sys.modules["gyrodrift.pipeline"], "compensate_file", boom)
     row = process_one(fleet_dir / "run0.csv", tmp_path)
     assert row["status"] == "error"
     assert row["error"] == "unexpected RuntimeError: boom with a second line"

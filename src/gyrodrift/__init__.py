@@ -26,10 +26,15 @@ from gyrodrift.compensator import (
     compensate_arrays,
     OutputBuffers,
 )
+from gyrodrift.config import load_config
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
-from gyrodrift.estimators import KalmanConfig
+from gyrodrift.estimators import AdaptiveConfig, KalmanConfig
+from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
+from gyrodrift.io import read_log
+from gyrodrift.io.validate import ReadOptions
 from gyrodrift.model import TempRateConfig
+from gyrodrift.pipeline import compensate_file
 
 __all__ = [
     "__version__",
@@ -39,10 +44,27 @@ __all__ = [
     "compensate",
     "compensate_arrays",
     "OutputBuffers",
+    "read_log",
+    "ReadOptions",
+    "compensate_file",
+    "load_config",
     "ConfigError",
     "GyroDriftError",
     "LogFormatError",
+    "AdaptiveConfig",
     "KalmanConfig",
+    "FusionConfig",
+    "ScaleFactorConfig",
     "GateConfig",
     "TempRateConfig",
 ]
+
+
+def __getattr__(name: str):
+    """:class:`~gyrodrift.scale_factor.ScaleFactorConfig` on first use: its package imports
+    scipy (a third of a second), which ``import gyrodrift`` does not need."""
+    if name == "ScaleFactorConfig":
+        from gyrodrift.scale_factor import ScaleFactorConfig
+
+        return ScaleFactorConfig
+    raise AttributeError(f"module 'gyrodrift' has no attribute {name!r}")

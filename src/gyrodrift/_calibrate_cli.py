@@ -6,34 +6,22 @@ import argparse
 import sys
 from pathlib import Path
 
-from gyrodrift._cliargs import add_input_options, parse_map
-from gyrodrift._text import printable
+from gyrodrift._cliargs import add_input_options, add_renamed, read_options
+from gyrodrift._text import say as _say, warn as _warn
 from gyrodrift.errors import ConfigError
 
 __all__ = ["add_calibrate_parser"]
-
-
-def _say(*lines, file=None) -> None:
-    """Print each of ``lines`` as one line, its user text made printable (as ``gyrodrift.cli``)."""
-    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
-
-
-def _warn(source, notes) -> None:
-    for note in notes:
-        _say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
 
 
 def _read_gyros(args) -> list:
     """The log's gyros (every one, or ``--instance``), as the options say."""
     from gyrodrift.io import log_format, read_gyros
 
+    opts = read_options(args).keywords()
     # --instance picks a gyro of a ULog, .bin or .tlog; for a table (one gyro) it is only the parameter slot
-    instances = log_format(args.input, args.log_format) in ("ulog", "ardupilot", "tlog")
-    return read_gyros(args.input, fmt=args.log_format, instance=args.instance if instances else None,
-                      mag_instance=args.mag_instance,
-                      gyro_unit=args.gyro_unit, frame=args.frame, column_map=parse_map(args.map),
-                      time_unit=args.time_unit, imu_topic=args.imu_topic, temp_topic=args.temp_topic,
-                      mag_topic=args.mag_topic)
+    if log_format(args.input, opts["fmt"]) not in ("ulog", "ardupilot", "tlog"):
+        opts["instance"] = None
+    return read_gyros(args.input, **opts)
 
 
 def _board_rotation(args, autopilot: str | None):
@@ -118,8 +106,7 @@ def add_calibrate_parser(sub) -> None:
     from gyrodrift.io import FORMATS as LOG_FORMATS
     from gyrodrift.paramfiles import FORMATS as CAL_FORMATS
 
-    # conflict_handler="resolve": this command's --format is the output's, so it replaces the
-    # input-format option of add_input_options (--log-format here), and --instance defaults to every gyro
+    # conflict_handler="resolve": --instance defaults to every gyro here
     cal = sub.add_parser(
         "calibrate", conflict_handler="resolve", formatter_class=argparse.RawDescriptionHelpFormatter,
         help="fit the gyro's thermal drift from a still heating run; write PX4, ArduPilot or JSON parameters",
@@ -140,12 +127,13 @@ def add_calibrate_parser(sub) -> None:
                      help="apply this PX4 .params or ArduPilot .param file to the log as the autopilot would and "
                      "print the drift left (no -o)")
     cal.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    add_input_options(cal)
+    add_input_options(cal, old_format=False)
     cal.add_argument("--instance", type=int,
                      help="one gyro only: PX4 ULog sensor_gyro instance, ArduPilot .bin IMU instance (default: "
                      "every gyro); for a table, the parameter slot: TC_G<instance>, INS_TCAL<instance+1> (default 0)")
-    cal.add_argument("--log-format", choices=list(LOG_FORMATS), help="input format (default: by file name)")
-    cal.add_argument("--format", dest="output_format", choices=list(CAL_FORMATS),
+    add_renamed(cal, "--log-format", "--input-format", "input_format", choices=list(LOG_FORMATS))
+    add_renamed(cal, "--format", "--output-format", "output_format", choices=list(CAL_FORMATS))
+    cal.add_argument("--output-format", choices=list(CAL_FORMATS),
                      help="px4 (.params), ardupilot (.param: Mission Planner, MAVProxy), ardupilot-qgc (ArduPilot's "
                      "parameters in QGroundControl's file) or json (default: by the output's name)")
     cal.add_argument("--device-id", type=int,

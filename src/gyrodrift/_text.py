@@ -10,8 +10,9 @@ moves, window titles). :func:`printable` writes each of them as its Python escap
 from __future__ import annotations
 
 import re
+import sys
 
-__all__ = ["printable"]
+__all__ = ["printable", "say", "warn"]
 
 #: C0 and C1 control characters, DEL, the Unicode line and paragraph separators and the
 #: bidirectional controls that reorder what a terminal or an editor shows.
@@ -32,3 +33,15 @@ def printable(text) -> str:
     'log\\\\n1.csv\\\\x1b[31m'
     """
     return _UNSAFE.sub(_escape, str(text))
+
+
+def say(*lines, file=None) -> None:
+    """Print each of ``lines`` as one line, flushed, its user text made :func:`printable` (a line
+    end or an escape code in a file name is shown, not obeyed); ``file`` default stdout."""
+    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
+
+
+def warn(source, notes) -> None:
+    """Print each note as one warning line on stderr, naming its ``source`` file."""
+    for note in notes:
+        say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)

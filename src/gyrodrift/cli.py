@@ -8,21 +8,18 @@ import signal
 import sys
 
 from contextlib import contextmanager
-from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
 from gyrodrift import __version__
 from gyrodrift._calibrate_cli import add_calibrate_parser
-from gyrodrift._cliargs import add_input_options, add_table_options, parse_map, read_input
+from gyrodrift._cliargs import (add_input_options, add_method_options, check_numbers, method_config, read_input,
+                                read_options, warm_start)
 from gyrodrift._parser import SuggestingParser
 from gyrodrift._paths import check_paths
-from gyrodrift._text import printable
-from gyrodrift.compensator import CompensatorConfig
-from gyrodrift.compensator.config import TEMPERATURE_MODES
-from gyrodrift.config import config_from_dict, load_config, load_toml
-from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
-from gyrodrift.estimators import ESTIMATORS
+from gyrodrift._stream_cli import add_stream_parser
+from gyrodrift._text import say, warn
+from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.io import check_output_path
 
 __all__ = ["main"]
@@ -59,62 +56,6 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
 """
 
 
-def _config(args) -> CompensatorConfig:
-    if args.config:  # --estimator first, so that a [fusion] table adjusts the settings of that estimator
-        values = load_toml(args.config)
-        if args.estimator is not None:
-            values = {**values, "estimator": args.estimator}
-        base = config_from_dict(values, where=str(args.config))
-    else:
-        base = CompensatorConfig()
-    kalman = base.kalman
-    if args.fading is not None:
-        kalman = replace(kalman, fading=args.fading)
-    gate = base.gate
-    if args.turn_rate_dps is not None:
-        gate = replace(gate, turn_rate_dps=args.turn_rate_dps)
-    if args.interference_deg is not None:
-        gate = replace(gate, interference_deg=args.interference_deg)
-    changes = {
-        name: getattr(args, name)
-        for name in ("update_interval_s", "init_s", "stack_depth", "compass_sigma_deg", "estimator", "declination_deg",
-                     "temperature")
-        if getattr(args, name) is not None
-    }
-    return replace(base, kalman=kalman, gate=gate, **changes)
-
-
-def _add_method_options(p: argparse.ArgumentParser) -> None:
-    d = CompensatorConfig()
-    g = p.add_argument_group("method (defaults follow the paper)")
-    g.add_argument(
-        "--config", type=Path, metavar="FILE.toml",
-        help="all settings from a TOML file (see gyrodrift.config); the options below override it",
-    )
-    g.add_argument("--estimator", choices=sorted(ESTIMATORS), help=f"drift estimator (default {d.estimator})")
-    g.add_argument("--fading", type=float, help=f"fading factor s >= 1 of the STKF (default {d.kalman.fading})")
-    g.add_argument("--update-interval-s", type=float, help=f"filter update interval, s (default {d.update_interval_s:g})")
-    g.add_argument("--init-s", type=float, help=f"initialisation window at the start, s (default {d.init_s:g})")
-    g.add_argument("--stack-depth", type=int, help=f"measurements stacked per update (default {d.stack_depth})")
-    g.add_argument("--compass-sigma-deg", type=float, help=f"compass noise, deg (default {d.compass_sigma_deg:g})")
-    g.add_argument(
-        "--declination", dest="declination_deg", type=float, metavar="DEG",
-        help="magnetic declination, deg, east positive: added to the compass heading, so that compass_heading, "
-        "heading and heading_fused are in true north like ref_heading (default 0: magnetic north)",
-    )
-    g.add_argument(
-        "--temperature", choices=TEMPERATURE_MODES,
-        help="what T of the drift model is: auto (default) the temperature column, or the elapsed time when that "
-        "never changes over the log; measured: always the column; clock: always the elapsed time (a stream "
-        "without temperature)",
-    )
-    g.add_argument("--turn-rate-dps", type=float, help=f"turning threshold, deg/s (default {d.gate.turn_rate_dps:g})")
-    g.add_argument(
-        "--interference-deg", type=float,
-        help=f"largest compass-vs-gyro disagreement per interval, deg (default {d.gate.interference_deg:g})",
-    )
-
-
 def _bar(desc: str, unit: str = "it"):
     """``progress(iterable, total, **options)``: a bar labelled ``desc`` counting ``unit`` on a terminal.
 
@@ -128,30 +69,12 @@ def _bar(desc: str, unit: str = "it"):
     return progress
 
 
-def _say(*lines, file=None) -> None:
-    """Print each of ``lines`` as one line, its user text made printable (:mod:`gyrodrift._text`:
-    a line end or an escape code in a file name is shown, not obeyed)."""
-    print("\n".join(printable(line) for line in lines), file=file or sys.stdout, flush=True)
-
-
-def _warn(source, notes) -> None:
-    """Print each note as one warning line on stderr, naming its ``source`` file."""
-    for note in notes:
-        _say(f"gyrodrift: warning: {source}: {note}", file=sys.stderr)
-
-
 def _cmd_compensate(args) -> int:
-    from gyrodrift.profile import load_profile, profile_from_run, profile_notes, save_profile, warm_config
-
     from gyrodrift.pipeline import compensate_file
+    from gyrodrift.profile import profile_from_run, profile_notes, save_profile
 
     check_output_path(args.input, args.output)
-    cfg = _config(args)
-    profile = None
-    if args.profile:
-        profile = load_profile(args.profile)
-        _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
-        cfg = warm_config(profile, cfg)
+    cfg, profile = warm_start(args, method_config(args))
     prior = None
     if args.prior:  # the z drift model starts from an autopilot's thermal calibration (gyrodrift.calibrate)
         from gyrodrift.calibrate import prior_config, start_temperature
@@ -160,125 +83,23 @@ def _cmd_compensate(args) -> int:
         if profile is not None:
             raise ConfigError("--prior and --profile both give the starting drift model; use one of them")
         prior = read_prior(args.prior, instance=args.instance)
-        cfg = prior_config(prior, cfg, start_temperature(args.input, _read_options(args)))
-    stats = compensate_file(args.input, args.output, cfg, read_options=_read_options(args),
+        cfg = prior_config(prior, cfg, start_temperature(args.input, read_options(args)))
+    stats = compensate_file(args.input, args.output, cfg, read_options=read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
                             smooth=args.smooth)
     if profile is not None:  # the temperatures of the run are known once it is read
-        _warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
+        warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
     if prior is not None:
         from gyrodrift.calibrate import prior_notes
 
-        _warn(args.prior, prior_notes(prior, (stats.temp_min_c, stats.temp_max_c)))
+        warn(args.prior, prior_notes(prior, (stats.temp_min_c, stats.temp_max_c)))
     if args.save_profile:
         save_profile(profile_from_run(stats), args.save_profile)
     if not args.quiet:
-        _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
+        say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
         if args.save_profile:
-            _say(f"saved device profile {args.save_profile}")
+            say(f"saved device profile {args.save_profile}")
     return 0
-
-
-def _cmd_stream(args) -> int:
-    from gyrodrift.compensator import Compensator
-    from gyrodrift.profile import load_profile, profile_from_run, profile_notes, save_profile, warm_config
-    from gyrodrift.stream import deferred_signals, input_blocks, output_writer, stream_rows
-
-    if args.serial is None and args.input != "-" and args.output != "-":
-        check_output_path(args.input, args.output)
-    cfg = _config(args)
-    profile = None
-    if args.profile:
-        profile = load_profile(args.profile)
-        _warn(args.profile, profile_notes(profile, estimator=cfg.estimator))
-        cfg = warm_config(profile, cfg)
-
-    def warn(line: str) -> None:
-        _say(f"gyrodrift: warning: {line}", file=sys.stderr)
-
-    stopped = None  # a bad line: the rows before it are written (to the -o file too), then exit 2
-    with deferred_signals() as signals, \
-            input_blocks(args.input, signals, serial_port=args.serial, baud=args.baud) as (blocks, name), \
-            output_writer(args.output) as write:
-        try:
-            stats = stream_rows(blocks, write, fmt=args.format, out_format=args.out_format, gyro_unit=args.gyro_unit,
-                                frame=args.frame, column_map=parse_map(args.map), time_unit=args.time_unit,
-                                source=name, skip_bad=args.skip_bad, warn=warn,
-                                compensator=Compensator(cfg, source=name, provisional=not args.hold_init))
-        except LogFormatError as err:
-            if not getattr(err, "stream_stats", None) or not err.stream_stats.rows_in:
-                raise  # nothing compensated: no output file is made
-            stopped = err
-    if stopped is not None:
-        raise stopped
-    run = stats.run
-    if profile is not None and run.rows:
-        _warn(args.profile, profile_notes(profile, temp_range_c=(run.temp_min_c, run.temp_max_c)))
-    if args.save_profile:
-        if run.rows:
-            save_profile(profile_from_run(run), args.save_profile)
-        else:
-            warn(f"{args.save_profile}: no row was compensated, so no profile was saved")
-    if not args.quiet and run.rows:
-        lines = [run.read_line(), *run.result_lines()]
-        if stats.skipped:
-            lines.append(f"skipped {stats.skipped} bad line(s)")
-        if args.save_profile:
-            lines.append(f"saved device profile {args.save_profile}")
-        _say(*(f"gyrodrift: {line}" for line in lines), file=sys.stderr)
-    if stats.signal is not None:
-        print("gyrodrift: " + ("terminated" if stats.signal == signal.SIGTERM else "interrupted"), file=sys.stderr)
-        return 143 if stats.signal == signal.SIGTERM else 130
-    return 0
-
-
-def _add_stream_parser(sub) -> None:
-    from gyrodrift.stream import FORMATS as STREAM_FORMATS, SERIAL_ADVICE
-
-    s = sub.add_parser(
-        "stream", help="compensate samples as they come: CSV or JSON lines in, compensated rows out",
-        epilog=CONVENTIONS, formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Read samples line by line (CSV with a header line, or JSON lines: one object per line) from "
-        "standard input, a file or a serial port, compensate them with the streaming Compensator and write each "
-        "row it returns at once (flushed), with the columns and formatting of 'gyrodrift compensate': one row per "
-        "sample from the first, those of the initialisation window provisional (the prior's or the profile's drift, "
-        "gate_reason init), then the rows 'gyrodrift compensate' gives; --hold-init holds the window's rows back and "
-        "writes them when it ends, every row then equal to compensate's. A bad line stops the stream "
-        "with one error line naming the line and column (exit 2), after writing the rows of every line before it "
-        "(to the -o file too); --skip-bad skips it with a warning instead. Time stamps that look like another unit "
-        "than --time-unit, or a rate above 100 kHz, stop it as they stop compensate. "
-        "SIGINT and SIGTERM end the input: the held rows are written, --save-profile is saved, exit 130 or 143 "
-        "(gyrodrift.stream).",
-    )
-    s.add_argument("input", nargs="?", default="-", help="input file, or - for standard input (default)")
-    s.add_argument("-o", "--output", default="-",
-                   help="output file, or - for standard output (default); a file appears, whole, when the stream ends")
-    s.add_argument("--format", choices=list(STREAM_FORMATS),
-                   help="input format (default: jsonl when the first non-blank character is '{', else csv)")
-    s.add_argument("--out-format", choices=list(STREAM_FORMATS), help="output format (default: the input's)")
-    s.add_argument("--serial", metavar="PORT", help=f"read a serial port instead, e.g. /dev/ttyUSB0 ({SERIAL_ADVICE})")
-    s.add_argument("--baud", type=int, default=115200, help="serial port speed, baud (default 115200)")
-    s.add_argument("--skip-bad", action="store_true", help="skip a bad line with a warning instead of stopping")
-    s.add_argument("--hold-init", action="store_true",
-                   help="hold the init window's rows back until it ends (no provisional rows; every row then equals "
-                   "what 'gyrodrift compensate' writes)")
-    s.add_argument("-q", "--quiet", action="store_true", help="no summary on stderr at the end")
-    s.add_argument("--profile", type=Path, metavar="DEV.json", help="warm-start from a saved device profile")
-    s.add_argument("--save-profile", type=Path, metavar="DEV.json",
-                   help="save what this run learned as a device profile at the end of the input, or on SIGINT/SIGTERM")
-    add_table_options(s.add_argument_group("input"))
-    _add_method_options(s)
-    s.set_defaults(func=_cmd_stream)
-
-
-def _read_options(args) -> dict:
-    """The read_log options of :func:`gyrodrift._cliargs.add_input_options`."""
-    return {
-        "fmt": args.format, "gyro_unit": args.gyro_unit, "frame": args.frame, "column_map": parse_map(args.map),
-        "time_unit": args.time_unit,
-        "instance": args.instance, "mag_instance": args.mag_instance, "imu_topic": args.imu_topic,
-        "temp_topic": args.temp_topic, "mag_topic": args.mag_topic,
-    }
 
 
 def demo_log_path() -> Path:
@@ -295,9 +116,9 @@ def _cmd_demo(args) -> int:
         "gyrodrift demo: a simulated motionless gyro heated 23 -> 58 degC and cooled, with a "
         "10 Hz compass and three magnetic-interference windows (gyrodrift/data/README.md)."
     )
-    stats = compensate_file(path, args.output, _config(args))
+    stats = compensate_file(path, args.output, method_config(args))
     stats.source = path.name
-    _say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
+    say(stats.read_line(), *stats.result_lines(), f"wrote {args.output}")
     return 0
 
 
@@ -332,7 +153,7 @@ def _cmd_simulate(args) -> int:
     log.attrs = {}
     write_table(log, args.output)
     if not args.quiet:
-        _say(
+        say(
             f"wrote {args.output}: scenario {args.scenario}, seed {args.seed}, {len(log)} rows, "
             f"{log['t'].iloc[-1]:.0f} s at {args.fs_hz:g} Hz, temperature {log['temp'].min():.1f} to "
             f"{log['temp'].max():.1f} degC, true drift {log['true_bias_z'].min():.3f} to "
@@ -381,7 +202,7 @@ def _cmd_compare(args) -> int:
             "or true_bias_z (simulated logs)"
         )
     calibration = read_input(args.calibration, args, with_format=False) if args.calibration else None
-    outputs, skipped = run_methods(log, methods, _config(args), calibration=calibration)
+    outputs, skipped = run_methods(log, methods, method_config(args), calibration=calibration)
     table = summary_table(outputs)
     if args.json:
         payload = {
@@ -393,12 +214,12 @@ def _cmd_compare(args) -> int:
         }
         print(json.dumps(payload, indent=2))
         return 0
-    _say(describe_log(log, args.input))
+    say(describe_log(log, args.input))
     print(markdown_table(table.rename(index=method_label), floatfmt=".4g"))
     print("bias_*: estimated minus true drift, deg/s (variance in (deg/s)^2); heading_*: heading minus "
           "ref_heading, deg; causal=False: uses the whole log (not possible in real time).")
     for name, why in skipped.items():
-        _say(f"skipped {name}: {why}")
+        say(f"skipped {name}: {why}")
     return 0
 
 
@@ -409,7 +230,7 @@ def _cmd_paper(args) -> int:
 
     args.output.mkdir(parents=True, exist_ok=True)
     settings = PaperSettings(
-        seed=args.seed, fs_hz=args.fs_hz, duration_scale=0.1 if args.quick else 1.0, config=_config(args)
+        seed=args.seed, fs_hz=args.fs_hz, duration_scale=0.1 if args.quick else 1.0, config=method_config(args)
     )
     start = time.monotonic()
 
@@ -418,7 +239,7 @@ def _cmd_paper(args) -> int:
             print(f"[{time.monotonic() - start:6.1f} s] {step}", file=sys.stderr)
 
     written = write_paper(args.output, settings, progress=progress, figures=not args.no_figures)
-    _say(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
+    say(f"wrote {len(written)} files to {args.output} in {time.monotonic() - start:.0f} s; start with "
           f"{args.output / 'table2.md'}")
     return 0
 
@@ -438,33 +259,37 @@ def _cmd_generated(args, splits) -> int:
     import time
 
     from gyrodrift import heldout
-    from gyrodrift.io import write_table
 
-    config = load_config(args.config) if args.config else CompensatorConfig()
+    config = method_config(args)
     methods = _names(args.methods, "methods") or list(heldout.METHODS)
     start = time.monotonic()
     df = heldout.run_generated(_names(args.families, "classes"), splits, args.seeds, methods, config=config,
                                workers=args.workers, duration_scale=args.duration_scale,
                                progress=_bar("monte carlo", "logs"))
-    if args.output:
+    table = heldout.markdown(df) if args.markdown else heldout.acceptance(heldout.summarise(df)).to_string(
+        index=False, float_format=lambda v: f"{v:.4g}")
+    return _runs_done(args, df, table, "class", f"{df['class'].nunique()} classes x {args.seeds} seeds x {len(splits)} "
+                      f"split(s) x {len(methods)} methods in {time.monotonic() - start:.0f} s")
+
+
+def _runs_done(args, df, table: str, unit: str, done: str) -> int:
+    """Write every run (``-o``), print the summary ``table``, the line ``done`` and the first
+    failures (each run's ``unit``, seed and method); exit status 1 when every run failed."""
+    from gyrodrift.io import write_table
+
+    if args.output:  # a CSV's text cells (error messages) never start a spreadsheet formula
         write_table(df, args.output, spreadsheet_safe=True)
-    if args.markdown:
-        print(heldout.markdown(df))
-    else:
-        print(heldout.acceptance(heldout.summarise(df)).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    print(table)
     failed = df[df["status"] != "ok"]
-    print(f"{df['class'].nunique()} classes x {args.seeds} seeds x {len(splits)} split(s) x {len(methods)} methods in "
-          f"{time.monotonic() - start:.0f} s; {len(failed)} of {len(df)} runs failed"
-          + (f"; wrote {args.output}" if args.output else ""))
+    say(f"{done}; {len(failed)} of {len(df)} runs failed" + (f"; wrote {args.output}" if args.output else ""))
     for _, row in failed.drop_duplicates("error").head(5).iterrows():
-        print(f"failed {row['class']} seed {row['seed']} {row['method']}: {row['error']}")
+        say(f"failed {row[unit]} seed {row['seed']} {row['method']}: {row['error']}")
     return 1 if len(failed) == len(df) else 0
 
 
 def _cmd_montecarlo(args) -> int:
     import time
 
-    from gyrodrift.io import write_table
     from gyrodrift.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
 
     splits = [name for name, on in (("tuning", args.tuning), ("held-out", args.held_out)) if on]
@@ -474,7 +299,7 @@ def _cmd_montecarlo(args) -> int:
         raise ConfigError(f"--seeds must be at least 1, got {args.seeds}")
     if args.first_seed < 0:
         raise ConfigError(f"--first-seed must be >= 0, got {args.first_seed}")
-    config = load_config(args.config) if args.config else CompensatorConfig()
+    config = method_config(args)
     methods = _names(args.methods, "methods") or list(DEFAULT_METHODS)
     start = time.monotonic()
     df = run_monte_carlo(
@@ -487,23 +312,12 @@ def _cmd_montecarlo(args) -> int:
         progress=_bar("monte carlo", "logs"),
         fs_hz=args.fs_hz,
     )
-    seconds = time.monotonic() - start
-    if args.output:  # a CSV's text cells (error messages) never start a spreadsheet formula
-        write_table(df, args.output, spreadsheet_safe=True)
     summary = summarise(df)
-    if args.markdown:
-        print(markdown(summary, tuned_on=args.tuned_on))
-    else:
-        print(summary.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    failed = df[df["status"] != "ok"]
-    _say(
-        f"{df['family'].nunique()} families x {args.seeds} seeds x {len(methods)} methods "
-        f"(durations x {args.duration_scale:g}, {args.fs_hz:g} Hz) in {seconds:.0f} s; "
-        f"{len(failed)} of {len(df)} runs failed" + (f"; wrote {args.output}" if args.output else "")
-    )
-    for _, row in failed.drop_duplicates("error").head(5).iterrows():
-        _say(f"failed {row['family']} seed {row['seed']} {row['method']}: {row['error']}")
-    return 1 if len(failed) == len(df) else 0
+    table = markdown(summary, tuned_on=args.tuned_on) if args.markdown else summary.to_string(
+        index=False, float_format=lambda v: f"{v:.4g}")
+    return _runs_done(args, df, table, "family", f"{df['family'].nunique()} families x {args.seeds} seeds x "
+                      f"{len(methods)} methods (durations x {args.duration_scale:g}, {args.fs_hz:g} Hz) in "
+                      f"{time.monotonic() - start:.0f} s")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -549,7 +363,7 @@ def build_parser() -> argparse.ArgumentParser:
         "then come from the smoother",
     )
     add_input_options(c)
-    _add_method_options(c)
+    add_method_options(c)
     c.set_defaults(func=_cmd_compensate)
 
     cmp_ = sub.add_parser(
@@ -563,7 +377,7 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--calibration", type=Path, help="a still heating run of the same device, for poly3")
     cmp_.add_argument("--json", action="store_true", help="machine-readable output")
     add_input_options(cmp_)
-    _add_method_options(cmp_)
+    add_method_options(cmp_)
     cmp_.set_defaults(func=_cmd_compare)
 
     pap = sub.add_parser(
@@ -577,7 +391,7 @@ def build_parser() -> argparse.ArgumentParser:
     pap.add_argument("--fs-hz", type=float, default=10.0, help="gyro sample rate of the runs, Hz (default 10)")
     pap.add_argument("--quick", action="store_true", help="every run 10x shorter (a smoke test, not the results)")
     pap.add_argument("--no-figures", action="store_true", help="numbers only")
-    _add_method_options(pap)
+    add_method_options(pap)
     pap.set_defaults(func=_cmd_paper)
 
     sim = sub.add_parser(
@@ -621,7 +435,6 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("--duration-scale", type=float, default=1.0, help="log lengths x this (default 1)")
     mc.add_argument("--fs-hz", type=float, default=10.0, help="gyro sample rate, Hz (default 10)")
     mc.add_argument("--workers", type=int, help="worker processes (default: one per CPU)")
-    mc.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings, frozen for every family")
     mc.add_argument("--tuned-on", metavar="FAMILY", help="with --markdown: the family the settings were tuned on")
     mc.add_argument("-o", "--output", type=Path, metavar="OUT.csv", help="write every run (one row per family, seed, method)")
     mc.add_argument("--markdown", action="store_true", help="print the summary as Markdown")
@@ -629,6 +442,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the procedural generator's classes on held-out seeds (gyrodrift.simulate.generator; "
                     "--families then names classes)")
     mc.add_argument("--tuning", action="store_true", help="the generator's classes on tuning seeds (with --held-out: both)")
+    add_method_options(mc)  # the settings, frozen for every family
     mc.set_defaults(func=_cmd_montecarlo)
 
     from gyrodrift.fleet import add_batch_parser
@@ -637,11 +451,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_report_parser(sub)
     add_batch_parser(sub)
     add_calibrate_parser(sub)
-    _add_stream_parser(sub)
+    add_stream_parser(sub, CONVENTIONS)
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
-    _add_method_options(d)
+    add_method_options(d)
     d.set_defaults(func=_cmd_demo)
     return p
 
@@ -653,28 +467,6 @@ def _say_if_compiling() -> None:
     from gyrodrift.kernels import say_when_compiling
 
     say_when_compiling()
-
-
-def _check_numbers(parser: argparse.ArgumentParser, args) -> None:
-    """Refuse a number option outside the range of every setting
-    (:func:`gyrodrift.settings_bounds.setting_problem`: 0, or a magnitude from 1e-9 to 1e9;
-    whole numbers of the settings with their own maximum), and a sample rate above the
-    highest a file may have (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`), naming the option."""
-    from gyrodrift.io.timebase import MAX_RATE_HZ
-    from gyrodrift.settings_bounds import WHOLE_MAXIMA, setting_problem
-
-    for action in parser._actions:
-        value = getattr(args, action.dest, None)
-        if not action.option_strings or value is None or action.type not in (float, int):
-            continue
-        flag = action.option_strings[-1]
-        if action.type is float or action.dest in WHOLE_MAXIMA:
-            problem = setting_problem(action.dest, value)
-            if problem is not None:
-                raise ConfigError(f"{flag}: {problem}")
-        if action.dest == "fs_hz" and value > MAX_RATE_HZ:
-            raise ConfigError(f"{flag} {value:g}: above {MAX_RATE_HZ:g} Hz, the highest sample rate gyrodrift reads; "
-                              "give a lower rate")
 
 
 class Terminated(KeyboardInterrupt):
@@ -732,14 +524,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     _say_if_compiling()
     try:
-        _check_numbers(parser._subparser(args), args)
+        check_numbers(parser._subparser(args), args)
         check_paths(args.command, args)  # no output onto an input, every output writable before any work
         with _sigterm_interrupts():
             code = args.func(args)
             sys.stdout.flush()  # here, where a reader gone away is caught, not at the exit
             return code
     except GyroDriftError as err:
-        _say(f"gyrodrift: error: {err}", file=sys.stderr)
+        say(f"gyrodrift: error: {err}", file=sys.stderr)
         return 2
     except Terminated:
         print("gyrodrift: terminated", file=sys.stderr)

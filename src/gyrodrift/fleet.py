@@ -1,8 +1,9 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
-``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) reads
-every log, compensates it with :func:`gyrodrift.compensator.compensate`, writes
-``OUTDIR/<stem>_out.parquet`` (or ``.csv``) atomically, and returns one summary row per
+``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) compensates
+every log as ``gyrodrift compensate`` does (:func:`gyrodrift.pipeline.compensate_file`: a CSV
+or Parquet log in chunks, in constant memory), writes ``OUTDIR/<stem>_out.parquet`` (or
+``.csv``) atomically, and returns one summary row per
 log; the logs' folders below their common folder are mirrored in ``OUTDIR``
 (``a/x.csv`` and ``b/x.csv`` → ``OUTDIR/a/x_out.parquet`` and ``OUTDIR/b/x_out.parquet``). A log that cannot be processed (bad file, too short, no compass, even an
 unexpected exception in a reader) gives a row with ``status = "error"`` and a one-line
@@ -61,7 +62,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gyrodrift._cliargs import add_table_options, table_read_options
+from gyrodrift._cliargs import add_input_options, add_method_options, add_renamed, method_config
+from gyrodrift._cliargs import read_options as cli_read_options
 from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
 
@@ -191,19 +193,6 @@ def _empty_row(path) -> dict:
     return row
 
 
-def _log_facts(log: pd.DataFrame) -> dict:
-    """Rows, duration (s) and temperature range (degC) of an input log."""
-    t = log["t"].to_numpy(float)
-    temp = log["temp"].to_numpy(float)
-    has_temp = bool(np.isfinite(temp).any())
-    return {
-        "rows": int(len(log)),
-        "duration_s": float(t[-1] - t[0]) if t.size else math.nan,
-        "temp_min_c": float(np.nanmin(temp)) if has_temp else math.nan,
-        "temp_max_c": float(np.nanmax(temp)) if has_temp else math.nan,
-    }
-
-
 def _error_text(err: BaseException) -> str:
     """One line: the message of a user error; type and message of anything else."""
     if isinstance(err, GyroDriftError):
@@ -211,8 +200,10 @@ def _error_text(err: BaseException) -> str:
     return _one_line(f"unexpected {type(err).__name__}: {err}")
 
 
-def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None) -> dict:
-    """Read, compensate and write one log; return its summary row. Never raises.
+def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None,
+                chunk_rows: int | None = None) -> dict:
+    """Compensate one log into ``out_dir`` as ``gyrodrift compensate`` does; return its summary
+    row. Never raises.
 
     Parameters
     ----------
@@ -226,39 +217,35 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root
         Format of the output table.
     root : str or os.PathLike, optional
         The input folder mirrored under ``out_dir`` (:func:`output_path`).
-    read_options : dict, optional
-        Keywords of :func:`gyrodrift.io.read_log` (``gyro_unit``, ``frame``,
-        ``column_map``, ``time_unit``); a ULog or ROS bag refuses table options other
-        than their defaults (an error row).
+    read_options : ReadOptions or dict, optional
+        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`).
+    chunk_rows : int, optional
+        Rows per chunk of the chunked path (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
 
     Returns
     -------
     dict
         The keys of :data:`SUMMARY_COLUMNS` (module notes). Any exception (a
         :class:`~gyrodrift.errors.GyroDriftError` or anything unexpected) gives
-        ``status = "error"`` and a one-line ``error``; what was learned before the
-        failure (rows, duration, temperatures) is kept.
+        ``status = "error"`` and a one-line ``error``.
     """
-    from gyrodrift.compensator import compensate
-    from gyrodrift.io import check_output_path, read_log, write_table
-    from gyrodrift.compensator.output import updated_column
+    from gyrodrift.io import check_output_path
+    from gyrodrift.pipeline import CHUNK_ROWS, compensate_file
 
     start = time.perf_counter()
     row = _empty_row(path)
     try:
         out_path = output_path(path, out_dir, out_format, root)
         check_output_path(path, out_path)
-        log = read_log(path, **(read_options or {}))
         out_path.parent.mkdir(parents=True, exist_ok=True)
-        row.update(_log_facts(log))
-        out = compensate(log, config, source=str(path))
-        write_table(out, out_path, fmt=out_format)
-        updates = int(updated_column(out, "batch").sum())
-        if out.attrs.get("drift_regressor") == "clock":  # a drift in time: no a, b per degC; c is the final drift
-            a, b, c = math.nan, math.nan, float(out["bias_z"].iloc[-1])
+        stats = compensate_file(path, out_path, config, read_options=read_options, chunk_rows=chunk_rows or CHUNK_ROWS)
+        finite = lambda v: v if math.isfinite(v) else math.nan  # noqa: E731 (no temperature seen: inf)
+        row.update(rows=stats.rows, duration_s=stats.t_last_s - stats.t_first_s, temp_min_c=finite(stats.temp_min_c),
+                   temp_max_c=finite(stats.temp_max_c), status="ok", updates=stats.updates)
+        if stats.regressor == "clock":  # a drift in time: no a, b per degC; c is the final drift
+            row.update(a=math.nan, b=math.nan, c=stats.last_bias_dps)
         else:
-            a, b, c = (float(v) for v in out.attrs["final_params"])
-        row.update(status="ok", updates=updates, a=a, b=b, c=c)
+            row.update(zip("abc", (float(v) for v in stats.final_params)))
     except Exception as err:  # one bad file never stops the rest: report it in the row
         row.update(status="error", error=_error_text(err))
     row["seconds"] = time.perf_counter() - start
@@ -360,7 +347,8 @@ def process_many(
     dask_address=None,
     progress=None,
     out_format: str = "parquet",
-    read_options: dict | None = None,
+    read_options=None,
+    chunk_rows: int | None = None,
 ) -> pd.DataFrame:
     """Compensate many logs in parallel; return the summary table, in the input order.
 
@@ -385,8 +373,10 @@ def process_many(
         :func:`gyrodrift._progress.progress_iter`); it must yield the same items.
     out_format : {"parquet", "csv"}
         Format of the output tables.
-    read_options : dict, optional
-        Keywords of :func:`gyrodrift.io.read_log` for every log (see :func:`process_one`).
+    read_options : ReadOptions or dict, optional
+        How to read every log (see :func:`process_one`).
+    chunk_rows : int, optional
+        Rows per chunk of the chunked path (see :func:`process_one`).
 
     Returns
     -------
@@ -413,7 +403,7 @@ def process_many(
     root = common_root(paths)
     _check_outputs(paths, out_dir, out_format, root)
     job = partial(process_one, out_dir=out_dir, config=config, out_format=out_format, root=root,
-                  read_options=read_options)
+                  read_options=read_options, chunk_rows=chunk_rows)
     if dask_address is not None:
         rows = _run_dask(job, paths, dask_address, progress)
     elif n_workers == 1 or len(paths) == 1:
@@ -499,10 +489,11 @@ def add_batch_parser(subparsers) -> argparse.ArgumentParser:
         "--dask", metavar="ADDRESS",
         help=f"run on a Dask scheduler, e.g. tcp://host:8786 (needs {_EXTRA}); workers must see the same paths",
     )
-    p.add_argument("--format", choices=list(OUT_FORMATS), default="parquet", help="output table format (default parquet)")
-    p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
-    p.add_argument("--init-s", type=float, help="initialisation window at the start, s (overrides --config)")
-    add_table_options(p.add_argument_group("input (as for compensate)"))
+    p.add_argument("--output-format", choices=list(OUT_FORMATS), default="parquet",
+                   help="output table format (default parquet)")
+    add_renamed(p, "--format", "--output-format", "output_format", choices=list(OUT_FORMATS))
+    add_input_options(p, old_format=False)
+    add_method_options(p)
     p.set_defaults(func=batch_command)
     return p
 
@@ -516,18 +507,11 @@ def _prepare_output_dir(out_dir: Path) -> None:
 
 def batch_command(args: argparse.Namespace) -> int:
     """Run ``gyrodrift batch``; return 0 (all ok), 1 (some logs failed) or 2 (bad usage)."""
-    from dataclasses import replace
-
     from gyrodrift._progress import progress_iter
-    from gyrodrift.compensator import CompensatorConfig
-    from gyrodrift.config import load_config
 
     try:
         paths = find_logs(args.logs)
-        config = load_config(args.config) if args.config else CompensatorConfig()
-        if args.init_s is not None:
-            config = replace(config, init_s=args.init_s)
-        read_options = table_read_options(args)
+        config = method_config(args)
         summary_path = args.output / SUMMARY_FILE
         clash = [p for p in paths if os.path.realpath(p) == os.path.realpath(summary_path)]
         if clash:
@@ -538,8 +522,8 @@ def batch_command(args: argparse.Namespace) -> int:
         _prepare_output_dir(args.output)
         summary = process_many(
             paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
-            progress=lambda items, total: progress_iter(items, total, "batch", unit="logs"), out_format=args.format,
-            read_options=read_options,
+            progress=lambda items, total: progress_iter(items, total, "batch", unit="logs"),
+            out_format=args.output_format, read_options=cli_read_options(args),
         )
         write_summary(summary, summary_path)
     except GyroDriftError as err:

@@ -278,7 +278,7 @@ def output_format(path, fmt: str | None = None) -> str:
     for key, endings in FORMATS.items():
         if name.endswith(endings):
             return key
-    raise ConfigError(f"{path}: cannot tell the calibration format from the file name; give --format "
+    raise ConfigError(f"{path}: cannot tell the calibration format from the file name; give --output-format "
                       f"({', '.join(FORMATS)}) or end it in .params (px4), .param (ardupilot) or .json")
 
 

@@ -54,7 +54,7 @@ from gyrodrift.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
-from gyrodrift._cliargs import add_input_options
+from gyrodrift._cliargs import add_input_options, add_method_options
 from gyrodrift._progress import progress_iter as _progress
 from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
@@ -716,8 +716,7 @@ def report_command(args: argparse.Namespace) -> int:
     Returns 0; problems the user can fix raise :class:`GyroDriftError` (the command
     line prints them as one line and exits 2).
     """
-    from gyrodrift.config import load_config
-    from gyrodrift._cliargs import read_input
+    from gyrodrift._cliargs import method_config, read_input
     from gyrodrift.io import check_output_path
     from gyrodrift.plots import require_matplotlib
 
@@ -731,7 +730,7 @@ def report_command(args: argparse.Namespace) -> int:
             f"{out_path}: output folder {str(out_path.parent)!r} does not exist; create it first or choose another -o"
         )
     methods = _parse_methods(args.methods)
-    config = load_config(args.config) if getattr(args, "config", None) else CompensatorConfig()
+    config = method_config(args)
     log = read_input(args.input, args)
     calibration = read_input(args.calibration, args, with_format=False) if args.calibration else None
     outputs, skipped = _run_all(log, methods, config, calibration)
@@ -768,8 +767,8 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
         f"{','.join(DEFAULT_METHODS)}; those that cannot run are listed as skipped)",
     )
     p.add_argument("--calibration", type=Path, metavar="CAL.csv", help="static heating run of the same device, for poly3")
-    p.add_argument("--config", type=Path, metavar="FILE.toml", help="compensator settings (see gyrodrift.config)")
     add_input_options(p)
+    add_method_options(p)
     p.add_argument("--title", help="page title (default: 'gyrodrift report: <input file name>')")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(func=report_command)
