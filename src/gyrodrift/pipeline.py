@@ -479,8 +479,8 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: R
     (the compiled kernels and pyarrow's readers and writers release the GIL)."""
     # The reader, writer and compute threads hand the GIL to each other thousands of times
     # (pyarrow and the kernels release it): with Python's default 5-ms switch interval a
-    # thread coming back from C code waits for the GIL; the 10-million-row Parquet run took
-    # 7.2 s instead of 5.1 s (measured with the interval at 5 and 0.2 ms). Restored on return.
+    # thread coming back from C code waits for the GIL (its cost on the 10-M-row run:
+    # benchmarks/README.md). Restored on return.
     from gyrodrift.io.chunked import ColumnTypeChanged
 
     switch = sys.getswitchinterval()
@@ -545,9 +545,9 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             if needs_survey(cfg, first):  # one reading of the whole file first (gyrodrift.compensator.intake)
                 with chunks_of(input_path) as again:
                     whole = survey(again, cfg, source)
-            # numba's start-up (importing it, loading the compiled kernels from its cache:
-            # about 0.7 s, mostly holding the GIL) happens here and in the first feed, while
-            # the reader thread reads the next chunks
+            # numba's start-up (importing it, loading the compiled kernels from its cache,
+            # mostly holding the GIL) happens here and in the first feed, while the reader
+            # thread reads the next chunks
             intake = Intake(cfg, source, whole=whole, gyro_unit=opts.gyro_unit, record=False)
 
             def emit(cols) -> None:
