@@ -55,7 +55,7 @@ from gyrodrift.kernels.layout import (
 )
 from gyrodrift.kernels.numeric import matvec
 
-__all__ = ["G_MPS2", "acc_scale", "specific_force", "euler_rates", "roll_pitch", "roll_pitch_all", "window_step",
+__all__ = ["G_MPS2", "acc_scale", "specific_force", "euler_rates", "roll_pitch", "window_step",
            "edge_window", "refusal", "measurement", "residual_ok", "close", "run"]
 
 #: Standard gravity, m/s² (1 g).
@@ -114,13 +114,6 @@ def roll_pitch(f0, f1, f2):
     elif math.isnan(norm):
         pitch = norm
     return math.degrees(math.atan2(-f1, -f2)), pitch
-
-
-@jit
-def roll_pitch_all(f, roll, pitch):
-    """:func:`roll_pitch` of every row of ``f`` (N, 3), into ``roll`` and ``pitch``."""
-    for i in range(f.shape[0]):
-        roll[i], pitch[i] = roll_pitch(f[i, 0], f[i, 1], f[i, 2])
 
 
 # ------------------------------------------------------------- row windows
