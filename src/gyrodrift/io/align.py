@@ -36,7 +36,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, first_outside, limit_of, outside_problem
-from gyrodrift.io.validate import message
+from gyrodrift.io.messages import message
 
 __all__ = [
     "Stream",

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -66,7 +65,7 @@ from gyrodrift.io.align import (
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.messages import message, one_line
 from gyrodrift.onboard import ardupilot_onboard
 
 __all__ = ["read_ardupilot", "read_ardupilot_imus", "MAGIC"]

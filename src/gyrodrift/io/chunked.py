@@ -71,7 +71,7 @@ import pyarrow.parquet as pa_pq
 
 from gyrodrift.conventions import T
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.io import csvfile, formats, parquetfile, validate
+from gyrodrift.io import csvfile, formats, messages, notes, parquetfile, validate
 from gyrodrift.io.chunkwriter import ChunkWriter
 from gyrodrift.io.held import held_note
 from gyrodrift.io.limits import GYRO_MAX_DPS
@@ -135,7 +135,7 @@ class _CsvText(io.RawIOBase):
             self._gzip = self._file.read(2) == csvfile.GZIP_MAGIC
             self._file.seek(0)
         except OSError as exc:
-            raise validate.read_error(path, exc) from exc
+            raise messages.read_error(path, exc) from exc
         self._source = gzip.GzipFile(fileobj=self._file, mode="rb") if self._gzip else self._file
         self._decoder = codecs.getincrementaldecoder("utf-8")()
         self._lines_before = 0  # "\n" handed out so far, for error lines
@@ -155,7 +155,7 @@ class _CsvText(io.RawIOBase):
         except csvfile.GZIP_ERRORS as exc:
             if self._gzip:
                 raise csvfile.gzip_error(self._name, exc) from exc
-            raise validate.read_error(self._name, exc) from exc
+            raise messages.read_error(self._name, exc) from exc
         if not self._started:  # the first read asks for at least _READ_PIECE_BYTES
             self._started = True
             if piece.startswith(csvfile.UTF8_BOM):
@@ -194,7 +194,7 @@ class _CsvText(io.RawIOBase):
                 if line is not None:
                     return line
             elif self._at_end:
-                raise validate.empty_file_error(self._name, csvfile.CSV_EMPTY_ADVICE)
+                raise messages.empty_file_error(self._name, csvfile.CSV_EMPTY_ADVICE)
             self._ahead += self._next_piece(_READ_PIECE_BYTES)
 
     def pieces(self) -> Iterator[bytes]:
@@ -217,7 +217,7 @@ def _csv_line_of(path: Path):
 
     def line_of(nonempty_index: int) -> int:
         with _CsvText(path, check=False) as text:
-            return validate.physical_line(text.pieces(), nonempty_index)
+            return messages.physical_line(text.pieces(), nonempty_index)
 
     return line_of
 
@@ -268,7 +268,7 @@ class _CsvBatches:
 
     def __init__(self, path: Path, renames: Mapping[str, str], column_types, block_size_bytes: int) -> None:
         self.path = path
-        self.src = validate.Source(str(path), "csv", _csv_line_of(path))
+        self.src = messages.Source(str(path), "csv", _csv_line_of(path))
         self._renames = renames
         self._block_size = int(block_size_bytes)
         with _CsvText(path) as text:
@@ -284,16 +284,16 @@ class _CsvBatches:
             raws = [raw for raw, new in final.items() if new == name]
             if not raws:
                 raise ConfigError(
-                    validate.message(
+                    messages.message(
                         self.src.name,
                         f"column_types names column {name!r}, which the file does not have;"
-                        f" columns found: {validate.show_names(final.values())}",
+                        f" columns found: {messages.show_names(final.values())}",
                         "name columns as they are after the column map",
                     )
                 )
             if name in validate.NUMERIC_COLS:
                 raise ConfigError(
-                    validate.message(
+                    messages.message(
                         self.src.name,
                         f"column_types names {name!r}, a number column of the input contract, which is always read"
                         " as numbers",
@@ -310,9 +310,9 @@ class _CsvBatches:
             return csvfile.csv_parse_error(self.src, exc)
         name = self._names[int(found["col"])].strip()
         name = next((new for new, old in self._renames.items() if old == name), name)
-        plain = validate.format_error(
+        plain = messages.format_error(
             self.src,
-            f"{validate.show_text(found['value'])} does not fit the type {found['type']} that the first"
+            f"{messages.show_text(found['value'])} does not fit the type {found['type']} that the first"
             f" {self._block_size} bytes of the file gave this column (a file read in chunks cannot look ahead)",
             f"give the column's type with the column_types option, e.g. column_types={{{name!r}: 'string'}}",
             where=f"line {self.src.line_of(int(found['row']))}, column {name!r}",
@@ -385,7 +385,7 @@ class _ParquetBatches:
 
     def __init__(self, path: Path, batch_rows: int) -> None:
         self.path = path
-        self.src = validate.Source(str(path), "parquet", None)
+        self.src = messages.Source(str(path), "parquet", None)
         parquetfile.check_parquet_size(path)
         self._batch_rows = batch_rows
         try:
@@ -406,7 +406,7 @@ class _ParquetBatches:
         except (pa.ArrowException, OSError, ValueError) as exc:
             raise parquetfile.parquet_error(self.src, exc) from exc
         if self._file.metadata.num_rows == 0:
-            raise validate.no_data_rows_error(self.src)
+            raise messages.no_data_rows_error(self.src)
 
     def _any_null(self, name: str) -> bool:
         """True if column ``name`` has an empty cell (statistics, else read the column)."""
@@ -502,7 +502,7 @@ class LogChunks:
         else:
             if column_types:
                 raise ConfigError(
-                    validate.message(self.source, "column_types applies to CSV files only", "Parquet files state their column types: leave it out")
+                    messages.message(self.source, "column_types applies to CSV files only", "Parquet files state their column types: leave it out")
                 )
             self._batches = _ParquetBatches(path, chunk_rows)
         self._tables = _rechunk(iter(self._batches), chunk_rows)
@@ -513,7 +513,7 @@ class LogChunks:
         """The ``attrs`` of every chunk: ``source``, ``format``, ``gyro_unit``, ``frame``."""
         return {"source": self.source, "format": self.format, "gyro_unit": self.gyro_unit, "frame": self.frame}
 
-    def _frame(self, table: pa.Table, src: validate.Source) -> pd.DataFrame:
+    def _frame(self, table: pa.Table, src: messages.Source) -> pd.DataFrame:
         frame = validate.table_to_frame(table, src)
         if isinstance(self._batches, _ParquetBatches):
             frame = self._batches.fix_frame(frame, table.column_names)
@@ -560,32 +560,32 @@ class LogChunks:
         prev_t_s = None
         columns: list = []
         with_values: frozenset[str] = frozenset()
-        temperature = validate.TEMP_MEASURED  # the first chunk decides it for the file
+        temperature = notes.TEMP_MEASURED  # the first chunk decides it for the file
         first_notes: tuple[str, ...] = ()  # and the time base (gyrodrift.io.timebase)
         held, last_compass = 0, None  # held compass values emptied so far (gyrodrift.io.held)
         for table in self._tables:
             chunk_src = src.at(self.rows)
-            df, found, temperature, notes, held_here, last_compass = validate.normalise_frame(
+            df, found, temperature, time_notes, held_here, last_compass = validate.normalise_frame(
                 self._frame(table, chunk_src),
                 chunk_src,
                 self._opts,
                 prev_t_s=prev_t_s,
                 first_values=self._first_values if self.rows == 0 else None,
-                temp_empty=temperature == validate.TEMP_EMPTY,
+                temp_empty=temperature == notes.TEMP_EMPTY,
                 prev_compass=last_compass,
             )
             df.index = pd.RangeIndex(self.rows, self.rows + len(df))
             df.attrs = self.attrs
             prev_t_s = float(df[T].iloc[-1])
             columns, with_values = list(df.columns), with_values | found
-            first_notes, held = first_notes or notes, held + held_here
+            first_notes, held = first_notes or time_notes, held + held_here
             self.rows += len(df)
             yield df
         if self.rows == 0:
-            raise validate.no_data_rows_error(src)
-        self.compass = validate.compass_form(with_values)
+            raise messages.no_data_rows_error(src)
+        self.compass = notes.compass_form(with_values)
         held_notes = filter(None, [held_note(src.name, held)])
-        self.notes = [*validate.table_notes(src.name, columns, with_values, temperature), *first_notes, *held_notes]
+        self.notes = [*notes.table_notes(src.name, columns, with_values, temperature), *first_notes, *held_notes]
 
     def __iter__(self) -> "LogChunks":
         return self
@@ -611,7 +611,7 @@ def _chunk_format(path: Path, fmt: str | None) -> str:
     named = str(fmt).strip().lower() if fmt is not None else formats.format_from_path(path)
     if named in ("ulog", "ardupilot", "rosbag"):
         raise ConfigError(
-            validate.message(
+            messages.message(
                 str(path),
                 f"a {named} log cannot be read in chunks (only CSV and Parquet tables)",
                 "read it whole with gyrodrift.io.read_log",
@@ -684,7 +684,7 @@ def iter_log_chunks(
         raise ConfigError(f"chunk_rows must be a positive whole number of rows, got {chunk_rows!r}")
     if isinstance(block_size_bytes, bool) or not isinstance(block_size_bytes, (int, np.integer)) or block_size_bytes < 1024:
         raise ConfigError(f"block_size_bytes must be a whole number of bytes, at least 1024, got {block_size_bytes!r}")
-    validate.check_input_path(path)
+    messages.check_input_path(path)
     table_fmt = _chunk_format(path, fmt)
     return LogChunks(path, table_fmt, opts, int(chunk_rows), column_types, int(block_size_bytes))
 
@@ -718,10 +718,10 @@ def log_summary(path, *, fmt: str | None = None, column_map: Mapping[str, str] |
     """
     path = Path(path)
     renames = validate.check_column_map(column_map)
-    validate.check_input_path(path)
+    messages.check_input_path(path)
     if _chunk_format(path, fmt) == "csv":
         return LogSummary(None, None, None)
-    src = validate.Source(str(path), "parquet", None)
+    src = messages.Source(str(path), "parquet", None)
     parquetfile.check_parquet_size(path)
     try:
         meta = pa_pq.ParquetFile(path).metadata

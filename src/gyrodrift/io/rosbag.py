@@ -69,7 +69,7 @@ from gyrodrift.io.align import (
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.messages import message, one_line
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 

@@ -67,7 +67,7 @@ from gyrodrift.io.align import (
 from gyrodrift.io.ardupilot import _check_instance  # the same rule for both MAVLink logs
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message
+from gyrodrift.io.messages import message
 from gyrodrift.onboard import ardupilot_onboard, px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_tlog", "read_tlog_imus", "REBOOT_S"]
