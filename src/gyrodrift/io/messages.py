@@ -30,6 +30,7 @@ __all__ = [
     "row_label",
     "cell_label",
     "check_input_path",
+    "read_log_bytes",
     "read_error",
     "empty_file_error",
     "no_data_rows_error",
@@ -133,16 +134,30 @@ def cell_label(src: Source, row: int, column: str) -> str:
     return f"{row_label(src, row)}, column {column!r}"
 
 
-def check_input_path(path: Path) -> None:
-    """Raise :class:`LogFormatError` if ``path`` is not an existing regular file."""
+def check_input_path(path: Path, kind: str = "a log file", advice: str = "give the path of a .csv or .parquet log") -> None:
+    """Raise :class:`LogFormatError` if ``path`` is not an existing regular file: a folder
+    ("is a directory, not ``kind``; ``advice``") or nothing at all."""
     if path.is_dir():
-        raise LogFormatError(
-            message(str(path), "is a directory, not a log file", "give the path of a .csv or .parquet log")
-        )
+        raise LogFormatError(message(str(path), f"is a directory, not {kind}", advice))
     if not path.exists():
         raise LogFormatError(
             message(str(path), "input file does not exist", "check the path and the current directory")
         )
+
+
+def read_log_bytes(path: Path, kind: str, advice: str, empty_advice: str, size: int = -1) -> bytes:
+    """The bytes of a binary log (the first ``size`` of them; all when -1), or a one-line
+    :class:`LogFormatError`: no such file (:func:`check_input_path`, with ``kind`` and
+    ``advice``), one the system cannot read, an empty one (``empty_advice``)."""
+    check_input_path(path, kind, advice)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(size)
+    except OSError as exc:
+        raise read_error(path, exc) from exc
+    if not data:
+        raise empty_file_error(str(path), empty_advice)
+    return data
 
 
 def read_error(path, exc: OSError) -> LogFormatError:

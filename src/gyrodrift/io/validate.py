@@ -41,63 +41,27 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import (
-    Source,
-    cell_label,
-    check_input_path,
-    empty_file_error,
-    format_error,
-    message,
-    no_data_rows_error,
-    one_line,
-    physical_line,
-    read_error,
-    row_label,
-    show_names,
-    show_text,
-)
-from gyrodrift.io.notes import (
-    NO_TEMPERATURE_C,
-    TEMP_ABSENT,
-    TEMP_EMPTY,
-    TEMP_MEASURED,
-    compass_columns_with_values,
-    compass_form,
-    table_notes,
-)
+from gyrodrift.io.messages import Source, cell_label, format_error, message, one_line, row_label, show_names, show_text
+# the reader of stream.py takes these from here, with the checks
+from gyrodrift.io.messages import check_input_path, no_data_rows_error, read_error  # noqa: F401
+from gyrodrift.io.notes import NO_TEMPERATURE_C, TEMP_ABSENT, TEMP_EMPTY, TEMP_MEASURED, compass_columns_with_values
+# the reader of stream.py takes these from here, with the checks
+from gyrodrift.io.notes import compass_form, table_notes  # noqa: F401
 from gyrodrift.io.held import drop_held
 from gyrodrift.io.timebase import time_base_notes, time_scale
 
 __all__ = [
     "NUMERIC_COLS",
-    "Source",
-    "one_line",
-    "message",
-    "format_error",
-    "show_text",
-    "show_names",
-    "physical_line",
-    "row_label",
-    "cell_label",
     "check_column_map",
     "check_z_up",
     "Z_UP_SHARE",
     "ReadOptions",
     "TableOptions",
     "read_options",
-    "check_input_path",
-    "read_error",
-    "empty_file_error",
-    "no_data_rows_error",
     "table_to_frame",
     "apply_column_map",
     "convert_numeric",
     "first_value_rows",
-    "compass_form",
-    "table_notes",
-    "TEMP_MEASURED",
-    "TEMP_ABSENT",
-    "TEMP_EMPTY",
     "Normalised",
     "normalise_frame",
 ]
