@@ -507,7 +507,7 @@ def _terms_table(terms: Mapping[str, object]) -> str:
 
 
 def _render_figure(entry: _Figure) -> str:
-    from gyrodrift.plots import png_base64
+    from gyrodrift.plotbase import png_base64
 
     head = f'<section class="figure" id="fig-{entry.key}"><h2>{_esc(entry.title)}</h2>'
     if entry.make is None:
@@ -626,7 +626,7 @@ def build_report(
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
     from gyrodrift import __version__
 
-    from gyrodrift.plots import require_matplotlib
+    from gyrodrift.plotbase import require_matplotlib
 
     require_matplotlib()
     plan = _figure_plan(log, outputs, config)
@@ -718,7 +718,7 @@ def report_command(args: argparse.Namespace) -> int:
     """
     from gyrodrift._cliargs import method_config, read_input
     from gyrodrift.io import check_output_path
-    from gyrodrift.plots import require_matplotlib
+    from gyrodrift.plotbase import require_matplotlib
 
     require_matplotlib()  # before the long work, not after it
     out_path = Path(args.output)
