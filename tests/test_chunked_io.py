@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import read_log, write_table
-from gyrodrift.io.chunked import ChunkWriter, LogChunks, LogSummary, iter_log_chunks, log_summary
+from gyrodrift.io.chunked import ChunkWriter, LogChunks, iter_log_chunks
 
 SMALL_BLOCK = 1024  # bytes: many pyarrow blocks even in a small file
 
@@ -381,14 +381,6 @@ def test_input_file_never_modified(tmp_path):
         next(chunks)  # stopped early
     assert (hashlib.sha256(path.read_bytes()).hexdigest(), os.stat(path).st_mtime_ns) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]
-
-
-def test_log_summary(tmp_path):
-    df = read_log(_write(tmp_path, _csv_log(300, seed=6)))
-    path = tmp_path / "s.parquet"
-    pq.write_table(pa.Table.from_pandas(df, preserve_index=False), path, row_group_size=64)
-    assert log_summary(path) == LogSummary(300, 0.0, df["t"].iloc[-1])
-    assert log_summary(tmp_path / "log.csv") == LogSummary(None, None, None)
 
 
 # ---------------------------------------------------------------------------

@@ -14,7 +14,7 @@ pytest.importorskip("matplotlib")
 
 from matplotlib.figure import Figure  # noqa: E402
 
-from gyrodrift import plots  # noqa: E402
+from gyrodrift import plotbase, plots  # noqa: E402
 from gyrodrift.allan import allan_deviation, noise_terms  # noqa: E402
 from gyrodrift.compare import run_methods  # noqa: E402
 from gyrodrift.errors import ConfigError, LogFormatError  # noqa: E402
@@ -183,13 +183,13 @@ def test_minmax_decimate_caps_points_and_keeps_extremes():
     y = rng.normal(size=x.size)
     y[77_777] = 50.0
     y[3] = -60.0
-    xd, yd = plots.minmax_decimate(x, y, 20_000)
+    xd, yd = plotbase.minmax_decimate(x, y, 20_000)
     assert len(xd) <= 20_000 and len(xd) == len(yd)
     assert yd.max() == 50.0 and yd.min() == -60.0
     assert np.all(np.diff(xd) >= 0)  # time order kept
-    assert plots.minmax_decimate(x[:100], y[:100])[0].size == 100
+    assert plotbase.minmax_decimate(x[:100], y[:100])[0].size == 100
     with pytest.raises(ConfigError):
-        plots.minmax_decimate(x, y, 1)
+        plotbase.minmax_decimate(x, y, 1)
 
 
 def test_long_log_lines_are_decimated():
@@ -204,11 +204,11 @@ def test_long_log_lines_are_decimated():
     ax = fig.axes[0]
     assert ax.get_xlabel() == "time from start (h)"
     for ln in ax.get_lines():
-        assert len(ln.get_xdata()) <= plots.MAX_POINTS
+        assert len(ln.get_xdata()) <= plotbase.MAX_POINTS
     assert ax.get_lines()[0].get_ydata().max() == 9.0
     assert any("min/max envelope" in t.get_text() for t in ax.texts)
     for a in plots.fig_temperature(out).axes:
-        assert all(len(ln.get_xdata()) <= plots.MAX_POINTS for ln in a.get_lines())
+        assert all(len(ln.get_xdata()) <= plotbase.MAX_POINTS for ln in a.get_lines())
 
 
 def test_missing_column_is_named(static_outputs):
@@ -220,12 +220,12 @@ def test_save_png_is_atomic_and_png_base64_decodes(tmp_path, static_outputs):
     fig = plots.fig_rates(static_outputs["stkf"])
     path = tmp_path / "rates.png"
     path.write_bytes(b"old")
-    plots.save_png(fig, path)
+    plotbase.save_png(fig, path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert os.listdir(tmp_path) == ["rates.png"]  # no temporary file left
-    assert base64.b64decode(plots.png_base64(fig))[:4] == b"\x89PNG"
+    assert base64.b64decode(plotbase.png_base64(fig))[:4] == b"\x89PNG"
     with pytest.raises(ConfigError, match="no-such-folder"):
-        plots.save_png(fig, tmp_path / "no-such-folder" / "x.png")
+        plotbase.save_png(fig, tmp_path / "no-such-folder" / "x.png")
 
 
 def test_save_png_keeps_the_old_file_when_rendering_fails(tmp_path, static_outputs, monkeypatch):
@@ -238,7 +238,7 @@ def test_save_png_keeps_the_old_file_when_rendering_fails(tmp_path, static_outpu
 
     monkeypatch.setattr(os, "replace", fail)
     with pytest.raises(ConfigError, match="No space left"):
-        plots.save_png(fig, path)
+        plotbase.save_png(fig, path)
     assert path.read_bytes() == b"old"
     assert os.listdir(tmp_path) == ["rates.png"]
 

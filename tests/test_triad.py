@@ -10,7 +10,8 @@ from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.estimators import KalmanDrift
 from gyrodrift.model import temp_rate
 from gyrodrift.simulate import TriadModel, simulate
-from gyrodrift.triad import TRIAD_COLUMNS, TriadCompensator, TriadConfig, compensate_triad, tilt_angles
+from gyrodrift.kernels import tilt
+from gyrodrift.triad import TRIAD_COLUMNS, TriadCompensator, TriadConfig
 
 PX = (0.01, 3.0, -0.2)  # a (deg/s/degC), b (deg), c (deg/s) of x
 PY = (-0.02, -2.0, 0.5)
@@ -31,6 +32,16 @@ def static_run(duration_s=3000.0, fs_hz=20.0, roll_deg=3.0, pitch_deg=-5.0):
     gx = PX[0] * T + PX[1] * Tp + PX[2]
     gy = PY[0] * T + PY[1] * Tp + PY[2]
     return t, gx, gy, T, Tp, level_acc(t.size, roll_deg, pitch_deg)
+
+
+def compensate_triad(t_s, gx, gy, temp_c, temp_rate_cps, acc, rate_z_dps=None, config=None, triad=None, *,
+                     estimators=None):
+    """Whole x/y columns at once: the output columns, the final parameters and the refusals."""
+    tc = TriadCompensator(config or CompensatorConfig(), triad, estimators=estimators)
+    out = pd.DataFrame(tc.feed(t_s, gx, gy, temp_c, temp_rate_cps, acc, rate_z_dps))
+    out.attrs["params_x"], out.attrs["params_y"] = tc.params
+    out.attrs["triad_reasons"] = dict(tc.reasons)
+    return out
 
 
 class Recorder(KalmanDrift):
@@ -63,7 +74,7 @@ def test_exact_recovery_of_a_b_c_from_noiseless_static_data():
 
 
 def test_tilt_angles_follow_frd_signs():
-    roll, pitch = tilt_angles(level_acc(2, [10.0, 0.0], [0.0, 20.0]))
+    roll, pitch = zip(*(tilt.roll_pitch(*f) for f in level_acc(2, [10.0, 0.0], [0.0, 20.0])))
     np.testing.assert_allclose(roll, [10.0, 0.0], atol=1e-12)  # right side down: positive roll
     np.testing.assert_allclose(pitch, [0.0, 20.0], atol=1e-12)  # nose up: positive pitch
 
@@ -77,7 +88,7 @@ def test_an_unseen_roll_measures_the_drift_with_the_right_sign():
     t = np.arange(0.0, 25.0, 1.0 / fs)
     roll = np.clip((t - 12.0) * 0.5, 0.0, 3.0)  # 12..18 s at 0.5 deg/s
     ex, ey = Recorder(), Recorder()
-    tc = TriadCompensator(triad=TriadConfig(), estimators=(ex, ey))
+    tc = TriadCompensator(CompensatorConfig(), triad=TriadConfig(), estimators=(ex, ey))
     tc.feed(t, np.zeros(t.size), np.full(t.size, 0.05), np.full(t.size, 25.0), np.zeros(t.size), level_acc(t.size, roll))
     # boundary 10 s: no start edge (held); boundary 20 s: the measurement
     assert [kind for kind, _, _ in ex.log] == ["hold", "update"]
@@ -94,7 +105,7 @@ def test_refused_intervals_hold_the_parameters():
     braking = (t >= 299.5) & (t < 301.5)  # a step of 0.1 g at the 300-s edge: accel
     acc[braking, 0] += 0.1
     ex, ey = Recorder(), Recorder()
-    tc = TriadCompensator(estimators=(ex, ey))
+    tc = TriadCompensator(CompensatorConfig(), estimators=(ex, ey))
     out = tc.feed(t, gx, gy, T, Tp, acc)
     kinds = [kind for kind, _, _ in ex.log]
     assert kinds[29] == "hold" and kinds[30] == "hold"  # the intervals ending at 300 s and 310 s
@@ -144,11 +155,11 @@ def test_chunked_equals_whole_bit_for_bit():
     args = (log["t"].to_numpy(), log["gyro_x"].to_numpy(), log["gyro_y"].to_numpy(), log["temp"].to_numpy(),
             temp_rate(log["t"].to_numpy(), log["temp"].ffill().to_numpy()), log[["acc_x", "acc_y", "acc_z"]].to_numpy(),
             np.full(len(log), 0.01))
-    whole = TriadCompensator().feed(*args)
+    whole = TriadCompensator(CompensatorConfig()).feed(*args)
     rng = np.random.default_rng(0)
     cuts = np.r_[0, np.sort(rng.choice(np.arange(1, len(log)), 40, replace=False)), np.arange(3000, 3040), len(log)]
     cuts = np.unique(cuts)
-    tc = TriadCompensator()
+    tc = TriadCompensator(CompensatorConfig())
     parts = [tc.feed(*(a[i:j] for a in args)) for i, j in zip(cuts[:-1], cuts[1:])]
     for c in TRIAD_COLUMNS:
         joined = np.concatenate([p[c] for p in parts])
@@ -293,8 +304,8 @@ def test_row_by_row_equals_whole_bit_for_bit(acc_unit_mps2):
     Tp[700] = np.nan
     args = (t, log["gyro_x"].to_numpy(), log["gyro_y"].to_numpy(), log["temp"].to_numpy(), Tp, acc,
             np.sin(t / 7.0))
-    whole = TriadCompensator().feed(*args)
-    tc = TriadCompensator()
+    whole = TriadCompensator(CompensatorConfig()).feed(*args)
+    tc = TriadCompensator(CompensatorConfig())
     rows = [tc.feed(*(a[i:i + 1] for a in args)) for i in range(len(t))]
     for c in TRIAD_COLUMNS:
         joined = np.concatenate([r[c] for r in rows])
@@ -311,8 +322,8 @@ def test_row_by_row_equals_whole_at_a_high_rate(estimator):
     t, gx, gy, T, Tp, acc = static_run(duration_s=45.0, fs_hz=200.0)
     rz = 0.05 * np.sin(t)
     config = TriadConfig(estimator=estimator)
-    whole = TriadCompensator(triad=config).feed(t, gx, gy, T, Tp, acc, rz)
-    tc = TriadCompensator(triad=config)
+    whole = TriadCompensator(CompensatorConfig(), triad=config).feed(t, gx, gy, T, Tp, acc, rz)
+    tc = TriadCompensator(CompensatorConfig(), triad=config)
     rows = [tc.feed_row(t[i], gx[i], gy[i], T[i], Tp[i], acc[i], rz[i]) for i in range(t.size)]
     for k, c in enumerate(TRIAD_COLUMNS):
         np.testing.assert_array_equal(np.array([r[k] for r in rows], dtype=whole[c].dtype), whole[c])
@@ -356,7 +367,7 @@ def xy_columns(args) -> dict:
     filter run inside the kernel (stkf, kf) and a Python estimator (lsm)."""
     out = {}
     for est in ("stkf", "kf", "lsm"):
-        tc = TriadCompensator(triad=TriadConfig(estimator=est))
+        tc = TriadCompensator(CompensatorConfig(), triad=TriadConfig(estimator=est))
         cols = tc.feed(*(args[k] for k in ("t", "gx", "gy", "T", "Tp", "acc", "rz")))
         out.update({f"{est}/{c}": cols[c] for c in TRIAD_COLUMNS})
         out[f"{est}/reasons"] = np.array(list(tc.reasons.values()))

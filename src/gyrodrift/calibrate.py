@@ -64,7 +64,7 @@ from gyrodrift.kernels.thermal import fit_polynomial
 
 __all__ = [
     "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW", "BIN_WIDTH_C",
-    "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_log", "calibrate_file",
+    "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_log",
     "undo_onboard", "temperature_bins", "bin_means", "smooth_rate", "start_temperature", "prior_config",
     "prior_notes",
 ]
@@ -449,14 +449,6 @@ def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_tex
     frame = {"rotation": tuple(tuple(float(v) for v in row) for row in R), "rotation_text": text} \
         if R is not None else {"rotation_text": text}
     return replace(cal, **identity, **frame), notes
-
-
-def calibrate_file(path, **read_options) -> Calibration:
-    """:func:`calibrate_log` of the log at ``path`` (read with :func:`gyrodrift.io.read_log`
-    and ``read_options``)."""
-    from gyrodrift.io import read_log
-
-    return calibrate_log(read_log(path, **read_options), source=str(path))[0]
 
 
 # ---------------------------------------------------------------------------- prior for the compensator

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import replace
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
@@ -244,6 +243,3 @@ def markdown(df: pd.DataFrame) -> str:
     return "\n".join(parts)
 
 
-def default_config(**overrides) -> CompensatorConfig:
-    """:class:`CompensatorConfig` with ``overrides`` (a helper for tuning scripts)."""
-    return replace(CompensatorConfig(), **overrides)

@@ -263,10 +263,6 @@ class Onboard:
         gyro = f"sensor_gyro {self.instance}" if self.autopilot == "px4" else f"IMU {self.instance}"
         return gyro + (f" (device id {self.device_id})" if self.device_id else "")
 
-    def describe(self) -> str:
-        """One phrase: the gyro and its rotation, e.g. ``"IMU 0, AHRS_ORIENTATION=8 (ROLL_180)"``."""
-        return f"{self.gyro_name}, {self.rotation_text}"
-
 
 def _system_id(params: Mapping, name: str) -> int | None:
     value = params.get(name)

@@ -404,7 +404,7 @@ def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
     """PNG figures corresponding to the paper's Figures 1–9; returns the paths written."""
     from pathlib import Path
 
-    from gyrodrift import plots
+    from gyrodrift import plotbase, plots
 
     out_dir = Path(out_dir)
     static, outages, vehicle = runs["static"], runs["static-outages"], runs["vehicle"]
@@ -430,7 +430,7 @@ def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
         )
     written = []
     for name, fig in sorted(figures.items()):
-        plots.save_png(fig, out_dir / name)
+        plotbase.save_png(fig, out_dir / name)
         written.append(out_dir / name)
     return written
 
@@ -645,9 +645,9 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
         if progress:
             progress("figures")
         written += write_figures(out_dir, runs, allan)
-        from gyrodrift import plots
+        from gyrodrift import plotbase, plots
 
         path = out_dir / "fig10_11_scale_factor.png"
-        plots.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)
+        plotbase.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)
         written.append(path)
     return written

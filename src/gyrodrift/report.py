@@ -25,12 +25,7 @@ Contents, top to bottom:
    saying which column is missing;
 4. the gyrodrift version and every setting used.
 
-The Allan deviation is of the angular-rate *error*: the rate minus the true rate.
-The true rate is 0 on a motionless log (one whose reference heading, or else whose
-1-s mean compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log
-with a reference, and unknown otherwise (the figure is then left out). It is computed
-over the longest stretch without a time gap; time stamps that jitter are first put on an
-even time base (:func:`gyrodrift.allan.even_rate`), and the figure's note says so.
+The figures and their notes: :mod:`gyrodrift.report_figures`.
 
 matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 (``gyrodrift[allan]``) computes the Allan deviation.
@@ -39,17 +34,15 @@ matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 from __future__ import annotations
 
 import argparse
-import html as _html
 import math
 import sys
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import fields, is_dataclass
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Mapping
 
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import DEFAULT_METHOD
 from gyrodrift.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
@@ -58,24 +51,15 @@ from gyrodrift._cliargs import add_input_options, add_method_options
 from gyrodrift._progress import progress_iter as _progress
 from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
+from gyrodrift.report_figures import esc, figure_plan, html_table, render_figure
 
-__all__ = ["ALLAN_METHODS", "build_report", "write_report", "report_command", "add_report_parser"]
+__all__ = ["build_report", "write_report", "report_command", "add_report_parser"]
 
-#: Methods whose compensated rate error gets an Allan-deviation curve (paper Fig. 6), the default estimator first.
-ALLAN_METHODS = (DEFAULT_METHOD, "stkf", "kf", "mlr")
 
-_DPI = 100
 _NONE = "–"
 
 
-# ---------------------------------------------------------------------- progress
-
-
 # ----------------------------------------------------------------------- helpers
-
-
-def _esc(value) -> str:
-    return _html.escape(str(value), quote=True)
 
 
 def _num(value, spec: str = ".4g") -> str:
@@ -94,23 +78,6 @@ def _duration_text(seconds: float) -> str:
     h, rest = divmod(int(round(seconds)), 3600)
     m, s = divmod(rest, 60)
     return (f"{h} h {m:02d} min {s:02d} s" if h else f"{m} min {s:02d} s") + f" ({seconds:.0f} s)"
-
-
-def _table(header: list[str], rows: list[list[str]], *, cls: str = "") -> str:
-    """An HTML table; cells are already-escaped HTML."""
-    head = "".join(f"<th>{h}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
-    attr = f' class="{cls}"' if cls else ""
-    return f"<table{attr}><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def _main_method(outputs: Mapping[str, pd.DataFrame]) -> str | None:
-    """The default estimator if it ran, else ``stkf`` if it ran, else the first method that ran."""
-    for name in (DEFAULT_METHOD, "stkf"):
-        if name in outputs:
-            return name
-    return next(iter(outputs), None)
-
 
 
 def _causal(name: str) -> bool:
@@ -157,21 +124,21 @@ def _read_section(log, outputs, skipped, source: str) -> str:
         units.append(f"gyro unit in file {log.attrs['gyro_unit']}")
     if "frame" in log.attrs:
         units.append(f"frame {str(log.attrs['frame']).upper()}")
-    run = [f"{_esc(_label(m))}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
+    run = [f"{esc(_label(m))}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
     rows = [
-        ("file", _esc(source)),
+        ("file", esc(source)),
         ("rows", f"{len(log)}"),
-        ("duration", _esc(_duration_text(dur))),
+        ("duration", esc(_duration_text(dur))),
         ("sample rate", f"{fs:.4g} Hz (mean)"),
         ("temperature", f"{temp.min():.2f} to {temp.max():.2f} degC"),
-        ("compass", _esc(compass)),
-        ("evaluation columns", _esc(", ".join(evaluation)) if evaluation else "none (no error statistics)"),
+        ("compass", esc(compass)),
+        ("evaluation columns", esc(", ".join(evaluation)) if evaluation else "none (no error statistics)"),
     ]
     if units:
-        rows.append(("read as", _esc(", ".join(units))))
+        rows.append(("read as", esc(", ".join(units))))
     rows.append(("methods run", ", ".join(run) if run else "none"))
     if skipped:
-        items = "".join(f"<li><b>{_esc(m)}</b>: {_esc(r)}</li>" for m, r in skipped.items())
+        items = "".join(f"<li><b>{esc(m)}</b>: {esc(r)}</li>" for m, r in skipped.items())
         rows.append(("methods skipped", f"<ul>{items}</ul>"))
     body = "".join(f"<tr><th scope=row>{k}</th><td>{v}</td></tr>" for k, v in rows)
     return f'<section id="read"><h2>What was read</h2><table class="facts">{body}</table></section>'
@@ -226,7 +193,7 @@ def _summary_section(log, outputs) -> str:
     if has_ref:
         header += ["heading error mean (deg)", "heading error variance (deg²)", "heading error RMS (deg)",
                    "heading error max |·| (deg)"]
-    header += ["filter updates", "gated rows (all reasons)"] + [f"gated: {_esc(r)}" for r in reasons]
+    header += ["filter updates", "gated rows (all reasons)"] + [f"gated: {esc(r)}" for r in reasons]
 
     def error_cells(bias, heading):
         cells = []
@@ -252,7 +219,7 @@ def _summary_section(log, outputs) -> str:
         reason = out["gate_reason"].fillna("").astype(str)
         n = max(len(out), 1)
         share = [f"{100.0 * float((reason == r).sum()) / n:.1f} %" for r in reasons]
-        label = _esc(_label(name)) + ("" if _causal(name) else " †")
+        label = esc(_label(name)) + ("" if _causal(name) else " †")
         rows.append(
             [label] + error_cells(bias, heading)
             + [str(int(pd.to_numeric(updated_column(out, name), errors="coerce").fillna(0).sum())),
@@ -273,251 +240,7 @@ def _summary_section(log, outputs) -> str:
                  "rows where compass aiding was refused, by reason (see the parameter figure)")
     notes.append("† non-causal: uses the whole log (mlr) or the true drift (oracle), not possible in real time")
     note = "<ul class=how>" + "".join(f"<li>{n}</li>" for n in notes) + "</ul>"
-    return f'<section id="summary"><h2>Summary</h2>{_table(header, rows, cls="summary")}{note}</section>'
-
-
-# ------------------------------------------------------------------ Allan inputs
-
-
-@dataclass(frozen=True)
-class _AllanInput:
-    rates: dict  # label -> rate error array, deg/s
-    fs_hz: float
-    truth: str  # how the true rate was obtained
-    span: str  # which rows were used
-
-
-def _longest_even_stretch(t: np.ndarray) -> slice:
-    """Rows of the longest stretch without a time gap (a step > 1.5 median steps)."""
-    dt = np.diff(t)
-    med = float(np.median(dt))
-    breaks = np.flatnonzero(dt > 1.5 * med)
-    edges = np.r_[0, breaks + 1, t.size]
-    k = int(np.argmax(np.diff(edges)))
-    return slice(int(edges[k]), int(edges[k + 1]))
-
-
-def _moving_by_rate(out: pd.DataFrame, config: CompensatorConfig) -> bool:
-    """True when the 1-s mean compensated rate exceeds the turning threshold anywhere."""
-    t = out["t"].to_numpy(float)
-    rate = out["rate_z"].ffill().to_numpy(float)
-    fs = (t.size - 1) / (t[-1] - t[0])
-    n = max(1, int(round(config.gate.turn_window_s * fs)))
-    if rate.size < n:
-        return False
-    mean = np.convolve(rate, np.ones(n) / n, mode="valid")
-    return bool(np.nanmax(np.abs(mean)) > config.gate.turn_rate_dps)
-
-
-def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
-    """Rate-error records for the Allan figure, or the reason it cannot be drawn."""
-    main = _main_method(outputs)
-    if main is None:
-        return "no method ran: Allan deviation not shown"
-    base = outputs[main]
-    t = base["t"].to_numpy(float)
-    if t.size < 3:
-        return "too few rows: Allan deviation not shown"
-    ref = base[REF_HEADING].to_numpy(float) if REF_HEADING in base.columns else None
-    true_rate = np.zeros(t.size)
-    usable = np.ones(t.size, dtype=bool)
-    if ref is not None and np.isfinite(ref).sum() >= 2:
-        ok = np.isfinite(ref)
-        unwrapped = np.interp(t, t[ok], np.unwrap(ref[ok], period=360.0))
-        if float(np.ptp(unwrapped[ok])) < 1.0:
-            truth = "0 (motionless: ref_heading changes by less than 1 deg)"
-        else:
-            true_rate = np.gradient(unwrapped, t)
-            usable = (t >= t[ok][0]) & (t <= t[ok][-1])
-            truth = "d(ref_heading)/dt (the log moves)"
-    elif _moving_by_rate(base, config):
-        return ("the log moves (1-s mean rate above the turning threshold) and has no ref_heading, so the true "
-                "rate is unknown: Allan deviation not shown")
-    else:
-        truth = "0 (motionless: the 1-s mean compensated rate never exceeds the turning threshold)"
-    stretch = _longest_even_stretch(t)
-    rows = np.flatnonzero(usable)
-    rows = rows[(rows >= stretch.start) & (rows < stretch.stop)]
-    if rows.size < 3:
-        return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
-    rows = slice(int(rows[0]), int(rows[-1]) + 1)
-    tt = t[rows]
-    from gyrodrift.allan import even_rate
-
-    rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
-    chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
-    for name in chosen:
-        rates[f"{_label(name)} rate_z"] = outputs[name]["rate_z"].to_numpy(float)[rows] - true_rate[rows]
-    even = {label: even_rate(tt, r) for label, r in rates.items()}  # a jittery time base resampled
-    rates = {label: r for label, (r, _, _) in even.items()}
-    _, fs, resampled = next(iter(even.values()))
-    span = "all rows" if tt.size == t.size else f"rows {rows.start}–{rows.stop - 1} (longest stretch without a time gap)"
-    if resampled:
-        span += ", resampled to an even time base (the time stamps jitter)"
-    return _AllanInput(rates=rates, fs_hz=float(fs), truth=truth, span=span)
-
-
-# ------------------------------------------------------------------------ figures
-
-
-@dataclass
-class _Figure:
-    key: str
-    title: str
-    how: str
-    make: Callable[[], object] | None = None  # returns a Figure
-    missing: str | None = None  # one-line note when left out
-    extra: str = ""  # HTML after the figure (e.g. a table)
-
-
-_HOW = {
-    "temperature": "Top: the gyro temperature. Bottom: its rate of change T′ as the compensator computed it. "
-    "The drift model a·T + b·T′ + c uses both; a gyro drifts fastest where |T′| is large, while heating or "
-    "cooling (paper Fig. 1a and 7).",
-    "rates": "Grey: the raw gyro rate; red: the rate after subtracting the estimated drift. On a motionless log "
-    "the red line should stay centred on zero however the temperature changes (paper Fig. 3); on a moving log "
-    "both show the motion and differ by the drift estimate.",
-    "bias": "Each method's drift estimate bias_z. Black dashed: the true drift (simulated logs); grey: the raw "
-    "rate, which on a motionless log is the drift plus noise (paper Fig. 2). The closer a line follows the "
-    "truth, the smaller its bias error in the summary table. Steps happen at filter updates.",
-    "params": "The parameters of drift = a·T + b·T′ + c in force at each row. Dots: filter updates, one per "
-    "accepted interval. Shaded: rows where compass aiding was refused, coloured by reason (init, gap, "
-    "no_compass, field, turning, interference); there the parameters are held and keep compensating (paper "
-    "eq. 5). Long shaded stretches are where the filter could not learn.",
-    "heading": "Blue: the compass heading; red: the heading integrated from the compensated gyro, starting at "
-    "the first compass heading; green dashed: the reference. All unwrapped (no jump at 0/360 deg). Compass "
-    "disturbances show as blue bumps that the gyro heading does not follow (paper Fig. 8).",
-    "heading_error": "Heading minus reference, wrapped to ±180 deg. Solid lines: causal methods (possible in "
-    "real time); dashed: non-causal ones (mlr is fitted on the whole log; oracle removes the true drift and "
-    "shows the limit set by gyro noise alone). Growth during the shaded stretches of the parameter figure shows "
-    "how well a method holds its drift model through aiding outages (paper Figs. 4, 5, 9).",
-    "calibration": "What gyrodrift calibrate would write for an autopilot from this log: per gyro axis, the drift "
-    "as a cubic in temperature (red) over the temperatures seen (TMIN..TMAX), fitted to the still samples (grey; "
-    "blue: their mean per temperature bin, each bin weighing the same). Bottom: bin mean minus fit; dashed: ± the "
-    "residual RMS calibrate prints. A residual with a shape (a loop, a trend) is drift a cubic in temperature does "
-    "not explain, e.g. heating-rate dependence, which the adaptive filter's b·T′ term and the compass take up.",
-    "allan": "Allan deviation of the angular-rate error (rate minus the true rate) against averaging time τ, "
-    "with 68 % confidence bands. Slope −1/2: angle random walk N (read at τ = 1 s); flat bottom: bias "
-    "instability B; +1/2: rate random walk K (read at τ = 3 s); +1: rate ramp. Temperature compensation should "
-    "lower the long-τ (right-hand) part of the raw curve (paper Fig. 6).",
-}
-
-
-def _figure_plan(log, outputs, config) -> list[_Figure]:
-    from gyrodrift import plots
-
-    main = _main_method(outputs)
-    first = next(iter(outputs.values()), None)
-    temp_table = first if first is not None else log
-    plan = [_Figure("temperature", "Temperature", _HOW["temperature"], make=lambda: plots.fig_temperature(temp_table)),
-            _calibration_figure(log)]
-    if main is None:
-        note = "no method ran: compensation figures not shown"
-        for key, title in (("rates", "Raw and compensated rate"), ("bias", "Drift estimates"),
-                           ("params", "Drift-model parameters"), ("heading", "Headings"),
-                           ("heading_error", "Heading error"), ("allan", "Allan deviation")):
-            plan.append(_Figure(key, title, _HOW[key], missing=note))
-        return plan
-    out = outputs[main]
-    label = _label(main)
-    plan.append(_Figure("rates", f"Raw and compensated rate ({label})", _HOW["rates"],
-                        make=lambda: plots.fig_rates(out, method=label)))
-    how = _HOW["bias"] if TRUE_BIAS_Z in log.columns else _HOW["bias"] + " No true_bias_z: the true drift is not drawn."
-    plan.append(_Figure("bias", "Drift estimates of every method", how, make=lambda: plots.fig_bias(outputs)))
-    if out[["a", "b", "c"]].notna().any().any():
-        plan.append(_Figure("params", f"Drift-model parameters and aiding gates ({label})", _HOW["params"],
-                            make=lambda: plots.fig_params(out, method=label)))
-    else:
-        plan.append(_Figure("params", "Drift-model parameters", _HOW["params"],
-                            missing=f"{label} has no a, b, c parameters: parameter figure not shown"))
-    plan.append(_Figure("heading", f"Headings ({label})", _HOW["heading"],
-                        make=lambda: plots.fig_heading(out, method=label)))
-    if REF_HEADING in log.columns:
-        plan.append(_Figure("heading_error", "Heading error of every method", _HOW["heading_error"],
-                            make=lambda: plots.fig_heading_error(outputs)))
-    else:
-        plan.append(_Figure("heading_error", "Heading error", _HOW["heading_error"],
-                            missing="no ref_heading: heading error not shown"))
-    plan.append(_allan_figure(outputs, config))
-    return plan
-
-
-def _calibration_figure(log) -> _Figure:
-    """The thermal calibration fit of the log, or a note saying why the log gives none."""
-    from gyrodrift import plots
-    from gyrodrift.calibrate import CalibrationError, fit_calibration
-
-    title = "Thermal calibration fit (gyrodrift calibrate)"
-    try:
-        cal = fit_calibration(log, source="this log")
-    except CalibrationError as err:
-        return _Figure("calibration", title, _HOW["calibration"], missing=f"no thermal calibration fit: {err}")
-    return _Figure("calibration", title, _HOW["calibration"] + f" {cal.summary()}.",
-                   make=lambda: plots.fig_calibration(log, cal))
-
-
-def _allan_figure(outputs, config) -> _Figure:
-    """The Allan entry; the curves are computed when it is rendered (inside :func:`_progress`)."""
-    inputs = _allan_inputs(outputs, config)
-    if isinstance(inputs, str):
-        return _Figure("allan", "Allan deviation", _HOW["allan"], missing=inputs)
-    how = _HOW["allan"] + f" True rate: {inputs.truth}; {inputs.span}."
-    entry = _Figure("allan", "Allan deviation of the rate error", how)
-
-    def make():
-        from gyrodrift import plots
-        from gyrodrift.allan import allan_deviation, noise_terms
-
-        curves = {label: allan_deviation(r, inputs.fs_hz) for label, r in inputs.rates.items()}
-        terms = {label: noise_terms(c) for label, c in curves.items()}
-        entry.extra = _terms_table(terms)
-        return plots.fig_allan(curves, terms)
-
-    entry.make = make
-    return entry
-
-
-def _term_cell(term, per_hour=None, *, at_tau: bool = False) -> str:
-    if term is None:
-        return "not seen"
-    text = f"{term.value:.3g} [{term.lo:.3g}, {term.hi:.3g}] {_esc(term.unit)}"
-    if per_hour is not None:
-        text += f" = {per_hour.value:.3g} {_esc(per_hour.unit)}"
-    if at_tau:
-        text += f" at τ = {term.tau_s:.3g} s"
-    return text
-
-
-def _terms_table(terms: Mapping[str, object]) -> str:
-    rows = []
-    for label, t in terms.items():
-        per_h = t.unit == "deg/s"
-        rows.append([
-            _esc(label),
-            _term_cell(t.arw, t.arw_deg_rt_h if per_h else None),
-            _term_cell(t.bias_instability, t.bias_instability_deg_h if per_h else None, at_tau=True),
-            _term_cell(t.rrw),
-            _term_cell(t.rate_ramp),
-        ])
-    header = ["rate error", "angle random walk N", "bias instability B", "rate random walk K", "rate ramp R"]
-    note = ("<p class=how>Noise terms read off each curve by the slope method of IEEE Std 952 "
-            "(<code>gyrodrift.allan.noise_terms</code>), with 68 % intervals; “not seen”: the curve has no "
-            "region of that slope.</p>")
-    return _table(header, rows, cls="terms") + note
-
-
-def _render_figure(entry: _Figure) -> str:
-    from gyrodrift.plots import png_base64
-
-    head = f'<section class="figure" id="fig-{entry.key}"><h2>{_esc(entry.title)}</h2>'
-    if entry.make is None:
-        return head + f'<p class="missing">{_esc(entry.missing)}</p></section>'
-    fig = entry.make()
-    w, h = (int(round(v * _DPI)) for v in fig.get_size_inches())
-    data = png_base64(fig, dpi=_DPI)
-    img = (f'<img src="data:image/png;base64,{data}" width="{w}" height="{h}" '
-           f'alt="{_esc(entry.title)}">')
-    return head + img + f'<p class="how"><b>How to read this:</b> {_esc(entry.how)}</p>' + entry.extra + "</section>"
+    return f'<section id="summary"><h2>Summary</h2>{html_table(header, rows, cls="summary")}{note}</section>'
 
 
 # ----------------------------------------------------------------------- settings
@@ -547,15 +270,15 @@ def _versions() -> list[tuple[str, str]]:
 
 
 def _settings_section(config: CompensatorConfig, outputs) -> str:
-    versions = ", ".join(f"{_esc(k)} {_esc(v)}" for k, v in _versions())
-    rows = [[f"<code>{_esc(k)}</code>", f"<code>{_esc(v)}</code>"] for k, v in _flatten(config)]
-    estimators = [f"{_esc(_label(m))}: {_esc(o.attrs.get('estimator', m))}" for m, o in outputs.items()]
+    versions = ", ".join(f"{esc(k)} {esc(v)}" for k, v in _versions())
+    rows = [[f"<code>{esc(k)}</code>", f"<code>{esc(v)}</code>"] for k, v in _flatten(config)]
+    estimators = [f"{esc(_label(m))}: {esc(o.attrs.get('estimator', m))}" for m, o in outputs.items()]
     text = f"<p>Software: {versions}.</p>"
     if estimators:
         text += (f"<p>Estimator of each method: {', '.join(estimators)} (every method sees the same gates and "
                  "settings; only the drift estimate differs).</p>")
     return (f'<section id="settings"><h2>Software and settings</h2>{text}'
-            f'{_table(["setting (CompensatorConfig)", "value"], rows, cls="settings")}</section>')
+            f'{html_table(["setting (CompensatorConfig)", "value"], rows, cls="settings")}</section>')
 
 
 # --------------------------------------------------------------------------- page
@@ -626,33 +349,33 @@ def build_report(
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
     from gyrodrift import __version__
 
-    from gyrodrift.plots import require_matplotlib
+    from gyrodrift.plotbase import require_matplotlib
 
     require_matplotlib()
-    plan = _figure_plan(log, outputs, config)
+    plan = figure_plan(log, outputs, config)
     parts = []
     for entry in _progress(plan, len(plan), "report figures"):
         try:
-            parts.append(_render_figure(entry))
+            parts.append(render_figure(entry))
         except GyroDriftError as err:  # e.g. allantools missing: leave this figure out, say why
             entry.make, entry.missing = None, f"{entry.title} not shown: {err}"
-            parts.append(_render_figure(entry))
+            parts.append(render_figure(entry))
     omitted = [e for e in plan if e.make is None and e.missing]
     toc = "".join(
-        f'<li><a href="#fig-{e.key}">{_esc(e.title)}</a>' + (" (not shown)" if e.make is None else "") + "</li>"
+        f'<li><a href="#fig-{e.key}">{esc(e.title)}</a>' + (" (not shown)" if e.make is None else "") + "</li>"
         for e in plan
     )
     body = [
-        f"<header><h1>{_esc(title)}</h1>",
+        f"<header><h1>{esc(title)}</h1>",
         f'<p class="sub">Temperature-drift compensation of a MEMS gyro with compass aiding (gyrodrift '
-        f"{_esc(__version__)}, after Feng, Li, Zhang, Sensors 2015, doi:10.3390/s150511222).</p></header>",
+        f"{esc(__version__)}, after Feng, Li, Zhang, Sensors 2015, doi:10.3390/s150511222).</p></header>",
         _read_section(log, outputs, skipped, source),
         _summary_section(log, outputs),
         f'<nav><h2>Figures</h2><ul><li><a href="#summary">Summary table</a></li>{toc}'
         f'<li><a href="#settings">Software and settings</a></li></ul></nav>',
         *parts,
         _settings_section(config, outputs),
-        f"<footer>Generated by gyrodrift {_esc(__version__)}. "
+        f"<footer>Generated by gyrodrift {esc(__version__)}. "
         f"{len(plan) - len(omitted)} of {len(plan)} figures shown.</footer>",
     ]
     return (
@@ -660,7 +383,7 @@ def build_report(
         f'<meta http-equiv="Content-Security-Policy" content="{_CSP}">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         '<link rel="icon" href="data:,">'
-        f"<title>{_esc(title)}</title><style>{_CSS}</style></head>\n<body>\n"
+        f"<title>{esc(title)}</title><style>{_CSS}</style></head>\n<body>\n"
         + "\n".join(body)
         + "\n</body></html>\n"
     )
@@ -718,7 +441,7 @@ def report_command(args: argparse.Namespace) -> int:
     """
     from gyrodrift._cliargs import method_config, read_input
     from gyrodrift.io import check_output_path
-    from gyrodrift.plots import require_matplotlib
+    from gyrodrift.plotbase import require_matplotlib
 
     require_matplotlib()  # before the long work, not after it
     out_path = Path(args.output)

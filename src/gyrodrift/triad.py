@@ -99,23 +99,20 @@ end). This module holds the settings, the state arrays and the table functions.
 Causality and chunks: a row depends only on earlier rows. :class:`TriadCompensator`
 runs the same kernel on chunks of any size, one row included
 (:meth:`TriadCompensator.feed_row`, the streaming compensator's case), with results
-identical bit for bit to one chunk (:func:`compensate_triad`).
+identical bit for bit to one chunk.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
-from gyrodrift.compensator.config import CompensatorConfig, build_estimator
-from gyrodrift.compensator.engine import compiled_arrays
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y
 from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.estimators import Observation
-from gyrodrift.estimators.base import LinearDrift
+from gyrodrift.estimators.base import LinearDrift, Observation, make_estimator
+from gyrodrift.estimators.kalman import compiled_arrays
 from gyrodrift.kernels import layout as L
 from gyrodrift.kernels import tilt
 from gyrodrift.settings import check, setting
@@ -123,11 +120,9 @@ from gyrodrift.settings import check, setting
 __all__ = [
     "TriadConfig",
     "TriadCompensator",
-    "compensate_triad",
     "has_triad_inputs",
     "TRIAD_COLUMNS",
     "TRIAD_REASONS",
-    "tilt_angles",
 ]
 
 #: Output columns, in order: compensated rates and removed drifts (deg/s), and 1 where the
@@ -149,7 +144,7 @@ def _interval_estimators() -> tuple:
 
 @dataclass(frozen=True, kw_only=True)
 class TriadConfig:
-    """Settings of the x/y gravity aiding (the rest comes from :class:`CompensatorConfig`).
+    """Settings of the x/y gravity aiding (the rest comes from the heading axis's settings).
 
     Attributes
     ----------
@@ -172,8 +167,8 @@ class TriadConfig:
     residual_k : float
         Residual gate in standard deviations of the predicted disagreement.
     estimator : str
-        Drift estimator of the x and y axes (:mod:`gyrodrift.estimators`; its settings
-        come from :class:`CompensatorConfig`): one that learns from interval
+        Drift estimator of the x and y axes (:mod:`gyrodrift.estimators`, with the heading
+        axis's ``kalman`` settings): one that learns from interval
         measurements, default ``stkf``; the ``adaptive`` model (heading, compass) is the
         heading axis's.
     """
@@ -190,22 +185,6 @@ class TriadConfig:
 
     def __post_init__(self):
         check(self)
-
-
-def tilt_angles(acc_g):
-    """Roll and pitch (deg) of FRD specific force rows ``(N, 3)`` (any unit).
-
-    ``roll = atan2(-f_y, -f_z)``, ``pitch = asin(f_x/|f|)``
-    (:func:`gyrodrift.kernels.tilt.roll_pitch`).
-
-    >>> r, p = tilt_angles(np.array([[0.0, 0.0, -1.0], [np.sin(np.radians(10.0)), 0.0, -np.cos(np.radians(10.0))]]))
-    >>> [round(float(v), 9) + 0.0 for v in r], [round(float(v), 9) + 0.0 for v in p]
-    ([0.0, 0.0], [0.0, 10.0])
-    """
-    f = np.ascontiguousarray(acc_g, dtype=float).reshape(-1, 3)
-    roll, pitch = np.empty(f.shape[0]), np.empty(f.shape[0])
-    tilt.roll_pitch_all(f, roll, pitch)
-    return roll, pitch
 
 
 def _column(values) -> np.ndarray:
@@ -228,14 +207,14 @@ class TriadCompensator:
 
     Parameters
     ----------
-    config : CompensatorConfig, optional
-        ``update_interval_s``, ``gyro_noise_dps_rthz``, ``gate`` (``max_gap_s``,
-        ``turn_rate_dps``, ``turn_window_s``, ``relock_intervals``) and the estimator
-        (``kalman``, ``adaptive``) as for the z axis; the estimator's name is
+    config : CompensatorConfig
+        The heading axis's settings, of which the x/y axes take ``update_interval_s``,
+        ``gyro_noise_dps_rthz``, ``gate`` (``max_gap_s``, ``turn_rate_dps``,
+        ``turn_window_s``, ``relock_intervals``) and ``kalman``; the estimator's name is
         ``triad.estimator``.
     triad : TriadConfig, optional
     estimators : (DriftEstimator, DriftEstimator), optional
-        Fresh estimators for x and y instead of two built from ``config``; their drift
+        Fresh estimators for x and y instead of two built from the settings; their drift
         must be eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`). The Kalman
         filters are updated inside the compiled row loop, others here at interval ends.
 
@@ -243,7 +222,8 @@ class TriadCompensator:
     --------
     A still, level unit whose x gyro reads 0.1 deg/s and y gyro -0.2 deg/s:
 
-    >>> tc = TriadCompensator()
+    >>> from gyrodrift.compensator import CompensatorConfig
+    >>> tc = TriadCompensator(CompensatorConfig())
     >>> t = np.arange(0.0, 300.0, 0.1)
     >>> acc = np.tile([0.0, 0.0, -1.0], (t.size, 1))
     >>> out = tc.feed(t, np.full(t.size, 0.1), np.full(t.size, -0.2), np.full(t.size, 25.0), np.zeros(t.size), acc)
@@ -251,8 +231,8 @@ class TriadCompensator:
     (0.1, -0.2)
     """
 
-    def __init__(self, config=None, triad: TriadConfig | None = None, *, estimators=None):
-        self.config = config or CompensatorConfig()
+    def __init__(self, config, triad: TriadConfig | None = None, *, estimators=None):
+        self.config = config
         self.triad = triad or TriadConfig()
         tc, gate = self.triad, self.config.gate
         if tc.edge_s > 0.5 * self.config.update_interval_s:
@@ -261,8 +241,7 @@ class TriadCompensator:
                 f"({self.config.update_interval_s:g} s)"
             )
         if estimators is None:
-            axis_config = replace(self.config, estimator=self.triad.estimator)
-            estimators = (build_estimator(axis_config), build_estimator(axis_config))
+            estimators = tuple(make_estimator(self.triad.estimator, config=self.config.kalman) for _ in "xy")
         for est in estimators:
             owner = next((k for k in type(est).__mro__ if "drift" in k.__dict__), None)
             if owner is not LinearDrift:
@@ -444,25 +423,6 @@ class _OneRow:
     def bind(self, state: tuple) -> None:
         """The kernel's arguments with these state arrays."""
         self.args = (*self.inputs, 0, *state, self.out, self.gated)
-
-
-def compensate_triad(
-    t_s, gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps, acc, rate_z_dps=None, config=None,
-    triad: TriadConfig | None = None, *, estimators=None,
-) -> pd.DataFrame:
-    """Compensate whole x/y columns at once; see :class:`TriadCompensator` (same arguments).
-
-    Returns
-    -------
-    DataFrame
-        The columns of :data:`TRIAD_COLUMNS`; ``attrs["params_x"]``, ``attrs["params_y"]``
-        (final [a, b, c]) and ``attrs["triad_reasons"]`` (refused intervals by reason).
-    """
-    tc = TriadCompensator(config, triad, estimators=estimators)
-    out = pd.DataFrame(tc.feed(t_s, gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps, acc, rate_z_dps))
-    out.attrs["params_x"], out.attrs["params_y"] = tc.params
-    out.attrs["triad_reasons"] = dict(tc.reasons)
-    return out
 
 
 def has_triad_inputs(columns) -> bool:

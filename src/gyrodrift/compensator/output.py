@@ -15,9 +15,7 @@ method, not the column). :func:`updated_column` reads either.
 
 from __future__ import annotations
 
-import math
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -26,6 +24,7 @@ from gyrodrift import gating
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES
+from gyrodrift.samples import CompensatedSample
 
 __all__ = ["CompensatedSample", "UNOBSERVABLE", "MEASUREMENT_COLUMNS", "output_frame", "with_attrs",
            "check_input_columns", "append_input_columns", "updated_column", "LEGACY_UPDATED"]
@@ -37,46 +36,6 @@ UNOBSERVABLE = UNOBSERVABLE_NAMES
 #: Columns of ``attrs["measurements"]``: time (s), drift measurement m (deg/s), interval
 #: means of T (degC) and T' (degC/s), variance r ((deg/s)²).
 MEASUREMENT_COLUMNS = ("t", "m", "temp", "temp_rate", "r")
-
-
-@dataclass(frozen=True)
-class CompensatedSample:
-    """One output row (the output contract of ``gyrodrift compensate``)."""
-
-    t: float
-    rate_z: float
-    bias_z: float
-    heading: float
-    a: float
-    b: float
-    c: float
-    updated: int
-    gated: int
-    gate_reason: str
-    temp_rate: float
-    compass_heading: float
-    unobservable: str
-    bias_sd: float
-    heading_fused: float
-    heading_fused_sd: float
-    heading_sd: float
-    #: x and y axes (deg/s; :mod:`gyrodrift.triad`), when the samples carry ``gyro_x_dps``,
-    #: ``gyro_y_dps`` and ``acc``; NaN (and ``tilt_gated`` 0) otherwise.
-    rate_x: float = math.nan
-    rate_y: float = math.nan
-    bias_x: float = math.nan
-    bias_y: float = math.nan
-    tilt_gated: int = 0
-    #: Scale factor (Sec. 4.3): NaN here. A :class:`Compensator` given ``scale_factor`` returns
-    #: :class:`gyrodrift.scale_factor.CompensatedSFSample`, a subclass in which these four are
-    #: fields: SF in force (unitless), its standard deviation, ``rate_z / sf`` (deg/s) and the
-    #: SF-compensated heading (deg). Class attributes, not fields, so that ``asdict`` and
-    #: ``fields`` of a sample without a scale factor give the columns of :func:`compensate`.
-    sf = math.nan
-    sf_sd = math.nan
-    rate_sf = math.nan
-    heading_sf = math.nan
-
 
 
 def output_frame(cols: dict, gated: np.ndarray | None = None) -> pd.DataFrame:

@@ -23,7 +23,7 @@ from gyrodrift.kernels import kalman as kernel
 from gyrodrift.kernels import layout as L
 from gyrodrift.settings import check, check_covariance, setting
 
-__all__ = ["KalmanConfig", "KernelFilter", "filter_arrays", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
+__all__ = ["KalmanConfig", "KernelFilter", "filter_arrays", "compiled_arrays", "KalmanDrift", "PlainKalmanDrift", "BiasKalman"]
 
 
 #: Names of the elements of a drift-model triple, for messages.
@@ -134,6 +134,16 @@ class KernelFilter(LinearDrift):
     def hold(self) -> np.ndarray:
         kernel.hold(self._ef, self._ei, 1.0)
         return self.params
+
+
+def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
+    """The state arrays of an estimator that a compiled row loop updates itself (a
+    :class:`KernelFilter` whose ``update`` and ``hold`` are the kernels'), or None: it is
+    updated in Python at interval ends (a subclass overriding them keeps its own)."""
+    cls = type(estimator)
+    if not isinstance(estimator, KernelFilter) or cls.update is not KernelFilter.update or cls.hold is not KernelFilter.hold:
+        return None
+    return estimator.kernel_arrays
 
 
 @register

@@ -33,7 +33,7 @@ from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.tlog import read_tlog, read_tlog_imus
 from gyrodrift.io.ulog import read_ulog, read_ulog_gyros
-from gyrodrift.io.validate import message
+from gyrodrift.io.messages import message
 
 __all__ = [
     "FORMATS",

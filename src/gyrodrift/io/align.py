@@ -36,7 +36,8 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, first_outside, limit_of, outside_problem
-from gyrodrift.io.validate import message
+from gyrodrift.io.messages import message
+from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 
 __all__ = [
     "Stream",
@@ -48,6 +49,7 @@ __all__ = [
     "yaw_deg",
     "check_temperature",
     "contract_frame",
+    "binary_log_frame",
     "describe_rate",
 ]
 
@@ -273,3 +275,27 @@ def contract_frame(
 def describe_rate(t: np.ndarray) -> str:
     """Short text for a stream's sample count and rate, e.g. ``"31 samples, 1.0 Hz"``."""
     return f"{np.size(t)} samples, {median_rate_hz(t):.3g} Hz"
+
+
+def binary_log_frame(name: str, fmt: str, t, gyro_dps, temp_c, mag, acc, ref_heading, *, topics: dict, summary: str,
+                     no_compass_why: str, no_temp_why: str, gyro_max_dps: float, mag_unit: str = "gauss",
+                     **extra_attrs) -> pd.DataFrame:
+    """The frame of a binary log (:func:`contract_frame`) with the ``attrs`` its reader gives.
+
+    ``attrs`` holds ``source`` (``name``), ``format`` (``fmt``), the units, ``frame``
+    "ned", ``compass`` ("mag", or :data:`~gyrodrift.io.notes.NO_COMPASS` when ``mag`` is
+    None), ``topics``, ``summary`` and ``extra_attrs``, with a note of a missing compass
+    (``no_compass_why`` not empty) and of a missing temperature (``temp_c`` None: every
+    row then reads :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C`; ``no_temp_why`` says why).
+    """
+    attrs = {"source": name, "format": fmt, "gyro_unit": "deg/s", "frame": "ned",
+             "compass": NO_COMPASS if mag is None else "mag",
+             **({} if mag is None else {"mag_unit": mag_unit}),
+             **({} if acc is None else {"acc_unit": "m/s^2"}),
+             "topics": topics, "summary": summary, **extra_attrs}
+    if no_compass_why:
+        add_note(attrs, no_compass_note(name, no_compass_why))
+    if temp_c is None:
+        add_note(attrs, no_temperature_note(name, no_temp_why))
+        temp_c = np.full(t.size, NO_TEMPERATURE_C)
+    return contract_frame(t, gyro_dps, temp_c, mag, acc, ref_heading, attrs, gyro_max_dps=gyro_max_dps)

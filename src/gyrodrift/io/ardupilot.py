@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -56,7 +55,7 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
     Stream,
     check_temperature,
-    contract_frame,
+    binary_log_frame,
     describe_rate,
     increasing,
     interp_heading,
@@ -65,8 +64,8 @@ from gyrodrift.io.align import (
     on_following_rows,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.notes import NO_TEMPERATURE_C
+from gyrodrift.io.messages import message, one_line, read_log_bytes
 from gyrodrift.onboard import ardupilot_onboard
 
 __all__ = ["read_ardupilot", "read_ardupilot_imus", "MAGIC"]
@@ -121,20 +120,7 @@ def _import_dfreader():
 def _check_file(path: Path) -> None:
     """Raise a one-line :class:`LogFormatError` unless ``path`` starts like a DataFlash log."""
     name = str(path)
-    if path.is_dir():
-        raise LogFormatError(message(name, "is a directory, not a DataFlash log", "give the path of a .bin log"))
-    if not path.exists():
-        raise LogFormatError(message(name, "input file does not exist", "check the path and the current directory"))
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(len(MAGIC))
-    except OSError as exc:
-        raise LogFormatError(
-            message(name, f"cannot read the input file ({exc.strerror or type(exc).__name__})",
-                    "check that it is a readable file")
-        ) from exc
-    if not head:
-        raise LogFormatError(message(name, "file is empty", "give an ArduPilot .bin log"))
+    head = read_log_bytes(path, "a DataFlash log", "give the path of a .bin log", "give an ArduPilot .bin log", len(MAGIC))
     if head != MAGIC:
         raise LogFormatError(
             message(
@@ -572,35 +558,10 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
     if int(params.get(f"INS_TCAL{instance + 1}_ENABLE", 0)) == 1:
         extra.append(f"ArduPilot's gyro temperature calibration was on (INS_TCAL{instance + 1}_ENABLE=1)")
 
-    attrs = {
-        "source": name,
-        "format": "ardupilot",
-        "gyro_unit": "deg/s",
-        "frame": "ned",
-        "compass": "mag" if mag_rows else NO_COMPASS,
-        **({"mag_unit": "gauss"} if mag_rows else {}),
-        **({"acc_unit": "m/s^2"} if acc is not None else {}),
-        "topics": {
-            "gyro": imu.label,
-            "temp": temp.label if temp is not None else None,
-            "mag": mag.label if mag_rows else None,
-            "acc": imu.label if acc is not None else None,
-            "ref_heading": ref.label if ref is not None else None,
-        },
-        "summary": _summary(name, t, imu, temp, mag, mag_rows, acc is not None, extra),
-        "onboard": onboard,
-    }
-    if no_compass_why:
-        add_note(attrs, no_compass_note(name, no_compass_why))
-    if temp is None:
-        add_note(attrs, no_temperature_note(name, no_temp_why))
-    return contract_frame(
-        t,
-        np.degrees(gyro.values[:, :3]),
-        temp_on_rows if temp is not None else np.full(t.size, NO_TEMPERATURE_C),
-        mag_on_rows,
-        acc,
-        ref_heading,
-        attrs,
-        gyro_max_dps=gyro_max_dps,
-    )
+    topics = {"gyro": imu.label, "temp": temp.label if temp is not None else None,
+              "mag": mag.label if mag_rows else None, "acc": imu.label if acc is not None else None,
+              "ref_heading": ref.label if ref is not None else None}
+    return binary_log_frame(
+        name, "ardupilot", t, np.degrees(gyro.values[:, :3]), temp_on_rows if temp is not None else None, mag_on_rows,
+        acc, ref_heading, topics=topics, summary=_summary(name, t, imu, temp, mag, mag_rows, acc is not None, extra),
+        no_compass_why=no_compass_why, no_temp_why=no_temp_why, gyro_max_dps=gyro_max_dps, onboard=onboard)

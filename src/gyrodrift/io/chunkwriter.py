@@ -19,7 +19,7 @@ import pyarrow.parquet as pa_pq
 
 from gyrodrift._atomic import atomic_path
 from gyrodrift.errors import ConfigError
-from gyrodrift.io import csvfile, formats, parquetfile, validate
+from gyrodrift.io import csvfile, formats, messages, parquetfile
 
 __all__ = ["ChunkWriter"]
 
@@ -138,10 +138,10 @@ class ChunkWriter:
                 table = table.cast(self._parquet.schema)
             except (pa.ArrowInvalid, pa.ArrowNotImplementedError, pa.ArrowTypeError) as exc:
                 raise ConfigError(
-                    validate.message(
+                    messages.message(
                         str(self.path),
                         f"the chunk from row {self.rows} has column types {table.schema.types} but the file was"
-                        f" started with {self._parquet.schema.types} ({validate.one_line(str(exc))})",
+                        f" started with {self._parquet.schema.types} ({messages.one_line(str(exc))})",
                         "give every chunk the same column types (e.g. read the input column as float64 with the"
                         " column_types option)",
                     )

@@ -34,7 +34,8 @@ import pyarrow.csv as pa_csv
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.formula import formula_safe_frame, formula_safe_table, formula_safe_text
 from gyrodrift.io.parquetfile import arrow_table
-from gyrodrift.io.validate import NUMERIC_COLS, Source, format_error, message, one_line
+from gyrodrift.io.messages import Source, format_error, message, one_line
+from gyrodrift.io.validate import NUMERIC_COLS
 
 __all__ = [
     "GZIP_MAGIC",

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Mapping
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.messages import message, one_line
 
 __all__ = ["FORMATS", "READ_SUFFIXES", "WRITE_SUFFIXES", "table_format", "format_from_path", "log_format"]
 

@@ -20,7 +20,7 @@ import pandas as pd
 import pyarrow as pa
 
 from gyrodrift.errors import LogFormatError
-from gyrodrift.io.validate import Source, empty_file_error, format_error, message, one_line
+from gyrodrift.io.messages import Source, empty_file_error, format_error, message, one_line
 
 __all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options", "open_sink"]
 

@@ -59,7 +59,7 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
     Stream,
     check_temperature,
-    contract_frame,
+    binary_log_frame,
     describe_rate,
     increasing,
     interp_held,
@@ -68,8 +68,8 @@ from gyrodrift.io.align import (
     yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.notes import NO_TEMPERATURE_C
+from gyrodrift.io.messages import message, one_line
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 
@@ -499,32 +499,11 @@ def read_rosbag(
             mag_rows = None
             compass_gap = f"no message of {mag.label} falls within the Imu record, t = {t[0]:.3f}..{t[-1]:.3f} s"
     ref_heading, ref_count = _reference_heading(imu)
-    attrs = {
-        "source": name,
-        "format": "rosbag",
-        "gyro_unit": "deg/s",
-        "frame": "ned",
-        "compass": "mag" if mag_count else NO_COMPASS,
-        **({"mag_unit": "T"} if mag_count else {}),
-        "acc_unit": "m/s^2",
-        "topics": {
-            "imu": imu.label,
-            "temp": temp.label if temp is not None else None,
-            "mag": mag.label if mag_count else None,
-        },
-        "summary": _summary(path, t, streams, mag_count, _notes(zero_stamps, dropped, ref_count)),
-    }
-    if compass_gap:
-        add_note(attrs, no_compass_note(name, compass_gap))
-    if temp is None:
-        add_note(attrs, no_temperature_note(name, gaps.temp))
-    return contract_frame(
-        t,
-        np.degrees(imu.values[:, 0:3]) * _FLU_TO_FRD,
-        interp_held(temp.t, temp.values, t) if temp is not None else np.full(t.size, NO_TEMPERATURE_C),
-        mag_rows,
-        imu.values[:, 3:6] * _FLU_TO_FRD,
-        ref_heading if ref_count else None,
-        attrs,
-        gyro_max_dps=gyro_max_dps,
-    )
+    topics = {"imu": imu.label, "temp": temp.label if temp is not None else None,
+              "mag": mag.label if mag_count else None}
+    return binary_log_frame(
+        name, "rosbag", t, np.degrees(imu.values[:, 0:3]) * _FLU_TO_FRD,
+        interp_held(temp.t, temp.values, t) if temp is not None else None, mag_rows, imu.values[:, 3:6] * _FLU_TO_FRD,
+        ref_heading if ref_count else None, topics=topics,
+        summary=_summary(path, t, streams, mag_count, _notes(zero_stamps, dropped, ref_count)),
+        no_compass_why=compass_gap, no_temp_why=gaps.temp, gyro_max_dps=gyro_max_dps, mag_unit="T")

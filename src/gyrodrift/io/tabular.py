@@ -47,20 +47,17 @@ from gyrodrift.io.formats import READ_SUFFIXES, WRITE_SUFFIXES, table_format
 from gyrodrift.io.held import held_note
 from gyrodrift.io.notes import add_note
 from gyrodrift.io.parquetfile import arrow_table, check_parquet_size, open_sink, parquet_error, parquet_options
-from gyrodrift.io.validate import (
+from gyrodrift.io.messages import (
     Source,
     check_input_path,
-    compass_form,
     empty_file_error,
     message,
     no_data_rows_error,
-    normalise_frame,
     physical_line,
     read_error,
-    read_options,
-    table_notes,
-    table_to_frame,
 )
+from gyrodrift.io.notes import compass_form, table_notes
+from gyrodrift.io.validate import normalise_frame, read_options, table_to_frame
 
 __all__ = ["read_log", "write_table", "check_output_path", "FORMULA_STARTS", "formula_safe"]
 

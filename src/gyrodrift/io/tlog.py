@@ -57,7 +57,7 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
     Stream,
     check_temperature,
-    contract_frame,
+    binary_log_frame,
     describe_rate,
     increasing,
     interp_heading,
@@ -66,8 +66,8 @@ from gyrodrift.io.align import (
 )
 from gyrodrift.io.ardupilot import _check_instance  # the same rule for both MAVLink logs
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message
+from gyrodrift.io.notes import NO_TEMPERATURE_C
+from gyrodrift.io.messages import message, read_log_bytes
 from gyrodrift.onboard import ardupilot_onboard, px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_tlog", "read_tlog_imus", "REBOOT_S"]
@@ -111,19 +111,7 @@ def _import_dialect():
 
 
 def _read_bytes(path: Path) -> bytes:
-    name = str(path)
-    if path.is_dir():
-        raise LogFormatError(message(name, "is a directory, not a telemetry log", "give the path of a .tlog file"))
-    if not path.exists():
-        raise LogFormatError(message(name, "input file does not exist", "check the path and the current directory"))
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise LogFormatError(message(name, f"cannot read the input file ({exc.strerror or type(exc).__name__})",
-                                     "check that it is a readable file")) from exc
-    if not data:
-        raise LogFormatError(message(name, "file is empty", "give a .tlog recorded by a ground station"))
-    return data
+    return read_log_bytes(path, "a telemetry log", "give the path of a .tlog file", "give a .tlog recorded by a ground station")
 
 
 def _frame_length(data: bytes, pos: int) -> int:
@@ -390,21 +378,12 @@ def _read(packets: _Packets, params, changed, name: str, instance: int, mag_inst
              f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
              if temp is not None else f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)",
              f"compass: mag from {mag.label} (on {mag_rows} rows)" if mag_rows else "no compass"]
-    attrs = {
-        "source": name, "format": "tlog", "gyro_unit": "deg/s", "frame": "ned",
-        "compass": "mag" if mag_rows else NO_COMPASS, **({"mag_unit": "gauss"} if mag_rows else {}),
-        "acc_unit": "m/s^2",
-        "topics": {"gyro": names[instance], "temp": temp.label if temp is not None else None,
-                   "mag": mag.label if mag_rows else None, "acc": names[instance],
-                   "ref_heading": "ATTITUDE" if ref_heading is not None else None},
-        "summary": "; ".join(parts + extra),
-        "onboard": onboard,
-    }
-    if no_compass_why:
-        add_note(attrs, no_compass_note(name, no_compass_why))
-    if temp is None:
-        add_note(attrs, no_temperature_note(name, no_temp_why))
-    temp_rows = interp_held(temp.t, temp.values, t) if temp is not None else np.full(t.size, NO_TEMPERATURE_C)
-    return contract_frame(t, gyro.values[:, :3], temp_rows, mag_on_rows if mag_rows else None, gyro.values[:, 3:6],
-                          ref_heading, attrs, gyro_max_dps=gyro_max_dps)
+    topics = {"gyro": names[instance], "temp": temp.label if temp is not None else None,
+              "mag": mag.label if mag_rows else None, "acc": names[instance],
+              "ref_heading": "ATTITUDE" if ref_heading is not None else None}
+    return binary_log_frame(
+        name, "tlog", t, gyro.values[:, :3], interp_held(temp.t, temp.values, t) if temp is not None else None,
+        mag_on_rows if mag_rows else None, gyro.values[:, 3:6], ref_heading, topics=topics,
+        summary="; ".join(parts + extra), no_compass_why=no_compass_why, no_temp_why=no_temp_why,
+        gyro_max_dps=gyro_max_dps, onboard=onboard)
 

@@ -77,7 +77,7 @@ from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
     Stream,
     check_temperature,
-    contract_frame,
+    binary_log_frame,
     describe_rate,
     increasing,
     interp_heading,
@@ -87,8 +87,8 @@ from gyrodrift.io.align import (
     yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
-from gyrodrift.io.validate import message, one_line
+from gyrodrift.io.notes import NO_TEMPERATURE_C
+from gyrodrift.io.messages import message, one_line, read_log_bytes
 from gyrodrift.onboard import px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
@@ -146,26 +146,7 @@ def _import_pyulog():
 
 def _read_file(path: Path) -> bytes:
     """Return the file's bytes, or raise a one-line :class:`LogFormatError`."""
-    name = str(path)
-    if path.is_dir():
-        raise LogFormatError(message(name, "is a directory, not a ULog file", "give the path of a .ulg log"))
-    if not path.exists():
-        raise LogFormatError(
-            message(name, "input file does not exist", "check the path and the current directory")
-        )
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise LogFormatError(
-            message(
-                name,
-                f"cannot read the input file ({exc.strerror or type(exc).__name__})",
-                "check that it is a readable file",
-            )
-        ) from exc
-    if not data:
-        raise LogFormatError(message(name, "file is empty", "give a PX4 .ulg log"))
-    return data
+    return read_log_bytes(path, "a ULog file", "give the path of a .ulg log", "give a PX4 .ulg log")
 
 
 def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatError:
@@ -698,35 +679,11 @@ def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | Non
     if gyro.label == "sensor_combined" and int(ulog.initial_parameters.get("TC_G_ENABLE", 0)) == 1:
         extra.append("PX4 thermal gyro compensation was on (TC_G_ENABLE=1)")
 
-    attrs = {
-        "source": name,
-        "format": "ulog",
-        "gyro_unit": "deg/s",
-        "frame": "ned",
-        "compass": "mag" if mag_rows else NO_COMPASS,
-        **({"mag_unit": "gauss"} if mag_rows else {}),
-        **({"acc_unit": "m/s^2"} if acc is not None else {}),
-        "topics": {
-            "gyro": gyro.label,
-            "temp": temp.label if temp is not None else None,
-            "mag": mag.label if mag_rows else None,
-            "acc": acc.label if acc is not None else None,
-            "ref_heading": ref.label if ref is not None else None,
-        },
-        "summary": _summary(name, t, gyro, temp, mag, mag_rows, acc, extra),
-        "onboard": _onboard(ulog, instance, gyro, temp, name),
-    }
-    if no_compass_why:
-        add_note(attrs, no_compass_note(name, no_compass_why))
-    if temp is None:
-        add_note(attrs, no_temperature_note(name, no_temp_why))
-    return contract_frame(
-        t,
-        np.degrees(gyro.values),
-        interp_held(temp.t, temp.values, t) if temp is not None else np.full(t.size, NO_TEMPERATURE_C),
-        mag_on_rows,
-        interp_held(acc.t, acc.values, t) if acc is not None else None,
-        ref_heading,
-        attrs,
-        gyro_max_dps=gyro_max_dps,
-    )
+    topics = {"gyro": gyro.label, "temp": temp.label if temp is not None else None,
+              "mag": mag.label if mag_rows else None, "acc": acc.label if acc is not None else None,
+              "ref_heading": ref.label if ref is not None else None}
+    return binary_log_frame(
+        name, "ulog", t, np.degrees(gyro.values), interp_held(temp.t, temp.values, t) if temp is not None else None,
+        mag_on_rows, interp_held(acc.t, acc.values, t) if acc is not None else None, ref_heading, topics=topics,
+        summary=_summary(name, t, gyro, temp, mag, mag_rows, acc, extra), no_compass_why=no_compass_why,
+        no_temp_why=no_temp_why, gyro_max_dps=gyro_max_dps, onboard=_onboard(ulog, instance, gyro, temp, name))

@@ -1,33 +1,19 @@
-"""Checks and conversions shared by the table readers, and the message style of all readers.
+"""Checks and conversions shared by the table readers.
 
 The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
 (:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
 contract with :func:`normalise_frame`: column map, required columns, numeric
-conversion, time checks, plausible ranges (:mod:`gyrodrift.io.limits`), gyro unit (deg/s) and frame (NED/FRD, headings
-in [0, 360)), and a ``temp`` of 0 degC where the file has no usable temperature. Every
-step works row by row, so the chunks of a file come out as the rows of the whole file.
-:func:`compass_form` names the compass form the file holds ("none" without one), and
-:func:`table_notes` words what the file lacks (:mod:`gyrodrift.io.notes`).
-
-Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
-:class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
-form::
-
-    <file>: <location>: <problem>; <what to do>
-
-where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the header
-is line 1) or ``data row N`` for Parquet (1-based, the first data row is ``data row 1``),
-optionally followed by ``, column 'name'``. Parts that do not apply are left out.
-:func:`message` builds such a message; :class:`Source`, :func:`row_label` and
-:func:`cell_label` name the rows and cells. The ULog, DataFlash and ROS bag readers use
-the same style.
+conversion, time checks, plausible ranges (:mod:`gyrodrift.io.limits`), gyro unit (deg/s)
+and frame (NED/FRD, headings in [0, 360)), and a ``temp`` of 0 degC where the file has no
+usable temperature. Every step works row by row, so the chunks of a file come out as the
+rows of the whole file. Messages follow :mod:`gyrodrift.io.messages`; what a file lacks is
+worded by :mod:`gyrodrift.io.notes`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from pathlib import Path
-from typing import Callable, Iterable, Mapping, NamedTuple
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -53,42 +39,29 @@ from gyrodrift.conventions import (
     TRUE_BIAS_Z,
     wrap_360,
 )
-from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, no_compass_note, no_temperature_note
+from gyrodrift.io.messages import Source, cell_label, format_error, message, one_line, row_label, show_names, show_text
+# the reader of stream.py takes these from here, with the checks
+from gyrodrift.io.messages import check_input_path, no_data_rows_error, read_error  # noqa: F401
+from gyrodrift.io.notes import NO_TEMPERATURE_C, TEMP_ABSENT, TEMP_EMPTY, TEMP_MEASURED, compass_columns_with_values
+# the reader of stream.py takes these from here, with the checks
+from gyrodrift.io.notes import compass_form, table_notes  # noqa: F401
 from gyrodrift.io.held import drop_held
 from gyrodrift.io.timebase import time_base_notes, time_scale
 
 __all__ = [
     "NUMERIC_COLS",
-    "Source",
-    "one_line",
-    "message",
-    "format_error",
-    "show_text",
-    "show_names",
-    "physical_line",
-    "row_label",
-    "cell_label",
     "check_column_map",
     "check_z_up",
     "Z_UP_SHARE",
     "ReadOptions",
     "TableOptions",
     "read_options",
-    "check_input_path",
-    "read_error",
-    "empty_file_error",
-    "no_data_rows_error",
     "table_to_frame",
     "apply_column_map",
     "convert_numeric",
     "first_value_rows",
-    "compass_form",
-    "table_notes",
-    "TEMP_MEASURED",
-    "TEMP_ABSENT",
-    "TEMP_EMPTY",
     "Normalised",
     "normalise_frame",
 ]
@@ -103,11 +76,6 @@ NUMERIC_COLS = (
 )
 #: Gyro rate columns (converted to deg/s).
 _GYRO_COLS = (GYRO_X, GYRO_Y, GYRO_Z)
-_MAG_FORM_COLS = MAG_COLS + ACC_COLS
-#: The raw compass form in a note.
-_MAG_FORM = "mag_x..z with acc_x..z"
-#: Where a table's temperature came from (:attr:`Normalised.temperature`).
-TEMP_MEASURED, TEMP_ABSENT, TEMP_EMPTY = "measured", "absent", "empty"
 #: Columns whose sign flips from ROS FLU body axes to FRD (180 deg rotation about x).
 _FLU_TO_FRD_FLIP = (GYRO_Y, GYRO_Z, TRUE_BIAS_Y, TRUE_BIAS_Z, MAG_COLS[1], MAG_COLS[2], ACC_COLS[1], ACC_COLS[2])
 #: Columns holding a heading (deg, clockwise from north in NED).
@@ -118,107 +86,11 @@ _CSV_NULL_VALUES = tuple(pa_csv.ConvertOptions().null_values)
 #: lower case); it includes every CSV null value, so a cell is empty whether the CSV reader
 #: or the text conversion decides.
 _NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"} | {v.lower() for v in _CSV_NULL_VALUES})
-_MAX_NAMES_SHOWN = 30
-_MAX_TEXT_SHOWN = 40
-
-
-class Source(NamedTuple):
-    """Where a table came from: enough to name rows the way a user sees them."""
-
-    name: str  #: the path as the user gave it
-    fmt: str  #: "csv" or "parquet"
-    #: CSV: maps the 1-based index of a non-empty line (header = 1) to the line an
-    #: editor shows (called on error only); None for Parquet
-    line_of: Callable[[int], int] | None
-    #: index in the whole file of the frame's first data row (0 unless read in chunks)
-    row0: int = 0
-
-    def at(self, row0: int) -> "Source":
-        """The same source for a frame whose first row is data row ``row0`` of the file."""
-        return self._replace(row0=row0)
 
 
 # ---------------------------------------------------------------------------
 # message helpers
 # ---------------------------------------------------------------------------
-
-
-def one_line(text: str) -> str:
-    """Collapse any line breaks so a message stays on one line."""
-    return " ".join(str(text).split())
-
-
-def message(name: str, problem: str, advice: str, where: str = "") -> str:
-    """Build ``<file>: [<where>: ]<problem>; <advice>`` on one line."""
-    head = f"{name}: {where}: " if where else f"{name}: "
-    return one_line(f"{head}{problem}; {advice}")
-
-
-def format_error(src: Source, problem: str, advice: str, where: str = "") -> LogFormatError:
-    """Return a :class:`LogFormatError` for ``src`` with a one-line message."""
-    return LogFormatError(message(src.name, problem, advice, where))
-
-
-def show_text(value: object) -> str:
-    """Quote a cell's text for a message, shortened and without line breaks."""
-    text = str(value)
-    if len(text) > _MAX_TEXT_SHOWN:
-        text = text[: _MAX_TEXT_SHOWN - 3] + "..."
-    return repr(text)
-
-
-def show_names(names) -> str:
-    """List column names for a message (at most ``_MAX_NAMES_SHOWN`` of them)."""
-    names = [repr(str(n)) for n in names]
-    if not names:
-        return "(none)"
-    if len(names) > _MAX_NAMES_SHOWN:
-        extra = len(names) - _MAX_NAMES_SHOWN
-        names = names[:_MAX_NAMES_SHOWN] + [f"... ({extra} more)"]
-    return ", ".join(names)
-
-
-def physical_line(blocks: Iterable[bytes], nonempty_index: int) -> int:
-    """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
-
-    pyarrow skips empty lines, so its row counts are counts of non-empty lines
-    (1-based, header included); this maps one back to what an editor shows. ``blocks``
-    are the file's bytes in order, in pieces of any size (line ends ``\n``, ``\r\n``
-    or ``\r``, as :meth:`bytes.splitlines` splits them).
-    """
-    count = 0
-    line_no = 0
-    carry = b""
-    for block in blocks:
-        lines = (carry + block).splitlines(keepends=True)
-        # the last piece may be an unfinished line, or a "\r" whose "\n" is in the next block
-        carry = lines.pop() if lines and (lines[-1].endswith(b"\r") or not lines[-1].endswith(b"\n")) else b""
-        for line in lines:
-            line_no += 1
-            if line.rstrip(b"\r\n"):
-                count += 1
-                if count == nonempty_index:
-                    return line_no
-    if carry:
-        line_no += 1
-        if carry.rstrip(b"\r\n") and count + 1 == nonempty_index:
-            return line_no
-    return nonempty_index
-
-
-def row_label(src: Source, row: int) -> str:
-    """Name data row ``row`` of the frame (0-based; negative: rows before it) as the user
-    sees it: ``line N`` (CSV) or ``data row N`` (Parquet), counted in the whole file."""
-    row = src.row0 + row
-    if src.fmt == "csv" and src.line_of is not None:
-        # header is non-empty line 1, data row 0 is non-empty line 2
-        return f"line {src.line_of(row + 2)}"
-    return f"data row {row + 1}"
-
-
-def cell_label(src: Source, row: int, column: str) -> str:
-    """Name one cell: ``line N, column 'x'``."""
-    return f"{row_label(src, row)}, column {column!r}"
 
 
 # ---------------------------------------------------------------------------
@@ -350,35 +222,6 @@ def read_options(gyro_unit: str, frame: str | None, column_map: Mapping[str, str
 # ---------------------------------------------------------------------------
 # file-level errors
 # ---------------------------------------------------------------------------
-
-
-def check_input_path(path: Path) -> None:
-    """Raise :class:`LogFormatError` if ``path`` is not an existing regular file."""
-    if path.is_dir():
-        raise LogFormatError(
-            message(str(path), "is a directory, not a log file", "give the path of a .csv or .parquet log")
-        )
-    if not path.exists():
-        raise LogFormatError(
-            message(str(path), "input file does not exist", "check the path and the current directory")
-        )
-
-
-def read_error(path, exc: OSError) -> LogFormatError:
-    """The error for an input file the operating system cannot read."""
-    reason = exc.strerror or type(exc).__name__
-    return LogFormatError(message(str(path), f"cannot read the input file ({reason})", "check that it is a readable file"))
-
-
-def empty_file_error(name: str, advice: str) -> LogFormatError:
-    """The error for a file with no content at all."""
-    return LogFormatError(message(name, "file is empty", advice))
-
-
-def no_data_rows_error(src: Source) -> LogFormatError:
-    """The error for a table without data rows."""
-    problem = "has a header row but no data rows" if src.fmt == "csv" else "has no data rows"
-    return format_error(src, problem, "give a log with at least one data row")
 
 
 def table_to_frame(table: pa.Table, src: Source) -> pd.DataFrame:
@@ -650,80 +493,6 @@ def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> Non
             raise format_error(src, outside_problem(col, value, limit), advice, where=cell_label(src, pos, col))
 
 
-def _compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
-    """The compass columns (``heading``, ``mag_*``, ``acc_*``) that hold at least one value."""
-    return frozenset(c for c in (HEADING,) + _MAG_FORM_COLS if c in frame.columns and frame[c].notna().any())
-
-
-def compass_form(with_values: frozenset[str]) -> str:
-    """Return "heading", "mag", "both" or "none" (:data:`~gyrodrift.io.notes.NO_COMPASS`):
-    the compass forms that hold data.
-
-    ``with_values`` are the compass columns holding a value somewhere in the file
-    (:func:`_compass_columns_with_values`, united over chunks). The raw form needs all
-    of ``mag_x, mag_y, mag_z, acc_x, acc_y, acc_z``.
-    """
-    heading = HEADING in with_values
-    mag = all(c in with_values for c in _MAG_FORM_COLS)
-    if heading and mag:
-        return "both"
-    if heading:
-        return "heading"
-    if mag:
-        return "mag"
-    return NO_COMPASS
-
-
-def _compass_gap(columns, with_values: frozenset[str]) -> str:
-    """Why a table has no compass form: the words inside its note's parentheses."""
-    head = f"{HEADING} column empty in every row" if HEADING in columns else f"no {HEADING} column"
-    present = [c for c in _MAG_FORM_COLS if c in columns]
-    if not present:
-        return f"{head} nor {_MAG_FORM}" if HEADING not in columns else f"{head}, no {_MAG_FORM}"
-    missing = [c for c in _MAG_FORM_COLS if c not in columns]
-    empty = [c for c in present if c not in with_values]
-    parts = ([f"missing: {', '.join(missing)}"] if missing else []) + (
-        [f"empty in every row: {', '.join(empty)}"] if empty else []
-    )
-    return f"{head}, {_MAG_FORM} incomplete ({'; '.join(parts)})"
-
-
-def table_notes(name: str, columns, with_values: frozenset[str], temperature: str) -> list[str]:
-    """The notes of a table read whole or in chunks (see :mod:`gyrodrift.io.notes`).
-
-    Parameters
-    ----------
-    name : str
-        The file, as the user gave it.
-    columns : sequence of str
-        The columns of the table as read (``temp`` included when it was filled in).
-    with_values : frozenset of str
-        Compass columns holding a value somewhere in the file.
-    temperature : {"measured", "absent", "empty"}
-        :attr:`Normalised.temperature` of the file.
-
-    Returns
-    -------
-    list of str
-        A compass note when :func:`compass_form` is "none", then a temperature note
-        when ``temperature`` is not "measured"; empty when the table lacks neither.
-    """
-    notes = []
-    if compass_form(with_values) == NO_COMPASS:
-        notes.append(no_compass_note(name, _compass_gap(columns, with_values)))
-    if temperature == TEMP_ABSENT:
-        notes.append(
-            no_temperature_note(
-                name,
-                f"no {TEMP!r} column; columns found: {show_names([c for c in columns if c != TEMP])}",
-                f"if the log has it under another name, map it with --map {TEMP}=NAME (column_map in Python)",
-            )
-        )
-    elif temperature == TEMP_EMPTY:
-        notes.append(no_temperature_note(name, f"column {TEMP!r} empty in every row"))
-    return notes
-
-
 # ---------------------------------------------------------------------------
 # unit and frame conversion (pure: frame in, new frame out)
 # ---------------------------------------------------------------------------
@@ -879,7 +648,7 @@ def normalise_frame(
     else:
         temperature = TEMP_MEASURED
     _check_limits(df, src, opts)
-    with_values = _compass_columns_with_values(df)
+    with_values = compass_columns_with_values(df)
     df = _to_deg_per_s(df, opts.scale)
     if opts.frame == "enu":
         df = _enu_to_ned(df)

@@ -50,12 +50,11 @@ from gyrodrift.kernels.layout import (
     XF_GX, XF_GY, XF_I, XF_K, XF_MEAS, XF_PARAMS, XF_RELOCK, XF_SCALE, XF_T0, XF_T_MEAS, XF_TEMP, XF_TLAST,
     XF_TP, XF_U, XG_ACCEL, XG_GAP, XG_NONE, XG_RESIDUAL, XG_TILT, XG_TURNING, XI_DECIDED, XI_EDGE_OK,
     XI_GATED, XI_HEAD, XI_N, XI_BAD, XI_PENDING, XI_REASONS, XI_REFUSALS, XI_STARTED, XI_TURN_J, XI_TURNING,
-    XI_UPDATES, XK_EXTERNAL, XK_RELOCK, XS_BAD_TIME, XS_NO_TEMP, XW_F0, XW_F1, XW_F2, XW_IGX, XW_IK1, XW_IK2,
-    XW_IPHI, XW_IRZ, XW_IT, XW_ITH, XW_ITP, XW_OK, XW_T,
+    XI_UPDATES, XK_EXTERNAL, XK_RELOCK, XS_BAD_TIME, XS_NO_TEMP, XW_F0, XW_F1, XW_F2, XW_IGX, XW_IPHI, XW_IRZ, XW_IT, XW_ITP, XW_OK, XW_T,
 )
 from gyrodrift.kernels.numeric import matvec
 
-__all__ = ["G_MPS2", "acc_scale", "specific_force", "euler_rates", "roll_pitch", "roll_pitch_all", "window_step",
+__all__ = ["G_MPS2", "acc_scale", "specific_force", "euler_rates", "roll_pitch", "window_step",
            "edge_window", "refusal", "measurement", "residual_ok", "close", "run"]
 
 #: Standard gravity, m/s² (1 g).
@@ -114,13 +113,6 @@ def roll_pitch(f0, f1, f2):
     elif math.isnan(norm):
         pitch = norm
     return math.degrees(math.atan2(-f1, -f2)), pitch
-
-
-@jit
-def roll_pitch_all(f, roll, pitch):
-    """:func:`roll_pitch` of every row of ``f`` (N, 3), into ``roll`` and ``pitch``."""
-    for i in range(f.shape[0]):
-        roll[i], pitch[i] = roll_pitch(f[i, 0], f[i, 1], f[i, 2])
 
 
 # ------------------------------------------------------------- row windows

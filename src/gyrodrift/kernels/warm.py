@@ -93,7 +93,6 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.numeric.solve": ["F2 F2"],
     # the x and y axes (gyrodrift.kernels.tilt) and the gyro-aided gravity (gyrodrift.attitude)
     "kernels.tilt.run": ["F1r F1r F1r F1r F1r F2r F1r i F1 I1 F1 I1 F2 F1 I1 F1 I1 F2 C1"],
-    "kernels.tilt.roll_pitch_all": ["F2 F1 F1"],
     "kernels.tilt._check": ["F1r F1r F1 I1"],
     "kernels.tilt.edge_window": ["F2 i i f F1"],
     "kernels.tilt.measurement": ["F1 F1 f f"],

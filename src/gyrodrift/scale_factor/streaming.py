@@ -1,7 +1,7 @@
 """The causal scale-factor estimate row by row: :class:`ScaleFactorTracker`.
 
-Its rows are :class:`ScaleFactorRow`; :class:`CompensatedSFSample` is the sample the
-streaming :class:`gyrodrift.compensator.Compensator` returns with them.
+Its rows are :class:`ScaleFactorRow`; the streaming :class:`gyrodrift.compensator.Compensator`
+returns them in a :class:`gyrodrift.samples.CompensatedSFSample`.
 """
 
 from __future__ import annotations
@@ -9,18 +9,17 @@ from __future__ import annotations
 import bisect
 import math
 from collections import deque
-from dataclasses import dataclass, fields
 from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compensator.output import CompensatedSample
 from gyrodrift.conventions import TEMP, T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.kernels.numeric import wrap180, wrap360
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 from gyrodrift.scale_factor.filter import sf_correct
+from gyrodrift.samples import CompensatedSFSample
 from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, require_columns, unmeasured_turn
 
 __all__ = ["ScaleFactorRow", "TRACKER_COLUMNS", "CompensatedSFSample", "ScaleFactorTracker"]
@@ -45,25 +44,6 @@ class ScaleFactorRow(NamedTuple):
 
 #: Columns of :class:`ScaleFactorTracker` output, in order.
 TRACKER_COLUMNS = ScaleFactorRow._fields
-
-
-@dataclass(frozen=True)
-class CompensatedSFSample(CompensatedSample):
-    """A :class:`gyrodrift.compensator.CompensatedSample` with the scale factor of Sec. 4.3, as
-    :class:`gyrodrift.compensator.Compensator` returns it when given ``scale_factor``: ``sf``
-    (unitless), ``sf_sd``, ``rate_sf`` (deg/s) and ``heading_sf`` (deg) of
-    :class:`ScaleFactorTracker`."""
-
-    sf: float = math.nan
-    sf_sd: float = math.nan
-    rate_sf: float = math.nan
-    heading_sf: float = math.nan
-
-    @classmethod
-    def of(cls, sample: CompensatedSample, row: ScaleFactorRow) -> "CompensatedSFSample":
-        """``sample`` with the SF columns of ``row``."""
-        base = {f.name: getattr(sample, f.name) for f in fields(CompensatedSample)}
-        return cls(**base, sf=row.sf, sf_sd=row.sf_sd, rate_sf=row.rate_sf, heading_sf=row.heading_sf)
 
 
 class ScaleFactorTracker:
