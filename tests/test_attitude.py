@@ -133,8 +133,8 @@ def test_batch_chunked_and_streaming_give_the_same_compass(tmp_path):
     cols = [c for c in log.columns if not c.startswith("true_bias_")]
     log[cols].to_csv(tmp_path / "in.csv", index=False)
     gyro_tilt = CompensatorConfig(tilt="gyro")
-    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", gyro_tilt, stream=False)
-    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", gyro_tilt, stream=True, chunk_rows=333)
+    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", gyro_tilt, chunked=False)
+    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", gyro_tilt, chunked=True, chunk_rows=333)
     whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
     for c in ("compass_heading", "heading", "heading_fused", "bias_z", "gate_reason"):
         assert whole[c].equals(parts[c]), c
@@ -209,8 +209,8 @@ def test_calibration_in_batch_equals_chunked(tmp_path):
     cols = [c for c in log.columns if not c.startswith("true_bias_")]
     log[cols].to_csv(tmp_path / "in.csv", index=False)
     cfg = CompensatorConfig(mag_calibration=True)
-    s_whole = compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", cfg, stream=False)
-    s_parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", cfg, stream=True, chunk_rows=500)
+    s_whole = compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", cfg, chunked=False)
+    s_parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", cfg, chunked=True, chunk_rows=500)
     whole, parts = pd.read_csv(tmp_path / "whole.csv"), pd.read_csv(tmp_path / "parts.csv")
     for c in ("compass_heading", "heading", "bias_z"):
         assert whole[c].equals(parts[c]), c

@@ -126,7 +126,7 @@ def test_file_path_in_chunks_gives_the_batch_numbers(tmp_path):
     log.to_csv(path, index=False)
     whole = compensate(read_log(path))
     out_path = tmp_path / "out.parquet"
-    stats = compensate_file(path, out_path, chunk_rows=5000, stream=True)
+    stats = compensate_file(path, out_path, chunk_rows=5000, chunked=True)
     chunked = pd.read_parquet(out_path)
     assert stats.regressor == "clock"
     for col in ("bias_z", "heading", "a", "c", "bias_sd"):
@@ -138,7 +138,7 @@ def test_file_whose_first_chunk_is_flat_but_not_the_rest_keeps_the_temperature(t
     log.loc[log.index[-100:], "temp"] = 0.5  # the temperature moves at the end only
     path = tmp_path / "late.csv"
     log.to_csv(path, index=False)
-    stats = compensate_file(path, tmp_path / "out.parquet", chunk_rows=5000, stream=True)
+    stats = compensate_file(path, tmp_path / "out.parquet", chunk_rows=5000, chunked=True)
     assert stats.regressor == "temperature"
     assert compensate(read_log(path)).attrs["drift_regressor"] == "temperature"
 
@@ -216,5 +216,5 @@ def test_a_warm_started_file_in_chunks_keeps_the_temperature_as_the_batch_does(t
     path = tmp_path / "flat.csv"
     warming_log(8).to_csv(path, index=False)
     cfg = warm_config(prof)
-    stats = compensate_file(path, tmp_path / "out.parquet", cfg, chunk_rows=5000, stream=True)
+    stats = compensate_file(path, tmp_path / "out.parquet", cfg, chunk_rows=5000, chunked=True)
     assert stats.regressor == compensate(read_log(path), cfg).attrs["drift_regressor"] == "temperature"
