@@ -16,7 +16,7 @@ The gyro reads ``true rate + drift``; ``drift = a*T + b*T' + c`` and
 ``rate_z = gyro_z - bias_z``.
 """
 
-__version__ = "0.1.0"
+from gyrodrift._version import __version__
 
 from gyrodrift.compensator import (
     CompensatedSample,

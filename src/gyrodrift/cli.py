@@ -11,7 +11,7 @@ from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
 
-from gyrodrift import __version__
+from gyrodrift._version import __version__
 from gyrodrift._calibrate_cli import add_calibrate_parser
 from gyrodrift._cliargs import (add_input_options, add_method_options, check_numbers, method_config, read_input,
                                 read_options, warm_start)

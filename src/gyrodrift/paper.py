@@ -340,7 +340,7 @@ def _term(term, scale=1.0, unit=""):
 
 def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict, settings: PaperSettings) -> str:
     """``table2.md``: Table 2 ours beside the paper's, the claims, the Allan noise terms."""
-    from gyrodrift import __version__
+    from gyrodrift._version import __version__
     from gyrodrift.metrics import markdown_table
 
     lines = [

@@ -101,7 +101,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift import __version__
+from gyrodrift._version import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift._text import printable
 from gyrodrift.calibrate import AXES, AxisFit, Calibration

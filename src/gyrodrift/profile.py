@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift import __version__
+from gyrodrift._version import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.config import read_utf8

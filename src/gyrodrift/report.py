@@ -258,7 +258,7 @@ def _flatten(obj, prefix: str = ""):
 def _versions() -> list[tuple[str, str]]:
     from importlib import metadata
 
-    from gyrodrift import __version__
+    from gyrodrift._version import __version__
 
     out = [("gyrodrift", __version__), ("Python", sys.version.split()[0])]
     for dist in ("numpy", "pandas", "matplotlib", "allantools"):
@@ -347,7 +347,7 @@ def build_report(
     skipped = dict(skipped or {})
     outputs = dict(outputs)
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
-    from gyrodrift import __version__
+    from gyrodrift._version import __version__
 
     from gyrodrift.plotbase import require_matplotlib
 
