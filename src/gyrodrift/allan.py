@@ -1,29 +1,13 @@
 """Allan deviation of a gyro rate and the noise terms read from it.
 
-Two steps, each a small function on numpy arrays:
+1. :func:`allan_deviation`: the (overlapping) Allan deviation of a rate record,
+   by allantools, with a chi-squared confidence interval per point (NIST SP 1065).
+   :func:`even_rate` first puts a jittered time base on an even one.
+2. :func:`noise_terms`: the angle random walk N, bias instability B, rate random
+   walk K and rate ramp R, read by the slope method of IEEE Std 952-1997, Annex C.
 
-1. :func:`allan_deviation` computes the (overlapping) Allan deviation of a rate
-   record with allantools and attaches a chi-squared confidence interval to every
-   point (NIST SP 1065, W. J. Riley 2008: overlapping Allan variance eq. (11),
-   Allan variance eq. (7), chi-squared interval eq. (45); equivalent degrees of
-   freedom after Greenhall & Riley 2004, as implemented by
-   ``allantools.edf_greenhall``).
-Logs whose time stamps jitter (a real IMU's do) are first put on an even time
-base by :func:`even_rate`, since :func:`allan_deviation` takes one sample rate.
-
-2. :func:`noise_terms` reads the angle random walk N, bias instability B, rate
-   random walk K and rate ramp R off the curve with the slope method of IEEE
-   Std 952-1997, Annex C (Allan-variance method of gyro noise analysis).
-
-The paper this package follows (Feng, Li, Zhang, Sensors 2015, Section 4.1,
-Figure 6) compares the Allan deviation of the uncompensated and compensated
-angular-rate error of a motionless gyro: temperature compensation should lower
-the rate random walk (+1/2 slope) and rate ramp (+1 slope) parts of the curve.
-The paper also notes error left near τ = 10 s, its STKF update interval: such a
-bump is not a noise term of IEEE 952; between regions it only shortens them, and
-it shows in :attr:`AllanResult.adev` itself.
-
-allantools is an optional dependency: ``pip install 'gyrodrift[allan]'``.
+The paper's Figure 6 (Section 4.1) compares these curves before and after
+compensation. allantools is optional: ``pip install 'gyrodrift[allan]'``.
 
 Examples
 --------
@@ -113,16 +97,13 @@ class AllanResult:
         Bounds of the ``ci`` (default ≈ 68.27 %) chi-squared confidence interval of
         each point, in ``unit`` (NIST SP 1065 eq. (45), from ``edf``).
     n : (M,) ndarray of int
-        Number of terms (second differences of the N + 1 integrated-rate points)
-        averaged at each tau = m/fs: N + 1 − 2m overlapping, ⌊N/m⌋ − 1
-        non-overlapping, for N rate samples.
+        Number of second differences averaged at each tau.
     unit : str
         Unit of the input rate and of the deviations (``"deg/s"`` for gyro rates).
     edf : (M,) ndarray
         Equivalent degrees of freedom of each point (Greenhall & Riley 2004).
     alpha : (M,) ndarray of int
-        Power-law noise exponent assumed for the EDF at each point (rate PSD ∝ f^α),
-        identified from the local slope of the curve (see :func:`allan_deviation`).
+        Power-law noise exponent assumed for the EDF at each point (rate PSD ∝ f^α).
     overlapping : bool
         Overlapping (True) or non-overlapping Allan deviation.
     ci : float
@@ -155,9 +136,8 @@ class NoiseTerm:
         Its confidence interval (same probability as the curve's), in ``unit``.
     unit : str
     tau_s : float
-        Averaging time at which the coefficient was read, s: the standard tau of the
-        term (N: 1 s, K: 3 s, R: √2 s) on the fitted line, or the tau of the
-        minimum (B). The line may be extrapolated to it: see ``fit_tau_s``.
+        Averaging time at which the coefficient was read, s (N: 1, K: 3, R: √2 on
+        the fitted line, possibly extrapolated; B: the minimum).
     fit_tau_s : tuple of float
         Smallest and largest tau of the points used, s.
     n_points : int
@@ -335,9 +315,8 @@ def allan_deviation(
         seconds, rounded to whole samples; duplicates and taus too long for the
         record (fewer than 2 terms) are dropped.
     overlapping : bool
-        Overlapping Allan deviation (``allantools.oadev``, NIST SP 1065 eq. (11);
-        the default, better confidence) or the plain one (``allantools.adev``,
-        SP 1065 eq. (7)).
+        Overlapping (``allantools.oadev``, SP 1065 eq. (11)) or plain
+        (``allantools.adev``, eq. (7)) Allan deviation.
     unit : str
         Unit of ``rate``, carried into the result.
     ci : float
@@ -349,14 +328,10 @@ def allan_deviation(
 
     Notes
     -----
-    Confidence interval: chi-squared, ``allantools.confidence_interval`` (NIST
-    SP 1065 eq. (45)) with the equivalent degrees of freedom of
-    ``allantools.edf_greenhall`` (Greenhall & Riley 2004; d = 2, m = τ·fs,
-    N + 1 phase points, overlapping or not). The EDF needs the noise type at each
-    tau; it is identified from the local log-log slope of the curve itself and
-    kept from getting whiter as tau grows (:func:`_noise_alpha`). allantools'
-    own ``err`` output (σ/√n) is not used: it ignores the correlation between
-    overlapping terms and the noise type.
+    Confidence interval: chi-squared (SP 1065 eq. (45)) with the EDF of
+    ``allantools.edf_greenhall``, the noise type at each tau identified from the
+    curve's local slope (:func:`_noise_alpha`). allantools' ``err`` (σ/√n) is not
+    used: it ignores the correlation between overlapping terms.
 
     Raises
     ------
@@ -431,10 +406,8 @@ def even_rate(t_s, rate) -> tuple[np.ndarray, float, bool]:
     -------
     rate : ndarray
         ``rate`` itself when every interval is within :data:`JITTER_TOL` of the median
-        one; else N − 1 values on an even base: the angle (the sum of rate × interval,
-        the phase of the Allan variance) is interpolated linearly at N even times over
-        the same span and differenced, so each value is the mean rate over its even
-        interval and the angle is kept at every even time.
+        one; else N − 1 mean rates over even intervals (the integrated angle is
+        interpolated at N even times and differenced).
     fs_hz : float
         Sample rate of the returned record, Hz: (N − 1) / span.
     resampled : bool
@@ -557,34 +530,13 @@ def noise_terms(
     rate ramp R          +1     R·τ/√2            τ = √2 s: σ = R
     ===================  =====  ================  =========================
 
-    Method, per term:
-
-    1. The local slope of each point is the mean of the log-log slopes of its two
-       neighbouring segments (one at the ends). Points with a non-positive
-       deviation or fewer than ``min_edf`` degrees of freedom are not used.
-    2. The region of a term is the longest run of consecutive usable points
-       whose local slope is within ±``tolerance`` (default 0.15) of the
-       theoretical slope; the earliest run wins a tie. No such run of at least
-       ``min_points`` (default 2) points: the term is None. (The theoretical
-       slopes are 1/2 apart, so a tolerance of 0.15 leaves the transitions
-       between terms out; a lone point that happens to sit at the bottom of a U
-       where ARW meets RRW or a ramp is not a flicker floor.)
-    3. N, K, R: a line of the fixed theoretical slope is fitted by least squares
-       in log-log (the intercept is the mean of log σᵢ − slope·log τᵢ) and read at
-       the standard tau, extrapolating when the region does not reach it.
-    4. B: the minimum of the deviation over its flat region, divided by
-       sqrt(2 ln 2/π) ≈ 0.664; ``tau_s`` is the tau of that minimum,
-       ``fit_tau_s`` spans the region.
-
-    Confidence intervals: N, K, R by the same fixed-slope fit through the points'
-    ``adev_lo`` and ``adev_hi``; B from the interval of the point it was read at,
-    divided by 0.664.
-
-    Points next to a transition still carry some of the neighbouring terms, so on
-    a curve with several terms the coefficients come out high (on the test curve
-    of ARW + flicker + RRW: N by about 5 %, B by about 25 %, the floor never
-    reaching 0.664 B between the other two). The defaults suit octave taus; a
-    denser grid makes regions of more points.
+    A term's region is the longest run (earliest on a tie) of at least
+    ``min_points`` usable points whose local log-log slope (mean of the two
+    neighbouring segments) is within ``tolerance`` of its slope. N, K, R: a line of
+    that fixed slope is fitted in log-log and read at the standard tau; B: the
+    region's minimum / 0.664. The intervals come from the same fits through
+    ``adev_lo``/``adev_hi``. Points near a transition carry neighbouring terms, so
+    with several terms the coefficients come out high.
     """
     if not 0.0 < tolerance < 0.25:
         raise ConfigError(f"tolerance must be in (0, 0.25) so regions cannot overlap, got {tolerance!r}")

@@ -1,52 +1,33 @@
 """Thermal calibration of the gyro triad from a still heating or cooling run.
 
-:func:`fit_calibration` fits, for every gyro axis in a log (``gyro_x``, ``gyro_y``,
-``gyro_z``; deg/s, body FRD, :mod:`gyrodrift.conventions`), the drift as a cubic in
-temperature about a reference temperature, as the autopilots' own tools do.
-:func:`calibrate_log` does so for one gyro of an autopilot's log: it first adds back the
-thermal correction the autopilot applied while the log was recorded
-(:func:`undo_onboard`, :mod:`gyrodrift.onboard`), and the :class:`Calibration` it
-returns knows its gyro (instance, device id) and the rotation from the sensor to the
-body frame, so that :mod:`gyrodrift.paramfiles` writes it in the sensor frame the
-autopilot corrects in. :func:`prior_config` starts the compensator's z-axis drift model
-from a calibration (``gyrodrift compensate --prior``).
+:func:`fit_calibration` fits, for every gyro axis in a log (deg/s, body FRD), the
+drift as a cubic in temperature about a reference temperature, as the autopilots'
+tools do. :func:`calibrate_log` does so for one gyro of an autopilot's log, after
+adding back the autopilot's own correction (:func:`undo_onboard`); its
+:class:`Calibration` knows the gyro and its sensor-to-body rotation, for
+:mod:`gyrodrift.paramfiles`. :func:`prior_config` starts the compensator's z drift
+model from a calibration (``compensate --prior``).
 
 The fit
 -------
 1. Rows with a finite time and temperature; per axis, the finite rates, median
-   filtered over :data:`MEDIAN_WINDOW` samples (spikes; exact on a rate that is
-   monotonic over the window).
-2. ``T_ref`` is the middle of the temperatures seen, ``T_min``/``T_max`` their ends.
-3. Weighted least squares of ``sum_k c_k (T - T_ref)**k`` (k = 0..3) over the samples,
-   each :data:`BIN_WIDTH_C` temperature bin weighing the same in total, so that a
-   plateau does not outweigh a ramp (a bin holding fewer than :data:`MIN_WINDOW_SAMPLES`
-   samples, such as the last sample alone at the highest temperature, is merged with
-   the next, :func:`temperature_bins`). Exact on noiseless cubic data.
-4. The residual RMS (deg/s) of an axis is the RMS over the bins of the bin's mean
-   residual: how far the drift departs from a cubic in temperature, with the white
-   noise averaged out. :attr:`Calibration.residual_rms_dps` is the largest of the axes.
+   filtered over :data:`MEDIAN_WINDOW` samples.
+2. ``T_ref`` is the middle of the temperatures seen.
+3. Weighted least squares of ``sum_k c_k (T - T_ref)**k`` (k = 0..3), each
+   :data:`BIN_WIDTH_C` temperature bin weighing the same in total so that a plateau
+   does not outweigh a ramp (:func:`temperature_bins`).
+4. An axis's residual RMS is the RMS over the bins of the bin's mean residual.
 
 Refusals (:class:`CalibrationError`, one line naming the log and what to do):
 
-* **span**: the temperatures span less than :data:`MIN_SPAN_C` (5 degC): a cubic over
-  a few degrees extrapolates wildly (ArduPilot's onboard learning needs 10 degC,
-  ``TEMP_RANGE_MIN`` of ``AP_InertialSensor_tempcal.cpp``);
-* **moved**: a still unit's gyro reads only its drift, a smooth function of
-  temperature. The unit is taken to have moved when a window mean of any axis's
-  filtered rate departs from the fitted curve by more than :data:`STILL_TOL_DPS`
-  (0.5 deg/s, ten times the drift departures seen on MEMS fits and far above the noise
-  of a window mean), or, when the log has ``acc_x, acc_y, acc_z``, when a window mean
-  of the specific force tilts more than :data:`STILL_TILT_DEG` (2 deg) from its median
-  direction. A window spans whole seconds: 1 s, or as many as it takes to hold
-  :data:`MIN_WINDOW_SAMPLES` samples (a log at 1 Hz is judged over 10-s windows), and
-  the samples left at the end of the log join the window before them when they are
-  fewer, so that no mean rests on a few samples (at the ends of the log the median
-  filter's output is a raw sample). A drift that is not a function of temperature
-  alone (heating and cooling in one log with hysteresis, a strong dependence on the
-  heating rate) fails the rate test too, and the message says so. Known limit: a slow, steady turn about
-  the vertical that the cubic can absorb is not detected (no sensor here sees it).
-
-The files the autopilots load, and their facts, are :mod:`gyrodrift.paramfiles`.
+* **span**: less than :data:`MIN_SPAN_C`; a cubic over a few degrees extrapolates
+  wildly (ArduPilot's onboard learning needs 10 degC);
+* **moved**: a window mean of any axis's filtered rate departs from the fit by more
+  than :data:`STILL_TOL_DPS`, or one of the specific force tilts more than
+  :data:`STILL_TILT_DEG` from its median direction. A window spans 1 s, or the whole
+  seconds it takes to hold :data:`MIN_WINDOW_SAMPLES` samples; a short tail joins the
+  window before it. A drift that is not a function of temperature alone fails too.
+  A slow steady turn the cubic can absorb is not detected.
 """
 
 from __future__ import annotations
@@ -482,12 +463,9 @@ def prior_config(cal: Calibration, config=None, temp_c: float = math.nan):
     """Settings whose z-axis drift model starts from ``cal``.
 
     The prior mean ``KalmanConfig.x0 = (a, 0, c)`` is the tangent of the z curve at
-    ``temp_c``, the log's starting temperature, clamped to the calibrated range: there
-    the filter has learnt nothing yet and the prior is all it has, while later its own
-    measurements take over; the start is also known before a log is streamed. Beyond
-    the range the tangent at the range's end extends the curve linearly. When the
-    curve's constant is unknown (``offset_known`` False, ArduPilot), ``c`` makes the
-    prior drift 0 at ``temp_c``, as the default prior. The prior covariance is unchanged.
+    the log's starting temperature clamped to the calibrated range. When the curve's
+    constant is unknown (``offset_known`` False), ``c`` makes the prior drift 0 at
+    ``temp_c``. The prior covariance is unchanged.
 
     Parameters
     ----------

@@ -1,51 +1,19 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
-``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many` from Python) compensates
-every log as ``gyrodrift compensate`` does (:func:`gyrodrift.pipeline.compensate_file`: a CSV
-or Parquet log in chunks, in constant memory), writes ``OUTDIR/<stem>_out.parquet`` (or
-``.csv``) atomically, and returns one summary row per
-log; the logs' folders below their common folder are mirrored in ``OUTDIR``
-(``a/x.csv`` and ``b/x.csv`` → ``OUTDIR/a/x_out.parquet`` and ``OUTDIR/b/x_out.parquet``). A log that cannot be processed (bad file, too short, no compass, even an
-unexpected exception in a reader) gives a row with ``status = "error"`` and a one-line
-message; it never stops the other logs.
+``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many`) compensates every
+log as ``gyrodrift compensate`` does (:func:`gyrodrift.pipeline.compensate_file`),
+writes ``OUTDIR/<sub>/<stem>_out.parquet`` (or ``.csv``) atomically, mirroring the
+logs' folders below their common folder, and returns one summary row per log. A log
+that fails gives a row with ``status = "error"`` and a one-line message; it never
+stops the others.
 
-Parallelism
------------
-* Local (default): :class:`concurrent.futures.ProcessPoolExecutor` with ``workers``
-  processes (default :func:`os.cpu_count`), started with the ``spawn`` method (safe
-  with pyarrow's threads; costs about a second per worker to start). ``workers=1``
-  runs in this process, one log after the other.
-* Dask (optional extra ``gyrodrift[fleet]``): ``dask_address`` is the scheduler
-  address (``tcp://host:8786``) or anything :class:`distributed.Client` accepts (a
-  ``LocalCluster``). Every worker must see the input logs and ``out_dir`` at the
-  same paths (a shared file system) and have gyrodrift installed.
+Parallelism: local ``spawn`` processes (``workers``; 1 runs in this process), or a
+Dask scheduler (``gyrodrift[fleet]``; every worker must see the logs and ``out_dir``
+at the same paths). Both give the same numbers as :func:`compensate` on each log.
 
-Both give identical numbers, and the same numbers as :func:`compensate` on each log.
-
-Summary columns
----------------
-==============  ========  =====================================================
-column          unit      meaning
-==============  ========  =====================================================
-``file``        --        the input log, as given
-``status``      --        ``ok`` or ``error``
-``error``       --        one-line message (``""`` when ok)
-``rows``        --        input rows (empty if the log could not be read)
-``duration_s``  s         last minus first time stamp
-``temp_min_c``  degC      lowest temperature in the log
-``temp_max_c``  degC      highest temperature in the log
-``updates``     --        filter updates taken (empty on error)
-``a``           deg/s/°C  final drift-model parameters (empty on error)
-``b``           deg
-``c``           deg/s
-``seconds``     s         wall time spent on this log (read, compensate, write)
-==============  ========  =====================================================
-
-In ``summary.csv`` (:func:`write_summary`) a text cell that starts with ``=``, ``+``,
-``-``, ``@``, a tab or a carriage return (a file name, an error message) gets a leading
-``'``, so that a spreadsheet shows it as text instead of running it as a formula
-(OWASP's advice on CSV injection). Number cells are written as numbers; the table
-:func:`process_many` returns is not changed.
+Summary columns (:data:`SUMMARY_COLUMNS`): ``file``, ``status``, ``error``, ``rows``,
+``duration_s`` (s), ``temp_min_c``, ``temp_max_c`` (degC), ``updates``, the final
+``a`` (deg/s/degC), ``b`` (deg), ``c`` (deg/s), and ``seconds`` (wall time).
 """
 
 from __future__ import annotations
@@ -387,11 +355,8 @@ def process_many(
     Raises
     ------
     ConfigError
-        Bad usage, before any log is processed: unknown ``out_format``, bad
-        ``workers``, missing ``out_dir``, two logs with the same output name, an
-        output that would overwrite an input log, dask missing or the scheduler not
-        reachable. Problems of single logs are never raised: they are rows with
-        ``status = "error"``.
+        Bad usage, before any log is processed (format, workers, ``out_dir``, clashing
+        or overwriting outputs, dask). Problems of single logs are rows, never raised.
     """
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
@@ -428,9 +393,8 @@ def write_summary(summary: pd.DataFrame, path) -> None:
 
     Notes
     -----
-    Text cells that start like a formula get a leading ``'`` (module notes,
-    :func:`gyrodrift.io.tabular.formula_safe`); number columns and ``summary`` itself
-    are left as they are.
+    Text cells that start like a formula get a leading ``'``
+    (:func:`gyrodrift.io.tabular.formula_safe`); ``summary`` itself is not changed.
     """
     from gyrodrift.io import write_table
 

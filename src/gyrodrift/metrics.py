@@ -1,16 +1,9 @@
 """Accuracy of a compensated log against a reference heading or the true drift.
 
-Besides the one-run summary :func:`accuracy`, this module computes the statistics
-of Table 2 of Feng, Li, Zhang (Sensors 2015, Section 4): the mean and variance of
-the bias drift error of a motionless gyro (static experiment, deg/s) and of the
-heading error against a reference (dynamic experiment, deg), per compensation
-method (:func:`table2`), next to the published numbers (:data:`PAPER_TABLE2`), and
-renders such tables as GitHub Markdown (:func:`markdown_table`).
-
-Statistics (:func:`error_stats`): mean, variance and standard deviation with
-``ddof=1`` (sample variance: the default of MATLAB's ``var``, which the paper's
-numbers most likely come from; on logs of thousands of rows the choice does not
-show in four digits), RMS and the largest absolute error.
+:func:`accuracy` summarises one run; :func:`table2` gives the statistics of the
+paper's Table 2 (static bias drift error, deg/s; dynamic heading error, deg) per
+method, beside the published numbers (:data:`PAPER_TABLE2`);
+:func:`markdown_table` renders them. Variances use ``ddof=1`` (MATLAB's ``var``).
 """
 
 from __future__ import annotations
@@ -155,27 +148,11 @@ def bias_error(out: pd.DataFrame, *, average_s: float | None = None) -> np.ndarr
 
     Notes
     -----
-    Which error:
-
-    * the table has ``true_bias_z`` (simulated logs): ``bias_z − true_bias_z``,
-      the estimated minus the true drift. This is the paper's quantity: its
-      Figure 2 compares the bias estimate with the "ideal bias" of the
-      motionless gyro.
-    * otherwise (a recorded log): the compensated rate ``rate_z`` itself, which
-      is the error only if the gyro did not move (true rate 0). It contains the
-      gyro's white noise as well as the drift error.
-
-    Why averaging: the paper's variances (Table 2, static, e.g. 6.7660e-5 (deg/s)²
-    for the adaptive algorithm) are far below the per-sample white noise of its
-    gyro. The ADXRS623's noise density is 0.04 deg/s/√Hz (Table 1), so even over
-    a 1 Hz bandwidth a single sample has a variance of about 1.6e-3 (deg/s)²,
-    24 times the table; a mean over τ seconds has N²/τ = 1.6e-3/τ, which reaches
-    6.8e-5 only for τ ≳ 24 s. The paper's error is therefore of smooth values
-    (bias estimate minus ideal bias, or averages). ``bias_z − true_bias_z`` has
-    no white-noise part, so it is used per row by default; for ``rate_z`` (no
-    truth column) pass ``average_s`` (for example 30 s, three of the paper's
-    10-s update intervals; Figure 6 of the paper shows the compensated rate
-    error still has structure at τ ≈ 10 s) to compare with the paper.
+    With ``true_bias_z`` (simulated logs) the error is ``bias_z − true_bias_z``, the
+    paper's quantity (Fig. 2). Otherwise it is ``rate_z``, an error only if the gyro
+    did not move, and it holds the white noise: the paper's variances are far below
+    the per-sample noise of its gyro, so average it (e.g. ``average_s=30``) to
+    compare with Table 2.
     """
     if TRUE_BIAS_Z in out.columns:
         e = _column(out, "bias_z", "bias_error") - out[TRUE_BIAS_Z].to_numpy(dtype=float)

@@ -1,38 +1,16 @@
 """Monte Carlo comparison of the drift estimators over every simulated scenario family.
 
-The families (:data:`FAMILIES`) are the six of the paper's kind (continuous logs,
-a compass heading, a measured temperature) and seven adversarial ones
-(:data:`ADVERSARIAL_FAMILIES`, :mod:`gyrodrift.simulate.adversarial`), built to break
-a design that relies on those: bursty records, interference during a fast
-temperature fall, a swaying platform with long outages, a vehicle with the raw
-magnetometer, a slow continuous turn, no temperature, a log of tens of seconds.
+The families (:data:`FAMILIES`) are those of the paper's kind (continuous logs, a
+compass heading, a measured temperature) and adversarial ones
+(:data:`ADVERSARIAL_FAMILIES`, :mod:`gyrodrift.simulate.adversarial`) built to break
+a design that relies on those.
 
-One *case* is a (family, seed) pair: a device and a compass drawn at random
-(:func:`gyrodrift.simulate.random_device`, :func:`gyrodrift.simulate.random_compass`)
-from a generator seeded by the pair, one simulated log of the family's scenario with
-that device, and (for ``poly3``) a separate 2-h calibration heating run of the same
-device and compass. Every method of the case runs on that same log
-(:func:`gyrodrift.compare.run_method`: same gates, same integration, same anchor),
-and is scored against the log's truth columns:
-
-===================  =====  ====================================================
-column               unit   meaning
-===================  =====  ====================================================
-``family``           --     scenario family (:data:`FAMILIES`)
-``seed``             --     Monte Carlo seed of the case
-``method``           --     drift estimator (:mod:`gyrodrift.compare` names)
-``scenario``         --     simulated scenario (:data:`gyrodrift.simulate.SCENARIOS`)
-``duration_s``       s      length of the log
-``heading_rms_deg``  deg    RMS of heading minus ``ref_heading`` (wrapped)
-``heading_max_deg``  deg    largest absolute heading error
-``bias_rms_dps``     deg/s  RMS of estimated minus true drift (``true_bias_z``)
-``status``           --     ``ok`` or ``error``
-``error``            --     one line: why the method or the case failed ("" if ok)
-===================  =====  ====================================================
-
-Results do not depend on the number of worker processes: each case is simulated from
-its own seeds, and the rows are sorted by family (in the order asked), seed and
-method (in the order asked).
+One *case* is a (family, seed): a random device and compass, one simulated log, and
+(for ``poly3``) a separate calibration heating run of the same device. Every method
+runs on the same log (:func:`gyrodrift.compare.run_method`) and is scored against
+its truth columns (:data:`COLUMNS`: wrapped heading RMS and max error in deg, bias
+RMS in deg/s, ``status`` and ``error``). Results do not depend on the number of
+workers.
 
 Examples
 --------
@@ -277,10 +255,8 @@ def _positive(name: str, value) -> float:
 def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
     """Draw the device, compass and simulation seeds of one case.
 
-    The generator is seeded by ``(crc32(family), seed)``, so a case is the same in
-    every process and independent of which other cases run; different families with
-    the same seed get different devices. A family with ``duration_range_s`` draws the
-    log length from a further child of that seed.
+    The generator is seeded by ``(crc32(family), seed)``: a case is the same in every
+    process whatever else runs.
 
     Parameters
     ----------
@@ -545,15 +521,10 @@ def summarise(df: pd.DataFrame, reference: str = REFERENCE_METHOD) -> pd.DataFra
     Returns
     -------
     DataFrame
-        One row per (family, method), families and methods in the order of ``df``,
-        then (with more than one family) an ``all`` family over every case. Columns:
-        ``family``, ``method``, ``n`` (cases that ran), ``failed``,
-        ``heading_rms_mean_deg``, ``heading_rms_median_deg``,
-        ``bias_rms_mean_dps``, ``bias_rms_median_dps``, ``pairs`` (cases where
-        both this method and ``reference`` ran), ``wins`` (of those, cases where
-        ``reference`` has a lower heading-error RMS *and* a lower bias RMS; empty on
-        the reference's own row) and ``better_mean`` (``reference`` has the lower
-        mean of both RMS errors).
+        One row per (family, method), then (with several families) an ``all`` family:
+        ``n``, ``failed``, mean and median heading (deg) and bias (deg/s) RMS,
+        ``pairs`` (cases both ran), ``wins`` (``reference`` lower in both RMS) and
+        ``better_mean``.
     """
     metrics = ["heading_rms_deg", "bias_rms_dps"]
     missing = [c for c in ("family", "seed", "method", *metrics, "status") if c not in df.columns]

@@ -460,10 +460,6 @@ def scale_factor_experiment(
 ) -> dict:
     """Section 4.3 on simulated data: drift compensation, then fixed and adaptive SF.
 
-    Simulates the ``scale-factor`` scenario (:func:`gyrodrift.simulate.simulate`),
-    compensates the drift (:func:`gyrodrift.compensator.compensate`) and estimates the
-    scale factor (:func:`gyrodrift.scale_factor.estimate_scale_factor`).
-
     Parameters
     ----------
     seed : int
@@ -495,24 +491,11 @@ def scale_factor_experiment(
         ``err_fixed``, ``err_adaptive`` and ``err_ideal`` (compensated with the true
         SF: what the drift compensation alone leaves), deg; ``summary``:
 
-        * ``heading_rms_deg``, ``heading_max_deg``: dicts none/fixed/adaptive/ideal
-          of the heading error over the whole run (Fig. 11);
-        * ``sf_heading_rms_deg``, ``sf_heading_max_deg``: dicts none/fixed/adaptive
-          of the heading minus the ideal heading, the part of the heading error due
-          to the SF estimate alone (the drift residual, common to all, cancels);
-        * ``sf_rms``, ``sf_max``: dicts none/fixed/adaptive of the SF error against
-          the true SF, over the rows after the first SF update (the rows before it
-          have no measurement of their own);
-        * ``turns`` (rotations detected), ``sf_updates`` (accepted), ``sf_fixed``;
-
-        and ``config``.
-
-    Notes
-    -----
-    The heading is integrated open loop for the whole run, so the drift left by the
-    drift compensator accumulates into every line of Fig. 11 alike (``err_ideal``);
-    over a 3-h run it is of the same order as the SF errors and adds to or cancels
-    them by chance. ``sf_heading_*`` isolates the SF's share.
+        ``heading_rms_deg``/``heading_max_deg`` (none/fixed/adaptive/ideal, whole
+        run), ``sf_heading_rms_deg``/``sf_heading_max_deg`` (heading minus the ideal
+        heading: the SF's share alone, as the open-loop drift residual cancels),
+        ``sf_rms``/``sf_max`` (SF error after the first update), ``turns``,
+        ``sf_updates``, ``sf_fixed``; and ``config``.
 
     Examples
     --------

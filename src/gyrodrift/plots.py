@@ -1,28 +1,10 @@
 """Figures of a compensated log, after Figures 1–9 of Feng, Li, Zhang (Sensors 2015).
 
-Every ``fig_*`` function takes output tables of :func:`gyrodrift.compensator.compensate`
-(or :func:`gyrodrift.compare.run_methods`) or arrays and returns a new
-:class:`matplotlib.figure.Figure` drawn with the Agg renderer. pyplot is never
-used, so no global figure state is created or changed: the caller owns the figure
-(save it with :func:`gyrodrift.plotbase.save_png` or embed it with
-:func:`gyrodrift.plotbase.png_base64`).
-
-==========================  ===============================================  =========
-function                    what it shows                                    paper
-==========================  ===============================================  =========
-:func:`fig_temperature`     temperature (degC) and its rate T' (degC/s)      Fig. 1a, 7
-:func:`fig_rates`           raw ``gyro_z`` and compensated ``rate_z``        Fig. 3
-:func:`fig_bias`            estimated drift of each method and the truth     Fig. 2
-:func:`fig_params`          drift-model a, b, c with the gated intervals     --
-:func:`fig_heading_error`   heading error of each method (wrapped)           Fig. 4, 5, 9
-:func:`fig_heading`         compass, compensated gyro and reference heading  Fig. 8
-:func:`fig_allan`           Allan deviation with intervals and noise terms   Fig. 6
-:func:`fig_calibration`     thermal calibration fit per axis, its residual   --
-==========================  ===============================================  =========
-
-Time axes, envelopes of long series and PNG output: :mod:`gyrodrift.plotbase`.
-
-matplotlib is an optional dependency: ``pip install 'gyrodrift[plot]'``.
+Every ``fig_*`` function takes output tables (or arrays) and returns a new
+:class:`matplotlib.figure.Figure` drawn with the Agg renderer, without pyplot: the
+caller owns the figure (:func:`gyrodrift.plotbase.save_png`,
+:func:`gyrodrift.plotbase.png_base64`). matplotlib is optional:
+``pip install 'gyrodrift[plot]'``.
 """
 
 from __future__ import annotations
@@ -249,11 +231,9 @@ def fig_params(out: pd.DataFrame, *, method: str | None = None):
     Returns
     -------
     matplotlib.figure.Figure
-        Three stacked axes: a (deg/s/degC), b (deg/degC), c (deg/s). Rows refused for
-        compass aiding are shaded in the colour of their reason
-        (:data:`GATE_COLORS`; one shading collection per reason and axes, with
-        ``gid`` ``"gate-<reason>"``); filter updates are marked with dots. The
-        legend lists the reasons present.
+        Three stacked axes: a (deg/s/degC), b (deg/degC), c (deg/s). Refused rows are
+        shaded by reason (:data:`GATE_COLORS`, ``gid`` ``"gate-<reason>"``); updates
+        are dots.
     """
     need_columns(out, ("t", "a", "b", "c", "gate_reason"), "fig_params")
     from matplotlib.lines import Line2D
@@ -451,11 +431,9 @@ def fig_calibration(log: pd.DataFrame, cal):
     Returns
     -------
     matplotlib.figure.Figure
-        One column per fitted axis. Top: the rate against temperature (grey: the
-        samples, at most :data:`MAX_POINTS`; blue: their mean per
-        :data:`gyrodrift.calibrate.BIN_WIDTH_C` bin) and the fitted cubic (red) over
-        the calibrated range, ``T_ref`` dotted. Bottom: bin mean minus fit, deg/s,
-        with ± the fit's residual RMS dashed. The title gives the temperature span.
+        One column per fitted axis. Top: samples, bin means and the fitted cubic
+        against temperature; bottom: bin mean minus fit, deg/s, with ± the residual
+        RMS.
     """
     from gyrodrift.calibrate import BIN_WIDTH_C
 

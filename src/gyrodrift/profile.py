@@ -14,34 +14,18 @@ The correlation between a and c, which a flat-temperature run leaves strong, is 
 
 Checks
 ------
-A profile is read as UTF-8 bytes (:func:`gyrodrift.config.read_utf8`) and checked
-field by field, on loading and before saving, by the validator of every setting
-(:func:`gyrodrift.settings.check`: :class:`Profile` declares each field's type and bounds); anything else is a
-:class:`~gyrodrift.errors.ConfigError` of one line naming the file and the field:
+A profile is checked field by field, on loading and before saving, by
+:func:`gyrodrift.settings.check` (:class:`Profile` declares each field's type and
+bounds); a failure is a one-line :class:`~gyrodrift.errors.ConfigError` naming the
+file and the field. The checks: exactly the fields :meth:`Profile.to_json` writes,
+each of its JSON type; parameters within :data:`PARAM_BOUNDS` (ten times and more
+above MEMS data sheets, so only corrupt or hand-edited values fail); the covariance
+symmetric and positive definite; the temperature range ordered and within
+:data:`gyrodrift.conventions.TEMP_RANGE_C`; ``updates <= samples``; ``created`` ISO 8601.
 
-* exactly the fields :meth:`Profile.to_json` writes, each of its JSON type (``true``
-  is not a number, ``"0.1"`` is not a number, ``1.5`` is not a count);
-* parameters finite and physically plausible (:data:`PARAM_BOUNDS`): ``|a| <= 1``
-  deg/s/degC, ``|b| <= 1000`` deg, ``|c| <= 50`` deg/s. MEMS data sheets give zero-rate
-  offsets of a few deg/s and temperature coefficients of hundredths of a deg/s/degC;
-  the bounds lie ten times and more above that, so that only corrupt or hand-edited
-  values are refused (``a = 1`` is already 210 deg/s of drift across the accepted
-  temperatures; ``b = 1000`` is 10 deg/s at a heating rate of 0.01 degC/s);
-* the covariance symmetric (to 1e-6 of ``sqrt(P_ii P_jj)``) and positive definite
-  (the smallest eigenvalue of its correlation matrix above 1e-12: no correlation of 1
-  to within rounding), each standard deviation within the same bound as its parameter;
-* the temperature range ordered and inside
-  :data:`gyrodrift.conventions.TEMP_RANGE_C`; ``updates <= samples``; ``created`` an
-  ISO 8601 date and time.
-
-Using a profile
----------------
-:func:`profile_notes` returns what the user should know when a profile is used: it was
-saved by another estimator than the one in use, or the run's temperatures reach beyond
-those it was learned at (by more than :data:`TEMP_MARGIN_C`), so that its drift model
-is extrapolated. ``gyrodrift compensate --profile`` prints each note as a warning line
-on stderr; :func:`compensate_warm` (the same from Python) adds them to the output's
-``attrs["notes"]``.
+:func:`profile_notes` says when a profile was saved by another estimator or the run's
+temperatures reach beyond its range by more than :data:`TEMP_MARGIN_C`; the command
+line prints them on stderr, :func:`compensate_warm` adds them to ``attrs["notes"]``.
 """
 
 from __future__ import annotations

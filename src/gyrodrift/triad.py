@@ -10,10 +10,8 @@ Model (Feng, Li, Zhang 2015, eqs. 1, 2 and 5, per axis)
 ``gyro_i = true_rate_i + drift_i + noise`` (eq. 1) with
 ``drift_i = a_i*T + b_i*T' + c_i`` (eq. 2), ``i = x, y``, with the temperature ``T`` and
 the ``T'`` of the z axis (the ``temp_rate`` output column, :mod:`gyrodrift.model`).
-Every row: ``bias_i = a_i*T + b_i*T' + c_i`` with the parameters in force and
-``rate_i = gyro_i - bias_i`` (eq. 5). Each axis has its own estimator from the
-registry (``TriadConfig.estimator``, default ``stkf``, eq. 10, with the same
-:class:`~gyrodrift.estimators.KalmanConfig`); one measurement per interval, no stacking.
+Every row ``rate_i = gyro_i - bias_i`` (eq. 5). Each axis has its own estimator
+(``TriadConfig.estimator``, default ``stkf``, eq. 10); one measurement per interval.
 
 Signs and angles (FRD body, NED world; :mod:`gyrodrift.conventions`)
 --------------------------------------------------------------------
@@ -25,81 +23,45 @@ the Euler-angle kinematics
 
     φ' = p + tanθ (q sinφ + r cosφ),      θ' = q cosφ − r sinφ
 
-(``p, q, r``: body rates about x, y, z; ``r`` is the compensated ``rate_z`` when
-given, else 0). gyrodrift integrates these with the raw ``gyro_x``/``gyro_y`` as
-``p, q`` and the per-row accelerometer angles in the coefficients.
+(``r``: the compensated ``rate_z`` when given, else 0), integrated with the raw
+``gyro_x``/``gyro_y`` as ``p, q`` and the per-row accelerometer angles.
 
 Measurement (the analogue of eqs. 4 and 6)
 ------------------------------------------
-Over the interval between two boundary rows A and B (``update_interval_s`` apart on
-a grid from the first row), each end is the mean over the rows of the last
-``edge_s`` seconds up to the boundary (1 s: accelerometer noise averages down).
-With ``Ī`` the window mean of a trapezoid integral and ``ā`` the window mean of an
-angle:
+Each end of an interval A..B is the mean over the last ``edge_s`` seconds up to
+the boundary. With ``Ī`` the window mean of a trapezoid integral and ``φ̄`` of an angle:
 
     M_φ = [Ī_φ'(B) − Ī_φ'(A) − (φ̄(B) − φ̄(A))] / Δt,   Δt = t̄(B) − t̄(A)
 
-and the same for θ. The same linear window functional is applied to the gyro
-integral and to the angle, so for a constant drift and any attitude the accelerometer
-sees exactly, ``M`` is the drift exactly; the sign measures the drift (gyro minus
-reference, as gyrodrift's eq. 6). The drifts enter as ``M_φ = d_x + k1 d_y`` and
-``M_θ = k2 d_y`` with ``k1`` and ``k2`` the window-matched interval means of
-``tanθ sinφ`` and ``cosφ``, so ``m_y = M_θ/k2`` and ``m_x = M_φ − k1 m_y``: exact for
-constant drifts whatever the attitude does between the edges. H is the row of
-window-matched means of ``[T, T', 1]`` (exact for the linear drift model with a
-constant attitude; eq. 3 with one row). Measurement
-variance per axis: ``R = N²/Δt + (σ_A² + σ_B²)/Δt²`` with ``N`` the gyro noise density
-and ``σ`` the standard error of each edge's mean angle (accelerometer noise, at least
-``acc_noise_g``, or the spread seen in the window if larger), propagated through
-``k1``, ``k2``.
+and the same for θ (gyro minus reference, as eq. 6). With ``k1``, ``k2`` the
+window-matched means of ``tanθ sinφ`` and ``cosφ``: ``m_y = M_θ/k2``,
+``m_x = M_φ − k1 m_y``, exact for constant drifts whatever the attitude does. H is the
+window-matched mean of ``[T, T', 1]`` (eq. 3, one row);
+``R = N²/Δt + (σ_A² + σ_B²)/Δt²``, ``σ`` the standard error of each edge's mean angle
+(at least ``acc_noise_g``), propagated through ``k1``, ``k2``.
 
 Gates (an interval is refused and the estimators hold, as the paper's outages)
 ------------------------------------------------------------------------------
-``gap``: a time step above ``GateConfig.max_gap_s``, or an empty gyro_x, gyro_y or
-temp cell (held from the previous row). ``accel``: an edge window with too few
-valid accelerometer rows, a mean specific-force norm more than ``acc_norm_tol_g``
-from 1 g, or a component spread above ``acc_spread_g`` (linear acceleration: the
-accelerometer does not show the gravity direction). ``tilt``: the tilt from level
-(angle between ``-f`` and body z) above ``max_tilt_deg`` at an edge (30°: the roll
-angle becomes ill-conditioned towards pitch 90° and the small cross-coupling
-``k1`` grows). ``turning``: a ``GateConfig.turn_window_s`` mean of the compensated
-x, y (or z, when given: a turning vehicle accelerates sideways) rate above
-``GateConfig.turn_rate_dps``. ``residual`` (per axis): the disagreement
-``(m − h·x)Δt`` exceeds ``max(residual_deg, residual_k·sqrt(h P hᵀ + R)·Δt)``: a
-sustained linear acceleration looks like a tilt; as for the compass, after
-``GateConfig.relock_intervals`` consecutive residual refusals that agree (same sign,
-spread below half their mean) the next is accepted (the drift moved).
-Known limit: a constant linear acceleration over a whole interval and both edges
-that stays inside these tolerances biases the measurement.
+``gap``: a step above ``max_gap_s`` or an empty gyro_x, gyro_y or temp cell.
+``accel``: an edge window with too few valid rows, a mean norm more than
+``acc_norm_tol_g`` from 1 g, or a component spread above ``acc_spread_g``. ``tilt``:
+tilt from level above ``max_tilt_deg`` at an edge. ``turning``: a ``turn_window_s``
+mean of the compensated x, y (or z) rate above ``turn_rate_dps``. ``residual`` (per
+axis): ``|m − h·x|Δt`` above ``max(residual_deg, residual_k·sqrt(h P hᵀ + R)·Δt)``;
+after ``relock_intervals`` agreeing refusals the next is accepted. A constant linear
+acceleration inside these tolerances biases the measurement.
 
 Bad inputs
 ----------
-* Empty (NaN) gyro_x/gyro_y/temp/temp_rate cells hold the previous value and refuse
-  the interval; before the first gyro value ``rate_x``/``rate_y`` are empty (NaN)
-  while ``bias_x``/``bias_y`` are given.
-* Accelerometer rows that are empty, whose norm is outside 0.5–1.5 g (e.g. all
-  zero), or that point along body x alone (pitch ±90°: no roll angle), are not used
-  (taken as level in the integrals); with no usable accelerometer at all every
-  interval is refused, the parameters stay at the prior ``x0`` and
-  ``rate_i = gyro_i − drift(x0)``.
-* The accelerometer unit (g or m/s²) is taken from the first usable row
-  (``acc_unit="auto"``: norm above 3 means m/s²) unless given.
+* Empty gyro_x/gyro_y/temp/temp_rate cells hold the previous value and refuse the
+  interval; ``rate_x``/``rate_y`` are NaN before the first gyro value.
+* Accelerometer rows that are empty, outside 0.5–1.5 g, or along body x alone are
+  taken as level; with none usable every interval is refused and the prior ``x0``
+  stays.
 
-Where the equations are
------------------------
-In :mod:`gyrodrift.kernels.tilt` (compiled with numba, as the z axis's): the row loop
-:func:`~gyrodrift.kernels.tilt.run` with the accelerometer's unit and validity, the
-Euler coefficients, the trapezoid integrals, the interval boundary and the turning gate
-of each row, then at each boundary :func:`~gyrodrift.kernels.tilt.close` with the edge
-windows, the gates, the measurement above and the estimators' update or hold (the
-Kalman filters of :mod:`gyrodrift.kernels.kalman` on their own arrays; a Python
-estimator is updated by :class:`TriadCompensator` when the loop returns at the interval
-end). This module holds the settings, the state arrays and the table functions.
-
-Causality and chunks: a row depends only on earlier rows. :class:`TriadCompensator`
-runs the same kernel on chunks of any size, one row included
-(:meth:`TriadCompensator.feed_row`, the streaming compensator's case), with results
-identical bit for bit to one chunk.
+The equations are in :mod:`gyrodrift.kernels.tilt` (``run`` per row, ``close`` per
+interval); this module holds the settings, the state and the table functions. A row
+depends only on earlier rows, and any chunking gives bit-identical results.
 """
 
 from __future__ import annotations
@@ -167,10 +129,8 @@ class TriadConfig:
     residual_k : float
         Residual gate in standard deviations of the predicted disagreement.
     estimator : str
-        Drift estimator of the x and y axes (:mod:`gyrodrift.estimators`, with the heading
-        axis's ``kalman`` settings): one that learns from interval
-        measurements, default ``stkf``; the ``adaptive`` model (heading, compass) is the
-        heading axis's.
+        Drift estimator of the x and y axes (:mod:`gyrodrift.estimators`, the heading
+        axis's ``kalman`` settings), one that learns from interval measurements.
     """
 
     edge_s: float = setting(1.0, "s", gt=0.0)

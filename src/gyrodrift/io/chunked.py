@@ -12,43 +12,24 @@ the same code as the whole-table functions of :mod:`gyrodrift.io.tabular`
 * a table written in chunks reads back as ``write_table`` of the whole table writes it
   (and for CSV the file is byte for byte the same).
 
-What a chunked reader cannot know in advance, and what it does about it:
+What a chunked reader cannot know in advance:
 
-* **Which compass form the log has** (``df.attrs["compass"]`` of ``read_log``) is known
-  after the last chunk: :attr:`LogChunks.compass`, and so are the notes
-  (``df.attrs["notes"]`` of ``read_log``: no compass, no temperature, held compass values
-  emptied; a low sample rate, decided on the first chunk):
-  :attr:`LogChunks.notes`. A log whose compass columns are empty in every row has
-  compass "none", as ``read_log`` says; its chunks keep those columns as read.
-* **A required column empty at the start** (``gyro_z``/``temp`` missing on the first
-  row, or ``t``/``gyro_z``/``temp`` empty in the whole first chunk): before it hands
-  out the first chunk, the reader reads the file again from the start, on a reader of
-  its own, until the column's first value (to the end if it has none): to give
-  ``read_log``'s message and raise, or, for a ``temp`` empty in every row, to fill it
-  with 0.0 in every chunk as ``read_log`` does. Such a file is read twice. A file
-  without a ``temp`` column is seen from its header (CSV) or schema (Parquet): ``temp``
-  is 0.0 in every chunk, the last column.
-* **Types of the other columns of a CSV** (pass-through columns, not numeric contract
-  columns): ``read_log`` lets pyarrow infer them from the whole file; the chunked
-  reader infers them from the first ``block_size_bytes`` (1 MiB) of the file. A later value
-  that does not fit (an integer column holding ``1.5`` on line 3 000 000, or a column
-  empty at the start) raises :class:`ColumnTypeChanged` (a
-  :class:`~gyrodrift.errors.LogFormatError`) naming the line and column and asking for
-  the ``column_types`` option (:func:`gyrodrift.pipeline.compensate_file` reads the file
-  again with the type it suggests, and says so); with it the chunks equal
-  ``read_log`` whenever the type given is the one pyarrow infers from the whole file.
-  An integer column with empty cells only in later chunks comes out int64 in the
-  first chunks and float64 in the others (``pd.concat`` gives ``read_log``'s float64);
-  Parquet files state their types, and such columns are float64 in every chunk.
-* **Several problems in one file**: ``read_log`` checks the whole file one kind of
-  problem after another (non-numbers in any row first, then time, temperature); the
-  chunked reader does the same within a chunk and reports the first chunk's problem
-  first. A file with one problem gets the same message either way.
+* **The compass form and the notes** are known after the last chunk
+  (:attr:`LogChunks.compass`, :attr:`LogChunks.notes`).
+* **A required column empty at the start**: before the first chunk, a second reader
+  reads from the start to the column's first value, to raise ``read_log``'s message
+  or to fill a ``temp`` empty in every row with 0.0. Such a file is read twice.
+* **Types of pass-through CSV columns** come from the first ``block_size_bytes``; a
+  later value that does not fit raises :class:`ColumnTypeChanged` asking for
+  ``column_types`` (:func:`gyrodrift.pipeline.compensate_file` retries with it). An
+  integer column with empty cells only later is int64 in the first chunks and
+  float64 after.
+* **Several problems**: the first chunk's problem is reported first; a file with one
+  problem gets ``read_log``'s message.
 
-Numbers in a CSV are read as float64 by pyarrow; where a number column holds text
-pyarrow cannot read as a number, the file is read again from that row with the number
-columns as text (:mod:`gyrodrift.io.batches`). Memory grows with ``chunk_rows``, not with
-the file (``benchmarks/README.md``).
+Where a CSV number column holds text, the file is read again from that row with the
+number columns as text (:mod:`gyrodrift.io.batches`). Memory grows with ``chunk_rows``,
+not with the file.
 """
 
 from __future__ import annotations
@@ -241,10 +222,8 @@ def iter_log_chunks(
 ) -> LogChunks:
     """Read a CSV or Parquet log in chunks of rows, each in the input contract.
 
-    Every chunk is what :func:`gyrodrift.io.tabular.read_log` gives for those rows:
-    ``pd.concat(list(iter_log_chunks(path, ...)))`` equals ``read_log(path, ...)`` (see
-    the module notes for what a chunked reader cannot know in advance). Memory use does
-    not grow with the file: one chunk and one block of the file at a time.
+    ``pd.concat(list(iter_log_chunks(path, ...)))`` equals ``read_log(path, ...)``
+    (module notes), in constant memory.
 
     Parameters
     ----------

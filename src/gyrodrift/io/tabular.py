@@ -175,27 +175,20 @@ def read_log(
     Returns
     -------
     pandas.DataFrame
-        All input columns in file order (renamed per ``column_map``, names stripped of
-        surrounding spaces). Numeric contract columns (``t``, ``gyro_*``, ``temp``,
-        ``heading``, ``mag_*``, ``acc_*``, ``ref_heading``, ``true_bias_*``) are float64,
-        with empty cells as NaN; headings are wrapped to [0, 360). Other columns pass
-        through as read. ``df.attrs`` holds ``source``, ``format``, ``gyro_unit``,
-        ``frame``, ``compass`` (``"heading"``, ``"mag"`` or ``"both"``: the compass
-        forms with data; ``"none"``: no ``heading`` nor a complete
-        ``mag_*`` + ``acc_*`` form with data) and, when the log lacks a compass or a
-        temperature, ``notes`` (list of one-line str, :mod:`gyrodrift.io.notes`).
-        Without a ``temp`` column, or with one empty in every row, ``temp`` is 0.0 in
-        every row (added as the last column when the file has none).
+        All input columns in file order (renamed, names stripped). Numeric contract
+        columns are float64 with empty cells NaN, headings in [0, 360); others pass
+        through. ``df.attrs``: ``source``, ``format``, ``gyro_unit``, ``frame``,
+        ``compass`` ("heading", "mag", "both" or "none") and ``notes`` when the log
+        lacks a compass or a temperature. Without a usable ``temp``, ``temp`` is 0.0
+        in every row.
 
     Raises
     ------
     LogFormatError
         The file is missing, empty, not a table, ragged, lacks ``t`` or ``gyro_z``, or
-        holds bad values (non-numbers, inf, empty or non-increasing ``t``, a value
-        outside its plausible range (:mod:`gyrodrift.io.limits`: ``temp``, ``gyro_*``,
-        ``heading``, ``mag_*``, ``acc_*``), ``t`` or ``gyro_z`` with no value, or a first row without
-        ``gyro_z``/``temp`` when the column has a value later). Empty cells in
-        ``gyro_z``/``temp`` after the first row are allowed and stay NaN.
+        holds bad values (non-numbers, inf, a non-increasing ``t``, a value outside
+        :mod:`gyrodrift.io.limits`, a first row without ``gyro_z``/``temp``). Later
+        empty ``gyro_z``/``temp`` cells stay NaN.
     ConfigError
         An unknown ``fmt``, ``gyro_unit`` or ``frame``, an undecidable file-name ending,
         or a ``column_map`` naming a column the file lacks.
@@ -263,9 +256,8 @@ def formula_safe(df: pd.DataFrame) -> pd.DataFrame:
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_safe: bool = False) -> None:
     """Write a DataFrame as CSV or Parquet, atomically.
 
-    The table goes to a hidden temporary file in the destination directory, which then
-    replaces ``path`` in one step (:func:`os.replace`): readers never see a partial file,
-    and an existing ``path`` is left untouched if writing fails.
+    Through a temporary file and :func:`os.replace`: readers never see a partial file,
+    and ``path`` is untouched if writing fails.
 
     Parameters
     ----------

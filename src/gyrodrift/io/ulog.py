@@ -559,28 +559,18 @@ def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     Returns
     -------
     pandas.DataFrame
-        One row per gyro sample: ``t`` (s, absolute, strictly increasing), ``gyro_z``,
-        ``gyro_x``, ``gyro_y`` (deg/s, body FRD; ``gyro_z`` > 0 = heading increasing),
-        ``temp`` (degC; 0 in every row without a measured temperature), ``mag_x``,
-        ``mag_y``, ``mag_z`` (gauss, body FRD, NaN on rows without a new sample; no
-        columns without a compass), ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific
-        force, body FRD; no columns without an accelerometer) and, with ``reference``,
-        ``ref_heading`` (deg, [0, 360)). ``df.attrs``: ``source``, ``format``
-        ("ulog"), ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or
-        "none"), ``mag_unit`` ("gauss", with the mag columns), ``acc_unit`` ("m/s^2",
-        with the acc columns), ``topics`` (column group -> topic used, None for a
-        group without data), ``summary`` (one line), ``onboard``
-        (:class:`gyrodrift.onboard.Onboard`: the gyro's device id, its sensor-to-body
-        rotation and the ``TC_G`` correction its rates hold) and, when the log has no
-        compass or no measured temperature, ``notes`` (one line each, :mod:`gyrodrift.io.notes`).
+        One row per gyro sample, the columns of the module notes. ``df.attrs``:
+        ``source``, ``format`` ("ulog"), ``gyro_unit``, ``frame`` ("ned"), ``compass``,
+        ``mag_unit``, ``acc_unit``, ``topics`` (column group -> topic used),
+        ``summary`` (one line), ``onboard`` (:class:`gyrodrift.onboard.Onboard`) and
+        ``notes`` when there is no compass or no measured temperature.
 
     Raises
     ------
     LogFormatError
-        Missing, empty, non-ULog, truncated or corrupt file; a missing gyro topic or
-        a missing field; no ``sensor_mag`` topic while ``mag_instance`` is given; fewer
-        than 2 gyro samples; an implausible temperature, gyro rate or magnetometer or
-        accelerometer value (:mod:`gyrodrift.io.limits`); an unsupported sensor rotation.
+        A missing, non-ULog or corrupt file; a missing topic or field; fewer than 2
+        gyro samples; an implausible value (:mod:`gyrodrift.io.limits`); an
+        unsupported sensor rotation.
     ConfigError
         pyulog is not installed; ``instance`` or ``mag_instance`` is not a
         non-negative integer or not in the log (the message lists those present).

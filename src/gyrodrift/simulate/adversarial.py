@@ -24,11 +24,9 @@ magnetometer and accelerometer instead of a heading, is in
 * ``short``: a hand-held log of tens of seconds: a few seconds still, then one
   rotation by 90–720 deg (:func:`scenario_short`).
 
-Every random choice (temperatures, heading, attitude, sway, turns, outages, records,
-whether a bursty log has a compass) is drawn from the scenario's generator in a fixed
-order, so a seed gives the same log. Lengths that describe the logger or a hand
-(records, a rotation's rate) are absolute; temperature profiles and compass outages
-scale with the run as in the other scenarios.
+Every random choice is drawn in a fixed order, so a seed gives the same log.
+Records and rotation rates are absolute; temperature profiles and outages scale
+with the run.
 """
 
 from __future__ import annotations

@@ -2,14 +2,10 @@
 
 :class:`DeviceModel` is the heading-axis MEMS gyro and its temperature sensor,
 :class:`TriadModel` adds the x and y gyros, and :func:`random_device` draws a
-randomised gyro for Monte Carlo runs. The stochastic processes of the bias
-(:func:`gauss_markov`, :func:`random_walk`) and the temperature reading
-(:func:`temperature_reading`) are here too; :func:`~gyrodrift.simulate.simulate`
-draws them from its own random streams.
-
-The drift is deliberately **not** the paper's ``a*T + b*T' + c`` (eq. 2): it is a cubic
-in temperature plus a rate term, a heating/cooling hysteresis, optionally a thermal lag
-and a backlash (:data:`SCENARIO_MEMORY`), and stochastic bias terms.
+randomised gyro for Monte Carlo runs; the bias and temperature-reading processes
+are here too. The drift is deliberately **not** the paper's ``a*T + b*T' + c`` (eq. 2):
+a cubic in temperature, a rate term, a heating/cooling hysteresis, optionally a
+thermal lag and a backlash (:data:`SCENARIO_MEMORY`), and stochastic bias terms.
 """
 
 from __future__ import annotations
@@ -33,25 +29,17 @@ __all__ = [
     "random_device",
 ]
 
-#: Scale-factor coefficients (:class:`DeviceModel` ``sf_*`` fields) of each scenario
-#: that sets them; a device coefficient left ``None`` takes this value (else 0).
-#: ``scale-factor``: 1 % high at 25 degC (a residual initial calibration error) and
-#: ``SF(T) - SF(23 degC)`` = 3.1 % at 58 degC: about the ±3 % sensitivity change over
-#: temperature of the ADXRS623 datasheet (Feng et al. 2015, Table 1), over the span of
-#: the static heating run, slightly curved (quadratic term) so that a linear SF model
-#: must keep adapting.
+#: Scale-factor coefficients (``sf_*``) of each scenario that sets them; a device
+#: coefficient left ``None`` takes this value (else 0). ``scale-factor``: 1 % high at
+#: 25 degC and about +3 % over 23-58 degC (ADXRS623, Feng et al. 2015, Table 1),
+#: slightly curved so that a linear SF model must keep adapting.
 SCENARIO_SCALE_FACTOR_PPM: dict[str, dict[str, float]] = {
     "scale-factor": {"sf_ppm": 10000.0, "sf_ppm_per_c": 700.0, "sf_ppm_per_c2": 6.0},
 }
 
-#: Temperature-memory fields (:class:`DeviceModel` ``lag_tau_s``, ``play_dps``,
-#: ``play_width_c``) of each scenario that sets them; a device field left ``None`` takes
-#: this value (else the memory is off). ``hysteresis``: the sensing element lags the
-#: temperature sensor by 120 s (at 0.02 degC/s the polynomial sees a temperature
-#: 2.4 degC behind the reading) and a 0.15 deg/s backlash of 6 degC width: with the
-#: default device, heating and cooling drifts differ by about 0.3 deg/s at the same
-#: temperature, and by 0.3 deg/s (the backlash) after the temperature has stopped
-#: changing.
+#: Temperature-memory fields (``lag_tau_s``, ``play_dps``, ``play_width_c``) of each
+#: scenario that sets them; a device field left ``None`` takes this value (else off).
+#: ``hysteresis``: a 120 s thermal lag and a 0.15 deg/s backlash of 6 degC width.
 SCENARIO_MEMORY: dict[str, dict[str, float]] = {
     "hysteresis": {"lag_tau_s": 120.0, "play_dps": 0.15, "play_width_c": 6.0},
 }
@@ -67,19 +55,10 @@ class DeviceModel:
     Defaults resemble an ADXRS623 (Feng et al. 2015, Table 1): white noise density
     0.04 deg/s/√Hz and a drift that changes by about 1 deg/s between 23 and 58 degC.
 
-    The gyro reads ``gyro_z = SF(T) * true_rate + true_bias_z + white``, with
-
-    ``true_bias_z = drift(T, T') + gauss_markov + rate_random_walk``
-
-    and the scale factor ``SF(T)`` of :meth:`scale_factor` (exactly 1 unless a
-    scale-factor coefficient is non-zero: only the ``scale-factor`` scenario sets them
-    by default, Section 4.3).
-
-    where :meth:`drift` is the deterministic part (a function of the *true* die
-    temperature ``T`` and its true rate ``T'``), ``gauss_markov`` a first-order
-    Gauss–Markov process (bias instability) and ``rate_random_walk`` integrated white
-    noise. ``white`` has the per-sample standard deviation
-    ``noise_density_dps_rthz * sqrt(fs_hz)``.
+    The gyro reads ``gyro_z = SF(T) * true_rate + drift(T, T') + gauss_markov +
+    rate_random_walk + white``: :meth:`scale_factor`, :meth:`drift` of the *true* die
+    temperature and its rate, a Gauss–Markov bias instability, integrated white noise,
+    and white noise of :meth:`white_sigma_dps` per sample.
 
     Attributes
     ----------
@@ -112,42 +91,28 @@ class DeviceModel:
     temp_noise_c : float
         Standard deviation of the temperature reading noise, degC (0 = off).
     temp_quant_c : float
-        Quantisation step of the temperature reading, degC (0 = off). Deterministic:
-        kept by :meth:`noiseless` and :meth:`scale_noise`.
+        Quantisation step of the temperature reading, degC (0 = off; not a noise term).
     sf_ppm : float or None
         Scale-factor error at ``t_ref_c``, ppm (parts per million of the true rate).
     sf_ppm_per_c : float or None
         Linear temperature coefficient of the scale factor, ppm/degC.
     sf_ppm_per_c2 : float or None
         Quadratic temperature coefficient of the scale factor, ppm/degC².
-
-        ``None`` (the default of all three) means "the scenario's value": 0 in every
-        scenario except ``scale-factor``, which uses ``SCENARIO_SCALE_FACTOR_PPM['scale-factor']``
-        (about 3 % over 23–58 degC, the ADXRS623 datasheet's sensitivity change over
-        temperature, Table 1). Give numbers (e.g. 0.0) to override the scenario.
-        Deterministic: kept by :meth:`noiseless` and :meth:`scale_noise`.
+        ``None`` (all three sf fields): the scenario's value
+        (:data:`SCENARIO_SCALE_FACTOR_PPM`, else 0).
     lag_tau_s : float or None
-        Thermal lag of the sensing element behind the die temperature ``T`` (which the
-        temperature sensor reads), s: the polynomial part of the drift is evaluated at
-        ``T_lag`` with ``dT_lag/dt = (T - T_lag)/lag_tau_s``, starting at ``T_lag = T``.
-        Heating, the element is colder than the reading, cooling, warmer: a hysteresis
-        loop whose width grows with ``|T'|``. 0 = off.
+        Thermal lag of the sensing element behind the read temperature ``T``, s: the
+        polynomial is evaluated at ``T_lag``, ``dT_lag/dt = (T - T_lag)/lag_tau_s``,
+        ``T_lag(0) = T(0)``. 0 = off.
     play_dps : float or None
-        Rate-independent (backlash) hysteresis, deg/s: ``play_dps * (T - p)/(w/2)``
-        where ``p`` is the play operator of ``T`` with width ``w = play_width_c``
-        (``p`` follows ``T`` with a slack of ``w/2``, starting at ``p = T``). After
-        heating by ``w`` or more the term is ``+play_dps``, after cooling
-        ``-play_dps``, and it stays there when the temperature stops changing: the
-        drift depends on the temperature *history*, not only on ``T`` and ``T'``.
-        0 = off.
+        Backlash hysteresis, deg/s: ``play_dps * (T - p)/(w/2)`` with ``p`` the play
+        operator of ``T`` of width ``w = play_width_c``; it stays at ``±play_dps`` when
+        the temperature stops changing. 0 = off.
     play_width_c : float or None
         Width ``w`` of the play operator, degC (> 0).
-
-        ``None`` (the default of all three) means "the scenario's value": off in every
-        scenario except ``hysteresis`` (:data:`SCENARIO_MEMORY`), so the default device
-        of every other scenario is unchanged. Deterministic: kept by :meth:`noiseless`
-        and :meth:`scale_noise`. The memory terms need the time series, so they are in
-        :meth:`drift_series`, not :meth:`drift`.
+        ``None`` (all three memory fields): the scenario's value
+        (:data:`SCENARIO_MEMORY`, else off). The memory terms are in
+        :meth:`drift_series` only.
     """
 
     noise_density_dps_rthz: float = 0.04
@@ -255,10 +220,7 @@ class DeviceModel:
     def drift_series(self, t_s, temp_true_c, temp_rate_true_cps) -> np.ndarray:
         """Deterministic drift, deg/s, of a temperature time series, memory terms included.
 
-        Without memory terms (``lag_tau_s`` and ``play_dps`` 0 or None) this is exactly
-        :meth:`drift`. Otherwise the polynomial is evaluated at the lagged temperature
-        (``lag_tau_s``) and the play hysteresis (``play_dps``) is added; the ``T'``
-        terms use the true rate.
+        Without memory terms this is exactly :meth:`drift`.
 
         Parameters
         ----------
@@ -306,9 +268,7 @@ class DeviceModel:
         ``x = T - t_ref_c``;
         ``SF = 1 + 1e-6 * (sf_ppm + sf_ppm_per_c*x + sf_ppm_per_c2*x**2)``
 
-        A coefficient that is ``None`` counts as 0 here;
-        :func:`~gyrodrift.simulate.simulate` first replaces ``None`` by the scenario's
-        value. With all coefficients 0 the result is exactly 1.0.
+        A ``None`` coefficient counts as 0 (``simulate`` first sets the scenario's value).
 
         Parameters
         ----------
@@ -352,10 +312,7 @@ class DeviceModel:
         )
 
     def with_scenario_memory(self, scenario: str) -> "DeviceModel":
-        """A copy with each ``None`` memory field set to the scenario's value (:data:`SCENARIO_MEMORY`).
-
-        Scenarios other than ``hysteresis`` switch the memory off (``lag_tau_s = 0``,
-        ``play_dps = 0``, ``play_width_c = 1``).
+        """A copy with each ``None`` memory field set to the scenario's value (:data:`SCENARIO_MEMORY`, else off).
 
         Examples
         --------
@@ -375,14 +332,11 @@ class DeviceModel:
 class TriadModel:
     """The x and y gyros and the accelerometer, for logs of the whole gyro triad.
 
-    Each axis has its own :class:`DeviceModel` (drift, noise; its temperature-reading
-    fields are unused: the one ``temp`` column is the z model's); the defaults differ
-    from the z axis and from each other in sign and size. ``gyro_x``/``gyro_y`` read
-    ``SF × true body rate + true_bias_x/y + white`` with the true body rates of the
-    scenario's constant mounting attitude (``p = -sinθ ψ'``, ``q = sinφ cosθ ψ'``).
-    The accelerometer (``acc_x..z``, g, FRD specific force) feels the vehicle's
-    acceleration (braking, cornering) as the compass does (``CompassModel.kinematic_tilt``)
-    plus white noise of ``acc_noise_g`` per sample.
+    Each axis has its own :class:`DeviceModel` (its temperature-reading fields are
+    unused). ``gyro_x``/``gyro_y`` read ``SF × body rate + bias + white`` with the body
+    rates of the constant mounting attitude (``p = -sinθ ψ'``, ``q = sinφ cosθ ψ'``);
+    the accelerometer (``acc_x..z``, g, FRD) feels the vehicle's acceleration as
+    ``CompassModel.kinematic_tilt`` does, plus white noise.
 
     Attributes
     ----------
@@ -547,34 +501,10 @@ def _signed(rng: np.random.Generator, low: float, high: float) -> float:
 def random_device(rng: np.random.Generator, *, scenario: str | None = None) -> DeviceModel:
     """A plausible randomised MEMS gyro for Monte Carlo runs.
 
-    Parameters are drawn independently, in a fixed order, around the ADXRS623-like
-    default (:class:`DeviceModel`):
-
-    ==========================  ==========================================  ============
-    field                       distribution                                unit
-    ==========================  ==========================================  ============
-    ``noise_density_dps_rthz``  log-uniform 0.015–0.08                      deg/s/√Hz
-    ``c0_dps``                  uniform −0.5 … 0.5                          deg/s
-    ``c1_dps_per_c``            ±(0.005–0.04), random sign                  deg/s/degC
-    ``c2_dps_per_c2``           uniform −5e-4 … 5e-4                        deg/s/degC²
-    ``c3_dps_per_c3``           uniform −5e-6 … 5e-6                        deg/s/degC³
-    ``k_rate_dps_per_cps``      uniform −8 … 8                              deg/s/(degC/s)
-    ``hyst_dps``                uniform 0 … 0.05                            deg/s
-    ``bias_instability_dps``    log-uniform 0.001–0.005                     deg/s
-    ``bias_tau_s``              uniform 100–1000                            s
-    ``rate_random_walk_dps_rts`` log-uniform 5e-6–5e-5                      deg/s/√s
-    ``temp_noise_c``            uniform 0.005–0.05                          degC
-    ``temp_quant_c``            one of 1/340, 1/16, 1/8                     degC
-    ==========================  ==========================================  ============
-
-    Over 23–58 degC the linear part alone moves the drift by 0.18–1.4 deg/s. The
-    scale factor is exactly 1 (all ``sf_*`` 0).
-
-    For ``scenario="hysteresis"`` the device is strongly nonlinear with memory: the
-    quadratic and cubic coefficients are drawn with magnitudes 3e-4–8e-4 and
-    3e-6–8e-6 (random signs) instead, and ``lag_tau_s`` uniform 60–300 s,
-    ``play_dps`` uniform 0.05–0.2 deg/s (random sign) and ``play_width_c`` uniform
-    3–10 degC. Any other scenario: no memory (``lag_tau_s = play_dps = 0``).
+    Each field is drawn independently, in a fixed order, around the ADXRS623-like
+    default (the ranges are in the code); the scale factor is exactly 1. For
+    ``scenario="hysteresis"`` the quadratic and cubic terms are larger and the memory
+    terms are drawn; for any other scenario the memory is off.
 
     Parameters
     ----------

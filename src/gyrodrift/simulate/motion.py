@@ -1,14 +1,9 @@
 """True motion of a simulated run: the :class:`Motion` record and the temperature profiles.
 
-A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what really happens to the
-unit as a :class:`Motion`: the true die temperature and its exact rate, the true
-heading rate, the mounting attitude and the kinematic acceleration, sampled at the log
-times, and how the run is logged (records of a bursty logger, a temperature channel
-that is not measured, the form of the compass columns). The temperature profiles here
-all start with a still hold at constant temperature (:func:`hold_s`) and then follow
-knots placed at fractions of the rest of the run (:func:`knot_profile`), so a shorter
-run keeps the shape. :func:`smooth_step` is the raised-cosine ramp of every turn,
-speed change and interference window.
+A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what happens to the unit,
+and how the run is logged, as a :class:`Motion`. The temperature profiles start with a
+still hold (:func:`hold_s`) then follow knots (:func:`knot_profile`); :func:`smooth_step`
+is the ramp of every turn, speed change and interference window.
 """
 
 from __future__ import annotations
@@ -90,12 +85,9 @@ def smooth_step_slope(x):
 def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
     """The samples of a ramp or pulse that lasts from ``start_s`` to ``end_s``.
 
-    Covers ``[start_s, end_s]`` and a margin of ``1e-6 * (1 + |start_s| + |end_s|)``
-    on both sides, many times the rounding error of ``t - start_s`` or ``t - end_s``:
-    a raised-cosine ramp (:func:`smooth_step` of ``(t - start_s) / (end_s - start_s)``,
-    or a pulse made of two of them) is exactly at its start value before the slice and
-    exactly at its end value after it. A scenario with one event every minute then
-    evaluates each event on its own samples, not on the whole run.
+    Covers ``[start_s, end_s]`` with a margin of ``1e-6 * (1 + |start_s| + |end_s|)``,
+    far above rounding, so a :func:`smooth_step` ramp is exactly at its start value
+    before the slice and at its end value after it.
 
     Parameters
     ----------
@@ -122,13 +114,8 @@ def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
 def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
     """Sum of raised-cosine steps at the sample times, each step evaluated on its ramp only.
 
-    The result is, bit for bit, that of adding ``delta * smooth_step((t_s - t0) / dur)``
-    over the whole run for each step in turn: before a step's ramp that term is
-    ``±0.0``, which leaves every partial sum unchanged (a partial sum starting at +0.0
-    is never -0.0), and after it the term is exactly ``delta``. So a sample gets the
-    ramp values of the steps whose ramps it lies in, and ``delta`` of each step whose
-    ramp it is past, in the order of ``steps``; the cost is linear in ``len(t_s)``
-    plus the samples inside the ramps.
+    Bit for bit the sum of ``delta * smooth_step((t_s - t0) / dur)`` over the whole
+    run, step by step, at a cost linear in ``len(t_s)`` plus the ramps' samples.
 
     Parameters
     ----------
@@ -186,23 +173,17 @@ class Motion:
     interference : tuple of (start_s, duration_s, offset_deg)
         Magnetic interference windows of the scenario.
     interference_offset_deg : ndarray or None
-        A further time-varying compass heading offset at the log times, deg (magnetic
-        interference that wanders, which constant windows cannot describe); added to
-        the windows' offset, in the simulated field as well. None = none.
+        A wandering compass heading offset at the log times, added to the windows',
+        deg. None = none.
     compass_dropouts : tuple of (start_s, duration_s)
         Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
         ``start_s <= t < start_s + duration_s``).
 
-    The last three fields say how the run is logged (the defaults: every sample, the
-    temperature sensor's reading, a ``heading`` column):
-
     records : tuple of (start_s, duration_s)
-        The logger keeps only the rows with ``start_s <= t < start_s + duration_s`` of
-        some record (bursty logging: the times jump between records); () = every row.
+        Bursty logging: only rows inside some record are kept; () = every row.
     temp_channel_c : float or None
-        The temperature column holds this constant, degC, whatever the true
-        temperature (a log whose temperature channel is not measured); None = the
-        sensor's reading.
+        A constant written in the temperature column, degC (a channel that is not
+        measured); None = the sensor's reading.
     compass_form : str
         ``"heading"``: a ``heading`` column (and the raw columns when asked);
         ``"raw"``: the raw ``mag_*`` and ``acc_*`` columns and no ``heading``;

@@ -333,13 +333,9 @@ _WANDER_PERIOD_S = (180.0, 900.0)
 def wander_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
     """Slowly wandering compass heading offset of ``interference-wander``, deg.
 
-    In each window of :func:`interference_windows_wander` the offset is a mean of
-    2–6 deg (random sign) plus three sinusoids of 1–3 deg amplitude and 3–15 min
-    period (random phases), faded in and out with raised-cosine ramps of
-    ``min(120 s, window/4)``; 0 outside the windows. For a window longer than 8 min the
-    offset changes by at most about 0.35 deg/s (typically 0.05–0.15 deg/s): too slow
-    for a 10-s disagreement gate of 3 deg to notice, so it pulls the compass along
-    with it. Periods are absolute (minutes), not scaled with the run.
+    In each window of :func:`interference_windows_wander`: a random mean plus three
+    slow sinusoids (periods in minutes, not scaled with the run), faded in and out;
+    0 outside. It moves too slowly for a disagreement gate to notice.
 
     Parameters
     ----------
@@ -533,11 +529,7 @@ def simulate(
     Parameters
     ----------
     scenario : str
-        One of :data:`SCENARIOS`: ``static``, ``static-outages``, ``vehicle``,
-        ``calibration``, ``scale-factor``, ``interference-wander``, ``hysteresis``,
-        ``cold-start``, ``soak``, and the adversarial ``vehicle-rawmag``, ``bursty``,
-        ``ramp-interference``, ``sway``, ``vessel``, ``no-temp``, ``short``
-        (:mod:`gyrodrift.simulate.adversarial`).
+        One of :data:`SCENARIOS`.
     seed : int
         Seed of all randomness (trajectory details and every noise term); the same
         seed gives an identical DataFrame.
@@ -566,21 +558,12 @@ def simulate(
     Returns
     -------
     pandas.DataFrame
-        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, then
-        ``true_sf`` in the ``scale-factor`` scenario or whenever the scale factor is
-        not ≡ 1 (+ raw columns); ``attrs`` holds ``scenario``, ``seed``,
-        ``duration_s``, ``fs_hz``, and the effective ``device`` (scale-factor
-        coefficients and memory fields resolved) and ``compass`` models as plain
-        dicts, and ``compass_dropouts`` (list of ``[start_s, duration_s]``) when the
-        scenario has windows without compass samples (``soak``, ``sway``).
-
-        How the scenario is logged (:class:`~gyrodrift.simulate.motion.Motion`) can
-        change this: ``bursty`` keeps only the rows of its records (times jump
-        between them; ``attrs["records"]``); ``no-temp`` writes a constant
-        temperature (``attrs["temp_channel_c"]``); ``vehicle-rawmag`` has
-        ``mag_*`` and ``acc_*`` and no ``heading``, and a ``bursty`` log without
-        compass no compass column at all (``attrs["compass_form"]``: ``"raw"``,
-        ``"none"``).
+        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, ``true_sf``
+        when the scale factor is not ≡ 1, and the raw columns asked for; ``attrs``
+        holds ``scenario``, ``seed``, ``duration_s``, ``fs_hz``, the effective
+        ``device`` and ``compass`` as dicts, and ``compass_dropouts`` when there are
+        any. How the scenario is logged (:class:`~gyrodrift.simulate.motion.Motion`:
+        records, a constant temperature, the compass columns) is in ``attrs`` too.
 
     Raises
     ------

@@ -179,11 +179,8 @@ def random_compass(rng: np.random.Generator) -> CompassModel:
     random phase; everything else as :class:`CompassModel` (10 Hz, 50 µT, dip 60 deg,
     kinematic tilt).
 
-    The noise stays near the 0.5 deg the default compensator settings assume: with
-    the default 3-deg disagreement gate checked at every compass sample, a noisier
-    compass gets most intervals refused (measured on ``static``, seed 1, 10 Hz:
-    0.7 deg → 20 % of rows gated, 1.0 deg → 82 %), and a Monte Carlo would then
-    measure the gate rather than the drift estimators.
+    The noise stays near the 0.5 deg the default settings assume: a noisier compass
+    gets most intervals refused by the disagreement gate (docs/results.md).
 
     Parameters
     ----------
