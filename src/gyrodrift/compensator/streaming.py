@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections import deque
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -231,12 +231,12 @@ class Compensator:
             return [row]
         if xy is not None:  # the x/y inputs wait with the row in the engine's init window
             self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
-        cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
-                                 np.array([norm]), np.array([dip]))
-        if cols is None and self._provisional:
-            rows = self._provisional_rows(self._engine.provisional())
-            self._n_provisional += len(rows)
-            return rows
+        cols = self._engine.window_row(t_s, g, float(temp_c), heading, norm, dip)
+        if cols is None:
+            if not self._provisional:
+                return []
+            self._n_provisional += 1
+            return [self._provisional_row(self._engine.provisional())]
         return self._released(cols)
 
     def flush(self) -> list[CompensatedSample]:
@@ -284,11 +284,12 @@ class Compensator:
             return self._rows({k: v[skip:] for k, v in cols.items()})
         return self._rows(cols)[skip:]
 
-    def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
-        """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
-        axis only, the x/y and scale-factor fields NaN."""
-        kind = CompensatedSample if self._sf is None else self._sf_sample
-        return [kind(*self._values(*row)) for row in _engine_rows(cols)]
+    def _provisional_row(self, row: tuple) -> CompensatedSample:
+        """The provisional row of a sample of the init window (:meth:`ChunkEngine.provisional`):
+        heading axis only, the x/y and scale-factor fields NaN."""
+        if self._sf is None:
+            return _new_sample(self._values(*row))
+        return self._sf_sample(*self._values(*row))
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
@@ -304,7 +305,7 @@ class Compensator:
         """One output row from the engine's float outputs and codes (layout order)."""
         values = self._values(t, out, codes, compass)
         if self._sf is None:
-            return CompensatedSample(*values)
+            return _new_sample(values)
         sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, values[9])
         return self._sf_sample(*values, sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf)
 
@@ -331,6 +332,19 @@ def _engine_rows(cols: dict | None):
         return ()
     return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
+
+
+#: The fields :meth:`Compensator._values` gives, in order (the rest keep their defaults).
+_VALUE_FIELDS = tuple(f.name for f in fields(CompensatedSample))[:17]
+
+
+def _new_sample(values, new=object.__new__, cls=CompensatedSample, names=_VALUE_FIELDS) -> CompensatedSample:
+    """``CompensatedSample(*values)`` made without the frozen dataclass's ``__init__`` (one
+    ``object.__setattr__`` per field): the same sample (fields, ``==``, ``repr``, ``asdict``).
+    The fields after ``values`` are read from their class defaults until set."""
+    sample = new(cls)
+    sample.__dict__.update(zip(names, values))
+    return sample
 
 
 def _limits(gyro_max_dps: float) -> dict:
