@@ -59,13 +59,19 @@ class Compensator:
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
+    Every sample goes to the gyro-unit check of :func:`gyrodrift.compensate`
+    (:class:`gyrodrift.gyro_units.GyroUnitCheck`): :attr:`notes` says when the gyro turns
+    about 57.3 times less or more than the compass. ``gyro_unit`` is the unit the rates were
+    read in before they were converted to deg/s (``"rad/s"`` gives the advice for that
+    unit), as for :func:`gyrodrift.compensate_arrays`.
+
     ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
     :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
     to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
     own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
     the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
     without a unit (epoch or whole-number milliseconds) belong to text without a stated
-    unit: ``gyrodrift stream`` makes them on the text before it pushes.
+    unit: :meth:`judge_times_as` asks for them (``gyrodrift stream`` does, for its text).
 
     Examples
     --------
@@ -86,17 +92,18 @@ class Compensator:
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
                  scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True,
-                 time_unit: str | None = None):
+                 time_unit: str | None = None, gyro_unit: str | None = None):
         self.config = check_config(config)
         check_estimator(estimator)
         self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         unit, self._time_scale = time_scale(time_unit)
-        self._time_base = TimeBaseWatch(unit or "s")  # as compensate_arrays judges its times (gyrodrift.io.timebase)
-        self._time_note = None
+        self._time_div: float | None = None  # judge_times_as: the times judged are t_s / this
         self._limits = _limits(self._gyro_max_dps)
         # "auto" takes the temperature: a stream has no whole log to look at
-        self._intake = Intake(self.config, source, estimator=estimator, record=False)
+        # times judged as compensate_arrays judges its own (gyrodrift.io.timebase), in their unit
+        self._intake = Intake(self.config, source, estimator=estimator, gyro_unit=gyro_unit, record=False,
+                              time_unit=unit or "s")
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
@@ -206,7 +213,8 @@ class Compensator:
         t_raw, t_s = t_s, t_s * self._time_scale
         if self._prev is not None and not t_s > self._prev[0]:
             raise GyroDriftError(f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}")
-        self._judge_time_base(self._time_base.add(t_raw))
+        if not self._intake.time_base.decided:
+            self._judge_time_base(self._intake.time_stamp(t_raw if self._time_div is None else t_s / self._time_div))
         if self._prev is None:
             if self._clock and not math.isfinite(T):
                 T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
@@ -252,16 +260,33 @@ class Compensator:
             The samples were too few for their sample rate to be judged as they came, and
             it is above 100 kHz (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
         """
-        self._judge_time_base(self._time_base.end())
+        self._judge_time_base(self._intake.time_end())
         return self._released(self._engine.flush())
 
+    def judge_times_as(self, time_unit: str | None) -> None:
+        """Judge the times pushed (seconds) as those of a file read with ``time_unit`` that
+        were converted to seconds: ``None`` for text without a stated unit, whose guesses of
+        another unit (epoch or whole-number milliseconds) then apply too. ``gyrodrift stream``
+        calls it for the text it reads. Before the first sample.
+
+        Raises
+        ------
+        ConfigError
+            An unknown unit.
+        """
+        if self._prev is not None:
+            raise GyroDriftError(f"{self.source}: judge_times_as() must come before the first sample")
+        unit, scale = time_scale(time_unit)
+        self._intake.time_base = TimeBaseWatch(unit)
+        self._time_div = scale
+
     def _judge_time_base(self, found) -> None:
-        """Refuse a time base a file is refused for; keep the note of a low rate."""
-        if found is None:
-            return
-        if found.problem:
-            raise GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
-        self._time_note = f"{self.source}: {found.note}"
+        """Refuse a time base a file is refused for (the error carries what was found as
+        ``time_base``)."""
+        if found is not None:
+            error = GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
+            error.time_base = found
+            raise error
 
     @property
     def compass_dead(self) -> bool:
@@ -272,7 +297,7 @@ class Compensator:
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._time_note]), *self._intake.notes]
+        return self._intake.notes
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
