@@ -99,6 +99,7 @@ class Compensator:
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         unit, self._time_scale = time_scale(time_unit)
         self._time_div: float | None = None  # judge_times_as: the times judged are t_s / this
+        self._time_decided = False  # the Intake's time-base watch has judged all it judges
         self._limits = _limits(self._gyro_max_dps)
         # "auto" takes the temperature: a stream has no whole log to look at
         # times judged as compensate_arrays judges its own (gyrodrift.io.timebase), in their unit
@@ -203,7 +204,7 @@ class Compensator:
             above 100 kHz (class notes). The refused sample is not taken: the
             compensator stays as it was.
         """
-        if self._clock and temp_c is None:
+        if temp_c is None and self._clock:
             temp_c = math.nan
         t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
             self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
@@ -213,8 +214,10 @@ class Compensator:
         t_raw, t_s = t_s, t_s * self._time_scale
         if self._prev is not None and not t_s > self._prev[0]:
             raise GyroDriftError(f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}")
-        if not self._intake.time_base.decided:
-            self._judge_time_base(self._intake.time_stamp(t_raw if self._time_div is None else t_s / self._time_div))
+        intake = self._intake
+        if not self._time_decided:
+            self._judge_time_base(intake.time_stamp(t_raw if self._time_div is None else t_s / self._time_div))
+            self._time_decided = intake.time_base.decided
         if self._prev is None:
             if self._clock and not math.isfinite(T):
                 T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
@@ -223,13 +226,14 @@ class Compensator:
         elif not math.isfinite(T):
             T = self._prev[2]
         self._prev = (t_s, g, T)
-        heading, norm, dip = self._intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
-        xy = self._intake.xy
-        ax = (math.nan,) * 3 if acc is None else acc
+        heading, norm, dip = intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        xy, engine = intake.xy, intake.engine
+        if xy is not None:
+            ax = (math.nan,) * 3 if acc is None else acc
         if self._sf is not None:
             self._held_T.append(T)
-        if self._engine.initialised:  # floats in, floats out
-            out, codes, compass = self._engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
+        if engine._held is None:  # initialised (ChunkEngine.initialised, without the property's call): floats in, floats out
+            out, codes, compass = engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
             row = self._sample(t_s, out, codes, compass)
             if xy is not None:
                 values = xy.feed_row(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
@@ -239,12 +243,12 @@ class Compensator:
             return [row]
         if xy is not None:  # the x/y inputs wait with the row in the engine's init window
             self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
-        cols = self._engine.window_row(t_s, g, float(temp_c), heading, norm, dip)
+        cols = engine.window_row(t_s, g, float(temp_c), heading, norm, dip)
         if cols is None:
             if not self._provisional:
                 return []
             self._n_provisional += 1
-            return [self._provisional_row(self._engine.provisional())]
+            return [self._provisional_row(engine.provisional())]
         return self._released(cols)
 
     def flush(self) -> list[CompensatedSample]:
