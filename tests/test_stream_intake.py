@@ -4,6 +4,8 @@ of a file, and the init window taken row by row, with the same results as the fi
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -126,3 +128,22 @@ def test_window_rows_then_a_chunk_give_the_whole_logs_bits(estimator, rows):
     for name, column in whole.items():
         joined = np.concatenate([c[name] for c in split])
         np.testing.assert_array_equal(joined, column, err_msg=name)
+
+
+@pytest.mark.parametrize("reason, unobs", [(0, 0), (3, 1)])
+def test_a_streamed_sample_is_the_dataclass_made_from_its_values(reason, unobs):
+    """The sample push makes without ``__init__``: the same fields, ``==``, ``repr`` and
+    ``asdict`` as ``CompensatedSample(*values)``, the x/y fields at their defaults."""
+    from dataclasses import asdict
+
+    from gyrodrift.compensator.output import CompensatedSample
+    from gyrodrift.compensator.streaming import _new_sample
+    from gyrodrift.kernels import layout as L
+
+    out = [0.5 + k for k in range(L.N_OUT)]
+    codes = [0] * L.N_CODES
+    codes[L.OC_REASON], codes[L.OC_UNOBS], codes[L.OC_UPDATE] = reason, unobs, 1
+    made = _new_sample(12.5, out, codes, 91.0)
+    built = CompensatedSample(*Compensator._values(12.5, out, codes, 91.0))
+    assert made == built and repr(made) == repr(built) and asdict(made) == asdict(built)
+    assert list(vars(made)) == [f for f in asdict(built)][:17] and math.isnan(made.rate_x) and made.tilt_gated == 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections import deque
-from dataclasses import fields, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -101,6 +101,8 @@ class Compensator:
         self._time_div: float | None = None  # judge_times_as: the times judged are t_s / this
         self._time_decided = False  # the Intake's time-base watch has judged all it judges
         self._limits = _limits(self._gyro_max_dps)
+        # the ranges push checks plain floats against before the full check (_checked_sample)
+        self._ranges = tuple(v for name in (GYRO_Z, TEMP, HEADING) for v in _range(self._limits[name]))
         # "auto" takes the temperature: a stream has no whole log to look at
         # times judged as compensate_arrays judges its own (gyrodrift.io.timebase), in their unit
         self._intake = Intake(self.config, source, estimator=estimator, gyro_unit=gyro_unit, record=False,
@@ -206,8 +208,15 @@ class Compensator:
         """
         if temp_c is None and self._clock:
             temp_c = math.nan
-        t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
-            self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        g_lo, g_hi, T_lo, T_hi, h_lo, h_hi = self._ranges
+        if not (type(t_s) is float and type(gyro_z_dps) is float and type(temp_c) is float
+                and type(heading_deg) is float and mag is None and acc is None and gyro_x_dps is None
+                and gyro_y_dps is None and (g_lo <= gyro_z_dps <= g_hi or gyro_z_dps != gyro_z_dps)
+                and (T_lo <= temp_c <= T_hi or temp_c != temp_c)
+                and (h_lo <= heading_deg <= h_hi or heading_deg != heading_deg)):
+            # anything but the plain floats in their ranges (NaN: no value) the common sample gives
+            t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
+                self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
@@ -317,7 +326,7 @@ class Compensator:
         """The provisional row of a sample of the init window (:meth:`ChunkEngine.provisional`):
         heading axis only, the x/y and scale-factor fields NaN."""
         if self._sf is None:
-            return _new_sample(self._values(*row))
+            return _new_sample(*row)
         return self._sf_sample(*self._values(*row))
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
@@ -332,9 +341,9 @@ class Compensator:
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
-        values = self._values(t, out, codes, compass)
         if self._sf is None:
-            return _new_sample(values)
+            return _new_sample(t, out, codes, compass)
+        values = self._values(t, out, codes, compass)
         sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, values[9])
         return self._sf_sample(*values, sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf)
 
@@ -363,16 +372,24 @@ def _engine_rows(cols: dict | None):
                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
-#: The fields :meth:`Compensator._values` gives, in order (the rest keep their defaults).
-_VALUE_FIELDS = tuple(f.name for f in fields(CompensatedSample))[:17]
-
-
-def _new_sample(values, new=object.__new__, cls=CompensatedSample, names=_VALUE_FIELDS) -> CompensatedSample:
-    """``CompensatedSample(*values)`` made without the frozen dataclass's ``__init__`` (one
-    ``object.__setattr__`` per field): the same sample (fields, ``==``, ``repr``, ``asdict``).
-    The fields after ``values`` are read from their class defaults until set."""
+def _new_sample(t: float, out, codes, compass: float, new=object.__new__, cls=CompensatedSample,
+                setattr=object.__setattr__, reasons=_REASONS, unobservable=UNOBSERVABLE, O_RATE=L.O_RATE,
+                O_BIAS=L.O_BIAS, O_HEADING=L.O_HEADING, O_A=L.O_A, O_B=L.O_B, O_C=L.O_C, O_TEMP_RATE=L.O_TEMP_RATE,
+                O_BIAS_SD=L.O_BIAS_SD, O_FUSED=L.O_FUSED, O_FUSED_SD=L.O_FUSED_SD, O_HEADING_SD=L.O_HEADING_SD,
+                OC_UPDATE=L.OC_UPDATE, OC_REASON=L.OC_REASON, OC_UNOBS=L.OC_UNOBS) -> CompensatedSample:
+    """``CompensatedSample(*Compensator._values(t, out, codes, compass))`` made without the
+    frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field) and without the
+    tuple: its fields set at once (the layout's indices bound as defaults). The same sample
+    (fields, ``==``, ``repr``, ``asdict``); the fields left out are read from their class
+    defaults until set."""
+    reason = reasons[codes[OC_REASON]]
     sample = new(cls)
-    sample.__dict__.update(zip(names, values))
+    setattr(sample, "__dict__", {
+        "t": t, "rate_z": out[O_RATE], "bias_z": out[O_BIAS], "heading": out[O_HEADING], "a": out[O_A],
+        "b": out[O_B], "c": out[O_C], "updated": codes[OC_UPDATE], "gated": int(reason != ""),
+        "gate_reason": reason, "temp_rate": out[O_TEMP_RATE], "compass_heading": compass,
+        "unobservable": unobservable[codes[OC_UNOBS]], "bias_sd": out[O_BIAS_SD], "heading_fused": out[O_FUSED],
+        "heading_fused_sd": out[O_FUSED_SD], "heading_sd": out[O_HEADING_SD]})
     return sample
 
 
@@ -380,6 +397,11 @@ def _limits(gyro_max_dps: float) -> dict:
     """The plausible range of every checked input column (:mod:`gyrodrift.io.limits`), by name."""
     names = ("", GYRO_Z, TEMP, HEADING, GYRO_X, GYRO_Y, *MAG_COLS, *ACC_COLS)
     return {name: limit_of(name, gyro_max_dps) for name in names}
+
+
+def _range(limit) -> tuple[float, float]:
+    """The plausible range of a :func:`_limits` entry (any float without one)."""
+    return (-math.inf, math.inf) if limit is None else (limit.lo, limit.hi)
 
 
 def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
