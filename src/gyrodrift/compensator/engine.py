@@ -30,7 +30,7 @@ from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -50,6 +50,21 @@ def _input(a) -> np.ndarray:
 
 
 _NO_FIELD = _read_only(np.empty(0))
+
+
+def compiled(dispatcher, args):
+    """The compiled function numba's ``dispatcher`` runs for ``args`` (its overload for their
+    types, which the dispatcher compiled or loaded on an earlier call with them), to be called
+    with arguments of the same types without the dispatcher typing each of them again on
+    every call (a one-row call of the streaming path); the dispatcher itself when there is
+    none (not compiled yet, or ``NUMBA_DISABLE_JIT``: a plain function)."""
+    overloads = getattr(dispatcher, "overloads", None)
+    if overloads is None:
+        return dispatcher
+    from numba import typeof
+
+    found = overloads.get(tuple(typeof(a) for a in args))
+    return dispatcher if found is None else found.entry_point
 
 
 def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
@@ -403,8 +418,13 @@ class ChunkEngine:
         (about 0.2 µs more per argument); the kernel writes none of its inputs."""
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
-        bad, fix = loop.prepare(r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins,
-                                cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        args = (r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins, cols.g_held,
+                cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        if r.prepare is None:  # the first row: through the dispatcher, then its compiled function
+            bad, fix = loop.prepare(*args)
+            r.prepare = compiled(loop.prepare, args)
+        else:
+            bad, fix = r.prepare(*args)
         if bad >= 0:  # nothing was taken: the rows so far are those before this one
             raise LogFormatError(f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing")
         if self._clock is not None:
@@ -528,6 +548,8 @@ class _RowMemory:
                             np.zeros(1), 1)
         self.Tp = self.cols.column(L.O_TEMP_RATE)
         self.gap = self.cols.code(L.OC_GAP).view(np.bool_)
+        #: the compiled kernels of these arrays and the engine's (:func:`compiled`), once called
+        self.prepare = self.run = None
         # the read-only views the kernels take (they see what is written to the arrays above)
         for name in ("t", "g", "T", "heading", "norm", "dip", "Tp", "gap"):
             setattr(self, "ro_" + name, _read_only(getattr(self, name)))

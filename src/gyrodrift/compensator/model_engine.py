@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from gyrodrift.compensator.engine import ChunkEngine, _read_only, output_columns, settings_arrays
+from gyrodrift.compensator.engine import ChunkEngine, _read_only, compiled, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
@@ -119,8 +119,14 @@ class ModelEngine(ChunkEngine):
         g = cols.g_held if fix & 1 else r.g
         T = cols.T_held if fix & 2 else r.T
         h = cols.h_wrapped if fix & 4 else r.heading
-        if evloop.run(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, 0, self.est.mf, self._mc, self._rf, self._rc,
-                      cols.out, cols.codes, 1, self._hist) < 1:
+        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, 0, self.est.mf, self._mc, self._rf, self._rc, cols.out,
+                cols.codes, 1, self._hist)
+        if r.run is None:  # the first row: through the dispatcher, then its compiled function
+            done = evloop.run(*args)
+            r.run = compiled(evloop.run, args)
+        else:
+            done = r.run(*args)
+        if done < 1:
             self._loop(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, cols)
 
     def accepted(self) -> np.ndarray:
