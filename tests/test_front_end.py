@@ -137,8 +137,8 @@ def runs(tmp_path_factory):
             log = make().reset_index(drop=True)
             path = tmp_path_factory.mktemp("front") / "in.parquet"
             log.to_parquet(path)
-            whole = compensate_file(path, path.with_name("whole.parquet"), cfg, stream=False)
-            parts = compensate_file(path, path.with_name("parts.parquet"), cfg, stream=True, chunk_rows=CHUNK_ROWS)
+            whole = compensate_file(path, path.with_name("whole.parquet"), cfg, chunked=False)
+            parts = compensate_file(path, path.with_name("parts.parquet"), cfg, chunked=True, chunk_rows=CHUNK_ROWS)
             done[name] = dict(log=log, cfg=cfg, batch=compensate(log, cfg), whole_stats=whole, parts_stats=parts,
                               whole=pd.read_parquet(path.with_name("whole.parquet")),
                               parts=pd.read_parquet(path.with_name("parts.parquet")), stream=_pushed(log, cfg))
@@ -221,7 +221,7 @@ def test_a_file_is_read_once_before_its_pass_and_the_engine_built_once(tmp_path,
     monkeypatch.setattr(ModelEngine, "__init__", counted_init)
     log = simulate("no-temp", seed=5, duration_s=200.0, fs_hz=20.0, raw_mag=True).drop(columns="heading")
     log.to_parquet(tmp_path / "in.parquet")
-    stats = compensate_file(tmp_path / "in.parquet", tmp_path / "out.parquet", C(mag_calibration=True), stream=True,
+    stats = compensate_file(tmp_path / "in.parquet", tmp_path / "out.parquet", C(mag_calibration=True), chunked=True,
                             chunk_rows=CHUNK_ROWS)
     assert calls == {"read": 2, "engine": 1}
     assert stats.regressor == "clock" and any("magnetometer" in n and "calibrated" in n for n in stats.notes)

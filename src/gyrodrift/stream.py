@@ -62,53 +62,37 @@ steps of milliseconds), and a sample rate above 100 kHz. A file is judged on all
 time stamps; the stream on its first ones as they come
 (:class:`~gyrodrift.io.timebase.TimeBaseWatch`: the first time stamp's magnitude at
 once, the steps from the ninth sample on), so such a stream stops within its first
-lines, or at its end when it is shorter.
-
-Signals
--------
-:func:`deferred_signals` turns SIGINT and SIGTERM into the end of the input: a signal
-that comes while the source is waiting for input ends the read at once; one that comes
-while rows are being compensated ends it after them. The held rows are then flushed and
-written as at the end of the input, and :attr:`StreamStats.signal` says which signal
-ended it (the command line then saves the profile and exits 130 or 143).
+lines, or at its end when it is shorter. The compensator's front end judges them
+(:meth:`~gyrodrift.Compensator.judge_times_as` with the stream's unit); a low sample
+rate is one of its notes.
 """
 
 from __future__ import annotations
 
-import codecs
 import csv
 import json
 import math
-import os
-import signal
-import sys
-from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
-from pathlib import Path
-from typing import Callable, Iterable, Iterator
+from typing import Callable, Iterable
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from gyrodrift._atomic import atomic_output
 from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorConfig
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
-from gyrodrift.io.timebase import TimeBaseWatch
 from gyrodrift.io.validate import (
     TEMP_ABSENT,
     Source,
     cell_label,
-    check_input_path,
     check_z_up,
     format_error,
     message,
     no_data_rows_error,
     normalise_frame,
-    read_error,
     read_options,
     compass_form,
     show_names,
@@ -116,6 +100,9 @@ from gyrodrift.io.validate import (
     table_to_frame,
 )
 from gyrodrift.pipeline import RunStats
+from gyrodrift.stream_ends import (
+    SERIAL_ADVICE, StreamInterrupted, deferred_signals, fd_blocks, input_blocks, output_writer, serial_blocks,
+)
 from gyrodrift.triad import TRIAD_COLUMNS, has_triad_inputs
 
 __all__ = [
@@ -125,12 +112,8 @@ __all__ = [
 
 #: Input and output formats of :func:`stream_rows`.
 FORMATS = ("csv", "jsonl")
-#: How to install the serial-port support.
-SERIAL_ADVICE = "pip install 'gyrodrift[serial]'"
 #: The byte-order mark some programs write first (decoded).
 BOM = "\ufeff"
-#: Bytes asked for in one read of a file descriptor (a read returns what is there, up to this).
-READ_BYTES = 1 << 16
 #: Longest line taken, characters: a longer one (a stream without line ends, a binary
 #: file) stops the stream instead of being gathered in memory.
 MAX_LINE_CHARS = 1 << 24
@@ -140,14 +123,6 @@ ACCOUNT_ROWS = 1000
 #: The output columns of the z axis, in the order of :func:`gyrodrift.compensator.output_frame`.
 _Z_COLUMNS = tuple(f.name for f in fields(CompensatedSample) if f.name not in TRIAD_COLUMNS)
 _COMPASS_COLUMNS = (HEADING, *MAG_COLS, *ACC_COLS)
-
-
-class StreamInterrupted(Exception):
-    """A signal (SIGINT or SIGTERM) ended the input; ``signum`` says which."""
-
-    def __init__(self, signum: int):
-        super().__init__(signal.Signals(signum).name)
-        self.signum = signum
 
 
 @dataclass
@@ -170,168 +145,6 @@ class StreamStats:
 def detect_format(first_line: str) -> str:
     """``"jsonl"`` when the first non-blank character of ``first_line`` is ``{``, else ``"csv"``."""
     return "jsonl" if first_line.lstrip().startswith("{") else "csv"
-
-
-class _Signals:
-    """SIGINT/SIGTERM received while :func:`deferred_signals` runs (see the module notes)."""
-
-    def __init__(self) -> None:
-        self.received: int | None = None
-        self.waiting = False  # True while a source blocks for input: a signal then ends the read at once
-
-    def handler(self, signum, frame) -> None:
-        self.received = signum
-        if self.waiting:
-            raise StreamInterrupted(signum)
-
-    def check(self) -> None:
-        """Raise :class:`StreamInterrupted` if a signal came since the last read."""
-        if self.received is not None:
-            raise StreamInterrupted(self.received)
-
-    @contextmanager
-    def wait(self):
-        """Around a blocking read: a signal raises :class:`StreamInterrupted` in it."""
-        self.waiting = True  # before the check: a signal after it raises in the handler
-        try:
-            self.check()
-            yield
-        finally:
-            self.waiting = False
-
-
-@contextmanager
-def deferred_signals(signums=(signal.SIGINT, signal.SIGTERM)):
-    """Catch ``signums`` while the block runs; yield the object the sources take.
-
-    Pass it as ``signals`` to :func:`fd_blocks` or :func:`serial_blocks`: a signal then
-    ends their input (module notes). The handlers in force before are restored after
-    the block. Outside the main thread (where Python cannot install handlers) nothing
-    is caught.
-    """
-    state = _Signals()
-    previous = {}
-    try:
-        for signum in signums:
-            previous[signum] = signal.signal(signum, state.handler)
-    except (ValueError, OSError):  # not the main thread
-        pass
-    try:
-        yield state
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-
-
-def fd_blocks(fd: int, signals: _Signals | None = None, *, read_bytes: int = READ_BYTES) -> Iterator[str]:
-    """The text of an open file descriptor (standard input, a file, a pipe) as it arrives.
-
-    Each item is what one :func:`os.read` returned (up to ``read_bytes``: what is there,
-    waiting only when nothing is), decoded as UTF-8 (a byte that is not UTF-8 becomes
-    U+FFFD, and its line is then refused as not a number). Ends at the end of the input,
-    or with :class:`StreamInterrupted` when ``signals`` (:func:`deferred_signals`)
-    caught a signal.
-    """
-    decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
-    while True:
-        if signals is None:
-            data = os.read(fd, read_bytes)
-        else:
-            with signals.wait():
-                data = os.read(fd, read_bytes)
-        if not data:
-            tail = decoder.decode(b"", final=True)
-            if tail:
-                yield tail
-            return
-        yield decoder.decode(data)
-
-
-def serial_blocks(port: str, baud: int, signals: _Signals | None = None) -> Iterator[str]:
-    """The text a serial port sends, as it arrives (as :func:`fd_blocks`); needs pyserial.
-
-    Raises
-    ------
-    ConfigError
-        pyserial is not installed (:data:`SERIAL_ADVICE`), or the port cannot be opened.
-    """
-    try:
-        import serial
-    except ImportError:
-        raise ConfigError(f"--serial {port}: reading a serial port needs pyserial; {SERIAL_ADVICE}") from None
-    try:
-        port_file = serial.Serial(port, baudrate=baud, timeout=None)
-    except (serial.SerialException, ValueError, OSError) as exc:
-        raise ConfigError(message(port, f"cannot open the serial port ({' '.join(str(exc).split())})",
-                                  "check the device name, its permissions and --baud")) from exc
-    decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
-    with port_file:
-        while True:
-            if signals is None:
-                data = port_file.read(max(1, port_file.in_waiting))
-            else:
-                with signals.wait():
-                    data = port_file.read(max(1, port_file.in_waiting))
-            if data:
-                yield decoder.decode(data)
-
-
-@contextmanager
-def input_blocks(path: str = "-", signals: _Signals | None = None, *, serial_port: str | None = None,
-                 baud: int = 115200):
-    """Open the input of ``gyrodrift stream``; yield ``(blocks, name)`` for :func:`stream_rows`.
-
-    ``serial_port`` (with ``baud``) reads a serial port (:func:`serial_blocks`); otherwise
-    ``path`` is a file, or ``"-"`` for standard input (named ``stdin`` in messages).
-    """
-    if serial_port is not None:
-        yield serial_blocks(serial_port, baud, signals), serial_port
-        return
-    if path == "-":
-        yield fd_blocks(0, signals), "stdin"
-        return
-    check_input_path(Path(path))
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError as exc:
-        raise read_error(path, exc) from exc
-    try:
-        yield fd_blocks(fd, signals), str(path)
-    finally:
-        os.close(fd)
-
-
-@contextmanager
-def output_writer(path: str = "-"):
-    """Yield ``write(text)`` for :func:`stream_rows`: every call written and flushed.
-
-    ``"-"`` is standard output (a reader that closes it stops the stream with a
-    :class:`~gyrodrift.errors.GyroDriftError`); a file is written atomically (:func:`gyrodrift._atomic.atomic_output`):
-    it appears, whole, when the block ends without an exception (the end of the input or a
-    signal), and an existing file is left as it was when it ends with one.
-    """
-    if path == "-":
-        out = sys.stdout
-        out.flush()
-
-        def write(text: str) -> None:
-            try:
-                out.buffer.write(text.encode("utf-8"))
-                out.buffer.flush()
-            except BrokenPipeError:  # e.g. "| head": what is still buffered goes nowhere, without a second error
-                os.dup2(os.open(os.devnull, os.O_WRONLY), out.fileno())
-                raise GyroDriftError("stdout: the program reading the output has closed it; the stream stopped "
-                                     "(no profile is saved); keep the reader open, or write to a file with -o") from None
-
-        yield write
-        return
-    with atomic_output(Path(path)) as fh:
-
-        def write(text: str) -> None:
-            fh.write(text.encode("utf-8"))
-            fh.flush()
-
-        yield write
 
 
 class _Reader:
@@ -407,7 +220,6 @@ class _Stream:
         self.has_mag = self.has_triad = False
         self.written: list[pd.DataFrame] = []  # output rows not yet in the run's account (:meth:`_account`)
         self.written_rows = 0
-        self.time_base = TimeBaseWatch(opts.time_unit)  # judged as a file's, on the first samples
 
     # -- header
     def _source(self, line_nos: list[int]) -> Source:
@@ -513,17 +325,13 @@ class _Stream:
         if good:
             self._push(records[:good], df if df is not None and len(df) == good else self._convert(records[:good]))
 
-    def _time_base(self, t_s: float, line_no: int) -> None:
-        """Judge the time base with the next sample (raw time: the file's unit), as a file's
-        is judged (:class:`~gyrodrift.io.timebase.TimeBaseWatch`); a problem stops the stream."""
-        found = self.time_base.add(t_s / self.opts.time_scale)
+    def _time_error(self, exc: GyroDriftError, where: str) -> GyroDriftError:
+        """The compensator's refusal of the time base (:meth:`Compensator.judge_times_as`) as
+        the file reader words it, at ``where``; any other error as it is."""
+        found = getattr(exc, "time_base", None)
         if found is None:
-            return
-        if found.problem:
-            raise LogFormatError(message(self.name, found.problem, found.advice, where=f"line {line_no}, column 't'"))
-        note = f"{self.name}: {found.note}"
-        self.stats.notes.append(note)
-        self.warn(note)
+            return exc
+        return LogFormatError(message(self.name, found.problem, found.advice, where=where))
 
     def _push(self, records, df: pd.DataFrame) -> None:
         if self.prev_t_s is None and not self.opts.frame_stated:  # the first rows say which way z points
@@ -538,17 +346,18 @@ class _Stream:
         rows: list[CompensatedSample] = []
         try:
             for i, t_s in enumerate(cols[T]):
-                if self.time_base.decided is False:
-                    self._time_base(t_s, records[i][0])
                 rows += self.comp.push(
                     t_s, cols[GYRO_Z][i], cols[TEMP][i], heading_deg=math.nan if heading is None else heading[i],
                     mag=None if mag is None else mag[i], acc=None if acc is None else acc[i],
                     gyro_x_dps=None if gx is None else gx[i], gyro_y_dps=None if gy is None else gy[i],
                 )
                 self.stats.rows_in += 1
-        except GyroDriftError:
+        except GyroDriftError as exc:
             self.emit(rows)  # the rows of the samples before it
-            raise
+            error = self._time_error(exc, f"line {records[i][0]}, column 't'")
+            if error is exc:
+                raise
+            raise error from None
         self.prev_t_s, self.prev_line = cols[T][-1], records[-1][0]
         self.emit(rows)
 
@@ -592,19 +401,18 @@ class _Stream:
         self.written, self.written_rows = [], 0
 
     def finish(self) -> None:
-        """The rows the compensator still holds (end of input); the run's account complete."""
-        self.emit(self.comp.flush())
+        """The rows the compensator still holds (end of input); the run's account complete.
+        The time base of a stream too short to be judged as it came is judged first (a
+        problem stops it; called again, the held rows are written)."""
+        try:
+            rows = self.comp.flush()
+        except GyroDriftError as exc:
+            error = self._time_error(exc, "column 't'")
+            if error is exc:
+                raise
+            raise error from None
+        self.emit(rows)
         self._account()
-
-    def end_time_base(self) -> None:
-        """At the end of the input: judge the time base of a stream too short to be judged
-        as it came (its rows are written); a problem stops it."""
-        found = self.time_base.end()
-        if found is not None and found.problem:
-            raise LogFormatError(message(self.name, found.problem, found.advice, where="column 't'"))
-        if found is not None and found.note:
-            self.stats.notes.append(f"{self.name}: {found.note}")
-            self.warn(f"{self.name}: {found.note}")
 
 
 def _too_long(source: str, line_no: int) -> LogFormatError:
@@ -712,7 +520,8 @@ def stream_rows(
         if value is not None and value not in FORMATS:
             raise ConfigError(f"unknown {option} {value!r}; use one of: {', '.join(FORMATS)}")
     opts = read_options(gyro_unit, frame, column_map, time_unit)
-    comp = compensator if compensator is not None else Compensator(config, source=source)
+    comp = compensator if compensator is not None else Compensator(config, source=source, gyro_unit=opts.gyro_unit)
+    comp.judge_times_as(opts.time_unit)  # the text's time stamps judged as a file's (its unit, or none stated)
     state = _Stream(write, comp, fmt=fmt, out_format=out_format, opts=opts, name=source, skip_bad=skip_bad,
                     warn=warn or (lambda line: None))
     carry: list[str] = []  # the pieces of an unfinished line, which waits for the rest
@@ -746,7 +555,8 @@ def stream_rows(
         tail = "".join(carry)
         if tail.strip():
             state.lines([(line_no + 1, tail.rstrip("\r"))])
-        state.end_time_base()
+        if state.stats.rows_in:
+            state.finish()
     except LogFormatError as stop:  # a bad line stops the stream: every row before it is written first
         if state.stats.rows_in:
             try:
@@ -761,7 +571,6 @@ def stream_rows(
             raise LogFormatError(message(source, "no input",
                                          "give a CSV header line and samples, or JSON lines (one object per line)"))
         raise no_data_rows_error(where)
-    state.finish()
     for note in comp.notes:
         state.warn(note)
     state.stats.notes += comp.notes

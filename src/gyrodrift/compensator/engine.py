@@ -30,7 +30,7 @@ from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -50,6 +50,21 @@ def _input(a) -> np.ndarray:
 
 
 _NO_FIELD = _read_only(np.empty(0))
+
+
+def compiled(dispatcher, args):
+    """The compiled function numba's ``dispatcher`` runs for ``args`` (its overload for their
+    types, which the dispatcher compiled or loaded on an earlier call with them), to be called
+    with arguments of the same types without the dispatcher typing each of them again on
+    every call (a one-row call of the streaming path); the dispatcher itself when there is
+    none (not compiled yet, or ``NUMBA_DISABLE_JIT``: a plain function)."""
+    overloads = getattr(dispatcher, "overloads", None)
+    if overloads is None:
+        return dispatcher
+    from numba import typeof
+
+    found = overloads.get(tuple(typeof(a) for a in args))
+    return dispatcher if found is None else found.entry_point
 
 
 def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
@@ -151,6 +166,7 @@ class ChunkEngine:
         self._bins = np.zeros((config.temp_rate.window_bins + 3, 3))
         self._t0: float | None = None
         self._held: list[tuple] | None = []  # prepared chunks of the init window, until it is complete
+        self._window: _WindowRows | None = None  # rows of the init window taken one by one (window_row)
         self._row: _RowMemory | None = None
         #: the provisional rows' previous time and rate, heading integral, anchor and its time
         self._prov = (math.nan, 0.0, 0.0, math.nan, math.nan)
@@ -210,6 +226,7 @@ class ChunkEngine:
         n = len(t)
         if n == 0:
             return None
+        self._hold_window_rows()
         if self.cfg.declination_deg:  # magnetic to true north (CompensatorConfig.declination_deg)
             heading = np.asarray(heading, dtype=float) + self.cfg.declination_deg
         if self._clock is not None:
@@ -243,12 +260,56 @@ class ChunkEngine:
                 self._held.append((inputs, cols))
                 if not t[-1] - self._fs[L.F_TSTART] >= 0:
                     return None
-                inputs, cols = _joined(self._held) if len(self._held) > 1 else self._held[0]
-                self._held = None
-                self._initialise(inputs, cols.column(L.O_TEMP_RATE))
+                return self._close_window()
             return self._run(inputs, cols)
         finally:
             join(helper)
+
+    def window_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
+                   dip: float = math.nan) -> dict | None:
+        """One row while the init window fills, on floats (the streaming path): checked and
+        prepared as :meth:`feed` prepares a chunk (the same kernel, the same bits) and held
+        with the window's other rows. Returns what :meth:`feed` returns: None until the row
+        completes the window, then the output columns of every row of the window.
+        :meth:`provisional` gives the row's provisional outputs meanwhile."""
+        w = self._window
+        if w is None:
+            if self._held is None:
+                raise GyroDriftError(f"{self.source}: the init window is complete: feed rows with feed_row()")
+            w = self._window = _WindowRows()
+        if self._clock is not None:
+            T = float(self._clock((t,))[0])
+        heading += self.cfg.declination_deg  # magnetic to true north, as in feed
+        if self._t0 is None:
+            if not (math.isfinite(g) and math.isfinite(T)):
+                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
+            self._t0 = t
+            self._fs[L.F_TSTART] = t + self.cfg.init_s
+        r = self._row or self._new_row()
+        fix = self._prepare_row(r, t, g, T, heading, norm, dip)
+        cols = r.cols
+        if fix:  # a held gyro or temperature cell, or a compass heading wrapped
+            g = float(cols.g_held[0]) if fix & 1 else g
+            T = float(cols.T_held[0]) if fix & 2 else T
+            heading = float(cols.h_wrapped[0]) if fix & 4 else heading
+        w.add(t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0]))
+        if not t - self._fs[L.F_TSTART] >= 0:
+            return None
+        self._hold_window_rows()
+        return self._close_window()
+
+    def _hold_window_rows(self) -> None:
+        """The rows taken by :meth:`window_row` since the last chunk, held as one prepared chunk."""
+        if self._window is not None:
+            self._held.append(self._window.chunk())
+            self._window = None
+
+    def _close_window(self) -> dict:
+        """The init window complete: its held chunks joined, the initialisation, its rows compensated."""
+        inputs, cols = _joined(self._held) if len(self._held) > 1 else self._held[0]
+        self._held = None
+        self._initialise(inputs, cols.column(L.O_TEMP_RATE))
+        return self._run(inputs, cols)
 
     def _initialise(self, inputs, Tp) -> None:
         """The init window's measurements, the estimator's first update and the field reference.
@@ -336,27 +397,46 @@ class ChunkEngine:
         """One row after initialisation, on floats (the streaming path; the same kernels as
         :meth:`feed`). Returns the N_OUT float outputs and the N_CODES codes of the row, as
         lists in the order of :mod:`gyrodrift.kernels.layout`, and the compass heading used."""
-        r = self._row
-        if r is None:
-            r = self._row = _RowMemory()
+        r = self._row or self._new_row()
         if self._clock is not None:
             T = float(self._clock((t,))[0])
         heading += self.cfg.declination_deg  # magnetic to true north, as in feed
+        fix = self._prepare_row(r, t, g, T, heading, norm, dip)
+        self._run_row(r, fix)
+        cols = r.cols
+        return cols.out.tolist(), cols.codes.tolist(), float(cols.h_wrapped[0]) if fix & 4 else heading
+
+    def _new_row(self) -> _RowMemory:
+        self._row = _RowMemory()
+        return self._row
+
+    def _prepare_row(self, r: _RowMemory, t: float, g: float, T: float, heading: float, norm: float,
+                     dip: float) -> int:
+        """One row into the row memory, checked and prepared (:func:`gyrodrift.kernels.loop.prepare`,
+        T' 0 with the clock); returns prepare's ``fix`` bits. The arrays are passed as they are,
+        writable: numba's dispatcher types a writable array in C and a read-only one in Python
+        (about 0.2 µs more per argument); the kernel writes none of its inputs."""
         r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
         cols = r.cols
-        rows_before = self.rows_in
-        bad, fix = loop.prepare(r.ro_t, r.ro_g, r.ro_T, r.ro_heading, self._fs, self._ist, self._set, self._iset,
-                                self._bins, cols.g_held, cols.T_held, cols.h_wrapped, r.Tp, r.gap)
-        if bad >= 0:
-            raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
+        args = (r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins, cols.g_held,
+                cols.T_held, cols.h_wrapped, r.Tp, r.gap)
+        if r.prepare is None:  # the first row: through the dispatcher, then its compiled function
+            bad, fix = loop.prepare(*args)
+            r.prepare = compiled(loop.prepare, args)
+        else:
+            bad, fix = r.prepare(*args)
+        if bad >= 0:  # nothing was taken: the rows so far are those before this one
+            raise LogFormatError(f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing")
         if self._clock is not None:
             r.Tp[0] = 0.0
-        h = r.ro_h_wrapped if fix & 4 else r.ro_heading
-        self._run_row(r, r.ro_g_held if fix & 1 else r.ro_g, r.ro_T_held if fix & 2 else r.ro_T, h)
-        return cols.out.tolist(), cols.codes.tolist(), float(h[0])
+        return fix
 
-    def _run_row(self, r: _RowMemory, g, T, heading) -> None:
-        """The prepared row of :meth:`feed_row` through the row loop."""
+    def _run_row(self, r: _RowMemory, fix: int) -> None:
+        """The prepared row of :meth:`feed_row` through the row loop (its read-only views: the
+        paper's loop is compiled for those)."""
+        g = r.ro_g_held if fix & 1 else r.ro_g
+        T = r.ro_T_held if fix & 2 else r.ro_T
+        heading = r.ro_h_wrapped if fix & 4 else r.ro_heading
         done = 0
         while done < 1:  # 0: a ring was full before the row (grown by _after_stop)
             done = loop.run_chunk(r.ro_t, g, T, r.ro_Tp, heading, r.ro_gap, r.ro_norm, r.ro_dip, 0, self._fs,
@@ -365,64 +445,58 @@ class ChunkEngine:
             self._after_stop()
 
     # --------------------------------------------------------------- finish
-    def provisional(self) -> dict | None:
-        """Provisional output columns of the rows of the last :meth:`feed` while the init
-        window fills (None once it is complete): compensated causally with the drift model
-        in force before any measurement (the prior, or a warm start's profile), its
-        ``bias_sd`` saying how little that is; the heading integrated from the first
+    def provisional(self) -> tuple:
+        """The provisional row of the last :meth:`window_row`: compensated causally with the
+        drift model in force before any measurement (the prior, or a warm start's profile),
+        its ``bias_sd`` saying how little that is; the heading integrated from the first
         compass sample (from 0 before one, relative), ``heading_fused`` the same from that
         sample on (NaN before it, as the fused filter's), reason ``init``. The streaming
         :class:`gyrodrift.Compensator` emits them so that every sample gets a row at once;
         the engine's own rows of the window are made all the same, when it ends, and the
-        rows after it are the same as without provisional rows."""
-        if not self._held:
-            return None
-        (t, g, T, heading, _, _), cols = self._held[-1]
-        Tp = cols.column(L.O_TEMP_RATE)
+        rows after it are the same as without provisional rows.
+
+        Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as
+        :meth:`feed_row` gives them: ``out`` the N_OUT float outputs and ``codes`` the N_CODES
+        codes, in the order of :mod:`gyrodrift.kernels.layout`."""
+        w = self._window
+        ti, gi, Ti, hi, Tpi = w.t[-1], w.g[-1], w.T[-1], w.heading[-1], w.Tp[-1]
         if self._prov_model is None:  # nothing updates the estimator before the window ends
             C = np.asarray(self.est.cov, dtype=float).reshape(9)
             unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
-            self._prov_model = (*(float(v) for v in self.est.params), tuple(C.tolist()), int(unobs))
-        a, b, c, C, unobs = self._prov_model
-        n = t.size
-        out = {k: np.empty(n) for k in ("bias_z", "rate_z", "heading", "bias_sd", "heading_sd", "heading_fused",
-                                         "heading_fused_sd")}
+            codes = [0] * L.N_CODES
+            codes[L.OC_REASON], codes[L.OC_UNOBS] = L.R_INIT, int(unobs)
+            self._prov_model = (*(float(v) for v in self.est.params), tuple(C.tolist()), codes)
+        a, b, c, C, codes = self._prov_model
         t_prev, rate_prev, integral, anchor, t_anchor = self._prov
-        for i in range(n):
-            bias = drift.bias(a, b, c, T[i], Tp[i])
-            rate = g[i] - bias
-            if not math.isnan(t_prev) and t[i] - t_prev <= self.cfg.gate.max_gap_s:
-                integral += 0.5 * (rate + rate_prev) * (t[i] - t_prev)
-            if math.isnan(anchor) and not math.isnan(heading[i]):
-                anchor, t_anchor = heading[i] - integral, t[i]
-            t_prev, rate_prev = t[i], rate
-            sd = drift.bias_sd(*C, T[i], Tp[i])
-            out["bias_z"][i], out["rate_z"][i], out["bias_sd"][i] = bias, rate, sd
-            out["heading"][i] = numeric.wrap360((0.0 if math.isnan(anchor) else anchor) + integral)
-            since = t[i] - (self._t0 if math.isnan(t_anchor) else t_anchor)
-            out["heading_sd"][i] = math.hypot(self.cfg.compass_sigma_deg if not math.isnan(anchor) else 0.0, sd * since)
-            # the fused heading, as the filter's: none before the first compass sample
-            out["heading_fused"][i] = out["heading"][i] if not math.isnan(anchor) else math.nan
-            out["heading_fused_sd"][i] = out["heading_sd"][i] if not math.isnan(anchor) else math.nan
-        self._prov = (t_prev, rate_prev, integral, anchor, t_anchor)
-        return {
-            "t": t, **out, "a": np.full(n, a), "b": np.full(n, b), "c": np.full(n, c),
-            "temp_rate": Tp,
-            "compass_heading": heading, "updated": np.zeros(n, np.int8), "reason": np.full(n, L.R_INIT, np.int8),
-            "unobs": np.full(n, unobs, np.int8),
-        }
+        bias = drift.bias(a, b, c, Ti, Tpi)
+        rate = gi - bias
+        if not math.isnan(t_prev) and ti - t_prev <= self.cfg.gate.max_gap_s:
+            integral += 0.5 * (rate + rate_prev) * (ti - t_prev)
+        if math.isnan(anchor) and not math.isnan(hi):
+            anchor, t_anchor = hi - integral, ti
+        self._prov = (ti, rate, integral, anchor, t_anchor)
+        sd = drift.bias_sd(*C, Ti, Tpi)
+        out = [math.nan] * L.N_OUT
+        out[L.O_BIAS], out[L.O_RATE], out[L.O_BIAS_SD], out[L.O_TEMP_RATE] = bias, rate, sd, Tpi
+        out[L.O_A], out[L.O_B], out[L.O_C] = a, b, c
+        out[L.O_HEADING] = numeric.wrap360((0.0 if math.isnan(anchor) else anchor) + integral)
+        since = ti - (self._t0 if math.isnan(t_anchor) else t_anchor)
+        out[L.O_HEADING_SD] = math.hypot(self.cfg.compass_sigma_deg if not math.isnan(anchor) else 0.0, sd * since)
+        if not math.isnan(anchor):  # the fused heading, as the filter's: none before the first compass sample
+            out[L.O_FUSED], out[L.O_FUSED_SD] = out[L.O_HEADING], out[L.O_HEADING_SD]
+        return ti, out, codes, hi
 
     def flush(self) -> dict | None:
         """The rows held back while the init window fills (a log shorter than the window),
         compensated from what they give (the window ends at the last row): output columns
         as :meth:`feed` returns them, or None when no row is held. Rows fed afterwards
         come out as they go in."""
+        if self._held is None:
+            return None
+        self._hold_window_rows()
         if not self._held:
             return None
-        inputs, cols = _joined(self._held) if len(self._held) > 1 else self._held[0]
-        self._held = None
-        self._initialise(inputs, cols.column(L.O_TEMP_RATE))
-        return self._run(inputs, cols)
+        return self._close_window()
 
     def finish(self) -> np.ndarray:
         """End of the log: return the accepted measurements, an (M, 5) array of (time s,
@@ -430,7 +504,7 @@ class ChunkEngine:
         taken with :meth:`flush` first."""
         if self._t0 is None:
             raise LogFormatError(f"{self.source}: the log has no samples")
-        if self._held:
+        if self._held or self._window is not None:
             raise GyroDriftError(f"{self.source}: rows are still held: call flush() before finish()")
         return self.accepted()
 
@@ -474,8 +548,39 @@ class _RowMemory:
                             np.zeros(1), 1)
         self.Tp = self.cols.column(L.O_TEMP_RATE)
         self.gap = self.cols.code(L.OC_GAP).view(np.bool_)
+        #: the compiled kernels of these arrays and the engine's (:func:`compiled`), once called
+        self.prepare = self.run = None
         # the read-only views the kernels take (they see what is written to the arrays above)
         for name in ("t", "g", "T", "heading", "norm", "dip", "Tp", "gap"):
             setattr(self, "ro_" + name, _read_only(getattr(self, name)))
         for name in ("g_held", "T_held", "h_wrapped"):
             setattr(self, "ro_" + name, _read_only(getattr(self.cols, name)))
+
+
+class _WindowRows:
+    """The rows of the init window taken one by one (:meth:`ChunkEngine.window_row`), as
+    :func:`gyrodrift.kernels.loop.prepare` left them: the inputs the row loop takes (held
+    cells filled, the compass wrapped), T' and the gap flags, in growing lists."""
+
+    def __init__(self):
+        self.t, self.g, self.T, self.heading, self.norm, self.dip, self.Tp, self.gap = ([] for _ in range(8))
+
+    def add(self, t, g, T, heading, norm, dip, Tp, gap) -> None:
+        self.t.append(t)
+        self.g.append(g)
+        self.T.append(T)
+        self.heading.append(heading)
+        self.norm.append(norm)
+        self.dip.append(dip)
+        self.Tp.append(Tp)
+        self.gap.append(gap)
+
+    def chunk(self) -> tuple[tuple, Columns]:
+        """The rows as one prepared chunk, as :meth:`ChunkEngine.feed` holds one: inputs and columns."""
+        cols, helper = new_columns(len(self.t))
+        join(helper)
+        cols.column(L.O_TEMP_RATE)[:] = self.Tp
+        cols.code(L.OC_GAP)[:] = self.gap
+        inputs = tuple(_read_only(np.array(v, dtype=float))
+                       for v in (self.t, self.g, self.T, self.heading, self.norm, self.dip))
+        return inputs, cols

@@ -13,6 +13,10 @@
    decided on the first rows);
 7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
 
+Rows that come one by one also have their time base judged here, on the first ones
+(:class:`gyrodrift.io.timebase.TimeBaseWatch`, :meth:`Intake.time_stamp`); a whole log or a
+file is judged on all its time stamps before it comes in.
+
 What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
 once for it (:func:`survey`), :func:`gyrodrift.compensate` takes it from the log in memory.
 """
@@ -32,9 +36,13 @@ from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
+from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
 from gyrodrift.triad import TRIAD_COLUMNS
 
 __all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays"]
+
+#: Rows taken one by one (:meth:`Intake.row_compass`) given to the gyro-unit check at a time.
+UNIT_ROWS = 4096
 
 
 @dataclass(frozen=True)
@@ -132,6 +140,9 @@ class Intake:
         The unit the gyro was read in, for the unit check's advice.
     record : bool
         Keep the default engine's epoch history (for the smoother).
+    time_unit : str or None
+        The canonical unit of the time stamps given to :meth:`time_stamp` (None: seconds,
+        not stated), as for a file.
 
     Attributes
     ----------
@@ -142,7 +153,7 @@ class Intake:
     """
 
     def __init__(self, config, source: str = "log", *, estimator=None, whole: WholeLog | None = None,
-                 gyro_unit: str | None = None, record: bool = True):
+                 gyro_unit: str | None = None, record: bool = True, time_unit: str | None = "s"):
         self.config = config
         self.source = source
         whole = whole or WholeLog()
@@ -154,6 +165,10 @@ class Intake:
         self._dead = DeadField()
         self._heading_seen = False  # a heading with a value: a compass even when the magnetometer is dead
         self.units = GyroUnitCheck(source, gyro_unit)
+        self._unit_rows: list[tuple] = []  # (t, gyro, heading) of rows not yet given to the unit check
+        self.time_base = TimeBaseWatch(time_unit)
+        self._time_note: str | None = None
+        self._time_ended = False
         self.xy = None
         self._xy_decided = False
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
@@ -185,7 +200,8 @@ class Intake:
             if self.config.mag_calibration:  # no calibration without the whole log: a stream has none
                 raw.append(self._cal.note(self.source) if self._cal is not None else f"{self.source}: magnetometer "
                            "not calibrated: a stream does not see the whole log the fit needs (mag_calibration)")
-        return [*filter(None, [self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
+        self._check_unit_rows()
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
                 *filter(None, [self.units.note()])]
 
     # ------------------------------------------------------------------ chunks
@@ -269,11 +285,49 @@ class Intake:
         return out
 
     # ------------------------------------------------------------------ rows
+    def time_stamp(self, t_raw: float) -> TimeBase | None:
+        """Judge the time base with the next time stamp (in :attr:`time_base`'s unit) until it
+        is decided: returns what is found when the time stamps cannot be in that unit (the
+        caller refuses the row; the stamp is not taken), else None; a note of a low sample
+        rate goes to :attr:`notes`."""
+        return self._time_found(self.time_base.add(t_raw))
+
+    def time_end(self) -> TimeBase | None:
+        """At the end of the rows: :meth:`time_stamp`'s judgement of rows too few to be judged
+        as they came (once: None when called again)."""
+        if self._time_ended:
+            return None
+        self._time_ended = True
+        return self._time_found(self.time_base.end())
+
+    def _time_found(self, found: TimeBase | None) -> TimeBase | None:
+        if found is not None and not found.problem:
+            self._time_note = f"{self.source}: {found.note}"
+            return None
+        return found
+
     def row_compass(self, t: float, g: float, heading: float, mag, acc, gx, gy) -> tuple[float, float, float]:
         """Heading, field strength and dip of one row (floats; ``mag``, ``acc`` triples or
         None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
         calibration (a stream does not see the whole log). The first row decides the tilt
-        and the x/y axes (:attr:`xy`)."""
+        and the x/y axes (:attr:`xy`). The row goes to the gyro-unit check as :meth:`feed`'s
+        rows do (:data:`UNIT_ROWS` at a time, and the rest before :attr:`notes`): the row must
+        be one the engine takes."""
+        compass = self._row_compass(t, g, heading, mag, acc, gx, gy)
+        rows = self._unit_rows
+        rows.append((t, g, compass[0]))
+        if len(rows) >= UNIT_ROWS:
+            self._check_unit_rows()
+        return compass
+
+    def _check_unit_rows(self) -> None:
+        """The rows taken one by one since the last call, to the gyro-unit check (in order)."""
+        if self._unit_rows:
+            t, g, heading = (np.array(v, dtype=float) for v in zip(*self._unit_rows))
+            self._unit_rows = []
+            self.units.add(t, g, heading)
+
+    def _row_compass(self, t, g, heading, mag, acc, gx, gy) -> tuple[float, float, float]:
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
             self._decide_xy(gx is not None and gy is not None and acc is not None)

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from gyrodrift.compensator.engine import ChunkEngine, _read_only, output_columns, settings_arrays
+from gyrodrift.compensator.engine import ChunkEngine, _read_only, compiled, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
@@ -112,8 +112,22 @@ class ModelEngine(ChunkEngine):
         self._loop(t, g, T, Tp, heading, held, norm, dip, cols, start)
         return output_columns(t, heading, cols)
 
-    def _run_row(self, r, g, T, heading) -> None:
-        self._loop(r.ro_t, g, T, r.ro_Tp, heading, r.ro_gap, r.ro_norm, r.ro_dip, r.cols)
+    def _run_row(self, r, fix: int) -> None:
+        # the row memory's arrays as they are, writable (see ChunkEngine._prepare_row); the
+        # history-growing loop only when the epoch history was full before the row
+        cols = r.cols
+        g = cols.g_held if fix & 1 else r.g
+        T = cols.T_held if fix & 2 else r.T
+        h = cols.h_wrapped if fix & 4 else r.heading
+        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, 0, self.est.mf, self._mc, self._rf, self._rc, cols.out,
+                cols.codes, 1, self._hist)
+        if r.run is None:  # the first row: through the dispatcher, then its compiled function
+            done = evloop.run(*args)
+            r.run = compiled(evloop.run, args)
+        else:
+            done = r.run(*args)
+        if done < 1:
+            self._loop(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, cols)
 
     def accepted(self) -> np.ndarray:
         """The model takes no interval measurements: an empty (0, 5) array."""

@@ -59,13 +59,19 @@ class Compensator:
     ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
     sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
 
+    Every sample goes to the gyro-unit check of :func:`gyrodrift.compensate`
+    (:class:`gyrodrift.gyro_units.GyroUnitCheck`): :attr:`notes` says when the gyro turns
+    about 57.3 times less or more than the compass. ``gyro_unit`` is the unit the rates were
+    read in before they were converted to deg/s (``"rad/s"`` gives the advice for that
+    unit), as for :func:`gyrodrift.compensate_arrays`.
+
     ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
     :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
     to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
     own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
     the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
     without a unit (epoch or whole-number milliseconds) belong to text without a stated
-    unit: ``gyrodrift stream`` makes them on the text before it pushes.
+    unit: :meth:`judge_times_as` asks for them (``gyrodrift stream`` does, for its text).
 
     Examples
     --------
@@ -86,17 +92,21 @@ class Compensator:
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",
                  scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True,
-                 time_unit: str | None = None):
+                 time_unit: str | None = None, gyro_unit: str | None = None):
         self.config = check_config(config)
         check_estimator(estimator)
         self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
         unit, self._time_scale = time_scale(time_unit)
-        self._time_base = TimeBaseWatch(unit or "s")  # as compensate_arrays judges its times (gyrodrift.io.timebase)
-        self._time_note = None
+        self._time_div: float | None = None  # judge_times_as: the times judged are t_s / this
+        self._time_decided = False  # the Intake's time-base watch has judged all it judges
         self._limits = _limits(self._gyro_max_dps)
+        # the ranges push checks plain floats against before the full check (_checked_sample)
+        self._ranges = tuple(v for name in (GYRO_Z, TEMP, HEADING) for v in _range(self._limits[name]))
         # "auto" takes the temperature: a stream has no whole log to look at
-        self._intake = Intake(self.config, source, estimator=estimator, record=False)
+        # times judged as compensate_arrays judges its own (gyrodrift.io.timebase), in their unit
+        self._intake = Intake(self.config, source, estimator=estimator, gyro_unit=gyro_unit, record=False,
+                              time_unit=unit or "s")
         self._provisional = bool(provisional)
         self._n_provisional = 0  # rows of the init window already emitted as provisional
         self._prev: tuple[float, float, float] | None = None  # t, gyro, temp of the last sample
@@ -196,17 +206,27 @@ class Compensator:
             above 100 kHz (class notes). The refused sample is not taken: the
             compensator stays as it was.
         """
-        if self._clock and temp_c is None:
+        if temp_c is None and self._clock:
             temp_c = math.nan
-        t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
-            self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        g_lo, g_hi, T_lo, T_hi, h_lo, h_hi = self._ranges
+        if not (type(t_s) is float and type(gyro_z_dps) is float and type(temp_c) is float
+                and type(heading_deg) is float and mag is None and acc is None and gyro_x_dps is None
+                and gyro_y_dps is None and (g_lo <= gyro_z_dps <= g_hi or gyro_z_dps != gyro_z_dps)
+                and (T_lo <= temp_c <= T_hi or temp_c != temp_c)
+                and (h_lo <= heading_deg <= h_hi or heading_deg != heading_deg)):
+            # anything but the plain floats in their ranges (NaN: no value) the common sample gives
+            t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps = _checked_sample(
+                self.source, self._limits, t_s, gyro_z_dps, temp_c, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
         g, T = gyro_z_dps, temp_c
         if not math.isfinite(t_s):
             raise GyroDriftError(f"{self.source}: sample time must be a finite number of seconds, got {t_s!r}")
         t_raw, t_s = t_s, t_s * self._time_scale
         if self._prev is not None and not t_s > self._prev[0]:
             raise GyroDriftError(f"{self.source}: time must increase: got t={t_s!r} after t={self._prev[0]!r}")
-        self._judge_time_base(self._time_base.add(t_raw))
+        intake = self._intake
+        if not self._time_decided:
+            self._judge_time_base(intake.time_stamp(t_raw if self._time_div is None else t_s / self._time_div))
+            self._time_decided = intake.time_base.decided
         if self._prev is None:
             if self._clock and not math.isfinite(T):
                 T = temp_c = 0.0  # not used by the drift model; the x/y axes and scale factor take it as constant
@@ -215,13 +235,14 @@ class Compensator:
         elif not math.isfinite(T):
             T = self._prev[2]
         self._prev = (t_s, g, T)
-        heading, norm, dip = self._intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
-        xy = self._intake.xy
-        ax = (math.nan,) * 3 if acc is None else acc
+        heading, norm, dip = intake.row_compass(t_s, g, heading_deg, mag, acc, gyro_x_dps, gyro_y_dps)
+        xy, engine = intake.xy, intake.engine
+        if xy is not None:
+            ax = (math.nan,) * 3 if acc is None else acc
         if self._sf is not None:
             self._held_T.append(T)
-        if self._engine.initialised:  # floats in, floats out
-            out, codes, compass = self._engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
+        if engine._held is None:  # initialised (ChunkEngine.initialised, without the property's call): floats in, floats out
+            out, codes, compass = engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
             row = self._sample(t_s, out, codes, compass)
             if xy is not None:
                 values = xy.feed_row(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
@@ -231,12 +252,12 @@ class Compensator:
             return [row]
         if xy is not None:  # the x/y inputs wait with the row in the engine's init window
             self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
-        cols = self._engine.feed(np.array([t_s]), np.array([g]), np.array([float(temp_c)]), np.array([heading]),
-                                 np.array([norm]), np.array([dip]))
-        if cols is None and self._provisional:
-            rows = self._provisional_rows(self._engine.provisional())
-            self._n_provisional += len(rows)
-            return rows
+        cols = engine.window_row(t_s, g, float(temp_c), heading, norm, dip)
+        if cols is None:
+            if not self._provisional:
+                return []
+            self._n_provisional += 1
+            return [self._provisional_row(engine.provisional())]
         return self._released(cols)
 
     def flush(self) -> list[CompensatedSample]:
@@ -252,16 +273,33 @@ class Compensator:
             The samples were too few for their sample rate to be judged as they came, and
             it is above 100 kHz (:class:`gyrodrift.io.timebase.TimeBaseWatch`).
         """
-        self._judge_time_base(self._time_base.end())
+        self._judge_time_base(self._intake.time_end())
         return self._released(self._engine.flush())
 
+    def judge_times_as(self, time_unit: str | None) -> None:
+        """Judge the times pushed (seconds) as those of a file read with ``time_unit`` that
+        were converted to seconds: ``None`` for text without a stated unit, whose guesses of
+        another unit (epoch or whole-number milliseconds) then apply too. ``gyrodrift stream``
+        calls it for the text it reads. Before the first sample.
+
+        Raises
+        ------
+        ConfigError
+            An unknown unit.
+        """
+        if self._prev is not None:
+            raise GyroDriftError(f"{self.source}: judge_times_as() must come before the first sample")
+        unit, scale = time_scale(time_unit)
+        self._intake.time_base = TimeBaseWatch(unit)
+        self._time_div = scale
+
     def _judge_time_base(self, found) -> None:
-        """Refuse a time base a file is refused for; keep the note of a low rate."""
-        if found is None:
-            return
-        if found.problem:
-            raise GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
-        self._time_note = f"{self.source}: {found.note}"
+        """Refuse a time base a file is refused for (the error carries what was found as
+        ``time_base``)."""
+        if found is not None:
+            error = GyroDriftError(f"{self.source}: t_s: {found.problem}; {found.advice}")
+            error.time_base = found
+            raise error
 
     @property
     def compass_dead(self) -> bool:
@@ -272,7 +310,7 @@ class Compensator:
     @property
     def notes(self) -> list[str]:
         """What could not be learned or was done instead (one-line sentences)."""
-        return [*filter(None, [self._time_note]), *self._intake.notes]
+        return self._intake.notes
 
     def _released(self, cols: dict | None) -> list[CompensatedSample]:
         """The rows of the engine's output columns, less those already emitted as provisional
@@ -284,11 +322,12 @@ class Compensator:
             return self._rows({k: v[skip:] for k, v in cols.items()})
         return self._rows(cols)[skip:]
 
-    def _provisional_rows(self, cols: dict | None) -> list[CompensatedSample]:
-        """Provisional rows of the init window (:meth:`ChunkEngine.provisional`): heading
-        axis only, the x/y and scale-factor fields NaN."""
-        kind = CompensatedSample if self._sf is None else self._sf_sample
-        return [kind(*self._values(*row)) for row in _engine_rows(cols)]
+    def _provisional_row(self, row: tuple) -> CompensatedSample:
+        """The provisional row of a sample of the init window (:meth:`ChunkEngine.provisional`):
+        heading axis only, the x/y and scale-factor fields NaN."""
+        if self._sf is None:
+            return _new_sample(*row)
+        return self._sf_sample(*self._values(*row))
 
     def _rows(self, cols: dict | None) -> list[CompensatedSample]:
         """The samples of the engine's output columns (none for None)."""
@@ -302,9 +341,9 @@ class Compensator:
 
     def _sample(self, t: float, out, codes, compass: float) -> CompensatedSample:
         """One output row from the engine's float outputs and codes (layout order)."""
-        values = self._values(t, out, codes, compass)
         if self._sf is None:
-            return CompensatedSample(*values)
+            return _new_sample(t, out, codes, compass)
+        values = self._values(t, out, codes, compass)
         sf = self._sf.push(t, out[L.O_RATE], self._held_T.popleft(), compass, values[9])
         return self._sf_sample(*values, sf=sf.sf, sf_sd=sf.sf_sd, rate_sf=sf.rate_sf, heading_sf=sf.heading_sf)
 
@@ -333,10 +372,36 @@ def _engine_rows(cols: dict | None):
                zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
+def _new_sample(t: float, out, codes, compass: float, new=object.__new__, cls=CompensatedSample,
+                setattr=object.__setattr__, reasons=_REASONS, unobservable=UNOBSERVABLE, O_RATE=L.O_RATE,
+                O_BIAS=L.O_BIAS, O_HEADING=L.O_HEADING, O_A=L.O_A, O_B=L.O_B, O_C=L.O_C, O_TEMP_RATE=L.O_TEMP_RATE,
+                O_BIAS_SD=L.O_BIAS_SD, O_FUSED=L.O_FUSED, O_FUSED_SD=L.O_FUSED_SD, O_HEADING_SD=L.O_HEADING_SD,
+                OC_UPDATE=L.OC_UPDATE, OC_REASON=L.OC_REASON, OC_UNOBS=L.OC_UNOBS) -> CompensatedSample:
+    """``CompensatedSample(*Compensator._values(t, out, codes, compass))`` made without the
+    frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field) and without the
+    tuple: its fields set at once (the layout's indices bound as defaults). The same sample
+    (fields, ``==``, ``repr``, ``asdict``); the fields left out are read from their class
+    defaults until set."""
+    reason = reasons[codes[OC_REASON]]
+    sample = new(cls)
+    setattr(sample, "__dict__", {
+        "t": t, "rate_z": out[O_RATE], "bias_z": out[O_BIAS], "heading": out[O_HEADING], "a": out[O_A],
+        "b": out[O_B], "c": out[O_C], "updated": codes[OC_UPDATE], "gated": int(reason != ""),
+        "gate_reason": reason, "temp_rate": out[O_TEMP_RATE], "compass_heading": compass,
+        "unobservable": unobservable[codes[OC_UNOBS]], "bias_sd": out[O_BIAS_SD], "heading_fused": out[O_FUSED],
+        "heading_fused_sd": out[O_FUSED_SD], "heading_sd": out[O_HEADING_SD]})
+    return sample
+
+
 def _limits(gyro_max_dps: float) -> dict:
     """The plausible range of every checked input column (:mod:`gyrodrift.io.limits`), by name."""
     names = ("", GYRO_Z, TEMP, HEADING, GYRO_X, GYRO_Y, *MAG_COLS, *ACC_COLS)
     return {name: limit_of(name, gyro_max_dps) for name in names}
+
+
+def _range(limit) -> tuple[float, float]:
+    """The plausible range of a :func:`_limits` entry (any float without one)."""
+    return (-math.inf, math.inf) if limit is None else (limit.lo, limit.hi)
 
 
 def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
