@@ -250,8 +250,8 @@ def test_streamed_file_equals_in_memory_file_with_x_and_y(tmp_path):
     log.attrs = {}
     log.loc[700, "gyro_y"] = np.nan
     write_table(log, tmp_path / "in.csv")
-    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", stream=False)
-    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", stream=True, chunk_rows=777)
+    compensate_file(tmp_path / "in.csv", tmp_path / "whole.csv", chunked=False)
+    compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", chunked=True, chunk_rows=777)
     assert (tmp_path / "parts.csv").read_bytes() == (tmp_path / "whole.csv").read_bytes()
     out = pd.read_csv(tmp_path / "parts.csv")
     assert set(TRIAD_COLUMNS) <= set(out.columns)
