@@ -24,7 +24,7 @@ import numpy as np
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
-from gyrodrift.estimators.kalman import KernelFilter
+from gyrodrift.estimators.kalman import compiled_arrays
 from gyrodrift.kernels import aiding, drift, loop, numeric
 from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
@@ -65,16 +65,6 @@ def compiled(dispatcher, args):
 
     found = overloads.get(tuple(typeof(a) for a in args))
     return dispatcher if found is None else found.entry_point
-
-
-def compiled_arrays(estimator) -> tuple[np.ndarray, np.ndarray] | None:
-    """The state arrays of an estimator the row loop updates itself (a Kalman filter of
-    :mod:`gyrodrift.estimators` whose ``update`` and ``hold`` are the kernels'), or None: it
-    is updated in Python at interval ends (a subclass overriding them keeps its own)."""
-    cls = type(estimator)
-    if not isinstance(estimator, KernelFilter) or cls.update is not KernelFilter.update or cls.hold is not KernelFilter.hold:
-        return None
-    return estimator.kernel_arrays
 
 
 def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
