@@ -31,8 +31,7 @@ from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
-from gyrodrift.io import read_log
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import ReadOptions, read_log
 from gyrodrift.model import TempRateConfig
 from gyrodrift.pipeline import compensate_file
 

@@ -1,7 +1,7 @@
 """The command line's one option layer: how to read a log, and the method's settings.
 
 Every subcommand that reads a log takes the input options of :func:`add_input_options` and
-turns them into one :class:`~gyrodrift.io.validate.ReadOptions` (:func:`read_options`);
+turns them into one :class:`~gyrodrift.io.ReadOptions` (:func:`read_options`);
 every subcommand that runs an estimator takes the method options of
 :func:`add_method_options` and turns them into one
 :class:`~gyrodrift.compensator.CompensatorConfig` (:func:`method_config`). The method
@@ -21,8 +21,7 @@ from pathlib import Path
 
 from gyrodrift.conventions import TIME_UNITS
 from gyrodrift.errors import ConfigError
-from gyrodrift.io import FORMATS
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import FORMATS, ReadOptions
 
 __all__ = ["parse_map", "Renamed", "add_table_options", "add_input_options", "read_options", "read_input",
            "add_method_options", "method_config", "warm_start", "check_numbers"]

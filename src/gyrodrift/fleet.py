@@ -186,7 +186,7 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root
     root : str or os.PathLike, optional
         The input folder mirrored under ``out_dir`` (:func:`output_path`).
     read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`).
+        How to read the log (:class:`gyrodrift.io.ReadOptions`).
     chunk_rows : int, optional
         Rows per chunk of the chunked path (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
 

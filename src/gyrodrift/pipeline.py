@@ -32,7 +32,7 @@ from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import CompensatorConfig, check_input_columns, compensate
 from gyrodrift.conventions import GYRO_Z, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import ReadOptions
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -237,7 +237,7 @@ def compensate_file(
         written atomically.
     config : CompensatorConfig, optional
     read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`, or a dict of its
+        How to read the log (:class:`gyrodrift.io.ReadOptions`, or a dict of its
         fields: the keywords of :func:`gyrodrift.io.read_log`).
     chunk_rows : int
         Rows per chunk of the chunked path.
