@@ -17,9 +17,9 @@ import sys
 import numpy as np
 
 from gyrodrift import compensate
-from gyrodrift.compare import run_method
+from gyrodrift.evaluate.compare import run_method
 from gyrodrift.io import read_log
-from gyrodrift.montecarlo import FAMILIES, draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import FAMILIES, draw_case, simulate_case
 
 METHODS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm", "mlr", "poly3", "smoothed")
 COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "bias_sd",

@@ -7,7 +7,7 @@ Sensors 2015, 15(5), 11222-11238 (doi:10.3390/s150511222).
 Data flow: :func:`gyrodrift.io.read_log` → compass heading
 (:mod:`gyrodrift.compass`) → aiding gates (:mod:`gyrodrift.gating`) → drift
 estimator (:mod:`gyrodrift.estimators`) → :func:`compensate` /
-:class:`Compensator` → :mod:`gyrodrift.metrics`.
+:class:`Compensator` → :mod:`gyrodrift.evaluate.metrics`.
 
 Conventions (all in :mod:`gyrodrift.conventions`): time in s, rates in deg/s,
 temperature in degC, headings in deg clockwise from magnetic north in [0, 360),

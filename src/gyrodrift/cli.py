@@ -190,8 +190,8 @@ def _cmd_compare(args) -> int:
 
     import pandas as pd
 
-    from gyrodrift.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label, run_methods, summary_table
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label, run_methods, summary_table
+    from gyrodrift.evaluate.metrics import markdown_table
     from gyrodrift.pipeline import describe_log
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(DEFAULT_METHODS)
@@ -226,7 +226,7 @@ def _cmd_compare(args) -> int:
 def _cmd_paper(args) -> int:
     import time
 
-    from gyrodrift.paper import PaperSettings, write_paper
+    from gyrodrift.evaluate.paper import PaperSettings, write_paper
 
     args.output.mkdir(parents=True, exist_ok=True)
     settings = PaperSettings(
@@ -255,10 +255,10 @@ def _names(values, what: str) -> list[str] | None:
 
 
 def _cmd_generated(args, splits) -> int:
-    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.heldout`)."""
+    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.evaluate.heldout`)."""
     import time
 
-    from gyrodrift import heldout
+    from gyrodrift.evaluate import heldout
 
     config = method_config(args)
     methods = _names(args.methods, "methods") or list(heldout.METHODS)
@@ -290,7 +290,7 @@ def _runs_done(args, df, table: str, unit: str, done: str) -> int:
 def _cmd_montecarlo(args) -> int:
     import time
 
-    from gyrodrift.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
+    from gyrodrift.evaluate.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
 
     splits = [name for name, on in (("tuning", args.tuning), ("held-out", args.held_out)) if on]
     if splits:
@@ -413,7 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
 
-    from gyrodrift.montecarlo import ADVERSARIAL_FAMILIES, DEFAULT_METHODS, FAMILIES
+    from gyrodrift.evaluate.montecarlo import ADVERSARIAL_FAMILIES, DEFAULT_METHODS, FAMILIES
 
     mc = sub.add_parser(
         "montecarlo", help="Monte Carlo of every method over the simulated scenario families",
@@ -446,7 +446,7 @@ def build_parser() -> argparse.ArgumentParser:
     mc.set_defaults(func=_cmd_montecarlo)
 
     from gyrodrift.fleet import add_batch_parser
-    from gyrodrift.report import add_report_parser
+    from gyrodrift.evaluate.report import add_report_parser
 
     add_report_parser(sub)
     add_batch_parser(sub)

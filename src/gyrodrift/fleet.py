@@ -404,7 +404,7 @@ def write_summary(summary: pd.DataFrame, path) -> None:
 
 def summary_markdown(summary: pd.DataFrame) -> str:
     """The summary table as Markdown: integers as integers, numbers to 4 significant digits."""
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.metrics import markdown_table
 
     shown = summary.copy()
     for col in ("rows", "updates"):

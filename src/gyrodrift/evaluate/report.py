@@ -1,7 +1,7 @@
 """A self-contained HTML report of one log compensated by several methods (``gyrodrift report``).
 
 The page holds everything inline: CSS in a ``<style>`` element, figures as base64
-PNG ``<img>`` elements (:mod:`gyrodrift.plots`), no JavaScript and no external
+PNG ``<img>`` elements (:mod:`gyrodrift.evaluate.plots`), no JavaScript and no external
 resource; a Content-Security-Policy in the page forbids loading any. It can be
 mailed or archived as one file and opened offline.
 
@@ -25,7 +25,7 @@ Contents, top to bottom:
    saying which column is missing;
 4. the gyrodrift version and every setting used.
 
-The figures and their notes: :mod:`gyrodrift.report_figures`.
+The figures and their notes: :mod:`gyrodrift.evaluate.report_figures`.
 
 matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 (``gyrodrift[allan]``) computes the Allan deviation.
@@ -43,7 +43,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import method_label as _label
+from gyrodrift.evaluate.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
@@ -51,7 +51,7 @@ from gyrodrift._cliargs import add_input_options, add_method_options
 from gyrodrift._progress import progress_iter as _progress
 from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.report_figures import esc, figure_plan, html_table, render_figure
+from gyrodrift.evaluate.report_figures import esc, figure_plan, html_table, render_figure
 
 __all__ = ["build_report", "write_report", "report_command", "add_report_parser"]
 
@@ -81,7 +81,7 @@ def _duration_text(seconds: float) -> str:
 
 
 def _causal(name: str) -> bool:
-    from gyrodrift.compare import CAUSAL
+    from gyrodrift.evaluate.compare import CAUSAL
 
     return CAUSAL.get(name, True)
 
@@ -149,7 +149,7 @@ def _read_section(log, outputs, skipped, source: str) -> str:
 
 def _raw_errors(log_like: pd.DataFrame, start_heading: float):
     """Bias error and heading error of the uncompensated gyro (None where no truth)."""
-    from gyrodrift.metrics import heading_error_deg, raw_heading_deg
+    from gyrodrift.evaluate.metrics import heading_error_deg, raw_heading_deg
 
     bias = heading = None
     if TRUE_BIAS_Z in log_like.columns:
@@ -162,7 +162,7 @@ def _raw_errors(log_like: pd.DataFrame, start_heading: float):
 
 
 def _stats(errors) -> dict | None:
-    from gyrodrift.metrics import error_stats
+    from gyrodrift.evaluate.metrics import error_stats
 
     if errors is None:
         return None
@@ -173,7 +173,7 @@ def _stats(errors) -> dict | None:
 
 
 def _summary_section(log, outputs) -> str:
-    from gyrodrift.metrics import bias_error, heading_error_deg
+    from gyrodrift.evaluate.metrics import bias_error, heading_error_deg
 
     if not outputs:
         return '<section id="summary"><h2>Summary</h2><p class="note">No method ran: nothing to summarise.</p></section>'
@@ -184,7 +184,7 @@ def _summary_section(log, outputs) -> str:
         for r in out["gate_reason"].fillna("").astype(str).unique():
             if r and r not in reasons:
                 reasons.append(r)
-    from gyrodrift.plots import GATE_COLORS
+    from gyrodrift.evaluate.plots import GATE_COLORS
 
     reasons.sort(key=lambda r: list(GATE_COLORS).index(r) if r in GATE_COLORS else len(GATE_COLORS))
     header = ["method"]
@@ -319,8 +319,8 @@ def build_report(
         The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
     outputs : mapping of str to DataFrame
         Method name → output table, as returned by
-        :func:`gyrodrift.compare.run_methods`. The default estimator
-        (:data:`gyrodrift.compare.DEFAULT_METHOD`) is the method of the
+        :func:`gyrodrift.evaluate.compare.run_methods`. The default estimator
+        (:data:`gyrodrift.evaluate.compare.DEFAULT_METHOD`) is the method of the
         single-method figures; without it ``stkf``, else the first one.
     skipped : mapping of str to str, optional
         Method name → why it did not run (listed in the header).
@@ -349,7 +349,7 @@ def build_report(
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
     from gyrodrift._version import __version__
 
-    from gyrodrift.plotbase import require_matplotlib
+    from gyrodrift.evaluate.plotbase import require_matplotlib
 
     require_matplotlib()
     plan = figure_plan(log, outputs, config)
@@ -407,7 +407,7 @@ def write_report(path, html: str) -> None:
 
 
 def _parse_methods(text: str) -> tuple[str, ...]:
-    from gyrodrift.compare import DEFAULT_METHODS, is_method
+    from gyrodrift.evaluate.compare import DEFAULT_METHODS, is_method
 
     names = list(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
     unknown = [m for m in names if not is_method(m)]
@@ -421,7 +421,7 @@ def _parse_methods(text: str) -> tuple[str, ...]:
 
 def _run_all(log, methods, config, calibration):
     """Run each method in turn (with a progress bar on a terminal)."""
-    from gyrodrift.compare import calibration_from_log, run_methods
+    from gyrodrift.evaluate.compare import calibration_from_log, run_methods
 
     if calibration is not None and "poly3" in methods:
         calibration = calibration_from_log(calibration)
@@ -441,7 +441,7 @@ def report_command(args: argparse.Namespace) -> int:
     """
     from gyrodrift._cliargs import method_config, read_input
     from gyrodrift.io import check_output_path
-    from gyrodrift.plotbase import require_matplotlib
+    from gyrodrift.evaluate.plotbase import require_matplotlib
 
     require_matplotlib()  # before the long work, not after it
     out_path = Path(args.output)
@@ -473,7 +473,7 @@ def add_report_parser(subparsers) -> argparse.ArgumentParser:
 
     The parser's ``func`` default is :func:`report_command`.
     """
-    from gyrodrift.compare import DEFAULT_METHODS
+    from gyrodrift.evaluate.compare import DEFAULT_METHODS
 
     p = subparsers.add_parser(
         "report",

@@ -2,8 +2,8 @@
 
 Every ``fig_*`` function takes output tables (or arrays) and returns a new
 :class:`matplotlib.figure.Figure` drawn with the Agg renderer, without pyplot: the
-caller owns the figure (:func:`gyrodrift.plotbase.save_png`,
-:func:`gyrodrift.plotbase.png_base64`). matplotlib is optional:
+caller owns the figure (:func:`gyrodrift.evaluate.plotbase.save_png`,
+:func:`gyrodrift.evaluate.plotbase.png_base64`). matplotlib is optional:
 ``pip install 'gyrodrift[plot]'``.
 """
 
@@ -15,12 +15,12 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError
-from gyrodrift.metrics import heading_error_deg
-from gyrodrift.plotbase import (
+from gyrodrift.evaluate.metrics import heading_error_deg
+from gyrodrift.evaluate.plotbase import (
     MAX_POINTS,
     WIDTH_IN,
     align_turns,
@@ -83,8 +83,8 @@ def _method_color(name: str, index: int) -> str:
 
 
 def _method_label(name: str) -> str:
-    """A method's legend name: the default estimator's says so (:func:`gyrodrift.compare.method_label`)."""
-    from gyrodrift.compare import method_label
+    """A method's legend name: the default estimator's says so (:func:`gyrodrift.evaluate.compare.method_label`)."""
+    from gyrodrift.evaluate.compare import method_label
 
     return method_label(name)
 
@@ -289,7 +289,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
     out_by_method : mapping of str to DataFrame
         Output table per method, each with ``t``, ``heading`` and ``ref_heading``.
     causal : mapping of str to bool, optional
-        Whether each method is causal (default :data:`gyrodrift.compare.CAUSAL`);
+        Whether each method is causal (default :data:`gyrodrift.evaluate.compare.CAUSAL`);
         non-causal methods are dashed and marked "(non-causal)" in the legend;
         the default estimator is labelled "adaptive (default)".
 
@@ -301,7 +301,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
     """
     _check_methods(out_by_method, "fig_heading_error")
     if causal is None:
-        from gyrodrift.compare import CAUSAL as causal
+        from gyrodrift.evaluate.compare import CAUSAL as causal
     fig, (ax,) = new_figure(4.0)
     xlabel = "time"
     n = 0
@@ -371,10 +371,10 @@ def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None =
     Parameters
     ----------
     curves : mapping of str to AllanResult
-        Label → :class:`gyrodrift.allan.AllanResult` (e.g. raw and compensated rate
+        Label → :class:`gyrodrift.evaluate.allan.AllanResult` (e.g. raw and compensated rate
         error), all in the same unit.
     terms : mapping of str to NoiseTerms, optional
-        Label → :class:`gyrodrift.allan.NoiseTerms`; each term found is marked on
+        Label → :class:`gyrodrift.evaluate.allan.NoiseTerms`; each term found is marked on
         its curve and annotated: N at τ = 1 s (circle), B at the τ of its minimum
         (σ = 0.664 B, square), K at τ = 3 s (triangle).
 
@@ -486,7 +486,7 @@ def fig_scale_factor(fig10: pd.DataFrame, fig11: pd.DataFrame):
     fig11 : DataFrame
         ``t`` (s) and heading errors (deg) ``err_none``, ``err_fixed``,
         ``err_adaptive`` (and optionally ``err_ideal``), as returned by
-        :func:`gyrodrift.paper.scale_factor_experiment`.
+        :func:`gyrodrift.evaluate.paper.scale_factor_experiment`.
     """
     need_columns(fig10, ("t", "sf_ideal", "sf_fixed", "sf_adaptive"), "fig_scale_factor")
     need_columns(fig11, ("t", "err_none", "err_fixed", "err_adaptive"), "fig_scale_factor")
