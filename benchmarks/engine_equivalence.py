@@ -27,7 +27,7 @@ COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "bi
 
 
 def outputs(seeds: int, scale: float) -> dict[str, np.ndarray]:
-    from gyrodrift.cli import demo_log_path
+    from gyrodrift.cli.commands import demo_log_path
 
     found = {}
     demo = compensate(read_log(demo_log_path()))

@@ -18,6 +18,7 @@ pytest.importorskip("matplotlib")
 pytest.importorskip("allantools")
 
 from gyrodrift import __version__  # noqa: E402
+from gyrodrift.cli.report import add_report_parser, report_command  # noqa: E402
 from gyrodrift.evaluate import report  # noqa: E402
 from gyrodrift.evaluate.compare import run_methods  # noqa: E402
 from gyrodrift.errors import ConfigError  # noqa: E402
@@ -182,7 +183,7 @@ def test_progress_bar_on_a_terminal(monkeypatch):
 def parse(argv):
     parser = argparse.ArgumentParser(prog="gyrodrift")
     sub = parser.add_subparsers(dest="command")
-    report.add_report_parser(sub)
+    add_report_parser(sub)
     return parser.parse_args(argv)
 
 
@@ -205,7 +206,7 @@ def test_report_command_writes_atomically(log_csv, tmp_path, monkeypatch, capsys
 
     monkeypatch.setattr(os, "replace", spy)
     args = parse(["report", str(log_csv), "-o", str(out), "--methods", "stkf,kf,poly3"])
-    assert args.func is report.report_command
+    assert args.func is report_command
     assert args.func(args) == 0
     (src, dst), = replaced
     assert dst == out and src.parent == out.parent and src.name.startswith(".report.html.")

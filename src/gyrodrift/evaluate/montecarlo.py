@@ -31,10 +31,10 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from gyrodrift.evaluate.compare import METHODS, run_method
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS
+from gyrodrift.evaluate.compare import METHODS, run_method
 from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_stats, markdown_table
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,

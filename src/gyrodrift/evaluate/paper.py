@@ -40,10 +40,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gyrodrift.evaluate.compare import METHODS, run_methods
 from gyrodrift.compensator import CompensatorConfig, compensate
-from gyrodrift.fusion import FusionConfig
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_360
+from gyrodrift.evaluate.compare import METHODS, run_methods
 from gyrodrift.evaluate.metrics import (
     bias_error,
     error_stats,
@@ -51,6 +50,7 @@ from gyrodrift.evaluate.metrics import (
     heading_error_stats,
     paper_table2,
 )
+from gyrodrift.fusion import FusionConfig
 from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor, heading_error, integrate_heading
 from gyrodrift.scale_factor.batch import heading_anchor
 from gyrodrift.simulate import DEFAULT_DURATION_S, TRUE_SF, interference_windows_static, simulate

@@ -15,10 +15,10 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError
+from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
 from gyrodrift.evaluate.metrics import heading_error_deg
 from gyrodrift.evaluate.plotbase import (
     MAX_POINTS,
@@ -31,8 +31,8 @@ from gyrodrift.evaluate.plotbase import (
     plot_line,
     require_matplotlib,
     robust_limits,
-    true_runs,
     time_axis,
+    true_runs,
     unwrap_deg,
 )
 

@@ -18,10 +18,10 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.evaluate.compare import DEFAULT_METHOD
-from gyrodrift.evaluate.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
+from gyrodrift.evaluate.compare import DEFAULT_METHOD
+from gyrodrift.evaluate.compare import method_label as _label
 
 __all__ = ["ALLAN_METHODS", "esc", "html_table", "main_method", "figure_plan", "render_figure"]
 
@@ -215,8 +215,8 @@ def figure_plan(log, outputs, config) -> list[_Figure]:
 
 def _calibration_figure(log) -> _Figure:
     """The thermal calibration fit of the log, or a note saying why the log gives none."""
-    from gyrodrift.evaluate import plots
     from gyrodrift.calibrate import CalibrationError, fit_calibration
+    from gyrodrift.evaluate import plots
 
     title = "Thermal calibration fit (gyrodrift calibrate)"
     try:

@@ -207,7 +207,7 @@ class ReadOptions:
     """How to read a log: the options of :func:`read_log`, as one value.
 
     Every entry point takes its read options as one of these (the command line builds it
-    once, :func:`gyrodrift._cliargs.read_options`); :meth:`read` reads a log with them. The
+    once, :func:`gyrodrift.cli.options.read_options`); :meth:`read` reads a log with them. The
     fields are :func:`read_log`'s keywords, with its defaults.
     """
 
