@@ -154,17 +154,11 @@ class RunStats:
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
             f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s",
         ]
-        raw_ss, ss, n = self._bias
-        if n:
-            lines.append(
-                f"drift error RMS vs true_bias_z: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
-                f"compensated {math.sqrt(ss / n):.4f} deg/s"
-            )
-        for axis, (raw_ss, ss, n) in self._bias_xy.items():
-            if n:
+        for axis, (raw_ss, ss, n) in {"z": self._bias, **self._bias_xy}.items():
+            if n:  # the heading axis's line names no axis
                 lines.append(
-                    f"{axis} drift error RMS vs true_bias_{axis}: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
-                    f"compensated {math.sqrt(ss / n):.4f} deg/s"
+                    f"{'' if axis == 'z' else axis + ' '}drift error RMS vs true_bias_{axis}: "
+                    f"raw {math.sqrt(raw_ss / n):.4f} deg/s -> compensated {math.sqrt(ss / n):.4f} deg/s"
                 )
         raw_ss, ss, n, raw_max, e_max = self._heading
         if n:

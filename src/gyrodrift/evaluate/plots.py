@@ -94,6 +94,18 @@ def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None
         raise ConfigError(f"{what} needs at least one method's output table")
 
 
+def _labelled(fig, ax, ylabel: str, xlabel: str, title: str, n: int, legend_at: str, **legend):
+    """``fig`` with its one axes ``ax`` labelled: axis labels, title, a legend at ``legend_at``
+    (more of :meth:`matplotlib.axes.Axes.legend`'s keywords in ``legend``) and the note of an
+    envelope of ``n`` points (:func:`~gyrodrift.evaluate.plotbase.envelope_note`)."""
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel(xlabel)
+    ax.set_title(title)
+    ax.legend(loc=legend_at, fontsize=8, **legend)
+    envelope_note(ax, n)
+    return fig
+
+
 # ----------------------------------------------------------------------- figures
 
 
@@ -158,12 +170,8 @@ def fig_rates(out: pd.DataFrame, *, method: str | None = None):
     plot_line(ax, x, float_column(out, "gyro_z"), color=_RAW_COLOR, lw=0.8, label="raw gyro_z")
     name = f" ({method})" if method else ""
     plot_line(ax, x, float_column(out, "rate_z"), color="#d62728", lw=0.8, alpha=0.85, label=f"compensated rate_z{name}")
-    ax.set_ylabel("angular rate (deg/s)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Uncompensated and compensated angular rate")
-    ax.legend(loc="upper right", fontsize=8)
-    envelope_note(ax, t.size)
-    return fig
+    return _labelled(fig, ax, "angular rate (deg/s)", xlabel, "Uncompensated and compensated angular rate", t.size,
+                     "upper right")
 
 
 def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
@@ -209,12 +217,8 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
     limits = robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
-    ax.set_ylabel("drift / rate (deg/s)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Estimated gyro drift" + (" and the true drift" if has_truth else ""))
-    ax.legend(loc="upper right", fontsize=8, ncols=2)
-    envelope_note(ax, t.size)
-    return fig
+    title = "Estimated gyro drift" + (" and the true drift" if has_truth else "")
+    return _labelled(fig, ax, "drift / rate (deg/s)", xlabel, title, t.size, "upper right", ncols=2)
 
 
 def fig_params(out: pd.DataFrame, *, method: str | None = None):
@@ -315,12 +319,8 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
         plot_line(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
-    ax.set_ylabel("heading error (deg)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Heading error against the reference heading")
-    ax.legend(loc="upper left", fontsize=8, ncols=2)
-    envelope_note(ax, n)
-    return fig
+    return _labelled(fig, ax, "heading error (deg)", xlabel, "Heading error against the reference heading", n,
+                     "upper left", ncols=2)
 
 
 def fig_heading(out: pd.DataFrame, *, method: str | None = None):
@@ -357,12 +357,8 @@ def fig_heading(out: pd.DataFrame, *, method: str | None = None):
     plot_line(ax, x, gyro, color="#d62728", lw=1.1, label=f"compensated gyro heading{name}")
     if REF_HEADING in out.columns:
         plot_line(ax, x, anchor, color="#2ca02c", lw=1.1, ls="--", label="reference (ref_heading)")
-    ax.set_ylabel("heading, unwrapped (deg)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Heading: compass, compensated gyro and reference")
-    ax.legend(loc="best", fontsize=8)
-    envelope_note(ax, t.size)
-    return fig
+    return _labelled(fig, ax, "heading, unwrapped (deg)", xlabel, "Heading: compass, compensated gyro and reference",
+                     t.size, "best")
 
 
 def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None = None):
