@@ -5,8 +5,8 @@ Run from the repository root (needs ``pip install imufusion``, a benchmark-only 
     python benchmarks/bench_fused_heading.py                      # 20 seeds per family, full length
     python benchmarks/bench_fused_heading.py --seeds 3 --duration-scale 0.2
 
-For every family of :data:`gyrodrift.montecarlo.FAMILIES` and every seed, the same
-simulated log (randomised device and compass, :func:`gyrodrift.montecarlo.draw_case`)
+For every family of :data:`gyrodrift.evaluate.montecarlo.FAMILIES` and every seed, the same
+simulated log (randomised device and compass, :func:`gyrodrift.evaluate.montecarlo.draw_case`)
 goes to:
 
 * gyrodrift: :func:`gyrodrift.compensate` with its defaults; ``heading_fused``
@@ -88,7 +88,7 @@ def rms_deg(heading, ref) -> float:
 
 def run(families, seeds, duration_scale: float, fs_hz: float, estimator: str | None = None) -> pd.DataFrame:
     from gyrodrift import CompensatorConfig, compensate
-    from gyrodrift.montecarlo import draw_case, simulate_case
+    from gyrodrift.evaluate.montecarlo import draw_case, simulate_case
 
     rows = []
     for family in families:
@@ -148,7 +148,7 @@ def main(argv=None) -> int:
     except ImportError:
         print("imufusion is not installed: pip install imufusion", file=sys.stderr)
         return 2
-    from gyrodrift.montecarlo import FAMILIES
+    from gyrodrift.evaluate.montecarlo import FAMILIES
 
     families = args.families or list(FAMILIES)
     start = time.perf_counter()
@@ -157,7 +157,7 @@ def main(argv=None) -> int:
         df.to_csv(args.output, index=False)
     table = summary(df)
     print()
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.metrics import markdown_table
 
     print(markdown_table(table.set_index("family"), floatfmt=".3g"))
     print(f"\nestimator {args.estimator or 'default'}; heading RMS error, deg, against ref_heading; {args.seeds} seeds per family, duration x "

@@ -17,9 +17,9 @@ import sys
 import numpy as np
 
 from gyrodrift import compensate
-from gyrodrift.compare import run_method
+from gyrodrift.evaluate.compare import run_method
 from gyrodrift.io import read_log
-from gyrodrift.montecarlo import FAMILIES, draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import FAMILIES, draw_case, simulate_case
 
 METHODS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm", "mlr", "poly3", "smoothed")
 COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "bias_sd",
@@ -27,7 +27,7 @@ COLUMNS = ("rate_z", "bias_z", "heading", "a", "b", "c", "updated", "gated", "bi
 
 
 def outputs(seeds: int, scale: float) -> dict[str, np.ndarray]:
-    from gyrodrift.cli import demo_log_path
+    from gyrodrift.cli.commands import demo_log_path
 
     found = {}
     demo = compensate(read_log(demo_log_path()))

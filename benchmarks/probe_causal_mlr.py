@@ -4,7 +4,7 @@ Run from the repository root (about 40 s for 20 seeds of two families)::
 
     python benchmarks/probe_causal_mlr.py --families vehicle,static --seeds 20
 
-``mlr`` (the paper's MLR, :func:`gyrodrift.compare.run_method`) fits one a, b, c by weighted
+``mlr`` (the paper's MLR, :func:`gyrodrift.evaluate.compare.run_method`) fits one a, b, c by weighted
 least squares over *all* the accepted drift measurements of a run, then compensates every
 row with them: it uses the future. Its causal counterpart, printed here as "mlr, so far",
 fits the same model to the measurements accepted *before* each row, regularised by the prior
@@ -26,11 +26,11 @@ import argparse
 
 import numpy as np
 
-from gyrodrift.compare import run_method
+from gyrodrift.evaluate.compare import run_method
 from gyrodrift.config import CompensatorConfig
 from gyrodrift.estimators.kalman import KalmanConfig
 from gyrodrift.estimators.lsq import fit_linear_drift
-from gyrodrift.montecarlo import draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import draw_case, simulate_case
 
 #: Rows before this many accepted measurements keep ``adaptive``'s bias.
 MIN_MEASUREMENTS = 6

@@ -4,7 +4,7 @@ Run from the repository root (about 2 minutes for 10 seeds of every family)::
 
     python benchmarks/probe_memory_models.py --families static,vehicle --seeds 0-9
 
-For each Monte Carlo case (:func:`gyrodrift.montecarlo.draw_case`, full length) it runs
+For each Monte Carlo case (:func:`gyrodrift.evaluate.montecarlo.draw_case`, full length) it runs
 ``adaptive`` once and, over its accepted measurements (``out.attrs["measurements"]``), a
 forward Kalman filter that reproduces ``adaptive`` on the families without long outages:
 the moving reference temperature, the slope random walk, the normalised fading test and
@@ -31,10 +31,10 @@ from collections import deque
 
 import numpy as np
 
-from gyrodrift.compare import run_method
+from gyrodrift.evaluate.compare import run_method
 from gyrodrift.config import CompensatorConfig
 from gyrodrift.kernels.numeric import cap_covariance
-from gyrodrift.montecarlo import FAMILIES, draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import FAMILIES, draw_case, simulate_case
 from gyrodrift.smooth import _groups, _held
 
 #: IMM switching probability per update interval (chosen on static seeds 10-19).

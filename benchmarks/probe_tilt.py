@@ -14,7 +14,7 @@ import numpy as np
 import gyrodrift
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.conventions import wrap_180
-from gyrodrift.montecarlo import draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import draw_case, simulate_case
 
 SETTINGS = {
     "accel": CompensatorConfig(tilt="accel"),

@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import pandas as pd
 
-from gyrodrift import heldout
+from gyrodrift.evaluate import heldout
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.estimators.adaptive import AdaptiveConfig
 

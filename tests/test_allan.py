@@ -1,4 +1,4 @@
-"""Tests of gyrodrift.allan: published NBS14 values, synthetic noise of known level, properties."""
+"""Tests of gyrodrift.evaluate.allan: published NBS14 values, synthetic noise of known level, properties."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 pytest.importorskip("allantools")
 
-from gyrodrift.allan import (  # noqa: E402
+from gyrodrift.evaluate.allan import (  # noqa: E402
     AllanResult,
     allan_deviation,
     even_rate,

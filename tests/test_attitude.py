@@ -102,7 +102,7 @@ def test_chunks_and_rows_give_the_numbers_of_one_call():
 
 
 def _turning_log(seconds: float = 240.0) -> pd.DataFrame:
-    from gyrodrift.montecarlo import draw_case
+    from gyrodrift.evaluate.montecarlo import draw_case
     from gyrodrift.simulate import simulate
     from gyrodrift.simulate.device import TriadModel
 

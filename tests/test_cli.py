@@ -6,7 +6,8 @@ import pandas as pd
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift.cli import demo_log_path, main
+from gyrodrift.cli import main
+from gyrodrift.cli.commands import demo_log_path
 
 
 def run_module(*args, cwd=None):

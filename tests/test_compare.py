@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from conftest import synthetic_log
-from gyrodrift.compare import CAUSAL, METHODS, run_method, run_methods, summary_table
+from gyrodrift.evaluate.compare import CAUSAL, METHODS, run_method, run_methods, summary_table
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import fit_linear_drift, fit_poly3
 from gyrodrift.fusion_offset import available as fusion_offset_available
@@ -171,7 +171,7 @@ def test_fusion_offset_without_imufusion_is_skipped_or_a_one_line_error(monkeypa
 
 
 def test_default_methods_start_with_the_default_estimator():
-    from gyrodrift.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label
+    from gyrodrift.evaluate.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label
     from gyrodrift.compensator import CompensatorConfig
 
     assert DEFAULT_METHOD == CompensatorConfig().estimator == "adaptive"

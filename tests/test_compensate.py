@@ -318,8 +318,8 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     """20-min heating: the drift outruns the filter, every interval disagrees with the compass.
     Without recovery the gate locks the filter out; with it, steady disagreements are
     recognised as drift and aiding resumes."""
-    from gyrodrift.metrics import heading_error_stats
-    from gyrodrift.paper import aligned
+    from gyrodrift.evaluate.metrics import heading_error_stats
+    from gyrodrift.evaluate.paper import aligned
     from gyrodrift.simulate import simulate
 
     log = simulate("static", seed=2, fs_hz=10.0, duration_s=1200.0)

@@ -118,8 +118,8 @@ def test_toml_fusion_table_changes_the_tolerant_settings(tmp_path):
 
 
 def test_cli_fusion_table_adjusts_the_fused_settings_whatever_the_estimator(tmp_path):
-    from gyrodrift._cliargs import method_config as _config
-    from gyrodrift.cli import build_parser
+    from gyrodrift.cli.options import method_config as _config
+    from gyrodrift.cli.commands import build_parser
     from gyrodrift.fusion import FusionConfig
 
     path = tmp_path / "f.toml"

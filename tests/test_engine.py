@@ -33,7 +33,7 @@ from gyrodrift.estimators import AdaptiveConfig, make_estimator
 from gyrodrift.estimators.base import LinearDrift
 from gyrodrift.gating import GateConfig
 from gyrodrift.compensator.model_engine import make_engine
-from gyrodrift.montecarlo import draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import draw_case, simulate_case
 from test_compensate import complex_log
 
 ESTIMATORS = ("adaptive", "stkf", "stkf-s1", "kf", "lsm")

@@ -8,12 +8,11 @@ import pandas as pd
 import pytest
 
 from gyrodrift import fleet
+from gyrodrift.cli.batch import add_batch_parser, batch_command
 from gyrodrift.compensator import compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.fleet import (
     SUMMARY_COLUMNS,
-    add_batch_parser,
-    batch_command,
     find_logs,
     output_path,
     process_many,

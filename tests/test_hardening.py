@@ -459,7 +459,7 @@ def test_main_restores_the_sigterm_handler(tmp_path, capsys):
 
 
 def test_batch_summary_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypatch, capsys):
-    from gyrodrift.fleet import batch_command
+    from gyrodrift.cli.batch import batch_command
     from test_fleet import _parse
 
     names = ["=1+2.csv", "+SUM(A1).csv", "-2+3.csv", "@cmd.csv", "plain.csv"]

@@ -251,7 +251,7 @@ def test_b_is_printed_in_deg_per_degc_and_the_package_is_typed(log, tmp_path, ca
 
 def test_the_updated_column_does_not_shadow_a_dataframe_method(log, tmp_path):
     import gyrodrift
-    from gyrodrift.compare import summary_table
+    from gyrodrift.evaluate.compare import summary_table
     from gyrodrift.conventions import OUTPUT_COLS
 
     out = gyrodrift.compensate(log)

@@ -273,7 +273,7 @@ def test_compensate_warm_notes_another_estimator_and_temperature_range(log):
 
 
 def test_montecarlo_csv_cells_cannot_be_spreadsheet_formulas(tmp_path, monkeypatch, capsys):
-    import gyrodrift.montecarlo as mc
+    import gyrodrift.evaluate.montecarlo as mc
 
     real = mc.run_monte_carlo
 

@@ -1,4 +1,4 @@
-"""Tests of gyrodrift.metrics: Table 2 statistics with known answers, the paper's numbers, Markdown."""
+"""Tests of gyrodrift.evaluate.metrics: Table 2 statistics with known answers, the paper's numbers, Markdown."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 from conftest import synthetic_log
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.metrics import (
+from gyrodrift.evaluate.metrics import (
     PAPER_METHODS,
     PAPER_TABLE2,
     TABLE2_STATS,

@@ -1,4 +1,4 @@
-"""Tests of gyrodrift.montecarlo and the ``gyrodrift montecarlo`` command (tiny runs only)."""
+"""Tests of gyrodrift.evaluate.montecarlo and the ``gyrodrift montecarlo`` command (tiny runs only)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 from gyrodrift.cli import main
 from gyrodrift.errors import ConfigError
 from gyrodrift.fusion_offset import available as fusion_offset_available
-from gyrodrift.montecarlo import (
+from gyrodrift.evaluate.montecarlo import (
     ADVERSARIAL_FAMILIES,
     COLUMNS,
     DEFAULT_METHODS,

@@ -9,7 +9,8 @@ import pytest
 
 from conftest import synthetic_log
 from gyrodrift import CompensatorConfig, KalmanConfig, compensate
-from gyrodrift.cli import build_parser, main
+from gyrodrift.cli import main
+from gyrodrift.cli.commands import build_parser
 from gyrodrift.config import load_config
 from gyrodrift.errors import ConfigError
 from gyrodrift.profile import load_profile
@@ -78,7 +79,7 @@ def test_a_drift_beyond_the_plausible_model_gets_the_same_words_from_every_route
 
 
 def test_options_are_judged_alone_then_together(log_path, tmp_path):
-    from gyrodrift._cliargs import method_config
+    from gyrodrift.cli.options import method_config
 
     args = build_parser().parse_args(["compensate", "x.csv", "-o", "o.csv", "--init-s", "0.2", "--stack-depth", "2",
                                       "--set", "tilt=gyro", "--set", "gate.max_gap_s=2", "--declination", "7"])

@@ -5,8 +5,8 @@ import json
 import pytest
 
 from gyrodrift.cli import main
-from gyrodrift.metrics import PAPER_METHODS
-from gyrodrift.paper import OURS_TO_PAPER, PaperSettings, run_paper, same_size, table2_comparison
+from gyrodrift.evaluate.metrics import PAPER_METHODS
+from gyrodrift.evaluate.paper import OURS_TO_PAPER, PaperSettings, run_paper, same_size, table2_comparison
 
 
 def test_ours_cover_the_papers_methods():

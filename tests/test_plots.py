@@ -1,4 +1,4 @@
-"""Figures of gyrodrift.plots on short simulated logs: structure, labels, shading, decimation."""
+"""Figures of gyrodrift.evaluate.plots on short simulated logs: structure, labels, shading, decimation."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ pytest.importorskip("matplotlib")
 
 from matplotlib.figure import Figure  # noqa: E402
 
-from gyrodrift import plotbase, plots  # noqa: E402
-from gyrodrift.allan import allan_deviation, noise_terms  # noqa: E402
-from gyrodrift.compare import run_methods  # noqa: E402
+from gyrodrift.evaluate import plotbase, plots  # noqa: E402
+from gyrodrift.evaluate.allan import allan_deviation, noise_terms  # noqa: E402
+from gyrodrift.evaluate.compare import run_methods  # noqa: E402
 from gyrodrift.errors import ConfigError, LogFormatError  # noqa: E402
 from gyrodrift.simulate import simulate  # noqa: E402
 

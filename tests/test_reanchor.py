@@ -4,7 +4,7 @@ wandering magnetic interference, 20-35 deg, while the temperature falls 0.8 degC
 import numpy as np
 
 from gyrodrift import compensate
-from gyrodrift.montecarlo import draw_case, simulate_case
+from gyrodrift.evaluate.montecarlo import draw_case, simulate_case
 from gyrodrift.simulate.adversarial import ramp_interference_window
 
 #: Seconds a heading must stay within 3 deg to count as re-anchored.

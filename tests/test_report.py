@@ -17,8 +17,10 @@ import pytest
 pytest.importorskip("matplotlib")
 pytest.importorskip("allantools")
 
-from gyrodrift import __version__, report  # noqa: E402
-from gyrodrift.compare import run_methods  # noqa: E402
+from gyrodrift import __version__  # noqa: E402
+from gyrodrift.cli.report import add_report_parser, report_command  # noqa: E402
+from gyrodrift.evaluate import report  # noqa: E402
+from gyrodrift.evaluate.compare import run_methods  # noqa: E402
 from gyrodrift.errors import ConfigError  # noqa: E402
 from gyrodrift.simulate import simulate  # noqa: E402
 
@@ -181,7 +183,7 @@ def test_progress_bar_on_a_terminal(monkeypatch):
 def parse(argv):
     parser = argparse.ArgumentParser(prog="gyrodrift")
     sub = parser.add_subparsers(dest="command")
-    report.add_report_parser(sub)
+    add_report_parser(sub)
     return parser.parse_args(argv)
 
 
@@ -204,7 +206,7 @@ def test_report_command_writes_atomically(log_csv, tmp_path, monkeypatch, capsys
 
     monkeypatch.setattr(os, "replace", spy)
     args = parse(["report", str(log_csv), "-o", str(out), "--methods", "stkf,kf,poly3"])
-    assert args.func is report.report_command
+    assert args.func is report_command
     assert args.func(args) == 0
     (src, dst), = replaced
     assert dst == out and src.parent == out.parent and src.name.startswith(".report.html.")
@@ -287,7 +289,7 @@ def test_report_renders_in_chromium_without_console_errors(static_page, tmp_path
 
 
 def test_report_runs_the_default_estimator_first_and_names_it(log_csv, tmp_path):
-    from gyrodrift.compare import DEFAULT_METHODS
+    from gyrodrift.evaluate.compare import DEFAULT_METHODS
 
     assert parse(["report", str(log_csv), "-o", "r.html"]).methods == ",".join(DEFAULT_METHODS)
     assert DEFAULT_METHODS[0] == "adaptive"
@@ -305,7 +307,7 @@ def test_report_runs_the_default_estimator_first_and_names_it(log_csv, tmp_path)
 
 
 def test_figure_legends_name_the_default_estimator():
-    from gyrodrift import plots
+    from gyrodrift.evaluate import plots
 
     log = simulate("vehicle", duration_s=300, fs_hz=10, seed=1)
     outputs, _ = run_methods(log, methods=("adaptive", "mlr"))
@@ -333,7 +335,7 @@ def test_a_heating_run_gets_the_calibration_fit_and_a_flat_log_says_why_not():
 
 
 def test_calibration_figure_draws_data_fit_and_residual_per_axis():
-    from gyrodrift import plots
+    from gyrodrift.evaluate import plots
     from gyrodrift.calibrate import fit_calibration
 
     log = simulate("calibration", duration_s=1200, fs_hz=10, seed=2)

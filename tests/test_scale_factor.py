@@ -10,7 +10,7 @@ from scipy.integrate import cumulative_trapezoid
 from gyrodrift.compensator import compensate
 from gyrodrift.conventions import wrap_180, wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
-from gyrodrift.paper import scale_factor_experiment
+from gyrodrift.evaluate.paper import scale_factor_experiment
 from gyrodrift.scale_factor import (
     ScaleFactorConfig,
     estimate_scale_factor,

@@ -8,7 +8,7 @@ from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import AdaptiveConfig
 from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_HIST
-from gyrodrift.metrics import bias_error
+from gyrodrift.evaluate.metrics import bias_error
 from gyrodrift.simulate import simulate
 from gyrodrift.smooth import _transition, smooth_epochs, smooth_output
 
@@ -163,7 +163,7 @@ def test_clear_errors():
 
 
 def test_smoothed_is_a_non_causal_compare_method():
-    from gyrodrift.compare import CAUSAL, run_method
+    from gyrodrift.evaluate.compare import CAUSAL, run_method
 
     log = simulate("static", seed=2, duration_s=900.0, fs_hz=10.0)
     out = run_method("smoothed", log, CompensatorConfig())

@@ -7,7 +7,7 @@ Sensors 2015, 15(5), 11222-11238 (doi:10.3390/s150511222).
 Data flow: :func:`gyrodrift.io.read_log` → compass heading
 (:mod:`gyrodrift.compass`) → aiding gates (:mod:`gyrodrift.gating`) → drift
 estimator (:mod:`gyrodrift.estimators`) → :func:`compensate` /
-:class:`Compensator` → :mod:`gyrodrift.metrics`.
+:class:`Compensator` → :mod:`gyrodrift.evaluate.metrics`.
 
 Conventions (all in :mod:`gyrodrift.conventions`): time in s, rates in deg/s,
 temperature in degC, headings in deg clockwise from magnetic north in [0, 360),
@@ -31,8 +31,7 @@ from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import AdaptiveConfig, KalmanConfig
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.gating import GateConfig
-from gyrodrift.io import read_log
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import ReadOptions, read_log
 from gyrodrift.model import TempRateConfig
 from gyrodrift.pipeline import compensate_file
 

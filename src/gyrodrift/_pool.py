@@ -51,7 +51,7 @@ def map_processes(job, items, workers: int, progress=None, on_error=None) -> lis
 
     Notes
     -----
-    An interruption of the caller (Ctrl-C, or SIGTERM as :class:`gyrodrift.cli.Terminated`)
+    An interruption of the caller (Ctrl-C, or SIGTERM as :class:`gyrodrift.cli.commands.Terminated`)
     cancels the items not yet started and terminates the workers (SIGTERM, which they
     take as Ctrl-C, so their partial outputs are removed; SIGKILL after
     :data:`STOP_WAIT_S`), then propagates: nothing queued runs after it.

@@ -443,7 +443,7 @@ def start_temperature(path, read_options=None) -> float:
     """
     from gyrodrift.io import log_format
     from gyrodrift.io.chunked import iter_log_chunks
-    from gyrodrift.io.validate import ReadOptions
+    from gyrodrift.io import ReadOptions
 
     opts = ReadOptions.of(read_options)  # a ReadOptions, or a dict of its fields
     path = Path(path)

@@ -18,11 +18,9 @@ Summary columns (:data:`SUMMARY_COLUMNS`): ``file``, ``status``, ``error``, ``ro
 
 from __future__ import annotations
 
-import argparse
 import glob
 import math
 import os
-import sys
 import time
 from functools import partial
 from pathlib import Path
@@ -30,8 +28,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gyrodrift._cliargs import add_input_options, add_method_options, add_renamed, method_config
-from gyrodrift._cliargs import read_options as cli_read_options
 from gyrodrift._text import printable
 from gyrodrift.errors import ConfigError, GyroDriftError
 
@@ -45,8 +41,6 @@ __all__ = [
     "process_many",
     "summary_markdown",
     "write_summary",
-    "add_batch_parser",
-    "batch_command",
 ]
 
 #: File-name endings (lower case) that :func:`find_logs` picks up.
@@ -60,7 +54,8 @@ SUMMARY_COLUMNS = (
 )
 #: Name of the summary file ``gyrodrift batch`` writes in OUTDIR.
 SUMMARY_FILE = "summary.csv"
-_EXTRA = "pip install 'gyrodrift[fleet]'"
+#: How to install what ``dask_address`` needs.
+DASK_INSTALL = "pip install 'gyrodrift[fleet]'"
 _GLOB_CHARS = frozenset("*?[")
 #: Endings stripped from a log's name to make its output name (longest first).
 _STEM_SUFFIXES = tuple(sorted(LOG_SUFFIXES + (".txt", ".txt.gz"), key=len, reverse=True))
@@ -186,7 +181,7 @@ def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root
     root : str or os.PathLike, optional
         The input folder mirrored under ``out_dir`` (:func:`output_path`).
     read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`).
+        How to read the log (:class:`gyrodrift.io.ReadOptions`).
     chunk_rows : int, optional
         Rows per chunk of the chunked path (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
 
@@ -285,7 +280,7 @@ def _run_dask(job, paths, address, progress) -> list[dict]:
     try:
         from distributed import Client, as_completed
     except ImportError:
-        raise ConfigError(f"--dask needs the optional packages dask and distributed: {_EXTRA}") from None
+        raise ConfigError(f"--dask needs the optional packages dask and distributed: {DASK_INSTALL}") from None
     try:
         client = Client(address, timeout="20s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as err:
@@ -380,7 +375,7 @@ def process_many(
     return _summary_frame(rows)
 
 
-# --------------------------------------------------------------------------- command line
+# --------------------------------------------------------------------------- the summary
 
 def write_summary(summary: pd.DataFrame, path) -> None:
     """Write a summary table as CSV, atomically, safe to open in a spreadsheet.
@@ -401,10 +396,9 @@ def write_summary(summary: pd.DataFrame, path) -> None:
     write_table(summary, path, fmt="csv", spreadsheet_safe=True)
 
 
-
 def summary_markdown(summary: pd.DataFrame) -> str:
     """The summary table as Markdown: integers as integers, numbers to 4 significant digits."""
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.metrics import markdown_table
 
     shown = summary.copy()
     for col in ("rows", "updates"):
@@ -413,88 +407,3 @@ def summary_markdown(summary: pd.DataFrame) -> str:
     for col in ("file", "error"):  # user text: one line each, shown, not obeyed by the terminal
         shown[col] = [printable(v) if isinstance(v, str) else v for v in shown[col]]
     return markdown_table(shown, floatfmt=".4g", index=False)
-
-
-BATCH_EPILOG = """\
-output: OUTDIR/<name>_out.parquet (or .csv) per log, written atomically (logs in
-sub-folders of the logs' common folder go to the same sub-folders of OUTDIR), and
-OUTDIR/summary.csv: file, status (ok/error), error (one line), rows, duration_s (s),
-temp_min_c, temp_max_c (degC), updates, a (deg/s/degC), b (deg/degC), c (deg/s) final
-drift model (a log whose temperature never changes: a, b empty, c its final drift),
-seconds (wall time per log). Text cells that start with = + - @ get a leading ' (shown
-as text, never run as a spreadsheet formula).
-
-exit status: 0 if every log was compensated, 1 if some logs failed (each one is
-reported in the table and in summary.csv; the others are still written), 2 for bad
-usage (no logs found, missing config, unreachable Dask scheduler).
-"""
-
-
-def add_batch_parser(subparsers) -> argparse.ArgumentParser:
-    """Add the ``batch`` subcommand to an argparse ``subparsers`` object; return its parser.
-
-    The parser's ``func`` default is :func:`batch_command`.
-    """
-    p = subparsers.add_parser(
-        "batch",
-        help="compensate every log in a folder (or glob) in parallel; write a summary table",
-        description="Compensate many logs on local processes or a Dask cluster. A log that fails is "
-        "reported and skipped; it never stops the others.",
-        epilog=BATCH_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    p.add_argument(
-        "logs", metavar="DIR_OR_GLOB",
-        help=f"a folder of logs ({', '.join(LOG_SUFFIXES)}) or a quoted glob pattern such as 'runs/*.csv'",
-    )
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR", help="output folder (created if missing)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: the number of CPUs)")
-    p.add_argument(
-        "--dask", metavar="ADDRESS",
-        help=f"run on a Dask scheduler, e.g. tcp://host:8786 (needs {_EXTRA}); workers must see the same paths",
-    )
-    p.add_argument("--output-format", choices=list(OUT_FORMATS), default="parquet",
-                   help="output table format (default parquet)")
-    add_renamed(p, "--format", "--output-format", "output_format", choices=list(OUT_FORMATS))
-    add_input_options(p, old_format=False)
-    add_method_options(p)
-    p.set_defaults(func=batch_command)
-    return p
-
-
-def _prepare_output_dir(out_dir: Path) -> None:
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ConfigError(f"{out_dir}: cannot create the output folder ({err.strerror})") from None
-
-
-def batch_command(args: argparse.Namespace) -> int:
-    """Run ``gyrodrift batch``; return 0 (all ok), 1 (some logs failed) or 2 (bad usage)."""
-    from gyrodrift._progress import progress_iter
-
-    try:
-        paths = find_logs(args.logs)
-        config = method_config(args)
-        summary_path = args.output / SUMMARY_FILE
-        clash = [p for p in paths if os.path.realpath(p) == os.path.realpath(summary_path)]
-        if clash:
-            raise ConfigError(
-                f"{summary_path}: the summary would overwrite the input log {clash[0]}; "
-                "choose an output folder apart from the logs"
-            )
-        _prepare_output_dir(args.output)
-        summary = process_many(
-            paths, args.output, config=config, workers=args.workers, dask_address=args.dask,
-            progress=lambda items, total: progress_iter(items, total, "batch", unit="logs"),
-            out_format=args.output_format, read_options=cli_read_options(args),
-        )
-        write_summary(summary, summary_path)
-    except GyroDriftError as err:
-        print(printable(f"gyrodrift: error: {err}"), file=sys.stderr)
-        return 2
-    n_bad = int((summary["status"] != "ok").sum())
-    print(summary_markdown(summary))
-    print(f"{len(summary) - n_bad} ok, {n_bad} failed")
-    print(printable(f"wrote {summary_path}"))
-    return 1 if n_bad else 0

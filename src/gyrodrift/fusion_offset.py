@@ -9,12 +9,12 @@ filter of 0.02 Hz cut-off (gain ``2π·0.02/sample_rate``). It has no temperatur
 input. The baseline here runs the library itself, through its Python package
 ``imufusion`` (``imufusion.Bias``, Fusion 1.3; ``pip install imufusion``), a
 benchmark and test dependency only: when it is missing, :func:`available` is False
-and :func:`gyrodrift.compare.run_methods` skips the method with the reason.
+and :func:`gyrodrift.evaluate.compare.run_methods` skips the method with the reason.
 
 The log's gyro goes in as it is (deg/s; ``gyro_x``, ``gyro_y`` when the log has them,
 else 0), one sample per row at the log's median sample rate (the library counts
 samples, not seconds). The drift of a row is ``gyro_z`` minus the corrected z rate:
-the offset in force at that row. :mod:`gyrodrift.compare` then integrates the
+the offset in force at that row. :mod:`gyrodrift.evaluate.compare` then integrates the
 corrected rate from the first compass sample as for every other method.
 """
 

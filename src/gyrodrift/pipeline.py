@@ -32,7 +32,7 @@ from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator import CompensatorConfig, check_input_columns, compensate
 from gyrodrift.conventions import GYRO_Z, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_180
 from gyrodrift.errors import GyroDriftError
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import ReadOptions
 
 __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
@@ -154,17 +154,11 @@ class RunStats:
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
             f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s",
         ]
-        raw_ss, ss, n = self._bias
-        if n:
-            lines.append(
-                f"drift error RMS vs true_bias_z: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
-                f"compensated {math.sqrt(ss / n):.4f} deg/s"
-            )
-        for axis, (raw_ss, ss, n) in self._bias_xy.items():
-            if n:
+        for axis, (raw_ss, ss, n) in {"z": self._bias, **self._bias_xy}.items():
+            if n:  # the heading axis's line names no axis
                 lines.append(
-                    f"{axis} drift error RMS vs true_bias_{axis}: raw {math.sqrt(raw_ss / n):.4f} deg/s -> "
-                    f"compensated {math.sqrt(ss / n):.4f} deg/s"
+                    f"{'' if axis == 'z' else axis + ' '}drift error RMS vs true_bias_{axis}: "
+                    f"raw {math.sqrt(raw_ss / n):.4f} deg/s -> compensated {math.sqrt(ss / n):.4f} deg/s"
                 )
         raw_ss, ss, n, raw_max, e_max = self._heading
         if n:
@@ -237,7 +231,7 @@ def compensate_file(
         written atomically.
     config : CompensatorConfig, optional
     read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.validate.ReadOptions`, or a dict of its
+        How to read the log (:class:`gyrodrift.io.ReadOptions`, or a dict of its
         fields: the keywords of :func:`gyrodrift.io.read_log`).
     chunk_rows : int
         Rows per chunk of the chunked path.

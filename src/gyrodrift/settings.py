@@ -7,7 +7,7 @@ its unit and its bounds. Its ``__post_init__`` calls :func:`check`, which conver
 value to the declared type (a whole number to a float for a number setting, a list to a
 tuple) and refuses a value of another type or outside its bounds. A TOML file
 (:func:`apply_settings`, used by :mod:`gyrodrift.config`), a device profile
-(:mod:`gyrodrift.profile`) and a command-line option (:mod:`gyrodrift._cliargs`) all reach
+(:mod:`gyrodrift.profile`) and a command-line option (:mod:`gyrodrift.cli.options`) all reach
 the same function, so the same bad value gives the same words, ``<key> = <value> <what is
 wrong>``; each route puts where the value came from before them (the class, the file and
 table, the option).
@@ -62,7 +62,7 @@ class Spec:
     largest whole number; ``drift`` names the elements of a drift triple, each within
     :data:`DRIFT_PARAM_BOUNDS`; ``measured`` marks a value learned from data (its own
     bounds only); ``longest`` bounds a text; ``flag`` and ``help`` make its command-line
-    option (:mod:`gyrodrift._cliargs`).
+    option (:mod:`gyrodrift.cli.options`).
     """
 
     unit: str = ""

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gyrodrift._arguments import (
+from gyrodrift._columns import join_input_columns
+from gyrodrift.compensator.arguments import (
     check_buffers,
     check_callable,
     check_config,
@@ -16,7 +17,6 @@ from gyrodrift._arguments import (
     frame_column,
     rows,
 )
-from gyrodrift._columns import join_input_columns
 from gyrodrift.compensator.config import CompensatorConfig
 from gyrodrift.compensator.intake import Intake, MagFit, WholeLog
 from gyrodrift.compensator.memory import OutputBuffers

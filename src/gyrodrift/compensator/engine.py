@@ -129,7 +129,7 @@ class ChunkEngine:
         owner = next((k for k in type(estimator).__mro__ if "drift" in k.__dict__), None)
         if owner is not LinearDrift:
             raise ConfigError(f"estimator {estimator.name!r}: its drift is not a*T + b*T' + c (eq. 2), which the "
-                              "engine compensates with; run it as a baseline of gyrodrift.compare")
+                              "engine compensates with; run it as a baseline of gyrodrift.evaluate.compare")
         self._start_state(config, estimator, source, clock)
         arrays = compiled_arrays(estimator)
         if arrays is None:

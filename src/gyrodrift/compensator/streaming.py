@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
-from gyrodrift._arguments import check_config, check_estimator, check_source
+from gyrodrift.compensator.arguments import check_config, check_estimator, check_source
 from gyrodrift.compensator.config import CompensatorConfig
 from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample

@@ -14,7 +14,7 @@ name         estimator
 ===========  ==================================================================
 
 The PX4-style cubic calibration (``poly3``, :func:`fit_poly3`) is a baseline of
-:mod:`gyrodrift.compare`: its drift is not eq. (2), so it does not run in the engine.
+:mod:`gyrodrift.evaluate.compare`: its drift is not eq. (2), so it does not run in the engine.
 """
 
 from gyrodrift.estimators.base import (

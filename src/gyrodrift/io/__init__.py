@@ -11,6 +11,8 @@
   :mod:`gyrodrift.io.rosbag`;
 * a file with another ending that starts like a ULog or a DataFlash log: that format.
 
+:class:`ReadOptions` holds the options of :func:`read_log` as one value.
+
 See :mod:`gyrodrift.io.validate` for the checks of the table readers and the error-message
 style shared by all. A log without a compass or without a usable gyro temperature is read,
 not refused: ``attrs["compass"]`` is ``"none"``, or ``temp`` is 0 degC in every row, and
@@ -19,6 +21,7 @@ not refused: ``attrs["compass"]`` is ``"none"``, or ``temp`` is 0 degC in every 
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Mapping
 
@@ -37,6 +40,7 @@ from gyrodrift.io.messages import message
 
 __all__ = [
     "FORMATS",
+    "ReadOptions",
     "log_format",
     "read_log",
     "read_gyros",
@@ -196,3 +200,51 @@ def read_gyros(path, *, fmt: str | None = None, instance: int | None = None, mag
         return every(path, mag_instance=mag_instance, gyro_max_dps=options.get("gyro_max_dps", GYRO_MAX_DPS))
     return [read_log(path, fmt=fmt, instance=0 if instance is None else instance, mag_instance=mag_instance,
                      **options)]
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """How to read a log: the options of :func:`read_log`, as one value.
+
+    Every entry point takes its read options as one of these (the command line builds it
+    once, :func:`gyrodrift.cli.options.read_options`); :meth:`read` reads a log with them. The
+    fields are :func:`read_log`'s keywords, with its defaults.
+    """
+
+    fmt: str | None = None
+    gyro_unit: str = "deg/s"
+    frame: str | None = None
+    column_map: Mapping[str, str] | None = None
+    time_unit: str | None = None
+    instance: int = 0
+    mag_instance: int | None = None
+    imu_topic: str | None = None
+    temp_topic: str | None = None
+    mag_topic: str | None = None
+    gyro_max_dps: float = GYRO_MAX_DPS
+
+    #: The options the CSV and Parquet readers take (the others are the binary logs').
+    TABLE = ("fmt", "gyro_unit", "frame", "column_map", "time_unit", "gyro_max_dps")
+
+    @classmethod
+    def of(cls, options) -> "ReadOptions":
+        """``options`` as ReadOptions: ReadOptions, a dict of read_log keywords, or None."""
+        return options if isinstance(options, cls) else cls(**(options or {}))
+
+    def keywords(self) -> dict:
+        """The keywords of :func:`read_log`."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def table_keywords(self) -> dict:
+        """The keywords of the table readers (:func:`gyrodrift.io.chunked.iter_log_chunks`)."""
+        return {k: getattr(self, k) for k in self.TABLE}
+
+    @property
+    def tables_only(self) -> bool:
+        """Whether no option of a binary log (instance, topics) is set: a table reader takes these."""
+        return self.instance in (None, 0) and not any((self.mag_instance, self.imu_topic, self.temp_topic,
+                                                       self.mag_topic))
+
+    def read(self, path):
+        """The log at ``path`` read with these options (:func:`read_log`)."""
+        return read_log(path, **self.keywords())

@@ -12,7 +12,6 @@ worded by :mod:`gyrodrift.io.notes`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
 from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
@@ -55,7 +54,6 @@ __all__ = [
     "check_column_map",
     "check_z_up",
     "Z_UP_SHARE",
-    "ReadOptions",
     "TableOptions",
     "read_options",
     "table_to_frame",
@@ -140,56 +138,6 @@ def check_column_map(column_map: Mapping[str, str] | None) -> dict[str, str]:
             one_line(f"column map renames column {dup[0]!r} twice; map each input column once")
         )
     return out
-
-
-@dataclass(frozen=True)
-class ReadOptions:
-    """How to read a log: the options of :func:`gyrodrift.io.read_log`, as one value.
-
-    Every entry point takes its read options as one of these (the command line builds it
-    once, :func:`gyrodrift._cliargs.read_options`); :meth:`read` reads a log with them. The
-    fields are :func:`gyrodrift.io.read_log`'s keywords, with its defaults.
-    """
-
-    fmt: str | None = None
-    gyro_unit: str = "deg/s"
-    frame: str | None = None
-    column_map: Mapping[str, str] | None = None
-    time_unit: str | None = None
-    instance: int = 0
-    mag_instance: int | None = None
-    imu_topic: str | None = None
-    temp_topic: str | None = None
-    mag_topic: str | None = None
-    gyro_max_dps: float = GYRO_MAX_DPS
-
-    #: The options the CSV and Parquet readers take (the others are the binary logs').
-    TABLE = ("fmt", "gyro_unit", "frame", "column_map", "time_unit", "gyro_max_dps")
-
-    @classmethod
-    def of(cls, options) -> "ReadOptions":
-        """``options`` as ReadOptions: ReadOptions, a dict of read_log keywords, or None."""
-        return options if isinstance(options, cls) else cls(**(options or {}))
-
-    def keywords(self) -> dict:
-        """The keywords of :func:`gyrodrift.io.read_log`."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-    def table_keywords(self) -> dict:
-        """The keywords of the table readers (:func:`gyrodrift.io.chunked.iter_log_chunks`)."""
-        return {k: getattr(self, k) for k in self.TABLE}
-
-    @property
-    def tables_only(self) -> bool:
-        """Whether no option of a binary log (instance, topics) is set: a table reader takes these."""
-        return self.instance in (None, 0) and not any((self.mag_instance, self.imu_topic, self.temp_topic,
-                                                       self.mag_topic))
-
-    def read(self, path):
-        """The log at ``path`` read with these options (:func:`gyrodrift.io.read_log`)."""
-        from gyrodrift.io import read_log
-
-        return read_log(path, **self.keywords())
 
 
 class TableOptions(NamedTuple):

@@ -68,7 +68,7 @@ Where the paper is silent (choices made here)
 Modules: ``config``, ``turns`` (rotation test, measurements), ``filter`` (the SF
 filter, the fixed SF), ``batch`` (:func:`estimate_scale_factor`), ``streaming``
 (:class:`ScaleFactorTracker`). The experiment of Section 4.3 is
-:func:`gyrodrift.paper.scale_factor_experiment`.
+:func:`gyrodrift.evaluate.paper.scale_factor_experiment`.
 """
 
 from gyrodrift.scale_factor.batch import estimate_scale_factor, heading_error, integrate_heading

@@ -44,7 +44,7 @@ turn), ``no-temp`` (a temperature column that reads a constant 0 degC) and ``sho
 (tens of seconds).
 
 :func:`random_device` and :func:`random_compass` draw randomised sensors for Monte
-Carlo runs (:mod:`gyrodrift.montecarlo`).
+Carlo runs (:mod:`gyrodrift.evaluate.montecarlo`).
 
 Output columns
 --------------

@@ -2,8 +2,8 @@
 
 Every ``fig_*`` function takes output tables (or arrays) and returns a new
 :class:`matplotlib.figure.Figure` drawn with the Agg renderer, without pyplot: the
-caller owns the figure (:func:`gyrodrift.plotbase.save_png`,
-:func:`gyrodrift.plotbase.png_base64`). matplotlib is optional:
+caller owns the figure (:func:`gyrodrift.evaluate.plotbase.save_png`,
+:func:`gyrodrift.evaluate.plotbase.png_base64`). matplotlib is optional:
 ``pip install 'gyrodrift[plot]'``.
 """
 
@@ -15,12 +15,12 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.allan import BIAS_INSTABILITY_FACTOR
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError
-from gyrodrift.metrics import heading_error_deg
-from gyrodrift.plotbase import (
+from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.evaluate.metrics import heading_error_deg
+from gyrodrift.evaluate.plotbase import (
     MAX_POINTS,
     WIDTH_IN,
     align_turns,
@@ -31,8 +31,8 @@ from gyrodrift.plotbase import (
     plot_line,
     require_matplotlib,
     robust_limits,
-    true_runs,
     time_axis,
+    true_runs,
     unwrap_deg,
 )
 
@@ -83,8 +83,8 @@ def _method_color(name: str, index: int) -> str:
 
 
 def _method_label(name: str) -> str:
-    """A method's legend name: the default estimator's says so (:func:`gyrodrift.compare.method_label`)."""
-    from gyrodrift.compare import method_label
+    """A method's legend name: the default estimator's says so (:func:`gyrodrift.evaluate.compare.method_label`)."""
+    from gyrodrift.evaluate.compare import method_label
 
     return method_label(name)
 
@@ -92,6 +92,18 @@ def _method_label(name: str) -> str:
 def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None:
     if not out_by_method:
         raise ConfigError(f"{what} needs at least one method's output table")
+
+
+def _labelled(fig, ax, ylabel: str, xlabel: str, title: str, n: int, legend_at: str, **legend):
+    """``fig`` with its one axes ``ax`` labelled: axis labels, title, a legend at ``legend_at``
+    (more of :meth:`matplotlib.axes.Axes.legend`'s keywords in ``legend``) and the note of an
+    envelope of ``n`` points (:func:`~gyrodrift.evaluate.plotbase.envelope_note`)."""
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel(xlabel)
+    ax.set_title(title)
+    ax.legend(loc=legend_at, fontsize=8, **legend)
+    envelope_note(ax, n)
+    return fig
 
 
 # ----------------------------------------------------------------------- figures
@@ -158,12 +170,8 @@ def fig_rates(out: pd.DataFrame, *, method: str | None = None):
     plot_line(ax, x, float_column(out, "gyro_z"), color=_RAW_COLOR, lw=0.8, label="raw gyro_z")
     name = f" ({method})" if method else ""
     plot_line(ax, x, float_column(out, "rate_z"), color="#d62728", lw=0.8, alpha=0.85, label=f"compensated rate_z{name}")
-    ax.set_ylabel("angular rate (deg/s)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Uncompensated and compensated angular rate")
-    ax.legend(loc="upper right", fontsize=8)
-    envelope_note(ax, t.size)
-    return fig
+    return _labelled(fig, ax, "angular rate (deg/s)", xlabel, "Uncompensated and compensated angular rate", t.size,
+                     "upper right")
 
 
 def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
@@ -209,12 +217,8 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
     limits = robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
-    ax.set_ylabel("drift / rate (deg/s)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Estimated gyro drift" + (" and the true drift" if has_truth else ""))
-    ax.legend(loc="upper right", fontsize=8, ncols=2)
-    envelope_note(ax, t.size)
-    return fig
+    title = "Estimated gyro drift" + (" and the true drift" if has_truth else "")
+    return _labelled(fig, ax, "drift / rate (deg/s)", xlabel, title, t.size, "upper right", ncols=2)
 
 
 def fig_params(out: pd.DataFrame, *, method: str | None = None):
@@ -289,7 +293,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
     out_by_method : mapping of str to DataFrame
         Output table per method, each with ``t``, ``heading`` and ``ref_heading``.
     causal : mapping of str to bool, optional
-        Whether each method is causal (default :data:`gyrodrift.compare.CAUSAL`);
+        Whether each method is causal (default :data:`gyrodrift.evaluate.compare.CAUSAL`);
         non-causal methods are dashed and marked "(non-causal)" in the legend;
         the default estimator is labelled "adaptive (default)".
 
@@ -301,7 +305,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
     """
     _check_methods(out_by_method, "fig_heading_error")
     if causal is None:
-        from gyrodrift.compare import CAUSAL as causal
+        from gyrodrift.evaluate.compare import CAUSAL as causal
     fig, (ax,) = new_figure(4.0)
     xlabel = "time"
     n = 0
@@ -315,12 +319,8 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
         plot_line(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
-    ax.set_ylabel("heading error (deg)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Heading error against the reference heading")
-    ax.legend(loc="upper left", fontsize=8, ncols=2)
-    envelope_note(ax, n)
-    return fig
+    return _labelled(fig, ax, "heading error (deg)", xlabel, "Heading error against the reference heading", n,
+                     "upper left", ncols=2)
 
 
 def fig_heading(out: pd.DataFrame, *, method: str | None = None):
@@ -357,12 +357,8 @@ def fig_heading(out: pd.DataFrame, *, method: str | None = None):
     plot_line(ax, x, gyro, color="#d62728", lw=1.1, label=f"compensated gyro heading{name}")
     if REF_HEADING in out.columns:
         plot_line(ax, x, anchor, color="#2ca02c", lw=1.1, ls="--", label="reference (ref_heading)")
-    ax.set_ylabel("heading, unwrapped (deg)")
-    ax.set_xlabel(xlabel)
-    ax.set_title("Heading: compass, compensated gyro and reference")
-    ax.legend(loc="best", fontsize=8)
-    envelope_note(ax, t.size)
-    return fig
+    return _labelled(fig, ax, "heading, unwrapped (deg)", xlabel, "Heading: compass, compensated gyro and reference",
+                     t.size, "best")
 
 
 def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None = None):
@@ -371,10 +367,10 @@ def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None =
     Parameters
     ----------
     curves : mapping of str to AllanResult
-        Label → :class:`gyrodrift.allan.AllanResult` (e.g. raw and compensated rate
+        Label → :class:`gyrodrift.evaluate.allan.AllanResult` (e.g. raw and compensated rate
         error), all in the same unit.
     terms : mapping of str to NoiseTerms, optional
-        Label → :class:`gyrodrift.allan.NoiseTerms`; each term found is marked on
+        Label → :class:`gyrodrift.evaluate.allan.NoiseTerms`; each term found is marked on
         its curve and annotated: N at τ = 1 s (circle), B at the τ of its minimum
         (σ = 0.664 B, square), K at τ = 3 s (triangle).
 
@@ -486,7 +482,7 @@ def fig_scale_factor(fig10: pd.DataFrame, fig11: pd.DataFrame):
     fig11 : DataFrame
         ``t`` (s) and heading errors (deg) ``err_none``, ``err_fixed``,
         ``err_adaptive`` (and optionally ``err_ideal``), as returned by
-        :func:`gyrodrift.paper.scale_factor_experiment`.
+        :func:`gyrodrift.evaluate.paper.scale_factor_experiment`.
     """
     need_columns(fig10, ("t", "sf_ideal", "sf_fixed", "sf_adaptive"), "fig_scale_factor")
     need_columns(fig11, ("t", "err_none", "err_fixed", "err_adaptive"), "fig_scale_factor")

@@ -16,7 +16,10 @@ import os
 import numpy as np
 import pandas as pd
 
+from gyrodrift.compensator.config import CompensatorConfig
+from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.errors import ArgumentTypeError, LogFormatError
+from gyrodrift.estimators.base import DriftEstimator
 
 __all__ = ["shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
            "column", "rows", "check_log", "frame_column"]
@@ -41,8 +44,6 @@ def check_source(source) -> str:
 def check_config(config):
     """``config`` as a :class:`~gyrodrift.compensator.CompensatorConfig` (None: the defaults;
     its settings were checked when it was made, :mod:`gyrodrift.settings`)."""
-    from gyrodrift.compensator.config import CompensatorConfig
-
     if config is None:
         return CompensatorConfig()
     if not isinstance(config, CompensatorConfig):
@@ -55,8 +56,6 @@ def check_config(config):
 
 def check_estimator(estimator) -> None:
     """Refuse an ``estimator`` that is neither None nor a drift estimator instance."""
-    from gyrodrift.estimators.base import DriftEstimator
-
     if estimator is None:
         return
     if isinstance(estimator, type) or not isinstance(estimator, DriftEstimator):
@@ -74,8 +73,6 @@ def check_callable(value, name: str) -> None:
 
 def check_buffers(buffers) -> None:
     """Refuse ``buffers`` that are neither None nor :class:`~gyrodrift.compensator.OutputBuffers`."""
-    from gyrodrift.compensator.memory import OutputBuffers
-
     if buffers is not None and not isinstance(buffers, OutputBuffers):
         raise ArgumentTypeError(f"buffers must be OutputBuffers or None, got {shown(buffers)}")
 

@@ -39,7 +39,7 @@ import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.metrics import heading_error_deg
+from gyrodrift.evaluate.metrics import heading_error_deg
 from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
 
 __all__ = ["METHODS", "CAUSAL_BASELINES", "COLUMNS", "run_case", "run_generated", "summarise", "acceptance",
@@ -105,7 +105,7 @@ def _one_line(err: BaseException) -> str:
 
 
 def _run(name: str, log: pd.DataFrame, config: CompensatorConfig, case) -> pd.DataFrame:
-    from gyrodrift.compare import run_method
+    from gyrodrift.evaluate.compare import run_method
 
     if name == "default":
         return run_method(config.estimator, log, config)
@@ -224,7 +224,7 @@ def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
 
 def markdown(df: pd.DataFrame) -> str:
     """The acceptance table and the per-method medians of a run, Markdown."""
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.metrics import markdown_table
 
     summ = summarise(df)
     acc = acceptance(summ)

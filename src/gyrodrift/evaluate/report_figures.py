@@ -6,7 +6,7 @@ true rate is 0 on a motionless log (one whose reference heading, or else whose 1
 compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log with a reference,
 and unknown otherwise (the figure is then left out). It is computed over the longest
 stretch without a time gap; time stamps that jitter are first put on an even time base
-(:func:`gyrodrift.allan.even_rate`), and the figure's note says so.
+(:func:`gyrodrift.evaluate.allan.even_rate`), and the figure's note says so.
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import DEFAULT_METHOD
-from gyrodrift.compare import method_label as _label
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
+from gyrodrift.evaluate.compare import DEFAULT_METHOD
+from gyrodrift.evaluate.compare import method_label as _label
 
 __all__ = ["ALLAN_METHODS", "esc", "html_table", "main_method", "figure_plan", "render_figure"]
 
@@ -116,7 +116,7 @@ def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
         return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
     rows = slice(int(rows[0]), int(rows[-1]) + 1)
     tt = t[rows]
-    from gyrodrift.allan import even_rate
+    from gyrodrift.evaluate.allan import even_rate
 
     rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
     chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
@@ -175,7 +175,7 @@ _HOW = {
 
 
 def figure_plan(log, outputs, config) -> list[_Figure]:
-    from gyrodrift import plots
+    from gyrodrift.evaluate import plots
 
     main = main_method(outputs)
     first = next(iter(outputs.values()), None)
@@ -215,8 +215,8 @@ def figure_plan(log, outputs, config) -> list[_Figure]:
 
 def _calibration_figure(log) -> _Figure:
     """The thermal calibration fit of the log, or a note saying why the log gives none."""
-    from gyrodrift import plots
     from gyrodrift.calibrate import CalibrationError, fit_calibration
+    from gyrodrift.evaluate import plots
 
     title = "Thermal calibration fit (gyrodrift calibrate)"
     try:
@@ -236,8 +236,8 @@ def _allan_figure(outputs, config) -> _Figure:
     entry = _Figure("allan", "Allan deviation of the rate error", how)
 
     def make():
-        from gyrodrift import plots
-        from gyrodrift.allan import allan_deviation, noise_terms
+        from gyrodrift.evaluate import plots
+        from gyrodrift.evaluate.allan import allan_deviation, noise_terms
 
         curves = {label: allan_deviation(r, inputs.fs_hz) for label, r in inputs.rates.items()}
         terms = {label: noise_terms(c) for label, c in curves.items()}
@@ -272,13 +272,13 @@ def _terms_table(terms: Mapping[str, object]) -> str:
         ])
     header = ["rate error", "angle random walk N", "bias instability B", "rate random walk K", "rate ramp R"]
     note = ("<p class=how>Noise terms read off each curve by the slope method of IEEE Std 952 "
-            "(<code>gyrodrift.allan.noise_terms</code>), with 68 % intervals; “not seen”: the curve has no "
+            "(<code>gyrodrift.evaluate.allan.noise_terms</code>), with 68 % intervals; “not seen”: the curve has no "
             "region of that slope.</p>")
     return html_table(header, rows, cls="terms") + note
 
 
 def render_figure(entry: _Figure) -> str:
-    from gyrodrift.plotbase import png_base64
+    from gyrodrift.evaluate.plotbase import png_base64
 
     head = f'<section class="figure" id="fig-{entry.key}"><h2>{esc(entry.title)}</h2>'
     if entry.make is None:

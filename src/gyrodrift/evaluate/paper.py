@@ -40,17 +40,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import METHODS, run_methods
 from gyrodrift.compensator import CompensatorConfig, compensate
-from gyrodrift.fusion import FusionConfig
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_360
-from gyrodrift.metrics import (
+from gyrodrift.evaluate.compare import METHODS, run_methods
+from gyrodrift.evaluate.metrics import (
     bias_error,
     error_stats,
     heading_error_deg,
     heading_error_stats,
     paper_table2,
 )
+from gyrodrift.fusion import FusionConfig
 from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor, heading_error, integrate_heading
 from gyrodrift.scale_factor.batch import heading_anchor
 from gyrodrift.simulate import DEFAULT_DURATION_S, TRUE_SF, interference_windows_static, simulate
@@ -78,7 +78,7 @@ class PaperSettings:
     duration_scale : float
         Multiplies every scenario's default duration (0.1 for a quick check).
     methods : tuple of str
-        Methods to compare (see :mod:`gyrodrift.compare`); by default every method but
+        Methods to compare (see :mod:`gyrodrift.evaluate.compare`); by default every method but
         ``smoothed`` and ``fusion-offset`` (not in the paper; the Monte Carlo has both).
     config : CompensatorConfig
         Compensator settings shared by every method. The default pins the paper's
@@ -321,7 +321,7 @@ def allan_static(run: PaperRun, fs_hz: float, methods=("stkf", "kf", "mlr", "ora
     Returns ``{label: (AllanResult, NoiseTerms)}``; the true rate is 0, so the rate
     itself is its error.
     """
-    from gyrodrift.allan import allan_deviation, noise_terms
+    from gyrodrift.evaluate.allan import allan_deviation, noise_terms
 
     series = {"raw": run.log["gyro_z"].to_numpy(float)}
     series.update({m: run.outputs[m]["rate_z"].to_numpy(float) for m in methods if m in run.outputs})
@@ -341,7 +341,7 @@ def _term(term, scale=1.0, unit=""):
 def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict, settings: PaperSettings) -> str:
     """``table2.md``: Table 2 ours beside the paper's, the claims, the Allan noise terms."""
     from gyrodrift._version import __version__
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.metrics import markdown_table
 
     lines = [
         "# The paper's experiments, regenerated",
@@ -404,7 +404,7 @@ def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
     """PNG figures corresponding to the paper's Figures 1–9; returns the paths written."""
     from pathlib import Path
 
-    from gyrodrift import plotbase, plots
+    from gyrodrift.evaluate import plotbase, plots
 
     out_dir = Path(out_dir)
     static, outages, vehicle = runs["static"], runs["static-outages"], runs["vehicle"]
@@ -606,7 +606,7 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
     from pathlib import Path
 
     from gyrodrift.errors import ConfigError
-    from gyrodrift.report import write_report
+    from gyrodrift.evaluate.report import write_report
 
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
@@ -628,7 +628,7 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
         if progress:
             progress("figures")
         written += write_figures(out_dir, runs, allan)
-        from gyrodrift import plotbase, plots
+        from gyrodrift.evaluate import plotbase, plots
 
         path = out_dir / "fig10_11_scale_factor.png"
         plotbase.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)

@@ -1,7 +1,7 @@
 """The command line's one option layer: how to read a log, and the method's settings.
 
 Every subcommand that reads a log takes the input options of :func:`add_input_options` and
-turns them into one :class:`~gyrodrift.io.validate.ReadOptions` (:func:`read_options`);
+turns them into one :class:`~gyrodrift.io.ReadOptions` (:func:`read_options`);
 every subcommand that runs an estimator takes the method options of
 :func:`add_method_options` and turns them into one
 :class:`~gyrodrift.compensator.CompensatorConfig` (:func:`method_config`). The method
@@ -21,11 +21,10 @@ from pathlib import Path
 
 from gyrodrift.conventions import TIME_UNITS
 from gyrodrift.errors import ConfigError
-from gyrodrift.io import FORMATS
-from gyrodrift.io.validate import ReadOptions
+from gyrodrift.io import FORMATS, ReadOptions
 
 __all__ = ["parse_map", "Renamed", "add_table_options", "add_input_options", "read_options", "read_input",
-           "add_method_options", "method_config", "warm_start", "check_numbers"]
+           "add_method_options", "finish_command", "method_config", "warm_start", "check_numbers"]
 
 
 def parse_map(text: str | None) -> dict[str, str] | None:
@@ -145,6 +144,16 @@ def add_method_options(p) -> None:
                        metavar=None if choices else ("DEG" if spec.unit == "deg" else None),
                        help=f"{spec.help}{unit} (default {default:g})" if isinstance(default, float) else
                        f"{spec.help} (default {default})")
+
+
+def finish_command(p, func, *, inputs: bool = True, old_format: bool = True) -> None:
+    """End the options of a command that runs the method: the input options (``inputs``: it
+    reads a log; ``old_format`` as in :func:`add_input_options`), then the method options;
+    ``func(args)`` runs the command."""
+    if inputs:
+        add_input_options(p, old_format=old_format)
+    add_method_options(p)
+    p.set_defaults(func=func)
 
 
 def _parse_set(item: str) -> tuple[str, str, object]:

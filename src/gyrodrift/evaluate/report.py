@@ -1,7 +1,7 @@
 """A self-contained HTML report of one log compensated by several methods (``gyrodrift report``).
 
 The page holds everything inline: CSS in a ``<style>`` element, figures as base64
-PNG ``<img>`` elements (:mod:`gyrodrift.plots`), no JavaScript and no external
+PNG ``<img>`` elements (:mod:`gyrodrift.evaluate.plots`), no JavaScript and no external
 resource; a Content-Security-Policy in the page forbids loading any. It can be
 mailed or archived as one file and opened offline.
 
@@ -25,7 +25,7 @@ Contents, top to bottom:
    saying which column is missing;
 4. the gyrodrift version and every setting used.
 
-The figures and their notes: :mod:`gyrodrift.report_figures`.
+The figures and their notes: :mod:`gyrodrift.evaluate.report_figures`.
 
 matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 (``gyrodrift[allan]``) computes the Allan deviation.
@@ -33,7 +33,6 @@ matplotlib (``gyrodrift[plot]``) draws the figures and allantools
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from dataclasses import fields, is_dataclass
@@ -43,17 +42,16 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import method_label as _label
+from gyrodrift._progress import progress_iter as _progress
+from gyrodrift._text import printable
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
-from gyrodrift._cliargs import add_input_options, add_method_options
-from gyrodrift._progress import progress_iter as _progress
-from gyrodrift._text import printable
-from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.report_figures import esc, figure_plan, html_table, render_figure
+from gyrodrift.errors import GyroDriftError
+from gyrodrift.evaluate.compare import method_label as _label
+from gyrodrift.evaluate.report_figures import esc, figure_plan, html_table, render_figure
 
-__all__ = ["build_report", "write_report", "report_command", "add_report_parser"]
+__all__ = ["build_report", "write_report"]
 
 
 _NONE = "–"
@@ -81,7 +79,7 @@ def _duration_text(seconds: float) -> str:
 
 
 def _causal(name: str) -> bool:
-    from gyrodrift.compare import CAUSAL
+    from gyrodrift.evaluate.compare import CAUSAL
 
     return CAUSAL.get(name, True)
 
@@ -149,7 +147,7 @@ def _read_section(log, outputs, skipped, source: str) -> str:
 
 def _raw_errors(log_like: pd.DataFrame, start_heading: float):
     """Bias error and heading error of the uncompensated gyro (None where no truth)."""
-    from gyrodrift.metrics import heading_error_deg, raw_heading_deg
+    from gyrodrift.evaluate.metrics import heading_error_deg, raw_heading_deg
 
     bias = heading = None
     if TRUE_BIAS_Z in log_like.columns:
@@ -162,7 +160,7 @@ def _raw_errors(log_like: pd.DataFrame, start_heading: float):
 
 
 def _stats(errors) -> dict | None:
-    from gyrodrift.metrics import error_stats
+    from gyrodrift.evaluate.metrics import error_stats
 
     if errors is None:
         return None
@@ -173,7 +171,7 @@ def _stats(errors) -> dict | None:
 
 
 def _summary_section(log, outputs) -> str:
-    from gyrodrift.metrics import bias_error, heading_error_deg
+    from gyrodrift.evaluate.metrics import bias_error, heading_error_deg
 
     if not outputs:
         return '<section id="summary"><h2>Summary</h2><p class="note">No method ran: nothing to summarise.</p></section>'
@@ -184,7 +182,7 @@ def _summary_section(log, outputs) -> str:
         for r in out["gate_reason"].fillna("").astype(str).unique():
             if r and r not in reasons:
                 reasons.append(r)
-    from gyrodrift.plots import GATE_COLORS
+    from gyrodrift.evaluate.plots import GATE_COLORS
 
     reasons.sort(key=lambda r: list(GATE_COLORS).index(r) if r in GATE_COLORS else len(GATE_COLORS))
     header = ["method"]
@@ -319,8 +317,8 @@ def build_report(
         The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
     outputs : mapping of str to DataFrame
         Method name → output table, as returned by
-        :func:`gyrodrift.compare.run_methods`. The default estimator
-        (:data:`gyrodrift.compare.DEFAULT_METHOD`) is the method of the
+        :func:`gyrodrift.evaluate.compare.run_methods`. The default estimator
+        (:data:`gyrodrift.evaluate.compare.DEFAULT_METHOD`) is the method of the
         single-method figures; without it ``stkf``, else the first one.
     skipped : mapping of str to str, optional
         Method name → why it did not run (listed in the header).
@@ -348,8 +346,7 @@ def build_report(
     outputs = dict(outputs)
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
     from gyrodrift._version import __version__
-
-    from gyrodrift.plotbase import require_matplotlib
+    from gyrodrift.evaluate.plotbase import require_matplotlib
 
     require_matplotlib()
     plan = figure_plan(log, outputs, config)
@@ -401,98 +398,3 @@ def write_report(path, html: str) -> None:
     from gyrodrift._atomic import write_bytes_atomic
 
     write_bytes_atomic(Path(path), html.encode("utf-8"))
-
-
-# ----------------------------------------------------------------------- command
-
-
-def _parse_methods(text: str) -> tuple[str, ...]:
-    from gyrodrift.compare import DEFAULT_METHODS, is_method
-
-    names = list(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
-    unknown = [m for m in names if not is_method(m)]
-    if unknown or not names:
-        raise ConfigError(
-            f"--methods: unknown method(s) {', '.join(unknown) or '(none given)'}; "
-            f"choose from: {', '.join(DEFAULT_METHODS)}"
-        )
-    return tuple(names)
-
-
-def _run_all(log, methods, config, calibration):
-    """Run each method in turn (with a progress bar on a terminal)."""
-    from gyrodrift.compare import calibration_from_log, run_methods
-
-    if calibration is not None and "poly3" in methods:
-        calibration = calibration_from_log(calibration)
-    outputs, skipped = {}, {}
-    for name in _progress(methods, len(methods), "compensating"):
-        out, skip = run_methods(log, (name,), config, calibration=calibration)
-        outputs.update(out)
-        skipped.update(skip)
-    return outputs, skipped
-
-
-def report_command(args: argparse.Namespace) -> int:
-    """Run ``gyrodrift report``: read, compensate with each method, write the HTML report.
-
-    Returns 0; problems the user can fix raise :class:`GyroDriftError` (the command
-    line prints them as one line and exits 2).
-    """
-    from gyrodrift._cliargs import method_config, read_input
-    from gyrodrift.io import check_output_path
-    from gyrodrift.plotbase import require_matplotlib
-
-    require_matplotlib()  # before the long work, not after it
-    out_path = Path(args.output)
-    check_output_path(args.input, out_path)
-    if getattr(args, "calibration", None):
-        check_output_path(args.calibration, out_path)
-    if not out_path.parent.is_dir():
-        raise ConfigError(
-            f"{out_path}: output folder {str(out_path.parent)!r} does not exist; create it first or choose another -o"
-        )
-    methods = _parse_methods(args.methods)
-    config = method_config(args)
-    log = read_input(args.input, args)
-    calibration = read_input(args.calibration, args, with_format=False) if args.calibration else None
-    outputs, skipped = _run_all(log, methods, config, calibration)
-    if not outputs:
-        reasons = "; ".join(f"{m}: {r}" for m, r in skipped.items())
-        raise ConfigError(f"{args.input}: none of the methods could run ({reasons}); choose others with --methods")
-    title = getattr(args, "title", None) or f"gyrodrift report: {Path(args.input).name}"
-    page = build_report(log, outputs, skipped, title=title, source=str(args.input), config=config)
-    write_report(out_path, page)
-    if not getattr(args, "quiet", False):
-        print(printable(f"wrote {out_path}: {len(outputs)} method(s) ({', '.join(outputs)}), {len(page) / 1e6:.1f} MB"))
-    return 0
-
-
-def add_report_parser(subparsers) -> argparse.ArgumentParser:
-    """Add the ``report`` subcommand to an argparse ``subparsers`` object; return its parser.
-
-    The parser's ``func`` default is :func:`report_command`.
-    """
-    from gyrodrift.compare import DEFAULT_METHODS
-
-    p = subparsers.add_parser(
-        "report",
-        help="compensate a log with several methods and write a self-contained HTML report",
-        description="Compensate a log with each method and write one self-contained HTML page: what was "
-        "read, an error table per method, figures after Feng, Li, Zhang (2015) Figs. 1-9 and the settings. "
-        "Needs matplotlib (gyrodrift[plot]); the Allan figure needs allantools (gyrodrift[allan]).",
-    )
-    p.add_argument("input", type=Path, help="input log (.csv, .csv.gz, .parquet, .ulg, .bin, ROS bag)")
-    p.add_argument("-o", "--output", type=Path, required=True, help="HTML file to write (atomically)")
-    p.add_argument(
-        "--methods", default=",".join(DEFAULT_METHODS),
-        help=f"comma-separated methods to run (default: all, the default estimator first: "
-        f"{','.join(DEFAULT_METHODS)}; those that cannot run are listed as skipped)",
-    )
-    p.add_argument("--calibration", type=Path, metavar="CAL.csv", help="static heating run of the same device, for poly3")
-    add_input_options(p)
-    add_method_options(p)
-    p.add_argument("--title", help="page title (default: 'gyrodrift report: <input file name>')")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    p.set_defaults(func=report_command)
-    return p

@@ -7,8 +7,9 @@ import signal
 import sys
 from pathlib import Path
 
-from gyrodrift._cliargs import add_method_options, add_renamed, add_table_options, method_config, read_options, warm_start
 from gyrodrift._text import say, warn
+from gyrodrift.cli.options import (add_method_options, add_renamed, add_table_options, method_config, read_options,
+                                   warm_start)
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io import check_output_path
 

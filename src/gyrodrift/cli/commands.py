@@ -1,4 +1,5 @@
-"""The ``gyrodrift`` command line: a thin shell over the library."""
+"""The ``gyrodrift`` command line: its parser, :func:`main`, and the commands that are a
+few lines over the library (compensate, compare, paper, simulate, montecarlo, demo)."""
 
 from __future__ import annotations
 
@@ -11,18 +12,19 @@ from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
 
-from gyrodrift._version import __version__
-from gyrodrift._calibrate_cli import add_calibrate_parser
-from gyrodrift._cliargs import (add_input_options, add_method_options, check_numbers, method_config, read_input,
-                                read_options, warm_start)
-from gyrodrift._parser import SuggestingParser
 from gyrodrift._paths import check_paths
-from gyrodrift._stream_cli import add_stream_parser
 from gyrodrift._text import say, warn
+from gyrodrift._version import __version__
+from gyrodrift.cli.batch import add_batch_parser
+from gyrodrift.cli.calibrate import add_calibrate_parser
+from gyrodrift.cli.options import check_numbers, finish_command, method_config, read_input, read_options, warm_start
+from gyrodrift.cli.parser import SuggestingParser
+from gyrodrift.cli.report import add_report_parser
+from gyrodrift.cli.stream import add_stream_parser
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.io import check_output_path
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser"]
 
 CONVENTIONS = """\
 units and conventions (input contract, CSV with a header row or Parquet):
@@ -190,8 +192,8 @@ def _cmd_compare(args) -> int:
 
     import pandas as pd
 
-    from gyrodrift.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label, run_methods, summary_table
-    from gyrodrift.metrics import markdown_table
+    from gyrodrift.evaluate.compare import DEFAULT_METHOD, DEFAULT_METHODS, method_label, run_methods, summary_table
+    from gyrodrift.evaluate.metrics import markdown_table
     from gyrodrift.pipeline import describe_log
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(DEFAULT_METHODS)
@@ -226,7 +228,7 @@ def _cmd_compare(args) -> int:
 def _cmd_paper(args) -> int:
     import time
 
-    from gyrodrift.paper import PaperSettings, write_paper
+    from gyrodrift.evaluate.paper import PaperSettings, write_paper
 
     args.output.mkdir(parents=True, exist_ok=True)
     settings = PaperSettings(
@@ -255,10 +257,10 @@ def _names(values, what: str) -> list[str] | None:
 
 
 def _cmd_generated(args, splits) -> int:
-    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.heldout`)."""
+    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.evaluate.heldout`)."""
     import time
 
-    from gyrodrift import heldout
+    from gyrodrift.evaluate import heldout
 
     config = method_config(args)
     methods = _names(args.methods, "methods") or list(heldout.METHODS)
@@ -290,7 +292,7 @@ def _runs_done(args, df, table: str, unit: str, done: str) -> int:
 def _cmd_montecarlo(args) -> int:
     import time
 
-    from gyrodrift.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
+    from gyrodrift.evaluate.montecarlo import DEFAULT_METHODS, markdown, run_monte_carlo, summarise
 
     splits = [name for name, on in (("tuning", args.tuning), ("held-out", args.held_out)) if on]
     if splits:
@@ -362,9 +364,7 @@ def build_parser() -> argparse.ArgumentParser:
         "gyrodrift.smooth; runs in memory). a, b, c, bias_z, rate_z, heading, bias_sd and heading_sd "
         "then come from the smoother",
     )
-    add_input_options(c)
-    add_method_options(c)
-    c.set_defaults(func=_cmd_compensate)
+    finish_command(c, _cmd_compensate)
 
     cmp_ = sub.add_parser(
         "compare", help="run ours and the paper's baselines on one log; print the Table-2 statistics",
@@ -376,9 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--methods", help="comma-separated (default: all, the default estimator adaptive first)")
     cmp_.add_argument("--calibration", type=Path, help="a still heating run of the same device, for poly3")
     cmp_.add_argument("--json", action="store_true", help="machine-readable output")
-    add_input_options(cmp_)
-    add_method_options(cmp_)
-    cmp_.set_defaults(func=_cmd_compare)
+    finish_command(cmp_, _cmd_compare)
 
     pap = sub.add_parser(
         "paper", help="regenerate every experiment of the paper: table2.md, results.json, figures",
@@ -391,8 +389,7 @@ def build_parser() -> argparse.ArgumentParser:
     pap.add_argument("--fs-hz", type=float, default=10.0, help="gyro sample rate of the runs, Hz (default 10)")
     pap.add_argument("--quick", action="store_true", help="every run 10x shorter (a smoke test, not the results)")
     pap.add_argument("--no-figures", action="store_true", help="numbers only")
-    add_method_options(pap)
-    pap.set_defaults(func=_cmd_paper)
+    finish_command(pap, _cmd_paper, inputs=False)
 
     sim = sub.add_parser(
         "simulate", help="write a simulated log (input contract + ref_heading, true_bias_z)",
@@ -413,7 +410,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sim.set_defaults(func=_cmd_simulate)
 
-    from gyrodrift.montecarlo import ADVERSARIAL_FAMILIES, DEFAULT_METHODS, FAMILIES
+    from gyrodrift.evaluate.montecarlo import ADVERSARIAL_FAMILIES, DEFAULT_METHODS, FAMILIES
 
     mc = sub.add_parser(
         "montecarlo", help="Monte Carlo of every method over the simulated scenario families",
@@ -442,11 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the procedural generator's classes on held-out seeds (gyrodrift.simulate.generator; "
                     "--families then names classes)")
     mc.add_argument("--tuning", action="store_true", help="the generator's classes on tuning seeds (with --held-out: both)")
-    add_method_options(mc)  # the settings, frozen for every family
-    mc.set_defaults(func=_cmd_montecarlo)
-
-    from gyrodrift.fleet import add_batch_parser
-    from gyrodrift.report import add_report_parser
+    finish_command(mc, _cmd_montecarlo, inputs=False)  # the settings, frozen for every family
 
     add_report_parser(sub)
     add_batch_parser(sub)
@@ -455,8 +448,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", help="compensate the built-in example log and print a summary")
     d.add_argument("-o", "--output", type=Path, default=Path("gyrodrift-demo-out.csv"), help="output table (default %(default)s)")
-    add_method_options(d)
-    d.set_defaults(func=_cmd_demo)
+    finish_command(d, _cmd_demo, inputs=False)
     return p
 
 

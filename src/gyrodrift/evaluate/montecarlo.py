@@ -7,7 +7,7 @@ a design that relies on those.
 
 One *case* is a (family, seed): a random device and compass, one simulated log, and
 (for ``poly3``) a separate calibration heating run of the same device. Every method
-runs on the same log (:func:`gyrodrift.compare.run_method`) and is scored against
+runs on the same log (:func:`gyrodrift.evaluate.compare.run_method`) and is scored against
 its truth columns (:data:`COLUMNS`: wrapped heading RMS and max error in deg, bias
 RMS in deg/s, ``status`` and ``error``). Results do not depend on the number of
 workers.
@@ -31,11 +31,11 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from gyrodrift.compare import METHODS, run_method
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS
-from gyrodrift.metrics import bias_error, error_stats, heading_error_stats, markdown_table
+from gyrodrift.evaluate.compare import METHODS, run_method
+from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_stats, markdown_table
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,
     CompassModel,
@@ -377,7 +377,7 @@ def run_case(
     family, seed, duration_scale :
         See :func:`draw_case`.
     methods : sequence of str
-        Method names (:func:`gyrodrift.compare.run_method`).
+        Method names (:func:`gyrodrift.evaluate.compare.run_method`).
     config : CompensatorConfig, optional
         Shared settings of every method (default :class:`CompensatorConfig`).
     fs_hz : float
@@ -444,7 +444,7 @@ def run_monte_carlo(
         A count ``N`` (seeds ``0 .. N-1``) or the seeds themselves.
     methods : sequence of str
         Methods (default :data:`DEFAULT_METHODS`); any name of
-        :data:`gyrodrift.compare.METHODS` or a registered estimator.
+        :data:`gyrodrift.evaluate.compare.METHODS` or a registered estimator.
     duration_scale : float
         Every log's length as a multiple of its family's default (the ``poly3``
         calibration run keeps its 2 h, and ``short`` its 20–40 s).

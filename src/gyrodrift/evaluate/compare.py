@@ -48,12 +48,12 @@ from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import ESTIMATORS, FixedParams, Poly3Calibration, fit_linear_drift, fit_poly3
+from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_stats
 from gyrodrift.fusion import FusionState
 from gyrodrift.fusion_offset import PACKAGE as FUSION_OFFSET_PACKAGE
 from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.kernels.integrate import trapezoid
-from gyrodrift.metrics import bias_error, error_stats, heading_error_stats
 
 __all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "method_label", "run_method",
            "run_methods", "calibration_from_log", "summary_table"]
@@ -238,7 +238,7 @@ def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
 
     Columns (present when the log allows): ``causal``; ``updates`` (filter updates);
     ``gated_pct`` (share of rows with compass aiding refused); bias drift error
-    (:func:`gyrodrift.metrics.bias_error`: against ``true_bias_z`` when present,
+    (:func:`gyrodrift.evaluate.metrics.bias_error`: against ``true_bias_z`` when present,
     deg/s) ``bias_mean``, ``bias_var``, ``bias_rms``, ``bias_max_abs``; heading
     error against ``ref_heading`` (deg) ``heading_mean``, ``heading_var``,
     ``heading_rms``, ``heading_min``, ``heading_max``. A table written before the

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from gyrodrift._cliargs import add_input_options, add_renamed, read_options
 from gyrodrift._text import say as _say, warn as _warn
+from gyrodrift.cli.options import add_input_options, add_renamed, read_options
 from gyrodrift.errors import ConfigError
 
 __all__ = ["add_calibrate_parser"]
@@ -101,7 +100,7 @@ def _cmd_check(args) -> int:
 
 
 def add_calibrate_parser(sub) -> None:
-    """Add the ``calibrate`` subcommand to ``sub`` (the subparsers of :func:`gyrodrift.cli.build_parser`)."""
+    """Add the ``calibrate`` subcommand to ``sub`` (the subparsers of :func:`gyrodrift.cli.commands.build_parser`)."""
     from gyrodrift.calibrate import MIN_SPAN_C
     from gyrodrift.io import FORMATS as LOG_FORMATS
     from gyrodrift.paramfiles import FORMATS as CAL_FORMATS
