@@ -31,12 +31,24 @@ with the run.
 
 from __future__ import annotations
 
-import math
 from typing import Callable
 
 import numpy as np
 
-from gyrodrift.simulate.motion import Motion, hold_s, knot_profile, ramp_slice, smooth_step, smooth_step_slope
+from gyrodrift.simulate.motion import (
+    Motion,
+    add_rotation,
+    approach_temperature,
+    draw_wave,
+    fade_in,
+    hold_s,
+    ramp_slice,
+    smooth_pulse,
+    smooth_step,
+    still_motion,
+    sway_rate,
+    wave,
+)
 
 __all__ = [
     "ADVERSARIAL_SCENARIOS",
@@ -76,55 +88,11 @@ def _attitude(rng: np.random.Generator) -> tuple[float, float, float]:
     return heading0, roll, pitch
 
 
-def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, tau_u: float):
-    """Temperature that approaches ``end_c`` exponentially after the hold, degC and degC/s.
-
-    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9
-    knots (:func:`~gyrodrift.simulate.motion.knot_profile`), ``u`` the fraction of the
-    run after the hold: fastest at first, ending at exactly ``end_c``.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    start_c, end_c : float
-        Temperature held at the start and reached at the end, degC.
-    tau_u : float
-        Time constant as a fraction of the run after the hold (> 0).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
-    u = np.linspace(0.0, 1.0, 9)
-    c = start_c + (end_c - start_c) * (1.0 - np.exp(-u / tau_u)) / (1.0 - math.exp(-1.0 / tau_u))
-    return knot_profile(t_s, duration_s, u, c)
-
-
-def _still_motion(t_s, temp_c, temp_rate_cps, heading0_deg, roll_deg, pitch_deg, **extra) -> Motion:
-    zero = np.zeros(np.shape(t_s))
-    return Motion(
-        temp_c=temp_c, temp_rate_cps=temp_rate_cps, heading_rate_dps=zero, heading0_deg=heading0_deg,
-        roll_deg=roll_deg, pitch_deg=pitch_deg, accel_fwd_mps2=zero, accel_lat_mps2=zero, **extra,
-    )
-
-
 def _rotations_rate(t_s: np.ndarray, rotations) -> np.ndarray:
-    """Heading rate of level rotations, deg/s, each evaluated on its own samples.
-
-    ``rotations``: ``(t0_s, angle_deg, peak_dps, ramp_s)`` each; a rotation has
-    raised-cosine ramps of ``ramp_s`` and a plateau at ``peak_dps``, lasts
-    ``|angle|/peak + ramp`` and turns by exactly ``angle_deg``.
-    """
+    """Heading rate of level rotations ``(t0_s, angle_deg, peak_dps, ramp_s)``, deg/s (:func:`add_rotation`)."""
     rate = np.zeros(t_s.size)
-    for t0, angle, peak, ramp in rotations:
-        dur = abs(angle) / peak + ramp
-        sl = ramp_slice(t_s, t0, t0 + dur)
-        x = t_s[sl]
-        up, down = smooth_step((x - t0) / ramp), smooth_step((x - (t0 + dur - ramp)) / ramp)
-        rate[sl] += math.copysign(peak, angle) * (up - down)
+    for rotation in rotations:
+        add_rotation(rate, t_s, *rotation)
     return rate
 
 
@@ -170,7 +138,7 @@ def scenario_bursty(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     heading0, roll, pitch = _attitude(rng)
     hot, cold, tau = rng.uniform(*_BURSTY_HOT_C), rng.uniform(*_BURSTY_COLD_C), rng.uniform(*_BURSTY_TAU_U)
     temp, rate = approach_temperature(t, duration_s, float(hot), float(cold), float(tau))
-    return _still_motion(
+    return still_motion(
         t, temp, rate, heading0, roll, pitch,
         records=bursty_records(duration_s, rng), compass_form="heading" if has_compass else "none",
     )
@@ -244,17 +212,11 @@ def ramp_interference_offset(t_s, duration_s: float, rng: np.random.Generator) -
     """
     t = np.asarray(t_s, dtype=float)
     start, dur = ramp_interference_window(duration_s)
-    mean = float(rng.choice([-1.0, 1.0]) * rng.uniform(*_RAMP_INTERFERENCE_MEAN_DEG))
-    amp = rng.uniform(*_RAMP_INTERFERENCE_AMP_DEG, size=3)
-    period = rng.uniform(*_RAMP_INTERFERENCE_PERIOD_S, size=3)
-    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    drawn = draw_wave(rng, _RAMP_INTERFERENCE_MEAN_DEG, _RAMP_INTERFERENCE_AMP_DEG, _RAMP_INTERFERENCE_PERIOD_S)
     fade = min(_RAMP_INTERFERENCE_FADE_S, dur / 4.0)
     out = np.zeros(t.shape)
     sl = ramp_slice(t, start, start + dur)
-    x = t[sl]
-    envelope = smooth_step((x - start) / fade) - smooth_step((x - (start + dur - fade)) / fade)
-    wave = mean + sum(a * np.sin(2.0 * np.pi * (x - start) / p + ph) for a, p, ph in zip(amp, period, phase))
-    out[sl] = envelope * wave
+    out[sl] = smooth_pulse(t[sl], start, start + dur, fade) * wave(t[sl] - start, drawn)
     return out
 
 
@@ -276,7 +238,7 @@ def scenario_ramp_interference(t_s, duration_s: float, rng: np.random.Generator)
     fall = per_min / 60.0 * ((_RAMP_FALL_U[1] - _RAMP_FALL_U[0] - _RAMP_CORNER_U) * rest)
     temp, rate = _falling_temperature(t, duration_s, hot, fall)
     offset = ramp_interference_offset(t, duration_s, rng)
-    return _still_motion(t, temp, rate, heading0, roll, pitch, interference_offset_deg=offset)
+    return still_motion(t, temp, rate, heading0, roll, pitch, interference_offset_deg=offset)
 
 
 # --------------------------------------------------------------------------- sway
@@ -331,26 +293,14 @@ def scenario_sway(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     ]
     peak = sum(a * w for a, w, _ in draws)
     gain = min(1.0, SWAY_MAX_RATE_DPS / peak)
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
-    sway = np.zeros(t.size)
-    sway_rate = np.zeros(t.size)
-    for amp, omega, phase in draws:
-        sway += gain * amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
-        sway_rate += gain * amp * omega * np.cos(omega * (t - hold) + phase)
+    rate = sway_rate(t, duration_s, draws, gain)
     mean, amp_c = rng.uniform(*_SWAY_TEMP_MEAN_C), rng.uniform(*_SWAY_TEMP_AMP_C)
     phase_c = rng.uniform(0.0, 2.0 * np.pi)
     omega_c = 2.0 * np.pi / (2.0 * duration_s)
     temp = mean + amp_c * np.sin(omega_c * t + phase_c)
     temp_rate = amp_c * omega_c * np.cos(omega_c * t + phase_c)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=env_rate * sway + env * sway_rate,
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-        compass_dropouts=sway_outages(duration_s, rng),
-    )
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch, heading_rate_dps=rate,
+                        compass_dropouts=sway_outages(duration_s, rng))
 
 
 # --------------------------------------------------------------------------- vessel
@@ -393,10 +343,7 @@ def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     speed = rng.uniform(*_VESSEL_SPEED_MPS)
     start_c, rise_c, tau = rng.uniform(*_VESSEL_START_C), rng.uniform(*_VESSEL_RISE_C), rng.uniform(*_VESSEL_TAU_U)
 
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
+    env, env_rate = fade_in(t, duration_s)
     turn = env * r0 * (1.0 + mod * np.sin(omega_mod * t + phase_mod))
     wave = wave_amp * omega_wave * np.cos(omega_wave * t + phase_wave)
     temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), float(tau))
@@ -442,12 +389,8 @@ def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion
         peak = float(rng.uniform(*_NO_TEMP_TURN_PEAK_DPS))
         rotations.append((at, angle, peak, _TURN_RAMP_S))
         at += abs(angle) / peak + _TURN_RAMP_S + float(rng.uniform(*_NO_TEMP_TURN_EVERY_S))
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=_rotations_rate(t, rotations),
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-        temp_channel_c=NO_TEMP_CHANNEL_C,
-    )
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch, heading_rate_dps=_rotations_rate(t, rotations),
+                        temp_channel_c=NO_TEMP_CHANNEL_C)
 
 
 # --------------------------------------------------------------------------- short
@@ -476,11 +419,8 @@ def scenario_short(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     peak = float(rng.uniform(*_SHORT_TURN_PEAK_DPS))
     start_c, rise_c = rng.uniform(*_SHORT_START_C), rng.uniform(*_SHORT_RISE_C)
     temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), 0.5)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=_rotations_rate(t, [(still, angle, peak, _TURN_RAMP_S)]),
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-    )
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch,
+                        heading_rate_dps=_rotations_rate(t, [(still, angle, peak, _TURN_RAMP_S)]))
 
 
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion`` (``vehicle-rawmag``

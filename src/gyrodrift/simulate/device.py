@@ -26,6 +26,8 @@ __all__ = [
     "gauss_markov",
     "random_walk",
     "temperature_reading",
+    "true_bias",
+    "gyro_axis",
     "random_device",
 ]
 
@@ -456,6 +458,26 @@ def random_walk(n: int, dt_s: float, coeff: float, rng: np.random.Generator) -> 
     steps = coeff * math.sqrt(dt_s) * rng.standard_normal(n)
     steps[0] = 0.0
     return np.cumsum(steps)
+
+
+def true_bias(device: DeviceModel, t_s: np.ndarray, dt_s: float, temp_c, temp_rate_cps, bias_rng, rrw_rng):
+    """The drift of one gyro axis, deg/s: :meth:`DeviceModel.drift_series` + Gauss–Markov + rate random walk."""
+    n = len(t_s)
+    return (
+        device.drift_series(t_s, temp_c, temp_rate_cps)
+        + gauss_markov(n, dt_s, device.bias_instability_dps, device.bias_tau_s, bias_rng)
+        + random_walk(n, dt_s, device.rate_random_walk_dps_rts, rrw_rng)
+    )
+
+
+def gyro_axis(device: DeviceModel, t_s: np.ndarray, dt_s: float, fs_hz: float, temp_c, temp_rate_cps, body_rate_dps,
+              bias_rng, rrw_rng, white_rng):
+    """One gyro axis: reading ``SF(T) * body rate + drift + white`` (deg/s), its drift and ``SF(T)``."""
+    bias = true_bias(device, t_s, dt_s, temp_c, temp_rate_cps, bias_rng, rrw_rng)
+    sigma = device.white_sigma_dps(fs_hz)
+    white = sigma * white_rng.standard_normal(len(t_s)) if sigma > 0 else np.zeros(len(t_s))
+    sf = device.scale_factor(temp_c)  # exactly 1.0 unless an sf_* is non-zero
+    return sf * body_rate_dps + bias + white, bias, sf
 
 
 def temperature_reading(temp_true_c: np.ndarray, device: DeviceModel, rng: np.random.Generator) -> np.ndarray:

@@ -56,8 +56,8 @@ import pandas as pd
 
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.simulate.device import DeviceModel, gauss_markov, random_device, random_walk, temperature_reading
-from gyrodrift.simulate.motion import Motion, ramp_slice, smooth_step, smooth_step_slope
+from gyrodrift.simulate.device import DeviceModel, random_device, temperature_reading, true_bias
+from gyrodrift.simulate.motion import Motion, add_rotation, in_records, ramp_slice, smooth_pulse, smooth_step, smooth_step_slope
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
 
 __all__ = [
@@ -234,13 +234,26 @@ def _day_cycle(rng, duration):
 # motion pieces, added over their own samples
 
 
-def _rotation(rate, t, t0, angle, peak, ramp=1.0):
-    """Add one rotation by ``angle`` deg (raised-cosine ramps, plateau ``peak`` deg/s)."""
-    dur = abs(angle) / peak + ramp
-    sl = ramp_slice(t, t0, t0 + dur)
-    x = t[sl]
-    rate[sl] += math.copysign(peak, angle) * (smooth_step((x - t0) / ramp) - smooth_step((x - (t0 + dur - ramp)) / ramp))
-    return t0 + dur
+def _turn_plan(rng, t0, end, angle, peak, gap, after=None):
+    """Turns ``(start s, angle deg, peak deg/s)`` from ``t0`` while before ``end``; the next
+    starts ``gap`` s after the start of one, or after ``after(angle, peak)`` s and the gap."""
+    turns = []
+    while t0 < end:
+        a = _sign(rng) * _u(rng, *angle)
+        p = _u(rng, *peak)
+        turns.append((t0, a, p))
+        t0 += _u(rng, *gap) if after is None else after(a, p) + _u(rng, *gap)
+    return turns
+
+
+def _turns_rate(turns, ramp=1.0):
+    """The heading rate (deg/s) of ``turns`` as a function of time (:func:`add_rotation`)."""
+    def rate(t):
+        r = np.zeros(t.size)
+        for t0, angle, peak in turns:
+            add_rotation(r, t, t0, angle, peak, ramp)
+        return r
+    return rate
 
 
 def _sway(rng, t, amp_deg=(0.5, 4.0), period_s=(8.0, 120.0), n=3):
@@ -254,8 +267,7 @@ def _sway(rng, t, amp_deg=(0.5, 4.0), period_s=(8.0, 120.0), n=3):
 
 def _pulse(t, t0, t1, ramp):
     """1 inside [t0, t1] with raised-cosine edges of ``ramp`` s, 0 outside."""
-    ramp = max(min(ramp, 0.25 * (t1 - t0)), 1e-3)
-    return smooth_step((t - t0) / ramp) - smooth_step((t - (t1 - ramp)) / ramp)
+    return smooth_pulse(t, t0, t1, max(min(ramp, 0.25 * (t1 - t0)), 1e-3))
 
 
 def _disturbances(rng, duration, n_range=(1, 4), size=(5.0, 40.0), dur=(20.0, 600.0), kinds=("step", "ramp", "wander")):
@@ -323,12 +335,8 @@ def _multicopter(rng, scale):
     k_throttle = _sign(rng) * _u(rng, 5.0, 30.0)
     hover = _u(rng, 0.4, 0.6)
     man = [(_u(rng, ground + 20, t_land - 30), _u(rng, 5.0, 20.0), _u(rng, -0.2, 0.2)) for _ in range(6)]
-    turns = []
-    t0 = ground + _u(rng, 20.0, 60.0)
-    while t0 < t_land - 40.0:
-        angle = _sign(rng) * _u(rng, 20.0, 180.0)
-        turns.append((t0, angle, _u(rng, 15.0, 90.0)))
-        t0 += abs(angle) / 15.0 + 1.0 + _u(rng, 10.0, 60.0)
+    turning = _turns_rate(_turn_plan(rng, ground + _u(rng, 20.0, 60.0), t_land - 40.0, (20.0, 180.0), (15.0, 90.0),
+                                     (10.0, 60.0), after=lambda a, p: abs(a) / 15.0 + 1.0))
 
     def throttle(t):
         th = hover * _pulse(t, ground, t_land, 3.0)
@@ -340,10 +348,7 @@ def _multicopter(rng, scale):
     vib = _u(rng, 2.0, 8.0)
 
     def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r + 0.3 * _sway(sway(), t, (0.2, 1.0), (2.0, 10.0)) * _pulse(t, ground, t_land, 3.0)
+        return turning(t) + 0.3 * _sway(sway(), t, (0.2, 1.0), (2.0, 10.0)) * _pulse(t, ground, t_land, 3.0)
 
     return _Recipe(duration, 200.0, _device(rng, hot=rng.random() < 0.5), _compass(rng, rate_hz=float(rng.choice([10.0, 25.0, 50.0]))),
                    lambda t: warm(t) + heat * np.clip(1.0 - np.exp(-(t - ground) / heat_tau), 0.0, None) * (t > ground),
@@ -424,6 +429,7 @@ def _drive_plan(rng, duration, still_s):
 
 def _drive_motion(rng, duration):
     steps, turns, cruise = _drive_plan(rng, duration, _u(rng, 30.0, 120.0))
+    turning = _turns_rate(turns, ramp=2.0)
     wobble = _child(rng)
 
     def speed(t):
@@ -439,10 +445,7 @@ def _drive_motion(rng, duration):
         return a
 
     def rate(t):
-        r = np.zeros(t.size)
-        for t0, a, p in turns:
-            _rotation(r, t, t0, a, p, ramp=2.0)
-        return r + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
+        return turning(t) + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
 
     return rate, accel, lambda t: speed(t) * np.radians(rate(t))
 
@@ -469,19 +472,8 @@ def _bench_interference(rng, scale):
     """A bench unit heated or cooled, turned by hand now and then, with interference steps,
     ramps and wander from things moved around it."""
     duration = _u(rng, 1800.0, 5400.0) * scale
-    turns = []
-    t0 = _u(rng, 120.0, 600.0)
-    while t0 < duration - 60.0:
-        angle = _sign(rng) * _u(rng, 30.0, 180.0)
-        turns.append((t0, angle, _u(rng, 10.0, 60.0)))
-        t0 += _u(rng, 300.0, 900.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 120.0, 600.0), duration - 60.0, (30.0, 180.0), (10.0, 60.0),
+                                  (300.0, 900.0)))
     return _Recipe(duration, float(rng.choice([20.0, 50.0, 100.0])), _device(rng), _compass(rng), _chamber(rng, duration),
                    rate=rate, offset=_offset_fn(_disturbances(rng, duration, (2, 5), (5.0, 60.0), (30.0, 600.0))),
                    heading0_deg=_u(rng, 0, 360))
@@ -491,20 +483,8 @@ def _turntable(rng, scale):
     """Turntable rotations of 90–720 deg at 30–300 deg/s between dwells, in a chamber ramp,
     sampled at 200–500 Hz."""
     duration = _u(rng, 600.0, 1800.0) * scale
-    turns = []
-    t0 = _u(rng, 30.0, 90.0)
-    while t0 < duration - 30.0:
-        angle = _sign(rng) * _u(rng, 90.0, 720.0)
-        peak = _u(rng, 30.0, 300.0)
-        turns.append((t0, angle, peak))
-        t0 += abs(angle) / peak + 1.0 + _u(rng, 10.0, 60.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 30.0, 90.0), duration - 30.0, (90.0, 720.0), (30.0, 300.0),
+                                  (10.0, 60.0), after=lambda a, p: abs(a) / p + 1.0))
     fs = float(rng.choice([200.0, 500.0]))
     return _Recipe(duration, fs, _device(rng), _compass(rng, rate_hz=50.0), _chamber(rng, duration), rate=rate,
                    heading0_deg=_u(rng, 0, 360))
@@ -514,19 +494,8 @@ def _no_temp_robot(rng, scale):
     """A ground robot indoors, stop and go with turns, near steel (wandering interference);
     its IMU warms up but the log has no temperature."""
     duration = _u(rng, 1200.0, 3600.0) * scale
-    turns = []
-    t0 = _u(rng, 20.0, 120.0)
-    while t0 < duration - 30.0:
-        angle = _sign(rng) * _u(rng, 20.0, 180.0)
-        turns.append((t0, angle, _u(rng, 10.0, 45.0)))
-        t0 += _u(rng, 20.0, 240.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 20.0, 120.0), duration - 30.0, (20.0, 180.0), (10.0, 45.0),
+                                  (20.0, 240.0)))
     episodes = _disturbances(rng, duration, (1, 4), (5.0, 25.0), (30.0, 300.0), ("wander", "step"))
     return _Recipe(duration, 50.0, _device(rng), _compass(rng), _warmup(rng, rise=(5.0, 20.0), tau=(300.0, 1200.0)),
                    rate=rate, offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), temp_channel_c=0.0)
@@ -590,11 +559,7 @@ def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.nd
         keep[:] = False
         keep[::step] = True
     if rec.records:
-        inside = np.zeros(t.size, dtype=bool)
-        for start, dur in rec.records:
-            lo, hi = np.searchsorted(t, [start, start + dur])
-            inside[lo:hi] = True
-        keep &= inside
+        keep &= in_records(t, rec.records)
     return np.flatnonzero(keep)
 
 
@@ -632,9 +597,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
 
     heading_true = rec.heading0_deg + cumulative_trapezoid(rate, t, initial=0.0)
     dev = rec.device
-    bias = (dev.drift_series(t, temp_true, temp_rate)
-            + gauss_markov(n, 1.0 / fs, dev.bias_instability_dps, dev.bias_tau_s, rng["bias"])
-            + random_walk(n, 1.0 / fs, dev.rate_random_walk_dps_rts, rng["rrw"]))
+    bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, rng["bias"], rng["rrw"])
     rows = _logged_rows(rec, t, rng["log"])
     if rows.size < 3:
         raise ConfigError(f"class {cls!r}, seed {seed}: fewer than 3 logged rows; use a larger duration_scale")
@@ -651,13 +614,9 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
                     heading0_deg=rec.heading0_deg, roll_deg=rec.roll_deg, pitch_deg=rec.pitch_deg,
                     accel_fwd_mps2=rec.accel_fwd(tl) if rec.accel_fwd is not None else zero,
                     accel_lat_mps2=rec.accel_lat(tl) if rec.accel_lat is not None else zero,
-                    interference_offset_deg=offset)
+                    interference_offset_deg=offset, compass_dropouts=rec.dropouts)
     mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
-    for start, dur in rec.dropouts:
-        out = (tl >= start) & (tl < start + dur)
-        heading[out] = np.nan
-        mag[out] = np.nan
     cols = {T: tl, GYRO_Z: gyro, TEMP: temp}
     if rec.compass_form == "heading":
         cols[HEADING] = heading

@@ -21,9 +21,18 @@ __all__ = [
     "hold_s",
     "smooth_step",
     "smooth_step_slope",
+    "smooth_pulse",
     "ramp_slice",
     "sum_of_steps",
+    "add_rotation",
+    "still_motion",
+    "fade_in",
+    "sway_rate",
+    "draw_wave",
+    "wave",
+    "in_records",
     "knot_profile",
+    "approach_temperature",
     "static_temperature",
     "vehicle_temperature",
     "calibration_temperature",
@@ -80,6 +89,11 @@ def smooth_step_slope(x):
     """
     inside = (x > 0.0) & (x < 1.0)
     return np.where(inside, 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0.0, 1.0)), 0.0)
+
+
+def smooth_pulse(t, t0: float, t1: float, ramp: float):
+    """1 from ``t0 + ramp`` to ``t1 - ramp``, 0 outside ``[t0, t1]``, raised-cosine edges of ``ramp``."""
+    return smooth_step((t - t0) / ramp) - smooth_step((t - (t1 - ramp)) / ramp)
 
 
 def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
@@ -151,6 +165,20 @@ def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
     return out
 
 
+def add_rotation(rate: np.ndarray, t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float,
+                 ramp_s: float) -> float:
+    """Add to ``rate`` (deg/s, at ``t_s``) one level rotation by ``angle_deg``; return its end, s.
+
+    Raised-cosine ramps of ``ramp_s`` and a plateau at ``peak_dps``: it lasts
+    ``|angle_deg|/peak_dps + ramp_s`` and turns by exactly ``angle_deg``. Only the
+    rotation's own samples are touched.
+    """
+    dur = abs(angle_deg) / peak_dps + ramp_s
+    sl = ramp_slice(t_s, t0, t0 + dur)
+    rate[sl] += math.copysign(peak_dps, angle_deg) * smooth_pulse(t_s[sl], t0, t0 + dur, ramp_s)
+    return t0 + dur
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Motion:
     """True motion and environment of one scenario, sampled at the log times.
@@ -217,6 +245,24 @@ class Motion:
             raise ConfigError(f"Motion.temp_channel_c must be a finite number or None, got {self.temp_channel_c!r}")
 
 
+def still_motion(t_s, temp_c, temp_rate_cps, heading0_deg: float, roll_deg: float = 0.0, pitch_deg: float = 0.0,
+                 **extra) -> Motion:
+    """A :class:`Motion` without kinematic acceleration, still unless ``extra`` gives a heading rate."""
+    zero = np.zeros(np.shape(t_s))
+    extra.setdefault("heading_rate_dps", zero)
+    return Motion(temp_c=temp_c, temp_rate_cps=temp_rate_cps, heading0_deg=heading0_deg, roll_deg=roll_deg,
+                  pitch_deg=pitch_deg, accel_fwd_mps2=zero, accel_lat_mps2=zero, **extra)
+
+
+def in_records(t_s: np.ndarray, records) -> np.ndarray:
+    """Rows (times ``t_s``, increasing) with ``start_s <= t < start_s + duration_s`` of some record."""
+    keep = np.zeros(t_s.size, dtype=bool)
+    for start, dur in records:
+        lo, hi = np.searchsorted(t_s, [start, start + dur], side="left")
+        keep[lo:hi] = True
+    return keep
+
+
 def hold_s(duration_s: float) -> float:
     """Length of the still, constant-temperature start of a run: 60 s, or 10 % of a short run.
 
@@ -236,6 +282,44 @@ def hold_s(duration_s: float) -> float:
     (60.0, 12.0)
     """
     return min(_HOLD_S, 0.1 * duration_s)
+
+
+def fade_in(t: np.ndarray, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Envelope (0 → 1 after the hold, over ``min(120 s, 10 %)``) and its time derivative, 1/s."""
+    hold = hold_s(duration_s)
+    fade = min(120.0, 0.1 * duration_s)
+    return smooth_step((t - hold) / fade), smooth_step_slope((t - hold) / fade) / fade
+
+
+def sway_rate(t: np.ndarray, duration_s: float, components, gain: float = 1.0) -> np.ndarray:
+    """Heading rate of a yaw sway faded in after the hold, deg/s.
+
+    The sway is ``gain * amp * (sin(omega (t - hold) + phase) - sin(phase))`` summed over
+    ``components`` (``(amp deg, omega rad/s, phase rad)`` each), times :func:`fade_in`'s envelope.
+    """
+    hold = hold_s(duration_s)
+    env, env_rate = fade_in(t, duration_s)
+    sway = np.zeros(t.size)
+    rate = np.zeros(t.size)
+    for amp, omega, phase in components:
+        sway += gain * amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
+        rate += gain * amp * omega * np.cos(omega * (t - hold) + phase)
+    return env_rate * sway + env * rate
+
+
+def draw_wave(rng: np.random.Generator, mean_deg, amp_deg, period_s):
+    """A random mean (random sign) and three sinusoids (amplitude, period, phase) from their ranges."""
+    mean = rng.choice([-1.0, 1.0]) * rng.uniform(*mean_deg)
+    amp = rng.uniform(*amp_deg, size=3)
+    period = rng.uniform(*period_s, size=3)
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    return mean, amp, period, phase
+
+
+def wave(x: np.ndarray, drawn) -> np.ndarray:
+    """The mean plus the three sinusoids of :func:`draw_wave` at times ``x`` (s from the start)."""
+    mean, amp, period, phase = drawn
+    return mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
 
 
 def knot_profile(t_s, duration_s: float, knots_u, knots_c):
@@ -270,6 +354,18 @@ def knot_profile(t_s, duration_s: float, knots_u, knots_c):
     return spline(t), spline.derivative()(t)
 
 
+def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, tau_u: float):
+    """Temperature that approaches ``end_c`` exponentially after the hold, degC and degC/s.
+
+    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9
+    knots (:func:`knot_profile`), ``u`` the fraction of the run after the hold: fastest at
+    first, ending at exactly ``end_c``.
+    """
+    u = np.linspace(0.0, 1.0, 9)
+    c = start_c + (end_c - start_c) * (1.0 - np.exp(-u / tau_u)) / (1.0 - math.exp(-1.0 / tau_u))
+    return knot_profile(t_s, duration_s, u, c)
+
+
 def static_temperature(t_s, duration_s: float):
     """Static heating run (Fig. 1): 23 degC, fast rise, slower rise to 58, plateau, cooling.
 
@@ -294,9 +390,7 @@ def vehicle_temperature(t_s, duration_s: float):
     -------
     temp_c, temp_rate_cps : ndarray
     """
-    u = np.linspace(0.0, 1.0, 9)
-    c = 26.0 + 11.0 * (1.0 - np.exp(-u / 0.5)) / (1.0 - math.exp(-2.0))
-    return knot_profile(t_s, duration_s, u, c)
+    return approach_temperature(t_s, duration_s, 26.0, 37.0, 0.5)
 
 
 def calibration_temperature(t_s, duration_s: float):
@@ -338,9 +432,7 @@ def cold_start_temperature(t_s, duration_s: float):
     -------
     temp_c, temp_rate_cps : ndarray
     """
-    u = np.linspace(0.0, 1.0, 9)
-    c = -20.0 + 80.0 * (1.0 - np.exp(-u / 0.25)) / (1.0 - math.exp(-4.0))
-    return knot_profile(t_s, duration_s, u, c)
+    return approach_temperature(t_s, duration_s, -20.0, 60.0, 0.25)
 
 
 #: Soak profile: knots (fraction of the run after the hold, degC); ramps between unequal knots.

@@ -25,21 +25,27 @@ from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADI
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.adversarial import ADVERSARIAL_DURATION_S, ADVERSARIAL_SCENARIOS
 from gyrodrift.simulate.checks import positive
-from gyrodrift.simulate.device import DeviceModel, TriadModel, gauss_markov, random_walk, temperature_reading
+from gyrodrift.simulate.device import DeviceModel, TriadModel, gyro_axis, temperature_reading
 from gyrodrift.simulate.motion import (
     Motion,
+    add_rotation,
     calibration_temperature,
     cold_start_temperature,
+    draw_wave,
     hold_s,
     hysteresis_temperature,
+    in_records,
     ramp_slice,
-    smooth_step,
+    smooth_pulse,
     smooth_step_slope,
     soak_ramps,
     soak_temperature,
     static_temperature,
+    still_motion,
     sum_of_steps,
+    sway_rate,
     vehicle_temperature,
+    wave,
 )
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, triad_columns
 
@@ -83,37 +89,22 @@ def interference_windows_static(duration_s: float) -> tuple[tuple[float, float, 
     )
 
 
-def _still(t_s, temp_c, temp_rate_cps, heading0_deg, roll_deg, pitch_deg, interference=()) -> Motion:
-    zero = np.zeros(np.shape(t_s))
-    return Motion(
-        temp_c=temp_c,
-        temp_rate_cps=temp_rate_cps,
-        heading_rate_dps=zero,
-        heading0_deg=heading0_deg,
-        roll_deg=roll_deg,
-        pitch_deg=pitch_deg,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-        interference=interference,
-    )
-
-
 def scenario_static(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Motionless at 40 deg on a slightly tilted bench, heated 23 → 58 degC and cooled."""
     temp, rate = static_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    return still_motion(t_s, temp, rate, 40.0, 0.8, -1.2)
 
 
 def scenario_static_outages(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """``static`` with magnetic interference in three windows (300, 300, 600 s)."""
     temp, rate = static_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 40.0, 0.8, -1.2, interference_windows_static(duration_s))
+    return still_motion(t_s, temp, rate, 40.0, 0.8, -1.2, interference=interference_windows_static(duration_s))
 
 
 def scenario_calibration(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Motionless at 200 deg, heated slowly from -10 to 60 degC (calibration run)."""
     temp, rate = calibration_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 200.0, -0.5, 0.7)
+    return still_motion(t_s, temp, rate, 200.0, -0.5, 0.7)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,7 +148,7 @@ def _turn_rate(t_s: np.ndarray, t0: float, dur: float, sign: int) -> np.ndarray:
     """Rate of one smooth 90° turn, deg/s: raised-cosine ramps of 0.3*dur, plateau between."""
     ramp = 0.3 * dur
     peak = 90.0 / (dur - ramp)  # each ramp pair integrates to peak*(dur - ramp)
-    return sign * peak * (smooth_step((t_s - t0) / ramp) - smooth_step((t_s - (t0 + dur - ramp)) / ramp))
+    return sign * peak * smooth_pulse(t_s, t0, t0 + dur, ramp)
 
 
 def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
@@ -211,23 +202,6 @@ _SF_TURN_PEAK_DPS = (30.0, 90.0)
 _SF_TURN_DEG = 360.0
 
 
-def _rotation_s(angle_deg: float, peak_dps: float, ramp_s: float) -> float:
-    """Duration of one rotation of :func:`_rotation_rate`, s."""
-    return abs(angle_deg) / peak_dps + ramp_s
-
-
-def _rotation_rate(t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float, ramp_s: float) -> np.ndarray:
-    """Rate of one rotation by ``angle_deg`` (signed), deg/s: raised-cosine ramps, plateau ``peak_dps``.
-
-    Lasts ``|angle_deg|/peak_dps + ramp_s``; the ramp pair integrates to
-    ``peak_dps * (duration - ramp_s) = |angle_deg|``.
-    """
-    dur = _rotation_s(angle_deg, peak_dps, ramp_s)
-    up = smooth_step((t_s - t0) / ramp_s)
-    down = smooth_step((t_s - (t0 + dur - ramp_s)) / ramp_s)
-    return math.copysign(peak_dps, angle_deg) * (up - down)
-
-
 def rotation_plan(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float, float], ...]:
     """The rotations of ``scale-factor``: ``(start_s, angle_deg, peak_dps)`` each.
 
@@ -263,18 +237,9 @@ def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> M
     t = np.asarray(t_s, dtype=float)
     temp, temp_rate = static_temperature(t, duration_s)
     rate = np.zeros(t.size)
-    for t0, angle, peak in rotation_plan(duration_s, rng):  # each on its own samples, zero elsewhere
-        turn = ramp_slice(t, t0, t0 + _rotation_s(angle, peak, _SF_TURN_RAMP_S))
-        rate[turn] += _rotation_rate(t[turn], t0, angle, peak, _SF_TURN_RAMP_S)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp,
-        temp_rate_cps=temp_rate,
-        heading_rate_dps=rate,
-        heading0_deg=40.0,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-    )
+    for t0, angle, peak in rotation_plan(duration_s, rng):
+        add_rotation(rate, t, t0, angle, peak, _SF_TURN_RAMP_S)
+    return still_motion(t, temp, temp_rate, 40.0, heading_rate_dps=rate)
 
 
 # --------------------------------------------------------------------------- beyond the paper
@@ -355,16 +320,10 @@ def wander_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarra
     t = np.asarray(t_s, dtype=float)
     out = np.zeros(t.shape)
     for start, dur in interference_windows_wander(duration_s):
-        mean = rng.choice([-1.0, 1.0]) * rng.uniform(*_WANDER_MEAN_DEG)
-        amp = rng.uniform(*_WANDER_AMP_DEG, size=3)
-        period = rng.uniform(*_WANDER_PERIOD_S, size=3)
-        phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
-        ramp = min(_WANDER_RAMP_S, dur / 4.0)
-        envelope = smooth_step((t - start) / ramp) - smooth_step((t - (start + dur - ramp)) / ramp)
+        drawn = draw_wave(rng, _WANDER_MEAN_DEG, _WANDER_AMP_DEG, _WANDER_PERIOD_S)
+        envelope = smooth_pulse(t, start, start + dur, min(_WANDER_RAMP_S, dur / 4.0))
         inside = envelope > 0.0
-        x = t[inside] - start
-        wave = mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
-        out[inside] = out[inside] + envelope[inside] * wave
+        out[inside] = out[inside] + envelope[inside] * wave(t[inside] - start, drawn)
     return out
 
 
@@ -376,7 +335,7 @@ def scenario_interference_wander(t_s, duration_s: float, rng: np.random.Generato
     the windows of :func:`interference_windows_wander`.
     """
     temp, rate = static_temperature(t_s, duration_s)
-    still = _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    still = still_motion(t_s, temp, rate, 40.0, 0.8, -1.2)
     return replace(still, interference_offset_deg=wander_offset(t_s, duration_s, rng))
 
 
@@ -390,13 +349,13 @@ def scenario_hysteresis(t_s, duration_s: float, rng: np.random.Generator) -> Mot
     between heating and cooling, also when the temperature has stopped changing.
     """
     temp, rate = hysteresis_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 120.0, -0.6, 1.0)
+    return still_motion(t_s, temp, rate, 120.0, -0.6, 1.0)
 
 
 def scenario_cold_start(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Cold start: motionless at 300 deg, warming from -20 to +60 degC after a cold soak."""
     temp, rate = cold_start_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 300.0, 1.1, 0.4)
+    return still_motion(t_s, temp, rate, 300.0, 1.1, 0.4)
 
 
 #: Yaw sway of ``soak``: (amplitude range deg, period range s) of its two components.
@@ -416,32 +375,12 @@ def scenario_soak(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """
     t = np.asarray(t_s, dtype=float)
     temp, temp_rate = soak_temperature(t, duration_s)
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
-    sway = np.zeros(t.size)
-    sway_rate = np.zeros(t.size)
-    for amp_range, period_range in _SWAY:
-        amp = rng.uniform(*amp_range)
-        omega = 2.0 * np.pi / rng.uniform(*period_range)
-        phase = rng.uniform(0.0, 2.0 * np.pi)
-        sway += amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
-        sway_rate += amp * omega * np.cos(omega * (t - hold) + phase)
+    draws = [
+        (rng.uniform(*amp), 2.0 * np.pi / rng.uniform(*period), rng.uniform(0.0, 2.0 * np.pi)) for amp, period in _SWAY
+    ]
     dropouts, interference = soak_outages(duration_s)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp,
-        temp_rate_cps=temp_rate,
-        heading_rate_dps=env_rate * sway + env * sway_rate,
-        heading0_deg=70.0,
-        roll_deg=0.5,
-        pitch_deg=-0.8,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-        interference=interference,
-        compass_dropouts=dropouts,
-    )
+    return still_motion(t, temp, temp_rate, 70.0, 0.5, -0.8, heading_rate_dps=sway_rate(t, duration_s, draws),
+                        interference=interference, compass_dropouts=dropouts)
 
 
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion``.
@@ -588,25 +527,14 @@ def simulate(
         math.cos(math.radians(motion.roll_deg)) * math.cos(math.radians(motion.pitch_deg))
     )
 
-    bias = (
-        device.drift_series(t, motion.temp_c, motion.temp_rate_cps)
-        + gauss_markov(n, dt, device.bias_instability_dps, device.bias_tau_s, rng["bias"])
-        + random_walk(n, dt, device.rate_random_walk_dps_rts, rng["rrw"])
-    )
-    sigma = device.white_sigma_dps(fs)
-    white = sigma * rng["white"].standard_normal(n) if sigma > 0 else np.zeros(n)
-    true_sf = device.scale_factor(motion.temp_c)  # exactly 1.0 unless an sf_* is non-zero
-    gyro = true_sf * body_rate + bias + white
+    gyro, bias, true_sf = gyro_axis(device, t, dt, fs, motion.temp_c, motion.temp_rate_cps, body_rate, rng["bias"],
+                                    rng["rrw"], rng["white"])
     temp = temperature_reading(motion.temp_c, device, rng["temp"])
     if motion.temp_channel_c is not None:  # a channel that is not measured: one constant on every row
         temp = np.full(n, float(motion.temp_channel_c))
 
     mask = compass_rows(t, compass.rate_hz)
     heading, mag, acc = compass_columns(t, heading_true, motion, compass, mask, rng["compass"])
-    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
-        out = (t >= start) & (t < start + dur)
-        heading[out] = np.nan
-        mag[out] = np.nan
 
     columns = {
         T: t,
@@ -654,11 +582,8 @@ def simulate(
 
 
 def _logged_rows(df: pd.DataFrame, t: np.ndarray, records, scenario: str) -> pd.DataFrame:
-    """The rows of ``df`` (times ``t``, increasing) with ``start_s <= t < start_s + duration_s`` of a record."""
-    keep = np.zeros(t.size, dtype=bool)
-    for start, dur in records:
-        lo, hi = np.searchsorted(t, [start, start + dur], side="left")
-        keep[lo:hi] = True
+    """The rows of ``df`` (times ``t``) inside a record (:func:`~gyrodrift.simulate.motion.in_records`)."""
+    keep = in_records(t, records)
     if not keep.any():
         raise ConfigError(f"scenario {scenario!r}: its records keep no row of the run")
     return df.loc[keep].reset_index(drop=True)

@@ -20,8 +20,8 @@ from gyrodrift.compass import tilt_compensated_heading
 from gyrodrift.conventions import ACC_COLS, TRUE_BIAS_X, TRUE_BIAS_Y, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.checks import finite, nonneg, positive
-from gyrodrift.simulate.device import TriadModel, gauss_markov, random_walk
-from gyrodrift.simulate.motion import Motion, smooth_step
+from gyrodrift.simulate.device import TriadModel, gyro_axis
+from gyrodrift.simulate.motion import Motion, smooth_pulse
 
 __all__ = [
     "GRAVITY_MPS2",
@@ -164,10 +164,7 @@ class CompassModel:
         t = np.asarray(t_s, dtype=float)
         out = np.zeros(t.shape)
         for start, dur, off in self.interference + _check_windows(extra_windows):
-            ramp = min(self.interference_ramp_s, dur / 4.0)
-            up = smooth_step((t - start) / ramp)
-            down = smooth_step((t - (start + dur - ramp)) / ramp)
-            out = out + off * (up - down)
+            out = out + off * smooth_pulse(t, start, start + dur, min(self.interference_ramp_s, dur / 4.0))
         return out
 
 
@@ -298,6 +295,10 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
 
     heading = np.full(n, np.nan)
     heading[idx] = wrap_360(tilt_compensated_heading(*mag[idx].T, *acc[idx].T))
+    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
+        out = (t >= start) & (t < start + dur)
+        heading[out] = np.nan
+        mag[out] = np.nan
     return heading, mag, acc
 
 
@@ -335,14 +336,8 @@ def triad_columns(t, dt, motion: Motion, triad: TriadModel, scenario: str, acc, 
     gyro, bias = {}, {}
     for axis in ("x", "y"):
         dev = getattr(triad, axis).with_scenario_scale_factor(scenario).with_scenario_memory(scenario)
-        bias[axis] = (
-            dev.drift_series(t, motion.temp_c, motion.temp_rate_cps)
-            + gauss_markov(n, dt, dev.bias_instability_dps, dev.bias_tau_s, rng[f"{axis}_bias"])
-            + random_walk(n, dt, dev.rate_random_walk_dps_rts, rng[f"{axis}_rrw"])
-        )
-        sigma = dev.white_sigma_dps(1.0 / dt)
-        white = sigma * rng[f"{axis}_white"].standard_normal(n) if sigma > 0 else np.zeros(n)
-        gyro[axis] = dev.scale_factor(motion.temp_c) * body_rate[axis] + bias[axis] + white
+        gyro[axis], bias[axis], _ = gyro_axis(dev, t, dt, 1.0 / dt, motion.temp_c, motion.temp_rate_cps, body_rate[axis],
+                                              rng[f"{axis}_bias"], rng[f"{axis}_rrw"], rng[f"{axis}_white"])
     if triad.acc_noise_g > 0:
         acc = acc + triad.acc_noise_g * rng["acc"].standard_normal((n, 3))
     return {
