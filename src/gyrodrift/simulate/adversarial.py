@@ -1,32 +1,9 @@
 """Adversarial scenarios: logs that break a design built around what the paper's runs offer.
 
-The paper's runs and the scenarios of :mod:`gyrodrift.simulate.scenarios` log without
-gaps, start with a minute of stillness, have a measured temperature, a ready-made
-compass heading and compass intervals that complete. Each scenario here takes some
-of that away (:data:`ADVERSARIAL_SCENARIOS`; default lengths in
-:data:`ADVERSARIAL_DURATION_S`; ``vehicle-rawmag``, the vehicle run with the raw
-magnetometer and accelerometer instead of a heading, is in
-:mod:`~gyrodrift.simulate.scenarios` beside ``vehicle``):
-
-* ``bursty``: a still unit cooling in a chamber, logged in 5-s records every
-  295–315 s (the times jump between records); half of the runs have a compass, the
-  others none (:func:`scenario_bursty`).
-* ``ramp-interference``: still, the temperature falling about 0.8 degC/min, and 10 min
-  of magnetic interference that wanders around 20–35 deg in the middle of the fall
-  (:func:`scenario_ramp_interference`).
-* ``sway``: a moored or parked platform for 12 h: a yaw sway of a few degrees below
-  0.2 deg/s, 3–5 compass outages of 40–90 min and a day/night temperature cycle
-  (:func:`scenario_sway`).
-* ``vessel``: a slow continuous turn of 0.15–0.6 deg/s with wave yaw, never still
-  (:func:`scenario_vessel`).
-* ``no-temp``: a bench unit warming up, with a turn every few minutes, whose
-  temperature column reads a constant 0 degC (:func:`scenario_no_temp`).
-* ``short``: a hand-held log of tens of seconds: a few seconds still, then one
-  rotation by 90–720 deg (:func:`scenario_short`).
-
-Every random choice is drawn in a fixed order, so a seed gives the same log.
-Records and rotation rates are absolute; temperature profiles and outages scale
-with the run.
+Each takes away something the paper's runs have (gaps in the log, a still start, a
+measured temperature, a heading column, complete compass intervals):
+:data:`ADVERSARIAL_SCENARIOS`, default lengths in :data:`ADVERSARIAL_DURATION_S`. What
+each models: ``docs/simulator.md`` (adversarial scenarios).
 """
 
 from __future__ import annotations
@@ -51,23 +28,10 @@ from gyrodrift.simulate.motion import (
 )
 
 __all__ = [
-    "ADVERSARIAL_SCENARIOS",
-    "ADVERSARIAL_DURATION_S",
-    "BURSTY_RECORD_S",
-    "BURSTY_SPACING_S",
-    "NO_TEMP_CHANNEL_C",
-    "SWAY_MAX_RATE_DPS",
-    "bursty_records",
-    "approach_temperature",
-    "ramp_interference_window",
-    "ramp_interference_offset",
-    "sway_outages",
-    "scenario_bursty",
-    "scenario_ramp_interference",
-    "scenario_sway",
-    "scenario_vessel",
-    "scenario_no_temp",
-    "scenario_short",
+    "ADVERSARIAL_SCENARIOS", "ADVERSARIAL_DURATION_S", "BURSTY_RECORD_S", "BURSTY_SPACING_S", "NO_TEMP_CHANNEL_C",
+    "SWAY_MAX_RATE_DPS", "bursty_records", "approach_temperature", "ramp_interference_window",
+    "ramp_interference_offset", "sway_outages", "scenario_bursty", "scenario_ramp_interference", "scenario_sway",
+    "scenario_vessel", "scenario_no_temp", "scenario_short",
 ]
 
 #: Default run length of each adversarial scenario, s.
@@ -111,11 +75,7 @@ _BURSTY_COMPASS_P = 0.5
 
 
 def bursty_records(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float], ...]:
-    """Records of the bursty logger: ``(start_s, BURSTY_RECORD_S)`` each, the first at 0.
-
-    Record starts are :data:`BURSTY_SPACING_S` apart (uniform, one draw per record), in
-    absolute time whatever the run length; the last record starts before the end.
-    """
+    """Records ``(start_s, BURSTY_RECORD_S)`` of the bursty logger, the first at 0, :data:`BURSTY_SPACING_S` apart."""
     starts = [0.0]
     while True:
         nxt = starts[-1] + float(rng.uniform(*BURSTY_SPACING_S))
@@ -126,13 +86,7 @@ def bursty_records(duration_s: float, rng: np.random.Generator) -> tuple[tuple[f
 
 
 def scenario_bursty(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A still unit cooling in a thermal chamber, logged in 5-s records every ~300 s.
-
-    Motionless at a random heading; the temperature held at 35–60 degC, then cooling
-    towards −20…10 degC (:func:`approach_temperature`, time constant 0.25–0.5 of the
-    run). The logger keeps :func:`bursty_records` only: 50 rows at 10 Hz, then a jump
-    of about 300 s. With probability 0.5 the log has no compass columns at all.
-    """
+    """A still unit cooling in a thermal chamber, logged in 5-s records every ~300 s; half without compass."""
     t = np.asarray(t_s, dtype=float)
     has_compass = bool(rng.random() < _BURSTY_COMPASS_P)
     heading0, roll, pitch = _attitude(rng)
@@ -180,36 +134,12 @@ def _falling_temperature(t: np.ndarray, duration_s: float, hot_c: float, fall_c:
 
 
 def ramp_interference_window(duration_s: float) -> tuple[float, float]:
-    """Where the interference of ``ramp-interference`` acts: ``(start_s, duration_s)``.
-
-    From a quarter of the run, for a ninth of it (10 min from 22.5 min in the default
-    90-min run): inside the temperature fall, which lasts from about 10 to 45 min.
-    """
+    """Where the interference of ``ramp-interference`` acts: ``(start_s, duration_s)``, inside the fall."""
     return 0.25 * duration_s, duration_s / 9.0
 
 
 def ramp_interference_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Compass heading offset of ``ramp-interference``, deg: about 30 deg that wanders.
-
-    In :func:`ramp_interference_window`: a mean of 20–35 deg (random sign) plus three
-    sinusoids of 3–10 deg amplitude and 1–5 min period (random phases), faded in and
-    out over ``min(30 s, window/4)``; 0 elsewhere. It changes by up to about 1 deg/s:
-    some intervals disagree with the gyro, others drift along unnoticed.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    rng : numpy.random.Generator
-        Source of the offsets (a fixed number of draws).
-
-    Returns
-    -------
-    ndarray
-        Offset, deg.
-    """
+    """Compass heading offset of ``ramp-interference`` at ``t_s``, deg: about 30 deg that wanders (0 outside)."""
     t = np.asarray(t_s, dtype=float)
     start, dur = ramp_interference_window(duration_s)
     drawn = draw_wave(rng, _RAMP_INTERFERENCE_MEAN_DEG, _RAMP_INTERFERENCE_AMP_DEG, _RAMP_INTERFERENCE_PERIOD_S)
@@ -221,14 +151,7 @@ def ramp_interference_offset(t_s, duration_s: float, rng: np.random.Generator) -
 
 
 def scenario_ramp_interference(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """Still; the temperature falls fast while the compass is pulled about 30 deg off.
-
-    Motionless at a random heading; held at 40–55 degC, then falling at a constant
-    0.7–0.9 degC/min (in the default 90-min run; the span is kept when the run is
-    shorter) from 0.10 to 0.50 of the run after the hold, then flat: the rest of the
-    log shows whether the heading recovers. The interference of
-    :func:`ramp_interference_offset` acts 10 min inside the fall.
-    """
+    """Still; the temperature falls fast while the compass is pulled about 30 deg off."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     hot = float(rng.uniform(*_RAMP_HOT_C))
@@ -256,11 +179,7 @@ _SWAY_TEMP_AMP_C = (5.0, 12.0)
 
 
 def sway_outages(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float], ...]:
-    """Compass outages of ``sway``: ``(start_s, duration_s)`` each, in time order.
-
-    3–5 outages of 40–90 min each (scaled with the run: the default is 12 h), placed at
-    random after the hold with random gaps between them (never overlapping).
-    """
+    """Compass outages ``(start_s, duration_s)`` of ``sway``, in time order, never overlapping."""
     scale = duration_s / ADVERSARIAL_DURATION_S["sway"]
     n = int(rng.integers(_SWAY_OUTAGE_COUNT[0], _SWAY_OUTAGE_COUNT[1] + 1))
     lengths = rng.uniform(*_SWAY_OUTAGE_MIN, size=n) * 60.0 * scale
@@ -276,15 +195,7 @@ def sway_outages(duration_s: float, rng: np.random.Generator) -> tuple[tuple[flo
 
 
 def scenario_sway(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A moored or parked platform for 12 h: slow yaw sway, long outages, a day/night cycle.
-
-    The heading (random) sways by a 2–5 deg sinusoid of 4–12 min period plus a
-    0.5–2 deg one of 40–120 s (random phases), faded in over ``min(120 s, 10 %)``
-    after the hold, amplitudes scaled so the yaw rate stays below
-    :data:`SWAY_MAX_RATE_DPS`. Temperature ``mean + amp * sin(2π t / (2 * run) + φ)``
-    (mean 0–25 degC, amplitude 5–12 degC: half a day in the default run). The compass
-    is missing during :func:`sway_outages`.
-    """
+    """A moored or parked platform for 12 h: slow yaw sway, long outages, a day/night cycle."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     draws = [
@@ -320,16 +231,7 @@ _VESSEL_TAU_U = (0.2, 0.5)
 
 
 def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A vessel in a slow continuous turn, with wave yaw: never still, never turning fast.
-
-    Wave yaw of 0.3–1.5 deg with an 8–20 s period from the first sample (at most about
-    1.2 deg/s); after the hold a turn of 0.15–0.6 deg/s (random sign) fades in over
-    ``min(120 s, 10 %)`` and goes on to the end, its rate modulated by ±10–30 % over
-    10–30 min; the speed (2–6 m/s) fades in with it, so the accelerometer feels the
-    centripetal acceleration. Temperature from 5–25 degC rising by 5–15 degC
-    (:func:`approach_temperature`). Below the turning gate all the time: a design
-    that takes slow rotation for stillness learns the turn as drift.
-    """
+    """A vessel in a slow continuous turn, with wave yaw: never still, never turning fast."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     sign = float(rng.choice([-1.0, 1.0]))
@@ -371,13 +273,7 @@ _TURN_RAMP_S = 1.0
 
 
 def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A bench unit warming up, turned now and then, whose temperature is not logged.
-
-    The true temperature rises from 15–30 degC by 10–25 degC
-    (:func:`approach_temperature`) and drives the drift, but the temperature column
-    reads :data:`NO_TEMP_CHANNEL_C` on every row. After the hold, a level turn by
-    45–180 deg (random sign, peak 10–30 deg/s) every 4–10 min; still in between.
-    """
+    """A bench unit warming up, turned now and then, whose temperature column is a constant."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     start_c, rise_c, tau = rng.uniform(*_NO_TEMP_START_C), rng.uniform(*_NO_TEMP_RISE_C), rng.uniform(*_NO_TEMP_TAU_U)
@@ -405,13 +301,7 @@ _SHORT_RISE_C = (0.2, 1.5)
 
 
 def scenario_short(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A hand-held log of tens of seconds: still for 3–8 s, then one rotation.
-
-    A level rotation by 90–720 deg (random sign, peak 30–90 deg/s, 1-s ramps) starts
-    3–8 s in (absolute times: a log too short for it ends mid-rotation); still after
-    it. The unit warms by 0.2–1.5 degC from 20–35 degC over the log (self-heating).
-    The start-up window of the paper's design (30 s) is as long as the log.
-    """
+    """A hand-held log of tens of seconds: still for 3–8 s, then one rotation, self-heating."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     still = float(rng.uniform(*_SHORT_STILL_S))

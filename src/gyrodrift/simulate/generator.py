@@ -1,40 +1,10 @@
 """A procedural scenario generator that nobody tunes on: random compositions of motion,
 temperature, compass, sampling and device, in classes, with seeds split once.
 
-Every named scenario of :mod:`gyrodrift.simulate.scenarios` is one hand-written run; a
-setting tuned on them fits their shapes. This generator draws each log from a *class*
-(:data:`CLASSES`) by composing random segments:
-
-* **motion**: still, yaw sway, slow continuous turns, driving legs with stops and
-  cornering, multicopter flights (yaw manoeuvres, vibration on the gyro), turntable
-  rotations, hand turns;
-* **temperature**: power-on warm-up with fast drift, chamber ramps with non-linear
-  knees (and, on some devices, thermal lag and backlash hysteresis), day cycles,
-  heating in flight, or a temperature channel that is not measured;
-* **compass**: clean (noise, hard- and soft-iron deviation, tilt while accelerating),
-  interference steps, ramps and wander, an error that follows the motor throttle,
-  outages, the raw magnetometer and accelerometer instead of a heading;
-* **sampling**: 1-Hz telemetry with 0.5–4 s jitter, short bursts, 10–500 Hz;
-* **device**: a randomised gyro, from a quiet, nearly linear one to a hot-running
-  multicopter IMU whose drift moves by several deg/s in minutes.
-
-Seeds are split once (:data:`SPLITS`): ``tuning`` seeds choose every setting,
-``held-out`` seeds only report (:func:`seeds`). A case is fully determined by
-``(class, seed)``.
-
-Beside the input contract and ``ref_heading``/``true_bias_z``, a generated log has
-truth columns for the decisions a compensator makes:
-
-=========================  =====  ===============================================
-column                     unit   meaning
-=========================  =====  ===============================================
-``true_rate_z``            deg/s  true heading rate (0 exactly where still)
-``true_compass_offset``    deg    magnetic interference on the compass heading
-                                  (deviation and noise excluded)
-=========================  =====  ===============================================
-
-:func:`truth_labels` turns them into the row labels a compensator's ``gate_reason``
-is scored against (:data:`DISTURBED_DEG`, :data:`TURNING_DPS`).
+Each log is drawn from a class (:data:`CLASSES`); ``tuning`` seeds choose settings,
+``held-out`` seeds only report (:data:`SPLITS`). A log has truth columns for the decisions
+a compensator makes (:data:`TRUE_RATE_Z`, :data:`TRUE_COMPASS_OFFSET`, :func:`truth_labels`).
+The classes and their numbers: ``docs/simulator.md`` (the procedural generator).
 
 Examples
 --------
@@ -57,21 +27,14 @@ import pandas as pd
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.device import DeviceModel, random_device, temperature_reading, true_bias
-from gyrodrift.simulate.motion import Motion, add_rotation, in_records, ramp_slice, smooth_pulse, smooth_step, smooth_step_slope
+from gyrodrift.simulate.motion import (
+    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, smooth_step, smooth_step_slope,
+)
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
 
 __all__ = [
-    "CLASSES",
-    "SPLITS",
-    "TRUE_RATE_Z",
-    "TRUE_COMPASS_OFFSET",
-    "DISTURBED_DEG",
-    "TURNING_DPS",
-    "GeneratedCase",
-    "seeds",
-    "split_of",
-    "generate",
-    "truth_labels",
+    "CLASSES", "SPLITS", "TRUE_RATE_Z", "TRUE_COMPASS_OFFSET", "DISTURBED_DEG", "TURNING_DPS", "GeneratedCase",
+    "seeds", "split_of", "generate", "truth_labels",
 ]
 
 #: Truth column: the true heading rate, deg/s.
@@ -93,13 +56,7 @@ SPLITS: Mapping[str, range] = MappingProxyType({
 
 
 def seeds(split: str, n: int) -> list[int]:
-    """The first ``n`` seeds of a split (``"tuning"`` or ``"held-out"``).
-
-    Examples
-    --------
-    >>> seeds("tuning", 3), seeds("held-out", 2)
-    ([0, 1, 2], [1000000, 1000001])
-    """
+    """The first ``n`` seeds of a split (``"tuning"`` or ``"held-out"``)."""
     if split not in SPLITS:
         raise ConfigError(f"unknown seed split {split!r}; choose from: {', '.join(SPLITS)}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= len(SPLITS[split]):
@@ -117,21 +74,9 @@ def split_of(seed: int) -> str:
 
 @dataclass(frozen=True)
 class GeneratedCase:
-    """One generated log and what goes with it.
-
-    Attributes
-    ----------
-    cls : str
-        The class (:data:`CLASSES`).
-    seed : int
-    log : DataFrame
-        Input contract + ``ref_heading``, ``true_bias_z`` and the truth columns;
-        ``attrs`` say how it was made.
-    device : DeviceModel
-    compass : CompassModel
-    calibration : Callable[[], DataFrame]
-        A separate 2-h still heating run of the same device and compass (for a
-        ``poly3`` calibration), made on demand.
+    """One generated log (``log``: input contract, ``ref_heading``, ``true_bias_z`` and the truth
+    columns; ``attrs`` say how it was made), its class, seed, device and compass, and
+    ``calibration()``, a separate 2-h still heating run of the same device and compass.
     """
 
     cls: str
@@ -171,10 +116,12 @@ class _Recipe:
 
 
 def _u(rng, lo, hi) -> float:
+    """Uniform in ``[lo, hi)``, as float."""
     return float(rng.uniform(lo, hi))
 
 
 def _sign(rng) -> float:
+    """-1 or 1."""
     return float(rng.choice([-1.0, 1.0]))
 
 
@@ -195,6 +142,7 @@ def _device(rng, *, hot: bool = False, memory: bool = False, coarse_temp: bool =
 
 
 def _compass(rng, *, noise=(0.3, 0.8), rate_hz=10.0) -> CompassModel:
+    """:func:`random_compass` with a heading noise uniform in ``noise`` and the rate ``rate_hz``."""
     return replace(random_compass(rng), noise_deg=_u(rng, *noise), rate_hz=float(rate_hz))
 
 
@@ -202,6 +150,7 @@ def _compass(rng, *, noise=(0.3, 0.8), rate_hz=10.0) -> CompassModel:
 
 
 def _warmup(rng, start=(10.0, 30.0), rise=(10.0, 35.0), tau=(60.0, 400.0)):
+    """A power-on warm-up: an exponential rise from the start (degC ranges, time constant s)."""
     t0, dT, tau_s = _u(rng, *start), _u(rng, *rise), _u(rng, *tau)
     return lambda t: t0 + dT * (1.0 - np.exp(-t / tau_s))
 
@@ -226,6 +175,7 @@ def _chamber(rng, duration):
 
 
 def _day_cycle(rng, duration):
+    """A sinusoid of 5–30 degC mean and 3–12 degC amplitude, its period 1.5–3 runs."""
     mean, amp, phase = _u(rng, 5.0, 30.0), _u(rng, 3.0, 12.0), _u(rng, 0.0, 2 * math.pi)
     period = _u(rng, 1.5, 3.0) * duration  # a part of one day, squeezed into the run
     return lambda t: mean + amp * np.sin(2 * math.pi * t / period + phase)
@@ -302,6 +252,7 @@ def _offset_fn(episodes):
 
 
 def _dropouts(rng, duration, n_range=(1, 3), length=(300.0, 1800.0)):
+    """Compass outages ``(start, length)``: how many and how long (s), at most a quarter of the run each."""
     out = []
     for _ in range(int(rng.integers(n_range[0], n_range[1] + 1))):
         ln = min(_u(rng, *length), 0.25 * duration)
@@ -535,6 +486,7 @@ CLASSES: Mapping[str, str] = MappingProxyType(
 
 
 def _streams(cls: str, seed: int) -> dict[str, np.random.Generator]:
+    """Independent generators of ``(cls, seed)``, one per random source."""
     names = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
     root = np.random.SeedSequence([zlib.crc32(cls.encode()), int(seed)])
     return {n: np.random.default_rng(c) for n, c in zip(names, root.spawn(len(names)))}
@@ -573,12 +525,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     seed : int
         A seed of a split (:func:`seeds`); the same ``(cls, seed)`` gives the same log.
     duration_scale : float
-        Every length of the run (segments, outages, temperature profiles) times this
-        (for quick tests; the Monte Carlo uses 1).
-
-    Returns
-    -------
-    GeneratedCase
+        Every length of the run times this (for quick tests; the Monte Carlo uses 1).
     """
     if cls not in _BUILDERS:
         raise ConfigError(f"unknown scenario class {cls!r}; choose from: {', '.join(_BUILDERS)}")
@@ -640,9 +587,9 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
 
 
 def truth_labels(log: pd.DataFrame) -> pd.DataFrame:
-    """Per row of a generated log: ``disturbed`` (a compass sample whose interference
-    exceeds :data:`DISTURBED_DEG`; NaN-free bool, False on rows without a compass sample),
-    ``turning`` (true rate above :data:`TURNING_DPS`) and ``still`` (true rate exactly 0)."""
+    """Per row of a generated log: ``disturbed`` (a compass sample with interference above
+    :data:`DISTURBED_DEG`), ``turning`` (true rate above :data:`TURNING_DPS`) and ``still``
+    (true rate exactly 0), as bools."""
     has_compass = log[HEADING].notna() if HEADING in log else log[MAG_COLS[0]].notna() if MAG_COLS[0] in log \
         else pd.Series(False, index=log.index)
     rate = log[TRUE_RATE_Z].to_numpy(float)

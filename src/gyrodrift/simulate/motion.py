@@ -1,9 +1,8 @@
-"""True motion of a simulated run: the :class:`Motion` record and the temperature profiles.
+"""True motion of a simulated run: :class:`Motion`, the temperature profiles and the ramps.
 
-A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what happens to the unit,
-and how the run is logged, as a :class:`Motion`. The temperature profiles start with a
-still hold (:func:`hold_s`) then follow knots (:func:`knot_profile`); :func:`smooth_step`
-is the ramp of every turn, speed change and interference window.
+A scenario describes what happens to the unit, and how the run is logged, as a
+:class:`Motion`; the pieces it is made of (raised-cosine ramps, rotations, sways,
+temperature knots) are here. What each models: ``docs/simulator.md`` (motion and temperature).
 """
 
 from __future__ import annotations
@@ -16,30 +15,10 @@ import numpy as np
 from gyrodrift.errors import ConfigError
 
 __all__ = [
-    "Motion",
-    "COMPASS_FORMS",
-    "hold_s",
-    "smooth_step",
-    "smooth_step_slope",
-    "smooth_pulse",
-    "ramp_slice",
-    "sum_of_steps",
-    "add_rotation",
-    "still_motion",
-    "fade_in",
-    "sway_rate",
-    "draw_wave",
-    "wave",
-    "in_records",
-    "knot_profile",
-    "approach_temperature",
-    "static_temperature",
-    "vehicle_temperature",
-    "calibration_temperature",
-    "hysteresis_temperature",
-    "cold_start_temperature",
-    "soak_temperature",
-    "soak_ramps",
+    "Motion", "COMPASS_FORMS", "hold_s", "smooth_step", "smooth_step_slope", "smooth_pulse", "ramp_slice",
+    "sum_of_steps", "add_rotation", "still_motion", "fade_in", "sway_rate", "draw_wave", "wave", "in_records",
+    "knot_profile", "approach_temperature", "static_temperature", "vehicle_temperature", "calibration_temperature",
+    "hysteresis_temperature", "cold_start_temperature", "soak_temperature", "soak_ramps",
 ]
 
 #: Longest time the unit stands still at constant temperature at the start, s.
@@ -50,43 +29,13 @@ COMPASS_FORMS = ("heading", "raw", "none")
 
 
 def smooth_step(x):
-    """Raised-cosine step: 0 for x <= 0, 1 for x >= 1, C1 in between.
-
-    Parameters
-    ----------
-    x : array_like
-        Position in the ramp (0 = start, 1 = end).
-
-    Returns
-    -------
-    ndarray
-        ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0.0 for ``x <= 0`` and exactly 1.0
-        for ``x >= 1``.
-
-    Examples
-    --------
-    >>> smooth_step(np.array([-2.0, 0.0, 1.0, 3.0])).tolist()
-    [0.0, 0.0, 1.0, 1.0]
-    >>> round(float(smooth_step(0.5)), 12)
-    0.5
-    """
+    """Raised-cosine step ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0 for x <= 0 and 1 for x >= 1, C1."""
     x = np.clip(x, 0.0, 1.0)
     return 0.5 - 0.5 * np.cos(np.pi * x)
 
 
 def smooth_step_slope(x):
-    """Derivative of :func:`smooth_step` with respect to x.
-
-    Parameters
-    ----------
-    x : array_like
-        Position in the ramp.
-
-    Returns
-    -------
-    ndarray
-        The slope; exactly 0.0 outside ``0 < x < 1``.
-    """
+    """Derivative of :func:`smooth_step` with respect to x; exactly 0.0 outside ``0 < x < 1``."""
     inside = (x > 0.0) & (x < 1.0)
     return np.where(inside, 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0.0, 1.0)), 0.0)
 
@@ -97,27 +46,10 @@ def smooth_pulse(t, t0: float, t1: float, ramp: float):
 
 
 def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
-    """The samples of a ramp or pulse that lasts from ``start_s`` to ``end_s``.
+    """The samples (``t_s`` increasing) of a ramp or pulse from ``start_s`` to ``end_s``, s.
 
-    Covers ``[start_s, end_s]`` with a margin of ``1e-6 * (1 + |start_s| + |end_s|)``,
-    far above rounding, so a :func:`smooth_step` ramp is exactly at its start value
-    before the slice and at its end value after it.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Sample times, s, increasing.
-    start_s, end_s : float
-        Start and end of the ramp, s.
-
-    Returns
-    -------
-    slice
-
-    Examples
-    --------
-    >>> ramp_slice(np.arange(10.0), 2.5, 4.0)
-    slice(3, 5, None)
+    The margin of ``1e-6 * (1 + |start_s| + |end_s|)``, far above rounding, leaves a
+    :func:`smooth_step` ramp exactly at its start value before the slice and at its end value after it.
     """
     pad = 1e-6 * (1.0 + abs(start_s) + abs(end_s))
     lo = int(np.searchsorted(t_s, start_s - pad, side="left"))
@@ -126,28 +58,10 @@ def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
 
 
 def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
-    """Sum of raised-cosine steps at the sample times, each step evaluated on its ramp only.
+    """Sum of raised-cosine steps ``(t0_s, dur_s > 0, delta)`` at the times ``t_s`` (increasing).
 
-    Bit for bit the sum of ``delta * smooth_step((t_s - t0) / dur)`` over the whole
-    run, step by step, at a cost linear in ``len(t_s)`` plus the ramps' samples.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Sample times, s, increasing.
-    steps : iterable of (t0_s, dur_s, delta)
-        Steps in the order they are added: ramp start, ramp length (> 0), size.
-
-    Returns
-    -------
-    ndarray
-        The sum at ``t_s``.
-
-    Examples
-    --------
-    >>> t = np.arange(8.0)
-    >>> sum_of_steps(t, [(1.0, 2.0, 4.0), (4.0, 2.0, -4.0)]).round(12).tolist()
-    [0.0, 0.0, 2.0, 4.0, 4.0, 2.0, 0.0, 0.0]
+    Bit for bit the sum of ``delta * smooth_step((t_s - t0) / dur)`` over the whole run,
+    step by step, at a cost linear in ``len(t_s)`` plus the ramps' samples.
     """
     out = np.zeros(t_s.size)
     level = 0.0  # sum of the deltas of the steps added so far: the value past all their ramps
@@ -181,41 +95,9 @@ def add_rotation(rate: np.ndarray, t_s: np.ndarray, t0: float, angle_deg: float,
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Motion:
-    """True motion and environment of one scenario, sampled at the log times.
+    """True motion and environment of one scenario at the log times, and how it is logged.
 
-    Attributes
-    ----------
-    temp_c : ndarray
-        True die temperature, degC.
-    temp_rate_cps : ndarray
-        Its exact time derivative, degC/s.
-    heading_rate_dps : ndarray
-        True heading rate, deg/s (positive = clockwise from above).
-    heading0_deg : float
-        True heading at the first sample, deg.
-    roll_deg, pitch_deg : float
-        Constant mounting attitude, deg (the body rate about z is the heading rate
-        times ``cos(roll)*cos(pitch)``).
-    accel_fwd_mps2, accel_lat_mps2 : ndarray
-        Kinematic acceleration along the forward and right level axes, m/s².
-    interference : tuple of (start_s, duration_s, offset_deg)
-        Magnetic interference windows of the scenario.
-    interference_offset_deg : ndarray or None
-        A wandering compass heading offset at the log times, added to the windows',
-        deg. None = none.
-    compass_dropouts : tuple of (start_s, duration_s)
-        Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
-        ``start_s <= t < start_s + duration_s``).
-
-    records : tuple of (start_s, duration_s)
-        Bursty logging: only rows inside some record are kept; () = every row.
-    temp_channel_c : float or None
-        A constant written in the temperature column, degC (a channel that is not
-        measured); None = the sensor's reading.
-    compass_form : str
-        ``"heading"``: a ``heading`` column (and the raw columns when asked);
-        ``"raw"``: the raw ``mag_*`` and ``acc_*`` columns and no ``heading``;
-        ``"none"``: no compass columns at all.
+    The attributes (units in their names): ``docs/simulator.md`` (motion and temperature).
     """
 
     temp_c: np.ndarray
@@ -264,23 +146,7 @@ def in_records(t_s: np.ndarray, records) -> np.ndarray:
 
 
 def hold_s(duration_s: float) -> float:
-    """Length of the still, constant-temperature start of a run: 60 s, or 10 % of a short run.
-
-    Parameters
-    ----------
-    duration_s : float
-        Run length, s.
-
-    Returns
-    -------
-    float
-        Hold time, s.
-
-    Examples
-    --------
-    >>> hold_s(3600.0), hold_s(120.0)
-    (60.0, 12.0)
-    """
+    """Length of the still, constant-temperature start of a run, s: 60 s, or 10 % of a short run."""
     return min(_HOLD_S, 0.1 * duration_s)
 
 
@@ -323,26 +189,10 @@ def wave(x: np.ndarray, drawn) -> np.ndarray:
 
 
 def knot_profile(t_s, duration_s: float, knots_u, knots_c):
-    """Temperature (degC) and its exact rate (degC/s) through knots.
+    """Temperature (degC) and its exact rate (degC/s) at ``t_s`` through knots.
 
-    Flat at ``knots_c[0]`` for the hold time (:func:`hold_s`), then a monotone C1
-    cubic (PCHIP) through ``knots_c`` at fractions ``knots_u`` of the rest of the run
-    (0 → end of hold, 1 → end of run), so a shorter run keeps the shape.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    knots_u : sequence of float
-        Increasing fractions of the run after the hold, from 0.
-    knots_c : sequence of float
-        Temperature at each knot, degC.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
+    Flat at ``knots_c[0]`` for the hold (:func:`hold_s`), then a monotone C1 cubic (PCHIP)
+    through ``knots_c`` at the fractions ``knots_u`` (increasing, from 0) of the rest of the run.
     """
     hold = hold_s(duration_s)
     knot_t = np.concatenate([[0.0], hold + (duration_s - hold) * np.asarray(knots_u, dtype=float)])
@@ -355,11 +205,10 @@ def knot_profile(t_s, duration_s: float, knots_u, knots_c):
 
 
 def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, tau_u: float):
-    """Temperature that approaches ``end_c`` exponentially after the hold, degC and degC/s.
+    """Temperature from ``start_c`` approaching ``end_c`` after the hold, degC and degC/s.
 
-    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9
-    knots (:func:`knot_profile`), ``u`` the fraction of the run after the hold: fastest at
-    first, ending at exactly ``end_c``.
+    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9 knots,
+    ``u`` the fraction of the run after the hold: fastest at first, ending at exactly ``end_c``.
     """
     u = np.linspace(0.0, 1.0, 9)
     c = start_c + (end_c - start_c) * (1.0 - np.exp(-u / tau_u)) / (1.0 - math.exp(-1.0 / tau_u))
@@ -367,16 +216,7 @@ def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, t
 
 
 def static_temperature(t_s, duration_s: float):
-    """Static heating run (Fig. 1): 23 degC, fast rise, slower rise to 58, plateau, cooling.
-
-    Shape in fractions of the run after the hold: 23 → 46 degC by 0.16 (fast),
-    → 58 by 0.40 (slower), plateau to 0.52, then exponential cooling towards 23 degC
-    with a time constant of 0.15 of the run (about 24.4 degC at the end).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Static heating run (Fig. 1), degC and degC/s: 23 → 58 degC, plateau, cooling."""
     cool_u = 0.52 + 0.48 * np.arange(1, 9) / 8.0
     knots_u = [0.0, 0.04, 0.10, 0.16, 0.28, 0.40, 0.52, *cool_u]
     knots_c = [23.0, 29.0, 39.0, 46.0, 53.0, 58.0, 58.0, *(23.0 + 35.0 * np.exp(-(cool_u - 0.52) / 0.15))]
@@ -384,54 +224,24 @@ def static_temperature(t_s, duration_s: float):
 
 
 def vehicle_temperature(t_s, duration_s: float):
-    """Vehicle run (Fig. 7): 26 → 37 degC, fast at first and levelling off.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Vehicle run (Fig. 7), degC and degC/s: 26 → 37 degC, fast at first and levelling off."""
     return approach_temperature(t_s, duration_s, 26.0, 37.0, 0.5)
 
 
 def calibration_temperature(t_s, duration_s: float):
-    """Calibration heating run: -10 → 60 degC, a nearly uniform slow ramp.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Calibration heating run, degC and degC/s: -10 → 60 degC, a nearly uniform slow ramp."""
     return knot_profile(t_s, duration_s, [0.0, 0.05, 0.95, 1.0], [-10.0, -8.25, 58.25, 60.0])
 
 
 def hysteresis_temperature(t_s, duration_s: float):
-    """Heating and cooling cycle of ``hysteresis``: 10 → 70 → 10 degC, then 10 → 45 → 20 degC.
-
-    Shape in fractions of the run after the hold: 10 → 70 degC by 0.25, plateau to
-    0.32, cooling to 10 degC by 0.60, plateau to 0.66, a minor loop up to 45 degC by
-    0.80, plateau to 0.84 and cooling to 20 degC at the end. Every temperature between
-    20 and 45 degC is passed four times, twice heating and twice cooling.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """The cycle of ``hysteresis``, degC and degC/s: 10 → 70 → 10 degC, then a minor loop 10 → 45 → 20 degC."""
     knots_u = [0.0, 0.25, 0.32, 0.60, 0.66, 0.80, 0.84, 1.0]
     knots_c = [10.0, 70.0, 70.0, 10.0, 10.0, 45.0, 45.0, 20.0]
     return knot_profile(t_s, duration_s, knots_u, knots_c)
 
 
 def cold_start_temperature(t_s, duration_s: float):
-    """Warm-up after a cold soak: -20 degC held, then up to +60 degC, fast at first.
-
-    ``T = -20 + 80 * (1 - exp(-u/0.25)) / (1 - exp(-4))`` through 9 knots, ``u`` the
-    fraction of the run after the hold: half of the 80 degC rise comes in the first
-    18 % of the run (for the default 2-h run about 0.04 degC/s at first), and the
-    profile ends at exactly +60 degC.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Warm-up after a cold soak, degC and degC/s: -20 degC held, then up to +60 degC, fast at first."""
     return approach_temperature(t_s, duration_s, -20.0, 60.0, 0.25)
 
 
@@ -439,17 +249,9 @@ def cold_start_temperature(t_s, duration_s: float):
 _SOAK_KNOTS_U = (0.0, 0.08, 0.20, 0.33, 0.50, 0.62, 0.75, 0.86, 0.95, 1.0)
 _SOAK_KNOTS_C = (20.0, 20.0, 45.0, 45.0, 5.0, 5.0, 35.0, 35.0, 20.0, 20.0)
 
+
 def soak_temperature(t_s, duration_s: float):
-    """Thermal soak of ``soak``: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC.
-
-    Knots (fraction of the run after the hold → degC): 0.08 → 20, 0.20 → 45,
-    0.33 → 45, 0.50 → 5, 0.62 → 5, 0.75 → 35, 0.86 → 35, 0.95 → 20, flat to the end.
-    For the default 12-h run the ramps take 1.1–2.0 h (at most about 0.01 degC/s).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Thermal soak of ``soak``, degC and degC/s: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC."""
     return knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
 
 
