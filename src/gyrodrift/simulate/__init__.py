@@ -15,44 +15,19 @@ Examples
 
 from gyrodrift.conventions import TRUE_BIAS_X, TRUE_BIAS_Y  # the x/y drift truth of simulate(..., triad=...)
 from gyrodrift.simulate.adversarial import (
-    BURSTY_RECORD_S,
-    BURSTY_SPACING_S,
-    NO_TEMP_CHANNEL_C,
-    SWAY_MAX_RATE_DPS,
-    bursty_records,
-    ramp_interference_window,
+    BURSTY_RECORD_S, BURSTY_SPACING_S, NO_TEMP_CHANNEL_C, SWAY_MAX_RATE_DPS, bursty_records, ramp_interference_window,
     sway_outages,
 )
 from gyrodrift.simulate.device import SCENARIO_MEMORY, SCENARIO_SCALE_FACTOR_PPM, DeviceModel, TriadModel, random_device
 from gyrodrift.simulate.motion import (
-    Motion,
-    calibration_temperature,
-    cold_start_temperature,
-    hysteresis_temperature,
-    soak_ramps,
-    soak_temperature,
-    static_temperature,
-    vehicle_temperature,
+    Motion, calibration_temperature, cold_start_temperature, hysteresis_temperature, soak_ramps, soak_temperature,
+    static_temperature, vehicle_temperature,
 )
 from gyrodrift.simulate.scenarios import (
-    DEFAULT_DURATION_S,
-    SCENARIOS,
-    TRUE_SF,
-    interference_windows_static,
-    interference_windows_wander,
-    rotation_plan,
-    scenario_calibration,
-    scenario_cold_start,
-    scenario_hysteresis,
-    scenario_interference_wander,
-    scenario_scale_factor,
-    scenario_soak,
-    scenario_static,
-    scenario_static_outages,
-    scenario_vehicle,
-    simulate,
-    soak_outages,
-    wander_offset,
+    DEFAULT_DURATION_S, SCENARIOS, TRUE_SF, interference_windows_static, interference_windows_wander, rotation_plan,
+    scenario_calibration, scenario_cold_start, scenario_hysteresis, scenario_interference_wander,
+    scenario_scale_factor, scenario_soak, scenario_static, scenario_static_outages, scenario_vehicle, simulate,
+    soak_outages, wander_offset,
 )
 from gyrodrift.simulate.sensors import GRAVITY_MPS2, CompassModel, random_compass
 

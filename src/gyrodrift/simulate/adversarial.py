@@ -52,6 +52,13 @@ def _attitude(rng: np.random.Generator) -> tuple[float, float, float]:
     return heading0, roll, pitch
 
 
+def _warming(t: np.ndarray, duration_s: float, rng, start_c, rise_c, tau_u):
+    """:func:`approach_temperature` from a start rising by a rise (degC ranges), time constant a range or a number."""
+    start, rise = rng.uniform(*start_c), rng.uniform(*rise_c)
+    tau = rng.uniform(*tau_u) if isinstance(tau_u, tuple) else tau_u
+    return approach_temperature(t, duration_s, float(start), float(start + rise), float(tau))
+
+
 def _rotations_rate(t_s: np.ndarray, rotations) -> np.ndarray:
     """Heading rate of level rotations ``(t0_s, angle_deg, peak_dps, ramp_s)``, deg/s (:func:`add_rotation`)."""
     rate = np.zeros(t_s.size)
@@ -225,9 +232,7 @@ _VESSEL_WAVE_DEG = (0.3, 1.5)
 _VESSEL_WAVE_PERIOD_S = (8.0, 20.0)
 _VESSEL_SPEED_MPS = (2.0, 6.0)
 #: Temperature: start (degC), rise (degC), time constant (fraction of the run).
-_VESSEL_START_C = (5.0, 25.0)
-_VESSEL_RISE_C = (5.0, 15.0)
-_VESSEL_TAU_U = (0.2, 0.5)
+_VESSEL_WARMING = ((5.0, 25.0), (5.0, 15.0), (0.2, 0.5))
 
 
 def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
@@ -243,12 +248,11 @@ def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     omega_wave = 2.0 * np.pi / rng.uniform(*_VESSEL_WAVE_PERIOD_S)
     phase_wave = rng.uniform(0.0, 2.0 * np.pi)
     speed = rng.uniform(*_VESSEL_SPEED_MPS)
-    start_c, rise_c, tau = rng.uniform(*_VESSEL_START_C), rng.uniform(*_VESSEL_RISE_C), rng.uniform(*_VESSEL_TAU_U)
+    temp, temp_rate = _warming(t, duration_s, rng, *_VESSEL_WARMING)
 
     env, env_rate = fade_in(t, duration_s)
     turn = env * r0 * (1.0 + mod * np.sin(omega_mod * t + phase_mod))
     wave = wave_amp * omega_wave * np.cos(omega_wave * t + phase_wave)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), float(tau))
     return Motion(
         temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=turn + wave, heading0_deg=heading0,
         roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=speed * env_rate,
@@ -262,9 +266,7 @@ def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
 #: when the sensor does not report a temperature).
 NO_TEMP_CHANNEL_C = 0.0
 #: Warm-up: start (degC), rise (degC), time constant (fraction of the run).
-_NO_TEMP_START_C = (15.0, 30.0)
-_NO_TEMP_RISE_C = (10.0, 25.0)
-_NO_TEMP_TAU_U = (0.15, 0.4)
+_NO_TEMP_WARMING = ((15.0, 30.0), (10.0, 25.0), (0.15, 0.4))
 #: Turns: time between them (s), angle (deg), peak rate (deg/s), ramp (s).
 _NO_TEMP_TURN_EVERY_S = (240.0, 600.0)
 _NO_TEMP_TURN_DEG = (45.0, 180.0)
@@ -276,8 +278,7 @@ def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion
     """A bench unit warming up, turned now and then, whose temperature column is a constant."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
-    start_c, rise_c, tau = rng.uniform(*_NO_TEMP_START_C), rng.uniform(*_NO_TEMP_RISE_C), rng.uniform(*_NO_TEMP_TAU_U)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), float(tau))
+    temp, temp_rate = _warming(t, duration_s, rng, *_NO_TEMP_WARMING)
     rotations = []
     at = hold_s(duration_s) + float(rng.uniform(*_NO_TEMP_TURN_EVERY_S))
     while at < duration_s:
@@ -295,9 +296,8 @@ def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion
 _SHORT_STILL_S = (3.0, 8.0)
 _SHORT_TURN_DEG = (90.0, 720.0)
 _SHORT_TURN_PEAK_DPS = (30.0, 90.0)
-#: Self-heating: start (degC) and rise over the log (degC).
-_SHORT_START_C = (20.0, 35.0)
-_SHORT_RISE_C = (0.2, 1.5)
+#: Self-heating: start (degC), rise over the log (degC), time constant (fraction of the run).
+_SHORT_WARMING = ((20.0, 35.0), (0.2, 1.5), 0.5)
 
 
 def scenario_short(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
@@ -307,8 +307,7 @@ def scenario_short(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     still = float(rng.uniform(*_SHORT_STILL_S))
     angle = float(rng.choice([-1.0, 1.0]) * rng.uniform(*_SHORT_TURN_DEG))
     peak = float(rng.uniform(*_SHORT_TURN_PEAK_DPS))
-    start_c, rise_c = rng.uniform(*_SHORT_START_C), rng.uniform(*_SHORT_RISE_C)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), 0.5)
+    temp, temp_rate = _warming(t, duration_s, rng, *_SHORT_WARMING)
     return still_motion(t, temp, temp_rate, heading0, roll, pitch,
                         heading_rate_dps=_rotations_rate(t, [(still, angle, peak, _TURN_RAMP_S)]))
 
