@@ -1,4 +1,4 @@
-"""Small known answers of the simulator's parts (they were docstring examples)."""
+"""Small known answers of the simulator, the scale-factor estimate and other parts (they were docstring examples)."""
 
 from __future__ import annotations
 
@@ -64,3 +64,32 @@ def test_seed_splits():
     from gyrodrift.simulate.generator import seeds
 
     assert (seeds("tuning", 3), seeds("held-out", 2)) == ([0, 1, 2], [1000000, 1000001])
+
+
+def test_sf_filter_pulls_s0_towards_the_measurements():
+    import pandas as pd
+
+    from gyrodrift.scale_factor import sf_filter
+
+    turns = pd.DataFrame({"sf_meas": [1.02] * 3, "temp_dev_c": [0.0] * 3, "r": [1e-8] * 3, "accepted": [True] * 3})
+    x, _ = sf_filter(turns)
+    assert round(float(x[-1, 0]), 4) == 1.02
+
+
+def test_moving_mask_of_a_four_second_turn():
+    from gyrodrift.scale_factor import moving_mask
+
+    t = np.arange(0.0, 20.0, 0.1)
+    m = moving_mask(t, np.where((t > 8) & (t < 12), 45.0, 0.0))
+    assert (float(t[m][0]), float(t[m][-1])) == (7.7, 12.3)
+
+
+def test_tracker_of_a_still_unit_keeps_the_prior_and_few_rows():
+    import math
+
+    from gyrodrift.scale_factor import ScaleFactorTracker
+
+    tr = ScaleFactorTracker()
+    rows = [tr.push(0.1 * i, 0.0, 30.0, 40.0 if i % 10 == 0 else math.nan) for i in range(1000)]
+    assert (rows[-1].sf, rows[-1].heading_sf) == (1.0, 40.0)
+    assert tr.buffered_rows < 200
