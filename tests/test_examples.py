@@ -93,3 +93,21 @@ def test_tracker_of_a_still_unit_keeps_the_prior_and_few_rows():
     rows = [tr.push(0.1 * i, 0.0, 30.0, 40.0 if i % 10 == 0 else math.nan) for i in range(1000)]
     assert (rows[-1].sf, rows[-1].heading_sf) == (1.0, 40.0)
     assert tr.buffered_rows < 200
+
+
+def test_gravity_filter_of_a_still_level_unit_points_down():
+    from gyrodrift.attitude import GravityFilter
+
+    d = GravityFilter().feed([0.0, 0.1], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [[0, 0, -1.0], [0, 0, -1.0]])
+    assert (d[-1] + 0.0).tolist() == [0.0, 0.0, 1.0]
+
+
+def test_triad_learns_constant_x_and_y_drifts_of_a_still_level_unit():
+    from gyrodrift.compensator import CompensatorConfig
+    from gyrodrift.triad import TriadCompensator
+
+    t = np.arange(0.0, 300.0, 0.1)
+    acc = np.tile([0.0, 0.0, -1.0], (t.size, 1))
+    out = TriadCompensator(CompensatorConfig()).feed(t, np.full(t.size, 0.1), np.full(t.size, -0.2),
+                                                     np.full(t.size, 25.0), np.zeros(t.size), acc)
+    assert (round(float(out["bias_x"][-1]), 4), round(float(out["bias_y"][-1]), 4)) == (0.1, -0.2)
