@@ -23,6 +23,7 @@ PACKAGE = "imufusion"
 
 
 def _imufusion():
+    """The ``imufusion`` module with ``Bias`` (1.3 or later), or None."""
     try:
         import imufusion
     except ImportError:
@@ -35,11 +36,24 @@ def available() -> bool:
     return _imufusion() is not None
 
 
+def _library(method: str):
+    """The ``imufusion`` module, or a :class:`ConfigError` saying that ``method`` needs it."""
+    imufusion = _imufusion()
+    if imufusion is None:
+        raise ConfigError(f"{method} needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    return imufusion
+
+
 def _axis(log: pd.DataFrame, name: str) -> np.ndarray:
     """A gyro column as floats (deg/s), gaps carried forward; zeros when absent or empty."""
     if name not in log.columns:
         return np.zeros(len(log))
     return log[name].ffill().fillna(0.0).to_numpy(float)
+
+
+def _gyro(log: pd.DataFrame) -> np.ndarray:
+    """The (n, 3) gyro of a log, deg/s (:func:`_axis` of x, y and z)."""
+    return np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
 
 
 def fusion_offset_drift(
@@ -65,9 +79,7 @@ def fusion_offset_drift(
     ConfigError
         ``imufusion`` missing, a column missing, fewer than two rows, or a bad setting.
     """
-    imufusion = _imufusion()
-    if imufusion is None:
-        raise ConfigError(f"fusion-offset needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    imufusion = _library("fusion-offset")
     missing = [c for c in (T, GYRO_Z) if c not in log.columns]
     if missing:
         raise ConfigError(f"fusion-offset needs the column(s) {', '.join(missing)}")
@@ -89,7 +101,7 @@ def fusion_offset_drift(
     bias = imufusion.Bias()
     bias.set_settings(settings)
 
-    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    gyro = _gyro(log)
     corrected_z = np.empty(len(log))
     update = bias.update
     for i, sample in enumerate(gyro):
@@ -104,9 +116,7 @@ def fusion_ahrs_heading(log: pd.DataFrame, compass_heading: np.ndarray | None = 
     (deg per row, NaN without a sample; default the log's ``heading``) is used when the log has
     no raw magnetometer. The settings: ``docs/heading_and_axes.md`` (x-io Fusion).
     """
-    imufusion = _imufusion()
-    if imufusion is None:
-        raise ConfigError(f"fusion-ahrs needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    imufusion = _library("fusion-ahrs")
     t = log[T].to_numpy(float)
     if t.size < 2:
         raise ConfigError(f"fusion-ahrs needs at least 2 rows, got {t.size}")
@@ -118,7 +128,7 @@ def fusion_ahrs_heading(log: pd.DataFrame, compass_heading: np.ndarray | None = 
     ahrs.set_settings(imufusion.AhrsSettings(
         sample_rate=fs_hz, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
         acceleration_rejection=10.0, magnetic_rejection=10.0, rejection_timeout=int(5 * fs_hz)))
-    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    gyro = _gyro(log)
     raw = all(c in log.columns for c in ("mag_x", "mag_y", "mag_z", "acc_x", "acc_y", "acc_z"))
     if raw:
         mag = log[["mag_x", "mag_y", "mag_z"]].to_numpy(float)

@@ -28,7 +28,7 @@ from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADI
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.device import DeviceModel, random_device, temperature_reading, true_bias
 from gyrodrift.simulate.motion import (
-    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, smooth_step, smooth_step_slope,
+    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, sum_of_step_slopes, sum_of_steps,
 )
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
 
@@ -384,21 +384,12 @@ def _drive_motion(rng, duration):
     wobble = _child(rng)
 
     def speed(t):
-        v = np.zeros(t.size)
-        for t0, d, dv in steps:
-            v += dv * smooth_step((t - t0) / d)
-        return v
-
-    def accel(t):
-        a = np.zeros(t.size)
-        for t0, d, dv in steps:
-            a += dv * smooth_step_slope((t - t0) / d) / d
-        return a
+        return sum_of_steps(t, steps)
 
     def rate(t):
         return turning(t) + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
 
-    return rate, accel, lambda t: speed(t) * np.radians(rate(t))
+    return rate, lambda t: sum_of_step_slopes(t, steps), lambda t: speed(t) * np.radians(rate(t))
 
 
 def _drive(rng, scale):

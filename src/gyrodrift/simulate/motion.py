@@ -16,7 +16,7 @@ from gyrodrift.errors import ConfigError
 
 __all__ = [
     "Motion", "COMPASS_FORMS", "hold_s", "smooth_step", "smooth_step_slope", "smooth_pulse", "ramp_slice",
-    "sum_of_steps", "add_rotation", "still_motion", "fade_in", "sway_rate", "draw_wave", "wave", "in_records",
+    "sum_of_steps", "sum_of_step_slopes", "add_rotation", "still_motion", "fade_in", "sway_rate", "draw_wave", "wave", "in_records",
     "knot_profile", "approach_temperature", "static_temperature", "vehicle_temperature", "calibration_temperature",
     "hysteresis_temperature", "cold_start_temperature", "soak_temperature", "soak_ramps",
 ]
@@ -76,6 +76,15 @@ def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
         level = level + delta
         done = max(done, hi)
     out[done:] = level
+    return out
+
+
+def sum_of_step_slopes(t_s: np.ndarray, steps) -> np.ndarray:
+    """Time derivative of :func:`sum_of_steps`, each step's slope evaluated on its ramp only."""
+    out = np.zeros(t_s.size)
+    for t0, dur, delta in steps:
+        ramp = ramp_slice(t_s, t0, t0 + dur)
+        out[ramp] += delta * smooth_step_slope((t_s[ramp] - t0) / dur) / dur
     return out
 
 

@@ -31,11 +31,11 @@ from gyrodrift.simulate.motion import (
     in_records,
     ramp_slice,
     smooth_pulse,
-    smooth_step_slope,
     soak_ramps,
     soak_temperature,
     static_temperature,
     still_motion,
+    sum_of_step_slopes,
     sum_of_steps,
     sway_rate,
     vehicle_temperature,
@@ -134,10 +134,7 @@ def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion
     # Every event is evaluated on its own samples only (ramp_slice): outside them it
     # adds exactly zero (accel, rate) or its full step (speed, sum_of_steps).
     speed = sum_of_steps(t, plan.speed_steps)
-    accel = np.zeros(t.size)
-    for t0, dur, delta in plan.speed_steps:
-        ramp = ramp_slice(t, t0, t0 + dur)
-        accel[ramp] += delta * smooth_step_slope((t[ramp] - t0) / dur) / dur
+    accel = sum_of_step_slopes(t, plan.speed_steps)
     rate = np.zeros(t.size)
     for t0, dur, sign in plan.turns:
         turn = ramp_slice(t, t0, t0 + dur)
