@@ -176,11 +176,7 @@ def turn_measurements(
         if causal:
             row["row_update"], row["t_update"] = j, float(t[j])
         rows.append(row)
-    columns = [
-        "t_start", "t_end", "t_update", "row_update", "angle_gyro_deg", "angle_compass_deg",
-        "sf_meas", "temp_c", "temp_dev_c", "r", "accepted", "reason",
-    ]
-    table = pd.DataFrame(rows, columns=columns)
+    table = pd.DataFrame(rows, columns=list(unmeasured_turn(0.0, 0.0, "")))
     return table.astype({"row_update": int, "accepted": bool})
 
 

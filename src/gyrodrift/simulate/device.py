@@ -16,8 +16,8 @@ from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.checks import finite, nonneg, positive
 
 __all__ = [
-    "SCENARIO_SCALE_FACTOR_PPM", "SCENARIO_MEMORY", "DeviceModel", "TriadModel", "gauss_markov", "random_walk",
-    "temperature_reading", "true_bias", "gyro_axis", "random_device",
+    "SCENARIO_SCALE_FACTOR_PPM", "SCENARIO_MEMORY", "DeviceModel", "TriadModel", "seeded_streams", "gauss_markov",
+    "random_walk", "temperature_reading", "true_bias", "gyro_axis", "random_device",
 ]
 
 #: Scale-factor coefficients (``sf_*``) of each scenario that sets them (else 0).
@@ -216,18 +216,18 @@ def _play_operator(x: np.ndarray, half_width: float) -> np.ndarray:
     return out
 
 
-def gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Stationary first-order Gauss–Markov sequence of ``n`` samples (exact discretisation).
+def seeded_streams(entropy, names) -> dict[str, np.random.Generator]:
+    """Independent generators, one per name, spawned in order from ``SeedSequence(entropy)``.
 
-    Parameters
-    ----------
-    n : int
-    dt_s, tau_s : float
-        Sample interval and correlation time, s.
-    sigma : float
-        Stationary standard deviation (0: zeros, nothing drawn).
-    rng : numpy.random.Generator
+    Child i of a SeedSequence does not depend on how many are spawned: append names only.
     """
+    children = np.random.SeedSequence(entropy).spawn(len(names))
+    return {name: np.random.default_rng(child) for name, child in zip(names, children)}
+
+
+def gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Stationary first-order Gauss–Markov sequence of ``n`` samples ``dt_s`` apart (exact discretisation),
+    of standard deviation ``sigma`` (0: zeros, nothing drawn) and correlation time ``tau_s``."""
     if sigma == 0.0:
         return np.zeros(n)
     phi = math.exp(-dt_s / tau_s)

@@ -26,9 +26,9 @@ import pandas as pd
 
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.simulate.device import DeviceModel, random_device, temperature_reading, true_bias
+from gyrodrift.simulate.device import DeviceModel, random_device, seeded_streams, temperature_reading, true_bias
 from gyrodrift.simulate.motion import (
-    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, sum_of_step_slopes, sum_of_steps,
+    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, sum_of_step_slopes, sum_of_steps, true_heading,
 )
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
 
@@ -476,11 +476,8 @@ CLASSES: Mapping[str, str] = MappingProxyType(
 # --------------------------------------------------------------------------- assembly
 
 
-def _streams(cls: str, seed: int) -> dict[str, np.random.Generator]:
-    """Independent generators of ``(cls, seed)``, one per random source."""
-    names = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
-    root = np.random.SeedSequence([zlib.crc32(cls.encode()), int(seed)])
-    return {n: np.random.default_rng(c) for n, c in zip(names, root.spawn(len(names)))}
+#: The random streams of a case, one per random source (:func:`seeded_streams`).
+_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
 
 
 def _telemetry_times(duration: float, rng: np.random.Generator) -> np.ndarray:
@@ -523,7 +520,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     split_of(int(seed))
     if not (isinstance(duration_scale, (int, float)) and math.isfinite(duration_scale) and duration_scale > 0):
         raise ConfigError(f"duration_scale must be a positive number, got {duration_scale!r}")
-    rng = _streams(cls, int(seed))
+    rng = seeded_streams([zlib.crc32(cls.encode()), int(seed)], _STREAMS)
     rec = _BUILDERS[cls](rng["recipe"], float(duration_scale))
     fs = rec.fs_sim_hz
     n = int(math.floor(rec.duration_s * fs)) + 1
@@ -531,9 +528,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     temp_true = rec.temp(t)
     temp_rate = np.gradient(temp_true, t) if n > 1 else np.zeros(n)
     rate = rec.rate(t)
-    from scipy.integrate import cumulative_trapezoid
-
-    heading_true = rec.heading0_deg + cumulative_trapezoid(rate, t, initial=0.0)
+    heading_true = true_heading(t, rate, rec.heading0_deg)
     dev = rec.device
     bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, rng["bias"], rng["rrw"])
     rows = _logged_rows(rec, t, rng["log"])

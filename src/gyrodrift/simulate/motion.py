@@ -16,9 +16,10 @@ from gyrodrift.errors import ConfigError
 
 __all__ = [
     "Motion", "COMPASS_FORMS", "hold_s", "smooth_step", "smooth_step_slope", "smooth_pulse", "ramp_slice",
-    "sum_of_steps", "sum_of_step_slopes", "add_rotation", "still_motion", "fade_in", "sway_rate", "draw_wave", "wave", "in_records",
-    "knot_profile", "approach_temperature", "static_temperature", "vehicle_temperature", "calibration_temperature",
-    "hysteresis_temperature", "cold_start_temperature", "soak_temperature", "soak_ramps",
+    "sum_of_steps", "sum_of_step_slopes", "add_rotation", "true_heading", "still_motion", "fade_in", "sway_rate",
+    "draw_wave", "wave", "in_records", "knot_profile", "approach_temperature", "static_temperature",
+    "vehicle_temperature", "calibration_temperature", "hysteresis_temperature", "cold_start_temperature",
+    "soak_temperature", "soak_ramps",
 ]
 
 #: Longest time the unit stands still at constant temperature at the start, s.
@@ -134,6 +135,13 @@ class Motion:
                 raise ConfigError(f"Motion.records[{i}] must be (start_s, duration_s > 0), got {rec!r}")
         if self.temp_channel_c is not None and not math.isfinite(self.temp_channel_c):
             raise ConfigError(f"Motion.temp_channel_c must be a finite number or None, got {self.temp_channel_c!r}")
+
+
+def true_heading(t_s: np.ndarray, heading_rate_dps: np.ndarray, heading0_deg: float) -> np.ndarray:
+    """The true heading, deg: ``heading0_deg`` plus the trapezoid integral of the rate at the times ``t_s``."""
+    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
+
+    return heading0_deg + cumulative_trapezoid(heading_rate_dps, t_s, initial=0.0)
 
 
 def still_motion(t_s, temp_c, temp_rate_cps, heading0_deg: float, roll_deg: float = 0.0, pitch_deg: float = 0.0,

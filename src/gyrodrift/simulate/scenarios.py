@@ -19,7 +19,7 @@ from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADI
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.adversarial import ADVERSARIAL_DURATION_S, ADVERSARIAL_SCENARIOS
 from gyrodrift.simulate.checks import positive
-from gyrodrift.simulate.device import DeviceModel, TriadModel, gyro_axis, temperature_reading
+from gyrodrift.simulate.device import DeviceModel, TriadModel, gyro_axis, seeded_streams, temperature_reading
 from gyrodrift.simulate.motion import (
     Motion,
     add_rotation,
@@ -38,6 +38,7 @@ from gyrodrift.simulate.motion import (
     sum_of_step_slopes,
     sum_of_steps,
     sway_rate,
+    true_heading,
     vehicle_temperature,
     wave,
 )
@@ -316,13 +317,9 @@ DEFAULT_DURATION_S: dict[str, float] = {
 # --------------------------------------------------------------------------- assembly
 
 
-def _streams(seed: int) -> dict[str, np.random.Generator]:
-    """Independent generators of one seed, one per random source."""
-    # Appended names only: child i of a SeedSequence does not depend on how many are spawned.
-    names = ("trajectory", "white", "bias", "rrw", "temp", "compass",
-             "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
-    children = np.random.SeedSequence(seed).spawn(len(names))
-    return {name: np.random.default_rng(child) for name, child in zip(names, children)}
+#: The random streams of a run, one per random source (append only: :func:`seeded_streams`).
+_STREAMS = ("trajectory", "white", "bias", "rrw", "temp", "compass",
+            "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
 
 
 def _jsonable(value):
@@ -403,12 +400,10 @@ def simulate(
     n = int(math.floor(duration * fs + 1e-9)) + 1
     t = np.arange(n) / fs
     dt = 1.0 / fs
-    rng = _streams(int(seed))
+    rng = seeded_streams(int(seed), _STREAMS)
 
     motion = SCENARIOS[scenario](t, duration, rng["trajectory"])
-    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
-
-    heading_true = motion.heading0_deg + cumulative_trapezoid(motion.heading_rate_dps, t, initial=0.0)
+    heading_true = true_heading(t, motion.heading_rate_dps, motion.heading0_deg)
     body_rate = motion.heading_rate_dps * (
         math.cos(math.radians(motion.roll_deg)) * math.cos(math.radians(motion.pitch_deg))
     )
