@@ -17,7 +17,6 @@ _UNSAFE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u200e\u200f\u202a-\u202e\u
 
 
 def _escape(match: re.Match) -> str:
-    """The Python escape of one unsafe character."""
     return match.group().encode("unicode_escape").decode("ascii")
 
 

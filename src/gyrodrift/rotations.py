@@ -73,7 +73,6 @@ def euler_matrix(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np.ndarra
 
 
 def _table(autopilot: str) -> dict:
-    """The rotation table of ``autopilot``."""
     if autopilot not in AUTOPILOTS:
         raise ConfigError(f"unknown autopilot {autopilot!r}; use one of: {', '.join(AUTOPILOTS)}")
     return PX4_ROTATIONS if autopilot == "px4" else ARDUPILOT_ROTATIONS

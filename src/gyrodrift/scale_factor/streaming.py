@@ -10,13 +10,12 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.conventions import TEMP, T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.kernels.numeric import wrap180, wrap360
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 from gyrodrift.scale_factor.filter import sf_correct
 from gyrodrift.samples import CompensatedSFSample
-from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, require_columns, unmeasured_turn
+from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, read_columns, unmeasured_turn
 
 __all__ = ["ScaleFactorRow", "TRACKER_COLUMNS", "CompensatedSFSample", "ScaleFactorTracker"]
 
@@ -231,11 +230,7 @@ class ScaleFactorTracker:
 
     def push_frame(self, out: pd.DataFrame) -> pd.DataFrame:
         """Add a chunk of a compensate() table; return the :data:`TRACKER_COLUMNS` on its index."""
-        require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
-        gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else None
-        cols = self.push_arrays(out[T].to_numpy(float), out["rate_z"].to_numpy(float), out[TEMP].to_numpy(float),
-                                out["compass_heading"].to_numpy(float), gates)
-        return pd.DataFrame(cols, index=out.index)
+        return pd.DataFrame(self.push_arrays(*read_columns(out)), index=out.index)
 
     # -- steps
     def _interp(self, x: float, p: int) -> tuple[float, int]:

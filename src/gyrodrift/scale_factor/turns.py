@@ -19,7 +19,7 @@ from gyrodrift.scale_factor.config import ScaleFactorConfig
 
 __all__ = [
     "REJECT_GATES", "EDGE", "NOT_STILL", "NO_COMPASS", "SMALL_TURN", "IMPLAUSIBLE", "LONG_TURN", "moving_mask",
-    "require_columns", "compensated_columns", "turn_measurements", "unmeasured_turn", "measure_turn",
+    "require_columns", "read_columns", "compensated_columns", "turn_measurements", "unmeasured_turn", "measure_turn",
 ]
 
 #: Drift-compensator refusals that also refuse an SF measurement over the same rows.
@@ -69,9 +69,7 @@ def require_columns(out: pd.DataFrame, cols) -> None:
     """Raise :class:`LogFormatError` naming the columns of ``cols`` that ``out`` lacks."""
     missing = [c for c in cols if c not in out.columns]
     if missing:
-        raise LogFormatError(
-            f"scale-factor estimate needs the compensate() output columns {', '.join(missing)}"
-        )
+        raise LogFormatError(f"scale-factor estimate needs the compensate() output columns {', '.join(missing)}")
 
 
 def _check_rows(t_s: np.ndarray, rate_dps: np.ndarray, source: str = "scale-factor estimate") -> None:
@@ -108,20 +106,22 @@ def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate")
     return temp_c[last]
 
 
-def compensated_columns(out: pd.DataFrame):
-    """The columns the SF estimate reads from a compensate() table, checked (see :func:`_check_rows`).
+def read_columns(out: pd.DataFrame):
+    """The columns the SF estimate reads from a compensate() table, as they are.
 
-    Returns ``t`` (s), ``rate`` (``rate_z``, deg/s), ``temp`` (degC, empty cells held),
-    ``compass`` (deg, NaN: no sample) and ``gates`` (``gate_reason``, '' when absent).
+    Returns ``t`` (s), ``rate`` (``rate_z``, deg/s), ``temp`` (degC), ``compass`` (deg, NaN:
+    no sample) and ``gates`` (``gate_reason``, '' when absent).
     """
     require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
-    t = out[T].to_numpy(float)
-    rate = out["rate_z"].to_numpy(float)
+    gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else np.full(len(out), "")
+    return (*(out[c].to_numpy(float) for c in (T, "rate_z", TEMP, "compass_heading")), gates)
+
+
+def compensated_columns(out: pd.DataFrame):
+    """:func:`read_columns`, checked (:func:`_check_rows`), empty temperature cells held."""
+    t, rate, temp, compass, gates = read_columns(out)
     _check_rows(t, rate)
-    temp = _held_temperature(out[TEMP].to_numpy(float))
-    compass = out["compass_heading"].to_numpy(float)
-    gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else np.full(t.size, "")
-    return t, rate, temp, compass, gates
+    return t, rate, _held_temperature(temp), compass, gates
 
 
 def _unwrapped_compass(psi_g: np.ndarray, compass: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -280,7 +280,6 @@ def temperature_reading(temp_true_c: np.ndarray, device: DeviceModel, rng: np.ra
 
 
 def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
-    """Uniform in log between ``low`` and ``high``."""
     return float(math.exp(rng.uniform(math.log(low), math.log(high))))
 
 

@@ -121,7 +121,6 @@ def _u(rng, lo, hi) -> float:
 
 
 def _sign(rng) -> float:
-    """-1 or 1."""
     return float(rng.choice([-1.0, 1.0]))
 
 

@@ -323,7 +323,6 @@ _STREAMS = ("trajectory", "white", "bias", "rrw", "temp", "compass",
 
 
 def _jsonable(value):
-    """``value`` with every tuple a list, for ``attrs``."""
     if isinstance(value, dict):
         return {k: _jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
