@@ -1,21 +1,9 @@
 """Atomic output files: every file gyrodrift writes appears whole or not at all.
 
-A file is written to a hidden temporary file beside it, then moved onto its name in one
-step. The temporary is named ``.NAME.gyrodrift-tmp-HOST-PID-RANDOM``: NAME the output's
-file name (shortened if the whole would exceed 255 bytes), HOST eight hex digits of a
-hash of this machine's host name, PID the writing process and RANDOM twelve hex digits.
-A failed write removes its temporary, and so does an interrupt (SIGINT, and SIGTERM
-with the command line, which turns it into the same exception). A process killed
-outright (SIGKILL, power loss) cannot; the next write of the same output on the same
-host therefore removes the temporaries of that output whose process is no longer
-alive (:func:`remove_stale_temporaries`). Temporaries of other outputs, of live
-processes and of other hosts (a shared file system) are left alone; so is everything
-on systems without POSIX process signals, where liveness is not checked.
-
-The node at the output's name is never replaced by another kind: a FIFO or a character
-device (``/dev/null``, a terminal) is written through, in place, as a user piping on
-purpose expects; a symbolic link is written through too, the file it names replaced
-atomically (the link stays); a socket or a block device is refused.
+A file is written to a hidden temporary beside it (``.NAME.gyrodrift-tmp-HOST-PID-RANDOM``)
+and moved onto its name in one step; a FIFO, a character device or a symbolic link is
+written through. Naming, clean-up of stale temporaries and the node kinds:
+``docs/output_files.md`` (atomic outputs).
 """
 
 from __future__ import annotations
@@ -70,19 +58,10 @@ def _pid_alive(pid: int) -> bool:
 
 
 def remove_stale_temporaries(path) -> list[Path]:
-    """Remove the temporaries of ``path`` left by dead processes on this host.
+    """Remove the temporaries of the output ``path`` left by dead processes on this host; return them.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The output file (not the temporary).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files removed. A temporary whose process is alive (or is a zombie not yet
-        reaped by its parent), of another output or another host, or that cannot be
-        removed, stays.
+    A temporary whose process is alive (or a zombie not yet reaped), of another output or
+    another host, or that cannot be removed, stays.
     """
     path = Path(path)
     prefix = _prefix(path)
@@ -107,8 +86,7 @@ def remove_stale_temporaries(path) -> list[Path]:
 
 
 def _create_temporary(path: Path) -> tuple[int, Path]:
-    """Create the hidden temporary file of ``path`` (module notes), after removing stale
-    ones of earlier runs; return its descriptor (open for writing) and its path.
+    """Create the temporary of ``path`` (after removing stale ones); its descriptor and path.
     Problems with ``path`` are a :class:`ConfigError` naming it."""
     parent = path.parent
     if not parent.is_dir():
@@ -181,13 +159,11 @@ def _through(path: Path):
 
 @contextmanager
 def atomic_output(path):
-    """Open a hidden temporary file beside ``path`` for binary writing; on success it
-    is synced and moved onto ``path`` in one step (:func:`os.replace`).
+    """Open a hidden temporary file beside ``path`` for binary writing; on success it is synced
+    and moved onto ``path`` in one step (:func:`os.replace`).
 
-    A missing folder, a folder given as the path, or an OS error is a
-    :class:`ConfigError` naming the path; on any failure the temporary file is
-    removed and an existing ``path`` is left untouched. A FIFO or a character device is
-    written through in place, a symbolic link through to its file (module notes).
+    On any failure the temporary is removed and an existing ``path`` left untouched; a
+    problem with the path is a :class:`ConfigError` naming it.
     """
     path, through = _destination(Path(path))
     if through:
@@ -204,17 +180,9 @@ def atomic_output(path):
 
 @contextmanager
 def atomic_path(path, *, sync_every_s: float | None = None):
-    """:func:`atomic_output` for writers that open the file by its name: yield the path
-    of the hidden temporary file (created, empty).
-
-    pyarrow's own files (:class:`pyarrow.OSFile`) write without holding Python's GIL,
-    which a Python file object passed to pyarrow needs for every write. The writer must
-    close its file before the block ends; the file is then synced and moved onto
-    ``path``. Errors and clean-up as for :func:`atomic_output`.
-
-    With ``sync_every_s``, a background thread also syncs what has been written so far
-    at that interval, so that the disk writes overlap the writing instead of all waiting
-    for the end (for a file written over seconds, e.g. by a pipeline).
+    """:func:`atomic_output` for writers that open the file by its name (pyarrow's own files):
+    yield the path of the temporary (created, empty), which the writer closes before the block
+    ends. ``sync_every_s``: also sync what is written so far at that interval, in a thread.
     """
     path, through = _destination(Path(path))
     if through:  # the writer opens the FIFO or device itself

@@ -1,39 +1,34 @@
-"""The input columns joined to an output table at once, however many there are.
+"""Columns: the input columns joined to an output table at once, and inputs as read-only floats.
 
 :func:`join_input_columns` does what adding each input column in turn does
-(:func:`gyrodrift.compensator.append_input_columns`), in one step: a table with
-thousands of pass-through columns is assembled in time linear in its columns, not
-quadratic (pandas copies its column index, and warns, at every insertion).
+(:func:`gyrodrift.compensator.append_input_columns`) in one step, in time linear in the
+columns (pandas copies its column index, and warns, at every insertion).
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 
 from gyrodrift.conventions import HEADING, T
 
-__all__ = ["join_input_columns"]
+__all__ = ["join_input_columns", "read_only_floats"]
+
+
+def read_only_floats(values) -> np.ndarray:
+    """A float64, contiguous, read-only view of ``values`` (a copy only when needed): a compiled
+    kernel takes its inputs read-only, one compiled version whatever the caller passes."""
+    view = np.ascontiguousarray(values, dtype=float).view()
+    view.flags.writeable = False
+    return view
 
 
 def join_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:
-    """``out`` with every input column of ``log`` but ``t`` and ``heading`` after its own.
+    """``out`` (its ``attrs`` kept) with every input column of ``log`` but ``t`` and ``heading`` after its own.
 
-    A column whose name the table already has is added as ``in_NAME`` (``in_in_NAME``
-    when that is taken too, and so on: no column is ever replaced). The columns are
-    taken row for row, by position, keeping their types (a text column of empty cells
-    stays text).
-
-    Parameters
-    ----------
-    out : DataFrame
-        The output table (its ``attrs`` are kept).
-    log : DataFrame
-        The input rows, as many as ``out`` has.
-
-    Returns
-    -------
-    DataFrame
-        A new table: ``out``'s columns, then the input columns.
+    A name the table already has becomes ``in_NAME`` (``in_in_NAME`` when that is taken too:
+    no column is ever replaced). The columns are taken row for row, by position, keeping
+    their types (a text column of empty cells stays text).
     """
     taken = set(out.columns)
     positions, names = [], []

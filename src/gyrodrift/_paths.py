@@ -1,12 +1,9 @@
 """The files a command reads and writes: never one for the other, and every output writable first.
 
-:func:`same_file` tells whether two paths name one file: the same resolved path (links
-followed), or, when both exist, the same device and inode (a hard link, a bind mount).
-:func:`check_paths` refuses a command whose outputs (``-o``, ``--save-profile``) name one of
-its inputs (the log, ``--prior``, ``--profile``, ``--config``, ``--calibration``) or each
-other, and checks every output before any work is done (:func:`check_writable`), so that
-a bad ``--save-profile`` cannot leave the ``-o`` file written. Every refusal is a
-:class:`~gyrodrift.errors.ConfigError` of one line naming the option and the path.
+:func:`check_paths` refuses outputs that name an input or each other and checks each output
+(:func:`check_writable`) before any work; refusals are one-line
+:class:`~gyrodrift.errors.ConfigError` naming the option and the path
+(``docs/output_files.md``, input and output paths).
 """
 
 from __future__ import annotations
@@ -66,18 +63,8 @@ def _short(path) -> str:
 
 
 def check_writable(path, what: str = "output") -> None:
-    """Check, before any work, that ``path`` can be written as an output file.
-
-    Its name and length must be ones the system takes, its folder must exist and be
-    writable, and it must not be a folder, a socket or a block device. A FIFO or a
-    character device (``/dev/null``) is written through and must be writable; a symbolic
-    link is written through to the file it names.
-
-    Raises
-    ------
-    ConfigError
-        One line naming ``what`` and the path, and what to do.
-    """
+    """Check, before any work, that ``path`` can be written as an output file (a
+    :class:`ConfigError` naming ``what`` and the path otherwise; the rules: ``docs/output_files.md``)."""
     check_path_length(path, what)
     path = Path(path)
     try:
@@ -113,6 +100,7 @@ def node_kind(mode: int) -> str:
 
 
 def _reason(exc: OSError) -> str:
+    """Why the system refused a path, in words."""
     if exc.errno == errno.ENAMETOOLONG:
         return "name too long"
     if exc.errno == errno.ELOOP:
@@ -123,19 +111,8 @@ def _reason(exc: OSError) -> str:
 def check_paths(command: str, args) -> None:
     """Refuse a command line whose outputs name its inputs or each other; check each output.
 
-    Parameters
-    ----------
-    command : str
-        The subcommand (``compensate``, ``stream``, ...).
-    args : argparse.Namespace
-        Its options: the attributes :data:`READ_OPTIONS` and :data:`WRITE_OPTIONS` that
-        it has and that name files (``-`` is standard input or output, not a file).
-
-    Raises
-    ------
-    ConfigError
-        ``<output>: <option> is <input option> <path> (the same file); the input is never
-        overwritten: choose another <option>``, or a problem of :func:`check_writable`.
+    ``args`` (an :class:`argparse.Namespace` of ``command``) has the attributes of
+    :data:`READ_OPTIONS` and :data:`WRITE_OPTIONS` that name files (``-`` is not a file).
     """
     reads = _named(args, READ_OPTIONS)
     writes = [] if command in _FOLDER_OUTPUTS else _named(args, WRITE_OPTIONS)

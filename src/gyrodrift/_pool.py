@@ -33,28 +33,12 @@ def _stop(pool) -> None:
 
 
 def map_processes(job, items, workers: int, progress=None, on_error=None) -> list:
-    """``[job(item) for item in items]`` in up to ``workers`` spawned processes.
+    """``[job(item) for item in items]`` in up to ``workers`` spawned processes, in input order.
 
-    Parameters
-    ----------
-    job : callable
-        A picklable function of one item.
-    items : sequence
-    workers : int
-        Largest number of processes (never more than there are items).
-    progress : callable, optional
-        ``progress(iterable, total)`` wrapping the completed futures (a progress bar).
-    on_error : callable, optional
-        ``on_error(item, exception)`` gives the result of an item whose worker failed
-        (a process that died, an argument that could not be pickled); without it the
-        exception propagates.
-
-    Notes
-    -----
-    An interruption of the caller (Ctrl-C, or SIGTERM as :class:`gyrodrift.cli.commands.Terminated`)
-    cancels the items not yet started and terminates the workers (SIGTERM, which they
-    take as Ctrl-C, so their partial outputs are removed; SIGKILL after
-    :data:`STOP_WAIT_S`), then propagates: nothing queued runs after it.
+    ``job`` is a picklable function of one item; ``progress(iterable, total)`` wraps the
+    completed futures (a progress bar); ``on_error(item, exception)`` gives the result of an
+    item whose worker failed (else the exception propagates). An interruption stops every
+    worker and propagates (``docs/output_files.md``, worker processes).
     """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed

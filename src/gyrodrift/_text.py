@@ -1,10 +1,7 @@
 """User text made safe to show on one line: in terminal lines, parameter files and reports.
 
-File names, titles and other text a user gives can hold line ends, which would start a
-new line of a message or a new parameter in a file written for an autopilot, and
-control characters such as the escape codes a terminal obeys (ANSI colours, cursor
-moves, window titles). :func:`printable` writes each of them as its Python escape
-(``\\n``, ``\\x1b``, ``\\u202e``), so the text stays one line and is shown, not obeyed.
+:func:`printable` writes line ends, control characters and bidirectional controls as their
+Python escapes, so the text stays one line and is shown, not obeyed (``docs/output_files.md``).
 """
 
 from __future__ import annotations

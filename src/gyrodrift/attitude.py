@@ -1,48 +1,9 @@
 """Gravity direction from the gyro, aided by the accelerometer: the tilt of the raw compass.
 
-A heading tilt-compensated with the accelerometer alone (:func:`gyrodrift.compass.tilt_compensated_heading`)
-takes the specific force for gravity, so braking and cornering tilt it by tens of degrees
-(0.2 g of braking: 11°). With the gyro's x and y axes, the gravity direction is instead
-*propagated* with the body rates and only *corrected* towards the accelerometer when the
-accelerometer is believable: a complementary filter with an integral term (Mahony, Hamel and
-Pflimlin, *Nonlinear complementary filters on the special orthogonal group*, IEEE TAC 2008,
-reduced to the gravity vector).
-
-Equations (body frame FRD, ``d`` the unit vector pointing down, ``ω`` the gyro in rad/s,
-``b`` the gyro bias the filter learns, ``m = -f/|f|`` the accelerometer's down)::
-
-    e     = d × m                                  (1)  error axis, |e| = sin(angle)
-    ω_eff = ω - b - k_P e     (k_P e only when the accelerometer is accepted)   (2)
-    d    ← rotate(d, -ω_eff Δt)                    (3)  a fixed world vector seen from a
-                                                        body turning at ω: d' = -ω × d
-    b    ← b + k_I e Δt                            (4)  (only when accepted)
-
-With (2), ``d' ⊃ k_P (m - (d·m) d)``: ``d`` turns towards ``m`` with the time constant
-``1/k_P`` (:data:`TAU_S`, 2 s); with (4) a constant gyro bias across gravity is learned
-(:data:`K_I` = ``k_P²/4``, the critically damped pair, ω_n = k_P/2, settling in about
-4/ω_n = 16 s). Until it is, a bias β tilts ``d`` by ``β/k_P`` (0.5 deg/s: 1°).
-(3) is exact for a constant rate over the step (Rodrigues' rotation formula).
-
-The accelerometer is accepted on a row when all hold (each a setting here, module constants):
-
-* ``| |f| / g - 1 | <= NORM_TOL`` (0.05): the specific force is near 1 g, ``g`` being 1 or
-  9.80665 as the first row reads near one or the other (the log's unit);
-* ``|ω| <= MAX_RATE_DPS`` (10 deg/s): not turning fast (cornering's centripetal
-  acceleration, ``v·ω``);
-* the angle between ``m`` and ``d`` is at most :data:`ANGLE_GATE_DEG` (2°). Braking at 0.2 g
-  changes ``|f|`` by 2 % only (inside the norm gate) but tilts ``m`` by 11°: this gate is
-  what refuses it. So that a wrong ``d`` is not locked out for ever, a disagreement that
-  lasts :data:`RELOCK_S` (20 s) with the two other gates passed is accepted (a sustained
-  acceleration that long is rare; a turn is refused by the rate gate and does not count),
-  and through the first :data:`STARTUP_S` (20 s) the angle gate is open, while the bias
-  is learned.
-
-The filter starts from the accelerometer on its first row with a finite one, and starts
-again from the accelerometer after a time gap longer than :data:`MAX_GAP_S` (nothing is
-known of what happened in it). A NaN gyro cell holds the previous rate, a NaN
-accelerometer cell is not used. The state (:func:`new_state`) is a small array, so the
-filter resumes exactly across chunks and rows: the batch, chunked and streaming paths run
-:func:`propagate` and give the same numbers.
+The down vector is propagated with the body rates and corrected towards the accelerometer
+only when it is believable: a complementary filter with an integral term (Mahony, Hamel and
+Pflimlin, IEEE TAC 2008) reduced to the gravity vector. Eq. (1)-(4), the gates and their
+constants: ``docs/heading_and_axes.md`` (gyro-aided tilt).
 """
 
 from __future__ import annotations
@@ -51,34 +12,18 @@ import math
 
 import numpy as np
 
+from gyrodrift._columns import read_only_floats
 from gyrodrift.kernels import jit
 
 __all__ = [
-    "TAU_S",
-    "K_I",
-    "NORM_TOL",
-    "MAX_RATE_DPS",
-    "ANGLE_GATE_DEG",
-    "RELOCK_S",
-    "STARTUP_S",
-    "MAX_GAP_S",
-    "MAX_BIAS_DPS",
-    "new_state",
-    "propagate",
-    "gravity_down",
-    "GravityFilter",
-    "RawTilt",
-    "accel_down",
+    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "STARTUP_S", "MAX_GAP_S",
+    "MAX_BIAS_DPS", "new_state", "propagate", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
 
-#: Time constant of the accelerometer correction, s (k_P = 1/TAU_S, eq. 2). A few seconds:
-#: long against the accelerometer's noise and vibration, short against the drift of a
-#: gyro whose bias is not yet learned.
+#: Time constant of the accelerometer correction, s (k_P = 1/TAU_S, eq. 2).
 TAU_S = 2.0
-#: After the first row, the angle gate is open this long, s: the gyro bias is not yet
-#: learned (eq. 4 settles in about 4/ω_n = 16 s), and a disagreement it causes must not be
-#: refused (the start-up phase of x-io Fusion's AHRS does the same with a raised gain).
+#: After the first row, the angle gate is open this long, s (while the bias is learned).
 STARTUP_S = 20.0
 #: Integral gain of eq. (4), 1/s²: k_P²/4 (critically damped).
 K_I = 0.25 / TAU_S**2
@@ -133,20 +78,12 @@ def _rotate(v0, v1, v2, r0, r1, r2):
 
 @jit
 def propagate(t, gx, gy, gz, acc, state, out):
-    """Run the filter over rows; write each row's down unit vector (body FRD) to ``out``.
+    """Run the filter over rows; write each row's down unit vector (body FRD) to ``out`` (n, 3).
 
-    Parameters
-    ----------
-    t : (n,) float64
-        Time, s, increasing (also across calls).
-    gx, gy, gz : (n,) float64
-        Raw gyro rates, deg/s, FRD. NaN holds the previous value.
-    acc : (n, 3) float64
-        Specific force, g or m/s², FRD (level and still: (0, 0, -1 g)). NaN: not used.
-    state : (14,) float64
-        From :func:`new_state`; updated in place.
-    out : (n, 3) float64
-        The down vector after each row (NaN before the first finite accelerometer row).
+    ``t`` (s, increasing, also across calls); raw gyro rates ``gx, gy, gz`` (deg/s, FRD; NaN
+    holds the previous value); specific force ``acc`` (n, 3; g or m/s², FRD; NaN: not used);
+    ``state`` from :func:`new_state`, updated in place. ``out`` is NaN before the first
+    finite accelerometer row.
     """
     kp = 1.0 / TAU_S
     cos_gate = math.cos(math.radians(ANGLE_GATE_DEG))
@@ -208,36 +145,19 @@ def propagate(t, gx, gy, gz, acc, state, out):
             out[i, k] = state[_D + k]
 
 
-def _column(a) -> np.ndarray:
-    """A float64, contiguous, read-only view (one compiled version of :func:`propagate`)."""
-    view = np.ascontiguousarray(a, dtype=float).view()
-    view.flags.writeable = False
-    return view
-
-
 class GravityFilter:
-    """The gravity filter of the module notes, resumable: chunks or rows in time order.
-
-    Examples
-    --------
-    A still, level unit: down stays (0, 0, 1).
-
-    >>> f = GravityFilter()
-    >>> d = f.feed([0.0, 0.1], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [[0, 0, -1.0], [0, 0, -1.0]])
-    >>> (d[-1] + 0.0).tolist()  # + 0.0: no negative zero
-    [0.0, 0.0, 1.0]
-    """
+    """The gravity filter, resumable: chunks or rows in time order."""
 
     def __init__(self):
         self.state = new_state()
 
     def feed(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
         """Down unit vectors (n, 3), body FRD, of these rows (see :func:`propagate`)."""
-        t = _column(t)
-        acc = np.ascontiguousarray(acc, dtype=float).reshape(-1, 3).view()
-        acc.flags.writeable = False
+        t = read_only_floats(t)
+        acc = read_only_floats(np.asarray(acc, dtype=float).reshape(-1, 3))
         out = np.empty((t.size, 3))
-        propagate(t, _column(gyro_x_dps), _column(gyro_y_dps), _column(gyro_z_dps), acc, self.state, out)
+        propagate(t, read_only_floats(gyro_x_dps), read_only_floats(gyro_y_dps), read_only_floats(gyro_z_dps), acc,
+                  self.state, out)
         return out
 
 
@@ -260,20 +180,9 @@ TILT_SOURCES = ("gyro", "accel")
 class RawTilt:
     """The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``) for one log, chunk by chunk.
 
-    Parameters
-    ----------
-    tilt : str
-        ``"gyro"``: the gyro-aided gravity of :class:`GravityFilter` when the log has
-        ``gyro_x`` and ``gyro_y``; ``"accel"``: the accelerometer alone.
-    gyro_xy : bool
-        Whether the log has ``gyro_x`` and ``gyro_y``.
-    source : str
-        Name for the note.
-
-    Attributes
-    ----------
-    uses_gyro : bool
-        True when :meth:`down` propagates gravity with the gyro.
+    ``tilt`` ``"gyro"``: the gyro-aided gravity of :class:`GravityFilter` when the log has
+    ``gyro_x`` and ``gyro_y`` (``gyro_xy``; then ``uses_gyro``); ``"accel"``: the
+    accelerometer alone. ``source`` names the log in the note.
     """
 
     def __init__(self, tilt: str, gyro_xy: bool, source: str = "log"):

@@ -1,21 +1,7 @@
-"""x-io Fusion's gyroscope offset correction, run on a log: the ``fusion-offset`` baseline.
+"""x-io Fusion's gyroscope offset correction and AHRS, run on a log: the ``fusion-offset`` and
+``fusion-ahrs`` baselines, through the ``imufusion`` package (a benchmark and test dependency).
 
-x-io Technologies' Fusion library (``xioTechnologies/Fusion``, ``Fusion/FusionBias.c``;
-named ``FusionOffset`` before v1.3.0) corrects the gyroscope offset at run time:
-every sample it subtracts the current offset; when every axis of the corrected gyro
-has stayed within ``stationary_threshold`` (3 deg/s) for ``stationary_period`` (3 s)
-of samples, each further sample moves the offset towards the gyro by a first-order
-filter of 0.02 Hz cut-off (gain ``2π·0.02/sample_rate``). It has no temperature
-input. The baseline here runs the library itself, through its Python package
-``imufusion`` (``imufusion.Bias``, Fusion 1.3; ``pip install imufusion``), a
-benchmark and test dependency only: when it is missing, :func:`available` is False
-and :func:`gyrodrift.evaluate.compare.run_methods` skips the method with the reason.
-
-The log's gyro goes in as it is (deg/s; ``gyro_x``, ``gyro_y`` when the log has them,
-else 0), one sample per row at the log's median sample rate (the library counts
-samples, not seconds). The drift of a row is ``gyro_z`` minus the corrected z rate:
-the offset in force at that row. :mod:`gyrodrift.evaluate.compare` then integrates the
-corrected rate from the first compass sample as for every other method.
+What the library does and how a log is fed to it: ``docs/heading_and_axes.md`` (x-io Fusion).
 """
 
 from __future__ import annotations
@@ -28,13 +14,16 @@ import pandas as pd
 from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, T
 from gyrodrift.errors import ConfigError
 
-__all__ = ["PACKAGE", "available", "fusion_offset_drift", "fusion_ahrs_heading"]
+__all__ = [
+    "PACKAGE", "available", "fusion_offset_drift", "fusion_ahrs_heading",
+]
 
 #: The Python package that runs x-io Fusion.
 PACKAGE = "imufusion"
 
 
 def _imufusion():
+    """The ``imufusion`` module with ``Bias`` (1.3 or later), or None."""
     try:
         import imufusion
     except ImportError:
@@ -47,11 +36,24 @@ def available() -> bool:
     return _imufusion() is not None
 
 
+def _library(method: str):
+    """The ``imufusion`` module, or a :class:`ConfigError` saying that ``method`` needs it."""
+    imufusion = _imufusion()
+    if imufusion is None:
+        raise ConfigError(f"{method} needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    return imufusion
+
+
 def _axis(log: pd.DataFrame, name: str) -> np.ndarray:
     """A gyro column as floats (deg/s), gaps carried forward; zeros when absent or empty."""
     if name not in log.columns:
         return np.zeros(len(log))
     return log[name].ffill().fillna(0.0).to_numpy(float)
+
+
+def _gyro(log: pd.DataFrame) -> np.ndarray:
+    """The (n, 3) gyro of a log, deg/s (:func:`_axis` of x, y and z)."""
+    return np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
 
 
 def fusion_offset_drift(
@@ -66,32 +68,18 @@ def fusion_offset_drift(
     Parameters
     ----------
     log : DataFrame
-        Input contract: ``t`` (s) and ``gyro_z`` (deg/s); ``gyro_x``, ``gyro_y``
-        (deg/s) are used when present, else zero.
+        ``t`` (s) and ``gyro_z`` (deg/s); ``gyro_x``, ``gyro_y`` when present, else zero.
     sample_rate_hz : float, optional
-        Sample rate given to the library, Hz (default: one over the median time step
-        of the log).
-    stationary_threshold_dps : float, optional
-        Largest corrected rate of every axis that counts as still, deg/s (default
-        the library's, 3 deg/s).
-    stationary_period_s : float, optional
-        Stillness needed before the offset adapts, s (default the library's, 3 s).
-
-    Returns
-    -------
-    ndarray
-        ``gyro_z - corrected z rate`` per row, deg/s (the library computes in single
-        precision).
+        Given to the library (default: one over the median time step).
+    stationary_threshold_dps, stationary_period_s : float, optional
+        The library's stillness threshold (deg/s, default 3) and period (s, default 3).
 
     Raises
     ------
     ConfigError
-        ``imufusion`` is missing, a column is missing, the log has fewer than two
-        rows, or a setting is not a positive number.
+        ``imufusion`` missing, a column missing, fewer than two rows, or a bad setting.
     """
-    imufusion = _imufusion()
-    if imufusion is None:
-        raise ConfigError(f"fusion-offset needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    imufusion = _library("fusion-offset")
     missing = [c for c in (T, GYRO_Z) if c not in log.columns]
     if missing:
         raise ConfigError(f"fusion-offset needs the column(s) {', '.join(missing)}")
@@ -113,7 +101,7 @@ def fusion_offset_drift(
     bias = imufusion.Bias()
     bias.set_settings(settings)
 
-    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    gyro = _gyro(log)
     corrected_z = np.empty(len(log))
     update = bias.update
     for i, sample in enumerate(gyro):
@@ -124,29 +112,11 @@ def fusion_offset_drift(
 def fusion_ahrs_heading(log: pd.DataFrame, compass_heading: np.ndarray | None = None) -> np.ndarray:
     """Heading (deg, [0, 360)) of x-io Fusion's AHRS with its gyroscope offset correction, per row.
 
-    Per sample: ``Bias.update`` (the offset correction, settings as
-    :func:`fusion_offset_drift` with a 5-s stationary period), then ``Ahrs`` (NED, gain
-    0.5, acceleration and magnetic rejection 10 deg, recovery after 5 s, Fusion's
-    recommended settings): ``update`` with the raw magnetometer and accelerometer when
-    the log has them, else ``update_external_heading`` with a level accelerometer; a compass
-    slower than the gyro is held (the latest sample, as firmware holds its last reading) up to
-    1 s, ``update_no_magnetometer`` after that. The
-    sample period given to the AHRS is each row's own time step (the library's
-    ``set_sample_period``), so irregular logs integrate correctly; the rejection
-    timeout counts samples at the median rate. The heading is the yaw of its
-    quaternion.
-
-    Parameters
-    ----------
-    log : DataFrame
-        Input contract (deg/s, g, any magnetometer unit).
-    compass_heading : ndarray, optional
-        The compass heading per row, deg, NaN without a sample (default the log's
-        ``heading`` column); ignored when the log has the raw magnetometer.
+    ``log`` is in the input contract (deg/s, g, any magnetometer unit); ``compass_heading``
+    (deg per row, NaN without a sample; default the log's ``heading``) is used when the log has
+    no raw magnetometer. The settings: ``docs/heading_and_axes.md`` (x-io Fusion).
     """
-    imufusion = _imufusion()
-    if imufusion is None:
-        raise ConfigError(f"fusion-ahrs needs the {PACKAGE} package (1.3 or later): pip install {PACKAGE}")
+    imufusion = _library("fusion-ahrs")
     t = log[T].to_numpy(float)
     if t.size < 2:
         raise ConfigError(f"fusion-ahrs needs at least 2 rows, got {t.size}")
@@ -158,7 +128,7 @@ def fusion_ahrs_heading(log: pd.DataFrame, compass_heading: np.ndarray | None = 
     ahrs.set_settings(imufusion.AhrsSettings(
         sample_rate=fs_hz, convention=imufusion.CONVENTION_NED, gain=0.5, gyroscope_range=2000.0,
         acceleration_rejection=10.0, magnetic_rejection=10.0, rejection_timeout=int(5 * fs_hz)))
-    gyro = np.column_stack([_axis(log, GYRO_X), _axis(log, GYRO_Y), _axis(log, GYRO_Z)])
+    gyro = _gyro(log)
     raw = all(c in log.columns for c in ("mag_x", "mag_y", "mag_z", "acc_x", "acc_y", "acc_z"))
     if raw:
         mag = log[["mag_x", "mag_y", "mag_z"]].to_numpy(float)

@@ -1,23 +1,8 @@
 """Hard- and soft-iron calibration of a raw magnetometer from the log itself, when it turns enough.
 
-Model (body frame FRD, ``m`` the raw field, ``d`` the down unit vector of the tilt in force,
-:mod:`gyrodrift.attitude`)::
-
-    m_cal = s ⊙ (m - o),   s = (1, s_y, s_z)            (1)  hard-iron offset o, axis scales
-    |m_cal| = F                                          (2)  the Earth's field strength
-    m_cal · d = V = F sin(dip)                           (3)  its vertical part
-
-Both are solved together by least squares (Levenberg–Marquardt). On a unit that stays
-level (its down vector within :data:`MIN_TILT_SPREAD_DEG`, 15°, of its mean) ``o_z`` and
-``s_z`` are undetermined (they only shift the vertical part): they are kept at 0 and 1,
-which does not change the heading of a level unit. The fit is accepted when the
-calibrated, tilt-compensated headings cover more than :data:`MIN_COVERAGE_DEG` (270°, in
-10° sectors) and the relative RMS of (2) is below :data:`MAX_RESIDUAL` (5 %).
-
-The fit needs the whole log (the chunked file path reads the file once more before
-compensating it), so it is not causal: the streaming :class:`gyrodrift.Compensator`
-does not calibrate. :class:`MagSamples` keeps a bounded, evenly thinned set of samples
-whatever the length of the log and the size of its chunks.
+``m_cal = s ⊙ (m - o)`` fitted so that ``|m_cal|`` and its vertical part are constant; used only
+when the headings cover enough and the fit is good. Not causal. The model and the
+acceptance: ``docs/heading_and_axes.md`` (magnetometer calibration).
 """
 
 from __future__ import annotations
@@ -27,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "MagCalibration", "MagSamples", "fit"]
+__all__ = [
+    "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "MagCalibration", "MagSamples", "fit",
+]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
 MIN_COVERAGE_DEG = 270.0
@@ -70,9 +57,8 @@ class MagCalibration:
 
 
 class MagSamples:
-    """A bounded, evenly thinned set of (mag, down) samples, in row order: every
-    ``stride``-th finite sample, the stride doubling when the set is full. The same rows
-    are kept however the log is cut into chunks."""
+    """A bounded, evenly thinned set of (mag, down) samples in row order; the same rows however
+    the log is cut into chunks (every ``stride``-th finite sample, the stride doubling when full)."""
 
     def __init__(self, capacity: int = CAPACITY):
         self.capacity = int(capacity)
@@ -112,17 +98,8 @@ def _coverage_deg(mag_cal: np.ndarray, down: np.ndarray) -> float:
 
 
 def fit(mag, down) -> MagCalibration:
-    """Fit eqs. (1)–(3) to samples of a log; see the module notes.
-
-    Parameters
-    ----------
-    mag, down : (n, 3) array_like
-        Raw field (any unit) and down unit vectors (body FRD) of the same rows.
-
-    Returns
-    -------
-    MagCalibration
-    """
+    """Fit ``m_cal = s ⊙ (m - o)``, ``|m_cal| = F``, ``m_cal · d = V`` to the raw fields ``mag``
+    (n, 3; any unit) and down unit vectors ``down`` (n, 3; body FRD) of the same rows."""
     from scipy.optimize import least_squares  # here: scipy costs 0.4 s at start-up
 
     mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)

@@ -1,28 +1,8 @@
 """Board and sensor rotations of PX4 and ArduPilot: their enum numbers as matrices.
 
-Both autopilots number the ways a flight controller (or an external sensor) can be
-mounted, and turn the sensor's vector into the vehicle body frame (FRD) with the matrix
-of that number: ``v_body = R @ v_board``. Both build ``R`` from Euler angles in the
-z-y-x order, ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`euler_matrix`), so an entry is
-its (roll, pitch, yaw) in degrees:
-
-* PX4 (``PX4/PX4-Autopilot``, ``src/lib/conversion/rotation.h``: ``enum Rotation`` and
-  the table ``rot_lookup``, turned into a matrix by ``get_rot_matrix`` as
-  ``Dcmf(Eulerf(roll, pitch, yaw))``): numbers 0 to 47 (:data:`PX4_ROTATIONS`), used by
-  ``SENS_BOARD_ROT`` and ``CAL_GYROn_ROT``/``CAL_ACCn_ROT``/``CAL_MAGn_ROT``.
-* ArduPilot (``ArduPilot/ardupilot``, ``libraries/AP_Math/rotations.h``: ``enum
-  Rotation``, applied by ``Vector3::rotate`` in ``vector3.cpp``; the numbers are those
-  of MAVLink's ``MAV_SENSOR_ORIENTATION``): numbers 0 to 43 (:data:`ARDUPILOT_ROTATIONS`),
-  used by ``AHRS_ORIENTATION``. Entry 38 (``ROLL_90_PITCH_68_YAW_293``) is a matrix in
-  ArduPilot's source, equal (to 1e-9) to roll 90, pitch 68.8, yaw 293.3 deg, which are
-  the angles used here (PX4's entry 38 is the rounded 90, 68, 293 of its table). The
-  custom rotations read their angles (deg) from parameters
-  (:data:`ARDUPILOT_CUSTOM`): 100 from ``AHRS_CUSTOM_ROLL``/``PIT``/``YAW`` (firmware
-  4.2 and older), 101 and 102 from ``CUST_ROT1_ROLL``/``PITCH``/``YAW`` and
-  ``CUST_ROT2_*`` (``AP_CustomRotations``).
-
-The same numbers mean different rotations in the two lists from 41 on (PX4 41 is roll 270
-yaw 180, ArduPilot 41 is pitch 7), so a number is always read with its autopilot.
+``v_body = R @ v_board`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`euler_matrix`); each
+table entry is its (roll, pitch, yaw) in degrees. A number is always read with its autopilot.
+Sources and the custom rotations: ``docs/heading_and_axes.md`` (board rotations).
 """
 
 from __future__ import annotations
@@ -99,6 +79,7 @@ def _table(autopilot: str) -> dict:
 
 
 def _numbers(autopilot: str) -> str:
+    """The valid numbers of ``autopilot``, for messages."""
     table = _table(autopilot)
     extra = ", 100..102 (custom)" if autopilot == "ardupilot" else ""
     return f"0..{max(table)}{extra}"
@@ -114,23 +95,11 @@ def rotation_name(autopilot: str, number: int) -> str:
 
 def rotation_matrix(autopilot: str, number, params: Mapping[str, float] | None = None,
                     where: str = "") -> np.ndarray:
-    """The matrix ``R`` (``v_body = R @ v_board``) of rotation ``number`` of ``autopilot``.
+    """The matrix ``R`` (``v_body = R @ v_board``) of rotation ``number`` of ``autopilot`` ("px4", "ardupilot").
 
-    Parameters
-    ----------
-    autopilot : {"px4", "ardupilot"}
-    number : int
-        The enum number (``SENS_BOARD_ROT``, ``AHRS_ORIENTATION`` ...).
-    params : mapping, optional
-        Parameters holding the angles of ArduPilot's custom rotations (100..102).
-    where : str
-        Where the number comes from, for the message (e.g. ``"log.bin: AHRS_ORIENTATION"``).
-
-    Raises
-    ------
-    ConfigError
-        A number the autopilot does not define, or a custom rotation whose angles are
-        not in ``params``.
+    ``params`` holds the angles of ArduPilot's custom rotations (100..102); ``where`` names the
+    number's source in the message. A number the autopilot does not define, or a custom
+    rotation whose angles are not in ``params``, is a :class:`ConfigError`.
     """
     table = _table(autopilot)
     label = where or AUTOPILOTS[autopilot]
@@ -152,13 +121,7 @@ def rotation_matrix(autopilot: str, number, params: Mapping[str, float] | None =
 
 
 def parse_rotation(text: str, autopilot: str) -> tuple[np.ndarray, str]:
-    """``--board-rotation``: an enum number of ``autopilot`` or ``roll,pitch,yaw`` in degrees.
-
-    Returns
-    -------
-    (numpy.ndarray, str)
-        ``R`` (``v_body = R @ v_board``) and a description for the messages.
-    """
+    """``--board-rotation``: a rotation number of ``autopilot`` or ``roll,pitch,yaw`` (deg); ``R`` and a description."""
     body = str(text).strip()
     if re.fullmatch(r"[+-]?\d+", body):
         number = int(body)

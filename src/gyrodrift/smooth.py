@@ -1,37 +1,8 @@
 """The default estimator's model run backwards: fixed-interval smoothing for recorded logs.
 
-The compensator is causal: the drift of a row is what the model knew *then*, so on a
-recorded log the first minutes, and the rows before an outage, are compensated with less
-than the log tells. This module runs the model's drift states backwards over the whole
-log with a Rauch–Tung–Striebel smoother and recompensates the log with them
-(:func:`smooth_output`, ``gyrodrift compensate --smooth``).
-
-Model (:mod:`gyrodrift.kernels.evidence`)
------------------------------------------
-The drift states ``z = [a, b, c', r]`` (the drift of eq. 2 centred on ``T_ref``,
-``bias = a (T − T_ref) + b T' + c'``, and the rate ``r`` at which it departs from eq. 2)
-evolve the same way whatever the hypotheses about compass and platform: between the ends
-of epochs ``k`` and ``k+1``::
-
-    z_{k+1} = F_k z_k + w_k,  F = I with F[c', r] = τ_r (1 − φ),  F[r, r] = φ = exp(−Δt/τ_r)
-    w_k ~ N(0, diag(q_a² |ΔT|,  q_b² Δt,  q_c² Δt + q_cT² |ΔT| + p_k σ_j²,  σ_r² (1 − φ²)))
-
-where ``p_k`` is the probability that the forward pass kept a jump of the drift (standard
-deviation σ_j) in epoch k+1: the smoother does not carry a step back across the epoch it
-happened in.
-
-with the settings of :class:`gyrodrift.estimators.AdaptiveConfig`. The forward pass is the
-model's own: its combined (mixture) estimate at every epoch end, recorded by the engine
-(``out.attrs["epochs"]``, :data:`gyrodrift.kernels.evloop.N_HIST` columns). Backward, for
-``k = K-2 … 0``::
-
-    P⁻ = F P_k Fᵀ + Q,  C_k = P_k Fᵀ (P⁻)⁻¹
-    z̃_k = z_k + C_k (z̃_{k+1} − F z_k),  P̃_k = P_k + C_k (P̃_{k+1} − P⁻) C_kᵀ
-
-The rows of an epoch (from the end of the one before to its own end) are compensated with
-its smoothed drift. The gyro-alone ``heading`` keeps its anchor and moves by the integral of
-the change of the drift; the fused heading, the labels and the mode decisions stay the
-forward pass's (a decision taken knowing the future is not what the row's sensors said).
+A Rauch–Tung–Striebel smoother over the drift states the model recorded at its epoch ends,
+and the log recompensated with them (:func:`smooth_output`, ``gyrodrift compensate
+--smooth``; not causal). The model and what changes: ``docs/heading_and_axes.md`` (smoothing).
 """
 
 from __future__ import annotations
@@ -54,16 +25,9 @@ __all__ = ["SmoothedDrift", "smooth_epochs", "smooth_output"]
 class SmoothedDrift:
     """Smoothed drift states, one set per epoch end.
 
-    Attributes
-    ----------
-    t : (K,) ndarray
-        Epoch ends, s.
-    states : (K, 4) ndarray
-        ``[a (deg/s/degC), b (deg/s per degC/s), c' (deg/s at T_ref), r (deg/s²)]``.
-    cov : (K, 4, 4) ndarray
-        Their covariance.
-    filtered : (K, 4) ndarray
-        The forward pass's states, for comparison.
+    ``t`` (K,) epoch ends, s; ``states`` (K, 4) ``[a (deg/s/degC), b (deg/s per degC/s),
+    c' (deg/s at T_ref), r (deg/s²)]``; ``cov`` (K, 4, 4) their covariance; ``filtered`` (K, 4)
+    the forward pass's states, for comparison.
     """
 
     t: np.ndarray
@@ -85,8 +49,7 @@ def _unpack(hist: np.ndarray):
 
 
 def _transition(dt: float, dtemp: float, jump: float, st) -> tuple[np.ndarray, np.ndarray]:
-    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC in which the
-    forward pass kept a jump of the drift with probability ``jump`` (module notes)."""
+    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC, a jump kept with chance ``jump``."""
     phi = np.exp(-dt / st.drift_rate_s)
     F = np.eye(4)
     F[2, 3] = st.drift_rate_s * (1.0 - phi)
@@ -99,12 +62,8 @@ def _transition(dt: float, dtemp: float, jump: float, st) -> tuple[np.ndarray, n
 def smooth_epochs(hist: np.ndarray, config=None) -> SmoothedDrift:
     """Rauch–Tung–Striebel smoothing of the model's drift states over its epoch history.
 
-    Parameters
-    ----------
-    hist : (K, N_HIST) ndarray
-        The engine's epoch history (``out.attrs["epochs"]``).
-    config : CompensatorConfig, optional
-        The settings the log was compensated with (``adaptive``: the process noise).
+    ``hist`` is the engine's ``out.attrs["epochs"]`` (K, N_HIST); ``config`` the
+    :class:`~gyrodrift.compensator.CompensatorConfig` the log was compensated with.
     """
     from gyrodrift.compensator import CompensatorConfig
 
@@ -137,20 +96,16 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensate` by the default estimator on a recorded log
-        (with its ``attrs["epochs"]`` and ``attrs["temp_ref_c"]``, and the input ``temp``
-        column unless the model's T was the clock).
+        :func:`gyrodrift.compensate` output of the default estimator on a recorded log (with its
+        ``attrs["epochs"]`` and ``attrs["temp_ref_c"]``, and ``temp`` unless T was the clock).
     config : CompensatorConfig, optional
         The settings ``out`` was compensated with.
 
     Returns
     -------
     DataFrame
-        A copy of ``out`` in which ``a, b, c``, ``bias_z``, ``rate_z``, ``heading``,
-        ``bias_sd`` and ``heading_sd`` come from the smoothed drift; ``unobservable`` is
-        recomputed from the smoothed covariance; every other column (the labels, the
-        forward ``heading_fused``) is unchanged. ``attrs["smoothed"]`` holds the
-        :class:`SmoothedDrift`.
+        A copy of ``out`` with the drift columns smoothed (``docs/heading_and_axes.md``) and
+        ``attrs["smoothed"]``, the :class:`SmoothedDrift`.
     """
     from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.kernels.layout import UNOBSERVABLE_NAMES, UNOBS_A, UNOBS_B, UNOBSERVABLE_SD_FRACTION

@@ -1,67 +1,10 @@
 """The x and y gyro axes: the same temperature drift model, aided by gravity when quasi-static.
 
-The heading axis (``gyro_z``) is aided by the compass (:mod:`gyrodrift.compensator`). The
-two level axes have no compass, but when the unit is quasi-static the accelerometer
-measures the gravity direction, i.e. roll and pitch, and their change over an update
-interval plays the part the compass heading change plays for z.
-
-Model (Feng, Li, Zhang 2015, eqs. 1, 2 and 5, per axis)
--------------------------------------------------------
-``gyro_i = true_rate_i + drift_i + noise`` (eq. 1) with
-``drift_i = a_i*T + b_i*T' + c_i`` (eq. 2), ``i = x, y``, with the temperature ``T`` and
-the ``T'`` of the z axis (the ``temp_rate`` output column, :mod:`gyrodrift.model`).
-Every row ``rate_i = gyro_i - bias_i`` (eq. 5). Each axis has its own estimator
-(``TriadConfig.estimator``, default ``stkf``, eq. 10); one measurement per interval.
-
-Signs and angles (FRD body, NED world; :mod:`gyrodrift.conventions`)
---------------------------------------------------------------------
-From the specific force ``f`` (level and still: ``f = (0, 0, -1 g)``):
-roll ``φ = atan2(-f_y, -f_z)`` (positive: right side down) and pitch
-``θ = asin(f_x/|f|)`` (positive: nose up). A positive ``gyro_x`` rolls right side down,
-a positive ``gyro_y`` pitches nose up (right-hand rule about the FRD axes), so with
-the Euler-angle kinematics
-
-    φ' = p + tanθ (q sinφ + r cosφ),      θ' = q cosφ − r sinφ
-
-(``r``: the compensated ``rate_z`` when given, else 0), integrated with the raw
-``gyro_x``/``gyro_y`` as ``p, q`` and the per-row accelerometer angles.
-
-Measurement (the analogue of eqs. 4 and 6)
-------------------------------------------
-Each end of an interval A..B is the mean over the last ``edge_s`` seconds up to
-the boundary. With ``Ī`` the window mean of a trapezoid integral and ``φ̄`` of an angle:
-
-    M_φ = [Ī_φ'(B) − Ī_φ'(A) − (φ̄(B) − φ̄(A))] / Δt,   Δt = t̄(B) − t̄(A)
-
-and the same for θ (gyro minus reference, as eq. 6). With ``k1``, ``k2`` the
-window-matched means of ``tanθ sinφ`` and ``cosφ``: ``m_y = M_θ/k2``,
-``m_x = M_φ − k1 m_y``, exact for constant drifts whatever the attitude does. H is the
-window-matched mean of ``[T, T', 1]`` (eq. 3, one row);
-``R = N²/Δt + (σ_A² + σ_B²)/Δt²``, ``σ`` the standard error of each edge's mean angle
-(at least ``acc_noise_g``), propagated through ``k1``, ``k2``.
-
-Gates (an interval is refused and the estimators hold, as the paper's outages)
-------------------------------------------------------------------------------
-``gap``: a step above ``max_gap_s`` or an empty gyro_x, gyro_y or temp cell.
-``accel``: an edge window with too few valid rows, a mean norm more than
-``acc_norm_tol_g`` from 1 g, or a component spread above ``acc_spread_g``. ``tilt``:
-tilt from level above ``max_tilt_deg`` at an edge. ``turning``: a ``turn_window_s``
-mean of the compensated x, y (or z) rate above ``turn_rate_dps``. ``residual`` (per
-axis): ``|m − h·x|Δt`` above ``max(residual_deg, residual_k·sqrt(h P hᵀ + R)·Δt)``;
-after ``relock_intervals`` agreeing refusals the next is accepted. A constant linear
-acceleration inside these tolerances biases the measurement.
-
-Bad inputs
-----------
-* Empty gyro_x/gyro_y/temp/temp_rate cells hold the previous value and refuse the
-  interval; ``rate_x``/``rate_y`` are NaN before the first gyro value.
-* Accelerometer rows that are empty, outside 0.5–1.5 g, or along body x alone are
-  taken as level; with none usable every interval is refused and the prior ``x0``
-  stays.
-
-The equations are in :mod:`gyrodrift.kernels.tilt` (``run`` per row, ``close`` per
-interval); this module holds the settings, the state and the table functions. A row
-depends only on earlier rows, and any chunking gives bit-identical results.
+Each level axis gets eq. (2) and its own estimator; the change of roll and pitch the
+accelerometer measures over an update interval plays the part of the compass heading
+change. The equations run in :mod:`gyrodrift.kernels.tilt`; this module holds the settings,
+the state and the table functions. Model, measurement, gates and settings:
+``docs/heading_and_axes.md`` (the x and y gyro axes).
 """
 
 from __future__ import annotations
@@ -71,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gyrodrift._columns import read_only_floats
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y
 from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.estimators.base import LinearDrift, Observation, make_estimator
@@ -80,11 +24,7 @@ from gyrodrift.kernels import tilt
 from gyrodrift.settings import check, setting
 
 __all__ = [
-    "TriadConfig",
-    "TriadCompensator",
-    "has_triad_inputs",
-    "TRIAD_COLUMNS",
-    "TRIAD_REASONS",
+    "TriadConfig", "TriadCompensator", "has_triad_inputs", "TRIAD_COLUMNS", "TRIAD_REASONS",
 ]
 
 #: Output columns, in order: compensated rates and removed drifts (deg/s), and 1 where the
@@ -97,8 +37,7 @@ TRIAD_REASONS = L.TILT_REASON_NAMES
 
 
 def _interval_estimators() -> tuple:
-    """The estimators of the x and y axes: those that learn from interval measurements (the
-    ``adaptive`` model, heading and compass, is the heading axis's)."""
+    """The estimators that learn from interval measurements (all but the heading axis's ``adaptive``)."""
     from gyrodrift.estimators import ESTIMATORS
 
     return tuple(sorted(n for n in ESTIMATORS if n != "adaptive"))
@@ -106,32 +45,7 @@ def _interval_estimators() -> tuple:
 
 @dataclass(frozen=True, kw_only=True)
 class TriadConfig:
-    """Settings of the x/y gravity aiding (the rest comes from the heading axis's settings).
-
-    Attributes
-    ----------
-    edge_s : float
-        Length of the window averaged at each interval edge, s (at most half the
-        update interval).
-    acc_unit : {"auto", "g", "m/s2"}
-        Unit of ``acc``; ``auto`` decides on the first usable row (norm > 3: m/s²).
-    acc_norm_tol_g : float
-        Largest accepted departure of an edge's mean specific-force norm from 1 g, g.
-    acc_spread_g : float
-        Largest accepted standard deviation of any accelerometer component in an edge
-        window, g.
-    acc_noise_g : float
-        Per-sample standard deviation of the accelerometer, g (floor of R).
-    max_tilt_deg : float
-        Largest accepted tilt from level at an edge, deg.
-    residual_deg : float
-        Floor of the residual gate, deg per interval.
-    residual_k : float
-        Residual gate in standard deviations of the predicted disagreement.
-    estimator : str
-        Drift estimator of the x and y axes (:mod:`gyrodrift.estimators`, the heading
-        axis's ``kalman`` settings), one that learns from interval measurements.
-    """
+    """Settings of the x/y gravity aiding (the rest is the heading axis's): ``docs/heading_and_axes.md``."""
 
     edge_s: float = setting(1.0, "s", gt=0.0)
     acc_unit: str = setting("auto", choices=("auto", "g", "m/s2"))
@@ -147,14 +61,6 @@ class TriadConfig:
         check(self)
 
 
-def _column(values) -> np.ndarray:
-    """A float64, contiguous, read-only view of an input (a copy only when needed): the
-    kernel takes its inputs read-only, one compiled version whatever the caller passes."""
-    view = np.ascontiguousarray(values, dtype=float).view()
-    view.flags.writeable = False
-    return view
-
-
 #: Messages of the kernel's statuses below 0.
 _STATUS = {
     L.XS_BAD_TIME: "triad: time must be finite and strictly increasing",
@@ -168,27 +74,11 @@ class TriadCompensator:
     Parameters
     ----------
     config : CompensatorConfig
-        The heading axis's settings, of which the x/y axes take ``update_interval_s``,
-        ``gyro_noise_dps_rthz``, ``gate`` (``max_gap_s``, ``turn_rate_dps``,
-        ``turn_window_s``, ``relock_intervals``) and ``kalman``; the estimator's name is
-        ``triad.estimator``.
+        The heading axis's settings (interval, noise, gate, ``kalman``).
     triad : TriadConfig, optional
     estimators : (DriftEstimator, DriftEstimator), optional
-        Fresh estimators for x and y instead of two built from the settings; their drift
-        must be eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`). The Kalman
-        filters are updated inside the compiled row loop, others here at interval ends.
-
-    Examples
-    --------
-    A still, level unit whose x gyro reads 0.1 deg/s and y gyro -0.2 deg/s:
-
-    >>> from gyrodrift.compensator import CompensatorConfig
-    >>> tc = TriadCompensator(CompensatorConfig())
-    >>> t = np.arange(0.0, 300.0, 0.1)
-    >>> acc = np.tile([0.0, 0.0, -1.0], (t.size, 1))
-    >>> out = tc.feed(t, np.full(t.size, 0.1), np.full(t.size, -0.2), np.full(t.size, 25.0), np.zeros(t.size), acc)
-    >>> round(float(out["bias_x"][-1]), 4), round(float(out["bias_y"][-1]), 4)
-    (0.1, -0.2)
+        Fresh x and y estimators instead of two built from the settings; their drift must be
+        eq. (2) (:class:`~gyrodrift.estimators.base.LinearDrift`).
     """
 
     def __init__(self, config, triad: TriadConfig | None = None, *, estimators=None):
@@ -242,8 +132,7 @@ class TriadCompensator:
 
     @property
     def reasons(self) -> dict[str, int]:
-        """Number of intervals refused for each reason of :data:`TRIAD_REASONS` (an interval
-        refused for two reasons counts under the first; the first interval is not counted)."""
+        """Intervals refused per reason of :data:`TRIAD_REASONS` (the first reason counts; not the first interval)."""
         return dict(zip(TRIAD_REASONS, self._xi[L.XI_REASONS:L.XI_REASONS + len(TRIAD_REASONS)].tolist()))
 
     @property
@@ -260,32 +149,24 @@ class TriadCompensator:
             Time, s, strictly increasing (also across chunks).
         gyro_x_dps, gyro_y_dps : (N,) array_like
             Raw roll- and pitch-axis rates, deg/s (FRD; NaN = hold).
-        temp_c : (N,) array_like
-            Gyro temperature, degC (NaN = hold; the first row needs a value).
-        temp_rate_cps : (N,) array_like
-            T', degC/s: the compensator's ``temp_rate`` column (NaN = hold).
+        temp_c, temp_rate_cps : (N,) array_like
+            Temperature (degC; the first row needs one) and the compensator's ``temp_rate`` (NaN = hold).
         acc : (N, 3) array_like
-            FRD specific force ``acc_x, acc_y, acc_z`` (g or m/s², see ``acc_unit``).
+            FRD specific force (g or m/s², ``acc_unit``).
         rate_z_dps : (N,) array_like, optional
-            Compensated heading-axis rate, deg/s (the ``rate_z`` column): the Euler
-            cross-coupling and the turning gate. None: taken as 0.
-
-        Returns
-        -------
-        dict of (N,) ndarray
-            ``rate_x, rate_y, bias_x, bias_y`` (deg/s, float) and ``tilt_gated`` (int8).
+            Compensated ``rate_z`` (the Euler cross-coupling and the turning gate); None: 0.
 
         Raises
         ------
         GyroDriftError
-            A time not finite or not increasing, no temperature on the first row, or
-            columns of different lengths; no row is taken then.
+            A time not finite or not increasing, no first temperature, or columns of different
+            lengths; no row is taken then.
         """
-        t = _column(t_s)
+        t = read_only_floats(t_s)
         n = t.size
-        cols = [_column(v) for v in (gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps)]
-        rz = _column(np.zeros(n) if rate_z_dps is None else rate_z_dps)
-        acc = _column(np.asarray(acc, dtype=float).reshape(-1, 3))
+        cols = [read_only_floats(v) for v in (gyro_x_dps, gyro_y_dps, temp_c, temp_rate_cps)]
+        rz = read_only_floats(np.zeros(n) if rate_z_dps is None else rate_z_dps)
+        acc = read_only_floats(np.asarray(acc, dtype=float).reshape(-1, 3))
         if t.ndim != 1 or any(c.shape != (n,) for c in (*cols, rz)) or acc.shape != (n, 3):
             raise GyroDriftError("triad: every input needs one value per row (acc three)")
         out = np.empty((4, n))
@@ -296,10 +177,7 @@ class TriadCompensator:
         return {"rate_x": out[0], "rate_y": out[1], "bias_x": out[2], "bias_y": out[3], "tilt_gated": gated}
 
     def feed_row(self, t: float, gx: float, gy: float, T: float, Tp: float, acc, rz: float = 0.0) -> tuple:
-        """:meth:`feed` for one row, on Python floats (the streaming compensator's case): the
-        same kernel on one-row arrays kept between calls. Arguments as for :meth:`feed`, one
-        value each (``acc`` three); returns the values of :data:`TRIAD_COLUMNS` for the row,
-        as floats and an int."""
+        """:meth:`feed` for one row of Python floats (``acc`` three); the values of :data:`TRIAD_COLUMNS`."""
         one = self._one
         if one is None:
             one = self._one = _OneRow(self._state)
@@ -318,9 +196,8 @@ class TriadCompensator:
         return (self._xf, self._xi, self._xc, self._xk, self._ring, *self._filters)
 
     def _resume(self, done: int, inputs: tuple, out: np.ndarray, gated: np.ndarray) -> None:
-        """Do what the row loop returned for (``done``: the next row, or a status below 0) and
-        call it again until every row of ``inputs`` is done (the columns in the order of
-        :func:`gyrodrift.kernels.tilt.run`)."""
+        """Act on what the row loop returned (``done``: the next row, or a status below 0), and run it
+        again until every row of ``inputs`` is done."""
         n = inputs[0].size
         while True:
             if done < 0:
@@ -367,14 +244,13 @@ class TriadCompensator:
 
 
 class _OneRow:
-    """One-row inputs and outputs of :meth:`TriadCompensator.feed_row`, kept between calls:
-    ``values`` (t, gyro_x, gyro_y, temp, temp_rate, acc x y z, rate_z) seen by the kernel
-    through the read-only views ``inputs``, and ``args``, the kernel's arguments for row 0."""
+    """One-row inputs, outputs and kernel arguments of :meth:`TriadCompensator.feed_row`, kept between calls."""
 
     def __init__(self, state: tuple):
         self.values = np.zeros(9)
         v = self.values
-        self.inputs = tuple(_column(c) for c in (v[0:1], v[1:2], v[2:3], v[3:4], v[4:5], v[5:8].reshape(1, 3), v[8:9]))
+        self.inputs = tuple(read_only_floats(c)
+                            for c in (v[0:1], v[1:2], v[2:3], v[3:4], v[4:5], v[5:8].reshape(1, 3), v[8:9]))
         self.out = np.zeros((4, 1))
         self.flat = self.out.reshape(4)
         self.gated = np.zeros(1, dtype=np.int8)

@@ -1,6 +1,4 @@
-"""A whole compensated log at once: :func:`estimate_scale_factor` (the default and the
-causal pass) and the SF-compensated heading.
-"""
+"""A whole compensated log at once: :func:`estimate_scale_factor` and the SF-compensated heading."""
 
 from __future__ import annotations
 
@@ -28,23 +26,8 @@ def integrate_heading(t_s, rate_dps, anchor_row: int, anchor_heading_deg: float)
 
 
 def heading_anchor(out: pd.DataFrame) -> tuple[int, float]:
-    """Row and value of the first compass heading, where the compensator anchors its heading.
-
-    Parameters
-    ----------
-    out : DataFrame
-        A compensate() table with ``compass_heading``.
-
-    Returns
-    -------
-    row : int
-    heading_deg : float
-
-    Raises
-    ------
-    LogFormatError
-        No compass heading at all.
-    """
+    """Row and value (deg) of the first ``compass_heading`` of a compensate() table, where the
+    compensator anchors its heading (:class:`LogFormatError` when there is none)."""
     rows = np.flatnonzero(out["compass_heading"].notna().to_numpy())
     if rows.size == 0:
         raise LogFormatError("scale-factor estimate: no compass heading to anchor the heading")
@@ -64,44 +47,19 @@ def estimate_scale_factor(
     Parameters
     ----------
     out : DataFrame
-        Output of :func:`gyrodrift.compensator.compensate` (columns ``t, rate_z,
-        temp, compass_heading``, optionally ``gate_reason``).
+        Output of :func:`gyrodrift.compensator.compensate` (``t, rate_z, temp,
+        compass_heading``, optionally ``gate_reason``).
     config : ScaleFactorConfig
     causal : bool
-        False (default, the paper reproduction): the pass of the package notes, which
-        looks ahead (centred rotation test, update decided with ``guard_s`` + half a
-        window of look-ahead) and initialises the rows up to the first update with its
-        result. True: every row depends on that row and the rows before it only, as
-        :class:`ScaleFactorTracker` computes it row by row (same numbers): an update
-        applies from the first row at which it could be decided, the prior applies until
-        the first update, ``heading_sf`` is NaN before the first compass heading
-        and rotations longer than ``max_turn_s`` are dropped. See "Causal and
-        non-causal" in the package notes.
+        False: the paper reproduction, which looks ahead; True: each row from the rows up to
+        it, as :class:`ScaleFactorTracker` (``docs/scale_factor.md``, causal and non-causal).
 
     Returns
     -------
     DataFrame
-        Same index as ``out``: ``t`` (s); ``sf`` (adaptive SF in force,
-        ``s0 + s1*(T - T_ref)`` with the parameters of the last update before the
-        row, or of the first update for the rows up to it; causal: of the last update
-        at or before the row, or the prior; unitless); ``sf_sd``
-        (its standard deviation); ``sf_s0``, ``sf_s1`` (parameters, unitless and
-        1/degC); ``sf_fixed`` (the one-off calibration, the same in both passes: a
-        calibration done before the run);
-        ``rate_sf = rate_z / sf`` and ``rate_sf_fixed`` (deg/s); ``heading_sf`` and
-        ``heading_sf_fixed`` (deg, integrated from the first compass heading like
-        the compensator's ``heading``, which is the heading without SF
-        compensation); ``sf_update`` (1 on the row whose measurement updated the
-        filter; the new SF applies from the next row, causal: from that row). ``attrs``
-        holds ``turns`` (:func:`turn_measurements`), ``sf_fixed``, ``final_params`` and
-        ``final_cov``.
-
-    Raises
-    ------
-    LogFormatError
-        A column is missing, the table is empty, time is not finite or does not
-        increase, ``rate_z`` is not finite, the first temperature is empty; default pass:
-        no compass heading at all.
+        ``t, sf, sf_sd, sf_s0, sf_s1, sf_fixed, rate_sf, rate_sf_fixed, heading_sf,
+        heading_sf_fixed, sf_update`` on ``out``'s index (``docs/scale_factor.md``, the
+        estimate's columns); ``attrs``: ``turns``, ``sf_fixed``, ``final_params``, ``final_cov``.
     """
     turns = turn_measurements(out, config, causal=causal)
     params, covs = sf_filter(turns, config)
@@ -152,8 +110,7 @@ def estimate_scale_factor(
 
 
 def _causal_heading(t_s: np.ndarray, rate_dps: np.ndarray, compass_deg: np.ndarray) -> np.ndarray:
-    """:func:`integrate_heading` from the first compass heading, NaN before it (and
-    everywhere without one): a causal pass cannot anchor rows before their heading is known."""
+    """:func:`integrate_heading` from the first compass heading, NaN before it (and everywhere without one)."""
     rows = np.flatnonzero(np.isfinite(compass_deg))
     if rows.size == 0:
         return np.full(t_s.size, np.nan)

@@ -1,9 +1,6 @@
-"""The scale-factor Kalman filter over the accepted rotations ("Model" in the notes of
-:mod:`gyrodrift.scale_factor`).
+"""The scale-factor Kalman filter over the accepted rotations, and the one-off calibration it is compared with.
 
-:func:`sf_filter` runs it over a turn table, :func:`sf_correct` is its step for one
-rotation (also the step of :class:`~gyrodrift.scale_factor.streaming.ScaleFactorTracker`),
-and :func:`fixed_scale_factor` is the one-off calibration it is compared with.
+:func:`sf_correct` is the step for one rotation (also the tracker's); ``docs/scale_factor.md``.
 """
 
 from __future__ import annotations
@@ -18,13 +15,7 @@ __all__ = ["sf_filter", "sf_correct", "fixed_scale_factor"]
 
 
 def sf_filter(turns: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig()):
-    """Run the SF STKF (eq. 10 with Φ = I) over the accepted rotations, in order.
-
-    Parameters
-    ----------
-    turns : DataFrame
-        From :func:`turn_measurements`.
-    config : ScaleFactorConfig
+    """Run the SF STKF (eq. 10 with Φ = I) over the accepted rotations of a turn table, in order.
 
     Returns
     -------
@@ -32,16 +23,6 @@ def sf_filter(turns: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig
         ``[s0, s1]`` before the first and after each of the K accepted rotations.
     cov : (K + 1, 2, 2) ndarray
         The matching covariances (capped at ``P0``).
-
-    Examples
-    --------
-    Three measurements of SF = 1.02 at 25 degC pull s0 from 1 towards 1.02:
-
-    >>> turns = pd.DataFrame({"sf_meas": [1.02] * 3, "temp_dev_c": [0.0] * 3,
-    ...                       "r": [1e-8] * 3, "accepted": [True] * 3})
-    >>> x, P = sf_filter(turns)
-    >>> round(float(x[-1, 0]), 4)
-    1.02
     """
     x = np.array(config.x0, dtype=float)
     P = np.diag(np.square(config.p0_sd))
@@ -55,29 +36,11 @@ def sf_filter(turns: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig
 
 def sf_correct(x: np.ndarray, P: np.ndarray, sf_meas: float, temp_dev_c: float, r: float,
                config: ScaleFactorConfig):
-    """One accepted rotation: ``P- = s*P + Q`` capped at ``P0``, then the Joseph-form
-    correction of eq. (10) with ``H = [1, T - T_ref]`` (Sec. 3.2), capped again.
+    """One accepted rotation: ``P- = s*P + Q`` capped at ``P0``, then the Joseph-form correction of
+    eq. (10) with ``H = [1, T - T_ref]`` (Sec. 3.2), capped again; returns the new ``x``, ``P``.
 
-    Parameters
-    ----------
-    x : (2,) ndarray
-        ``[s0, s1]`` (unitless, 1/degC) before the rotation.
-    P : (2, 2) ndarray
-        Their covariance.
-    sf_meas : float
-        The measurement y (unitless).
-    temp_dev_c : float
-        Its mean ``T - T_ref``, degC.
-    r : float
-        Its variance.
-    config : ScaleFactorConfig
-
-    Returns
-    -------
-    x : (2,) ndarray
-        The new ``[s0, s1]``.
-    P : (2, 2) ndarray
-        The new covariance.
+    ``x = [s0, s1]`` (unitless, 1/degC), ``sf_meas`` the measurement y, ``temp_dev_c`` its mean
+    ``T - T_ref`` (degC), ``r`` its variance.
     """
     Q = np.diag(np.square(config.q_sd))
     cap = np.square(np.array(config.p0_sd))
@@ -88,10 +51,7 @@ def sf_correct(x: np.ndarray, P: np.ndarray, sf_meas: float, temp_dev_c: float, 
 
 
 def fixed_scale_factor(turns: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig()) -> float:
-    """One-off calibration: weighted mean SF of the first ``fixed_turns`` accepted rotations.
-
-    Inverse-variance weights; 1.0 (the nominal SF) if no rotation was accepted.
-    """
+    """One-off calibration: inverse-variance mean SF of the first ``fixed_turns`` accepted rotations (1.0: none)."""
     first = turns[turns["accepted"]].head(config.fixed_turns)
     if first.empty:
         return 1.0

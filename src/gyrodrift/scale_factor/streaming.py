@@ -1,8 +1,4 @@
-"""The causal scale-factor estimate row by row: :class:`ScaleFactorTracker`.
-
-Its rows are :class:`ScaleFactorRow`; the streaming :class:`gyrodrift.compensator.Compensator`
-returns them in a :class:`gyrodrift.samples.CompensatedSFSample`.
-"""
+"""The causal scale-factor estimate row by row: :class:`ScaleFactorTracker`, its rows :class:`ScaleFactorRow`."""
 
 from __future__ import annotations
 
@@ -14,13 +10,12 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.conventions import TEMP, T
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.kernels.numeric import wrap180, wrap360
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 from gyrodrift.scale_factor.filter import sf_correct
 from gyrodrift.samples import CompensatedSFSample
-from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, require_columns, unmeasured_turn
+from gyrodrift.scale_factor.turns import LONG_TURN, measure_turn, read_columns, unmeasured_turn
 
 __all__ = ["ScaleFactorRow", "TRACKER_COLUMNS", "CompensatedSFSample", "ScaleFactorTracker"]
 
@@ -29,9 +24,7 @@ _TINY = float(np.finfo(float).tiny)
 
 
 class ScaleFactorRow(NamedTuple):
-    """One row of :class:`ScaleFactorTracker`: the columns of the causal
-    :func:`estimate_scale_factor` (``sf`` unitless, ``sf_s1`` 1/degC, ``rate_sf`` deg/s,
-    ``heading_sf`` deg, ``sf_update`` 0/1)."""
+    """One row of :class:`ScaleFactorTracker`: the columns of the causal :func:`estimate_scale_factor`."""
 
     sf: float
     sf_sd: float
@@ -47,38 +40,13 @@ TRACKER_COLUMNS = ScaleFactorRow._fields
 
 
 class ScaleFactorTracker:
-    """The causal SF estimate (Sec. 4.3, package notes) fed one compensated row at a time.
+    """The causal SF estimate (Sec. 4.3) fed compensated rows in time order.
 
-    Feed the rows of :func:`gyrodrift.compensator.compensate` (or of
-    :class:`gyrodrift.compensator.Compensator`) in time order with :meth:`push` (one row),
-    :meth:`push_arrays` or :meth:`push_frame` (chunks of any size); every row comes back at
-    once with the SF in force. The numbers are those of
-    ``estimate_scale_factor(out, config, causal=True)`` on the whole table, bit for bit,
-    however the rows are chunked.
-
-    What it keeps: the running gyro heading, compass unwrapping and SF-compensated heading
-    (a few floats), the filter state, and the rows that a rotation still to be decided
-    needs (from ``2*guard_s + still_s`` before it starts to ``turn_window_s/2`` after its
-    second still window and guard). A rotation whose rotating rows last longer than
-    ``max_turn_s`` is dropped (reason ``long_turn``) rather than buffered until it ends,
-    so the kept rows never span more than :attr:`buffer_bound_s` (plus 64 rows, the
-    amortised trimming), whatever the log's length.
-
-    Parameters
-    ----------
-    config : ScaleFactorConfig, optional
-    source : str
-        Name used in error messages.
-
-    Examples
-    --------
-    A still unit keeps the prior SF 1 and the first compass heading; 100 s at 10 Hz, of
-    which the tracker keeps the last 10 s or so:
-
-    >>> tr = ScaleFactorTracker()
-    >>> rows = [tr.push(0.1 * i, 0.0, 30.0, 40.0 if i % 10 == 0 else math.nan) for i in range(1000)]
-    >>> rows[-1].sf, rows[-1].heading_sf, tr.buffered_rows < 200
-    (1.0, 40.0, True)
+    :meth:`push` takes one row, :meth:`push_arrays` and :meth:`push_frame` chunks of any
+    size; every row comes back at once with the SF in force, bit for bit
+    ``estimate_scale_factor(out, config, causal=True)`` however the rows are chunked, in
+    bounded memory (``docs/scale_factor.md``, causal and non-causal). ``source`` names the
+    rows in error messages.
     """
 
     _TRIM_ROWS = 64
@@ -149,9 +117,7 @@ class ScaleFactorTracker:
 
     @property
     def buffer_bound_s(self) -> float:
-        """Longest time span the kept rows can cover, s: ``max_turn_s + 4*guard_s +
-        2*still_s + turn_window_s`` (the kept rows also include up to 64 rows of trimming
-        slack and the row just before the span)."""
+        """Longest time span the kept rows can cover, s (plus up to 64 rows of trimming slack)."""
         c = self.config
         return c.max_turn_s + 4.0 * c.guard_s + 2.0 * c.still_s + c.turn_window_s
 
@@ -159,27 +125,10 @@ class ScaleFactorTracker:
     def push(self, t_s, rate_z_dps, temp_c, compass_heading_deg=math.nan, gate_reason: str = "") -> ScaleFactorRow:
         """Add one compensated row; return its SF columns.
 
-        Parameters
-        ----------
-        t_s : float
-            Time, s (finite, strictly increasing).
-        rate_z_dps : float
-            Drift-compensated rate ``rate_z``, deg/s (finite).
-        temp_c : float
-            Gyro temperature, degC (NaN: hold the previous value; the first row needs one).
-        compass_heading_deg : float, optional
-            Compass heading, deg (NaN: no compass sample on this row).
-        gate_reason : str, optional
-            The drift compensator's ``gate_reason`` of the row ('' = none).
-
-        Returns
-        -------
-        ScaleFactorRow
-
-        Raises
-        ------
-        LogFormatError
-            Time not finite or not increasing, rate not finite, first temperature empty.
+        ``t_s`` (s, finite, increasing), ``rate_z_dps`` (deg/s, finite), ``temp_c`` (degC; NaN
+        holds the previous value, the first row needs one), ``compass_heading_deg`` (NaN: no
+        sample) and the drift compensator's ``gate_reason``. A bad row is a
+        :class:`LogFormatError` and leaves the state alone.
         """
         cfg = self.config
         t, rate, temp = float(t_s), float(rate_z_dps), float(temp_c)
@@ -261,8 +210,7 @@ class ScaleFactorTracker:
         )
 
     def push_arrays(self, t_s, rate_z_dps, temp_c, compass_heading_deg=None, gate_reason=None) -> dict:
-        """Add a chunk of rows (arrays of one length; see :meth:`push`); return a dict of
-        the :data:`TRACKER_COLUMNS` arrays."""
+        """Add a chunk of rows (arrays of one length, see :meth:`push`); return the :data:`TRACKER_COLUMNS` arrays."""
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
         n = t.size
         rate = np.atleast_1d(np.asarray(rate_z_dps, dtype=float))
@@ -281,13 +229,8 @@ class ScaleFactorTracker:
         }
 
     def push_frame(self, out: pd.DataFrame) -> pd.DataFrame:
-        """Add a chunk of a compensate() table (``t, rate_z, temp, compass_heading`` and,
-        if present, ``gate_reason``); return the :data:`TRACKER_COLUMNS` with its index."""
-        require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
-        gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else None
-        cols = self.push_arrays(out[T].to_numpy(float), out["rate_z"].to_numpy(float), out[TEMP].to_numpy(float),
-                                out["compass_heading"].to_numpy(float), gates)
-        return pd.DataFrame(cols, index=out.index)
+        """Add a chunk of a compensate() table; return the :data:`TRACKER_COLUMNS` on its index."""
+        return pd.DataFrame(self.push_arrays(*read_columns(out)), index=out.index)
 
     # -- steps
     def _interp(self, x: float, p: int) -> tuple[float, int]:

@@ -1,9 +1,7 @@
-"""Rotations and their scale-factor measurements ("Measurement: one per rotation" in
-the notes of :mod:`gyrodrift.scale_factor`).
+"""Rotations and their scale-factor measurements (``docs/scale_factor.md``, measurement).
 
-:func:`moving_mask` is the rotation test; :func:`turn_measurements` measures every
-rotation of a compensated log, :func:`measure_turn` one of them (also for
-:class:`~gyrodrift.scale_factor.streaming.ScaleFactorTracker`, on the rows it keeps).
+:func:`moving_mask` is the rotation test; :func:`turn_measurements` measures every rotation
+of a compensated log, :func:`measure_turn` one of them (also for the tracker's kept rows).
 """
 
 from __future__ import annotations
@@ -20,9 +18,8 @@ from gyrodrift.errors import LogFormatError
 from gyrodrift.scale_factor.config import ScaleFactorConfig
 
 __all__ = [
-    "REJECT_GATES", "EDGE", "NOT_STILL", "NO_COMPASS", "SMALL_TURN", "IMPLAUSIBLE", "LONG_TURN",
-    "moving_mask", "require_columns", "compensated_columns", "turn_measurements", "unmeasured_turn",
-    "measure_turn",
+    "REJECT_GATES", "EDGE", "NOT_STILL", "NO_COMPASS", "SMALL_TURN", "IMPLAUSIBLE", "LONG_TURN", "moving_mask",
+    "require_columns", "read_columns", "compensated_columns", "turn_measurements", "unmeasured_turn", "measure_turn",
 ]
 
 #: Drift-compensator refusals that also refuse an SF measurement over the same rows.
@@ -45,28 +42,8 @@ LONG_TURN = "long_turn"
 
 
 def moving_mask(t_s, rate_dps, config: ScaleFactorConfig = ScaleFactorConfig()) -> np.ndarray:
-    """Rows where the unit rotates: centred mean of ``rate_dps`` above ``turn_rate_dps``.
-
-    Parameters
-    ----------
-    t_s : (N,) array_like
-        Time, s, strictly increasing.
-    rate_dps : (N,) array_like
-        Drift-compensated rate ``rate_z``, deg/s.
-    config : ScaleFactorConfig
-
-    Returns
-    -------
-    (N,) bool ndarray
-
-    Examples
-    --------
-    >>> t = np.arange(0.0, 20.0, 0.1)
-    >>> rate = np.where((t > 8) & (t < 12), 45.0, 0.0)
-    >>> m = moving_mask(t, rate)
-    >>> float(t[m][0]), float(t[m][-1])
-    (7.7, 12.3)
-    """
+    """Rows where the unit rotates: the centred ``turn_window_s`` mean of ``rate_dps`` (deg/s, the
+    compensated ``rate_z`` at times ``t_s``, increasing) above ``turn_rate_dps`` in magnitude."""
     t = np.asarray(t_s, dtype=float)
     angle = cumulative_trapezoid(np.asarray(rate_dps, dtype=float), t, initial=0.0)
     half = 0.5 * config.turn_window_s
@@ -89,25 +66,10 @@ def _window(t: np.ndarray, t0: float, t1: float) -> slice:
 
 
 def require_columns(out: pd.DataFrame, cols) -> None:
-    """Raise if ``out`` lacks any of ``cols``.
-
-    Parameters
-    ----------
-    out : DataFrame
-        A :func:`gyrodrift.compensator.compensate` table.
-    cols : iterable of str
-        Column names it must have.
-
-    Raises
-    ------
-    LogFormatError
-        Naming the missing columns.
-    """
+    """Raise :class:`LogFormatError` naming the columns of ``cols`` that ``out`` lacks."""
     missing = [c for c in cols if c not in out.columns]
     if missing:
-        raise LogFormatError(
-            f"scale-factor estimate needs the compensate() output columns {', '.join(missing)}"
-        )
+        raise LogFormatError(f"scale-factor estimate needs the compensate() output columns {', '.join(missing)}")
 
 
 def _check_rows(t_s: np.ndarray, rate_dps: np.ndarray, source: str = "scale-factor estimate") -> None:
@@ -144,42 +106,22 @@ def _held_temperature(temp_c: np.ndarray, source: str = "scale-factor estimate")
     return temp_c[last]
 
 
-def compensated_columns(out: pd.DataFrame):
-    """The columns the SF estimate reads from a compensate() table, checked.
+def read_columns(out: pd.DataFrame):
+    """The columns the SF estimate reads from a compensate() table, as they are.
 
-    Parameters
-    ----------
-    out : DataFrame
-        Output of :func:`gyrodrift.compensator.compensate`.
-
-    Returns
-    -------
-    t : (N,) ndarray
-        Time, s.
-    rate : (N,) ndarray
-        ``rate_z``, deg/s.
-    temp : (N,) ndarray
-        Temperature, degC; an empty cell holds the previous value, as in the drift
-        compensator.
-    compass : (N,) ndarray
-        Compass heading, deg (NaN = no sample).
-    gates : (N,) ndarray of str
-        The drift compensator's ``gate_reason`` ('' when the column is absent).
-
-    Raises
-    ------
-    LogFormatError
-        See :func:`estimate_scale_factor` (a column missing, no rows, bad time or rate,
-        the first temperature empty).
+    Returns ``t`` (s), ``rate`` (``rate_z``, deg/s), ``temp`` (degC), ``compass`` (deg, NaN:
+    no sample) and ``gates`` (``gate_reason``, '' when absent).
     """
     require_columns(out, (T, "rate_z", TEMP, "compass_heading"))
-    t = out[T].to_numpy(float)
-    rate = out["rate_z"].to_numpy(float)
+    gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else np.full(len(out), "")
+    return (*(out[c].to_numpy(float) for c in (T, "rate_z", TEMP, "compass_heading")), gates)
+
+
+def compensated_columns(out: pd.DataFrame):
+    """:func:`read_columns`, checked (:func:`_check_rows`), empty temperature cells held."""
+    t, rate, temp, compass, gates = read_columns(out)
     _check_rows(t, rate)
-    temp = _held_temperature(out[TEMP].to_numpy(float))
-    compass = out["compass_heading"].to_numpy(float)
-    gates = out["gate_reason"].to_numpy(str) if "gate_reason" in out.columns else np.full(t.size, "")
-    return t, rate, temp, compass, gates
+    return t, rate, _held_temperature(temp), compass, gates
 
 
 def _unwrapped_compass(psi_g: np.ndarray, compass: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -189,13 +131,8 @@ def _unwrapped_compass(psi_g: np.ndarray, compass: np.ndarray, rows: np.ndarray)
 
 
 def _decision_row(t_s: np.ndarray, t_end_s: float, cfg: ScaleFactorConfig) -> int:
-    """First row at which the rotation ending at ``t_end_s`` can be decided from the rows so
-    far (causal pass), or -1 if the log ends first.
-
-    The not-still check after the turn reads the rotation test up to ``a1 + guard_s`` (``a1``
-    = end of the second still window); the centred test of the last row ``i`` there is known
-    once a row at ``t_i + turn_window_s/2`` exists.
-    """
+    """First row at which the rotation ending at ``t_end_s`` can be decided from the rows so far
+    (causal pass; ``docs/scale_factor.md``), or -1 if the log ends first."""
     lim = t_end_s + cfg.guard_s + cfg.still_s + cfg.guard_s  # a1 + guard_s, as in measure_turn
     last = int(np.searchsorted(t_s, lim, "right")) - 1
     j = int(np.searchsorted(t_s, t_s[last] + 0.5 * cfg.turn_window_s, "left"))
@@ -205,34 +142,11 @@ def _decision_row(t_s: np.ndarray, t_end_s: float, cfg: ScaleFactorConfig) -> in
 def turn_measurements(
     out: pd.DataFrame, config: ScaleFactorConfig = ScaleFactorConfig(), *, causal: bool = False
 ) -> pd.DataFrame:
-    """One SF measurement per detected rotation (package notes), accepted or not.
+    """One SF measurement per detected rotation, accepted or not: the turn table of ``docs/scale_factor.md``.
 
-    Parameters
-    ----------
-    out : DataFrame
-        Output of :func:`gyrodrift.compensator.compensate`: ``t`` (s), ``rate_z``
-        (deg/s), ``temp`` (degC), ``compass_heading`` (deg, NaN off compass rows)
-        and, if present, ``gate_reason``.
-    config : ScaleFactorConfig
-    causal : bool
-        Decide each rotation at the first row at which the rows so far suffice
-        (``row_update``; see "Causal and non-causal" in the package notes) and drop
-        rotations longer than ``max_turn_s`` (``long_turn``); the measurements
-        themselves are those of the default pass.
-
-    Returns
-    -------
-    DataFrame
-        One row per rotation: ``t_start, t_end`` (s, rotating rows), ``t_update``
-        (s) and its row ``row_update`` (default: the end of the second still window,
-        the new SF applies from the next row; causal: the row at which the rotation
-        is decided, the new SF applies from it; -1 when not decided),
-        ``angle_gyro_deg``, ``angle_compass_deg`` (heading changes, deg), ``sf_meas``
-        (y, unitless), ``temp_c`` and ``temp_dev_c`` (rate-weighted mean T and
-        T - T_ref, degC), ``r`` (variance of y), ``accepted`` (bool) and ``reason``
-        ('' when accepted; else ``edge``, ``long_turn`` (causal only), ``not_still``,
-        ``no_compass``, a drift gate of :data:`REJECT_GATES`, ``small_turn`` or
-        ``implausible``).
+    ``out`` is a :func:`gyrodrift.compensator.compensate` table; ``causal`` decides each
+    rotation at the first row at which the rows so far suffice and drops rotations longer
+    than ``max_turn_s`` (the measurements are those of the default pass).
     """
     t, rate, temp, compass, gates = compensated_columns(out)
     cfg = config
@@ -262,29 +176,12 @@ def turn_measurements(
         if causal:
             row["row_update"], row["t_update"] = j, float(t[j])
         rows.append(row)
-    columns = [
-        "t_start", "t_end", "t_update", "row_update", "angle_gyro_deg", "angle_compass_deg",
-        "sf_meas", "temp_c", "temp_dev_c", "r", "accepted", "reason",
-    ]
-    table = pd.DataFrame(rows, columns=columns)
+    table = pd.DataFrame(rows, columns=list(unmeasured_turn(0.0, 0.0, "")))
     return table.astype({"row_update": int, "accepted": bool})
 
 
 def unmeasured_turn(t_start_s: float, t_end_s: float, reason: str) -> dict:
-    """A turn-table row (:func:`turn_measurements`) without a measurement.
-
-    Parameters
-    ----------
-    t_start_s, t_end_s : float
-        First and last rotating row of the rotation, s.
-    reason : str
-        Why it is not used ('' while the measurement is still to be made).
-
-    Returns
-    -------
-    dict
-        The turn-table columns: NaN measurement, ``row_update`` -1, not accepted.
-    """
+    """A turn-table row of the rotation from ``t_start_s`` to ``t_end_s`` without a measurement, for ``reason``."""
     return {
         "t_start": t_start_s, "t_end": t_end_s, "t_update": math.nan, "row_update": -1,
         "angle_gyro_deg": math.nan, "angle_compass_deg": math.nan, "sf_meas": math.nan,
@@ -296,35 +193,12 @@ def measure_turn(
     t, rate, temp, psi_g, psi_c, has_c, moving, gates, i0, i1, cfg: ScaleFactorConfig, *,
     log_start_s: float, log_end_s: float,
 ) -> dict:
-    """The SF measurement of the rotation on rows i0..i1 (see :func:`turn_measurements`).
+    """The turn-table row of the rotation on rows ``i0..i1`` (``row_update``: the end of the second still window).
 
-    The arrays may be a part of the log (the rows :class:`ScaleFactorTracker` keeps), as long
-    as they hold every row from ``guard_s`` before the first still window to ``guard_s`` after
-    the second.
-
-    Parameters
-    ----------
-    t, rate, temp : (N,) ndarray
-        Time (s), ``rate_z`` (deg/s) and temperature (degC) of the rows.
-    psi_g, psi_c : (N,) ndarray
-        Gyro heading and compass heading unwrapped against it (NaN off compass rows), deg.
-    has_c : (N,) bool ndarray
-        Rows with a compass heading.
-    moving : (N,) bool ndarray
-        The rotation test (:func:`moving_mask`).
-    gates : (N,) ndarray of str
-        The drift compensator's ``gate_reason``.
-    i0, i1 : int
-        First and last rotating row, indices into the arrays.
-    cfg : ScaleFactorConfig
-    log_start_s, log_end_s : float
-        Times of the log's first and last rows (the edge test).
-
-    Returns
-    -------
-    dict
-        The turn-table row; ``row_update``/``t_update`` are the end of the second still
-        window (the default pass).
+    The arrays (time, ``rate_z``, temperature, gyro heading, unwrapped compass heading, compass
+    rows, rotation test, drift gates) may be a part of the log, holding every row from ``guard_s``
+    before the first still window to ``guard_s`` after the second; ``log_start_s`` and
+    ``log_end_s`` bound the log for the edge test.
     """
     ts, te = float(t[i0]), float(t[i1])
     b0, b1 = ts - cfg.guard_s - cfg.still_s, ts - cfg.guard_s

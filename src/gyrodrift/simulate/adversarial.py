@@ -1,61 +1,37 @@
 """Adversarial scenarios: logs that break a design built around what the paper's runs offer.
 
-The paper's runs and the scenarios of :mod:`gyrodrift.simulate.scenarios` log without
-gaps, start with a minute of stillness, have a measured temperature, a ready-made
-compass heading and compass intervals that complete. Each scenario here takes some
-of that away (:data:`ADVERSARIAL_SCENARIOS`; default lengths in
-:data:`ADVERSARIAL_DURATION_S`; ``vehicle-rawmag``, the vehicle run with the raw
-magnetometer and accelerometer instead of a heading, is in
-:mod:`~gyrodrift.simulate.scenarios` beside ``vehicle``):
-
-* ``bursty``: a still unit cooling in a chamber, logged in 5-s records every
-  295–315 s (the times jump between records); half of the runs have a compass, the
-  others none (:func:`scenario_bursty`).
-* ``ramp-interference``: still, the temperature falling about 0.8 degC/min, and 10 min
-  of magnetic interference that wanders around 20–35 deg in the middle of the fall
-  (:func:`scenario_ramp_interference`).
-* ``sway``: a moored or parked platform for 12 h: a yaw sway of a few degrees below
-  0.2 deg/s, 3–5 compass outages of 40–90 min and a day/night temperature cycle
-  (:func:`scenario_sway`).
-* ``vessel``: a slow continuous turn of 0.15–0.6 deg/s with wave yaw, never still
-  (:func:`scenario_vessel`).
-* ``no-temp``: a bench unit warming up, with a turn every few minutes, whose
-  temperature column reads a constant 0 degC (:func:`scenario_no_temp`).
-* ``short``: a hand-held log of tens of seconds: a few seconds still, then one
-  rotation by 90–720 deg (:func:`scenario_short`).
-
-Every random choice is drawn in a fixed order, so a seed gives the same log.
-Records and rotation rates are absolute; temperature profiles and outages scale
-with the run.
+Each takes away something the paper's runs have (gaps in the log, a still start, a
+measured temperature, a heading column, complete compass intervals):
+:data:`ADVERSARIAL_SCENARIOS`, default lengths in :data:`ADVERSARIAL_DURATION_S`. What
+each models: ``docs/simulator.md`` (adversarial scenarios).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Callable
 
 import numpy as np
 
-from gyrodrift.simulate.motion import Motion, hold_s, knot_profile, ramp_slice, smooth_step, smooth_step_slope
+from gyrodrift.simulate.motion import (
+    Motion,
+    add_rotation,
+    approach_temperature,
+    draw_wave,
+    fade_in,
+    hold_s,
+    ramp_slice,
+    smooth_pulse,
+    smooth_step,
+    still_motion,
+    sway_rate,
+    wave,
+)
 
 __all__ = [
-    "ADVERSARIAL_SCENARIOS",
-    "ADVERSARIAL_DURATION_S",
-    "BURSTY_RECORD_S",
-    "BURSTY_SPACING_S",
-    "NO_TEMP_CHANNEL_C",
-    "SWAY_MAX_RATE_DPS",
-    "bursty_records",
-    "approach_temperature",
-    "ramp_interference_window",
-    "ramp_interference_offset",
-    "sway_outages",
-    "scenario_bursty",
-    "scenario_ramp_interference",
-    "scenario_sway",
-    "scenario_vessel",
-    "scenario_no_temp",
-    "scenario_short",
+    "ADVERSARIAL_SCENARIOS", "ADVERSARIAL_DURATION_S", "BURSTY_RECORD_S", "BURSTY_SPACING_S", "NO_TEMP_CHANNEL_C",
+    "SWAY_MAX_RATE_DPS", "bursty_records", "approach_temperature", "ramp_interference_window",
+    "ramp_interference_offset", "sway_outages", "scenario_bursty", "scenario_ramp_interference", "scenario_sway",
+    "scenario_vessel", "scenario_no_temp", "scenario_short",
 ]
 
 #: Default run length of each adversarial scenario, s.
@@ -76,55 +52,18 @@ def _attitude(rng: np.random.Generator) -> tuple[float, float, float]:
     return heading0, roll, pitch
 
 
-def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, tau_u: float):
-    """Temperature that approaches ``end_c`` exponentially after the hold, degC and degC/s.
-
-    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9
-    knots (:func:`~gyrodrift.simulate.motion.knot_profile`), ``u`` the fraction of the
-    run after the hold: fastest at first, ending at exactly ``end_c``.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    start_c, end_c : float
-        Temperature held at the start and reached at the end, degC.
-    tau_u : float
-        Time constant as a fraction of the run after the hold (> 0).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
-    u = np.linspace(0.0, 1.0, 9)
-    c = start_c + (end_c - start_c) * (1.0 - np.exp(-u / tau_u)) / (1.0 - math.exp(-1.0 / tau_u))
-    return knot_profile(t_s, duration_s, u, c)
-
-
-def _still_motion(t_s, temp_c, temp_rate_cps, heading0_deg, roll_deg, pitch_deg, **extra) -> Motion:
-    zero = np.zeros(np.shape(t_s))
-    return Motion(
-        temp_c=temp_c, temp_rate_cps=temp_rate_cps, heading_rate_dps=zero, heading0_deg=heading0_deg,
-        roll_deg=roll_deg, pitch_deg=pitch_deg, accel_fwd_mps2=zero, accel_lat_mps2=zero, **extra,
-    )
+def _warming(t: np.ndarray, duration_s: float, rng, start_c, rise_c, tau_u):
+    """:func:`approach_temperature` from a start rising by a rise (degC ranges), time constant a range or a number."""
+    start, rise = rng.uniform(*start_c), rng.uniform(*rise_c)
+    tau = rng.uniform(*tau_u) if isinstance(tau_u, tuple) else tau_u
+    return approach_temperature(t, duration_s, float(start), float(start + rise), float(tau))
 
 
 def _rotations_rate(t_s: np.ndarray, rotations) -> np.ndarray:
-    """Heading rate of level rotations, deg/s, each evaluated on its own samples.
-
-    ``rotations``: ``(t0_s, angle_deg, peak_dps, ramp_s)`` each; a rotation has
-    raised-cosine ramps of ``ramp_s`` and a plateau at ``peak_dps``, lasts
-    ``|angle|/peak + ramp`` and turns by exactly ``angle_deg``.
-    """
+    """Heading rate of level rotations ``(t0_s, angle_deg, peak_dps, ramp_s)``, deg/s (:func:`add_rotation`)."""
     rate = np.zeros(t_s.size)
-    for t0, angle, peak, ramp in rotations:
-        dur = abs(angle) / peak + ramp
-        sl = ramp_slice(t_s, t0, t0 + dur)
-        x = t_s[sl]
-        up, down = smooth_step((x - t0) / ramp), smooth_step((x - (t0 + dur - ramp)) / ramp)
-        rate[sl] += math.copysign(peak, angle) * (up - down)
+    for rotation in rotations:
+        add_rotation(rate, t_s, *rotation)
     return rate
 
 
@@ -143,11 +82,7 @@ _BURSTY_COMPASS_P = 0.5
 
 
 def bursty_records(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float], ...]:
-    """Records of the bursty logger: ``(start_s, BURSTY_RECORD_S)`` each, the first at 0.
-
-    Record starts are :data:`BURSTY_SPACING_S` apart (uniform, one draw per record), in
-    absolute time whatever the run length; the last record starts before the end.
-    """
+    """Records ``(start_s, BURSTY_RECORD_S)`` of the bursty logger, the first at 0, :data:`BURSTY_SPACING_S` apart."""
     starts = [0.0]
     while True:
         nxt = starts[-1] + float(rng.uniform(*BURSTY_SPACING_S))
@@ -158,19 +93,13 @@ def bursty_records(duration_s: float, rng: np.random.Generator) -> tuple[tuple[f
 
 
 def scenario_bursty(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A still unit cooling in a thermal chamber, logged in 5-s records every ~300 s.
-
-    Motionless at a random heading; the temperature held at 35–60 degC, then cooling
-    towards −20…10 degC (:func:`approach_temperature`, time constant 0.25–0.5 of the
-    run). The logger keeps :func:`bursty_records` only: 50 rows at 10 Hz, then a jump
-    of about 300 s. With probability 0.5 the log has no compass columns at all.
-    """
+    """A still unit cooling in a thermal chamber, logged in 5-s records every ~300 s; half without compass."""
     t = np.asarray(t_s, dtype=float)
     has_compass = bool(rng.random() < _BURSTY_COMPASS_P)
     heading0, roll, pitch = _attitude(rng)
     hot, cold, tau = rng.uniform(*_BURSTY_HOT_C), rng.uniform(*_BURSTY_COLD_C), rng.uniform(*_BURSTY_TAU_U)
     temp, rate = approach_temperature(t, duration_s, float(hot), float(cold), float(tau))
-    return _still_motion(
+    return still_motion(
         t, temp, rate, heading0, roll, pitch,
         records=bursty_records(duration_s, rng), compass_form="heading" if has_compass else "none",
     )
@@ -212,61 +141,24 @@ def _falling_temperature(t: np.ndarray, duration_s: float, hot_c: float, fall_c:
 
 
 def ramp_interference_window(duration_s: float) -> tuple[float, float]:
-    """Where the interference of ``ramp-interference`` acts: ``(start_s, duration_s)``.
-
-    From a quarter of the run, for a ninth of it (10 min from 22.5 min in the default
-    90-min run): inside the temperature fall, which lasts from about 10 to 45 min.
-    """
+    """Where the interference of ``ramp-interference`` acts: ``(start_s, duration_s)``, inside the fall."""
     return 0.25 * duration_s, duration_s / 9.0
 
 
 def ramp_interference_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Compass heading offset of ``ramp-interference``, deg: about 30 deg that wanders.
-
-    In :func:`ramp_interference_window`: a mean of 20–35 deg (random sign) plus three
-    sinusoids of 3–10 deg amplitude and 1–5 min period (random phases), faded in and
-    out over ``min(30 s, window/4)``; 0 elsewhere. It changes by up to about 1 deg/s:
-    some intervals disagree with the gyro, others drift along unnoticed.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    rng : numpy.random.Generator
-        Source of the offsets (a fixed number of draws).
-
-    Returns
-    -------
-    ndarray
-        Offset, deg.
-    """
+    """Compass heading offset of ``ramp-interference`` at ``t_s``, deg: about 30 deg that wanders (0 outside)."""
     t = np.asarray(t_s, dtype=float)
     start, dur = ramp_interference_window(duration_s)
-    mean = float(rng.choice([-1.0, 1.0]) * rng.uniform(*_RAMP_INTERFERENCE_MEAN_DEG))
-    amp = rng.uniform(*_RAMP_INTERFERENCE_AMP_DEG, size=3)
-    period = rng.uniform(*_RAMP_INTERFERENCE_PERIOD_S, size=3)
-    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    drawn = draw_wave(rng, _RAMP_INTERFERENCE_MEAN_DEG, _RAMP_INTERFERENCE_AMP_DEG, _RAMP_INTERFERENCE_PERIOD_S)
     fade = min(_RAMP_INTERFERENCE_FADE_S, dur / 4.0)
     out = np.zeros(t.shape)
     sl = ramp_slice(t, start, start + dur)
-    x = t[sl]
-    envelope = smooth_step((x - start) / fade) - smooth_step((x - (start + dur - fade)) / fade)
-    wave = mean + sum(a * np.sin(2.0 * np.pi * (x - start) / p + ph) for a, p, ph in zip(amp, period, phase))
-    out[sl] = envelope * wave
+    out[sl] = smooth_pulse(t[sl], start, start + dur, fade) * wave(t[sl] - start, drawn)
     return out
 
 
 def scenario_ramp_interference(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """Still; the temperature falls fast while the compass is pulled about 30 deg off.
-
-    Motionless at a random heading; held at 40–55 degC, then falling at a constant
-    0.7–0.9 degC/min (in the default 90-min run; the span is kept when the run is
-    shorter) from 0.10 to 0.50 of the run after the hold, then flat: the rest of the
-    log shows whether the heading recovers. The interference of
-    :func:`ramp_interference_offset` acts 10 min inside the fall.
-    """
+    """Still; the temperature falls fast while the compass is pulled about 30 deg off."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     hot = float(rng.uniform(*_RAMP_HOT_C))
@@ -276,7 +168,7 @@ def scenario_ramp_interference(t_s, duration_s: float, rng: np.random.Generator)
     fall = per_min / 60.0 * ((_RAMP_FALL_U[1] - _RAMP_FALL_U[0] - _RAMP_CORNER_U) * rest)
     temp, rate = _falling_temperature(t, duration_s, hot, fall)
     offset = ramp_interference_offset(t, duration_s, rng)
-    return _still_motion(t, temp, rate, heading0, roll, pitch, interference_offset_deg=offset)
+    return still_motion(t, temp, rate, heading0, roll, pitch, interference_offset_deg=offset)
 
 
 # --------------------------------------------------------------------------- sway
@@ -294,11 +186,7 @@ _SWAY_TEMP_AMP_C = (5.0, 12.0)
 
 
 def sway_outages(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float], ...]:
-    """Compass outages of ``sway``: ``(start_s, duration_s)`` each, in time order.
-
-    3–5 outages of 40–90 min each (scaled with the run: the default is 12 h), placed at
-    random after the hold with random gaps between them (never overlapping).
-    """
+    """Compass outages ``(start_s, duration_s)`` of ``sway``, in time order, never overlapping."""
     scale = duration_s / ADVERSARIAL_DURATION_S["sway"]
     n = int(rng.integers(_SWAY_OUTAGE_COUNT[0], _SWAY_OUTAGE_COUNT[1] + 1))
     lengths = rng.uniform(*_SWAY_OUTAGE_MIN, size=n) * 60.0 * scale
@@ -314,15 +202,7 @@ def sway_outages(duration_s: float, rng: np.random.Generator) -> tuple[tuple[flo
 
 
 def scenario_sway(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A moored or parked platform for 12 h: slow yaw sway, long outages, a day/night cycle.
-
-    The heading (random) sways by a 2–5 deg sinusoid of 4–12 min period plus a
-    0.5–2 deg one of 40–120 s (random phases), faded in over ``min(120 s, 10 %)``
-    after the hold, amplitudes scaled so the yaw rate stays below
-    :data:`SWAY_MAX_RATE_DPS`. Temperature ``mean + amp * sin(2π t / (2 * run) + φ)``
-    (mean 0–25 degC, amplitude 5–12 degC: half a day in the default run). The compass
-    is missing during :func:`sway_outages`.
-    """
+    """A moored or parked platform for 12 h: slow yaw sway, long outages, a day/night cycle."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     draws = [
@@ -331,26 +211,14 @@ def scenario_sway(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     ]
     peak = sum(a * w for a, w, _ in draws)
     gain = min(1.0, SWAY_MAX_RATE_DPS / peak)
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
-    sway = np.zeros(t.size)
-    sway_rate = np.zeros(t.size)
-    for amp, omega, phase in draws:
-        sway += gain * amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
-        sway_rate += gain * amp * omega * np.cos(omega * (t - hold) + phase)
+    rate = sway_rate(t, duration_s, draws, gain)
     mean, amp_c = rng.uniform(*_SWAY_TEMP_MEAN_C), rng.uniform(*_SWAY_TEMP_AMP_C)
     phase_c = rng.uniform(0.0, 2.0 * np.pi)
     omega_c = 2.0 * np.pi / (2.0 * duration_s)
     temp = mean + amp_c * np.sin(omega_c * t + phase_c)
     temp_rate = amp_c * omega_c * np.cos(omega_c * t + phase_c)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=env_rate * sway + env * sway_rate,
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-        compass_dropouts=sway_outages(duration_s, rng),
-    )
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch, heading_rate_dps=rate,
+                        compass_dropouts=sway_outages(duration_s, rng))
 
 
 # --------------------------------------------------------------------------- vessel
@@ -364,22 +232,11 @@ _VESSEL_WAVE_DEG = (0.3, 1.5)
 _VESSEL_WAVE_PERIOD_S = (8.0, 20.0)
 _VESSEL_SPEED_MPS = (2.0, 6.0)
 #: Temperature: start (degC), rise (degC), time constant (fraction of the run).
-_VESSEL_START_C = (5.0, 25.0)
-_VESSEL_RISE_C = (5.0, 15.0)
-_VESSEL_TAU_U = (0.2, 0.5)
+_VESSEL_WARMING = ((5.0, 25.0), (5.0, 15.0), (0.2, 0.5))
 
 
 def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A vessel in a slow continuous turn, with wave yaw: never still, never turning fast.
-
-    Wave yaw of 0.3–1.5 deg with an 8–20 s period from the first sample (at most about
-    1.2 deg/s); after the hold a turn of 0.15–0.6 deg/s (random sign) fades in over
-    ``min(120 s, 10 %)`` and goes on to the end, its rate modulated by ±10–30 % over
-    10–30 min; the speed (2–6 m/s) fades in with it, so the accelerometer feels the
-    centripetal acceleration. Temperature from 5–25 degC rising by 5–15 degC
-    (:func:`approach_temperature`). Below the turning gate all the time: a design
-    that takes slow rotation for stillness learns the turn as drift.
-    """
+    """A vessel in a slow continuous turn, with wave yaw: never still, never turning fast."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     sign = float(rng.choice([-1.0, 1.0]))
@@ -391,15 +248,11 @@ def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     omega_wave = 2.0 * np.pi / rng.uniform(*_VESSEL_WAVE_PERIOD_S)
     phase_wave = rng.uniform(0.0, 2.0 * np.pi)
     speed = rng.uniform(*_VESSEL_SPEED_MPS)
-    start_c, rise_c, tau = rng.uniform(*_VESSEL_START_C), rng.uniform(*_VESSEL_RISE_C), rng.uniform(*_VESSEL_TAU_U)
+    temp, temp_rate = _warming(t, duration_s, rng, *_VESSEL_WARMING)
 
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
+    env, env_rate = fade_in(t, duration_s)
     turn = env * r0 * (1.0 + mod * np.sin(omega_mod * t + phase_mod))
     wave = wave_amp * omega_wave * np.cos(omega_wave * t + phase_wave)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), float(tau))
     return Motion(
         temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=turn + wave, heading0_deg=heading0,
         roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=speed * env_rate,
@@ -413,9 +266,7 @@ def scenario_vessel(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
 #: when the sensor does not report a temperature).
 NO_TEMP_CHANNEL_C = 0.0
 #: Warm-up: start (degC), rise (degC), time constant (fraction of the run).
-_NO_TEMP_START_C = (15.0, 30.0)
-_NO_TEMP_RISE_C = (10.0, 25.0)
-_NO_TEMP_TAU_U = (0.15, 0.4)
+_NO_TEMP_WARMING = ((15.0, 30.0), (10.0, 25.0), (0.15, 0.4))
 #: Turns: time between them (s), angle (deg), peak rate (deg/s), ramp (s).
 _NO_TEMP_TURN_EVERY_S = (240.0, 600.0)
 _NO_TEMP_TURN_DEG = (45.0, 180.0)
@@ -424,17 +275,10 @@ _TURN_RAMP_S = 1.0
 
 
 def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A bench unit warming up, turned now and then, whose temperature is not logged.
-
-    The true temperature rises from 15–30 degC by 10–25 degC
-    (:func:`approach_temperature`) and drives the drift, but the temperature column
-    reads :data:`NO_TEMP_CHANNEL_C` on every row. After the hold, a level turn by
-    45–180 deg (random sign, peak 10–30 deg/s) every 4–10 min; still in between.
-    """
+    """A bench unit warming up, turned now and then, whose temperature column is a constant."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
-    start_c, rise_c, tau = rng.uniform(*_NO_TEMP_START_C), rng.uniform(*_NO_TEMP_RISE_C), rng.uniform(*_NO_TEMP_TAU_U)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), float(tau))
+    temp, temp_rate = _warming(t, duration_s, rng, *_NO_TEMP_WARMING)
     rotations = []
     at = hold_s(duration_s) + float(rng.uniform(*_NO_TEMP_TURN_EVERY_S))
     while at < duration_s:
@@ -442,12 +286,8 @@ def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion
         peak = float(rng.uniform(*_NO_TEMP_TURN_PEAK_DPS))
         rotations.append((at, angle, peak, _TURN_RAMP_S))
         at += abs(angle) / peak + _TURN_RAMP_S + float(rng.uniform(*_NO_TEMP_TURN_EVERY_S))
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=_rotations_rate(t, rotations),
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-        temp_channel_c=NO_TEMP_CHANNEL_C,
-    )
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch, heading_rate_dps=_rotations_rate(t, rotations),
+                        temp_channel_c=NO_TEMP_CHANNEL_C)
 
 
 # --------------------------------------------------------------------------- short
@@ -456,31 +296,20 @@ def scenario_no_temp(t_s, duration_s: float, rng: np.random.Generator) -> Motion
 _SHORT_STILL_S = (3.0, 8.0)
 _SHORT_TURN_DEG = (90.0, 720.0)
 _SHORT_TURN_PEAK_DPS = (30.0, 90.0)
-#: Self-heating: start (degC) and rise over the log (degC).
-_SHORT_START_C = (20.0, 35.0)
-_SHORT_RISE_C = (0.2, 1.5)
+#: Self-heating: start (degC), rise over the log (degC), time constant (fraction of the run).
+_SHORT_WARMING = ((20.0, 35.0), (0.2, 1.5), 0.5)
 
 
 def scenario_short(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A hand-held log of tens of seconds: still for 3–8 s, then one rotation.
-
-    A level rotation by 90–720 deg (random sign, peak 30–90 deg/s, 1-s ramps) starts
-    3–8 s in (absolute times: a log too short for it ends mid-rotation); still after
-    it. The unit warms by 0.2–1.5 degC from 20–35 degC over the log (self-heating).
-    The start-up window of the paper's design (30 s) is as long as the log.
-    """
+    """A hand-held log of tens of seconds: still for 3–8 s, then one rotation, self-heating."""
     t = np.asarray(t_s, dtype=float)
     heading0, roll, pitch = _attitude(rng)
     still = float(rng.uniform(*_SHORT_STILL_S))
     angle = float(rng.choice([-1.0, 1.0]) * rng.uniform(*_SHORT_TURN_DEG))
     peak = float(rng.uniform(*_SHORT_TURN_PEAK_DPS))
-    start_c, rise_c = rng.uniform(*_SHORT_START_C), rng.uniform(*_SHORT_RISE_C)
-    temp, temp_rate = approach_temperature(t, duration_s, float(start_c), float(start_c + rise_c), 0.5)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp, temp_rate_cps=temp_rate, heading_rate_dps=_rotations_rate(t, [(still, angle, peak, _TURN_RAMP_S)]),
-        heading0_deg=heading0, roll_deg=roll, pitch_deg=pitch, accel_fwd_mps2=zero, accel_lat_mps2=zero,
-    )
+    temp, temp_rate = _warming(t, duration_s, rng, *_SHORT_WARMING)
+    return still_motion(t, temp, temp_rate, heading0, roll, pitch,
+                        heading_rate_dps=_rotations_rate(t, [(still, angle, peak, _TURN_RAMP_S)]))
 
 
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion`` (``vehicle-rawmag``

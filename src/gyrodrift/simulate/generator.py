@@ -1,40 +1,10 @@
 """A procedural scenario generator that nobody tunes on: random compositions of motion,
 temperature, compass, sampling and device, in classes, with seeds split once.
 
-Every named scenario of :mod:`gyrodrift.simulate.scenarios` is one hand-written run; a
-setting tuned on them fits their shapes. This generator draws each log from a *class*
-(:data:`CLASSES`) by composing random segments:
-
-* **motion**: still, yaw sway, slow continuous turns, driving legs with stops and
-  cornering, multicopter flights (yaw manoeuvres, vibration on the gyro), turntable
-  rotations, hand turns;
-* **temperature**: power-on warm-up with fast drift, chamber ramps with non-linear
-  knees (and, on some devices, thermal lag and backlash hysteresis), day cycles,
-  heating in flight, or a temperature channel that is not measured;
-* **compass**: clean (noise, hard- and soft-iron deviation, tilt while accelerating),
-  interference steps, ramps and wander, an error that follows the motor throttle,
-  outages, the raw magnetometer and accelerometer instead of a heading;
-* **sampling**: 1-Hz telemetry with 0.5–4 s jitter, short bursts, 10–500 Hz;
-* **device**: a randomised gyro, from a quiet, nearly linear one to a hot-running
-  multicopter IMU whose drift moves by several deg/s in minutes.
-
-Seeds are split once (:data:`SPLITS`): ``tuning`` seeds choose every setting,
-``held-out`` seeds only report (:func:`seeds`). A case is fully determined by
-``(class, seed)``.
-
-Beside the input contract and ``ref_heading``/``true_bias_z``, a generated log has
-truth columns for the decisions a compensator makes:
-
-=========================  =====  ===============================================
-column                     unit   meaning
-=========================  =====  ===============================================
-``true_rate_z``            deg/s  true heading rate (0 exactly where still)
-``true_compass_offset``    deg    magnetic interference on the compass heading
-                                  (deviation and noise excluded)
-=========================  =====  ===============================================
-
-:func:`truth_labels` turns them into the row labels a compensator's ``gate_reason``
-is scored against (:data:`DISTURBED_DEG`, :data:`TURNING_DPS`).
+Each log is drawn from a class (:data:`CLASSES`); ``tuning`` seeds choose settings,
+``held-out`` seeds only report (:data:`SPLITS`). A log has truth columns for the decisions
+a compensator makes (:data:`TRUE_RATE_Z`, :data:`TRUE_COMPASS_OFFSET`, :func:`truth_labels`).
+The classes and their numbers: ``docs/simulator.md`` (the procedural generator).
 
 Examples
 --------
@@ -56,22 +26,15 @@ import pandas as pd
 
 from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.simulate.device import DeviceModel, gauss_markov, random_device, random_walk, temperature_reading
-from gyrodrift.simulate.motion import Motion, ramp_slice, smooth_step, smooth_step_slope
+from gyrodrift.simulate.device import DeviceModel, random_device, seeded_streams, temperature_reading, true_bias
+from gyrodrift.simulate.motion import (
+    Motion, add_rotation, in_records, ramp_slice, smooth_pulse, sum_of_step_slopes, sum_of_steps, true_heading,
+)
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
 
 __all__ = [
-    "CLASSES",
-    "SPLITS",
-    "TRUE_RATE_Z",
-    "TRUE_COMPASS_OFFSET",
-    "DISTURBED_DEG",
-    "TURNING_DPS",
-    "GeneratedCase",
-    "seeds",
-    "split_of",
-    "generate",
-    "truth_labels",
+    "CLASSES", "SPLITS", "TRUE_RATE_Z", "TRUE_COMPASS_OFFSET", "DISTURBED_DEG", "TURNING_DPS", "GeneratedCase",
+    "seeds", "split_of", "generate", "truth_labels",
 ]
 
 #: Truth column: the true heading rate, deg/s.
@@ -93,13 +56,7 @@ SPLITS: Mapping[str, range] = MappingProxyType({
 
 
 def seeds(split: str, n: int) -> list[int]:
-    """The first ``n`` seeds of a split (``"tuning"`` or ``"held-out"``).
-
-    Examples
-    --------
-    >>> seeds("tuning", 3), seeds("held-out", 2)
-    ([0, 1, 2], [1000000, 1000001])
-    """
+    """The first ``n`` seeds of a split (``"tuning"`` or ``"held-out"``)."""
     if split not in SPLITS:
         raise ConfigError(f"unknown seed split {split!r}; choose from: {', '.join(SPLITS)}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= len(SPLITS[split]):
@@ -117,21 +74,9 @@ def split_of(seed: int) -> str:
 
 @dataclass(frozen=True)
 class GeneratedCase:
-    """One generated log and what goes with it.
-
-    Attributes
-    ----------
-    cls : str
-        The class (:data:`CLASSES`).
-    seed : int
-    log : DataFrame
-        Input contract + ``ref_heading``, ``true_bias_z`` and the truth columns;
-        ``attrs`` say how it was made.
-    device : DeviceModel
-    compass : CompassModel
-    calibration : Callable[[], DataFrame]
-        A separate 2-h still heating run of the same device and compass (for a
-        ``poly3`` calibration), made on demand.
+    """One generated log (``log``: input contract, ``ref_heading``, ``true_bias_z`` and the truth
+    columns; ``attrs`` say how it was made), its class, seed, device and compass, and
+    ``calibration()``, a separate 2-h still heating run of the same device and compass.
     """
 
     cls: str
@@ -171,6 +116,7 @@ class _Recipe:
 
 
 def _u(rng, lo, hi) -> float:
+    """Uniform in ``[lo, hi)``, as float."""
     return float(rng.uniform(lo, hi))
 
 
@@ -195,6 +141,7 @@ def _device(rng, *, hot: bool = False, memory: bool = False, coarse_temp: bool =
 
 
 def _compass(rng, *, noise=(0.3, 0.8), rate_hz=10.0) -> CompassModel:
+    """:func:`random_compass` with a heading noise uniform in ``noise`` and the rate ``rate_hz``."""
     return replace(random_compass(rng), noise_deg=_u(rng, *noise), rate_hz=float(rate_hz))
 
 
@@ -202,6 +149,7 @@ def _compass(rng, *, noise=(0.3, 0.8), rate_hz=10.0) -> CompassModel:
 
 
 def _warmup(rng, start=(10.0, 30.0), rise=(10.0, 35.0), tau=(60.0, 400.0)):
+    """A power-on warm-up: an exponential rise from the start (degC ranges, time constant s)."""
     t0, dT, tau_s = _u(rng, *start), _u(rng, *rise), _u(rng, *tau)
     return lambda t: t0 + dT * (1.0 - np.exp(-t / tau_s))
 
@@ -226,6 +174,7 @@ def _chamber(rng, duration):
 
 
 def _day_cycle(rng, duration):
+    """A sinusoid of 5–30 degC mean and 3–12 degC amplitude, its period 1.5–3 runs."""
     mean, amp, phase = _u(rng, 5.0, 30.0), _u(rng, 3.0, 12.0), _u(rng, 0.0, 2 * math.pi)
     period = _u(rng, 1.5, 3.0) * duration  # a part of one day, squeezed into the run
     return lambda t: mean + amp * np.sin(2 * math.pi * t / period + phase)
@@ -234,13 +183,26 @@ def _day_cycle(rng, duration):
 # motion pieces, added over their own samples
 
 
-def _rotation(rate, t, t0, angle, peak, ramp=1.0):
-    """Add one rotation by ``angle`` deg (raised-cosine ramps, plateau ``peak`` deg/s)."""
-    dur = abs(angle) / peak + ramp
-    sl = ramp_slice(t, t0, t0 + dur)
-    x = t[sl]
-    rate[sl] += math.copysign(peak, angle) * (smooth_step((x - t0) / ramp) - smooth_step((x - (t0 + dur - ramp)) / ramp))
-    return t0 + dur
+def _turn_plan(rng, t0, end, angle, peak, gap, after=None):
+    """Turns ``(start s, angle deg, peak deg/s)`` from ``t0`` while before ``end``; the next
+    starts ``gap`` s after the start of one, or after ``after(angle, peak)`` s and the gap."""
+    turns = []
+    while t0 < end:
+        a = _sign(rng) * _u(rng, *angle)
+        p = _u(rng, *peak)
+        turns.append((t0, a, p))
+        t0 += _u(rng, *gap) if after is None else after(a, p) + _u(rng, *gap)
+    return turns
+
+
+def _turns_rate(turns, ramp=1.0):
+    """The heading rate (deg/s) of ``turns`` as a function of time (:func:`add_rotation`)."""
+    def rate(t):
+        r = np.zeros(t.size)
+        for t0, angle, peak in turns:
+            add_rotation(r, t, t0, angle, peak, ramp)
+        return r
+    return rate
 
 
 def _sway(rng, t, amp_deg=(0.5, 4.0), period_s=(8.0, 120.0), n=3):
@@ -254,8 +216,7 @@ def _sway(rng, t, amp_deg=(0.5, 4.0), period_s=(8.0, 120.0), n=3):
 
 def _pulse(t, t0, t1, ramp):
     """1 inside [t0, t1] with raised-cosine edges of ``ramp`` s, 0 outside."""
-    ramp = max(min(ramp, 0.25 * (t1 - t0)), 1e-3)
-    return smooth_step((t - t0) / ramp) - smooth_step((t - (t1 - ramp)) / ramp)
+    return smooth_pulse(t, t0, t1, max(min(ramp, 0.25 * (t1 - t0)), 1e-3))
 
 
 def _disturbances(rng, duration, n_range=(1, 4), size=(5.0, 40.0), dur=(20.0, 600.0), kinds=("step", "ramp", "wander")):
@@ -290,6 +251,7 @@ def _offset_fn(episodes):
 
 
 def _dropouts(rng, duration, n_range=(1, 3), length=(300.0, 1800.0)):
+    """Compass outages ``(start, length)``: how many and how long (s), at most a quarter of the run each."""
     out = []
     for _ in range(int(rng.integers(n_range[0], n_range[1] + 1))):
         ln = min(_u(rng, *length), 0.25 * duration)
@@ -323,12 +285,8 @@ def _multicopter(rng, scale):
     k_throttle = _sign(rng) * _u(rng, 5.0, 30.0)
     hover = _u(rng, 0.4, 0.6)
     man = [(_u(rng, ground + 20, t_land - 30), _u(rng, 5.0, 20.0), _u(rng, -0.2, 0.2)) for _ in range(6)]
-    turns = []
-    t0 = ground + _u(rng, 20.0, 60.0)
-    while t0 < t_land - 40.0:
-        angle = _sign(rng) * _u(rng, 20.0, 180.0)
-        turns.append((t0, angle, _u(rng, 15.0, 90.0)))
-        t0 += abs(angle) / 15.0 + 1.0 + _u(rng, 10.0, 60.0)
+    turning = _turns_rate(_turn_plan(rng, ground + _u(rng, 20.0, 60.0), t_land - 40.0, (20.0, 180.0), (15.0, 90.0),
+                                     (10.0, 60.0), after=lambda a, p: abs(a) / 15.0 + 1.0))
 
     def throttle(t):
         th = hover * _pulse(t, ground, t_land, 3.0)
@@ -340,10 +298,7 @@ def _multicopter(rng, scale):
     vib = _u(rng, 2.0, 8.0)
 
     def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r + 0.3 * _sway(sway(), t, (0.2, 1.0), (2.0, 10.0)) * _pulse(t, ground, t_land, 3.0)
+        return turning(t) + 0.3 * _sway(sway(), t, (0.2, 1.0), (2.0, 10.0)) * _pulse(t, ground, t_land, 3.0)
 
     return _Recipe(duration, 200.0, _device(rng, hot=rng.random() < 0.5), _compass(rng, rate_hz=float(rng.choice([10.0, 25.0, 50.0]))),
                    lambda t: warm(t) + heat * np.clip(1.0 - np.exp(-(t - ground) / heat_tau), 0.0, None) * (t > ground),
@@ -424,27 +379,16 @@ def _drive_plan(rng, duration, still_s):
 
 def _drive_motion(rng, duration):
     steps, turns, cruise = _drive_plan(rng, duration, _u(rng, 30.0, 120.0))
+    turning = _turns_rate(turns, ramp=2.0)
     wobble = _child(rng)
 
     def speed(t):
-        v = np.zeros(t.size)
-        for t0, d, dv in steps:
-            v += dv * smooth_step((t - t0) / d)
-        return v
-
-    def accel(t):
-        a = np.zeros(t.size)
-        for t0, d, dv in steps:
-            a += dv * smooth_step_slope((t - t0) / d) / d
-        return a
+        return sum_of_steps(t, steps)
 
     def rate(t):
-        r = np.zeros(t.size)
-        for t0, a, p in turns:
-            _rotation(r, t, t0, a, p, ramp=2.0)
-        return r + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
+        return turning(t) + _sway(wobble(), t, (0.05, 0.3), (5.0, 40.0), 2) * np.clip(speed(t) / cruise, 0.0, 1.0)
 
-    return rate, accel, lambda t: speed(t) * np.radians(rate(t))
+    return rate, lambda t: sum_of_step_slopes(t, steps), lambda t: speed(t) * np.radians(rate(t))
 
 
 def _drive(rng, scale):
@@ -469,19 +413,8 @@ def _bench_interference(rng, scale):
     """A bench unit heated or cooled, turned by hand now and then, with interference steps,
     ramps and wander from things moved around it."""
     duration = _u(rng, 1800.0, 5400.0) * scale
-    turns = []
-    t0 = _u(rng, 120.0, 600.0)
-    while t0 < duration - 60.0:
-        angle = _sign(rng) * _u(rng, 30.0, 180.0)
-        turns.append((t0, angle, _u(rng, 10.0, 60.0)))
-        t0 += _u(rng, 300.0, 900.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 120.0, 600.0), duration - 60.0, (30.0, 180.0), (10.0, 60.0),
+                                  (300.0, 900.0)))
     return _Recipe(duration, float(rng.choice([20.0, 50.0, 100.0])), _device(rng), _compass(rng), _chamber(rng, duration),
                    rate=rate, offset=_offset_fn(_disturbances(rng, duration, (2, 5), (5.0, 60.0), (30.0, 600.0))),
                    heading0_deg=_u(rng, 0, 360))
@@ -491,20 +424,8 @@ def _turntable(rng, scale):
     """Turntable rotations of 90–720 deg at 30–300 deg/s between dwells, in a chamber ramp,
     sampled at 200–500 Hz."""
     duration = _u(rng, 600.0, 1800.0) * scale
-    turns = []
-    t0 = _u(rng, 30.0, 90.0)
-    while t0 < duration - 30.0:
-        angle = _sign(rng) * _u(rng, 90.0, 720.0)
-        peak = _u(rng, 30.0, 300.0)
-        turns.append((t0, angle, peak))
-        t0 += abs(angle) / peak + 1.0 + _u(rng, 10.0, 60.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 30.0, 90.0), duration - 30.0, (90.0, 720.0), (30.0, 300.0),
+                                  (10.0, 60.0), after=lambda a, p: abs(a) / p + 1.0))
     fs = float(rng.choice([200.0, 500.0]))
     return _Recipe(duration, fs, _device(rng), _compass(rng, rate_hz=50.0), _chamber(rng, duration), rate=rate,
                    heading0_deg=_u(rng, 0, 360))
@@ -514,19 +435,8 @@ def _no_temp_robot(rng, scale):
     """A ground robot indoors, stop and go with turns, near steel (wandering interference);
     its IMU warms up but the log has no temperature."""
     duration = _u(rng, 1200.0, 3600.0) * scale
-    turns = []
-    t0 = _u(rng, 20.0, 120.0)
-    while t0 < duration - 30.0:
-        angle = _sign(rng) * _u(rng, 20.0, 180.0)
-        turns.append((t0, angle, _u(rng, 10.0, 45.0)))
-        t0 += _u(rng, 20.0, 240.0)
-
-    def rate(t):
-        r = np.zeros(t.size)
-        for s, a, p in turns:
-            _rotation(r, t, s, a, p)
-        return r
-
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 20.0, 120.0), duration - 30.0, (20.0, 180.0), (10.0, 45.0),
+                                  (20.0, 240.0)))
     episodes = _disturbances(rng, duration, (1, 4), (5.0, 25.0), (30.0, 300.0), ("wander", "step"))
     return _Recipe(duration, 50.0, _device(rng), _compass(rng), _warmup(rng, rise=(5.0, 20.0), tau=(300.0, 1200.0)),
                    rate=rate, offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), temp_channel_c=0.0)
@@ -565,10 +475,8 @@ CLASSES: Mapping[str, str] = MappingProxyType(
 # --------------------------------------------------------------------------- assembly
 
 
-def _streams(cls: str, seed: int) -> dict[str, np.random.Generator]:
-    names = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
-    root = np.random.SeedSequence([zlib.crc32(cls.encode()), int(seed)])
-    return {n: np.random.default_rng(c) for n, c in zip(names, root.spawn(len(names)))}
+#: The random streams of a case, one per random source (:func:`seeded_streams`).
+_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
 
 
 def _telemetry_times(duration: float, rng: np.random.Generator) -> np.ndarray:
@@ -590,11 +498,7 @@ def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.nd
         keep[:] = False
         keep[::step] = True
     if rec.records:
-        inside = np.zeros(t.size, dtype=bool)
-        for start, dur in rec.records:
-            lo, hi = np.searchsorted(t, [start, start + dur])
-            inside[lo:hi] = True
-        keep &= inside
+        keep &= in_records(t, rec.records)
     return np.flatnonzero(keep)
 
 
@@ -608,19 +512,14 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     seed : int
         A seed of a split (:func:`seeds`); the same ``(cls, seed)`` gives the same log.
     duration_scale : float
-        Every length of the run (segments, outages, temperature profiles) times this
-        (for quick tests; the Monte Carlo uses 1).
-
-    Returns
-    -------
-    GeneratedCase
+        Every length of the run times this (for quick tests; the Monte Carlo uses 1).
     """
     if cls not in _BUILDERS:
         raise ConfigError(f"unknown scenario class {cls!r}; choose from: {', '.join(_BUILDERS)}")
     split_of(int(seed))
     if not (isinstance(duration_scale, (int, float)) and math.isfinite(duration_scale) and duration_scale > 0):
         raise ConfigError(f"duration_scale must be a positive number, got {duration_scale!r}")
-    rng = _streams(cls, int(seed))
+    rng = seeded_streams([zlib.crc32(cls.encode()), int(seed)], _STREAMS)
     rec = _BUILDERS[cls](rng["recipe"], float(duration_scale))
     fs = rec.fs_sim_hz
     n = int(math.floor(rec.duration_s * fs)) + 1
@@ -628,13 +527,9 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     temp_true = rec.temp(t)
     temp_rate = np.gradient(temp_true, t) if n > 1 else np.zeros(n)
     rate = rec.rate(t)
-    from scipy.integrate import cumulative_trapezoid
-
-    heading_true = rec.heading0_deg + cumulative_trapezoid(rate, t, initial=0.0)
+    heading_true = true_heading(t, rate, rec.heading0_deg)
     dev = rec.device
-    bias = (dev.drift_series(t, temp_true, temp_rate)
-            + gauss_markov(n, 1.0 / fs, dev.bias_instability_dps, dev.bias_tau_s, rng["bias"])
-            + random_walk(n, 1.0 / fs, dev.rate_random_walk_dps_rts, rng["rrw"]))
+    bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, rng["bias"], rng["rrw"])
     rows = _logged_rows(rec, t, rng["log"])
     if rows.size < 3:
         raise ConfigError(f"class {cls!r}, seed {seed}: fewer than 3 logged rows; use a larger duration_scale")
@@ -651,13 +546,9 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
                     heading0_deg=rec.heading0_deg, roll_deg=rec.roll_deg, pitch_deg=rec.pitch_deg,
                     accel_fwd_mps2=rec.accel_fwd(tl) if rec.accel_fwd is not None else zero,
                     accel_lat_mps2=rec.accel_lat(tl) if rec.accel_lat is not None else zero,
-                    interference_offset_deg=offset)
+                    interference_offset_deg=offset, compass_dropouts=rec.dropouts)
     mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
-    for start, dur in rec.dropouts:
-        out = (tl >= start) & (tl < start + dur)
-        heading[out] = np.nan
-        mag[out] = np.nan
     cols = {T: tl, GYRO_Z: gyro, TEMP: temp}
     if rec.compass_form == "heading":
         cols[HEADING] = heading
@@ -681,9 +572,9 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
 
 
 def truth_labels(log: pd.DataFrame) -> pd.DataFrame:
-    """Per row of a generated log: ``disturbed`` (a compass sample whose interference
-    exceeds :data:`DISTURBED_DEG`; NaN-free bool, False on rows without a compass sample),
-    ``turning`` (true rate above :data:`TURNING_DPS`) and ``still`` (true rate exactly 0)."""
+    """Per row of a generated log: ``disturbed`` (a compass sample with interference above
+    :data:`DISTURBED_DEG`), ``turning`` (true rate above :data:`TURNING_DPS`) and ``still``
+    (true rate exactly 0), as bools."""
     has_compass = log[HEADING].notna() if HEADING in log else log[MAG_COLS[0]].notna() if MAG_COLS[0] in log \
         else pd.Series(False, index=log.index)
     rate = log[TRUE_RATE_Z].to_numpy(float)

@@ -1,9 +1,8 @@
-"""True motion of a simulated run: the :class:`Motion` record and the temperature profiles.
+"""True motion of a simulated run: :class:`Motion`, the temperature profiles and the ramps.
 
-A scenario (:mod:`gyrodrift.simulate.scenarios`) describes what happens to the unit,
-and how the run is logged, as a :class:`Motion`. The temperature profiles start with a
-still hold (:func:`hold_s`) then follow knots (:func:`knot_profile`); :func:`smooth_step`
-is the ramp of every turn, speed change and interference window.
+A scenario describes what happens to the unit, and how the run is logged, as a
+:class:`Motion`; the pieces it is made of (raised-cosine ramps, rotations, sways,
+temperature knots) are here. What each models: ``docs/simulator.md`` (motion and temperature).
 """
 
 from __future__ import annotations
@@ -16,21 +15,11 @@ import numpy as np
 from gyrodrift.errors import ConfigError
 
 __all__ = [
-    "Motion",
-    "COMPASS_FORMS",
-    "hold_s",
-    "smooth_step",
-    "smooth_step_slope",
-    "ramp_slice",
-    "sum_of_steps",
-    "knot_profile",
-    "static_temperature",
-    "vehicle_temperature",
-    "calibration_temperature",
-    "hysteresis_temperature",
-    "cold_start_temperature",
-    "soak_temperature",
-    "soak_ramps",
+    "Motion", "COMPASS_FORMS", "hold_s", "smooth_step", "smooth_step_slope", "smooth_pulse", "ramp_slice",
+    "sum_of_steps", "sum_of_step_slopes", "add_rotation", "true_heading", "still_motion", "fade_in", "sway_rate",
+    "draw_wave", "wave", "in_records", "knot_profile", "approach_temperature", "static_temperature",
+    "vehicle_temperature", "calibration_temperature", "hysteresis_temperature", "cold_start_temperature",
+    "soak_temperature", "soak_ramps",
 ]
 
 #: Longest time the unit stands still at constant temperature at the start, s.
@@ -41,69 +30,27 @@ COMPASS_FORMS = ("heading", "raw", "none")
 
 
 def smooth_step(x):
-    """Raised-cosine step: 0 for x <= 0, 1 for x >= 1, C1 in between.
-
-    Parameters
-    ----------
-    x : array_like
-        Position in the ramp (0 = start, 1 = end).
-
-    Returns
-    -------
-    ndarray
-        ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0.0 for ``x <= 0`` and exactly 1.0
-        for ``x >= 1``.
-
-    Examples
-    --------
-    >>> smooth_step(np.array([-2.0, 0.0, 1.0, 3.0])).tolist()
-    [0.0, 0.0, 1.0, 1.0]
-    >>> round(float(smooth_step(0.5)), 12)
-    0.5
-    """
+    """Raised-cosine step ``0.5 - 0.5*cos(pi*clip(x, 0, 1))``: exactly 0 for x <= 0 and 1 for x >= 1, C1."""
     x = np.clip(x, 0.0, 1.0)
     return 0.5 - 0.5 * np.cos(np.pi * x)
 
 
 def smooth_step_slope(x):
-    """Derivative of :func:`smooth_step` with respect to x.
-
-    Parameters
-    ----------
-    x : array_like
-        Position in the ramp.
-
-    Returns
-    -------
-    ndarray
-        The slope; exactly 0.0 outside ``0 < x < 1``.
-    """
+    """Derivative of :func:`smooth_step` with respect to x; exactly 0.0 outside ``0 < x < 1``."""
     inside = (x > 0.0) & (x < 1.0)
     return np.where(inside, 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0.0, 1.0)), 0.0)
 
 
+def smooth_pulse(t, t0: float, t1: float, ramp: float):
+    """1 from ``t0 + ramp`` to ``t1 - ramp``, 0 outside ``[t0, t1]``, raised-cosine edges of ``ramp``."""
+    return smooth_step((t - t0) / ramp) - smooth_step((t - (t1 - ramp)) / ramp)
+
+
 def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
-    """The samples of a ramp or pulse that lasts from ``start_s`` to ``end_s``.
+    """The samples (``t_s`` increasing) of a ramp or pulse from ``start_s`` to ``end_s``, s.
 
-    Covers ``[start_s, end_s]`` with a margin of ``1e-6 * (1 + |start_s| + |end_s|)``,
-    far above rounding, so a :func:`smooth_step` ramp is exactly at its start value
-    before the slice and at its end value after it.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Sample times, s, increasing.
-    start_s, end_s : float
-        Start and end of the ramp, s.
-
-    Returns
-    -------
-    slice
-
-    Examples
-    --------
-    >>> ramp_slice(np.arange(10.0), 2.5, 4.0)
-    slice(3, 5, None)
+    The margin of ``1e-6 * (1 + |start_s| + |end_s|)``, far above rounding, leaves a
+    :func:`smooth_step` ramp exactly at its start value before the slice and at its end value after it.
     """
     pad = 1e-6 * (1.0 + abs(start_s) + abs(end_s))
     lo = int(np.searchsorted(t_s, start_s - pad, side="left"))
@@ -112,28 +59,10 @@ def ramp_slice(t_s: np.ndarray, start_s: float, end_s: float) -> slice:
 
 
 def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
-    """Sum of raised-cosine steps at the sample times, each step evaluated on its ramp only.
+    """Sum of raised-cosine steps ``(t0_s, dur_s > 0, delta)`` at the times ``t_s`` (increasing).
 
-    Bit for bit the sum of ``delta * smooth_step((t_s - t0) / dur)`` over the whole
-    run, step by step, at a cost linear in ``len(t_s)`` plus the ramps' samples.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Sample times, s, increasing.
-    steps : iterable of (t0_s, dur_s, delta)
-        Steps in the order they are added: ramp start, ramp length (> 0), size.
-
-    Returns
-    -------
-    ndarray
-        The sum at ``t_s``.
-
-    Examples
-    --------
-    >>> t = np.arange(8.0)
-    >>> sum_of_steps(t, [(1.0, 2.0, 4.0), (4.0, 2.0, -4.0)]).round(12).tolist()
-    [0.0, 0.0, 2.0, 4.0, 4.0, 2.0, 0.0, 0.0]
+    Bit for bit the sum of ``delta * smooth_step((t_s - t0) / dur)`` over the whole run,
+    step by step, at a cost linear in ``len(t_s)`` plus the ramps' samples.
     """
     out = np.zeros(t_s.size)
     level = 0.0  # sum of the deltas of the steps added so far: the value past all their ramps
@@ -151,43 +80,34 @@ def sum_of_steps(t_s: np.ndarray, steps) -> np.ndarray:
     return out
 
 
+def sum_of_step_slopes(t_s: np.ndarray, steps) -> np.ndarray:
+    """Time derivative of :func:`sum_of_steps`, each step's slope evaluated on its ramp only."""
+    out = np.zeros(t_s.size)
+    for t0, dur, delta in steps:
+        ramp = ramp_slice(t_s, t0, t0 + dur)
+        out[ramp] += delta * smooth_step_slope((t_s[ramp] - t0) / dur) / dur
+    return out
+
+
+def add_rotation(rate: np.ndarray, t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float,
+                 ramp_s: float) -> float:
+    """Add to ``rate`` (deg/s, at ``t_s``) one level rotation by ``angle_deg``; return its end, s.
+
+    Raised-cosine ramps of ``ramp_s`` and a plateau at ``peak_dps``: it lasts
+    ``|angle_deg|/peak_dps + ramp_s`` and turns by exactly ``angle_deg``. Only the
+    rotation's own samples are touched.
+    """
+    dur = abs(angle_deg) / peak_dps + ramp_s
+    sl = ramp_slice(t_s, t0, t0 + dur)
+    rate[sl] += math.copysign(peak_dps, angle_deg) * smooth_pulse(t_s[sl], t0, t0 + dur, ramp_s)
+    return t0 + dur
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Motion:
-    """True motion and environment of one scenario, sampled at the log times.
+    """True motion and environment of one scenario at the log times, and how it is logged.
 
-    Attributes
-    ----------
-    temp_c : ndarray
-        True die temperature, degC.
-    temp_rate_cps : ndarray
-        Its exact time derivative, degC/s.
-    heading_rate_dps : ndarray
-        True heading rate, deg/s (positive = clockwise from above).
-    heading0_deg : float
-        True heading at the first sample, deg.
-    roll_deg, pitch_deg : float
-        Constant mounting attitude, deg (the body rate about z is the heading rate
-        times ``cos(roll)*cos(pitch)``).
-    accel_fwd_mps2, accel_lat_mps2 : ndarray
-        Kinematic acceleration along the forward and right level axes, m/s².
-    interference : tuple of (start_s, duration_s, offset_deg)
-        Magnetic interference windows of the scenario.
-    interference_offset_deg : ndarray or None
-        A wandering compass heading offset at the log times, added to the windows',
-        deg. None = none.
-    compass_dropouts : tuple of (start_s, duration_s)
-        Windows without compass samples (``heading`` and raw ``mag_*`` NaN in
-        ``start_s <= t < start_s + duration_s``).
-
-    records : tuple of (start_s, duration_s)
-        Bursty logging: only rows inside some record are kept; () = every row.
-    temp_channel_c : float or None
-        A constant written in the temperature column, degC (a channel that is not
-        measured); None = the sensor's reading.
-    compass_form : str
-        ``"heading"``: a ``heading`` column (and the raw columns when asked);
-        ``"raw"``: the raw ``mag_*`` and ``acc_*`` columns and no ``heading``;
-        ``"none"``: no compass columns at all.
+    The attributes (units in their names): ``docs/simulator.md`` (motion and temperature).
     """
 
     temp_c: np.ndarray
@@ -217,48 +137,79 @@ class Motion:
             raise ConfigError(f"Motion.temp_channel_c must be a finite number or None, got {self.temp_channel_c!r}")
 
 
+def true_heading(t_s: np.ndarray, heading_rate_dps: np.ndarray, heading0_deg: float) -> np.ndarray:
+    """The true heading, deg: ``heading0_deg`` plus the trapezoid integral of the rate at the times ``t_s``."""
+    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
+
+    return heading0_deg + cumulative_trapezoid(heading_rate_dps, t_s, initial=0.0)
+
+
+def still_motion(t_s, temp_c, temp_rate_cps, heading0_deg: float, roll_deg: float = 0.0, pitch_deg: float = 0.0,
+                 **extra) -> Motion:
+    """A :class:`Motion` without kinematic acceleration, still unless ``extra`` gives a heading rate."""
+    zero = np.zeros(np.shape(t_s))
+    extra.setdefault("heading_rate_dps", zero)
+    return Motion(temp_c=temp_c, temp_rate_cps=temp_rate_cps, heading0_deg=heading0_deg, roll_deg=roll_deg,
+                  pitch_deg=pitch_deg, accel_fwd_mps2=zero, accel_lat_mps2=zero, **extra)
+
+
+def in_records(t_s: np.ndarray, records) -> np.ndarray:
+    """Rows (times ``t_s``, increasing) with ``start_s <= t < start_s + duration_s`` of some record."""
+    keep = np.zeros(t_s.size, dtype=bool)
+    for start, dur in records:
+        lo, hi = np.searchsorted(t_s, [start, start + dur], side="left")
+        keep[lo:hi] = True
+    return keep
+
+
 def hold_s(duration_s: float) -> float:
-    """Length of the still, constant-temperature start of a run: 60 s, or 10 % of a short run.
-
-    Parameters
-    ----------
-    duration_s : float
-        Run length, s.
-
-    Returns
-    -------
-    float
-        Hold time, s.
-
-    Examples
-    --------
-    >>> hold_s(3600.0), hold_s(120.0)
-    (60.0, 12.0)
-    """
+    """Length of the still, constant-temperature start of a run, s: 60 s, or 10 % of a short run."""
     return min(_HOLD_S, 0.1 * duration_s)
 
 
+def fade_in(t: np.ndarray, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Envelope (0 → 1 after the hold, over ``min(120 s, 10 %)``) and its time derivative, 1/s."""
+    hold = hold_s(duration_s)
+    fade = min(120.0, 0.1 * duration_s)
+    return smooth_step((t - hold) / fade), smooth_step_slope((t - hold) / fade) / fade
+
+
+def sway_rate(t: np.ndarray, duration_s: float, components, gain: float = 1.0) -> np.ndarray:
+    """Heading rate of a yaw sway faded in after the hold, deg/s.
+
+    The sway is ``gain * amp * (sin(omega (t - hold) + phase) - sin(phase))`` summed over
+    ``components`` (``(amp deg, omega rad/s, phase rad)`` each), times :func:`fade_in`'s envelope.
+    """
+    hold = hold_s(duration_s)
+    env, env_rate = fade_in(t, duration_s)
+    sway = np.zeros(t.size)
+    rate = np.zeros(t.size)
+    for amp, omega, phase in components:
+        sway += gain * amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
+        rate += gain * amp * omega * np.cos(omega * (t - hold) + phase)
+    return env_rate * sway + env * rate
+
+
+def draw_wave(rng: np.random.Generator, mean_deg, amp_deg, period_s):
+    """A random mean (random sign) and three sinusoids (amplitude, period, phase) from their ranges."""
+    mean = rng.choice([-1.0, 1.0]) * rng.uniform(*mean_deg)
+    amp = rng.uniform(*amp_deg, size=3)
+    period = rng.uniform(*period_s, size=3)
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    return mean, amp, period, phase
+
+
+def wave(x: np.ndarray, drawn) -> np.ndarray:
+    """The mean plus the three sinusoids of :func:`draw_wave` at times ``x`` (s from the start)."""
+    mean, amp, period, phase = drawn
+    return mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
+
+
 def knot_profile(t_s, duration_s: float, knots_u, knots_c):
-    """Temperature (degC) and its exact rate (degC/s) through knots.
+    """Temperature (degC) and its exact rate (degC/s) at ``t_s`` through knots.
 
-    Flat at ``knots_c[0]`` for the hold time (:func:`hold_s`), then a monotone C1
-    cubic (PCHIP) through ``knots_c`` at fractions ``knots_u`` of the rest of the run
-    (0 → end of hold, 1 → end of run), so a shorter run keeps the shape.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    knots_u : sequence of float
-        Increasing fractions of the run after the hold, from 0.
-    knots_c : sequence of float
-        Temperature at each knot, degC.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
+    Flat at ``knots_c[0]`` for the hold (:func:`hold_s`), then a monotone C1 cubic (PCHIP)
+    through ``knots_c`` at the fractions ``knots_u`` (increasing, from 0) of the rest of the run.
     """
     hold = hold_s(duration_s)
     knot_t = np.concatenate([[0.0], hold + (duration_s - hold) * np.asarray(knots_u, dtype=float)])
@@ -270,17 +221,19 @@ def knot_profile(t_s, duration_s: float, knots_u, knots_c):
     return spline(t), spline.derivative()(t)
 
 
-def static_temperature(t_s, duration_s: float):
-    """Static heating run (Fig. 1): 23 degC, fast rise, slower rise to 58, plateau, cooling.
+def approach_temperature(t_s, duration_s: float, start_c: float, end_c: float, tau_u: float):
+    """Temperature from ``start_c`` approaching ``end_c`` after the hold, degC and degC/s.
 
-    Shape in fractions of the run after the hold: 23 → 46 degC by 0.16 (fast),
-    → 58 by 0.40 (slower), plateau to 0.52, then exponential cooling towards 23 degC
-    with a time constant of 0.15 of the run (about 24.4 degC at the end).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
+    ``T = start + (end - start) * (1 - exp(-u/tau_u)) / (1 - exp(-1/tau_u))`` through 9 knots,
+    ``u`` the fraction of the run after the hold: fastest at first, ending at exactly ``end_c``.
     """
+    u = np.linspace(0.0, 1.0, 9)
+    c = start_c + (end_c - start_c) * (1.0 - np.exp(-u / tau_u)) / (1.0 - math.exp(-1.0 / tau_u))
+    return knot_profile(t_s, duration_s, u, c)
+
+
+def static_temperature(t_s, duration_s: float):
+    """Static heating run (Fig. 1), degC and degC/s: 23 → 58 degC, plateau, cooling."""
     cool_u = 0.52 + 0.48 * np.arange(1, 9) / 8.0
     knots_u = [0.0, 0.04, 0.10, 0.16, 0.28, 0.40, 0.52, *cool_u]
     knots_c = [23.0, 29.0, 39.0, 46.0, 53.0, 58.0, 58.0, *(23.0 + 35.0 * np.exp(-(cool_u - 0.52) / 0.15))]
@@ -288,76 +241,34 @@ def static_temperature(t_s, duration_s: float):
 
 
 def vehicle_temperature(t_s, duration_s: float):
-    """Vehicle run (Fig. 7): 26 → 37 degC, fast at first and levelling off.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
-    u = np.linspace(0.0, 1.0, 9)
-    c = 26.0 + 11.0 * (1.0 - np.exp(-u / 0.5)) / (1.0 - math.exp(-2.0))
-    return knot_profile(t_s, duration_s, u, c)
+    """Vehicle run (Fig. 7), degC and degC/s: 26 → 37 degC, fast at first and levelling off."""
+    return approach_temperature(t_s, duration_s, 26.0, 37.0, 0.5)
 
 
 def calibration_temperature(t_s, duration_s: float):
-    """Calibration heating run: -10 → 60 degC, a nearly uniform slow ramp.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Calibration heating run, degC and degC/s: -10 → 60 degC, a nearly uniform slow ramp."""
     return knot_profile(t_s, duration_s, [0.0, 0.05, 0.95, 1.0], [-10.0, -8.25, 58.25, 60.0])
 
 
 def hysteresis_temperature(t_s, duration_s: float):
-    """Heating and cooling cycle of ``hysteresis``: 10 → 70 → 10 degC, then 10 → 45 → 20 degC.
-
-    Shape in fractions of the run after the hold: 10 → 70 degC by 0.25, plateau to
-    0.32, cooling to 10 degC by 0.60, plateau to 0.66, a minor loop up to 45 degC by
-    0.80, plateau to 0.84 and cooling to 20 degC at the end. Every temperature between
-    20 and 45 degC is passed four times, twice heating and twice cooling.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """The cycle of ``hysteresis``, degC and degC/s: 10 → 70 → 10 degC, then a minor loop 10 → 45 → 20 degC."""
     knots_u = [0.0, 0.25, 0.32, 0.60, 0.66, 0.80, 0.84, 1.0]
     knots_c = [10.0, 70.0, 70.0, 10.0, 10.0, 45.0, 45.0, 20.0]
     return knot_profile(t_s, duration_s, knots_u, knots_c)
 
 
 def cold_start_temperature(t_s, duration_s: float):
-    """Warm-up after a cold soak: -20 degC held, then up to +60 degC, fast at first.
-
-    ``T = -20 + 80 * (1 - exp(-u/0.25)) / (1 - exp(-4))`` through 9 knots, ``u`` the
-    fraction of the run after the hold: half of the 80 degC rise comes in the first
-    18 % of the run (for the default 2-h run about 0.04 degC/s at first), and the
-    profile ends at exactly +60 degC.
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
-    u = np.linspace(0.0, 1.0, 9)
-    c = -20.0 + 80.0 * (1.0 - np.exp(-u / 0.25)) / (1.0 - math.exp(-4.0))
-    return knot_profile(t_s, duration_s, u, c)
+    """Warm-up after a cold soak, degC and degC/s: -20 degC held, then up to +60 degC, fast at first."""
+    return approach_temperature(t_s, duration_s, -20.0, 60.0, 0.25)
 
 
 #: Soak profile: knots (fraction of the run after the hold, degC); ramps between unequal knots.
 _SOAK_KNOTS_U = (0.0, 0.08, 0.20, 0.33, 0.50, 0.62, 0.75, 0.86, 0.95, 1.0)
 _SOAK_KNOTS_C = (20.0, 20.0, 45.0, 45.0, 5.0, 5.0, 35.0, 35.0, 20.0, 20.0)
 
+
 def soak_temperature(t_s, duration_s: float):
-    """Thermal soak of ``soak``: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC.
-
-    Knots (fraction of the run after the hold → degC): 0.08 → 20, 0.20 → 45,
-    0.33 → 45, 0.50 → 5, 0.62 → 5, 0.75 → 35, 0.86 → 35, 0.95 → 20, flat to the end.
-    For the default 12-h run the ramps take 1.1–2.0 h (at most about 0.01 degC/s).
-
-    Returns
-    -------
-    temp_c, temp_rate_cps : ndarray
-    """
+    """Thermal soak of ``soak``, degC and degC/s: plateaus joined by slow ramps, 20 → 45 → 5 → 35 → 20 degC."""
     return knot_profile(t_s, duration_s, _SOAK_KNOTS_U, _SOAK_KNOTS_C)
 
 

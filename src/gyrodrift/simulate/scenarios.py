@@ -1,15 +1,9 @@
 """The named scenarios and :func:`simulate`, which turns a scenario into a log.
 
-A scenario is a motion builder ``f(t_s, duration_s, rng) -> Motion``
-(:data:`SCENARIOS`): the temperature profile of :mod:`gyrodrift.simulate.motion`, the
-heading rate (still, vehicle loops, turntable turns, sway), the mounting attitude and
-the magnetic environment (interference windows, wandering interference, compass
-dropouts). :func:`simulate` samples it, integrates the true heading and applies the
-gyro (:mod:`gyrodrift.simulate.device`) and compass (:mod:`gyrodrift.simulate.sensors`)
-error models, each from its own random stream, and logs it as the motion says (every
-row or records only, the temperature reading or a constant, a heading column, the raw
-magnetometer and accelerometer, or no compass). The adversarial scenarios are in
-:mod:`gyrodrift.simulate.adversarial`.
+A scenario is a motion builder ``f(t_s, duration_s, rng) -> Motion`` (:data:`SCENARIOS`);
+:func:`simulate` samples it, integrates the true heading, applies the gyro and compass
+error models, each from its own random stream, and logs it as the motion says. The
+scenarios and the log: ``docs/simulator.md``.
 """
 
 from __future__ import annotations
@@ -25,43 +19,36 @@ from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADI
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.adversarial import ADVERSARIAL_DURATION_S, ADVERSARIAL_SCENARIOS
 from gyrodrift.simulate.checks import positive
-from gyrodrift.simulate.device import DeviceModel, TriadModel, gauss_markov, random_walk, temperature_reading
+from gyrodrift.simulate.device import DeviceModel, TriadModel, gyro_axis, seeded_streams, temperature_reading
 from gyrodrift.simulate.motion import (
     Motion,
+    add_rotation,
     calibration_temperature,
     cold_start_temperature,
+    draw_wave,
     hold_s,
     hysteresis_temperature,
+    in_records,
     ramp_slice,
-    smooth_step,
-    smooth_step_slope,
+    smooth_pulse,
     soak_ramps,
     soak_temperature,
     static_temperature,
+    still_motion,
+    sum_of_step_slopes,
     sum_of_steps,
+    sway_rate,
+    true_heading,
     vehicle_temperature,
+    wave,
 )
 from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, triad_columns
 
 __all__ = [
-    "TRUE_SF",
-    "SCENARIOS",
-    "DEFAULT_DURATION_S",
-    "simulate",
-    "interference_windows_static",
-    "interference_windows_wander",
-    "wander_offset",
-    "soak_outages",
-    "rotation_plan",
-    "scenario_static",
-    "scenario_static_outages",
-    "scenario_vehicle",
-    "scenario_calibration",
-    "scenario_scale_factor",
-    "scenario_interference_wander",
-    "scenario_hysteresis",
-    "scenario_cold_start",
-    "scenario_soak",
+    "TRUE_SF", "SCENARIOS", "DEFAULT_DURATION_S", "simulate", "interference_windows_static",
+    "interference_windows_wander", "wander_offset", "soak_outages", "rotation_plan", "scenario_static",
+    "scenario_static_outages", "scenario_vehicle", "scenario_calibration", "scenario_scale_factor",
+    "scenario_interference_wander", "scenario_hysteresis", "scenario_cold_start", "scenario_soak",
     "scenario_vehicle_rawmag",
 ]
 
@@ -70,11 +57,7 @@ TRUE_SF = "true_sf"
 
 
 def interference_windows_static(duration_s: float) -> tuple[tuple[float, float, float], ...]:
-    """The three interference windows of ``static-outages`` (Fig. 5), scaled to the run.
-
-    For the default 3-h run: 300 s from 2160 s (rising, +20 deg), 300 s from 4860 s
-    (plateau, -15 deg) and 600 s from 7560 s (cooling, +30 deg).
-    """
+    """The three interference windows ``(start_s, duration_s, offset_deg)`` of ``static-outages`` (Fig. 5)."""
     scale = duration_s / DEFAULT_DURATION_S["static"]
     return (
         (0.20 * duration_s, 300.0 * scale, 20.0),
@@ -83,37 +66,22 @@ def interference_windows_static(duration_s: float) -> tuple[tuple[float, float, 
     )
 
 
-def _still(t_s, temp_c, temp_rate_cps, heading0_deg, roll_deg, pitch_deg, interference=()) -> Motion:
-    zero = np.zeros(np.shape(t_s))
-    return Motion(
-        temp_c=temp_c,
-        temp_rate_cps=temp_rate_cps,
-        heading_rate_dps=zero,
-        heading0_deg=heading0_deg,
-        roll_deg=roll_deg,
-        pitch_deg=pitch_deg,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-        interference=interference,
-    )
-
-
 def scenario_static(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Motionless at 40 deg on a slightly tilted bench, heated 23 → 58 degC and cooled."""
     temp, rate = static_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    return still_motion(t_s, temp, rate, 40.0, 0.8, -1.2)
 
 
 def scenario_static_outages(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """``static`` with magnetic interference in three windows (300, 300, 600 s)."""
     temp, rate = static_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 40.0, 0.8, -1.2, interference_windows_static(duration_s))
+    return still_motion(t_s, temp, rate, 40.0, 0.8, -1.2, interference=interference_windows_static(duration_s))
 
 
 def scenario_calibration(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Motionless at 200 deg, heated slowly from -10 to 60 degC (calibration run)."""
     temp, rate = calibration_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 200.0, -0.5, 0.7)
+    return still_motion(t_s, temp, rate, 200.0, -0.5, 0.7)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,25 +125,17 @@ def _turn_rate(t_s: np.ndarray, t0: float, dur: float, sign: int) -> np.ndarray:
     """Rate of one smooth 90° turn, deg/s: raised-cosine ramps of 0.3*dur, plateau between."""
     ramp = 0.3 * dur
     peak = 90.0 / (dur - ramp)  # each ramp pair integrates to peak*(dur - ramp)
-    return sign * peak * (smooth_step((t_s - t0) / ramp) - smooth_step((t_s - (t0 + dur - ramp)) / ramp))
+    return sign * peak * smooth_pulse(t_s, t0, t0 + dur, ramp)
 
 
 def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A car on a flat road: still 60 s, then rectangular loops with 90° turns.
-
-    Straight legs of 30–120 s with a small yaw wander (at most 0.3 deg/s, scaled by
-    speed), 90° turns of 5.5–7.5 s (peak 17–23 deg/s), stops of 10–40 s after 15 % of
-    the legs, cruise 8 m/s, loops mostly clockwise; temperature 26 → 37 degC.
-    """
+    """A car on a flat road: still, then rectangular loops with 90° turns and stops; 26 → 37 degC."""
     t = np.asarray(t_s, dtype=float)
     plan = _vehicle_plan(duration_s, rng)
     # Every event is evaluated on its own samples only (ramp_slice): outside them it
     # adds exactly zero (accel, rate) or its full step (speed, sum_of_steps).
     speed = sum_of_steps(t, plan.speed_steps)
-    accel = np.zeros(t.size)
-    for t0, dur, delta in plan.speed_steps:
-        ramp = ramp_slice(t, t0, t0 + dur)
-        accel[ramp] += delta * smooth_step_slope((t[ramp] - t0) / dur) / dur
+    accel = sum_of_step_slopes(t, plan.speed_steps)
     rate = np.zeros(t.size)
     for t0, dur, sign in plan.turns:
         turn = ramp_slice(t, t0, t0 + dur)
@@ -194,13 +154,7 @@ def scenario_vehicle(t_s, duration_s: float, rng: np.random.Generator) -> Motion
 
 
 def scenario_vehicle_rawmag(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """``vehicle`` logged with the raw magnetometer and accelerometer and no ``heading``.
-
-    The motion of :func:`scenario_vehicle` (the same route for the same seed); the log
-    has ``mag_x..z`` and ``acc_x..z`` instead of a heading column. The accelerometer
-    feels braking, pulling away and cornering (``CompassModel.kinematic_tilt``), so a
-    heading tilt-compensated with it alone is off by degrees in every turn and stop.
-    """
+    """``vehicle`` (the same route for the same seed) logged with ``mag_*`` and ``acc_*`` and no ``heading``."""
     return replace(scenario_vehicle(t_s, duration_s, rng), compass_form="raw")
 
 
@@ -211,32 +165,8 @@ _SF_TURN_PEAK_DPS = (30.0, 90.0)
 _SF_TURN_DEG = 360.0
 
 
-def _rotation_s(angle_deg: float, peak_dps: float, ramp_s: float) -> float:
-    """Duration of one rotation of :func:`_rotation_rate`, s."""
-    return abs(angle_deg) / peak_dps + ramp_s
-
-
-def _rotation_rate(t_s: np.ndarray, t0: float, angle_deg: float, peak_dps: float, ramp_s: float) -> np.ndarray:
-    """Rate of one rotation by ``angle_deg`` (signed), deg/s: raised-cosine ramps, plateau ``peak_dps``.
-
-    Lasts ``|angle_deg|/peak_dps + ramp_s``; the ramp pair integrates to
-    ``peak_dps * (duration - ramp_s) = |angle_deg|``.
-    """
-    dur = _rotation_s(angle_deg, peak_dps, ramp_s)
-    up = smooth_step((t_s - t0) / ramp_s)
-    down = smooth_step((t_s - (t0 + dur - ramp_s)) / ramp_s)
-    return math.copysign(peak_dps, angle_deg) * (up - down)
-
-
 def rotation_plan(duration_s: float, rng: np.random.Generator) -> tuple[tuple[float, float, float], ...]:
-    """The rotations of ``scale-factor``: ``(start_s, angle_deg, peak_dps)`` each.
-
-    One full turn (±360°, so the compass deviation is the same before and after) every
-    120 s, the first 60 s after the still start, alternating clockwise and
-    anticlockwise, plateau rate uniform in 30–90 deg/s (from ``rng``), raised-cosine
-    ramps of 2 s; the unit stands still between turns. A turn that would not end 10 s
-    before the end of the run is left out.
-    """
+    """The rotations ``(start_s, angle_deg, peak_dps)`` of ``scale-factor``: a full turn every 120 s."""
     turns = []
     t0 = hold_s(duration_s) + 0.5 * _SF_TURN_PERIOD_S
     sign = 1.0
@@ -251,30 +181,13 @@ def rotation_plan(duration_s: float, rng: np.random.Generator) -> tuple[tuple[fl
 
 
 def scenario_scale_factor(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """Section 4.3: the static heating run on a level turntable with repeated full turns.
-
-    The temperature profile of ``static`` (23 → 58 degC and back), a stable magnetic
-    field (no interference windows) and the turns of :func:`rotation_plan`: the
-    heading change of the gyro over a turn against the compass measures the scale
-    factor, the still periods between turns the drift. The unit turns about its own
-    axis (no kinematic acceleration); the gyro scale factor comes from
-    ``SCENARIO_SCALE_FACTOR_PPM['scale-factor']`` unless the device sets its own.
-    """
+    """Section 4.3: the static heating run on a level turntable with the turns of :func:`rotation_plan`."""
     t = np.asarray(t_s, dtype=float)
     temp, temp_rate = static_temperature(t, duration_s)
     rate = np.zeros(t.size)
-    for t0, angle, peak in rotation_plan(duration_s, rng):  # each on its own samples, zero elsewhere
-        turn = ramp_slice(t, t0, t0 + _rotation_s(angle, peak, _SF_TURN_RAMP_S))
-        rate[turn] += _rotation_rate(t[turn], t0, angle, peak, _SF_TURN_RAMP_S)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp,
-        temp_rate_cps=temp_rate,
-        heading_rate_dps=rate,
-        heading0_deg=40.0,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-    )
+    for t0, angle, peak in rotation_plan(duration_s, rng):
+        add_rotation(rate, t, t0, angle, peak, _SF_TURN_RAMP_S)
+    return still_motion(t, temp, temp_rate, 40.0, heading_rate_dps=rate)
 
 
 # --------------------------------------------------------------------------- beyond the paper
@@ -286,11 +199,6 @@ _SOAK_OUTAGES = ((900.0, None), (1200.0, 30.0), (900.0, None), (600.0, -25.0))
 
 def soak_outages(duration_s: float):
     """The compass outages of ``soak``, one centred in each temperature ramp.
-
-    For the default 12-h run: 900 s without compass (first ramp, heating), 1200 s of
-    +30 deg interference (second ramp, cooling), 900 s without compass (third,
-    heating) and 600 s of -25 deg interference (fourth, cooling); durations scale with
-    the run.
 
     Returns
     -------
@@ -312,12 +220,7 @@ def soak_outages(duration_s: float):
 
 
 def interference_windows_wander(duration_s: float) -> tuple[tuple[float, float], ...]:
-    """Where the interference of ``interference-wander`` acts: ``(start_s, duration_s)`` each.
-
-    For the default 3-h run: 900 s from 1296 s (early rise), 1200 s from 3456 s (top
-    of the rise), 900 s from 5940 s (plateau) and 1500 s from 8424 s (cooling); start
-    and length scale with the run.
-    """
+    """Where the interference of ``interference-wander`` acts: ``(start_s, duration_s)`` each."""
     scale = duration_s / (3 * 3600.0)
     return tuple((f * duration_s, d * scale) for f, d in ((0.12, 900.0), (0.32, 1200.0), (0.55, 900.0), (0.78, 1500.0)))
 
@@ -331,72 +234,37 @@ _WANDER_PERIOD_S = (180.0, 900.0)
 
 
 def wander_offset(t_s, duration_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Slowly wandering compass heading offset of ``interference-wander``, deg.
+    """Slowly wandering compass heading offset of ``interference-wander`` at ``t_s``, deg (0 outside its windows).
 
-    In each window of :func:`interference_windows_wander`: a random mean plus three
-    slow sinusoids (periods in minutes, not scaled with the run), faded in and out;
-    0 outside. It moves too slowly for a disagreement gate to notice.
-
-    Parameters
-    ----------
-    t_s : array_like
-        Times, s.
-    duration_s : float
-        Run length, s.
-    rng : numpy.random.Generator
-        Source of the offsets, amplitudes, periods and phases (a fixed number of
-        draws per window).
-
-    Returns
-    -------
-    ndarray
-        Offset, deg.
+    ``rng`` gives a fixed number of draws per window.
     """
     t = np.asarray(t_s, dtype=float)
     out = np.zeros(t.shape)
     for start, dur in interference_windows_wander(duration_s):
-        mean = rng.choice([-1.0, 1.0]) * rng.uniform(*_WANDER_MEAN_DEG)
-        amp = rng.uniform(*_WANDER_AMP_DEG, size=3)
-        period = rng.uniform(*_WANDER_PERIOD_S, size=3)
-        phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
-        ramp = min(_WANDER_RAMP_S, dur / 4.0)
-        envelope = smooth_step((t - start) / ramp) - smooth_step((t - (start + dur - ramp)) / ramp)
+        drawn = draw_wave(rng, _WANDER_MEAN_DEG, _WANDER_AMP_DEG, _WANDER_PERIOD_S)
+        envelope = smooth_pulse(t, start, start + dur, min(_WANDER_RAMP_S, dur / 4.0))
         inside = envelope > 0.0
-        x = t[inside] - start
-        wave = mean + sum(a * np.sin(2.0 * np.pi * x / p + ph) for a, p, ph in zip(amp, period, phase))
-        out[inside] = out[inside] + envelope[inside] * wave
+        out[inside] = out[inside] + envelope[inside] * wave(t[inside] - start, drawn)
     return out
 
 
 def scenario_interference_wander(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """``static`` with magnetic interference that wanders slowly in four windows.
-
-    The bench, attitude and temperature of ``static`` (23 → 58 degC and back); the
-    compass offset of :func:`wander_offset` (a few degrees, changing over minutes) in
-    the windows of :func:`interference_windows_wander`.
-    """
+    """``static`` with magnetic interference that wanders slowly (:func:`wander_offset`) in four windows."""
     temp, rate = static_temperature(t_s, duration_s)
-    still = _still(t_s, temp, rate, 40.0, 0.8, -1.2)
+    still = still_motion(t_s, temp, rate, 40.0, 0.8, -1.2)
     return replace(still, interference_offset_deg=wander_offset(t_s, duration_s, rng))
 
 
 def scenario_hysteresis(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A strongly nonlinear device with hysteresis, motionless at 120 deg, heated and cooled.
-
-    The temperature cycle of :func:`hysteresis_temperature` (10 → 70 → 10 degC, then a
-    minor loop 10 → 45 → 20 degC) spans 60 degC of the cubic drift, and the scenario's
-    device (:data:`~gyrodrift.simulate.device.SCENARIO_MEMORY`) adds a 120-s thermal
-    lag and a 0.15 deg/s backlash hysteresis: the drift at one temperature differs
-    between heating and cooling, also when the temperature has stopped changing.
-    """
+    """A strongly nonlinear device with hysteresis (``SCENARIO_MEMORY``), motionless at 120 deg, heated and cooled."""
     temp, rate = hysteresis_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 120.0, -0.6, 1.0)
+    return still_motion(t_s, temp, rate, 120.0, -0.6, 1.0)
 
 
 def scenario_cold_start(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
     """Cold start: motionless at 300 deg, warming from -20 to +60 degC after a cold soak."""
     temp, rate = cold_start_temperature(t_s, duration_s)
-    return _still(t_s, temp, rate, 300.0, 1.1, 0.4)
+    return still_motion(t_s, temp, rate, 300.0, 1.1, 0.4)
 
 
 #: Yaw sway of ``soak``: (amplitude range deg, period range s) of its two components.
@@ -404,44 +272,15 @@ _SWAY = (((10.0, 20.0), (180.0, 600.0)), ((2.0, 5.0), (60.0, 180.0)))
 
 
 def scenario_soak(t_s, duration_s: float, rng: np.random.Generator) -> Motion:
-    """A 12-h soak: slow yaw sway, temperature ramps, long compass outages during the ramps.
-
-    The unit sways about heading 70 deg (a moored boat, a vehicle on a rocking
-    platform): a 10–20 deg sinusoid of 3–10 min period plus a 2–5 deg one of 1–3 min
-    (random amplitudes, periods and phases), faded in over ``min(120 s, 10 %)`` after
-    the hold; at most about 1.2 deg/s, below the 2 deg/s turning gate. Temperature of
-    :func:`soak_temperature`; the outages of :func:`soak_outages` (compass missing, or
-    interference of 25–30 deg) in the middle of the ramps, where the drift changes
-    fastest.
-    """
+    """A 12-h soak: slow yaw sway, temperature ramps, long compass outages during the ramps."""
     t = np.asarray(t_s, dtype=float)
     temp, temp_rate = soak_temperature(t, duration_s)
-    hold = hold_s(duration_s)
-    fade = min(120.0, 0.1 * duration_s)
-    env = smooth_step((t - hold) / fade)
-    env_rate = smooth_step_slope((t - hold) / fade) / fade
-    sway = np.zeros(t.size)
-    sway_rate = np.zeros(t.size)
-    for amp_range, period_range in _SWAY:
-        amp = rng.uniform(*amp_range)
-        omega = 2.0 * np.pi / rng.uniform(*period_range)
-        phase = rng.uniform(0.0, 2.0 * np.pi)
-        sway += amp * (np.sin(omega * (t - hold) + phase) - math.sin(phase))
-        sway_rate += amp * omega * np.cos(omega * (t - hold) + phase)
+    draws = [
+        (rng.uniform(*amp), 2.0 * np.pi / rng.uniform(*period), rng.uniform(0.0, 2.0 * np.pi)) for amp, period in _SWAY
+    ]
     dropouts, interference = soak_outages(duration_s)
-    zero = np.zeros(t.size)
-    return Motion(
-        temp_c=temp,
-        temp_rate_cps=temp_rate,
-        heading_rate_dps=env_rate * sway + env * sway_rate,
-        heading0_deg=70.0,
-        roll_deg=0.5,
-        pitch_deg=-0.8,
-        accel_fwd_mps2=zero,
-        accel_lat_mps2=zero,
-        interference=interference,
-        compass_dropouts=dropouts,
-    )
+    return still_motion(t, temp, temp_rate, 70.0, 0.5, -0.8, heading_rate_dps=sway_rate(t, duration_s, draws),
+                        interference=interference, compass_dropouts=dropouts)
 
 
 #: Scenario name → motion builder ``f(t_s, duration_s, rng) -> Motion``.
@@ -478,13 +317,9 @@ DEFAULT_DURATION_S: dict[str, float] = {
 # --------------------------------------------------------------------------- assembly
 
 
-def _streams(seed: int) -> dict[str, np.random.Generator]:
-    """Independent generators of one seed, one per random source."""
-    # Appended names only: child i of a SeedSequence does not depend on how many are spawned.
-    names = ("trajectory", "white", "bias", "rrw", "temp", "compass",
-             "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
-    children = np.random.SeedSequence(seed).spawn(len(names))
-    return {name: np.random.default_rng(child) for name, child in zip(names, children)}
+#: The random streams of a run, one per random source (append only: :func:`seeded_streams`).
+_STREAMS = ("trajectory", "white", "bias", "rrw", "temp", "compass",
+            "x_white", "x_bias", "x_rrw", "y_white", "y_bias", "y_rrw", "acc")
 
 
 def _jsonable(value):
@@ -524,46 +359,32 @@ def simulate(
     raw_mag: bool = False,
     triad: TriadModel | None = None,
 ) -> pd.DataFrame:
-    """Simulate a log in the gyrodrift input contract, with truth columns.
+    """Simulate a log in the gyrodrift input contract, with truth columns (``docs/simulator.md``).
 
     Parameters
     ----------
     scenario : str
         One of :data:`SCENARIOS`.
     seed : int
-        Seed of all randomness (trajectory details and every noise term); the same
-        seed gives an identical DataFrame.
+        Seed of all randomness; the same seed gives an identical DataFrame.
     duration_s : float, optional
-        Run length, s (default :data:`DEFAULT_DURATION_S`). Temperature profiles and
-        interference windows scale with it, so a short run keeps the shape (with
-        proportionally faster temperature rates); vehicle legs keep their length.
+        Run length, s (default :data:`DEFAULT_DURATION_S`); the scenario's shape scales with it.
     fs_hz : float
         Gyro and temperature sample rate, Hz.
     device : DeviceModel, optional
-        Gyro error model (default :class:`DeviceModel`). Scale-factor coefficients
-        and memory fields left ``None`` take the scenario's values
-        (:data:`~gyrodrift.simulate.device.SCENARIO_SCALE_FACTOR_PPM`,
-        :data:`~gyrodrift.simulate.device.SCENARIO_MEMORY`).
+        Gyro error model; ``None`` fields take the scenario's values.
     compass : CompassModel, optional
-        Compass error model (default :class:`CompassModel`); the scenario's own
-        interference windows are added to its ``interference``.
+        Compass error model; the scenario's interference windows are added to its own.
     raw_mag : bool
-        Also write ``mag_x, mag_y, mag_z`` (µT, FRD, NaN off compass rows) and
-        ``acc_x, acc_y, acc_z`` (g, FRD specific force, every row).
+        Also write ``mag_x..z`` (µT, FRD, NaN off compass rows) and ``acc_x..z`` (g, FRD).
     triad : TriadModel, optional
-        Also write ``gyro_x, gyro_y`` (deg/s, own drift and noise), their truth
-        ``true_bias_x, true_bias_y`` and the accelerometer ``acc_x..z`` (g, with the
-        triad's noise). None (default): none of these (the other columns do not change).
+        Also write ``gyro_x, gyro_y``, ``true_bias_x, true_bias_y`` and a noisy ``acc_x..z``.
 
     Returns
     -------
     pandas.DataFrame
-        Columns ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, ``true_sf``
-        when the scale factor is not ≡ 1, and the raw columns asked for; ``attrs``
-        holds ``scenario``, ``seed``, ``duration_s``, ``fs_hz``, the effective
-        ``device`` and ``compass`` as dicts, and ``compass_dropouts`` when there are
-        any. How the scenario is logged (:class:`~gyrodrift.simulate.motion.Motion`:
-        records, a constant temperature, the compass columns) is in ``attrs`` too.
+        ``t, gyro_z, temp, heading, ref_heading, true_bias_z``, ``true_sf`` when the scale
+        factor is not ≡ 1, and the columns asked for; ``attrs`` say how it was made.
 
     Raises
     ------
@@ -578,35 +399,22 @@ def simulate(
     n = int(math.floor(duration * fs + 1e-9)) + 1
     t = np.arange(n) / fs
     dt = 1.0 / fs
-    rng = _streams(int(seed))
+    rng = seeded_streams(int(seed), _STREAMS)
 
     motion = SCENARIOS[scenario](t, duration, rng["trajectory"])
-    from scipy.integrate import cumulative_trapezoid  # here, not at the top: scipy costs 0.4 s at start-up
-
-    heading_true = motion.heading0_deg + cumulative_trapezoid(motion.heading_rate_dps, t, initial=0.0)
+    heading_true = true_heading(t, motion.heading_rate_dps, motion.heading0_deg)
     body_rate = motion.heading_rate_dps * (
         math.cos(math.radians(motion.roll_deg)) * math.cos(math.radians(motion.pitch_deg))
     )
 
-    bias = (
-        device.drift_series(t, motion.temp_c, motion.temp_rate_cps)
-        + gauss_markov(n, dt, device.bias_instability_dps, device.bias_tau_s, rng["bias"])
-        + random_walk(n, dt, device.rate_random_walk_dps_rts, rng["rrw"])
-    )
-    sigma = device.white_sigma_dps(fs)
-    white = sigma * rng["white"].standard_normal(n) if sigma > 0 else np.zeros(n)
-    true_sf = device.scale_factor(motion.temp_c)  # exactly 1.0 unless an sf_* is non-zero
-    gyro = true_sf * body_rate + bias + white
+    gyro, bias, true_sf = gyro_axis(device, t, dt, fs, motion.temp_c, motion.temp_rate_cps, body_rate, rng["bias"],
+                                    rng["rrw"], rng["white"])
     temp = temperature_reading(motion.temp_c, device, rng["temp"])
     if motion.temp_channel_c is not None:  # a channel that is not measured: one constant on every row
         temp = np.full(n, float(motion.temp_channel_c))
 
     mask = compass_rows(t, compass.rate_hz)
     heading, mag, acc = compass_columns(t, heading_true, motion, compass, mask, rng["compass"])
-    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
-        out = (t >= start) & (t < start + dur)
-        heading[out] = np.nan
-        mag[out] = np.nan
 
     columns = {
         T: t,
@@ -654,11 +462,8 @@ def simulate(
 
 
 def _logged_rows(df: pd.DataFrame, t: np.ndarray, records, scenario: str) -> pd.DataFrame:
-    """The rows of ``df`` (times ``t``, increasing) with ``start_s <= t < start_s + duration_s`` of a record."""
-    keep = np.zeros(t.size, dtype=bool)
-    for start, dur in records:
-        lo, hi = np.searchsorted(t, [start, start + dur], side="left")
-        keep[lo:hi] = True
+    """The rows of ``df`` (times ``t``) inside a record (:func:`~gyrodrift.simulate.motion.in_records`)."""
+    keep = in_records(t, records)
     if not keep.any():
         raise ConfigError(f"scenario {scenario!r}: its records keep no row of the run")
     return df.loc[keep].reset_index(drop=True)

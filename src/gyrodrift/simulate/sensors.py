@@ -1,12 +1,8 @@
 """The aiding sensors of a simulated run: the strapdown compass and the accelerometer.
 
-:class:`CompassModel` is the compass error model (deviation, interference, noise) and
-:func:`random_compass` draws one for Monte Carlo runs. :func:`compass_columns`
-synthesises what the compass and accelerometer measure: the FRD body field of the
-Earth plus the interference, the specific force (gravity, and the vehicle's
-acceleration with ``CompassModel.kinematic_tilt``) and the tilt-compensated heading
-computed from both. :func:`triad_columns` adds the x and y gyros and a noisy
-accelerometer of a :class:`~gyrodrift.simulate.device.TriadModel`.
+:class:`CompassModel` and :func:`random_compass`; :func:`compass_columns` synthesises the
+body field, the specific force and the tilt-compensated heading, :func:`triad_columns` the
+x and y gyros and a noisy accelerometer. The model: ``docs/simulator.md`` (the compass).
 """
 
 from __future__ import annotations
@@ -20,16 +16,11 @@ from gyrodrift.compass import tilt_compensated_heading
 from gyrodrift.conventions import ACC_COLS, TRUE_BIAS_X, TRUE_BIAS_Y, wrap_360
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.checks import finite, nonneg, positive
-from gyrodrift.simulate.device import TriadModel, gauss_markov, random_walk
-from gyrodrift.simulate.motion import Motion, smooth_step
+from gyrodrift.simulate.device import TriadModel, gyro_axis
+from gyrodrift.simulate.motion import Motion, smooth_pulse
 
 __all__ = [
-    "GRAVITY_MPS2",
-    "CompassModel",
-    "random_compass",
-    "compass_rows",
-    "compass_columns",
-    "triad_columns",
+    "GRAVITY_MPS2", "CompassModel", "random_compass", "compass_rows", "compass_columns", "triad_columns",
 ]
 
 #: Standard gravity, m/s² (converts kinematic acceleration to g).
@@ -37,6 +28,7 @@ GRAVITY_MPS2 = 9.80665
 
 
 def _check_windows(windows) -> tuple[tuple[float, float, float], ...]:
+    """Interference windows as float triples, checked (offsets within ±85 deg)."""
     try:
         items = [tuple(w) for w in windows]
     except TypeError:
@@ -60,43 +52,9 @@ def _check_windows(windows) -> tuple[tuple[float, float, float], ...]:
 
 @dataclass(frozen=True, kw_only=True)
 class CompassModel:
-    """Error model of the strapdown magnetic compass.
+    """Error model of the strapdown magnetic compass: ``true + deviation + interference + noise``.
 
-    The compass heading is ``true + deviation(true) + interference(t) + noise``,
-    sampled at ``rate_hz`` and computed by tilt compensation
-    (:func:`gyrodrift.compass.tilt_compensated_heading`) from a simulated body field
-    and specific force.
-
-    Attributes
-    ----------
-    noise_deg : float
-        Standard deviation of the white heading noise, deg (0 = off).
-    rate_hz : float
-        Compass sample rate, Hz; at most the gyro rate.
-    deviation_deg, deviation_phase_deg : float
-        Semicircular (hard-iron) deviation ``deviation_deg * sin(h + phase)``, deg.
-        A function of heading: a constant offset at rest, an error of the heading
-        *change* when turning.
-    deviation2_deg, deviation2_phase_deg : float
-        Quadrantal (soft-iron) deviation ``deviation2_deg * sin(2h + phase2)``, deg.
-    interference : tuple of (start_s, duration_s, offset_deg)
-        Magnetic interference windows in addition to those of the scenario. Inside a
-        window the heading offset ramps in and out (raised cosine) over
-        ``min(interference_ramp_s, duration_s/4)`` and is ``offset_deg`` in between.
-    interference_ramp_s : float
-        Ramp time of an interference window, s.
-    interference_vertical_ratio : float
-        The disturbing field is ``B_h * tan(offset)`` across the horizontal Earth
-        field (that rotates the heading by ``offset``) plus this fraction of it
-        downwards, so field strength and dip change too.
-    field_ut : float
-        Earth field strength, µT.
-    dip_deg : float
-        Earth field dip (inclination), deg, positive = pointing down.
-    kinematic_tilt : bool
-        True: the accelerometer senses the vehicle acceleration as well as gravity
-        (real strapdown compass; heading errors while braking and cornering).
-        False: ideal attitude, gravity only.
+    The fields (units in their names) and the field synthesis: ``docs/simulator.md`` (the compass).
     """
 
     noise_deg: float = 0.5
@@ -128,12 +86,7 @@ class CompassModel:
 
     @classmethod
     def noiseless(cls, **overrides) -> "CompassModel":
-        """The default model with zero heading noise, then ``overrides`` applied.
-
-        Deviation and interference are deterministic and kept; pass
-        ``deviation_deg=0.0, deviation2_deg=0.0`` for a compass that reads the true
-        heading.
-        """
+        """The default model with zero heading noise (deviation kept), then ``overrides``."""
         return replace(cls(noise_deg=0.0), **overrides)
 
     def scale_noise(self, factor: float) -> "CompassModel":
@@ -142,55 +95,23 @@ class CompassModel:
         return replace(self, noise_deg=self.noise_deg * factor)
 
     def deviation(self, heading_deg):
-        """Heading-dependent compass deviation, deg.
-
-        ``deviation_deg*sin(h + deviation_phase_deg) + deviation2_deg*sin(2h + deviation2_phase_deg)``
-        """
+        """Heading-dependent deviation, deg: ``dev*sin(h + phase) + dev2*sin(2h + phase2)``."""
         h = np.radians(np.asarray(heading_deg, dtype=float))
         return self.deviation_deg * np.sin(h + math.radians(self.deviation_phase_deg)) + (
             self.deviation2_deg * np.sin(2.0 * h + math.radians(self.deviation2_phase_deg))
         )
 
     def interference_offset(self, t_s, extra_windows=()):
-        """Heading offset of the interference windows at times ``t_s``, deg.
-
-        Parameters
-        ----------
-        t_s : array_like
-            Times, s.
-        extra_windows : sequence of (start_s, duration_s, offset_deg)
-            Windows added to ``self.interference`` (e.g. a scenario's).
-        """
+        """Heading offset, deg, at ``t_s`` of the interference windows and ``extra_windows`` (a scenario's)."""
         t = np.asarray(t_s, dtype=float)
         out = np.zeros(t.shape)
         for start, dur, off in self.interference + _check_windows(extra_windows):
-            ramp = min(self.interference_ramp_s, dur / 4.0)
-            up = smooth_step((t - start) / ramp)
-            down = smooth_step((t - (start + dur - ramp)) / ramp)
-            out = out + off * (up - down)
+            out = out + off * smooth_pulse(t, start, start + dur, min(self.interference_ramp_s, dur / 4.0))
         return out
 
 
 def random_compass(rng: np.random.Generator) -> CompassModel:
-    """A plausible randomised compass for Monte Carlo runs.
-
-    ``noise_deg`` uniform 0.3–0.6 deg; semicircular deviation ``deviation_deg``
-    uniform 0–3 deg and quadrantal ``deviation2_deg`` 0–1 deg, both at a uniform
-    random phase; everything else as :class:`CompassModel` (10 Hz, 50 µT, dip 60 deg,
-    kinematic tilt).
-
-    The noise stays near the 0.5 deg the default settings assume: a noisier compass
-    gets most intervals refused by the disagreement gate (docs/results.md).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Source of every draw.
-
-    Returns
-    -------
-    CompassModel
-    """
+    """A plausible randomised compass for Monte Carlo runs (the draws: ``docs/simulator.md``)."""
     return CompassModel(
         noise_deg=float(rng.uniform(0.3, 0.6)),
         deviation_deg=float(rng.uniform(0.0, 3.0)),
@@ -227,25 +148,7 @@ def _apparent_field_level(heading_app_deg, offset_deg, compass: CompassModel) ->
 
 
 def compass_rows(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Rows that carry a compass sample: the first row of each compass tick.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Sample times, s.
-    rate_hz : float
-        Compass sample rate, Hz (at most the gyro rate).
-
-    Returns
-    -------
-    ndarray of bool
-        True on compass rows.
-
-    Examples
-    --------
-    >>> compass_rows(np.arange(6) / 4.0, 2.0).tolist()
-    [True, False, True, False, True, False]
-    """
+    """Rows (times ``t_s``) that carry a compass sample of ``rate_hz``: the first row of each compass tick."""
     tick = np.floor(t_s * rate_hz + 1e-9)
     mask = np.ones(t_s.size, dtype=bool)
     mask[1:] = tick[1:] != tick[:-1]
@@ -253,22 +156,10 @@ def compass_rows(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
 
 
 def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask, rng):
-    """Compass heading, body field and specific force of a run.
+    """Compass heading, body field and specific force at times ``t`` of the true heading ``heading_true``.
 
-    Parameters
-    ----------
-    t : ndarray
-        Sample times, s.
-    heading_true : ndarray
-        True heading at ``t``, deg.
-    motion : Motion
-        The scenario's motion (attitude, acceleration, interference).
-    compass : CompassModel
-        Compass error model.
-    mask : ndarray of bool
-        Compass rows (:func:`compass_rows`).
-    rng : numpy.random.Generator
-        Source of the heading noise (one draw per compass row).
+    ``mask`` marks the compass rows (:func:`compass_rows`), ``rng`` draws one noise value per
+    compass row; ``motion.compass_dropouts`` are cut after the draw.
 
     Returns
     -------
@@ -298,33 +189,19 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
 
     heading = np.full(n, np.nan)
     heading[idx] = wrap_360(tilt_compensated_heading(*mag[idx].T, *acc[idx].T))
+    for start, dur in motion.compass_dropouts:  # after the noise draw: the other rows keep their noise
+        out = (t >= start) & (t < start + dur)
+        heading[out] = np.nan
+        mag[out] = np.nan
     return heading, mag, acc
 
 
 def triad_columns(t, dt, motion: Motion, triad: TriadModel, scenario: str, acc, rng) -> dict:
     """The x and y gyros of a :class:`TriadModel`, their drift truth and a noisy accelerometer.
 
-    Parameters
-    ----------
-    t : ndarray
-        Sample times, s.
-    dt : float
-        Sample interval, s.
-    motion : Motion
-        The scenario's motion (heading rate, attitude, temperature).
-    triad : TriadModel
-        Error models of the x and y gyros and the accelerometer noise.
-    scenario : str
-        Scenario name: resolves the axes' scale-factor and memory fields left None.
-    acc : ndarray, shape (n, 3)
-        Noise-free specific force, g (from :func:`compass_columns`).
-    rng : dict of numpy.random.Generator
-        The run's streams; uses ``x_white, x_bias, x_rrw, y_white, y_bias, y_rrw, acc``.
-
-    Returns
-    -------
-    dict
-        ``gyro_x, gyro_y, true_bias_x, true_bias_y, acc_x, acc_y, acc_z`` as arrays.
+    ``acc`` is the noise-free specific force of :func:`compass_columns`; ``rng`` the run's
+    streams (``x_white, x_bias, x_rrw, y_white, y_bias, y_rrw, acc``). Returns the columns
+    ``gyro_x, gyro_y, true_bias_x, true_bias_y, acc_x, acc_y, acc_z``.
     """
     n = t.size
     phi, theta = math.radians(motion.roll_deg), math.radians(motion.pitch_deg)
@@ -335,14 +212,9 @@ def triad_columns(t, dt, motion: Motion, triad: TriadModel, scenario: str, acc, 
     gyro, bias = {}, {}
     for axis in ("x", "y"):
         dev = getattr(triad, axis).with_scenario_scale_factor(scenario).with_scenario_memory(scenario)
-        bias[axis] = (
-            dev.drift_series(t, motion.temp_c, motion.temp_rate_cps)
-            + gauss_markov(n, dt, dev.bias_instability_dps, dev.bias_tau_s, rng[f"{axis}_bias"])
-            + random_walk(n, dt, dev.rate_random_walk_dps_rts, rng[f"{axis}_rrw"])
-        )
-        sigma = dev.white_sigma_dps(1.0 / dt)
-        white = sigma * rng[f"{axis}_white"].standard_normal(n) if sigma > 0 else np.zeros(n)
-        gyro[axis] = dev.scale_factor(motion.temp_c) * body_rate[axis] + bias[axis] + white
+        gyro[axis], bias[axis], _ = gyro_axis(dev, t, dt, 1.0 / dt, motion.temp_c, motion.temp_rate_cps,
+                                              body_rate[axis], rng[f"{axis}_bias"], rng[f"{axis}_rrw"],
+                                              rng[f"{axis}_white"])
     if triad.acc_noise_g > 0:
         acc = acc + triad.acc_noise_g * rng["acc"].standard_normal((n, 3))
     return {
