@@ -17,7 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable, Iterable, NamedTuple
 
-from gyrodrift.errors import LogFormatError
+from gyrodrift.errors import ConfigError, LogFormatError
 
 __all__ = [
     "Source",
@@ -34,6 +34,7 @@ __all__ = [
     "read_error",
     "empty_file_error",
     "no_data_rows_error",
+    "optional_module",
 ]
 
 _MAX_NAMES_SHOWN = 30
@@ -175,3 +176,15 @@ def no_data_rows_error(src: Source) -> LogFormatError:
     """The error for a table without data rows."""
     problem = "has a header row but no data rows" if src.fmt == "csv" else "has no data rows"
     return format_error(src, problem, "give a log with at least one data row")
+
+
+def optional_module(name: str, what: str, package: str, extra: str):
+    """``from parent import attr`` for the dotted ``name``, or a :class:`ConfigError`: "``what`` needs
+    the optional package ``package``; install it with pip install 'gyrodrift[``extra``]'"."""
+    parent, _, attr = name.rpartition(".")
+    try:
+        return getattr(__import__(parent, fromlist=[attr]), attr)
+    except (ImportError, AttributeError) as exc:
+        raise ConfigError(
+            f"{what} needs the optional package {package}; install it with pip install 'gyrodrift[{extra}]'"
+        ) from exc
