@@ -1,19 +1,8 @@
 """CSV text: what both table readers check and how they convert it; how both writers print it.
 
-Reading: a CSV log may be gzip-compressed (recognised by content,
-:func:`decompress_if_gzip`) and start with a UTF-8 byte-order mark (:data:`UTF8_BOM`);
-its text is checked for NUL bytes and UTF-8 whole or piece by piece
-(:func:`check_csv_text`). pyarrow converts the cells with :func:`csv_convert_options`
-in the whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and in the chunked
-reader (:func:`gyrodrift.io.chunked.iter_log_chunks`) alike, so a cell gets the same
-value either way.
-
-Writing: :func:`csv_header` prints the header line and :func:`write_csv_rows` the data
-lines of the Arrow table :func:`csv_table` makes of a DataFrame, for
-:func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
-alike, so a table written in chunks is byte for byte the table written whole;
-:func:`write_csv_with_pandas` prints the tables pyarrow cannot. Both quote the text cells
-and column names a spreadsheet would run as formulas (:mod:`gyrodrift.io.formula`).
+The whole-table and the chunked reader convert cells with the same options, and the
+whole-table and the chunk writer print the same lines (docs/log-formats.md, sections
+"Tables: CSV and Parquet" and "Writing tables").
 """
 
 from __future__ import annotations
@@ -97,11 +86,10 @@ def decompress_if_gzip(data: bytes, name: str) -> bytes:
 
 
 def check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=None, final: bool = True) -> None:
-    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text.
+    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text (no NUL byte).
 
-    For text checked piece by piece (chunked reading), ``lines_before`` counts the
-    ``\n`` before ``data`` and ``decoder`` (a UTF-8 incremental decoder) carries an
-    unfinished character from one piece to the next; ``final`` marks the last piece.
+    Piece by piece: ``lines_before`` counts the line ends before ``data``, ``decoder`` (a
+    UTF-8 incremental decoder) carries an unfinished character on, ``final`` marks the last.
     """
     nul = data.find(b"\x00")
     if nul >= 0:
@@ -164,12 +152,9 @@ def csv_convert_options(
 ) -> pa_csv.ConvertOptions:
     """How pyarrow converts CSV cells, the same for the whole-file and the chunked reader.
 
-    Columns that become numeric contract columns (after stripping and ``column_map``) are
-    read as float64, or as text when ``numbers_as_text`` (a cell pyarrow cannot read as a
-    number: :func:`gyrodrift.io.validate.convert_numeric` then converts the text cell by
-    cell, with the same parser, and names the first bad cell). Every cell therefore gets
-    the same value whichever way its column was read. ``column_types`` pins the types of other columns
-    (by header name); the rest are inferred by pyarrow.
+    Numeric contract columns (after stripping and ``column_map``) are read as float64, or
+    as text when ``numbers_as_text`` (then converted cell by cell with the same parser);
+    ``column_types`` pins other columns' types (by header name); the rest are inferred.
     """
     kind = pa.string() if numbers_as_text else pa.float64()
     types = {raw: kind for raw in numeric_raw_names(names, column_map)}
@@ -279,13 +264,8 @@ def write_csv_rows(table: pa.Table, sink, header: bytes = b"") -> bool:
     """Write ``header`` and the CSV data lines of ``table`` to ``sink``; False, with nothing
     written, if pyarrow cannot print a column type of ``table`` (pandas writes it then).
 
-    Numbers and other values are printed by pyarrow (shortest round-trip floats, NaN as
-    an empty cell); text is quoted only where needed. Every line depends on its own row
-    only, so the lines of a table split in chunks are the lines of the whole table.
-    pyarrow's own writer prints straight into ``sink`` when no text needs quoting (it
-    would quote every text value otherwise); the column-by-column path (:func:`_csv_lines`)
-    prints the same values the same way. ``sink`` is best a :class:`pyarrow.NativeFile`:
-    pyarrow then writes without holding Python's GIL and without the text in memory.
+    Every line depends on its own row only, so a table split in chunks prints the lines of
+    the whole. ``sink`` is best a :class:`pyarrow.NativeFile` (written without the GIL).
     """
     if table.num_rows:
         try:

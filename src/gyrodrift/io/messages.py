@@ -1,15 +1,8 @@
 """The message style of every reader, and the errors of a whole file.
 
-Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
-:class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
-form::
-
-    <file>: <location>: <problem>; <what to do>
-
-where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the header
-is line 1) or ``data row N`` for Parquet (1-based), optionally followed by
-``, column 'name'``. Parts that do not apply are left out. :func:`message` builds such a
-message; :class:`Source`, :func:`row_label` and :func:`cell_label` name the rows and cells.
+Every problem a user can fix is one line, ``<file>: <location>: <problem>; <what to do>``
+(docs/log-formats.md, section "Messages"): :func:`message` builds it, :class:`Source`,
+:func:`row_label` and :func:`cell_label` name the rows and cells.
 """
 
 from __future__ import annotations
@@ -93,13 +86,8 @@ def show_names(names) -> str:
 
 
 def physical_line(blocks: Iterable[bytes], nonempty_index: int) -> int:
-    """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
-
-    pyarrow skips empty lines, so its row counts are counts of non-empty lines
-    (1-based, header included); this maps one back to what an editor shows. ``blocks``
-    are the file's bytes in order, in pieces of any size (line ends ``\n``, ``\r\n``
-    or ``\r``, as :meth:`bytes.splitlines` splits them).
-    """
+    """The 1-based file line of the ``nonempty_index``-th non-empty line (pyarrow counts only
+    those); ``blocks`` are the file's bytes in order, in pieces of any size."""
     count = 0
     line_no = 0
     carry = b""

@@ -1,13 +1,8 @@
-"""Checks and conversions shared by the table readers.
+"""Checks and conversions shared by the table readers, whole or in chunks.
 
-The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
-(:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
-contract with :func:`normalise_frame`: column map, required columns, numeric
-conversion, time checks, plausible ranges (:mod:`gyrodrift.io.limits`), gyro unit (deg/s)
-and frame (NED/FRD, headings in [0, 360)), and a ``temp`` of 0 degC where the file has no
-usable temperature. Every step works row by row, so the chunks of a file come out as the
-rows of the whole file. Messages follow :mod:`gyrodrift.io.messages`; what a file lacks is
-worded by :mod:`gyrodrift.io.notes`.
+:func:`normalise_frame` brings the rows of a table into the input contract, step by step
+as docs/log-formats.md, section "Tables: CSV and Parquet", lists; every step works row by
+row, so the chunks of a file come out as the rows of the whole file.
 """
 
 from __future__ import annotations
@@ -89,11 +84,6 @@ _NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"} |
 
 
 # ---------------------------------------------------------------------------
-# message helpers
-# ---------------------------------------------------------------------------
-
-
-# ---------------------------------------------------------------------------
 # option checks
 # ---------------------------------------------------------------------------
 
@@ -144,12 +134,8 @@ def check_column_map(column_map: Mapping[str, str] | None) -> dict[str, str]:
 
 @dataclass(frozen=True)
 class ReadOptions:
-    """How to read a log: the options of :func:`gyrodrift.io.read_log`, as one value.
-
-    Every entry point takes its read options as one of these (the command line builds it
-    once, :func:`gyrodrift._cliargs.read_options`); :meth:`read` reads a log with them. The
-    fields are :func:`gyrodrift.io.read_log`'s keywords, with its defaults.
-    """
+    """How to read a log: the keywords of :func:`gyrodrift.io.read_log` (with its defaults) as one
+    value, which every entry point takes; :meth:`read` reads a log with them."""
 
     fmt: str | None = None
     gyro_unit: str = "deg/s"
@@ -209,10 +195,8 @@ class TableOptions(NamedTuple):
 
 def read_options(gyro_unit: str, frame: str | None, column_map: Mapping[str, str] | None,
                  time_unit: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> TableOptions:
-    """Check the table options (raising :class:`ConfigError`) and return them canonical.
-
-    ``frame`` None means NED/FRD, not stated: :func:`check_z_up` then refuses a table
-    whose accelerometer shows its z axis pointing up."""
+    """Check the table options (raising :class:`ConfigError`) and return them canonical;
+    ``frame`` None means NED/FRD, not stated (:func:`check_z_up` then applies)."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
     return TableOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
@@ -276,12 +260,7 @@ def apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: Sourc
 
 
 def _check_required_columns(frame: pd.DataFrame, src: Source) -> None:
-    """Raise if ``t`` or ``gyro_z`` is missing.
-
-    A log without ``temp`` is read (:func:`normalise_frame` fills it in); when another
-    required column is missing too, the message names ``temp`` as well, so that one
-    ``--map`` fixes both.
-    """
+    """Raise if ``t`` or ``gyro_z`` is missing (naming ``temp`` too when it is missing as well)."""
     missing = [c for c in REQUIRED_COLS if c not in frame.columns]
     if any(c != TEMP for c in missing):
         raise format_error(
@@ -299,11 +278,8 @@ def _is_plain_numeric(series: pd.Series) -> bool:
 
 
 def _objects_to_numbers(values: pd.Series) -> tuple[np.ndarray | None, int | None]:
-    """Convert cells that are Python objects (numbers, text, e.g. ``Decimal``) one by one.
-
-    Returns ``(values, None)`` or ``(None, pos)`` with the first cell that is not a number.
-    Slow, but only reached for object columns that are not all text.
-    """
+    """Convert object cells (numbers, text, ``Decimal``) one by one, slowly: ``(values, None)``,
+    or ``(None, pos)`` with the first cell that is not a number."""
     out = np.empty(len(values), dtype=np.float64)
     for pos, cell in enumerate(values.astype(object)):
         if cell is None or (isinstance(cell, float) and np.isnan(cell)):
@@ -333,14 +309,11 @@ def _canonical_nan(values: np.ndarray) -> np.ndarray:
 
 
 def _parse_text_numbers(series: pd.Series) -> tuple[np.ndarray | None, int | None]:
-    """Convert text cells to float64 with pyarrow's number parser, cell by cell.
+    """Convert text cells to float64 with pyarrow's number parser (the CSV reader's), stripped,
+    the texts of :data:`_NAN_TEXT` empty.
 
-    A cell is stripped of white space; one whose lower-case text is in :data:`_NAN_TEXT`
-    is empty (NaN). Returns ``(values, None)``, or ``(None, pos)`` with the position of
-    the first cell that is not a number, or ``(None, None)`` when some cells are not text
-    at all. pyarrow's CSV reader parses numbers with the same parser, so a cell has the
-    same value whether its column was read as numbers or as text (and whether the file
-    was read whole or in chunks).
+    Returns ``(values, None)``, ``(None, pos)`` with the first cell that is not a number, or
+    ``(None, None)`` when some cells are not text at all.
     """
     try:
         text = pa.array(series.astype(object), type=pa.string(), from_pandas=True)
@@ -424,12 +397,8 @@ def first_value_rows(frame: pd.DataFrame) -> dict[str, int | None]:
 
 
 def _check_required_values(first: Mapping[str, int | None], src: Source) -> None:
-    """Reject an entirely empty ``t`` or ``gyro_z`` and leading empty gyro_z/temp cells.
-
-    ``first`` maps each required column of the frame to the row of its first value in
-    the whole file (None: empty in every row), see :func:`first_value_rows`. A ``temp``
-    empty in every row is no error: :func:`normalise_frame` fills it in.
-    """
+    """Reject an entirely empty ``t`` or ``gyro_z`` and leading empty gyro_z/temp cells;
+    ``first`` maps each required column to the file row of its first value (None: none)."""
     for col in (T, GYRO_Z):
         if first[col] is None:
             raise format_error(
@@ -449,11 +418,8 @@ def _check_required_values(first: Mapping[str, int | None], src: Source) -> None
 
 
 def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None) -> None:
-    """Reject empty time stamps and times that do not strictly increase.
-
-    ``prev_t_s`` is the time of the row just before the frame (chunked reading), so
-    that a step back across two chunks is caught too.
-    """
+    """Reject empty time stamps and times that do not strictly increase, also from ``prev_t_s``,
+    the time of the row just before the frame (chunked reading)."""
     t = frame[T].to_numpy()
     empty = np.flatnonzero(np.isnan(t))
     if empty.size:
@@ -514,14 +480,8 @@ Z_UP_SHARE = 0.9
 
 
 def check_z_up(frame: pd.DataFrame, src: Source) -> None:
-    """Refuse a table read as NED/FRD whose accelerometer says its z axis points up.
-
-    A still or slowly moving unit measures a specific force of 1 g pointing up; in the
-    contract's FRD body frame a level unit reads ``acc_z`` = -1 g. When the median over
-    the rows of ``acc_z / |acc|`` is above :data:`Z_UP_SHARE`, the z axis points up, as
-    in ROS logs (REP-103: ENU world, FLU body), and reading it as FRD would flip the
-    sign of ``gyro_y``, ``gyro_z`` and the heading. One line names ``--frame enu``.
-    """
+    """Refuse a table read as NED/FRD whose accelerometer says its z axis points up (the median of
+    ``acc_z / |acc|`` above :data:`Z_UP_SHARE`), naming ``--frame enu``."""
     if not all(c in frame.columns for c in ACC_COLS):
         return
     acc = frame[list(ACC_COLS)].to_numpy(dtype=np.float64)
@@ -590,42 +550,31 @@ def normalise_frame(
 ) -> Normalised:
     """Check a frame of a table and bring it into the input contract.
 
-    The whole file (:func:`gyrodrift.io.tabular.read_log`) or one chunk of it
-    (:mod:`gyrodrift.io.chunked`) goes through here; every step is row by row, so the
-    chunks of a file come out as the rows of the whole.
-
-    A table without a compass form is read as it is (its compass columns, if any, stay
-    as read; :func:`compass_form` then gives "none"). A table without a usable
-    temperature (no ``temp`` column, or one empty in every row of the file) gets
-    ``temp`` = :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row: in place of
-    the empty column, or added as the last column. :func:`table_notes` words both.
-    Compass values that repeat the row before bit for bit are emptied (:mod:`gyrodrift.io.held`).
+    The whole file or one chunk of it goes through here (docs/log-formats.md, section
+    "Tables: CSV and Parquet"). A table without a usable temperature gets ``temp`` =
+    :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row, in place of the empty column
+    or added last; held compass values are emptied.
 
     Parameters
     ----------
     frame : pandas.DataFrame
-        Rows as read (:func:`table_to_frame`), names stripped.
+        Rows as read (:func:`table_to_frame`).
     src : Source
         Where the rows are; ``src.row0`` is the file row of the frame's first row.
     opts : TableOptions
     prev_t_s : float, optional
-        Time (s) of the file row just before the frame, for the strictly-increasing check.
+        Time (s) of the file row just before the frame.
     first_values : callable, optional
-        ``first_values(converted_frame)`` gives the file row of the first value of each
-        required column the frame has (:func:`first_value_rows`); None skips that check
-        (later chunks).
+        Gives the file row of the first value of each required column
+        (:func:`first_value_rows`); None skips those checks (later chunks).
     temp_empty : bool, default False
-        With ``first_values`` None (later chunks): the file's ``temp`` column is empty
-        in every row, as the first chunk's ``temperature`` ("empty") said.
+        Later chunks: the first chunk found ``temp`` empty in every row of the file.
     prev_compass : dict, optional
-        ``last_compass`` of the frame before (chunks): held compass values are emptied
-        across chunks as in the whole file (:func:`~gyrodrift.io.held.drop_held`).
+        ``last_compass`` of the frame before (chunks).
 
     Returns
     -------
     Normalised
-        The frame (numeric contract columns float64 in deg/s and NED, headings in
-        [0, 360)), its compass columns with values, and where its temperature came from.
     """
     df = apply_column_map(frame, opts.renames, src)
     _check_required_columns(df, src)
