@@ -49,30 +49,7 @@ _ORDER = 3
 
 
 class CalibrationError(GyroDriftError, ValueError):
-    """A thermal calibration of the gyro axes (body FRD, deg/s).
-
-    Attributes
-    ----------
-    axes : dict of str to AxisFit
-        ``"x"``, ``"y"``, ``"z"``: those in the log (a file read back has all three).
-    temp_ref_c, temp_min_c, temp_max_c : float
-        Reference temperature and calibrated range, degC.
-    samples : int
-        Log rows used (0 when read from a file).
-    source : str
-        The log or file it came from.
-    offset_known : bool
-        False when read from an ArduPilot file (known up to a constant).
-    instance : int
-        The gyro: PX4 ``TC_G`` slot, ArduPilot IMU index from 0.
-    device_id : int or None
-        PX4 ``TC_G{instance}_ID`` (None: unknown).
-    rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``: the frame the autopilot corrects in (None:
-        the identity).
-    rotation_text : str
-        Where ``rotation`` comes from.
-    """
+    """A log cannot give a thermal calibration (too small a span, the unit moved)."""
 
 
 @dataclass(frozen=True)
@@ -106,18 +83,16 @@ class Calibration:
     source : str
         The log or file it came from.
     offset_known : bool
-        False when read from an ArduPilot file: its curves are known up to a constant
-        (:mod:`gyrodrift.paramfiles`) and ``c_0`` is then 0 at ``temp_ref_c``.
+        False when read from an ArduPilot file (known up to a constant).
     instance : int
-        The gyro: PX4 ``TC_G`` slot (``sensor_gyro`` instance), ArduPilot IMU index
-        from 0 (``INS_TCAL{instance + 1}``).
+        The gyro: PX4 ``TC_G`` slot, ArduPilot IMU index from 0.
     device_id : int or None
-        PX4 ``TC_G{instance}_ID``: the gyro's device id (None: unknown).
+        PX4 ``TC_G{instance}_ID`` (None: unknown).
     rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``: the frame the autopilot corrects the gyro in
-        (None: the identity, the sensor axes are the body axes).
+        ``R`` with ``v_body = R @ v_sensor``: the frame the autopilot corrects in (None:
+        the identity).
     rotation_text : str
-        Where ``rotation`` comes from (e.g. ``"AHRS_ORIENTATION=8 (ROLL_180)"``).
+        Where ``rotation`` comes from.
     """
 
     axes: dict = field(default_factory=dict)
