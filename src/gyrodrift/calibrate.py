@@ -54,58 +54,30 @@ class CalibrationError(GyroDriftError, ValueError):
 
 @dataclass(frozen=True)
 class AxisFit:
-    """The fitted drift of one axis.
+    """The fitted drift of one axis."""
 
-    Attributes
-    ----------
-    coeffs : tuple of 4 floats
-        ``c_0 .. c_3`` of ``drift = sum_k c_k (T - temp_ref_c)**k``, deg/s per degC**k.
-    residual_rms_dps : float
-        RMS over temperature bins of the mean residual, deg/s; NaN when read from a file.
-    """
-
+    #: ``c_0 .. c_3`` of ``drift = sum_k c_k (T - temp_ref_c)**k``, deg/s per degC**k
     coeffs: tuple[float, float, float, float]
+    #: RMS over temperature bins of the mean residual, deg/s (NaN when read from a file)
     residual_rms_dps: float = math.nan
 
 
 @dataclass(frozen=True)
 class Calibration:
-    """A thermal calibration of the gyro axes (body FRD, deg/s).
+    """A thermal calibration of the gyro axes (body FRD, deg/s)."""
 
-    Attributes
-    ----------
-    axes : dict of str to AxisFit
-        ``"x"``, ``"y"``, ``"z"``: those in the log (a file read back has all three).
-    temp_ref_c, temp_min_c, temp_max_c : float
-        Reference temperature and calibrated range, degC.
-    samples : int
-        Log rows used (0 when read from a file).
-    source : str
-        The log or file it came from.
-    offset_known : bool
-        False when read from an ArduPilot file (known up to a constant).
-    instance : int
-        The gyro: PX4 ``TC_G`` slot, ArduPilot IMU index from 0.
-    device_id : int or None
-        PX4 ``TC_G{instance}_ID`` (None: unknown).
-    rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``: the frame the autopilot corrects in (None:
-        the identity).
-    rotation_text : str
-        Where ``rotation`` comes from.
-    """
-
-    axes: dict = field(default_factory=dict)
-    temp_ref_c: float = 0.0
-    temp_min_c: float = 0.0
+    axes: dict = field(default_factory=dict)  #: "x", "y", "z" -> AxisFit: those in the log (all three from a file)
+    temp_ref_c: float = 0.0  #: reference temperature, degC
+    temp_min_c: float = 0.0  #: calibrated range, degC
     temp_max_c: float = 0.0
-    samples: int = 0
-    source: str = ""
-    offset_known: bool = True
-    instance: int = 0
-    device_id: int | None = None
+    samples: int = 0  #: log rows used (0 when read from a file)
+    source: str = ""  #: the log or file it came from
+    offset_known: bool = True  #: False when read from an ArduPilot file (known up to a constant)
+    instance: int = 0  #: the gyro: PX4 ``TC_G`` slot, ArduPilot IMU index from 0
+    device_id: int | None = None  #: PX4 ``TC_G{instance}_ID`` (None: unknown)
+    #: ``R`` with ``v_body = R @ v_sensor``, the frame the autopilot corrects in (None: the identity)
     rotation: tuple | None = None
-    rotation_text: str = ""
+    rotation_text: str = ""  #: where ``rotation`` comes from
 
     @property
     def matrix(self) -> np.ndarray:

@@ -38,26 +38,14 @@ def uint32(value) -> int:
 
 @dataclass(frozen=True)
 class ThermalCorrection:
-    """An autopilot's thermal correction of one gyro, in its sensor axes.
+    """An autopilot's thermal correction of one gyro, in its sensor axes."""
 
-    Attributes
-    ----------
-    coeffs : tuple of 4 tuples of 3 floats
-        ``coeffs[k][axis]``: coefficient of ``(T - temp_ref_c)**k``, rad/s per degC**k.
-    temp_ref_c, temp_min_c, temp_max_c : float
-        Reference and clip range, degC.
-    cal_temp_c : float or None
-        ArduPilot: the temperature whose polynomial value is added back; None for PX4.
-    names : str
-        The parameters it comes from, e.g. ``"TC_G0_* (TC_G_ENABLE=1)"``.
-    """
-
-    coeffs: tuple
-    temp_ref_c: float
-    temp_min_c: float
+    coeffs: tuple  #: ``coeffs[k][axis]``: coefficient of ``(T - temp_ref_c)**k``, rad/s per degC**k
+    temp_ref_c: float  #: reference temperature, degC
+    temp_min_c: float  #: clip range, degC
     temp_max_c: float
-    cal_temp_c: float | None
-    names: str
+    cal_temp_c: float | None  #: ArduPilot: the temperature whose polynomial value is added back (PX4: None)
+    names: str  #: the parameters it comes from, e.g. "TC_G0_* (TC_G_ENABLE=1)"
 
     def offset_rad_s(self, temp_c, *, float32: bool = False) -> np.ndarray:
         """What the autopilot subtracts at ``temp_c`` (degC): (n, 3), rad/s, sensor axes;
@@ -153,38 +141,17 @@ def ardupilot_correction(params: Mapping, imu: int, *, where: str = "parameters"
 
 @dataclass(frozen=True)
 class Onboard:
-    """What the autopilot did to the gyro rates of a log (docs/autopilot-files.md).
+    """What the autopilot did to the gyro rates of a log (docs/autopilot-files.md)."""
 
-    Attributes
-    ----------
-    autopilot : {"px4", "ardupilot"}
-    instance : int
-        PX4 ``sensor_gyro`` instance (its ``TC_G`` slot), ArduPilot IMU (0 = ``INS_TCAL1``).
-    device_id : int or None
-        PX4 ``sensor_gyro.device_id``; ArduPilot ``INS_GYR_ID`` (``INS_GYR2_ID`` ...).
-    rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``; None when unusable (``rotation_problem``).
-    rotation_text : str
-        Where ``R`` comes from, e.g. ``"AHRS_ORIENTATION=8 (ROLL_180)"``.
-    correction : ThermalCorrection or None
-        The thermal correction the logged rates hold (None: none).
-    correction_problem : str
-        Why that correction cannot be undone ("" when it can or there is none).
-    rotation_problem : str
-        Why ``rotation`` is None ("" otherwise).
-    system_id : int or None
-        The vehicle's MAVLink system id.
-    """
-
-    autopilot: str
-    instance: int
-    device_id: int | None
-    rotation: tuple | None
-    rotation_text: str
-    correction: ThermalCorrection | None = None
-    correction_problem: str = ""
-    rotation_problem: str = ""
-    system_id: int | None = None
+    autopilot: str  #: "px4" or "ardupilot"
+    instance: int  #: PX4 ``sensor_gyro`` instance (its ``TC_G`` slot), ArduPilot IMU (0 = ``INS_TCAL1``)
+    device_id: int | None  #: PX4 ``sensor_gyro.device_id``; ArduPilot ``INS_GYR_ID`` (``INS_GYR2_ID`` ...)
+    rotation: tuple | None  #: ``R`` with ``v_body = R @ v_sensor``; None when unusable
+    rotation_text: str  #: where ``R`` comes from, e.g. "AHRS_ORIENTATION=8 (ROLL_180)"
+    correction: ThermalCorrection | None = None  #: the thermal correction the logged rates hold
+    correction_problem: str = ""  #: why that correction cannot be undone ("" when it can or there is none)
+    rotation_problem: str = ""  #: why ``rotation`` is None ("" otherwise)
+    system_id: int | None = None  #: the vehicle's MAVLink system id
 
     @property
     def matrix(self) -> np.ndarray | None:

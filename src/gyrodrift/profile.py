@@ -48,31 +48,19 @@ _INT64_MAX = 2**63 - 1
 
 @dataclass(frozen=True)
 class Profile:
-    """What one run learned.
+    """What one run learned (docs/settings-and-profiles.md, section "Device profiles")."""
 
-    Attributes
-    ----------
-    params : tuple of 3 floats
-        a (deg/s/degC), b (deg/degC), c (deg/s) at the end of the run.
-    cov : 3x3 tuple
-        Their covariance.
-    temp_range_c : (float, float)
-        Lowest and highest temperature seen, degC.
-    samples, updates : int
-        Rows compensated and filter updates taken.
-    estimator, created, software : str
-        The estimator, the ISO 8601 date and time (UTC) and ``gyrodrift X.Y.Z``.
-    """
-
+    #: a (deg/s/degC), b (deg/degC), c (deg/s) at the end of the run, and their covariance
     params: tuple[float, float, float] = setting(drift=_NAMES, measured=True)
     cov: tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]] = \
         setting(measured=True)
+    #: lowest and highest temperature seen, degC
     temp_range_c: tuple[float, float] = setting(unit="degC", ge=TEMP_RANGE_C[0], le=TEMP_RANGE_C[1], measured=True)
-    samples: int = setting(ge=0, whole_max=_INT64_MAX)
-    updates: int = setting(ge=0, whole_max=_INT64_MAX)
+    samples: int = setting(ge=0, whole_max=_INT64_MAX)  #: rows compensated
+    updates: int = setting(ge=0, whole_max=_INT64_MAX)  #: filter updates taken
     estimator: str = setting(longest=200)
-    created: str = setting(longest=200)
-    software: str = setting(longest=200)
+    created: str = setting(longest=200)  #: ISO 8601 date and time (UTC)
+    software: str = setting(longest=200)  #: "gyrodrift X.Y.Z"
 
     def _check_together(self) -> None:
         """The checks that involve more than one value (:func:`check` runs them)."""

@@ -316,8 +316,7 @@ class ParquetBatches:
         parquetfile.check_parquet_size(path)
         self._batch_rows = batch_rows
         try:
-            # pre_buffer=False: otherwise pyarrow buffers the byte ranges of every row group
-            # it will read, i.e. the whole file (1.3 GB of memory for a 1.1-GB file, measured)
+            # pre_buffer=False: otherwise pyarrow buffers every row group it will read, the whole file
             self._file = pa_pq.ParquetFile(path, pre_buffer=False)
             schema = self._file.schema_arrow
             # pandas turns integer/boolean columns with an empty cell anywhere into

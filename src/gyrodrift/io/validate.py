@@ -464,17 +464,6 @@ def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> Non
 # ---------------------------------------------------------------------------
 
 
-def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
-    """Multiply the gyro rate columns (and the ``true_bias_*`` truth) by ``scale``."""
-    if scale == 1.0:
-        return frame
-    out = frame.copy(deep=False)  # columns are replaced, never changed in place
-    for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
-        if col in out.columns:
-            out[col] = out[col] * scale
-    return out
-
-
 #: Median share of the specific force along +z beyond which a table is taken as z up (a tilt under 26 deg).
 Z_UP_SHARE = 0.9
 
@@ -499,21 +488,21 @@ def check_z_up(frame: pd.DataFrame, src: Source) -> None:
             where="column 'acc_z'")
 
 
-def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
-    """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
+def _to_contract_frame(frame: pd.DataFrame, opts: TableOptions) -> pd.DataFrame:
+    """A new frame: gyro columns (and ``true_bias_*``) times ``opts.scale`` (to deg/s); for ENU/FLU
+    the headings ``90 - yaw`` and the y and z axes flipped; headings wrapped to [0, 360)."""
     out = frame.copy(deep=False)  # columns are replaced, never changed in place
-    for col in _HEADING_COLS:
-        if col in out.columns:
-            out[col] = wrap_360(90.0 - out[col].to_numpy())
-    for col in _FLU_TO_FRD_FLIP:
-        if col in out.columns:
-            out[col] = -out[col]
-    return out
-
-
-def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
-    """Wrap ``heading`` and ``ref_heading`` to [0, 360) deg (NaN stays NaN)."""
-    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    if opts.scale != 1.0:
+        for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
+            if col in out.columns:
+                out[col] = out[col] * opts.scale
+    if opts.frame == "enu":
+        for col in _HEADING_COLS:
+            if col in out.columns:
+                out[col] = wrap_360(90.0 - out[col].to_numpy())
+        for col in _FLU_TO_FRD_FLIP:
+            if col in out.columns:
+                out[col] = -out[col]
     for col in _HEADING_COLS:
         if col in out.columns:
             out[col] = wrap_360(out[col].to_numpy())
@@ -598,10 +587,7 @@ def normalise_frame(
         temperature = TEMP_MEASURED
     _check_limits(df, src, opts)
     with_values = compass_columns_with_values(df)
-    df = _to_deg_per_s(df, opts.scale)
-    if opts.frame == "enu":
-        df = _enu_to_ned(df)
-    df = _wrap_headings(df)
+    df = _to_contract_frame(df, opts)
     if temperature != TEMP_MEASURED:
-        df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
+        df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_to_contract_frame)
     return Normalised(df, with_values, temperature, notes, held, last_compass)
