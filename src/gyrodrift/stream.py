@@ -23,13 +23,13 @@ from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorCon
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
+from gyrodrift.io.messages import log_error
 from gyrodrift.io.validate import (
     TEMP_ABSENT,
     Source,
     cell_label,
     check_z_up,
     format_error,
-    message,
     no_data_rows_error,
     normalise_frame,
     read_options,
@@ -102,7 +102,7 @@ class _Reader:
 
     def _bad(self, line_no: int, problem: str, advice: str, column: str | None = None) -> LogFormatError:
         where = f"line {line_no}" + (f", column {column!r}" if column is not None else "")
-        return LogFormatError(message(self.name, problem, advice, where=where))
+        return log_error(self.name, problem, advice, where=where)
 
     def _object(self, line: str, line_no: int, first: bool = False) -> dict:
         try:
@@ -268,7 +268,7 @@ class _Stream:
         found = getattr(exc, "time_base", None)
         if found is None:
             return exc
-        return LogFormatError(message(self.name, found.problem, found.advice, where=where))
+        return log_error(self.name, found.problem, found.advice, where=where)
 
     def _push(self, records, df: pd.DataFrame) -> None:
         if self.prev_t_s is None and not self.opts.frame_stated:  # the first rows say which way z points
@@ -353,9 +353,8 @@ class _Stream:
 
 def _too_long(source: str, line_no: int) -> LogFormatError:
     """The error for a line longer than :data:`MAX_LINE_CHARS`."""
-    return LogFormatError(message(source, f"longer than {MAX_LINE_CHARS:,} characters without a line end",
-                                  "give one sample per line (is the input text, one line per sample?)",
-                                  where=f"line {line_no}"))
+    return log_error(source, f"longer than {MAX_LINE_CHARS:,} characters without a line end",
+                     "give one sample per line (is the input text, one line per sample?)", where=f"line {line_no}")
 
 
 def _csv_text(out: pd.DataFrame) -> str:
@@ -497,8 +496,8 @@ def stream_rows(
     if state.stats.rows_in == 0 and state.stats.signal is None:
         where = Source(source, "csv", None)
         if state.reader is None:
-            raise LogFormatError(message(source, "no input",
-                                         "give a CSV header line and samples, or JSON lines (one object per line)"))
+            raise log_error(source, "no input",
+                            "give a CSV header line and samples, or JSON lines (one object per line)")
         raise no_data_rows_error(where)
     for note in comp.notes:
         state.warn(note)

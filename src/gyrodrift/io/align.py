@@ -25,9 +25,9 @@ from gyrodrift.conventions import (
     TEMP_RANGE_C,
     wrap_360,
 )
-from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import message, one_line
+from gyrodrift.io.messages import log_error, message, one_line
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 
 __all__ = [
@@ -165,15 +165,9 @@ def check_temperature(name: str, where: str, temp_c: np.ndarray) -> None:
         outside = np.flatnonzero((temp_c < lo) | (temp_c > hi))
     if outside.size:
         value = float(temp_c[outside[0]])
-        raise LogFormatError(
-            message(
-                name,
-                f"temperature {value!r} degC (sample {int(outside[0]) + 1}) is outside"
-                f" the plausible range {lo:g}..{hi:g} degC",
-                "check that this is the gyro temperature in degC (not Kelvin or raw counts)",
-                where=where,
-            )
-        )
+        raise log_error(name, f"temperature {value!r} degC (sample {int(outside[0]) + 1}) is outside"
+                        f" the plausible range {lo:g}..{hi:g} degC",
+                        "check that this is the gyro temperature in degC (not Kelvin or raw counts)", where=where)
 
 
 def contract_frame(
@@ -212,14 +206,8 @@ def contract_frame(
         limit = limit_of(col, gyro_max_dps) if col in df.columns else None
         pos = None if limit is None else first_outside(df[col].to_numpy(), limit)
         if pos is not None:
-            raise LogFormatError(
-                message(
-                    str(attrs.get("source", "log")),
-                    outside_problem(col, df[col].iloc[pos], limit),
-                    limit.advice,
-                    where=f"gyro sample {pos + 1} (t = {float(t[pos]):.6f} s)",
-                )
-            )
+            raise log_error(str(attrs.get("source", "log")), outside_problem(col, df[col].iloc[pos], limit),
+                            limit.advice, where=f"gyro sample {pos + 1} (t = {float(t[pos]):.6f} s)")
     df.attrs = dict(attrs)
     return df
 

@@ -15,13 +15,12 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.errors import LogFormatError
 from gyrodrift.io.align import (
     Stream, binary_log_frame, check_reader_options, check_temperature, compass_on_rows, compass_parts, increasing,
     interp_held, last_values, measured_temperature, median_rate_hz, no_instance, read_summary, reference_heading,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS
-from gyrodrift.io.messages import message, one_line, optional_module, read_log_bytes
+from gyrodrift.io.messages import log_error, one_line, optional_module, read_log_bytes
 from gyrodrift.onboard import ardupilot_onboard
 
 __all__ = ["read_ardupilot", "read_ardupilot_imus", "MAGIC"]
@@ -66,13 +65,9 @@ def _check_file(path: Path) -> None:
     name = str(path)
     head = read_log_bytes(path, "a DataFlash log", "give the path of a .bin log", "give an ArduPilot .bin log", len(MAGIC))
     if head != MAGIC:
-        raise LogFormatError(
-            message(
-                name,
-                "is not an ArduPilot DataFlash log (it does not start with a FMT message, bytes A3 95 80)",
-                "give a binary .bin log (from the SD card or downloaded over MAVLink), or name the right format",
-            )
-        )
+        raise log_error(name, "is not an ArduPilot DataFlash log (it does not start with a FMT message, bytes A3 95 80)",
+                        "give a binary .bin log (from the SD card or downloaded over MAVLink), or name the right"
+                        " format")
 
 
 def _open(dfreader, path: Path):
@@ -88,10 +83,8 @@ def _open(dfreader, path: Path):
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             return IndexOnly(str(path), zero_time_base=True)
     except Exception as exc:  # any failure of a third-party parser on an untrusted file
-        raise LogFormatError(
-            message(str(path), f"cannot be parsed as a DataFlash log ({one_line(str(exc)) or type(exc).__name__})",
-                    "check that it is a complete ArduPilot .bin log")
-        ) from exc
+        raise log_error(str(path), f"cannot be parsed as a DataFlash log ({one_line(str(exc)) or type(exc).__name__})",
+                        "check that it is a complete ArduPilot .bin log") from exc
 
 
 def _dtype(fmt, name: str) -> tuple[np.dtype, dict]:
@@ -99,10 +92,8 @@ def _dtype(fmt, name: str) -> tuple[np.dtype, dict]:
     names, types, scales = [], [], {}
     for char, column in zip(fmt.format, fmt.columns):
         if char not in _FIELD_TYPES:
-            raise LogFormatError(
-                message(name, f"format character {char!r} of field {column} is not a DataFlash type",
-                        "the log is corrupt or from an unsupported logger", where=f"message {fmt.name}")
-            )
+            raise log_error(name, f"format character {char!r} of field {column} is not a DataFlash type",
+                            "the log is corrupt or from an unsupported logger", where=f"message {fmt.name}")
         numpy_type, scale = _FIELD_TYPES[char]
         names.append(column)
         types.append(numpy_type)
@@ -110,11 +101,9 @@ def _dtype(fmt, name: str) -> tuple[np.dtype, dict]:
             scales[column] = scale
     dtype = np.dtype({"names": names, "formats": types})
     if dtype.itemsize != fmt.len - _HEADER_BYTES:
-        raise LogFormatError(
-            message(name, f"its FMT states {fmt.len} bytes but the format {fmt.format!r} packs"
-                    f" {dtype.itemsize + _HEADER_BYTES}", "the log is corrupt; download it again",
-                    where=f"message {fmt.name}")
-        )
+        raise log_error(name, f"its FMT states {fmt.len} bytes but the format {fmt.format!r} packs"
+                        f" {dtype.itemsize + _HEADER_BYTES}", "the log is corrupt; download it again",
+                        where=f"message {fmt.name}")
     return dtype, scales
 
 
@@ -187,10 +176,8 @@ def _sources(reader, name: str, types, wanted) -> dict[int, _Source]:
             continue
         t = _time_s(fields)
         if t is None:
-            raise LogFormatError(
-                message(name, "has no TimeUS nor TimeMS field", "convert the log to CSV in the input contract",
-                        where=f"message {type_name}")
-            )
+            raise log_error(name, "has no TimeUS nor TimeMS field", "convert the log to CSV in the input contract",
+                            where=f"message {type_name}")
         if "I" not in fields:
             if t.size:
                 found.setdefault(number, _Source(type_name, fields, t))
@@ -205,10 +192,8 @@ def _sources(reader, name: str, types, wanted) -> dict[int, _Source]:
 def _pick(found: dict[int, _Source], kind: str, instance: int, name: str, option: str) -> _Source:
     """The source of ``instance``; a missing sensor or instance raises, listing those present."""
     if not found:
-        raise LogFormatError(
-            message(name, f"no {kind} messages in the log", f"enable {kind} logging (LOG_BITMASK) or convert the"
-                    " log to CSV in the input contract")
-        )
+        raise log_error(name, f"no {kind} messages in the log", f"enable {kind} logging (LOG_BITMASK) or convert the"
+                        " log to CSV in the input contract")
     if instance not in found:
         raise no_instance(name, kind, instance, found, option)
     return found[instance]
@@ -220,10 +205,8 @@ def _stack(source: _Source, fields, name: str = "") -> np.ndarray | None:
         return np.column_stack([source.fields[f] for f in fields])
     if not name:
         return None
-    raise LogFormatError(
-        message(name, f"field(s) {', '.join(fields)} missing; fields found: {', '.join(sorted(source.fields))}",
-                "convert the log to CSV in the input contract", where=source.label)
-    )
+    raise log_error(name, f"field(s) {', '.join(fields)} missing; fields found: {', '.join(sorted(source.fields))}",
+                    "convert the log to CSV in the input contract", where=source.label)
 
 
 # ---------------------------------------------------------------------------
@@ -352,20 +335,16 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
     skipped, partial = _damage(reader)
     imus = _sources(reader, name, _IMU_TYPES, (*_GYRO_FIELDS, *_ACC_FIELDS, "T"))
     if not imus and partial:
-        raise LogFormatError(
-            message(name, f"the file is truncated: it ends inside a message at byte {reader.data_len}, before"
-                    " any IMU sample", "copy the complete .bin from the vehicle again")
-        )
+        raise log_error(name, f"the file is truncated: it ends inside a message at byte {reader.data_len}, before"
+                        " any IMU sample", "copy the complete .bin from the vehicle again")
     imu = _pick(imus, "IMU", instance, name, "instance")
     rates = _stack(imu, _GYRO_FIELDS, name)
     acc_values = _stack(imu, _ACC_FIELDS)
     columns = rates if acc_values is None else np.column_stack([rates, acc_values])
     gyro, dropped = increasing(Stream(imu.label, imu.t, columns))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
-        raise LogFormatError(
-            message(name, f"too few gyro samples ({gyro.t.size}) in {imu.label}",
-                    f"give a log with at least {_MIN_GYRO_SAMPLES} IMU samples")
-        )
+        raise log_error(name, f"too few gyro samples ({gyro.t.size}) in {imu.label}",
+                        f"give a log with at least {_MIN_GYRO_SAMPLES} IMU samples")
     t = gyro.t
     temp, no_temp_why = _temperature(imu)
     temp_on_rows = None

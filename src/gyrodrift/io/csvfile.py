@@ -23,7 +23,7 @@ import pyarrow.csv as pa_csv
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.formula import formula_safe_frame, formula_safe_table, formula_safe_text
 from gyrodrift.io.parquetfile import arrow_table
-from gyrodrift.io.messages import Source, format_error, message, one_line
+from gyrodrift.io.messages import Source, format_error, log_error, one_line
 from gyrodrift.io.validate import NUMERIC_COLS
 
 __all__ = [
@@ -62,13 +62,8 @@ CSV_EMPTY_ADVICE = "give a CSV log with a header row and at least one data row"
 
 def gzip_error(name: str, exc: Exception) -> LogFormatError:
     """The error for a file that starts like gzip but does not decompress."""
-    return LogFormatError(
-        message(
-            name,
-            f"is not a valid gzip file ({one_line(str(exc))})",
-            "re-compress the CSV with gzip or give the uncompressed .csv",
-        )
-    )
+    return log_error(name, f"is not a valid gzip file ({one_line(str(exc))})",
+                     "re-compress the CSV with gzip or give the uncompressed .csv")
 
 
 #: What decompressing a broken gzip file raises.
@@ -94,14 +89,9 @@ def check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=Non
     nul = data.find(b"\x00")
     if nul >= 0:
         line = lines_before + data.count(b"\n", 0, nul) + 1
-        raise LogFormatError(
-            message(
-                name,
-                "contains NUL bytes, so it is a binary file, not a CSV text file",
-                "export the log as comma-separated text with a header row (or give a .parquet file)",
-                where=f"line {line}",
-            )
-        )
+        raise log_error(name, "contains NUL bytes, so it is a binary file, not a CSV text file",
+                        "export the log as comma-separated text with a header row (or give a .parquet file)",
+                        where=f"line {line}")
     if decoder is None:
         decoder = codecs.getincrementaldecoder("utf-8")()
     elif not decoder.getstate()[0] and data.isascii() and not final:
@@ -111,14 +101,8 @@ def check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=Non
     except UnicodeDecodeError as exc:
         pos = exc.start - (len(exc.object) - len(data))  # in ``data``; < 0: in the piece before
         line = lines_before + data.count(b"\n", 0, max(pos, 0)) + 1
-        raise LogFormatError(
-            message(
-                name,
-                f"byte 0x{exc.object[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
-                "export or re-save the log as UTF-8 comma-separated text",
-                where=f"line {line}",
-            )
-        ) from exc
+        raise log_error(name, f"byte 0x{exc.object[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
+                        "export or re-save the log as UTF-8 comma-separated text", where=f"line {line}") from exc
 
 
 def header_line(data: bytes, *, at_end: bool) -> bytes | None:

@@ -28,6 +28,7 @@ __all__ = [
     "empty_file_error",
     "no_data_rows_error",
     "optional_module",
+    "log_error",
 ]
 
 _MAX_NAMES_SHOWN = 30
@@ -61,9 +62,14 @@ def message(name: str, problem: str, advice: str, where: str = "") -> str:
     return one_line(f"{head}{problem}; {advice}")
 
 
+def log_error(name: str, problem: str, advice: str, where: str = "") -> LogFormatError:
+    """A :class:`LogFormatError` for the file ``name`` with the one-line :func:`message`."""
+    return LogFormatError(message(name, problem, advice, where))
+
+
 def format_error(src: Source, problem: str, advice: str, where: str = "") -> LogFormatError:
     """Return a :class:`LogFormatError` for ``src`` with a one-line message."""
-    return LogFormatError(message(src.name, problem, advice, where))
+    return log_error(src.name, problem, advice, where)
 
 
 def show_text(value: object) -> str:

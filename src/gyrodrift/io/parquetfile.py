@@ -12,7 +12,7 @@ import pandas as pd
 import pyarrow as pa
 
 from gyrodrift.errors import LogFormatError
-from gyrodrift.io.messages import Source, empty_file_error, format_error, message, one_line
+from gyrodrift.io.messages import Source, empty_file_error, format_error, log_error, one_line
 
 __all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options", "open_sink"]
 
@@ -70,9 +70,8 @@ def check_parquet_size(path: Path) -> None:
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise LogFormatError(
-            message(str(path), f"cannot read the input file ({exc.strerror})", "check that it is a readable file")
-        ) from exc
+        raise log_error(str(path), f"cannot read the input file ({exc.strerror})",
+                        "check that it is a readable file") from exc
     if size == 0:
         raise empty_file_error(str(path), _PARQUET_EMPTY_ADVICE)
 

@@ -19,7 +19,7 @@ from gyrodrift.io.align import (
     measured_temperature, median_rate_hz, read_summary, yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.messages import message, one_line, optional_module
+from gyrodrift.io.messages import log_error, message, one_line, optional_module
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 
@@ -80,21 +80,14 @@ def _check_bag_path(path: Path) -> None:
     """Raise :class:`LogFormatError` for a missing path, a plain directory or an empty file."""
     name = str(path)
     if not path.exists():
-        raise LogFormatError(
-            message(name, "input file does not exist", "check the path and the current directory")
-        )
+        raise log_error(name, "input file does not exist", "check the path and the current directory")
     if path.is_dir():
         if not (path / "metadata.yaml").is_file():
-            raise LogFormatError(
-                message(
-                    name,
-                    "is a directory without metadata.yaml, so not a ROS 2 bag",
-                    "give a ROS 2 bag directory, a .db3/.mcap file or a ROS 1 .bag file",
-                )
-            )
+            raise log_error(name, "is a directory without metadata.yaml, so not a ROS 2 bag",
+                            "give a ROS 2 bag directory, a .db3/.mcap file or a ROS 1 .bag file")
         return
     if path.stat().st_size == 0:
-        raise LogFormatError(message(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag"))
+        raise log_error(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag")
 
 
 def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
@@ -106,13 +99,8 @@ def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
         repair = ", or repair an unclosed/truncated bag with 'rosbag reindex'"
     elif ".mcap" in kinds:
         repair = ", or repair a truncated file with 'mcap recover'"
-    return LogFormatError(
-        message(
-            str(path),
-            f"is not a readable ROS bag ({detail})",
-            f"check that the bag is complete and was closed properly (copy it again){repair}",
-        )
-    )
+    return log_error(str(path), f"is not a readable ROS bag ({detail})",
+                     f"check that the bag is complete and was closed properly (copy it again){repair}")
 
 
 # ---------------------------------------------------------------------------
@@ -158,14 +146,8 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
     if not of_type and not role.required:
         return None
     if not of_type:
-        raise LogFormatError(
-            message(
-                name,
-                f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
-                f" topics found: {_show_topics(topics)}",
-                role.advice,
-            )
-        )
+        raise log_error(name, f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
+                        f" topics found: {_show_topics(topics)}", role.advice)
     raise ConfigError(
         message(
             name,
@@ -285,13 +267,8 @@ def _reference_heading(imu: Stream) -> tuple[np.ndarray, int]:
 def _check_imu_count(name: str, imu: Stream) -> None:
     """The Imu topic needs at least two messages."""
     if imu.t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few messages ({imu.t.size}) on {imu.label}",
-                f"give a bag with at least {_MIN_IMU_SAMPLES} message(s) on it",
-            )
-        )
+        raise log_error(name, f"too few messages ({imu.t.size}) on {imu.label}",
+                        f"give a bag with at least {_MIN_IMU_SAMPLES} message(s) on it")
 
 
 def _notes(zero_stamps: int, dropped: int, ref_count: int) -> list[str]:
@@ -335,13 +312,8 @@ def _streams(
     _check_imu_count(name, streams["imu"])
     streams["imu"], dropped = increasing(streams["imu"])
     if streams["imu"].t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few Imu messages with distinct times ({streams['imu'].t.size}) on {streams['imu'].label}",
-                "give a longer bag",
-            )
-        )
+        raise log_error(name, f"too few Imu messages with distinct times ({streams['imu'].t.size}) on"
+                        f" {streams['imu'].label}", "give a longer bag")
     temp_gap = f"no {_TEMPERATURE} topic in the bag"
     if streams["temp"] is not None:
         streams["temp"], temp_gap = _temperature(name, increasing(streams["temp"])[0])

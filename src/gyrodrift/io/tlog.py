@@ -14,13 +14,13 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.errors import ConfigError
 from gyrodrift.io.align import (
     Stream, binary_log_frame, check_reader_options, check_temperature, describe_rate, increasing, interp_held,
     last_values, no_instance, on_following_rows, read_summary, reference_heading,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS
-from gyrodrift.io.messages import message, optional_module, read_log_bytes
+from gyrodrift.io.messages import log_error, optional_module, read_log_bytes
 from gyrodrift.onboard import ardupilot_onboard, px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_tlog", "read_tlog_imus", "REBOOT_S"]
@@ -196,9 +196,9 @@ def _open(path) -> tuple[str, _Packets]:
     packets = _walk(data, dialect)
     if not any(packets.messages[n] for n in ("RAW_IMU", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")):
         what = "no MAVLink packets" if packets.skipped and not any(packets.messages.values()) else "no IMU messages"
-        raise LogFormatError(message(name, f"{what} (RAW_IMU or SCALED_IMU*) found", "give a .tlog recorded with the "
-                                     "IMU stream on (Mission Planner: SRn_RAW_SENS; QGroundControl: the vehicle's "
-                                     "SCALED_IMU rate)"))
+        raise log_error(name, f"{what} (RAW_IMU or SCALED_IMU*) found", "give a .tlog recorded with the "
+                        "IMU stream on (Mission Planner: SRn_RAW_SENS; QGroundControl: the vehicle's "
+                        "SCALED_IMU rate)")
     return name, packets
 
 
@@ -265,8 +265,8 @@ def _read(packets: _Packets, params, changed, name: str, instance: int, mag_inst
     boot = boots[int(np.argmax(counts))]
     gyro, dropped = increasing(_imu_stream(_rows(packets, names[instance], boot), names[instance]))
     if gyro.t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(message(name, f"too few IMU samples ({gyro.t.size}) in {names[instance]}",
-                                     f"give a log with at least {_MIN_IMU_SAMPLES} IMU samples"))
+        raise log_error(name, f"too few IMU samples ({gyro.t.size}) in {names[instance]}",
+                        f"give a log with at least {_MIN_IMU_SAMPLES} IMU samples")
     t = gyro.t
     temp, no_temp_why = _temperature(gyro, _rows(packets, "SCALED_PRESSURE", boot))
     if temp is not None:

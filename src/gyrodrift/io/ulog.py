@@ -22,7 +22,7 @@ from gyrodrift.io.align import (
     interp_held, measured_temperature, median_rate_hz, no_instance, read_summary, reference_heading, yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS
-from gyrodrift.io.messages import message, one_line, optional_module, read_log_bytes
+from gyrodrift.io.messages import log_error, one_line, optional_module, read_log_bytes
 from gyrodrift.onboard import px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
@@ -62,22 +62,11 @@ _QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
 def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatError:
     """The error for a message that runs past the end of the file."""
     if in_header:
-        return LogFormatError(
-            message(
-                name,
-                f"the file ends inside the ULog header section (message at byte {start}, file size {total} bytes):"
-                " the file is truncated",
-                "copy the complete .ulg from the vehicle again",
-            )
-        )
-    return LogFormatError(
-        message(
-            name,
-            f"the file is truncated: its last message starts at byte {start} but the file ends at byte {total}",
-            "copy the complete .ulg from the vehicle again, or keep only the complete messages"
-            f" (the first {start} bytes, e.g. head -c {start})",
-        )
-    )
+        return log_error(name, f"the file ends inside the ULog header section (message at byte {start}, file size"
+                         f" {total} bytes): the file is truncated", "copy the complete .ulg from the vehicle again")
+    return log_error(name, f"the file is truncated: its last message starts at byte {start} but the file ends at byte"
+                     f" {total}", "copy the complete .ulg from the vehicle again, or keep only the complete messages"
+                     f" (the first {start} bytes, e.g. head -c {start})")
 
 
 def _check_framing(data: bytes, name: str) -> bool:
@@ -86,13 +75,8 @@ def _check_framing(data: bytes, name: str) -> bool:
     Returns True when the data section holds a corrupt stretch (pyulog skips it).
     """
     if len(data) < _FILE_HEADER_SIZE or not data.startswith(_MAGIC):
-        raise LogFormatError(
-            message(
-                name,
-                "is not a ULog file (it does not start with the ULog header bytes)",
-                "give a PX4 .ulg flight log, or name the right format",
-            )
-        )
+        raise log_error(name, "is not a ULog file (it does not start with the ULog header bytes)",
+                        "give a PX4 .ulg flight log, or name the right format")
     total = len(data)
     pos = _FILE_HEADER_SIZE
     in_header = True
@@ -105,21 +89,14 @@ def _check_framing(data: bytes, name: str) -> bool:
         known = _DEFINITION_TYPES if in_header else _DATA_TYPES
         if kind not in known and (kind == 0 or size == 0 or size > _MAX_UNKNOWN_SIZE):
             if in_header:
-                raise LogFormatError(
-                    message(
-                        name,
-                        f"the ULog header section is corrupt at byte {pos}",
-                        "copy the .ulg from the vehicle again; this file cannot be read",
-                    )
-                )
+                raise log_error(name, f"the ULog header section is corrupt at byte {pos}",
+                                "copy the .ulg from the vehicle again; this file cannot be read")
             return True
         if pos + _MSG_HEADER_SIZE + size > total:
             raise _truncated(name, pos, total, in_header)
         pos += _MSG_HEADER_SIZE + size
     if in_header:
-        raise LogFormatError(
-            message(name, "holds only the ULog header, no logged data", "give a log that recorded data")
-        )
+        raise log_error(name, "holds only the ULog header, no logged data", "give a log that recorded data")
     return False
 
 
@@ -130,13 +107,8 @@ def _parse(ulog_class, data: bytes, name: str):
         with contextlib.redirect_stdout(io.StringIO()):
             return ulog_class(io.BytesIO(data), message_name_filter_list=list(_TOPICS))
     except Exception as exc:  # any failure of a third-party parser on an untrusted file
-        raise LogFormatError(
-            message(
-                name,
-                f"cannot be parsed as a ULog file ({one_line(str(exc))})",
-                "check that it is a complete PX4 .ulg log",
-            )
-        ) from exc
+        raise log_error(name, f"cannot be parsed as a ULog file ({one_line(str(exc))})",
+                        "check that it is a complete PX4 .ulg log") from exc
 
 
 # ---------------------------------------------------------------------------
@@ -157,14 +129,9 @@ def _fields(ds, names, name: str, where: str) -> np.ndarray:
     """Stack fields of a dataset as float64 columns, shape (n, len(names))."""
     missing = [f for f in names if f not in ds.data]
     if missing:
-        raise LogFormatError(
-            message(
-                name,
-                f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
-                "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
-                where=where,
-            )
-        )
+        raise log_error(name, f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
+                        "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
+                        where=where)
     return np.column_stack([np.asarray(ds.data[f], dtype=np.float64) for f in names])
 
 
@@ -193,13 +160,8 @@ def _pick_instance(ulog, topic: str, instance: int, name: str, option: str):
     """Dataset of ``topic`` instance ``instance``; missing topic or instance raises."""
     found = _instances(ulog, topic)
     if not found:
-        raise LogFormatError(
-            message(
-                name,
-                f"no '{topic}' topic in the log",
-                f"log '{topic}' (PX4 logger profile) or convert the log to CSV",
-            )
-        )
+        raise log_error(name, f"no '{topic}' topic in the log",
+                        f"log '{topic}' (PX4 logger profile) or convert the log to CSV")
     if instance not in found:
         raise no_instance(name, topic, instance, found, option)
     return found[instance]
@@ -223,10 +185,8 @@ def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tu
     try:
         return px4_sensor_rotation(params, kind, device, where=name)
     except ConfigError as exc:
-        raise LogFormatError(
-            message(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
-                    "vehicle_magnetometer) or convert the log to CSV")
-        ) from None
+        raise log_error(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
+                        "vehicle_magnetometer) or convert the log to CSV") from None
 
 
 # ---------------------------------------------------------------------------
@@ -425,13 +385,8 @@ def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | Non
     """The body of :func:`read_ulog` on a parsed log."""
     gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
-                f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples",
-            )
-        )
+        raise log_error(name, f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
+                        f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples")
     temp, no_temp_why = _temperature_stream(ulog, instance)
     if temp is not None:
         temp, _ = increasing(temp)
