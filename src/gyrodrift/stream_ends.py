@@ -14,7 +14,7 @@ from typing import Iterator
 
 from gyrodrift._atomic import atomic_output
 from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.io.validate import check_input_path, message, read_error
+from gyrodrift.io.messages import check_input_path, message, read_error
 
 __all__ = ["StreamInterrupted", "deferred_signals", "fd_blocks", "serial_blocks", "input_blocks", "output_writer",
            "SERIAL_ADVICE", "READ_BYTES"]

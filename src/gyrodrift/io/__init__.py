@@ -11,7 +11,6 @@ from typing import Mapping
 
 import pandas as pd
 
-from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
 from gyrodrift.io.ardupilot import read_ardupilot, read_ardupilot_imus
 from gyrodrift.io.formats import FORMATS, log_format
@@ -20,7 +19,7 @@ from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.tlog import read_tlog, read_tlog_imus
 from gyrodrift.io.ulog import read_ulog, read_ulog_gyros
-from gyrodrift.io.messages import message
+from gyrodrift.io.messages import option_error
 
 __all__ = [
     "FORMATS",
@@ -49,9 +48,7 @@ def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None
     if not options:
         return
     option, value = next(iter(options.items()))
-    raise ConfigError(
-        message(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
-    )
+    raise option_error(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
 
 
 def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map, time_unit) -> None:
@@ -67,14 +64,10 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
         changed["time_unit"] = time_unit
     if changed:
         option, value = next(iter(changed.items()))
-        raise ConfigError(
-            message(
-                str(path),
-                f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
-                " frames and the reader converts them (to deg/s, NED/FRD)",
-                "leave gyro_unit, frame, column_map and time_unit at their defaults",
-            )
-        )
+        raise option_error(str(path),
+                           f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
+                           " frames and the reader converts them (to deg/s, NED/FRD)",
+                           "leave gyro_unit, frame, column_map and time_unit at their defaults")
 
 
 def read_log(path, *, fmt: str | None = None, gyro_unit: str = "deg/s", frame: str | None = None,

@@ -27,7 +27,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import log_error, message, one_line
+from gyrodrift.io.messages import log_error, one_line, option_error
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 
 __all__ = [
@@ -259,8 +259,8 @@ def check_reader_options(instances, mag_instance, gyro_max_dps) -> float:
 def no_instance(name: str, kind: str, instance: int, present, option: str) -> ConfigError:
     """The error for a sensor ``instance`` the log lacks, listing those ``present``."""
     listed = ", ".join(str(k) for k in sorted(present))
-    return ConfigError(message(name, f"there is no {kind} instance {instance}; instances present: {listed}",
-                               f"choose one of them ({option}=N)"))
+    return option_error(name, f"there is no {kind} instance {instance}; instances present: {listed}",
+                        f"choose one of them ({option}=N)")
 
 
 def measured_temperature(label: str, t: np.ndarray, temp: np.ndarray, said: str = "logs",

@@ -29,6 +29,7 @@ __all__ = [
     "no_data_rows_error",
     "optional_module",
     "log_error",
+    "option_error",
 ]
 
 _MAX_NAMES_SHOWN = 30
@@ -65,6 +66,11 @@ def message(name: str, problem: str, advice: str, where: str = "") -> str:
 def log_error(name: str, problem: str, advice: str, where: str = "") -> LogFormatError:
     """A :class:`LogFormatError` for the file ``name`` with the one-line :func:`message`."""
     return LogFormatError(message(name, problem, advice, where))
+
+
+def option_error(name: str, problem: str, advice: str, where: str = "") -> ConfigError:
+    """A :class:`ConfigError` (a bad option for the file ``name``) with the one-line :func:`message`."""
+    return ConfigError(message(name, problem, advice, where))
 
 
 def format_error(src: Source, problem: str, advice: str, where: str = "") -> LogFormatError:

@@ -19,7 +19,7 @@ from gyrodrift.io.align import (
     measured_temperature, median_rate_hz, read_summary, yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.messages import log_error, message, one_line, optional_module
+from gyrodrift.io.messages import log_error, one_line, option_error, optional_module
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 
@@ -124,22 +124,12 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
     of_type = {t: typ for t, typ in topics.items() if typ == role.msgtype}
     if given is not None:
         if given not in topics:
-            raise ConfigError(
-                message(
-                    name,
-                    f"there is no topic {given!r} in the bag; {role.msgtype} topics: {_show_topics(of_type)}",
-                    f"fix {role.option}",
-                )
-            )
+            raise option_error(name,
+                               f"there is no topic {given!r} in the bag; {role.msgtype} topics: {_show_topics(of_type)}",
+                               f"fix {role.option}")
         if topics[given] != role.msgtype:
-            raise ConfigError(
-                message(
-                    name,
-                    f"topic {given!r} has type {topics[given]}, not {role.msgtype};"
-                    f" {role.msgtype} topics: {_show_topics(of_type)}",
-                    f"fix {role.option}",
-                )
-            )
+            raise option_error(name, f"topic {given!r} has type {topics[given]}, not {role.msgtype};"
+                               f" {role.msgtype} topics: {_show_topics(of_type)}", f"fix {role.option}")
         return given
     if len(of_type) == 1:
         return next(iter(of_type))
@@ -148,13 +138,8 @@ def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: 
     if not of_type:
         raise log_error(name, f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
                         f" topics found: {_show_topics(topics)}", role.advice)
-    raise ConfigError(
-        message(
-            name,
-            f"{len(of_type)} {role.msgtype} topics: {_show_topics(of_type)}",
-            f"choose one with {role.option}",
-        )
-    )
+    raise option_error(name, f"{len(of_type)} {role.msgtype} topics: {_show_topics(of_type)}",
+                       f"choose one with {role.option}")
 
 
 # ---------------------------------------------------------------------------

@@ -17,7 +17,6 @@ import pyarrow.csv as pa_csv
 import pyarrow.parquet as pa_pq
 
 from gyrodrift._atomic import atomic_path
-from gyrodrift.errors import ConfigError
 from gyrodrift.io.csvfile import (
     CSV_EMPTY_ADVICE,
     UTF8_BOM,
@@ -43,8 +42,8 @@ from gyrodrift.io.messages import (
     Source,
     check_input_path,
     empty_file_error,
-    message,
     no_data_rows_error,
+    option_error,
     physical_line,
     read_error,
 )
@@ -244,10 +243,5 @@ def check_output_path(in_path, out_path) -> None:
     from gyrodrift._paths import same_file
 
     if same_file(in_path, out_path):
-        raise ConfigError(
-            message(
-                str(out_path),
-                f"output file is the input log {str(in_path)!r}",
-                "the input is never overwritten: choose another -o",
-            )
-        )
+        raise option_error(str(out_path), f"output file is the input log {str(in_path)!r}",
+                           "the input is never overwritten: choose another -o")

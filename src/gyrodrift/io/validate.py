@@ -36,7 +36,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import Source, cell_label, format_error, message, one_line, row_label, show_names, show_text
+from gyrodrift.io.messages import Source, cell_label, format_error, one_line, option_error, row_label, show_names, show_text
 # the reader of stream.py takes these from here, with the checks
 from gyrodrift.io.messages import check_input_path, no_data_rows_error, read_error  # noqa: F401
 from gyrodrift.io.notes import NO_TEMPERATURE_C, TEMP_ABSENT, TEMP_EMPTY, TEMP_MEASURED, compass_columns_with_values
@@ -238,24 +238,14 @@ def apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: Sourc
     found = list(frame.columns)
     for new, old in column_map.items():
         if old not in frame.columns:
-            raise ConfigError(
-                message(
-                    src.name,
-                    f"column map {new}={old}: there is no column {old!r};"
-                    f" columns found: {show_names(found)}",
-                    "fix the --map NEW=OLD option (column_map in Python)",
-                )
-            )
+            raise option_error(src.name, f"column map {new}={old}: there is no column {old!r};"
+                               f" columns found: {show_names(found)}",
+                               "fix the --map NEW=OLD option (column_map in Python)")
     renamed = [next((n for n, o in column_map.items() if o == c), c) for c in found]
     for col in set(renamed):
         if renamed.count(col) > 1:
-            raise ConfigError(
-                message(
-                    src.name,
-                    f"column map would give two columns named {col!r}",
-                    "map each contract name from one input column only, or drop the other column",
-                )
-            )
+            raise option_error(src.name, f"column map would give two columns named {col!r}",
+                               "map each contract name from one input column only, or drop the other column")
     return frame.set_axis(renamed, axis=1)
 
 
