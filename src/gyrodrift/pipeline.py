@@ -291,12 +291,8 @@ def compensate_file(
 
 
 class _Ahead:
-    """Iterate ``iterator`` in a background thread, up to ``depth`` items ahead.
-
-    Items come out in order; an exception raised by the iterator is raised, in its place,
-    in the consuming thread. :meth:`close` stops the thread (call it before closing what
-    the iterator reads).
-    """
+    """Iterate ``iterator`` in a background thread, up to ``depth`` items ahead, in order; its exception
+    is raised in the consuming thread. :meth:`close` stops the thread (before closing what it reads)."""
 
     def __init__(self, iterator, depth: int = 1):
         self._queue: queue.Queue = queue.Queue(maxsize=depth)
@@ -338,10 +334,8 @@ class _Ahead:
 
 
 class _Behind:
-    """Call ``write(item)`` for each :meth:`put` item in a background thread, in order.
-
-    An exception in ``write`` is raised by the next :meth:`put` or by :meth:`close`.
-    """
+    """Call ``write(item)`` for each :meth:`put` item in a background thread, in order; an exception in
+    ``write`` is raised by the next :meth:`put` or by :meth:`close`."""
 
     def __init__(self, write, depth: int = 1):
         self._write = write

@@ -71,8 +71,7 @@ def _check_file(path: Path) -> None:
 
 
 def _open(dfreader, path: Path):
-    """Index the log with pymavlink, skipping its wall-clock time base (``init_clock`` only
-    rewinds); any failure of the parser becomes one LogFormatError."""
+    """Index the log with pymavlink (its wall-clock time base skipped); a failure is one LogFormatError."""
 
     class IndexOnly(dfreader.DFReader_binary):
         def init_clock(self):
@@ -114,8 +113,7 @@ def _complete(reader, type_id: int) -> np.ndarray:
 
 
 def _records(reader, name: str, type_name: str) -> tuple[np.ndarray, dict] | None:
-    """Every complete message ``type_name`` as a numpy record array (raw field values),
-    and the multipliers of its scaled fields; None if the log defines no such type."""
+    """The complete messages ``type_name`` as raw records, and their fields' multipliers; None if undefined."""
     type_id = getattr(reader, "name_to_id", {}).get(type_name)
     if type_id is None or type_id not in reader.formats:
         return None
@@ -132,8 +130,7 @@ def _records(reader, name: str, type_name: str) -> tuple[np.ndarray, dict] | Non
 
 
 def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
-    """Fields ``wanted`` (those present) of every complete message ``type_name``, as float64,
-    scaled as pymavlink scales them; None if the log defines no such type."""
+    """Fields ``wanted`` of every complete message ``type_name``, float64 and scaled; None if undefined."""
     found = _records(reader, name, type_name)
     if found is None:
         return None
@@ -147,8 +144,7 @@ def _decode(reader, name: str, type_name: str, wanted) -> dict | None:
 
 
 def _params(reader, name: str) -> tuple[dict[str, float], set[str]]:
-    """The ``PARM`` messages: parameter name -> value (the last logged value wins), and the
-    names logged with more than one value (changed during the log)."""
+    """``PARM``: name -> the last logged value, and the names logged with more than one value."""
     found = _records(reader, name, "PARM")
     if found is None or not {"Name", "Value"} <= set(found[0].dtype.names):
         return {}, set()
@@ -167,8 +163,7 @@ def _time_s(fields: dict) -> np.ndarray | None:
 
 
 def _sources(reader, name: str, types, wanted) -> dict[int, _Source]:
-    """Every logged instance of a sensor: instance number -> its messages (field ``I``, or
-    one type per instance in older logs)."""
+    """Every logged instance of a sensor: instance number -> its messages (field ``I``, or a type each)."""
     found: dict[int, _Source] = {}
     for number, type_name in enumerate(types):
         fields = _decode(reader, name, type_name, ("TimeUS", "TimeMS", "I", *wanted))
@@ -222,8 +217,7 @@ def _temperature(imu: _Source) -> tuple[Stream | None, str]:
 
 
 def _mag_stream(reader, params: dict, mag_instance: int | None, name: str) -> tuple[Stream | None, int]:
-    """Magnetometer (gauss, body FRD) and the number of unhealthy samples dropped; None if
-    the log has no MAG messages (no instance named)."""
+    """Magnetometer (gauss, body FRD) and the unhealthy samples dropped; None without MAG messages."""
     found = _sources(reader, name, _MAG_TYPES, (*_MAG_FIELDS, "Health"))
     if mag_instance is None:
         if not found:

@@ -58,9 +58,7 @@ _CONVERSION_ERROR = re.compile(
 
 
 class _CsvText(io.RawIOBase):
-    """The text of a CSV file as pyarrow reads it: gzip decompressed (recognised by
-    content), byte-order mark dropped, and checked piece by piece as ``read_log``
-    checks the whole text (NUL bytes, UTF-8), with the same messages."""
+    """A CSV file's text as pyarrow reads it: gunzipped, byte-order mark dropped, checked as it is read."""
 
     def __init__(self, path: Path, *, check: bool = True) -> None:
         super().__init__()
@@ -345,8 +343,7 @@ class ParquetBatches:
         return any(b.column(0).null_count for b in self._file.iter_batches(self._batch_rows, columns=[name]))
 
     def _all_categories(self, name: str) -> list:
-        """The categories pandas gives column ``name`` read whole: the dictionaries of all
-        batches united, in order of appearance."""
+        """The categories pandas gives column ``name`` read whole: every batch's dictionary, in order."""
         seen: dict = {}
         for batch in self._file.iter_batches(self._batch_rows, columns=[name]):
             for value in batch.column(0).dictionary.to_pylist():

@@ -78,8 +78,7 @@ class LogChunks:
         return frame
 
     def _first_values(self, frame: pd.DataFrame) -> dict[str, int | None]:
-        """First value of each required column in the whole file: where the first chunk holds
-        none, read again from the start on a reader of its own, up to the column's first value."""
+        """First value of each required column in the whole file (read again from the start where needed)."""
         first = validate.first_value_rows(frame)
         if None not in first.values():
             return first

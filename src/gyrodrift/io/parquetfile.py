@@ -86,9 +86,8 @@ def parquet_error(src: Source, exc: Exception) -> LogFormatError:
 
 
 def _arrow_column(column: pd.Series):
-    """One column as :meth:`pyarrow.Table.from_pandas` converts it (NaN and None as empty
-    cells), a categorical column as its values; a float column without NaN as it is,
-    without the pass that looks for NaN (it took most of the conversion of an output chunk)."""
+    """One column as :meth:`pyarrow.Table.from_pandas` converts it, a categorical as its values; a
+    float column without NaN without the pass that looks for NaN (most of an output chunk's conversion)."""
     if column.dtype.kind == "f":
         values = column.to_numpy()
         if not np.isnan(values).any():

@@ -119,8 +119,7 @@ def _show_topics(topics: dict[str, str]) -> str:
 
 
 def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: str) -> str | None:
-    """The topic for ``role``: the one named by its option, else the only one of its type;
-    None when the bag has none and the role is not required."""
+    """The topic for ``role``: named by its option, else the only one of its type (None: none, not required)."""
     of_type = {t: typ for t, typ in topics.items() if typ == role.msgtype}
     if given is not None:
         if given not in topics:
@@ -205,8 +204,8 @@ def _to_stream(topic: str, raw: _Raw, width: int) -> tuple[Stream, int]:
 
 
 def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tuple[dict[str, str], dict[str, _Raw]]:
-    """Open the bag, choose the topics (topic -> msgtype; a type without a topic is left
-    out) and collect their messages; any error of rosbags is one :class:`LogFormatError`."""
+    """Open the bag, choose the topics (topic -> msgtype) and collect their messages; any error of
+    rosbags is one :class:`LogFormatError`."""
     any_reader, default_types = rosbags_api
     name = str(path)
     given = (imu_topic, temp_topic, mag_topic)
@@ -280,12 +279,8 @@ class _Gaps(NamedTuple):
 def _streams(
     name: str, chosen: dict[str, str], raw: dict[str, _Raw]
 ) -> tuple[dict[str, Stream | None], int, int, _Gaps]:
-    """Time-ordered Imu, temperature and magnetometer streams (FLU values as recorded).
-
-    Returns the streams (``"temp"``, ``"mag"`` None when missing or not measured), the
-    messages timed by their receive time, the Imu messages dropped for a repeated time,
-    and why the temperature or the magnetometer is None.
-    """
+    """Time-ordered Imu, temperature and magnetometer streams (FLU), the messages timed by their receive
+    time, the Imu messages dropped for a repeated time, and why temperature or magnetometer is None."""
     by_type = {msgtype: topic for topic, msgtype in chosen.items()}
     widths = {"imu": (_IMU, 11), "temp": (_TEMPERATURE, 1), "mag": (_MAGNETIC_FIELD, 3)}
     streams: dict[str, Stream | None] = {}

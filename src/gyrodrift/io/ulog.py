@@ -70,10 +70,8 @@ def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatE
 
 
 def _check_framing(data: bytes, name: str) -> bool:
-    """Walk the ULog message chain, refusing non-ULog, truncated or header-only files.
-
-    Returns True when the data section holds a corrupt stretch (pyulog skips it).
-    """
+    """Walk the message chain, refusing non-ULog, truncated or header-only files; True when the data
+    section holds a corrupt stretch (pyulog skips it)."""
     if len(data) < _FILE_HEADER_SIZE or not data.startswith(_MAGIC):
         raise log_error(name, "is not a ULog file (it does not start with the ULog header bytes)",
                         "give a PX4 .ulg flight log, or name the right format")

@@ -299,12 +299,8 @@ def _canonical_nan(values: np.ndarray) -> np.ndarray:
 
 
 def _parse_text_numbers(series: pd.Series) -> tuple[np.ndarray | None, int | None]:
-    """Convert text cells to float64 with pyarrow's number parser (the CSV reader's), stripped,
-    the texts of :data:`_NAN_TEXT` empty.
-
-    Returns ``(values, None)``, ``(None, pos)`` with the first cell that is not a number, or
-    ``(None, None)`` when some cells are not text at all.
-    """
+    """Text cells to float64 with pyarrow's (the CSV reader's) parser, stripped, :data:`_NAN_TEXT` empty:
+    ``(values, None)``, ``(None, first bad pos)``, or ``(None, None)`` when some cells are not text."""
     try:
         text = pa.array(series.astype(object), type=pa.string(), from_pandas=True)
     except (pa.ArrowInvalid, pa.ArrowTypeError):
@@ -435,9 +431,7 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
 
 
 def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> None:
-    """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`): temperature,
-    gyro rates (in the file's unit, against ``opts.gyro_max_dps``), headings, magnetometer
-    and accelerometer components."""
+    """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`), gyro rates in the file's unit."""
     for col in LIMITED_COLS:
         if col not in frame.columns:
             continue
