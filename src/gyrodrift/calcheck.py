@@ -1,24 +1,10 @@
 """Apply a parameter file to a log the way the autopilot would, and report the drift left.
 
-``gyrodrift calibrate --check PARAMS LOG`` is the pilot's proof before flying: it takes
-the gyro rates of a still heating run as the autopilot's sensor gave them (a correction
-the autopilot applied while the log was recorded is added back first,
-:func:`gyrodrift.calibrate.undo_onboard`), turns them into the sensor frame the
-autopilot corrects in, subtracts the correction the parameter file makes the autopilot
-apply to that gyro (:mod:`gyrodrift.onboard`: PX4 picks the ``TC_G`` slot by the gyro's
-device id, ArduPilot the ``INS_TCALn`` of the IMU; each in 32-bit floats, clipped to the
-file's ``TMIN..TMAX``), turns the result back to the body frame and measures, per axis,
-the drift left over the log's temperatures.
-
-The measure is the one of the fit's residual (:mod:`gyrodrift.calibrate`): the rate median
-filtered, its mean in each temperature bin, and the RMS of those means (deg/s), with the
-largest of them as the peak. For ArduPilot the means are taken about their average:
-ArduPilot leaves the constant to its gyro calibration at boot, so only the change with
-temperature is the file's to remove; for PX4 the means themselves, since its ``X0`` is the
-offset. The same measure of the rates without the file says how much there was to remove
-(for PX4 it includes the gyro's constant offset). A file that makes the autopilot apply nothing to a gyro
-(``TC_G_ENABLE`` not 1, no slot with the gyro's device id, ``INS_TCALn_ENABLE`` not 1)
-is reported as such: :attr:`Check.applied` is empty.
+``gyrodrift calibrate --check PARAMS LOG``: the rates as the sensor gave them, corrected by
+the file as the autopilot would (its slot, clip range, 32-bit floats and sensor frame), and
+the drift left per axis, measured as the fit's residual (docs/autopilot-files.md, section
+"Checking a file"). A file that makes the autopilot apply nothing has an empty
+:attr:`Check.applied`.
 """
 
 from __future__ import annotations
@@ -30,27 +16,28 @@ import numpy as np
 
 from gyrodrift.calibrate import (
     AXES,
+    AXIS_COLUMNS,
     BIN_WIDTH_C,
     CalibrationError,
     bin_means,
     smooth_rate,
+    sensor_rotation,
     temperature_bins,
     undo_onboard,
 )
-from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z, TEMP, T
+from gyrodrift.conventions import TEMP, T
 from gyrodrift.errors import ConfigError
 from gyrodrift.onboard import ardupilot_correction, px4_correction
 from gyrodrift.paramfiles import param_file_format, param_values
 
 __all__ = ["AxisLeft", "Check", "check_log"]
 
-_COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
 _WHO = {"px4": "PX4", "ardupilot": "ArduPilot"}
 
 
 @dataclass(frozen=True)
 class AxisLeft:
-    """The drift of one body axis before and after the file (module notes), deg/s."""
+    """The drift of one body axis before and after the file, deg/s."""
 
     axis: str
     before_rms_dps: float  #: RMS of the bin means without the file (ArduPilot: about their average)
@@ -111,15 +98,13 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
         A PX4 ``.params`` or ArduPilot ``.param`` file.
     log : pandas.DataFrame
         One gyro's still heating run in the input contract; ``attrs["onboard"]`` when an
-        autopilot's reader read it (its gyro's device id, instance and rotation).
+        autopilot's reader read it.
     rotation : 3x3 array_like, optional
-        ``v_body = R @ v_sensor`` in place of the log's (``--board-rotation``); identity
-        for a log without ``onboard``.
+        ``v_body = R @ v_sensor`` in place of the log's (identity for a log without ``onboard``).
     rotation_text : str
         Where ``rotation`` comes from.
     instance : int, optional
-        The file's slot to apply (PX4 ``TC_G{instance}``, ArduPilot
-        ``INS_TCAL{instance + 1}``) in place of the one the autopilot would pick.
+        The file's slot to apply, in place of the one the autopilot would pick.
     source : str, optional
         Name of the log (default ``attrs["source"]``).
 
@@ -133,8 +118,8 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
         Not an autopilot's parameter file; a file for the other autopilot than the log's;
         a slot that applies lacks a parameter.
     CalibrationError
-        The log's rotation is unusable, or a correction it holds cannot be undone; no
-        rows with a time and a temperature.
+        An unusable rotation, a correction the log holds that cannot be undone, or no rows
+        with a time and a temperature.
     """
     where = str(params_path)
     source = source or str(log.attrs.get("source", "log"))
@@ -146,14 +131,8 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
     if onboard is not None and onboard.autopilot != autopilot:
         raise ConfigError(f"{where}: a {_WHO[autopilot]} file, but {source} is a {_WHO[onboard.autopilot]} log; "
                           "check a file on a log of the vehicle it is for")
-    if rotation is not None:
-        R, frame = np.asarray(rotation, dtype=float), rotation_text
-    elif onboard is not None:
-        if onboard.matrix is None:
-            raise CalibrationError(onboard.rotation_problem)
-        R, frame = onboard.matrix, onboard.rotation_text
-    else:
-        R, frame = np.eye(3), "no board rotation (the log's axes taken as the sensor's)"
+    R, frame = sensor_rotation(onboard, rotation, rotation_text,
+                               (np.eye(3), "no board rotation (the log's axes taken as the sensor's)"))
     log, notes = undo_onboard(log, onboard, R)
     values = param_values(params_path, autopilot)
     correction, why_not = _correction(autopilot, values, onboard, instance, where)
@@ -162,14 +141,14 @@ def check_log(params_path, log, *, rotation=None, rotation_text: str = "", insta
     if ok.sum() < 2:
         raise CalibrationError(f"{source}: no rows with a time and a temperature to check the file on")
     temp = temp[ok]
-    rates = np.column_stack([log[_COLUMNS[a]].to_numpy(dtype=float)[ok] if _COLUMNS[a] in log.columns
+    rates = np.column_stack([log[AXIS_COLUMNS[a]].to_numpy(dtype=float)[ok] if AXIS_COLUMNS[a] in log.columns
                              else np.zeros(temp.size) for a in AXES])
     offset = correction.offset_dps(temp, R, float32=True) if correction is not None else np.zeros_like(rates)
     corrected = rates - offset
     axes = []
     for i, a in enumerate(AXES):
         finite = np.isfinite(rates[:, i])
-        if _COLUMNS[a] not in log.columns or finite.sum() < 2:
+        if AXIS_COLUMNS[a] not in log.columns or finite.sum() < 2:
             continue
         bins = temperature_bins(temp[finite], float(temp[finite].min()))
         before = bin_means(smooth_rate(rates[finite, i]), bins)

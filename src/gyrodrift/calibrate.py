@@ -1,33 +1,11 @@
 """Thermal calibration of the gyro triad from a still heating or cooling run.
 
-:func:`fit_calibration` fits, for every gyro axis in a log (deg/s, body FRD), the
-drift as a cubic in temperature about a reference temperature, as the autopilots'
-tools do. :func:`calibrate_log` does so for one gyro of an autopilot's log, after
-adding back the autopilot's own correction (:func:`undo_onboard`); its
-:class:`Calibration` knows the gyro and its sensor-to-body rotation, for
-:mod:`gyrodrift.paramfiles`. :func:`prior_config` starts the compensator's z drift
-model from a calibration (``compensate --prior``).
-
-The fit
--------
-1. Rows with a finite time and temperature; per axis, the finite rates, median
-   filtered over :data:`MEDIAN_WINDOW` samples.
-2. ``T_ref`` is the middle of the temperatures seen.
-3. Weighted least squares of ``sum_k c_k (T - T_ref)**k`` (k = 0..3), each
-   :data:`BIN_WIDTH_C` temperature bin weighing the same in total so that a plateau
-   does not outweigh a ramp (:func:`temperature_bins`).
-4. An axis's residual RMS is the RMS over the bins of the bin's mean residual.
-
-Refusals (:class:`CalibrationError`, one line naming the log and what to do):
-
-* **span**: less than :data:`MIN_SPAN_C`; a cubic over a few degrees extrapolates
-  wildly (ArduPilot's onboard learning needs 10 degC);
-* **moved**: a window mean of any axis's filtered rate departs from the fit by more
-  than :data:`STILL_TOL_DPS`, or one of the specific force tilts more than
-  :data:`STILL_TILT_DEG` from its median direction. A window spans 1 s, or the whole
-  seconds it takes to hold :data:`MIN_WINDOW_SAMPLES` samples; a short tail joins the
-  window before it. A drift that is not a function of temperature alone fails too.
-  A slow steady turn the cubic can absorb is not detected.
+:func:`fit_calibration` fits each gyro axis's drift as a cubic in temperature, as the
+autopilots' tools do; :func:`calibrate_log` does so for one gyro of an autopilot's log,
+after adding back the autopilot's own correction (:func:`undo_onboard`), keeping the
+gyro's identity and sensor frame for :mod:`gyrodrift.paramfiles`; :func:`prior_config`
+starts the compensator's z drift model from a calibration (``compensate --prior``). The
+fit, its refusals and the prior: docs/autopilot-files.md.
 """
 
 from __future__ import annotations
@@ -44,15 +22,16 @@ from gyrodrift.errors import ConfigError, GyroDriftError
 from gyrodrift.kernels.thermal import fit_polynomial
 
 __all__ = [
-    "AXES", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW", "BIN_WIDTH_C",
-    "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_log",
-    "undo_onboard", "temperature_bins", "bin_means", "smooth_rate", "start_temperature", "prior_config",
+    "AXES", "AXIS_COLUMNS", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW",
+    "BIN_WIDTH_C", "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_log", "undo_onboard",
+    "sensor_rotation", "temperature_bins", "bin_means", "smooth_rate", "start_temperature", "prior_config",
     "prior_notes",
 ]
 
 #: Gyro axes, in gyrodrift's column order (body FRD).
 AXES = ("x", "y", "z")
-_COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
+#: The contract column of each axis.
+AXIS_COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
 #: Smallest temperature span (degC) a calibration is fitted over.
 MIN_SPAN_C = 5.0
 #: Largest departure (deg/s) of a window mean rate from the fitted drift of a still unit.
@@ -60,7 +39,7 @@ STILL_TOL_DPS = 0.5
 #: Largest tilt (deg) of a window mean specific force from its median direction.
 STILL_TILT_DEG = 2.0
 _STILL_WINDOW_S = 1.0
-#: Fewest samples in a window of the stillness checks (module notes).
+#: Fewest samples in a window of the stillness checks and in a temperature bin.
 MIN_WINDOW_SAMPLES = 10
 #: Samples of the median filter applied to each rate before the fit (as PX4's tool).
 MEDIAN_WINDOW = 31
@@ -75,62 +54,30 @@ class CalibrationError(GyroDriftError, ValueError):
 
 @dataclass(frozen=True)
 class AxisFit:
-    """The fitted drift of one axis.
+    """The fitted drift of one axis."""
 
-    Attributes
-    ----------
-    coeffs : tuple of 4 floats
-        ``c_0 .. c_3`` of ``drift = sum_k c_k (T - temp_ref_c)**k``, deg/s per degC**k
-        (lowest power first, the order of PX4's ``X0 .. X3``).
-    residual_rms_dps : float
-        RMS over temperature bins of the mean residual, deg/s (module notes); NaN when
-        read from an autopilot's file.
-    """
-
+    #: ``c_0 .. c_3`` of ``drift = sum_k c_k (T - temp_ref_c)**k``, deg/s per degC**k
     coeffs: tuple[float, float, float, float]
+    #: RMS over temperature bins of the mean residual, deg/s (NaN when read from a file)
     residual_rms_dps: float = math.nan
 
 
 @dataclass(frozen=True)
 class Calibration:
-    """A thermal calibration of the gyro axes (body FRD, deg/s).
+    """A thermal calibration of the gyro axes (body FRD, deg/s)."""
 
-    Attributes
-    ----------
-    axes : dict of str to AxisFit
-        ``"x"``, ``"y"``, ``"z"``: those in the log (a file read back has all three).
-    temp_ref_c, temp_min_c, temp_max_c : float
-        Reference temperature and calibrated range, degC.
-    samples : int
-        Log rows used (0 when read from a file).
-    source : str
-        The log or file it came from.
-    offset_known : bool
-        False when read from an ArduPilot file: its curves are known up to a constant
-        (:mod:`gyrodrift.paramfiles`) and ``c_0`` is then 0 at ``temp_ref_c``.
-    instance : int
-        The gyro: PX4 ``TC_G`` slot (``sensor_gyro`` instance), ArduPilot IMU index
-        from 0 (``INS_TCAL{instance + 1}``).
-    device_id : int or None
-        PX4 ``TC_G{instance}_ID``: the gyro's device id (None: unknown).
-    rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``: the frame the autopilot corrects the gyro in
-        (None: the identity, the sensor axes are the body axes).
-    rotation_text : str
-        Where ``rotation`` comes from (e.g. ``"AHRS_ORIENTATION=8 (ROLL_180)"``).
-    """
-
-    axes: dict = field(default_factory=dict)
-    temp_ref_c: float = 0.0
-    temp_min_c: float = 0.0
+    axes: dict = field(default_factory=dict)  #: "x", "y", "z" -> AxisFit: those in the log (all three from a file)
+    temp_ref_c: float = 0.0  #: reference temperature, degC
+    temp_min_c: float = 0.0  #: calibrated range, degC
     temp_max_c: float = 0.0
-    samples: int = 0
-    source: str = ""
-    offset_known: bool = True
-    instance: int = 0
-    device_id: int | None = None
+    samples: int = 0  #: log rows used (0 when read from a file)
+    source: str = ""  #: the log or file it came from
+    offset_known: bool = True  #: False when read from an ArduPilot file (known up to a constant)
+    instance: int = 0  #: the gyro: PX4 ``TC_G`` slot, ArduPilot IMU index from 0
+    device_id: int | None = None  #: PX4 ``TC_G{instance}_ID`` (None: unknown)
+    #: ``R`` with ``v_body = R @ v_sensor``, the frame the autopilot corrects in (None: the identity)
     rotation: tuple | None = None
-    rotation_text: str = ""
+    rotation_text: str = ""  #: where ``rotation`` comes from
 
     @property
     def matrix(self) -> np.ndarray:
@@ -189,16 +136,15 @@ def bin_means(values: np.ndarray, bins: np.ndarray) -> np.ndarray:
 
 
 def smooth_rate(rate: np.ndarray) -> np.ndarray:
-    """The rate median filtered over :data:`MEDIAN_WINDOW` samples (module notes, step 1)."""
+    """The rate median filtered over :data:`MEDIAN_WINDOW` samples."""
     from scipy.ndimage import median_filter  # imported here: scipy.ndimage costs 0.2 s at start-up
 
     return median_filter(rate, size=MEDIAN_WINDOW, mode="nearest")
 
 
 def _groups(index: np.ndarray) -> np.ndarray:
-    """Group of every sample from its bin ``index`` (non-negative ints): consecutive bins
-    merged until a group holds MIN_WINDOW_SAMPLES samples; a short last group joins the one
-    before it (module notes)."""
+    """Group of every sample from its bin ``index``: consecutive bins merged until a group holds
+    MIN_WINDOW_SAMPLES samples, a short last group joining the one before."""
     counts = np.bincount(index)
     group = np.empty(counts.size, dtype=np.int64)
     number, held = 0, 0
@@ -244,7 +190,7 @@ def _refuse_motion(source: str, t: float, what: str, *, tilted: bool) -> Calibra
 
 
 def _check_tilt(log, ok: np.ndarray, t: np.ndarray, source: str) -> None:
-    """Refuse when a window mean of the specific force tilts more than STILL_TILT_DEG (module notes)."""
+    """Refuse when a window mean of the specific force tilts more than STILL_TILT_DEG."""
     if not all(c in log.columns for c in ACC_COLS):
         return
     acc = log.loc[ok, list(ACC_COLS)].to_numpy(dtype=float)
@@ -266,17 +212,19 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
                     still_tol_dps: float = STILL_TOL_DPS) -> Calibration:
     """Fit the thermal calibration of every gyro axis of a still heating or cooling log.
 
+    See docs/autopilot-files.md, section "The fit".
+
     Parameters
     ----------
     log : pandas.DataFrame
-        A log in the input contract (``t`` s, ``temp`` degC, ``gyro_z`` and, when
-        present, ``gyro_x``, ``gyro_y`` in deg/s, body FRD; optional ``acc_*``).
+        A log in the input contract (``t``, ``temp``, ``gyro_z`` and optional ``gyro_x``,
+        ``gyro_y``, ``acc_*``).
     source : str
         Name of the log, for the messages.
     min_span_c : float
-        Smallest temperature span accepted, degC (default :data:`MIN_SPAN_C`).
+        Smallest temperature span accepted, degC.
     still_tol_dps : float
-        Largest departure of a window mean rate from the fitted drift, deg/s (module notes).
+        Largest departure of a window mean rate from the fitted drift, deg/s.
 
     Returns
     -------
@@ -285,7 +233,7 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
     Raises
     ------
     CalibrationError
-        Too few samples or too small a temperature span, or the unit moved (module notes).
+        Too few samples, too small a temperature span, or the unit moved.
 
     Examples
     --------
@@ -313,7 +261,7 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
     t_ref = 0.5 * (t_min + t_max)
     axes = {}
     for axis in AXES:
-        col = _COLUMNS[axis]
+        col = AXIS_COLUMNS[axis]
         if col not in log.columns:
             continue
         rate = log[col].to_numpy(dtype=float)[ok]
@@ -338,27 +286,11 @@ def fit_calibration(log, *, source: str = "log", min_span_c: float = MIN_SPAN_C,
 
 
 def undo_onboard(log, onboard=None, rotation=None):
-    """``log`` with the thermal correction its rates hold added back (module notes).
+    """``log`` with the thermal correction its rates hold added back, and a note for the user.
 
-    Parameters
-    ----------
-    log : pandas.DataFrame
-        One gyro's log (deg/s, body FRD, ``temp`` degC).
-    onboard : gyrodrift.onboard.Onboard, optional
-        What the autopilot did (default ``log.attrs["onboard"]``; none: nothing to undo).
-    rotation : 3x3 array_like, optional
-        ``v_body = R @ v_sensor`` in place of the log's own (``--board-rotation``).
-
-    Returns
-    -------
-    (pandas.DataFrame, list of str)
-        The log (a new frame when rates changed) and a note for the user when a
-        correction was undone.
-
-    Raises
-    ------
-    CalibrationError
-        The correction the rates hold cannot be undone (``onboard.correction_problem``).
+    ``onboard`` defaults to ``log.attrs["onboard"]`` (none: nothing to undo); ``rotation``
+    (``v_body = R @ v_sensor``) replaces the log's own. Returns a new frame when rates
+    changed. A correction that cannot be undone is a :class:`CalibrationError`.
     """
     onboard = log.attrs.get("onboard") if onboard is None else onboard
     if onboard is None:
@@ -381,9 +313,21 @@ def undo_onboard(log, onboard=None, rotation=None):
                  "back to the rates before the fit, so the new coefficients replace it (they do not add to it)"]
 
 
+def sensor_rotation(onboard, rotation, text: str, default: tuple) -> tuple:
+    """``R`` (``v_body = R @ v_sensor``) and where it comes from: ``rotation`` (described by
+    ``text``), else the log's (``onboard``; unusable: a :class:`CalibrationError`), else ``default``."""
+    if rotation is not None:
+        return np.asarray(rotation, dtype=float), text
+    if onboard is None:
+        return default
+    if onboard.matrix is None:
+        raise CalibrationError(onboard.rotation_problem)
+    return onboard.matrix, onboard.rotation_text
+
+
 def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_text: str = "",
                   min_span_c: float = MIN_SPAN_C, still_tol_dps: float = STILL_TOL_DPS) -> tuple[Calibration, list[str]]:
-    """The calibration of one gyro's log, with its identity and frame (module notes).
+    """The calibration of one gyro's log, with its identity and frame.
 
     The correction the autopilot applied while the log was recorded is added back first
     (:func:`undo_onboard`); the fit is then :func:`fit_calibration`'s, in the body frame.
@@ -391,15 +335,13 @@ def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_tex
     Parameters
     ----------
     log : pandas.DataFrame
-        One gyro's log in the input contract; ``attrs["onboard"]``
-        (:class:`gyrodrift.onboard.Onboard`) when an autopilot's reader read it.
+        One gyro's log in the input contract, with ``attrs["onboard"]`` from an autopilot's reader.
     source : str, optional
         Name of the log (default ``attrs["source"]``).
     rotation : 3x3 array_like, optional
-        ``v_body = R @ v_sensor``, in place of the log's (``--board-rotation``); a log
-        without ``onboard`` takes the identity without it.
+        ``v_body = R @ v_sensor``, in place of the log's (identity for a log without ``onboard``).
     rotation_text : str
-        Where ``rotation`` comes from, for the file's header.
+        Where ``rotation`` comes from.
     min_span_c, still_tol_dps : float
         As :func:`fit_calibration`.
 
@@ -411,19 +353,12 @@ def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_tex
     Raises
     ------
     CalibrationError
-        As :func:`fit_calibration`; the log's board rotation is unusable and no
-        ``rotation`` is given; a correction the rates hold cannot be undone.
+        As :func:`fit_calibration`; an unusable board rotation without ``rotation``; a
+        correction the rates hold that cannot be undone.
     """
     source = source or str(log.attrs.get("source", "log"))
     onboard = log.attrs.get("onboard")
-    if rotation is not None:
-        R, text = np.asarray(rotation, dtype=float), rotation_text or "given rotation"
-    elif onboard is not None:
-        if onboard.matrix is None:
-            raise CalibrationError(onboard.rotation_problem)
-        R, text = onboard.matrix, onboard.rotation_text
-    else:
-        R, text = None, rotation_text
+    R, text = sensor_rotation(onboard, rotation, rotation_text or "given rotation", (None, rotation_text))
     log, notes = undo_onboard(log, onboard, R)
     cal = fit_calibration(log, source=source, min_span_c=min_span_c, still_tol_dps=still_tol_dps)
     identity = {"instance": onboard.instance, "device_id": onboard.device_id} if onboard is not None else {}
@@ -436,11 +371,8 @@ def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_tex
 
 
 def start_temperature(path, read_options=None) -> float:
-    """The first finite temperature (degC) of the log at ``path``.
-
-    CSV and Parquet logs are read only up to it (in small chunks); ULog and ROS bag logs
-    are read whole (:func:`gyrodrift.io.read_log`).
-    """
+    """The first finite temperature (degC) of the log at ``path``: a CSV or Parquet log read up to
+    it in small chunks, another format read whole."""
     from gyrodrift.io import log_format
     from gyrodrift.io.chunked import iter_log_chunks
     from gyrodrift.io import ReadOptions
@@ -460,23 +392,8 @@ def start_temperature(path, read_options=None) -> float:
 
 
 def prior_config(cal: Calibration, config=None, temp_c: float = math.nan):
-    """Settings whose z-axis drift model starts from ``cal``.
-
-    The prior mean ``KalmanConfig.x0 = (a, 0, c)`` is the tangent of the z curve at
-    the log's starting temperature clamped to the calibrated range. When the curve's
-    constant is unknown (``offset_known`` False), ``c`` makes the prior drift 0 at
-    ``temp_c``. The prior covariance is unchanged.
-
-    Parameters
-    ----------
-    cal : Calibration
-    config : CompensatorConfig, optional
-    temp_c : float
-        Starting temperature of the log, degC.
-
-    Returns
-    -------
-    CompensatorConfig
+    """Settings whose z-axis drift model starts from ``cal`` at the log's starting temperature
+    ``temp_c`` (docs/autopilot-files.md, section "Starting the compensator from a calibration").
 
     Raises
     ------

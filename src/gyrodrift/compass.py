@@ -1,21 +1,10 @@
-"""Compass heading from a body-frame magnetometer and accelerometer.
+"""Compass heading from a body-frame magnetometer and accelerometer (FRD, specific force).
 
-Body frame FRD (x forward, y right, z down); the accelerometer gives specific force,
-so a level, still unit reads ``acc = (0, 0, -1 g)``. Roll and pitch come from the
-gravity direction, the magnetic field is rotated back to the local level frame and
-its horizontal part gives the heading (deg, clockwise from magnetic north). All
-functions are vectorised, unit-agnostic (only ratios are used) and pure.
-
-The tilt estimate assumes the accelerometer sees gravity only: linear acceleration
-(braking, cornering) tilts the computed heading. That is the compass the paper uses
-(Section 2); the gating of :mod:`gyrodrift.gating` refuses aiding while turning.
-
-A magnetometer sample is a compass sample only when it reads a field
-(:func:`usable_field`): finite components and a strength of at least :data:`MIN_FIELD`.
-A dead or unplugged sensor reads (0, 0, 0), which has no direction; every entry point
-(:func:`gyrodrift.compensate`, the chunked file path, :class:`gyrodrift.Compensator`)
-empties such samples with :class:`DeadField` before anything else sees them, and a
-magnetometer that never reads a field leaves the log without a compass, with a note.
+Roll and pitch come from the gravity direction, the field is rotated to the level frame and
+its horizontal part gives the heading (deg, clockwise from magnetic north): the paper's
+compass (Section 2). The functions are vectorised, unit-agnostic and pure; a magnetometer
+sample counts only when it reads a field (:func:`usable_field`, :class:`DeadField`). See
+docs/conventions.md, section "The compass".
 """
 
 from __future__ import annotations
@@ -31,9 +20,7 @@ __all__ = ["MIN_FIELD", "roll_pitch_deg", "tilt_compensated_heading", "field_nor
            "usable_field", "DeadField"]
 
 #: Weakest field strength a magnetometer sample must read to be a compass sample, in the
-#: sample's own unit (only ratios are used, so any unit is allowed). The Earth's field is
-#: at least about 2e-5 T (0.2 gauss, 20 uT, 20 000 nT) and raw counts are whole numbers,
-#: so every reading in any of those units is far above it; a dead sensor reads 0.
+#: sample's own unit (docs/conventions.md, section "The compass").
 MIN_FIELD = 1e-9
 
 
@@ -101,11 +88,7 @@ def tilt_compensated_heading(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
 
 
 def field_norm_dip(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
-    """Field strength (input unit) and dip angle (deg, positive = field points down).
-
-    A change in either while the heading is used flags magnetic interference
-    (:mod:`gyrodrift.gating`): the Earth's field has a fixed strength and dip at one place.
-    """
+    """Field strength (input unit) and dip angle (deg, positive = field points down)."""
     hx, hy, vert = _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
     horiz = np.hypot(hx, hy)
     return np.sqrt(horiz**2 + vert**2), np.degrees(np.arctan2(vert, horiz))
@@ -122,12 +105,10 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
     heading_deg : (n,) array_like, optional
         A given compass heading, deg; NaN = no sample.
     mag, acc : (n, 3) array_like, optional
-        Raw FRD magnetometer and accelerometer: a tilt-compensated heading where
-        ``heading_deg`` has none, and the field strength and dip of every row.
+        Raw FRD magnetometer and accelerometer: the heading where ``heading_deg`` has none.
     down : (n, 3) array_like, optional
-        The gravity direction (a unit vector pointing down, body FRD) to tilt-compensate
-        with instead of the accelerometer's (:mod:`gyrodrift.attitude`); the heading and
-        field use ``-down`` as the specific force.
+        A gravity direction (unit vector down, body FRD) to tilt-compensate with instead of
+        the accelerometer's (:mod:`gyrodrift.attitude`).
 
     Returns
     -------
@@ -149,18 +130,8 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
 
 
 def usable_field(mag) -> np.ndarray:
-    """Which magnetometer samples read a field: finite components and a strength of at
-    least :data:`MIN_FIELD`.
-
-    Parameters
-    ----------
-    mag : (n, 3) array_like
-        Raw magnetometer samples, any unit.
-
-    Returns
-    -------
-    (n,) ndarray of bool
-    """
+    """Which magnetometer samples ((n, 3), any unit) read a field: finite components and a
+    strength of at least :data:`MIN_FIELD`; (n,) bool."""
     mag = np.asarray(mag, dtype=float).reshape(-1, 3)
     with np.errstate(over="ignore", invalid="ignore"):
         strength = np.sqrt(np.einsum("ij,ij->i", mag, mag))
@@ -168,13 +139,9 @@ def usable_field(mag) -> np.ndarray:
 
 
 class DeadField:
-    """The magnetometer samples that read no field (:func:`usable_field`), emptied and
-    counted over a whole log, chunk by chunk (:meth:`mask`) or sample by sample
-    (:meth:`sample`).
-
-    A row whose three components are all NaN is no sample (a compass slower than the
-    gyro); any other row is a sample, and a dead one when it reads no field.
-    """
+    """The magnetometer samples that read no field (:func:`usable_field`), emptied and counted over a
+    whole log, chunk by chunk (:meth:`mask`) or sample by sample (:meth:`sample`); a row whose
+    three components are all NaN is no sample."""
 
     def __init__(self) -> None:
         self.samples = 0  #: magnetometer samples seen

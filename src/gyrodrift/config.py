@@ -1,41 +1,9 @@
 """Compensator settings from a TOML file (``gyrodrift compensate --config FILE``).
 
-Top-level keys are the fields of :class:`~gyrodrift.compensator.CompensatorConfig`;
-the tables ``[kalman]``, ``[gate]``, ``[temp_rate]``, ``[adaptive]`` and ``[fusion]``
-hold the fields of :class:`~gyrodrift.estimators.KalmanConfig`,
-:class:`~gyrodrift.gating.GateConfig`, :class:`~gyrodrift.model.TempRateConfig`,
-:class:`~gyrodrift.estimators.AdaptiveConfig` and :class:`~gyrodrift.fusion.FusionConfig`.
-Anything left out keeps its default; a ``[fusion]`` table changes the fused-heading
-settings of the paper's filters, which start from the tolerant ones
-(``CompensatorConfig.fusion_settings``, :meth:`~gyrodrift.fusion.FusionConfig.tolerant`)::
-
-    update_interval_s = 10.0
-    init_s = 30.0
-
-    [kalman]
-    fading = 1.2
-    p0_sd = [0.05, 5.0, 5.0]   # a deg/s/degC, b deg, c deg/s
-
-    [gate]
-    turn_rate_dps = 2.0
-
-    [adaptive]                 # the default estimator's model (AdaptiveConfig)
-    disturbed_s = 600.0        # mean length of a magnetic disturbance, s
-    turn_walks = [0.003, 0.03, 0.3, 3.0]   # deg/s/√s, slow turns to manoeuvres
-
-    [fusion]                   # the fused-heading settings (B) of docs/results.md
-    magnetic_gates = true
-    bias_corr_s = 30.0
-    relock_s = inf
-
-Checks
-------
-The file is read as bytes and must be UTF-8 (a leading byte-order mark is allowed) and
-at most :data:`MAX_FILE_BYTES` long. Unknown tables and keys are refused; every value goes
-through the validator of the settings classes (:mod:`gyrodrift.settings`: its declared
-type, unit and bounds), the same that judges a Python construction and a command-line
-option. Every problem is a :class:`~gyrodrift.errors.ConfigError` of one line that names
-the file, the table and the key.
+Top-level keys are the fields of :class:`~gyrodrift.compensator.CompensatorConfig`, the
+tables ``[kalman]``, ``[gate]``, ``[temp_rate]``, ``[adaptive]`` and ``[fusion]`` those of
+its settings classes; every value goes through the validator of :mod:`gyrodrift.settings`.
+An example and the checks: docs/settings-and-profiles.md, section "Settings files".
 """
 
 from __future__ import annotations
@@ -55,7 +23,7 @@ else:  # pragma: no cover - Python 3.10
 
 __all__ = [
     "MAX_FILE_BYTES", "DRIFT_PARAM_BOUNDS", "load_config", "config_from_dict", "load_toml", "apply_settings",
-    "read_utf8", "TABLES",
+    "read_utf8", "parse_problem", "TABLES",
 ]
 
 #: The tables of a settings file: fields of :class:`CompensatorConfig` that hold settings classes.
@@ -68,27 +36,15 @@ def _one_line(text) -> str:
     return " ".join(str(text).split())
 
 
+def parse_problem(err: ValueError) -> str:
+    """Why a text did not parse, on one line: an integer beyond Python's digit limit, or the parser's words."""
+    return "a number with too many digits" if "digits" in str(err) else _one_line(err)
+
+
 def read_utf8(path, what: str) -> str:
-    """The text of a small UTF-8 file, read as bytes; every problem is one line.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    what : str
-        What the file is, for the messages (``"settings file"``, ``"profile file"``).
-
-    Returns
-    -------
-    str
-        The text, without a leading UTF-8 byte-order mark.
-
-    Raises
-    ------
-    ConfigError
-        The file is missing or unreadable, larger than :data:`MAX_FILE_BYTES`, or not
-        UTF-8 (the message gives the first bad byte and its offset). Each message
-        starts with the path.
-    """
+    """The text of a small UTF-8 file (``what`` names it in the messages), read as bytes, without
+    a leading byte-order mark; a missing, unreadable, too large (:data:`MAX_FILE_BYTES`) or
+    non-UTF-8 file is a one-line :class:`ConfigError` starting with the path."""
     path = Path(path)
     try:
         with open(path, "rb") as fh:
@@ -116,24 +72,9 @@ def read_utf8(path, what: str) -> str:
 def config_from_dict(values: dict, *, where: str = "config", base: CompensatorConfig | None = None) -> CompensatorConfig:
     """Build a :class:`CompensatorConfig` from nested plain values (as read from TOML).
 
-    Parameters
-    ----------
-    values : dict
-        Top-level settings and the tables ``kalman``, ``gate``, ``temp_rate``,
-        ``adaptive`` and ``fusion`` (module notes).
-    where : str
-        The source of the values, for the messages (usually the file name).
-    base : CompensatorConfig, optional
-        The settings the values change (default: the defaults).
-
-    Returns
-    -------
-    CompensatorConfig
-
-    Raises
-    ------
-    ConfigError
-        One line naming ``where``, the table and the key (see :func:`apply_settings`).
+    ``values`` holds top-level settings and the tables (:data:`TABLES`); ``where`` names their
+    source in the messages; ``base`` is the settings they change (default: the defaults). A
+    bad value is a one-line :class:`ConfigError` naming ``where``, the table and the key.
     """
     if not isinstance(values, dict):
         raise ConfigError(f"{where}: must be a table of settings, got {show(values)}")
@@ -151,23 +92,8 @@ def config_from_dict(values: dict, *, where: str = "config", base: CompensatorCo
 
 
 def load_toml(path) -> dict:
-    """Read a TOML file as bytes and parse it.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    dict
-        The tables and values, as :mod:`tomllib` gives them.
-
-    Raises
-    ------
-    ConfigError
-        Unreadable, too large, not UTF-8 (see :func:`read_utf8`) or not valid TOML;
-        one line that starts with the path.
-    """
+    """The tables and values of a TOML file, read as bytes (:func:`read_utf8`); a file that does
+    not parse is a one-line :class:`ConfigError` starting with the path."""
     text = read_utf8(path, "settings file")
     try:
         return tomllib.loads(text)
@@ -176,25 +102,10 @@ def load_toml(path) -> dict:
     except RecursionError:
         raise ConfigError(f"{path}: not valid TOML: arrays or tables nested too deeply") from None
     except ValueError as err:  # an integer beyond Python's digit limit for text
-        what = "a number with too many digits" if "digits" in str(err) else _one_line(err)
-        raise ConfigError(f"{path}: not valid TOML: {what}") from None
+        raise ConfigError(f"{path}: not valid TOML: {parse_problem(err)}") from None
 
 
 def load_config(path) -> CompensatorConfig:
-    """Read a TOML settings file.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    CompensatorConfig
-
-    Raises
-    ------
-    ConfigError
-        One line naming the file and, for a bad value, the table and the key
-        (module notes).
-    """
+    """Read a TOML settings file into a :class:`CompensatorConfig`; every problem is a one-line
+    :class:`ConfigError` naming the file and, for a bad value, the table and the key."""
     return config_from_dict(load_toml(path), where=str(path))

@@ -1,32 +1,9 @@
 """Units, frames, sign conventions and column names: declared once, here.
 
-Every quantity inside gyrodrift is in these units; readers convert on the way in.
-
-=====================  ========  ==============================================
-quantity               unit      convention
-=====================  ========  ==============================================
-time ``t``             s         strictly increasing
-rates ``gyro_*``       deg/s     body frame FRD (x forward, y right, z down)
-``gyro_z`` sign        --        positive = heading increases (clockwise seen
-                                 from above), as the NED z axis points down
-temperature ``temp``   degC      gyro die temperature
-heading                deg       clockwise from magnetic north, in [0, 360)
-``mag_*``              any       one unit for all three axes (only ratios used)
-``acc_*``              g or m/s² specific force: a level, still unit reads
-                                 ``acc_z`` ≈ −1 g
-drift model a          deg/s/degC
-drift model b          deg       (deg/s per degC/s)
-drift model c          deg/s
-=====================  ========  ==============================================
-
-The gyro measurement model is eq. (1) of Feng et al. (2015)::
-
-    gyro_z = true_rate + drift + noise,   drift = a*T + b*T' + c   (eq. 2)
-
-so the compensated rate is ``rate_z = gyro_z - bias_z``.
-
-Frames other than NED/FRD (ROS ENU/FLU) are converted by the readers:
-``heading_ned = 90 - yaw_enu`` and ``gyro_z_frd = -gyro_z_flu``.
+Every quantity inside gyrodrift is in these units (the table: docs/conventions.md, section
+"Units, frames and signs"); readers convert on the way in. The gyro measurement model is
+eq. (1) of Feng et al. (2015), ``gyro_z = true_rate + drift + noise`` with the drift of
+eq. (2), so the compensated rate is ``rate_z = gyro_z - bias_z``.
 """
 
 from __future__ import annotations

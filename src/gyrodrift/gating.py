@@ -1,42 +1,8 @@
 """When compass aiding is refused, and why (the ``gated`` / ``gate_reason`` columns).
 
-This module holds the names of the reasons and the thresholds of the paper's gates
-(:class:`GateConfig`).
-
-The default estimator (``adaptive``) has no gates: its model weighs hypotheses about the
-compass and the platform by how well each explains the data
-(:mod:`gyrodrift.kernels.evidence`), and a row's reason says what the model believes at
-that row (:mod:`gyrodrift.kernels.evloop`): ``gap`` (a time step far longer than the
-log's own spacing, or an empty gyro or temperature cell), ``no_compass`` (no compass
-sample for ``compass_max_age_s``), ``turning`` (the compensated rate, averaged over about
-``turn_window_s``, above ``turn_rate_dps``: the compass then errs more), ``interference``
-or ``field`` (a disturbed compass is likelier than a clean one; ``field`` when the field
-strength and dip say so), or none. ``init`` marks the streaming compensator's provisional
-rows while its init window fills.
-
-The paper's filters (``stkf``, ``kf``, ...) judge aiding per update interval (10 s by
-default, :func:`gyrodrift.kernels.aiding.row_condition` and
-:func:`gyrodrift.kernels.aiding.close`). An interval is refused for the first of these
-reasons seen in it (causal: a row shows what was known at that row):
-
-==============  ================================================================
-reason          meaning
-==============  ================================================================
-``init``        initialising from the first seconds of the log
-``gap``         a sample time gap longer than ``max_gap_s``, or a row whose gyro or
-                temperature was empty (held from the previous row)
-``no_compass``  no compass sample within ``compass_max_age_s`` at an end of the
-                interval
-``field``       raw magnetometer only: field strength or dip differs from the
-                values seen at initialisation (magnetic interference)
-``turning``     the 1-s mean compensated rate exceeded ``turn_rate_dps``; the
-                paper updates only during straight motion (Section 4.2)
-``interference`` the compass and the compensated gyro disagree on the heading
-                change since the start of the interval by more than
-                ``interference_deg`` at some compass sample; the gyro does not feel
-                magnetic fields (Section 4.1). Also shown on the rows after a
-                refusal for interference until an interval is accepted again.
-==============  ================================================================
+The names of the reasons and the thresholds of the paper's gates (:class:`GateConfig`).
+What each reason means for the default estimator and for the paper's filters:
+docs/conventions.md, section "Gate reasons".
 """
 
 from __future__ import annotations
@@ -65,39 +31,25 @@ _, INIT, GAP, NO_COMPASS, FIELD, TURNING, INTERFERENCE = REASONS
 
 @dataclass(frozen=True, kw_only=True)
 class GateConfig:
-    """Thresholds of the aiding gates.
+    """Thresholds of the aiding gates (docs/conventions.md, section "Gate reasons").
 
     Attributes
     ----------
-    turn_rate_dps : float
-        Turning when the 1-s mean compensated rate exceeds this, deg/s (every estimator).
-    turn_window_s : float
-        Averaging window of the turning test, s (every estimator).
+    turn_rate_dps, turn_window_s : float
+        Turning when the compensated rate, averaged over the window (s), exceeds this, deg/s.
     interference_deg : float
-        Largest accepted disagreement between compass and gyro heading change
-        over one update interval, deg.
-    field_norm_tol : float
-        Largest accepted relative change of field strength (raw mag only).
-    dip_tol_deg : float
-        Largest accepted change of dip angle, deg (raw mag only).
+        Largest accepted compass-vs-gyro heading change disagreement per interval, deg.
+    field_norm_tol, dip_tol_deg : float
+        Largest accepted relative change of field strength and change of dip, deg (raw mag).
     compass_max_age_s : float
-        A compass sample older than this at an interval end counts as missing, s (every
-        estimator: ``no_compass``).
+        An older compass sample at an interval end counts as missing, s.
     max_gap_s : float
-        A time step longer than this refuses the interval, s (the paper's filters; the
-        default estimator judges a gap against the log's own spacing).
-    still_std_dps : float
-        Initialisation: a sub-window is motionless when the gyro standard deviation
-        is below this, deg/s ...
-    still_heading_deg : float
-        ... and the compass heading changes by less than this, deg.
+        A longer time step refuses the interval, s (the paper's filters).
+    still_std_dps, still_heading_deg : float
+        Initialisation: a sub-window is motionless below this gyro standard deviation, deg/s,
+        and this compass heading change, deg.
     relock_intervals : int
-        Lock-out recovery (0 = off, as in the paper; default 3): after this many
-        consecutive intervals
-        refused for ``interference`` whose compass-minus-gyro rates agree (same sign,
-        spread below half their mean), the disagreement is taken for a drift change the
-        filter has not followed, not for a magnetic disturbance, and the next such
-        interval is accepted.
+        Lock-out recovery after this many agreeing ``interference`` refusals (0 = off).
     """
 
     turn_rate_dps: float = setting(2.0, "deg/s", gt=0.0, flag="--turn-rate-dps", help="turning threshold")

@@ -1,23 +1,9 @@
 """Is the gyro in the unit it was read in? A check of the heading-axis rate against the compass.
 
-A gyro logged in rad/s and read as deg/s (or logged in deg/s and converted as if rad/s)
-is compensated without any error, and wrongly: the heading turns 57.3 times too little
-(or too much). :class:`GyroUnitCheck` compares, over windows of :data:`WINDOW_S` (10 s)
-between compass samples, the compass's turn (unwrapped) with the integrated raw gyro's.
-Over the windows where the compass turned at least :data:`MIN_TURN_DEG` (10 deg), the
-ratio compass turn / gyro turn is about 1 for a right unit, 57.3 for rad/s read as deg/s
-and 1/57.3 for the reverse (the drift, at most a few deg/s, shifts it little; read in the
-wrong unit the drift is scaled with the rate). A unit error is one scale for every turn,
-so the ratio is judged only when the windows agree: those of the majority sign whose
-ratio is within a factor :data:`AGREE_FACTOR` of their median must be at least
-:data:`MIN_WINDOWS` and two thirds of the windows that turned. A still unit whose compass
-swings in magnetic interference does not pass: its compass turns one way then the other
-while its gyro reads the drift, always the same way, and their ratios scatter in sign and
-size. With agreeing windows, a median ratio beyond :data:`RATIO_LIMIT` (15) either way
-gives a note. Without a compass (or without turns) only the reverse can be seen:
-rates above :data:`MAX_RATE_DPS` (2000 deg/s, beyond MEMS gyro ranges) after a rad/s
-conversion give a note. The data are fed chunk by chunk (:meth:`GyroUnitCheck.add`), so a
-log read in chunks gets the note a whole log gets.
+:class:`GyroUnitCheck` compares the compass's turns with the integrated gyro's over 10-s
+windows and gives a note when they differ by a factor near 57.3 in windows that agree, or
+when rates read as rad/s exceed any MEMS range: docs/conventions.md, section "The
+gyro-unit check". Fed chunk by chunk, a log read in chunks gets the note a whole log gets.
 """
 
 from __future__ import annotations
@@ -45,13 +31,8 @@ MAX_RATE_DPS = 2000.0
 class GyroUnitCheck:
     """Compass turn against integrated gyro turn, fed chunk by chunk (see the module notes).
 
-    Parameters
-    ----------
-    source : str
-        The log, as the user gave it (starts the note).
-    gyro_unit : str, optional
-        The unit the gyro columns were read in (``attrs["gyro_unit"]`` of the reader);
-        None when the format states it (ULog, ROS bag).
+    ``source`` starts the note; ``gyro_unit`` is the unit the gyro columns were read in (None
+    when the format states it).
     """
 
     def __init__(self, source: str, gyro_unit: str | None = None) -> None:

@@ -1,26 +1,9 @@
 """The drift model of Feng et al. (2015), eq. (2): ``B_d = a*T + b*T' + c``.
 
-``T`` is the gyro temperature (degC) and ``T'`` its rate of change (degC/s).
-
-How T' is computed
-------------------
-The paper uses a plain difference over the 10-s update interval,
-``T'_{k+1} = (T_{k+1} - T_k)/Δt``. Real sensors quantise temperature (0.0625 degC, or
-1 degC on some Bosch parts), so a plain difference is zero most of the time and
-spikes when the reading steps. gyrodrift instead:
-
-1. averages the temperature over bins of ``bin_s`` seconds (default 1 s), aligned on
-   the first sample;
-2. fits a least-squares line through the completed bins of the trailing
-   ``window_s`` seconds (default 60 s: the newest bin and the 60 before it, counted by
-   bin number so that the choice does not depend on rounding) and takes its slope as T'.
-
-The estimate is causal: a sample uses only bins that closed before its own bin
-(so streaming and batch give the same numbers). It is exact for a linear ramp
-once the window is full; on a curved profile it lags by about ``window_s/2 + bin_s``;
-until two bins have closed T' is 0. A quantisation step of q degC moves T' by at most
-about ``q/window_s``-scale amounts instead of ``q/Δt`` spikes; choose a longer window
-for coarser sensors.
+``T`` is the gyro temperature (degC) and ``T'`` its rate of change (degC/s), estimated by a
+causal least-squares slope over binned temperatures instead of the paper's plain difference;
+a temperature that never changes is replaced by the elapsed time (:class:`ElapsedClock`).
+See docs/conventions.md, section "How T' is computed".
 """
 
 from __future__ import annotations
@@ -34,9 +17,8 @@ from gyrodrift.settings import SettingError, check, setting
 
 __all__ = ["TempRateConfig", "temp_rate", "drift", "regressors", "CLOCK_UNIT_S", "ElapsedClock", "temperature_is_flat"]
 
-#: Seconds per unit of the clock regressor (:class:`ElapsedClock`): ``a`` is then the
-#: drift's change per 300 s, deg/s. Chosen on the ``no-temp`` Monte Carlo family, seeds
-#: 0–3 (180, 300, 600, 1200 and 3600 s tried; ``docs/results.md``).
+#: Seconds per unit of the clock regressor (:class:`ElapsedClock`; how it was chosen:
+#: docs/conventions.md, section "How T' is computed").
 CLOCK_UNIT_S = 300.0
 #: Largest number of temperature bins in the T' window (``window_s / bin_s``).
 MAX_TEMP_RATE_BINS = 100_000
@@ -74,8 +56,8 @@ class TempRateConfig:
 
 
 def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndarray:
-    """T' (degC/s) for every sample, causal; see the module notes for the method (the
-    compensator's own estimate, :func:`gyrodrift.kernels.drift.temp_rate_chunk`).
+    """T' (degC/s) for every sample, causal (docs/conventions.md, section "How T' is computed";
+    the compensator's own estimate is :func:`gyrodrift.kernels.drift.temp_rate_chunk`).
 
     Parameters
     ----------
@@ -136,29 +118,16 @@ def drift(params, temp_c, temp_rate_cps):
 
 
 def temperature_is_flat(temp_c) -> bool:
-    """Whether a temperature column cannot explain any drift: every finite value the
-    same (a sensor that logs a constant, or a column filled in for a log without one),
-    or none finite."""
+    """Whether a temperature column cannot explain any drift: every finite value the same, or none finite."""
     temp_c = np.asarray(temp_c, dtype=float)
     seen = temp_c[np.isfinite(temp_c)]
     return seen.size == 0 or bool(seen.min() == seen.max())
 
 
 class ElapsedClock:
-    """The regressor that stands in for a temperature that never changes.
-
-    With no usable temperature, eq. (2) keeps its form with the elapsed time, in units of
-    :data:`CLOCK_UNIT_S`, as ``T`` and T' taken as 0: ``c`` is the drift at the start and
-    ``a`` its change per unit, so the ``adaptive`` filter (whose reference follows ``T``)
-    tracks a local trend in time — the warm-up a temperature would have explained —
-    instead of a constant bias that lags it. The clock stops across a time gap longer
-    than ``max_gap_s`` (a record of a bursty log does not jump the trend ahead).
-    Call it on consecutive chunks of time stamps; it carries on where it stopped.
-
-    Parameters
-    ----------
-    max_gap_s : float
-        The longest step, s, that counts as elapsed time (``GateConfig.max_gap_s``).
+    """The regressor that stands in for a temperature that never changes: the elapsed time in units
+    of :data:`CLOCK_UNIT_S`, stopped across steps longer than ``max_gap_s``, carried on from one
+    call (a chunk of time stamps) to the next (docs/conventions.md, section "How T' is computed").
 
     Examples
     --------

@@ -1,42 +1,9 @@
 """What the autopilot did to a log's gyro rates, and what its thermal calibration does.
 
-A thermal calibration is fitted in the vehicle body frame (the frame every reader
-delivers) but applied by the autopilot in the frame of the sensor, before the board
-rotation; and a log recorded while the autopilot's own thermal calibration was on holds
-rates with that correction already taken off. :class:`Onboard` records both, read by the
-ULog, DataFlash and telemetry readers from the log's parameters (``attrs["onboard"]``):
-
-* the board rotation ``R`` (``v_body = R @ v_sensor``, :mod:`gyrodrift.rotations`): PX4
-  ``CAL_GYROn_ROT`` of the gyro's calibration slot when >= 0 (an external sensor), else
-  ``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X/Y/Z_OFF``
-  (``src/lib/sensor_calibration/Gyroscope.cpp``: the rotation that ``Correct`` applies
-  after subtracting the thermal and calibration offsets); ArduPilot
-  ``AHRS_ORIENTATION`` (custom 100..102 with their angle parameters): the
-  ``INS_TCALn`` correction is applied after the sensor's own rotation (fixed by the
-  board definition) and before ``AHRS_ORIENTATION``
-  (``AP_InertialSensor_Backend.cpp``, ``_rotate_and_correct_gyro``);
-* the gyro's identity: PX4 ``sensor_gyro`` instance and ``device_id``, ArduPilot IMU
-  instance (0 = ``INS_TCAL1``) and ``INS_GYR_ID``/``INS_GYR2_ID``/``INS_GYR3_ID``;
-* the thermal correction the logged rates hold (:class:`ThermalCorrection`), or why
-  it cannot be undone (a parameter of it missing or changed during the log, no
-  temperature).
-
-The corrections, as each autopilot applies them to the gyro of one sensor (rad/s, sensor
-axes 0, 1, 2; ``T`` that sensor's temperature, degC):
-
-* PX4 (``TemperatureCompensation::calc_thermal_offsets_3D``, ``set_sensor_id``): with
-  ``TC_G_ENABLE = 1`` and a slot ``i`` whose ``TC_G{i}_ID`` is the gyro's device id,
-  ``offset = X0 + X1 d + X2 d^2 + X3 d^3``, ``d = clip(T, TMIN, TMAX) - TREF``, is
-  subtracted (coefficients ``TC_G{i}_X{k}_{axis}``). No slot with that id: nothing.
-* ArduPilot (``AP_InertialSensor_tempcal.cpp``, ``correct_sensor``): with
-  ``INS_TCALn_ENABLE = 1``, ``P(clip(T)) - P(clip(T_cal))`` is subtracted, ``P(T) =
-  (GYR1 d + GYR2 d^2 + GYR3 d^3) 1e-6``, ``d = T - 35``, both temperatures clipped to
-  ``[TMIN, TMAX]``, ``T_cal = INS_GYRn_CALTEMP`` (the gyro offset calibration's; default
-  -300 when never calibrated, which the clip makes ``TMIN``). ``ENABLE = 2`` (learning)
-  applies nothing.
-
-Both autopilots hold these parameters and do this arithmetic in 32-bit floats;
-:meth:`ThermalCorrection.offset_rad_s` does the same with ``float32=True``.
+:class:`Onboard` records a gyro's board rotation, identity and the thermal correction its
+logged rates hold; :class:`ThermalCorrection` evaluates PX4's or ArduPilot's correction as
+the autopilot does (in 32-bit floats on request). The autopilots' rules, with their sources:
+docs/autopilot-files.md, sections "What the autopilot did to the rates", "PX4" and "ArduPilot".
 """
 
 from __future__ import annotations
@@ -71,34 +38,18 @@ def uint32(value) -> int:
 
 @dataclass(frozen=True)
 class ThermalCorrection:
-    """An autopilot's thermal correction of one gyro, in its sensor axes.
+    """An autopilot's thermal correction of one gyro, in its sensor axes."""
 
-    Attributes
-    ----------
-    coeffs : tuple of 4 tuples of 3 floats
-        ``coeffs[k][axis]``: coefficient of ``(T - temp_ref_c)**k``, rad/s per degC**k.
-    temp_ref_c, temp_min_c, temp_max_c : float
-        Reference and clip range, degC.
-    cal_temp_c : float or None
-        ArduPilot: the temperature whose polynomial value is added back (``INS_GYRn_CALTEMP``);
-        None for PX4.
-    names : str
-        The parameters it comes from, for the messages (e.g. ``"TC_G0_* (TC_G_ENABLE=1)"``).
-    """
-
-    coeffs: tuple
-    temp_ref_c: float
-    temp_min_c: float
+    coeffs: tuple  #: ``coeffs[k][axis]``: coefficient of ``(T - temp_ref_c)**k``, rad/s per degC**k
+    temp_ref_c: float  #: reference temperature, degC
+    temp_min_c: float  #: clip range, degC
     temp_max_c: float
-    cal_temp_c: float | None
-    names: str
+    cal_temp_c: float | None  #: ArduPilot: the temperature whose polynomial value is added back (PX4: None)
+    names: str  #: the parameters it comes from, e.g. "TC_G0_* (TC_G_ENABLE=1)"
 
     def offset_rad_s(self, temp_c, *, float32: bool = False) -> np.ndarray:
-        """What the autopilot subtracts at ``temp_c`` (degC): (n, 3), rad/s, sensor axes.
-
-        ``float32`` evaluates as the autopilots do, in 32-bit floats (PX4 as a sum of
-        powers, ArduPilot by Horner's rule); the result is returned as float64.
-        """
+        """What the autopilot subtracts at ``temp_c`` (degC): (n, 3), rad/s, sensor axes;
+        ``float32`` evaluates in 32-bit floats as the autopilots do."""
         kind = np.float32 if float32 else np.float64
         temp = np.atleast_1d(np.asarray(temp_c, dtype=np.float64)).astype(kind)
         c = np.asarray(self.coeffs, dtype=np.float64).astype(kind)
@@ -141,29 +92,11 @@ def px4_slots(params: Mapping) -> list[int]:
 
 def px4_correction(params: Mapping, device_id: int | None, *, slot: int | None = None,
                    where: str = "parameters") -> tuple[ThermalCorrection | None, str]:
-    """PX4's gyro thermal correction of the gyro with ``device_id`` (module notes).
+    """PX4's gyro thermal correction of the gyro with ``device_id`` (docs/autopilot-files.md,
+    section "PX4"): the correction, or None and why PX4 applies none.
 
-    Parameters
-    ----------
-    params : mapping
-        Parameter name -> value.
-    device_id : int or None
-        The gyro's device id; None (unknown, e.g. a CSV log): the slot ``slot`` is taken
-        as the one that applies.
-    slot : int, optional
-        With ``device_id`` None: the slot to use.
-    where : str
-        The file, for the messages.
-
-    Returns
-    -------
-    (ThermalCorrection or None, str)
-        The correction PX4 applies, or None and why it applies none.
-
-    Raises
-    ------
-    ConfigError
-        The slot that applies lacks a parameter.
+    With ``device_id`` None (unknown, e.g. a CSV log) slot ``slot`` is taken as the one that
+    applies. A slot that applies but lacks a parameter is a :class:`ConfigError` naming ``where``.
     """
     enable = params.get("TC_G_ENABLE")
     if enable is None or int(enable) != 1:
@@ -190,18 +123,9 @@ def px4_correction(params: Mapping, device_id: int | None, *, slot: int | None =
 
 def ardupilot_correction(params: Mapping, imu: int, *, where: str = "parameters",
                          ) -> tuple[ThermalCorrection | None, str]:
-    """ArduPilot's gyro temperature correction of IMU ``imu`` (0 = ``INS_TCAL1``; module notes).
-
-    Returns
-    -------
-    (ThermalCorrection or None, str)
-        The correction ArduPilot applies, or None and why it applies none.
-
-    Raises
-    ------
-    ConfigError
-        ``INS_TCALn_ENABLE`` is 1 but a coefficient or the range is missing.
-    """
+    """ArduPilot's gyro temperature correction of IMU ``imu`` (0 = ``INS_TCAL1``): the correction,
+    or None and why ArduPilot applies none; a :class:`ConfigError` when ``ENABLE`` is 1 but a
+    coefficient or the range is missing (docs/autopilot-files.md, section "ArduPilot")."""
     p = f"INS_TCAL{imu + 1}_"
     enable = params.get(p + "ENABLE")
     if enable is None or int(enable) != 1:
@@ -217,40 +141,17 @@ def ardupilot_correction(params: Mapping, imu: int, *, where: str = "parameters"
 
 @dataclass(frozen=True)
 class Onboard:
-    """What the autopilot did to the gyro rates of a log (module notes).
+    """What the autopilot did to the gyro rates of a log (docs/autopilot-files.md)."""
 
-    Attributes
-    ----------
-    autopilot : {"px4", "ardupilot"}
-    instance : int
-        The gyro in the log: PX4 ``sensor_gyro`` instance (its ``TC_G`` slot), ArduPilot
-        IMU instance (0 = ``INS_TCAL1``).
-    device_id : int or None
-        PX4 ``sensor_gyro.device_id``; ArduPilot ``INS_GYR_ID`` (``INS_GYR2_ID`` ...).
-    rotation : tuple of 3 tuples, or None
-        ``R`` with ``v_body = R @ v_sensor``; None when the log's rotation is unusable
-        (``rotation_problem`` says why).
-    rotation_text : str
-        Where ``R`` comes from, e.g. ``"AHRS_ORIENTATION=8 (ROLL_180)"``.
-    correction : ThermalCorrection or None
-        The thermal correction the logged rates hold (None: they hold none).
-    correction_problem : str
-        Why the correction the rates hold cannot be undone ("" when it can or there is none).
-    rotation_problem : str
-        Why ``rotation`` is None ("" otherwise).
-    system_id : int or None
-        The vehicle's MAVLink system id (PX4 ``MAV_SYS_ID``, ArduPilot ``SYSID_THISMAV``).
-    """
-
-    autopilot: str
-    instance: int
-    device_id: int | None
-    rotation: tuple | None
-    rotation_text: str
-    correction: ThermalCorrection | None = None
-    correction_problem: str = ""
-    rotation_problem: str = ""
-    system_id: int | None = None
+    autopilot: str  #: "px4" or "ardupilot"
+    instance: int  #: PX4 ``sensor_gyro`` instance (its ``TC_G`` slot), ArduPilot IMU (0 = ``INS_TCAL1``)
+    device_id: int | None  #: PX4 ``sensor_gyro.device_id``; ArduPilot ``INS_GYR_ID`` (``INS_GYR2_ID`` ...)
+    rotation: tuple | None  #: ``R`` with ``v_body = R @ v_sensor``; None when unusable
+    rotation_text: str  #: where ``R`` comes from, e.g. "AHRS_ORIENTATION=8 (ROLL_180)"
+    correction: ThermalCorrection | None = None  #: the thermal correction the logged rates hold
+    correction_problem: str = ""  #: why that correction cannot be undone ("" when it can or there is none)
+    rotation_problem: str = ""  #: why ``rotation`` is None ("" otherwise)
+    system_id: int | None = None  #: the vehicle's MAVLink system id
 
     @property
     def matrix(self) -> np.ndarray | None:
@@ -277,24 +178,34 @@ def _changed(changed, names) -> list[str]:
     return sorted(n for n in names if n in changed)
 
 
+def _moved(where: str, name: str) -> str:
+    """Why the rotation is unusable: its parameter ``name`` changed during the log."""
+    return f"{where}: {name} changed during the log; cut the log where it is constant or give --board-rotation"
+
+
+def _held_correction(find, changed: list[str], temperature: bool, where: str, enabled: str, sensor: str,
+                     off: str) -> tuple[ThermalCorrection | None, str]:
+    """The correction the logged rates hold (``find()``) and why it cannot be undone ("" when it
+    can): a parameter missing, one of ``changed`` changed during the log, or no temperature."""
+    correction, problem = None, ""
+    try:
+        correction, _ = find()
+    except ConfigError as exc:
+        problem = f"{exc}: the correction the log's rates hold cannot be undone"
+    if changed:
+        problem = f"{where}: {sorted(changed)[0]} changed during the log, so the correction its rates hold changed: " \
+                  "cut the log where it is constant, or record the run again with the setting fixed"
+    elif correction is not None and not temperature:
+        problem = f"{where}: {enabled} but the log has no {sensor} temperature: the correction its rates hold " \
+                  f"cannot be undone; record the run with {off}"
+    return correction, problem
+
+
 def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature: bool = True,
                       where: str = "log") -> Onboard:
-    """:class:`Onboard` of IMU ``instance`` of an ArduPilot log whose rates are those the
-    firmware logs (after ``INS_TCALn`` and ``AHRS_ORIENTATION``).
-
-    Parameters
-    ----------
-    params : mapping
-        The log's parameters (the last value of each).
-    instance : int
-        IMU instance (0 = the first).
-    changed : collection of str
-        Parameters whose value changed during the log.
-    temperature : bool
-        Whether the log holds the IMU's temperature (needed to undo a correction).
-    where : str
-        The log, for the messages.
-    """
+    """:class:`Onboard` of IMU ``instance`` of an ArduPilot log (rates after ``INS_TCALn`` and
+    ``AHRS_ORIENTATION``), from its ``params`` (the last value of each), the parameters
+    ``changed`` during the log and whether it holds the IMU's ``temperature``."""
     number = int(params.get("AHRS_ORIENTATION", 0))
     rotation, rotation_problem = None, ""
     try:
@@ -304,47 +215,26 @@ def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature
     moved = _changed(changed, ["AHRS_ORIENTATION", "CUST_ROT1_ROLL", "CUST_ROT1_PITCH", "CUST_ROT1_YAW",
                                "CUST_ROT2_ROLL", "CUST_ROT2_PITCH", "CUST_ROT2_YAW"])
     if moved and not rotation_problem:
-        rotation, rotation_problem = None, f"{where}: {moved[0]} changed during the log; cut the log where it is " \
-                                           "constant or give --board-rotation"
+        rotation, rotation_problem = None, _moved(where, moved[0])
     text = f"AHRS_ORIENTATION={rotation_name('ardupilot', number)}" + ("" if "AHRS_ORIENTATION" in params
                                                                        else " (not in the log: 0 taken)")
     dev_name = "INS_GYR_ID" if instance == 0 else f"INS_GYR{instance + 1}_ID"
     device = uint32(params[dev_name]) if dev_name in params else None
-    correction, problem = None, ""
     p = f"INS_TCAL{instance + 1}_"
     tcal = [n for n in changed if n.startswith(p) or n == f"INS_GYR{instance + 1}_CALTEMP"]
-    try:
-        correction, _ = ardupilot_correction(params, instance, where=where)
-    except ConfigError as exc:
-        problem = f"{exc}: the correction the log's rates hold cannot be undone"
-    if tcal:
-        problem = f"{where}: {sorted(tcal)[0]} changed during the log, so the correction its rates hold changed: " \
-                  "cut the log where it is constant, or record the run again with the setting fixed"
-    elif correction is not None and not temperature:
-        problem = f"{where}: {p}ENABLE=1 but the log has no IMU temperature: the correction its rates hold " \
-                  "cannot be undone; record the run with INS_TCAL disabled"
+    correction, problem = _held_correction(lambda: ardupilot_correction(params, instance, where=where), tcal,
+                                           temperature, where, f"{p}ENABLE=1", "IMU", "INS_TCAL disabled")
     return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem,
                    _system_id(params, "SYSID_THISMAV"))
 
 
 def px4_sensor_rotation(params: Mapping, kind: str, device: int | None, *, where: str = "log"
                         ) -> tuple[np.ndarray, str]:
-    """PX4's rotation from a sensor's frame to the body frame (module notes), and its description.
+    """PX4's rotation from a sensor's frame to the body frame, and its description.
 
-    Parameters
-    ----------
-    params : mapping
-        The vehicle's parameters.
-    kind : {"GYRO", "ACC", "MAG"}
-        The calibration name (``CAL_GYROn_ID`` ...).
-    device : int or None
-        The sensor's device id: its calibration slot's ``CAL_<kind>n_ROT``, when >= 0
-        (external), rotates it; otherwise ``SENS_BOARD_ROT`` then the level trims.
-
-    Raises
-    ------
-    ConfigError
-        A rotation number PX4 does not define.
+    ``kind`` is "GYRO", "ACC" or "MAG" (``CAL_<kind>n_ID``); ``device`` the sensor's device id
+    (docs/autopilot-files.md, section "What the autopilot did to the rates"). A rotation
+    number PX4 does not define is a :class:`ConfigError`.
     """
     slot = None
     if device is not None:
@@ -365,42 +255,18 @@ def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation:
                 *, corrected: bool, changed=(), temperature: bool = True, where: str = "log") -> Onboard:
     """:class:`Onboard` of ``sensor_gyro`` instance ``instance`` of a PX4 log.
 
-    Parameters
-    ----------
-    params : mapping
-        The log's parameters (initial values).
-    instance, device_id : int
-        The gyro's ``sensor_gyro`` instance and device id.
-    rotation : 3x3 array
-        Its sensor-to-body rotation as the reader applied it (``v_body = R v_sensor``).
-    rotation_text : str
-        Where it comes from.
-    corrected : bool
-        True when the rates are PX4's corrected ones (``sensor_combined``: thermal
-        correction applied when it was on); False for raw ``sensor_gyro``.
-    changed : collection of str
-        Parameters that changed during the log.
-    temperature : bool
-        Whether the log holds the gyro's temperature.
-    where : str
-        The log, for the messages.
+    ``rotation`` is the sensor-to-body rotation the reader applied, ``rotation_text`` where it
+    comes from; ``corrected`` is True for PX4's corrected rates (``sensor_combined``), False
+    for raw ``sensor_gyro``; ``changed`` the parameters that changed during the log and
+    ``temperature`` whether it holds the gyro's temperature.
     """
     correction, problem = None, ""
     if corrected:
-        try:
-            correction, _ = px4_correction(params, device_id, slot=instance, where=where)
-        except ConfigError as exc:
-            problem = f"{exc}: the correction the log's rates hold cannot be undone"
-        tc = sorted(n for n in changed if n.startswith("TC_G"))
-        if tc:
-            problem = f"{where}: {tc[0]} changed during the log, so the correction its rates hold changed: cut " \
-                      "the log where it is constant, or record the run again with the setting fixed"
-        elif correction is not None and not temperature:
-            problem = f"{where}: TC_G_ENABLE=1 but the log has no gyro temperature: the correction its rates " \
-                      "hold cannot be undone; record the run with TC_G_ENABLE=0"
+        tc = [n for n in changed if n.startswith("TC_G")]
+        correction, problem = _held_correction(lambda: px4_correction(params, device_id, slot=instance, where=where),
+                                               tc, temperature, where, "TC_G_ENABLE=1", "gyro", "TC_G_ENABLE=0")
     moved = sorted(n for n in changed if n.startswith("SENS_BOARD_") or re.fullmatch(r"CAL_GYRO\d_ROT", n))
-    rotation_problem = f"{where}: {moved[0]} changed during the log; cut the log where it is constant or give " \
-                       "--board-rotation" if moved else ""
+    rotation_problem = _moved(where, moved[0]) if moved else ""
     return Onboard("px4", instance, device_id, None if moved else _as_tuple(rotation), rotation_text, correction,
                    problem, rotation_problem, _system_id(params, "MAV_SYS_ID"))
 

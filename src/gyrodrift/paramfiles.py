@@ -1,94 +1,9 @@
 """Parameter files the autopilots load: PX4 ``.params``, ArduPilot ``.param``, gyrodrift JSON.
 
-:func:`write_calibration` writes one or more :class:`~gyrodrift.calibrate.Calibration`
-(one per gyro) for PX4, ArduPilot or as gyrodrift's JSON; :func:`read_px4_params`,
-:func:`read_ardupilot_params` and :func:`read_calibration_json` read those files back
-into a :class:`~gyrodrift.calibrate.Calibration`; :func:`param_values` reads any of the
-two autopilots' files into ``{name: value}`` (for :mod:`gyrodrift.calcheck`).
-
-Facts used by the writers and readers (from the autopilots' sources and documentation)
--------------------------------------------------------------------------------------
-PX4 (``PX4/PX4-Autopilot``):
-
-* ``TC_G{i}_X{k}_{a}`` is the coefficient of ``(T - TC_G{i}_TREF)**k``, k = 0..3, for
-  axis ``a`` = 0, 1, 2 (X, Y, Z) of gyro slot ``i``
-  (``src/modules/temperature_compensation/temp_comp_params_gyro_0.yaml``; user guide
-  ``en/advanced_config/sensor_thermal_calibration.md``, "Calibration Parameter
-  Storage", which says the axes are those of the board frame).
-* The offset is ``X0 + X1 d + X2 d**2 + X3 d**3`` with ``d = T - TREF`` and ``T``
-  clipped to ``[TMIN, TMAX]`` (``TemperatureCompensation.cpp``,
-  ``calc_thermal_offsets_3D``); it is *subtracted*: corrected = rotation x (raw -
-  thermal offset - calibration offset), the rotation to the body frame coming after
-  (``src/lib/sensor_calibration/Gyroscope.hpp``, ``Correct``). So the coefficients are
-  the drift itself, gyrodrift's sign, in the board frame.
-* The rates it corrects are ``sensor_gyro.x, y, z``: rad/s, FRD board frame
-  (``msg/SensorGyro.msg``); ``Tools/process_sensor_caldata.py`` fits them as "bias
-  (rad/s)". The coefficients are therefore rad/s per degC**k.
-* ``process_sensor_caldata.py`` sets ``TMIN``/``TMAX`` to the log's extreme
-  temperatures and ``TREF = (TMIN + TMAX) / 2``; gyrodrift does the same.
-* PX4 subtracts ``CAL_GYRO*_OFF`` too, so ``X0`` must be the offset of the rates the
-  log holds: raw ``sensor_gyro`` needs those offsets at 0, as the user guide's offboard
-  procedure says; ``sensor_combined`` is already corrected (and thermally compensated
-  when ``TC_G_ENABLE`` was 1), which the ULog reader's summary states.
-* ``TC_G_ENABLE`` (boolean, reboot required, ``temp_comp_params_gyro.yaml``) must be 1;
-  a slot is applied only to the gyro whose device id equals ``TC_G{i}_ID``
-  (``TemperatureCompensation::set_sensor_id``): with no match nothing is corrected.
-* The file: ``process_sensor_caldata.py`` writes a ``# Vehicle-Id Component-Id Name
-  Value Type`` header, then tab-separated ``1 1 NAME VALUE TYPE`` lines, type 6 for
-  the id and 9 for the floats: MAVLink ``MAV_PARAM_TYPE_INT32`` and
-  ``MAV_PARAM_TYPE_REAL32`` (``common.xml``). This is QGroundControl's parameter file
-  (mavros ``param.py``, ``QGroundControlParam``). PX4 keeps the values as 32-bit
-  floats (about 7 digits).
-
-ArduPilot (``ArduPilot/ardupilot``):
-
-* ``INS_TCAL{n}_ENABLE`` (0 disabled, 1 enabled, 2 learn; reboot required),
-  ``INS_TCAL{n}_TMIN``/``TMAX`` (degC, documented range -70..80) and
-  ``INS_TCAL{n}_GYR{k}_X/Y/Z``, the k-th order coefficient, k = 1..3, for IMU ``n``
-  (1 = the first) (``libraries/AP_InertialSensor/AP_InertialSensor_tempcal.cpp``).
-* The polynomial has no constant term and a fixed reference of 35 degC
-  (``TEMP_REFERENCE``); stored coefficients are scaled by 1e6 (``SCALE_FACTOR``):
-  ``P(T) = (GYR1 d + GYR2 d**2 + GYR3 d**3) * 1e-6``, ``d = T - 35``
-  (``polynomial_eval``).
-* The correction subtracts ``P(T)`` and adds back ``P(T_cal)``, both temperatures
-  clamped to ``[TMIN, TMAX]``, ``T_cal`` being that of the gyro offset calibration
-  (``correct_sensor``); the gyro offset is subtracted next. So ``P`` is the drift up
-  to a constant, gyrodrift's sign; the constant is ArduPilot's own gyro calibration,
-  and a file read back gives the curve up to a constant (:attr:`Calibration.offset_known`).
-* It corrects the rates after the sensor's own rotation and before the board
-  orientation (``AHRS_ORIENTATION``) is applied
-  (``AP_InertialSensor_Backend.cpp``, ``_rotate_and_correct_gyro``), in rad/s
-  (``Tools/scripts/tempcal_IMU.py`` undoes the board orientation, fits the gyro in
-  rad/s against ``T - 35`` and plots it times ``degrees(1)``).
-* Third order is what the firmware reads (pull request #16262); a fifth-order variant
-  is an open experiment (pull request #27295).
-* ``.param`` files: ``NAME,VALUE`` lines with ``#`` comments (Mission Planner; mavros
-  ``param.py``, ``MissionPlannerParam``); ``tempcal_IMU.py`` writes ``NAME VALUE``, the
-  firmware's persistent dump ``NAME=VALUE``. All three are read. Values are written
-  without exponents, as ``tempcal_IMU.py`` intends.
-
-* Loading: ArduPilot hides the ``INS_TCALn_*`` coefficients while ``INS_TCALn_ENABLE``
-  is 0 (``AP_PARAM_FLAG_ENABLE``), so a ground station that loads a file into a vehicle
-  with calibration off sets only ``ENABLE``: the file has to be loaded, the parameters
-  refreshed, and the file loaded again, then the vehicle rebooted (``ENABLE`` needs a
-  reboot). The same ``TMIN``/``TMAX`` clip the accelerometer coefficients
-  ``INS_TCALn_ACC*`` already on the vehicle, which this file does not write.
-
-Other facts:
-
-* QGroundControl refuses a whole ``.params`` file whose lines name another system id
-  than the vehicle's ("The parameters in the stream have been saved from System Id ...",
-  ``ParameterManager::readParametersFromStream``): the first column is the vehicle's
-  ``MAV_SYS_ID``, taken from the log or ``--sysid``.
-
-Axis mapping: gyrodrift's ``gyro_x, gyro_y, gyro_z`` (deg/s, body FRD) become the
-autopilot's axes 0, 1, 2 (X, Y, Z, rad/s) of the sensor frame it corrects in through
-``body_to_board = R.T`` (``v_sensor = R.T @ v_body``), ``R`` being the calibration's
-``rotation`` (``v_body = R @ v_sensor``, :mod:`gyrodrift.onboard`): the board rotation
-read from the log, or ``--board-rotation``; the identity when neither is known (a
-flight controller mounted without rotation: PX4 ``SENS_BOARD_ROT = 0`` and no level
-trims, ArduPilot ``AHRS_ORIENTATION = 0``). Numbers are written with every digit of the
-double (``repr``), so a file read back gives the same curve to rounding error.
+:func:`write_calibration` writes calibrations (one per gyro) for PX4, ArduPilot or as JSON;
+:func:`read_px4_params`, :func:`read_ardupilot_params` and :func:`read_calibration_json`
+read them back; :func:`param_values` reads an autopilot's file into ``{name: value}``. The
+autopilots' parameters, file formats and frames, with their sources: docs/autopilot-files.md.
 """
 
 from __future__ import annotations
@@ -104,9 +19,8 @@ import numpy as np
 from gyrodrift._version import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift._text import printable
-from gyrodrift.calibrate import AXES, AxisFit, Calibration
+from gyrodrift.calibrate import AXES, AXIS_COLUMNS, AxisFit, Calibration
 from gyrodrift.config import read_utf8
-from gyrodrift.conventions import GYRO_X, GYRO_Y, GYRO_Z
 from gyrodrift.errors import ConfigError
 from gyrodrift.onboard import ARDUPILOT_SCALE, ARDUPILOT_TREF_C
 
@@ -117,7 +31,6 @@ __all__ = [
 ]
 
 _ORDER = 3
-_COLUMNS = {"x": GYRO_X, "y": GYRO_Y, "z": GYRO_Z}
 _RAD_PER_DEG = math.pi / 180.0
 _PX4_INT32, _PX4_REAL32 = 6, 9  # MAVLink MAV_PARAM_TYPE of the id and of the floats
 #: Output formats of :func:`write_calibration` and the file endings that name them
@@ -162,7 +75,7 @@ def _shift(coeffs: np.ndarray, delta: float) -> np.ndarray:
 
 
 def _missing_note(cal: Calibration) -> list[str]:
-    missing = [_COLUMNS[a] for a in AXES if a not in cal.axes]
+    missing = [AXIS_COLUMNS[a] for a in AXES if a not in cal.axes]
     if not missing:
         return []
     return [f"{', '.join(missing)} not in the log: their coefficients are written as 0 (no compensation)"]
@@ -178,7 +91,7 @@ def _number(value: float) -> str:
 
 def px4_parameters(cal: Calibration, *, instance: int | None = None, device_id: int | None = None,
                    body_to_board=None) -> list:
-    """PX4's gyro thermal-compensation parameters of ``cal`` (module notes).
+    """PX4's gyro thermal-compensation parameters of ``cal`` (docs/autopilot-files.md, section "PX4").
 
     Parameters
     ----------
@@ -186,18 +99,15 @@ def px4_parameters(cal: Calibration, *, instance: int | None = None, device_id: 
     instance : int, optional
         Gyro slot ``i`` of ``TC_G{i}_*`` (0..3); default ``cal.instance``.
     device_id : int, optional
-        ``TC_G{i}_ID``: the device id of the gyro; default ``cal.device_id`` (0 when
-        unknown: PX4 then applies nothing).
+        ``TC_G{i}_ID``; default ``cal.device_id`` (0 when unknown: PX4 then applies nothing).
     body_to_board : 3x3 array_like, optional
-        Rotation from gyrodrift's body FRD axes to the sensor frame; default the
-        calibration's own (``cal.matrix.T``).
+        Rotation from body FRD to the sensor frame; default ``cal.matrix.T``.
 
     Returns
     -------
     list of (str, int or float, int)
-        ``(name, value, MAVLink type)``: ``TC_G_ENABLE`` = 1, ``TC_G{i}_ID``,
-        ``TC_G{i}_TMIN``, ``TMAX``, ``TREF`` (degC) and ``TC_G{i}_X{k}_{a}`` (rad/s per
-        degC**k, board axis a), in that order.
+        ``(name, value, MAVLink type)``: ``TC_G_ENABLE``, ``TC_G{i}_ID``, ``TMIN``, ``TMAX``,
+        ``TREF`` (degC) and ``TC_G{i}_X{k}_{a}`` (rad/s per degC**k), in that order.
     """
     instance = cal.instance if instance is None else instance
     device_id = (cal.device_id or 0) if device_id is None else device_id
@@ -216,25 +126,22 @@ def px4_parameters(cal: Calibration, *, instance: int | None = None, device_id: 
 
 
 def ardupilot_parameters(cal: Calibration, *, instance: int | None = None, body_to_board=None) -> list:
-    """ArduPilot's gyro temperature-calibration parameters of ``cal`` (module notes).
+    """ArduPilot's gyro temperature-calibration parameters of ``cal`` (docs/autopilot-files.md,
+    section "ArduPilot").
 
     Parameters
     ----------
     cal : Calibration
     instance : int, optional
-        IMU index from 0; the parameters are ``INS_TCAL{instance + 1}_*`` (1..3);
-        default ``cal.instance``.
+        IMU index from 0 (``INS_TCAL{instance + 1}_*``); default ``cal.instance``.
     body_to_board : 3x3 array_like, optional
-        Rotation from gyrodrift's body FRD axes to the sensor frame; default the
-        calibration's own (``cal.matrix.T``).
+        Rotation from body FRD to the sensor frame; default ``cal.matrix.T``.
 
     Returns
     -------
     list of (str, float)
-        ``INS_TCAL{n}_ENABLE`` = 1, ``TMIN``, ``TMAX`` (degC), then
-        ``INS_TCAL{n}_GYR{k}_{X,Y,Z}``: coefficient of ``(T - 35)**k`` in rad/s per
-        degC**k times 1e6, k = 1..3. The constant is left to ArduPilot's gyro
-        calibration; accelerometer coefficients are not written (those on the vehicle stay).
+        ``INS_TCAL{n}_ENABLE`` = 1, ``TMIN``, ``TMAX`` (degC), then ``GYR{k}_{X,Y,Z}``: the
+        coefficient of ``(T - 35)**k`` in rad/s per degC**k times 1e6, k = 1..3.
     """
     instance = cal.instance if instance is None else instance
     if isinstance(instance, bool) or not isinstance(instance, int) or not 0 <= instance <= 2:
@@ -301,33 +208,27 @@ def _check_slots(cals, fmt: str) -> None:
 
 def write_calibration(cal, path, fmt: str | None = None, *, instance: int | None = None,
                       device_id: int | None = None, body_to_board=None, sysid: int = 1) -> list[str]:
-    """Write one calibration, or one per gyro, to ``path`` atomically as ``fmt`` (``px4``,
-    ``ardupilot``, ``ardupilot-qgc``, ``json``; default by the file name, :func:`output_format`).
+    """Write one calibration, or one per gyro, to ``path`` atomically (docs/autopilot-files.md,
+    section "Files").
 
     Parameters
     ----------
     cal : Calibration or sequence of Calibration
-        One per gyro: each goes to its own slot (``cal.instance``), with its device id
-        and sensor frame (module notes). JSON takes one.
+        One per gyro, each to its own slot (``cal.instance``); JSON takes one.
     path : str or os.PathLike
-    fmt : str, optional
-    instance : int, optional
-        One calibration only: the gyro slot (PX4 ``TC_G{instance}``) or IMU index
-        (ArduPilot ``INS_TCAL{instance+1}``) in place of ``cal.instance``.
-    device_id : int, optional
-        One calibration only, PX4: ``TC_G{i}_ID`` in place of ``cal.device_id``.
-    body_to_board : 3x3 array_like, optional
-        One calibration only: rotation from body FRD to the sensor frame, in place of the
-        calibration's own.
+    fmt : {"px4", "ardupilot", "ardupilot-qgc", "json"}, optional
+        Default by the file name (:func:`output_format`).
+    instance, device_id, body_to_board : optional
+        One calibration only: the slot (PX4 ``TC_G{instance}``, ArduPilot
+        ``INS_TCAL{instance+1}``), PX4's ``TC_G{i}_ID`` and the body-to-sensor rotation, in
+        place of the calibration's own.
     sysid : int
-        ``px4`` and ``ardupilot-qgc``: the vehicle's system id (``MAV_SYS_ID``,
-        ``SYSID_THISMAV``), the first column of every line.
+        ``px4`` and ``ardupilot-qgc``: the vehicle's system id, the first column of every line.
 
     Returns
     -------
     list of str
-        Notes for the user (one sentence each), e.g. axes written as 0 or an unknown
-        PX4 device id.
+        Notes for the user, e.g. axes written as 0 or an unknown PX4 device id.
     """
     cals = [cal] if isinstance(cal, Calibration) else list(cal)
     if not cals:
@@ -401,9 +302,8 @@ def _bad(path, what: str) -> ConfigError:
 
 
 def param_values(path, fmt: str) -> dict[str, float]:
-    """``{name: value}`` of a parameter file: QGroundControl lines (tab-separated
-    ``vehicle component NAME VALUE type``, ``px4`` or ``ardupilot``) or ``NAME,VALUE`` /
-    ``NAME VALUE`` / ``NAME=VALUE`` lines (``ardupilot``); ``#`` starts a comment line."""
+    """``{name: value}`` of a parameter file: QGroundControl lines (``px4`` or ``ardupilot``), or
+    ``NAME,VALUE`` / ``NAME VALUE`` / ``NAME=VALUE`` lines (``ardupilot``); ``#`` starts a comment."""
     what = {"px4": "PX4 parameter file", "ardupilot": "ArduPilot parameter file"}[fmt]
     text = read_utf8(path, what)
     values: dict[str, float] = {}
@@ -454,15 +354,8 @@ def _instances(values: dict, pattern: str) -> str:
 
 
 def read_px4_params(path, *, instance: int = 0, body_to_board=None) -> Calibration:
-    """Read PX4's gyro thermal-compensation parameters (slot ``TC_G{instance}``) from a
-    QGroundControl parameter file into a :class:`Calibration` (body FRD, deg/s).
-
-    Raises
-    ------
-    ConfigError
-        Unreadable file, a malformed line, or parameters of the slot missing (the
-        message lists the slots present).
-    """
+    """Read PX4's gyro slot ``TC_G{instance}`` from a QGroundControl parameter file into a
+    :class:`Calibration` (body FRD, deg/s); a malformed file or missing slot is a :class:`ConfigError`."""
     values = param_values(path, "px4")
     g = f"TC_G{instance}_"
     slots = _instances(values, r"TC_G(\d)_TREF")
@@ -475,15 +368,8 @@ def read_px4_params(path, *, instance: int = 0, body_to_board=None) -> Calibrati
 
 
 def read_ardupilot_params(path, *, instance: int = 0, body_to_board=None) -> Calibration:
-    """Read ArduPilot's gyro temperature calibration of IMU ``instance`` (``INS_TCAL{instance+1}``)
-    from a ``.param`` file into a :class:`Calibration` (body FRD, deg/s, reference 35 degC,
-    known up to a constant: ``offset_known`` is False).
-
-    Raises
-    ------
-    ConfigError
-        As :func:`read_px4_params`.
-    """
+    """Read ArduPilot's ``INS_TCAL{instance+1}`` from a ``.param`` file into a :class:`Calibration`
+    (body FRD, deg/s, known up to a constant); errors as :func:`read_px4_params`."""
     values = param_values(path, "ardupilot")
     p = f"INS_TCAL{instance + 1}_"
     imus = _instances(values, r"INS_TCAL(\d)_TMIN")

@@ -1,17 +1,9 @@
-"""File in, file out: read a log, compensate it, write the result — in constant memory when it can.
+"""File in, file out: read a log, compensate it, write the result, in constant memory when it can.
 
-:func:`compensate_file` is what ``gyrodrift compensate`` runs. For CSV and Parquet logs
-it streams: the log is read in chunks (:func:`gyrodrift.io.chunked.iter_log_chunks`),
-each chunk is compensated where the last one stopped
-(:class:`gyrodrift.compensator.ChunkEngine`) and written out
-(:class:`gyrodrift.io.chunked.ChunkWriter`), so memory does not grow with the log. The
-output file is the same as the in-memory path (``read_log`` →
-:func:`~gyrodrift.compensator.compensate` → ``write_table``) gives. Other formats (ULog,
-ArduPilot DataFlash, ROS bags), ``--smooth`` and ``--scale-factor`` run in memory.
-
-:class:`RunStats` gathers, chunk by chunk, what the command prints at the end: the
-log's span and temperature range, the share of refused rows, the final drift model
-and, when the log has truth columns, the accuracy.
+:func:`compensate_file` is what ``gyrodrift compensate`` runs: CSV and Parquet logs in
+chunks, on threads that read ahead and write behind; other formats, ``--smooth`` and
+``--scale-factor`` in memory. :class:`RunStats` gathers what the command prints. See
+docs/streaming.md, section "gyrodrift compensate".
 """
 
 from __future__ import annotations
@@ -38,8 +30,7 @@ __all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
 
 #: Rows per chunk of the streaming path: small enough to overlap reading, compensating and writing and to bound memory.
 CHUNK_ROWS = 250_000
-#: Chunks the reader thread reads ahead of the compensation: it reads on while numba starts,
-#: so the second core is not idle then.
+#: Chunks the reader thread reads ahead of the compensation.
 READ_AHEAD = 4
 
 
@@ -226,34 +217,25 @@ def compensate_file(
     Parameters
     ----------
     input_path, output_path : str or os.PathLike
-        The log (any format of :func:`gyrodrift.io.read_log`) and the output table
-        (CSV or Parquet by its name). The input is never modified; the output is
-        written atomically.
+        The log (any format of :func:`gyrodrift.io.read_log`) and the output table (CSV or
+        Parquet by its name), written atomically; the input is never modified.
     config : CompensatorConfig, optional
     read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.ReadOptions`, or a dict of its
-        fields: the keywords of :func:`gyrodrift.io.read_log`).
+        How to read the log (:class:`gyrodrift.io.ReadOptions`, or a dict of its fields).
     chunk_rows : int
         Rows per chunk of the chunked path.
     chunked : bool, optional
-        Force (True) or forbid (False) the chunked path; default: chunked when it can
-        (a CSV or Parquet log without ``scale_factor`` or ``smooth``).
+        Force (True) or forbid (False) the chunked path; default: chunked when it can.
     progress : callable, optional
-        ``progress(iterable, total, **options)`` wraps a loop of the run and yields the
-        same items (e.g. :func:`gyrodrift._progress.progress_iter` with a label). The
-        streaming path wraps the chunks read with ``total`` the log's rows (the Parquet
-        footer's count, a CSV's estimated from its size; None for a compressed CSV)
-        and the options ``unit="rows"`` and ``size=len``; the in-memory path passes it
-        to :func:`compensate` (``progress(iterable, total)`` over chunks of rows).
+        ``progress(iterable, total, **options)`` wraps a loop of the run and yields its
+        items: the chunks read (``total`` the log's rows, None when unknown; ``unit="rows"``,
+        ``size=len``), or the in-memory :func:`compensate`'s chunks of rows.
     scale_factor : bool
-        Also estimate the gyro scale factor over the turns of the log
-        (:func:`gyrodrift.scale_factor.estimate_scale_factor`: updated at every accepted
-        rotation, frozen in between) and add its columns ``sf``, ``sf_sd``, ``rate_sf``,
-        ``heading_sf`` after ``heading_sd``. It needs the whole output, so the run is in memory.
+        Also estimate the gyro scale factor over the turns
+        (:func:`gyrodrift.scale_factor.estimate_scale_factor`), in memory.
     smooth : bool
-        Recompensate with the drift smoothed over the whole log, before and after each
-        row (:func:`gyrodrift.smooth.smooth_output`; non-causal, for recorded logs). Runs
-        in memory.
+        Recompensate with the drift smoothed over the whole log
+        (:func:`gyrodrift.smooth.smooth_output`; non-causal), in memory.
     stream : bool, optional
         The old name of ``chunked`` (a DeprecationWarning).
 
@@ -303,12 +285,8 @@ def compensate_file(
 
 
 class _Ahead:
-    """Iterate ``iterator`` in a background thread, up to ``depth`` items ahead.
-
-    Items come out in order; an exception raised by the iterator is raised, in its place,
-    in the consuming thread. :meth:`close` stops the thread (call it before closing what
-    the iterator reads).
-    """
+    """Iterate ``iterator`` in a background thread, up to ``depth`` items ahead, in order; its exception
+    is raised in the consuming thread. :meth:`close` stops the thread (before closing what it reads)."""
 
     def __init__(self, iterator, depth: int = 1):
         self._queue: queue.Queue = queue.Queue(maxsize=depth)
@@ -350,10 +328,8 @@ class _Ahead:
 
 
 class _Behind:
-    """Call ``write(item)`` for each :meth:`put` item in a background thread, in order.
-
-    An exception in ``write`` is raised by the next :meth:`put` or by :meth:`close`.
-    """
+    """Call ``write(item)`` for each :meth:`put` item in a background thread, in order; an exception in
+    ``write`` is raised by the next :meth:`put` or by :meth:`close`."""
 
     def __init__(self, write, depth: int = 1):
         self._write = write
@@ -390,11 +366,8 @@ class _Behind:
 SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
 
 
-#: Least memory the in-memory path takes per row of the log, bytes: a floor, so that
-#: :func:`_check_fits_in_memory` refuses only logs that cannot fit. Measured on a 2M-row
-#: Parquet log of benchmarks/bench_throughput.py (peak RSS from GNU time, less the 118 MiB
-#: of ``python -m gyrodrift --version``): about 390 B/row for ``--estimator lsm``, 540 with
-#: ``--scale-factor``, 680 with ``--smooth``.
+#: Least memory the in-memory path takes per row of the log, bytes: a floor (docs/streaming.md,
+#: section "gyrodrift compensate", gives the measurements).
 IN_MEMORY_MIN_BYTES_PER_ROW = 300
 
 
@@ -469,21 +442,13 @@ def _with_scale_factor(out: pd.DataFrame, cfg: CompensatorConfig) -> pd.DataFram
 
 def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: ReadOptions, chunk_rows: int,
             progress=None) -> RunStats:
-    """The chunked path: read ahead in one thread, write behind in another, compensate here
-    (the compiled kernels and pyarrow's readers and writers release the GIL)."""
-    # The reader, writer and compute threads hand the GIL to each other thousands of times
-    # (pyarrow and the kernels release it): with Python's default 5-ms switch interval a
-    # thread coming back from C code waits for the GIL (its cost on the 10-M-row run:
-    # benchmarks/README.md). Restored on return.
+    """The chunked path: read ahead in one thread, write behind in another, compensate here,
+    with a short GIL switch interval; a column that changes type starts the run over
+    (docs/streaming.md, section "gyrodrift compensate")."""
     from gyrodrift.io.chunked import ColumnTypeChanged
 
     switch = sys.getswitchinterval()
     sys.setswitchinterval(min(switch, 0.0005))
-    # A pass-through CSV column whose cells change type after the first block (empty, then
-    # text; whole numbers, then a fraction) stops the read at that row. The run starts over
-    # with that column's type given (numbers, or text when its cell is not a number or a
-    # column given as numbers fails again), at most twice per column; nothing was written
-    # yet (the output appears atomically at the end).
     column_types: dict[str, str] = {}
     notes: dict[str, str] = {}  # column -> what was done, the last word on it
     try:
@@ -523,9 +488,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
     def chunks_of(path):
         return iter_log_chunks(path, chunk_rows=chunk_rows, column_types=column_types or None, **table_opts)
 
-    # One Parquet row group per chunk: the writer thread encodes each chunk as it comes
-    # (gathered into bigger groups, it idled and then held up the compute thread, and
-    # the last group was encoded after the compute had finished).
+    # one Parquet row group per chunk, encoded as it comes (docs/streaming.md)
     with chunks_of(input_path) as chunks, ChunkWriter(output_path, row_group_rows=chunk_rows) as writer:
         reader = _Ahead(chunks, depth=READ_AHEAD)
         behind = _Behind(writer.write)
@@ -539,9 +502,7 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             if needs_survey(cfg, first):  # one reading of the whole file first (gyrodrift.compensator.intake)
                 with chunks_of(input_path) as again:
                     whole = survey(again, cfg, source)
-            # numba's start-up (importing it, loading the compiled kernels from its cache,
-            # mostly holding the GIL) happens here and in the first feed, while the reader
-            # thread reads the next chunks
+            # numba starts up here and in the first feed, while the reader thread reads on
             intake = Intake(cfg, source, whole=whole, gyro_unit=opts.gyro_unit, record=False)
 
             def emit(cols) -> None:

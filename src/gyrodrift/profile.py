@@ -1,31 +1,9 @@
 """Device profiles: what a run learned about one gyro, to warm-start the next run.
 
-``gyrodrift compensate --save-profile dev.json`` stores the final drift parameters, their
-covariance, the temperature range seen, sample count, date and software version;
-``--profile dev.json`` starts the next run from them. The file is versioned JSON and
-validated on load.
-
-Warm start
-----------
-The saved parameters become the prior mean ``x0``; the saved covariance, with every
-standard deviation doubled (the device may have changed since: power cycles, ageing,
-a different mounting) and never above the default prior, becomes the prior covariance.
-The correlation between a and c, which a flat-temperature run leaves strong, is kept.
-
-Checks
-------
-A profile is checked field by field, on loading and before saving, by
-:func:`gyrodrift.settings.check` (:class:`Profile` declares each field's type and
-bounds); a failure is a one-line :class:`~gyrodrift.errors.ConfigError` naming the
-file and the field. The checks: exactly the fields :meth:`Profile.to_json` writes,
-each of its JSON type; parameters within :data:`PARAM_BOUNDS` (ten times and more
-above MEMS data sheets, so only corrupt or hand-edited values fail); the covariance
-symmetric and positive definite; the temperature range ordered and within
-:data:`gyrodrift.conventions.TEMP_RANGE_C`; ``updates <= samples``; ``created`` ISO 8601.
-
-:func:`profile_notes` says when a profile was saved by another estimator or the run's
-temperatures reach beyond its range by more than :data:`TEMP_MARGIN_C`; the command
-line prints them on stderr, :func:`compensate_warm` adds them to ``attrs["notes"]``.
+``gyrodrift compensate --save-profile dev.json`` stores the final drift parameters and
+their covariance with the run's facts; ``--profile dev.json`` starts the next run from them.
+The file, the warm start, the checks and the notes: docs/settings-and-profiles.md, section
+"Device profiles".
 """
 
 from __future__ import annotations
@@ -41,7 +19,7 @@ import numpy as np
 from gyrodrift._version import __version__
 from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift.compensator import CompensatorConfig, compensate
-from gyrodrift.config import read_utf8
+from gyrodrift.config import parse_problem, read_utf8
 from gyrodrift.conventions import TEMP, TEMP_RANGE_C
 from gyrodrift.errors import ConfigError
 from gyrodrift.kernels.numeric import cap_covariance
@@ -70,37 +48,22 @@ _INT64_MAX = 2**63 - 1
 
 @dataclass(frozen=True)
 class Profile:
-    """What one run learned.
+    """What one run learned (docs/settings-and-profiles.md, section "Device profiles")."""
 
-    Attributes
-    ----------
-    params : tuple of 3 floats
-        a (deg/s/degC), b (deg/degC), c (deg/s) at the end of the run.
-    cov : 3x3 tuple
-        Their covariance.
-    temp_range_c : (float, float)
-        Lowest and highest temperature seen, degC.
-    samples, updates : int
-        Rows compensated and filter updates taken.
-    estimator : str
-    created : str
-        ISO 8601 date and time (UTC).
-    software : str
-        ``gyrodrift X.Y.Z``.
-    """
-
+    #: a (deg/s/degC), b (deg/degC), c (deg/s) at the end of the run, and their covariance
     params: tuple[float, float, float] = setting(drift=_NAMES, measured=True)
     cov: tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]] = \
         setting(measured=True)
+    #: lowest and highest temperature seen, degC
     temp_range_c: tuple[float, float] = setting(unit="degC", ge=TEMP_RANGE_C[0], le=TEMP_RANGE_C[1], measured=True)
-    samples: int = setting(ge=0, whole_max=_INT64_MAX)
-    updates: int = setting(ge=0, whole_max=_INT64_MAX)
+    samples: int = setting(ge=0, whole_max=_INT64_MAX)  #: rows compensated
+    updates: int = setting(ge=0, whole_max=_INT64_MAX)  #: filter updates taken
     estimator: str = setting(longest=200)
-    created: str = setting(longest=200)
-    software: str = setting(longest=200)
+    created: str = setting(longest=200)  #: ISO 8601 date and time (UTC)
+    software: str = setting(longest=200)  #: "gyrodrift X.Y.Z"
 
     def _check_together(self) -> None:
-        """The checks of the module notes that involve more than one value (:func:`check` runs them)."""
+        """The checks that involve more than one value (:func:`check` runs them)."""
         check_covariance("cov", self.cov, _NAMES)
         lo, hi = self.temp_range_c
         if not lo <= hi:
@@ -131,14 +94,8 @@ class Profile:
 
 def profile_from_run(out) -> Profile:
     """The profile of a run: a :func:`gyrodrift.compensator.compensate` output table, or the
-    :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`.
-
-    Raises
-    ------
-    ConfigError
-        The run's drift model was in time, not temperature (a log whose temperature never
-        changes; ``CompensatorConfig.temperature``): it does not carry over to another run.
-    """
+    :class:`gyrodrift.pipeline.RunStats` of :func:`gyrodrift.pipeline.compensate_file`; a
+    :class:`ConfigError` when its drift model was in time, not temperature."""
     if hasattr(out, "attrs"):
         regressor, source = out.attrs.get("drift_regressor", "temperature"), out.attrs.get("source", "the log")
     else:  # RunStats
@@ -172,20 +129,8 @@ def profile_from_run(out) -> Profile:
 
 
 def save_profile(profile: Profile, path) -> None:
-    """Write the profile as JSON, atomically, after the checks :func:`load_profile` makes.
-
-    Parameters
-    ----------
-    profile : Profile
-    path : str or os.PathLike
-
-    Raises
-    ------
-    ConfigError
-        The profile would not load (module notes: e.g. a parameter that is not finite,
-        a covariance that is not positive definite, as from an estimator that learns
-        nothing); nothing is written. One line naming the file and the field.
-    """
+    """Write the profile to ``path`` as JSON, atomically, after the checks :func:`load_profile`
+    makes; one that would not load is a one-line :class:`ConfigError` and nothing is written."""
     checked = _from_json(profile.to_json(), path, advice="the run did not learn a usable profile; nothing was saved")
     write_bytes_atomic(path, (json.dumps(checked.to_json(), indent=2) + "\n").encode("utf-8"))
 
@@ -198,9 +143,19 @@ def _is_count(v) -> bool:
     return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
 
 
+def _check_keys(data: dict, known, unknown: str, missing: str) -> None:
+    """Raise :class:`SettingError` for keys of ``data`` not ``known`` (the ``unknown`` wording,
+    keys quoted) or ``known`` keys it lacks (the ``missing`` wording)."""
+    odd = sorted((k for k in data if k not in known), key=repr)
+    if odd:
+        raise SettingError(unknown.format(", ".join(map(repr, odd))))
+    absent = [k for k in known if k not in data]
+    if absent:
+        raise SettingError(missing.format(", ".join(absent)))
+
+
 def _from_json(data, path, advice: str) -> Profile:
-    """The :class:`Profile` of parsed JSON after every check (module notes); a
-    :class:`ConfigError` ``"{path}: not a valid gyrodrift device profile: ..."`` else."""
+    """The :class:`Profile` of parsed JSON after every check, or a :class:`ConfigError`."""
     try:
         if not isinstance(data, dict):
             raise SettingError(f"the file holds {show(data)}, not a JSON object")
@@ -209,21 +164,11 @@ def _from_json(data, path, advice: str) -> Profile:
         version = data.get("version")
         if not _is_count(version) or version != VERSION:
             raise SettingError(f"version {show(version)} is not supported (this gyrodrift reads version {VERSION})")
-        odd = sorted((k for k in data if k not in _FIELDS), key=repr)
-        if odd:
-            raise SettingError(f"unknown field(s) {', '.join(map(repr, odd))}")
-        missing = [k for k in _FIELDS if k not in data]
-        if missing:
-            raise SettingError(f"missing field(s) {', '.join(missing)}")
+        _check_keys(data, _FIELDS, "unknown field(s) {}", "missing field(s) {}")
         params = data["params"]
         if not isinstance(params, dict):
             raise SettingError(f"params = {show(params)} must be an object with {', '.join(_NAMES)}")
-        odd = sorted((k for k in params if k not in PARAM_BOUNDS), key=repr)
-        if odd:
-            raise SettingError(f"params has unknown field(s) {', '.join(map(repr, odd))}; known: {', '.join(_NAMES)}")
-        missing = [k for k in _NAMES if k not in params]
-        if missing:
-            raise SettingError(f"params lacks {', '.join(missing)}")
+        _check_keys(params, _NAMES, f"params has unknown field(s) {{}}; known: {', '.join(_NAMES)}", "params lacks {}")
         for name in _NAMES:  # each named, as in the file (the validator names the element of a triple)
             if not _is_number(params[name]) or not math.isfinite(params[name]):
                 raise SettingError(f"params.{name} = {show(params[name])} must be a finite number")
@@ -240,22 +185,8 @@ def _bad(path, what: str, advice: str = "correct it or save a new one with --sav
 
 
 def load_profile(path) -> Profile:
-    """Read and check a device profile.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    Profile
-
-    Raises
-    ------
-    ConfigError
-        The file is missing, unreadable or not UTF-8, not JSON, or a field fails its
-        check (module notes). One line naming the file and the field.
-    """
+    """Read and check a device profile; a missing, unreadable, non-UTF-8 or non-JSON file, or a
+    field that fails its check, is a one-line :class:`ConfigError` naming the file and the field."""
     path = Path(path)
     text = read_utf8(path, "profile file")
     try:
@@ -263,27 +194,15 @@ def load_profile(path) -> Profile:
     except RecursionError:
         raise _bad(path, "cannot read it as JSON (arrays or objects nested too deeply)") from None
     except ValueError as err:  # JSONDecodeError, or an integer beyond Python's digit limit for text
-        reason = "a number with too many digits" if "digits" in str(err) else " ".join(str(err).split())
-        raise _bad(path, f"cannot read it as JSON ({reason})") from None
+        raise _bad(path, f"cannot read it as JSON ({parse_problem(err)})") from None
     return _from_json(data, path, advice="correct it or save a new one with --save-profile")
 
 
 def profile_notes(profile: Profile, *, estimator: str | None = None, temp_range_c=None) -> list[str]:
-    """What a user of ``profile`` should know (module notes); empty when nothing.
+    """What a user of ``profile`` should know, one sentence each without the file name.
 
-    Parameters
-    ----------
-    profile : Profile
-    estimator : str, optional
-        The estimator the profile warm-starts (``CompensatorConfig.estimator``).
-    temp_range_c : (float, float), optional
-        Lowest and highest temperature of the run, degC; non-finite ends (no
-        temperature seen) are left out.
-
-    Returns
-    -------
-    list of str
-        One sentence each, without the file name.
+    ``estimator`` is the estimator it warm-starts; ``temp_range_c`` the run's lowest and
+    highest temperature, degC (non-finite ends left out).
     """
     notes = []
     if estimator is not None and estimator != profile.estimator:
@@ -306,7 +225,7 @@ def profile_notes(profile: Profile, *, estimator: str | None = None, temp_range_
 
 
 def warm_config(profile: Profile, config: CompensatorConfig | None = None) -> CompensatorConfig:
-    """Settings that start the Kalman estimators from a profile (module notes)."""
+    """Settings that start the Kalman estimators from ``profile`` (docs/settings-and-profiles.md)."""
     config = config or CompensatorConfig()
     kal = config.kalman
     cap = np.square(np.array(kal.max_sd or kal.p0_sd, dtype=float))
@@ -320,25 +239,9 @@ def compensate_warm(log, profile: Profile, config: CompensatorConfig | None = No
                     **options):
     """:func:`gyrodrift.compensate` started from ``profile``, with its notes.
 
-    Parameters
-    ----------
-    log : pandas.DataFrame
-        A log in the input contract (:func:`gyrodrift.io.read_log`).
-    profile : Profile
-        From :func:`load_profile`.
-    config : CompensatorConfig, optional
-        The settings to warm-start (:func:`warm_config`); default settings without it.
-    name : str, default "profile"
-        What to call the profile in the notes (its file, say).
-    **options
-        Passed to :func:`gyrodrift.compensate` (``source``, ``progress``, ``gyro_max_dps``).
-
-    Returns
-    -------
-    pandas.DataFrame
-        The output of :func:`gyrodrift.compensate`; ``attrs["notes"]`` ends with the notes
-        of :func:`profile_notes` for this configuration's estimator and the log's
-        temperatures, each as ``"<name>: <note>"``.
+    ``config`` is warm-started (:func:`warm_config`; default settings without it), ``name``
+    calls the profile in the notes, ``options`` go to :func:`gyrodrift.compensate`. The
+    output's ``attrs["notes"]`` ends with those of :func:`profile_notes`, as ``"<name>: <note>"``.
     """
     config = config or CompensatorConfig()
     temp_c = np.asarray(log[TEMP], dtype=float) if TEMP in log.columns else np.array([])

@@ -1,70 +1,9 @@
 """Samples in, compensated rows out, as they come: what ``gyrodrift stream`` runs.
 
-:func:`stream_rows` reads samples as CSV (a header line first) or JSON lines (one object
-per line), from any source of text (standard input, a file, a serial port:
-:func:`fd_blocks`, :func:`serial_blocks`), feeds them to a :class:`gyrodrift.Compensator`
-and writes every row it returns, in order, in the format and with the columns
-``gyrodrift compensate`` writes.
-
-Input
------
-The columns and their units are those of ``gyrodrift compensate`` (the input contract,
-:mod:`gyrodrift.conventions`), read with the same options (``gyro_unit``, ``frame``,
-``column_map``) and the same checks and conversions
-(:func:`gyrodrift.io.validate.normalise_frame`). A column the input does not have is
-"no value" in every row: no ``heading`` (nor ``mag_*`` + ``acc_*``) is no compass, no
-``temp`` is 0 degC and, with ``temperature = "auto"``, a drift model in elapsed time
-(:meth:`gyrodrift.Compensator.temperature_absent`; both said in a note). The first row
-needs ``gyro_z`` and ``temp`` values; later empty cells hold the previous value, as in a log.
-
-* CSV: the first non-blank line is the header; every line after it one sample, with one
-  cell per header column (an empty cell is no value).
-* JSON lines: every line one object ``{"t": 0.0, "gyro_z": 0.1, ...}``; the keys of the
-  first object are the columns. A later object may leave keys out (or give ``null``):
-  no value there; a key the first object did not have is a bad line, so give every key
-  in the first line (``"heading": null`` when the first sample has no compass).
-
-The format is ``fmt`` or, by default, JSON lines when the first non-blank character is
-``{`` and CSV otherwise. Blank lines are skipped.
-
-Latency
--------
-The lines that arrive together (one read of the source: one line when samples come one
-by one, more when they come faster than they are compensated) are converted together,
-pushed one by one, and the rows the pushes return are written at once with one call of
-``write``, before the next read. Nothing is held back: the
-:class:`~gyrodrift.Compensator` answers every sample with its row, provisional through
-its initialisation window; one made with ``provisional=False`` (``--hold-init``) holds
-the window's rows until it ends, and the rows it still holds when the input ends come
-from :meth:`~gyrodrift.Compensator.flush`.
-
-Each read costs a fixed time (the conversion of :func:`~gyrodrift.io.validate.normalise_frame`
-and the output table, with pandas and pyarrow): about 20 ms on a shared 2-core test
-machine, against about 0.1 ms per line when many lines come in one read. A source that
-sends lines faster than one per read time is therefore read several lines at a time: the
-stream keeps up, and a row comes out within about one read time of its line.
-
-Bad lines
----------
-A line that cannot be read (wrong number of cells, not JSON, not a number, time not
-increasing, ...) is a :class:`~gyrodrift.errors.LogFormatError` of one line naming the
-source, the line number and the column, and what to do. It stops the stream after the
-rows of every line before it are written (those the compensator holds too); with
-``skip_bad`` the line is skipped instead, with that message as a warning. Problems of the
-header (a required column missing, a bad ``column_map``), a line longer than
-:data:`MAX_LINE_CHARS` and a time base a file is refused for always stop.
-
-Time base
----------
-The stream refuses what a file is refused for (:mod:`gyrodrift.io.timebase`): time
-stamps that look like another unit than the one given (epoch milliseconds, whole-number
-steps of milliseconds), and a sample rate above 100 kHz. A file is judged on all its
-time stamps; the stream on its first ones as they come
-(:class:`~gyrodrift.io.timebase.TimeBaseWatch`: the first time stamp's magnitude at
-once, the steps from the ninth sample on), so such a stream stops within its first
-lines, or at its end when it is shorter. The compensator's front end judges them
-(:meth:`~gyrodrift.Compensator.judge_times_as` with the stream's unit); a low sample
-rate is one of its notes.
+:func:`stream_rows` reads samples as CSV or JSON lines from any source of text
+(:func:`fd_blocks`, :func:`serial_blocks`), feeds them to a :class:`gyrodrift.Compensator`
+and writes every row it returns, as ``gyrodrift compensate`` writes them. The input, the
+latency, bad lines and the time base: docs/streaming.md, section "gyrodrift stream".
 """
 
 from __future__ import annotations
@@ -84,13 +23,13 @@ from gyrodrift.compensator import CompensatedSample, Compensator, CompensatorCon
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.io.csvfile import csv_header, csv_table, write_csv_rows, write_csv_with_pandas
+from gyrodrift.io.messages import log_error
 from gyrodrift.io.validate import (
     TEMP_ABSENT,
     Source,
     cell_label,
     check_z_up,
     format_error,
-    message,
     no_data_rows_error,
     normalise_frame,
     read_options,
@@ -114,11 +53,9 @@ __all__ = [
 FORMATS = ("csv", "jsonl")
 #: The byte-order mark some programs write first (decoded).
 BOM = "\ufeff"
-#: Longest line taken, characters: a longer one (a stream without line ends, a binary
-#: file) stops the stream instead of being gathered in memory.
+#: Longest line taken, characters: a longer one stops the stream.
 MAX_LINE_CHARS = 1 << 24
-#: Output rows gathered before they are added to the run's account (:class:`gyrodrift.pipeline.RunStats`),
-#: which costs about as much for one row as for a thousand.
+#: Output rows gathered before they are added to the run's account (:class:`gyrodrift.pipeline.RunStats`).
 ACCOUNT_ROWS = 1000
 #: The output columns of the z axis, in the order of :func:`gyrodrift.compensator.output_frame`.
 _Z_COLUMNS = tuple(f.name for f in fields(CompensatedSample) if f.name not in TRIAD_COLUMNS)
@@ -165,7 +102,7 @@ class _Reader:
 
     def _bad(self, line_no: int, problem: str, advice: str, column: str | None = None) -> LogFormatError:
         where = f"line {line_no}" + (f", column {column!r}" if column is not None else "")
-        return LogFormatError(message(self.name, problem, advice, where=where))
+        return log_error(self.name, problem, advice, where=where)
 
     def _object(self, line: str, line_no: int, first: bool = False) -> dict:
         try:
@@ -331,7 +268,7 @@ class _Stream:
         found = getattr(exc, "time_base", None)
         if found is None:
             return exc
-        return LogFormatError(message(self.name, found.problem, found.advice, where=where))
+        return log_error(self.name, found.problem, found.advice, where=where)
 
     def _push(self, records, df: pd.DataFrame) -> None:
         if self.prev_t_s is None and not self.opts.frame_stated:  # the first rows say which way z points
@@ -401,9 +338,8 @@ class _Stream:
         self.written, self.written_rows = [], 0
 
     def finish(self) -> None:
-        """The rows the compensator still holds (end of input); the run's account complete.
-        The time base of a stream too short to be judged as it came is judged first (a
-        problem stops it; called again, the held rows are written)."""
+        """The rows the compensator still holds (end of input), after judging the time base of a
+        stream too short to be judged as it came; the run's account complete."""
         try:
             rows = self.comp.flush()
         except GyroDriftError as exc:
@@ -417,9 +353,8 @@ class _Stream:
 
 def _too_long(source: str, line_no: int) -> LogFormatError:
     """The error for a line longer than :data:`MAX_LINE_CHARS`."""
-    return LogFormatError(message(source, f"longer than {MAX_LINE_CHARS:,} characters without a line end",
-                                  "give one sample per line (is the input text, one line per sample?)",
-                                  where=f"line {line_no}"))
+    return log_error(source, f"longer than {MAX_LINE_CHARS:,} characters without a line end",
+                     "give one sample per line (is the input text, one line per sample?)", where=f"line {line_no}")
 
 
 def _csv_text(out: pd.DataFrame) -> str:
@@ -467,52 +402,45 @@ def stream_rows(
 ) -> StreamStats:
     """Compensate samples as they arrive and write the output rows as they come.
 
+    See docs/streaming.md, section "gyrodrift stream".
+
     Parameters
     ----------
     blocks : iterable of str
-        The input text in pieces of any size as it arrives: lines (with their line ends),
-        or what each read of a source returned (:func:`fd_blocks`, :func:`serial_blocks`).
-        The complete lines of a piece are compensated and written before the next piece
-        is taken (module notes: latency).
+        The input text in pieces of any size as it arrives; the complete lines of a piece
+        are compensated and written before the next piece is taken.
     write : callable
-        ``write(text)`` gets the output: the CSV header at the start (``out_format``
-        "csv"), then the complete lines of the rows each piece gave. The command line
-        flushes after each call.
+        ``write(text)`` gets the output: the CSV header first (CSV output), then the lines
+        of the rows each piece gave.
     config : CompensatorConfig, optional
         Settings of the compensator made here (ignored with ``compensator``).
     fmt, out_format : {"csv", "jsonl"}, optional
-        Input format (default: by the first non-blank character, module notes) and output
-        format (default: the input's).
+        Input format (default: by the first non-blank character) and output format
+        (default: the input's).
     gyro_unit, frame, column_map, time_unit
-        As :func:`gyrodrift.io.read_log`: the unit of the gyro columns, ``"ned"`` or
-        ``"enu"``, ``{NEW: OLD}`` renames of input columns, and the unit of ``t``
-        (``s``, ``ms``, ``us``, ``ns``; None: s).
+        As :func:`gyrodrift.io.read_log`.
     source : str
-        The input's name in messages (a path, ``stdin``, a serial port).
+        The input's name in messages.
     skip_bad : bool
-        Skip a bad line with a warning instead of stopping (module notes).
+        Skip a bad line with a warning instead of stopping.
     warn : callable, optional
-        ``warn(line)`` gets each note and warning (one line each) when it arises: the
-        input's notes after its first line, the compensator's at the end, skipped lines;
-        default: dropped.
+        ``warn(line)`` gets each note and warning as it arises; default: dropped.
     compensator : Compensator, optional
-        The compensator to feed (e.g. warm-started); default a new one from ``config``.
-        It gets the times in seconds (its default ``time_unit``), converted and judged here.
+        The compensator to feed (e.g. warm-started; it gets times in seconds); default a
+        new one from ``config``.
 
     Returns
     -------
     StreamStats
-        Rows in and out, skipped lines, notes, and the signal that ended the input if
-        one did (a :class:`StreamInterrupted` from ``blocks`` ends the input like its end).
+        Rows in and out, skipped lines, notes, and the signal that ended the input if one
+        did (a :class:`StreamInterrupted` from ``blocks`` ends the input like its end).
 
     Raises
     ------
     LogFormatError
-        A bad line (without ``skip_bad``; every row before it is written first, the
-        held ones too), a bad header, a line longer than :data:`MAX_LINE_CHARS`, a time
-        base a file is refused for (:class:`~gyrodrift.io.timebase.TimeBaseWatch`), or an
-        input without data rows. Its ``stream_stats`` (:class:`StreamStats`) say what was
-        read and written before it.
+        A bad line (without ``skip_bad``; every row before it is written first), a bad
+        header, a line longer than :data:`MAX_LINE_CHARS`, a refused time base, or no data
+        rows; its ``stream_stats`` say what was read and written before it.
     ConfigError
         A bad ``fmt``, ``out_format``, ``gyro_unit``, ``frame`` or ``column_map``.
     """
@@ -568,8 +496,8 @@ def stream_rows(
     if state.stats.rows_in == 0 and state.stats.signal is None:
         where = Source(source, "csv", None)
         if state.reader is None:
-            raise LogFormatError(message(source, "no input",
-                                         "give a CSV header line and samples, or JSON lines (one object per line)"))
+            raise log_error(source, "no input",
+                            "give a CSV header line and samples, or JSON lines (one object per line)")
         raise no_data_rows_error(where)
     for note in comp.notes:
         state.warn(note)

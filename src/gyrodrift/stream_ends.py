@@ -1,14 +1,6 @@
 """The ends of ``gyrodrift stream``: the text coming in (a file descriptor, a serial port),
-the text going out, and the signals that end the input (:mod:`gyrodrift.stream` runs between them).
-
-Signals
--------
-:func:`deferred_signals` turns SIGINT and SIGTERM into the end of the input: a signal
-that comes while the source is waiting for input ends the read at once; one that comes
-while rows are being compensated ends it after them. The held rows are then flushed and
-written as at the end of the input, and :attr:`StreamStats.signal` says which signal
-ended it (the command line then saves the profile and exits 130 or 143).
-"""
+the text going out, and the signals that end the input (docs/streaming.md, sections
+"Signals" and "Ends" of "gyrodrift stream")."""
 
 from __future__ import annotations
 
@@ -22,7 +14,7 @@ from typing import Iterator
 
 from gyrodrift._atomic import atomic_output
 from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.io.validate import check_input_path, message, read_error
+from gyrodrift.io.messages import check_input_path, message, read_error
 
 __all__ = ["StreamInterrupted", "deferred_signals", "fd_blocks", "serial_blocks", "input_blocks", "output_writer",
            "SERIAL_ADVICE", "READ_BYTES"]
@@ -42,7 +34,7 @@ class StreamInterrupted(Exception):
 
 
 class _Signals:
-    """SIGINT/SIGTERM received while :func:`deferred_signals` runs (see the module notes)."""
+    """SIGINT/SIGTERM received while :func:`deferred_signals` runs."""
 
     def __init__(self) -> None:
         self.received: int | None = None
@@ -71,13 +63,8 @@ class _Signals:
 
 @contextmanager
 def deferred_signals(signums=(signal.SIGINT, signal.SIGTERM)):
-    """Catch ``signums`` while the block runs; yield the object the sources take.
-
-    Pass it as ``signals`` to :func:`fd_blocks` or :func:`serial_blocks`: a signal then
-    ends their input (module notes). The handlers in force before are restored after
-    the block. Outside the main thread (where Python cannot install handlers) nothing
-    is caught.
-    """
+    """Catch ``signums`` while the block runs, and restore the handlers after; yield the object
+    :func:`fd_blocks` and :func:`serial_blocks` take as ``signals`` (a signal then ends their input)."""
     state = _Signals()
     previous = {}
     try:
@@ -93,14 +80,9 @@ def deferred_signals(signums=(signal.SIGINT, signal.SIGTERM)):
 
 
 def fd_blocks(fd: int, signals: _Signals | None = None, *, read_bytes: int = READ_BYTES) -> Iterator[str]:
-    """The text of an open file descriptor (standard input, a file, a pipe) as it arrives.
-
-    Each item is what one :func:`os.read` returned (up to ``read_bytes``: what is there,
-    waiting only when nothing is), decoded as UTF-8 (a byte that is not UTF-8 becomes
-    U+FFFD, and its line is then refused as not a number). Ends at the end of the input,
-    or with :class:`StreamInterrupted` when ``signals`` (:func:`deferred_signals`)
-    caught a signal.
-    """
+    """The text of an open file descriptor as it arrives: what each read returned (up to
+    ``read_bytes``), decoded as UTF-8 with replacement; ends at the end of the input, or with
+    :class:`StreamInterrupted` when ``signals`` caught a signal."""
     decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
     while True:
         if signals is None:
@@ -117,13 +99,8 @@ def fd_blocks(fd: int, signals: _Signals | None = None, *, read_bytes: int = REA
 
 
 def serial_blocks(port: str, baud: int, signals: _Signals | None = None) -> Iterator[str]:
-    """The text a serial port sends, as it arrives (as :func:`fd_blocks`); needs pyserial.
-
-    Raises
-    ------
-    ConfigError
-        pyserial is not installed (:data:`SERIAL_ADVICE`), or the port cannot be opened.
-    """
+    """The text a serial port sends, as it arrives (as :func:`fd_blocks`); needs pyserial. A missing
+    pyserial or a port that cannot be opened is a :class:`ConfigError`."""
     try:
         import serial
     except ImportError:
@@ -148,11 +125,8 @@ def serial_blocks(port: str, baud: int, signals: _Signals | None = None) -> Iter
 @contextmanager
 def input_blocks(path: str = "-", signals: _Signals | None = None, *, serial_port: str | None = None,
                  baud: int = 115200):
-    """Open the input of ``gyrodrift stream``; yield ``(blocks, name)`` for :func:`stream_rows`.
-
-    ``serial_port`` (with ``baud``) reads a serial port (:func:`serial_blocks`); otherwise
-    ``path`` is a file, or ``"-"`` for standard input (named ``stdin`` in messages).
-    """
+    """Open the input of ``gyrodrift stream``; yield ``(blocks, name)``: the serial port
+    ``serial_port`` (at ``baud``), else the file ``path``, or ``"-"`` for standard input."""
     if serial_port is not None:
         yield serial_blocks(serial_port, baud, signals), serial_port
         return
@@ -172,13 +146,8 @@ def input_blocks(path: str = "-", signals: _Signals | None = None, *, serial_por
 
 @contextmanager
 def output_writer(path: str = "-"):
-    """Yield ``write(text)`` for :func:`stream_rows`: every call written and flushed.
-
-    ``"-"`` is standard output (a reader that closes it stops the stream with a
-    :class:`~gyrodrift.errors.GyroDriftError`); a file is written atomically (:func:`gyrodrift._atomic.atomic_output`):
-    it appears, whole, when the block ends without an exception (the end of the input or a
-    signal), and an existing file is left as it was when it ends with one.
-    """
+    """Yield ``write(text)`` for :func:`stream_rows`, every call written and flushed: to standard
+    output (``"-"``), or to a file written atomically (docs/streaming.md, section "Ends")."""
     if path == "-":
         out = sys.stdout
         out.flush()

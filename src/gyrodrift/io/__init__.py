@@ -1,22 +1,7 @@
 """Input and output of logs: read any supported log in the input contract, write results.
 
-:func:`read_log` picks the reader by ``fmt`` or by the path:
-
-* ``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz`` (csv) and ``.parquet``, ``.pq``
-  (parquet): :mod:`gyrodrift.io.tabular`;
-* ``.ulg`` (ulog, PX4 ULog): :mod:`gyrodrift.io.ulog`;
-* ``.bin`` (ardupilot, ArduPilot DataFlash): :mod:`gyrodrift.io.ardupilot`;
-* ``.tlog`` (tlog, MAVLink telemetry recorded by a ground station): :mod:`gyrodrift.io.tlog`;
-* ``.bag``, ``.db3``, ``.mcap`` or a directory holding ``metadata.yaml`` (rosbag):
-  :mod:`gyrodrift.io.rosbag`;
-* a file with another ending that starts like a ULog or a DataFlash log: that format.
-
-:class:`ReadOptions` holds the options of :func:`read_log` as one value.
-
-See :mod:`gyrodrift.io.validate` for the checks of the table readers and the error-message
-style shared by all. A log without a compass or without a usable gyro temperature is read,
-not refused: ``attrs["compass"]`` is ``"none"``, or ``temp`` is 0 degC in every row, and
-``attrs["notes"]`` says so in one line each (:mod:`gyrodrift.io.notes`).
+:func:`read_log` picks the reader by ``fmt`` or by the path; which reader takes which
+file, and what each reads: docs/log-formats.md, section "Choosing the reader".
 """
 
 from __future__ import annotations
@@ -27,7 +12,6 @@ from typing import Mapping
 
 import pandas as pd
 
-from gyrodrift.errors import ConfigError
 from gyrodrift.io import tabular
 from gyrodrift.io.ardupilot import read_ardupilot, read_ardupilot_imus
 from gyrodrift.io.formats import FORMATS, log_format
@@ -36,7 +20,7 @@ from gyrodrift.io.rosbag import read_rosbag
 from gyrodrift.io.tabular import check_output_path, write_table
 from gyrodrift.io.tlog import read_tlog, read_tlog_imus
 from gyrodrift.io.ulog import read_ulog, read_ulog_gyros
-from gyrodrift.io.messages import message
+from gyrodrift.io.messages import option_error
 
 __all__ = [
     "FORMATS",
@@ -55,6 +39,10 @@ __all__ = [
 #: Option values that mean "the file is already in contract units and frames".
 _NEUTRAL_UNITS = ("deg/s", "dps")
 _NEUTRAL_FRAME = "ned"
+#: The readers of the logs with gyro instances: one gyro, and every gyro.
+_ONE = {"ulog": read_ulog, "ardupilot": read_ardupilot, "tlog": read_tlog}
+_EVERY = {"ulog": read_ulog_gyros, "ardupilot": read_ardupilot_imus, "tlog": read_tlog_imus}
+_TOPICS = ("imu_topic", "temp_topic", "mag_topic")
 
 
 def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None:
@@ -62,9 +50,7 @@ def _refuse_options(path: Path, fmt: str, options: Mapping[str, object]) -> None
     if not options:
         return
     option, value = next(iter(options.items()))
-    raise ConfigError(
-        message(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
-    )
+    raise option_error(str(path), f"option {option}={value!r} does not apply to a {fmt} log", "leave it out")
 
 
 def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column_map, time_unit) -> None:
@@ -80,72 +66,50 @@ def _check_stated_units(path: Path, fmt: str, gyro_unit: str, frame: str, column
         changed["time_unit"] = time_unit
     if changed:
         option, value = next(iter(changed.items()))
-        raise ConfigError(
-            message(
-                str(path),
-                f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
-                " frames and the reader converts them (to deg/s, NED/FRD)",
-                "leave gyro_unit, frame, column_map and time_unit at their defaults",
-            )
-        )
+        raise option_error(str(path),
+                           f"option {option}={value!r} makes no sense for a {fmt} log: the format states its units and"
+                           " frames and the reader converts them (to deg/s, NED/FRD)",
+                           "leave gyro_unit, frame, column_map and time_unit at their defaults")
 
 
-def read_log(
-    path,
-    *,
-    fmt: str | None = None,
-    gyro_unit: str = "deg/s",
-    frame: str | None = None,
-    column_map: Mapping[str, str] | None = None,
-    time_unit: str | None = None,
-    instance: int = 0,
-    mag_instance: int | None = None,
-    imu_topic: str | None = None,
-    temp_topic: str | None = None,
-    mag_topic: str | None = None,
-    gyro_max_dps: float = GYRO_MAX_DPS,
-) -> pd.DataFrame:
+def read_log(path, *, fmt: str | None = None, gyro_unit: str = "deg/s", frame: str | None = None,
+             column_map: Mapping[str, str] | None = None, time_unit: str | None = None, instance: int = 0,
+             mag_instance: int | None = None, imu_topic: str | None = None, temp_topic: str | None = None,
+             mag_topic: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
     """Read any supported log into the input contract (units and frames of :mod:`gyrodrift.conventions`).
 
     Parameters
     ----------
     path : str or os.PathLike
-        The log: CSV/Parquet table, PX4 ULog (``.ulg``), ArduPilot DataFlash
-        (``.bin``), ROS 1 ``.bag``, ROS 2 bag directory or ``.db3``/``.mcap`` file.
-    fmt : {"csv", "parquet", "ulog", "ardupilot", "rosbag"}, optional
+        A CSV/Parquet table, PX4 ULog, ArduPilot DataFlash log, MAVLink telemetry log or
+        ROS bag (docs/log-formats.md, section "Choosing the reader").
+    fmt : {"csv", "parquet", "ulog", "ardupilot", "tlog", "rosbag"}, optional
         Format; overrides the file-name ending.
     gyro_unit, frame, column_map, time_unit
-        Table options, see :func:`gyrodrift.io.tabular.read_log`. ULog, DataFlash and
-        ROS bags state their units and frames, so these must stay at their defaults for them.
-    instance : int, default 0
-        ULog: ``sensor_gyro`` instance (see :func:`gyrodrift.io.ulog.read_ulog`);
-        ArduPilot: IMU instance (see :func:`gyrodrift.io.ardupilot.read_ardupilot`);
-        telemetry log: IMU instance (see :func:`gyrodrift.io.tlog.read_tlog`).
-    mag_instance : int, optional
-        ULog: ``sensor_mag`` instance, default the magnetometer PX4 selected;
-        ArduPilot: ``MAG`` instance, default ``COMPASS_PRIMARY`` or the first.
+        Table options (:func:`gyrodrift.io.tabular.read_log`); must stay at their
+        defaults for the other formats.
+    instance, mag_instance : int, optional
+        ULog, DataFlash and telemetry logs: the gyro and the compass instance (see
+        :func:`~gyrodrift.io.ulog.read_ulog`, :func:`~gyrodrift.io.ardupilot.read_ardupilot`,
+        :func:`~gyrodrift.io.tlog.read_tlog`).
     imu_topic, temp_topic, mag_topic : str, optional
-        ROS bags only: topics of type Imu, Temperature and MagneticField (see
-        :func:`gyrodrift.io.rosbag.read_rosbag`).
+        ROS bags only (:func:`gyrodrift.io.rosbag.read_rosbag`).
     gyro_max_dps : float, default 10000
-        Plausible full scale of the gyro axes, deg/s, in every format
-        (:mod:`gyrodrift.io.limits`).
+        Plausible full scale of the gyro axes, deg/s (:mod:`gyrodrift.io.limits`).
 
     Returns
     -------
     pandas.DataFrame
-        The log in the input contract; ``df.attrs["format"]`` names the format,
-        ``df.attrs["compass"]`` the compass form ("none" without one), and
-        ``df.attrs["notes"]`` (only when there is something to say) lists what the log
-        lacks and what is done instead.
+        The log in the input contract; ``attrs["format"]``, ``attrs["compass"]`` ("none"
+        without one) and, when there is something to say, ``attrs["notes"]``.
 
     Raises
     ------
     LogFormatError
         The file does not follow its format or lacks data (see the readers).
     ConfigError
-        Unknown ``fmt``; an ending that names no format; an option that does not apply
-        to the format; a reader's own option errors; a missing optional package.
+        Unknown ``fmt`` or ending; an option that does not apply to the format; a
+        reader's own option errors; a missing optional package.
     """
     path = Path(path)
     log_fmt = log_format(path, fmt)
@@ -153,23 +117,13 @@ def read_log(
     ros_options = {"imu_topic": imu_topic, "temp_topic": temp_topic, "mag_topic": mag_topic}
     set_ulog = {k: v for k, v in ulog_options.items() if v is not None and not (k == "instance" and v == 0)}
     set_ros = {k: v for k, v in ros_options.items() if v is not None}
-    if log_fmt == "ulog":
-        _check_stated_units(path, "ulog", gyro_unit, frame, column_map, time_unit)
-        _refuse_options(path, "ulog", set_ros)
-        return read_ulog(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
-    if log_fmt == "ardupilot":
-        _check_stated_units(path, "ardupilot", gyro_unit, frame, column_map, time_unit)
-        _refuse_options(path, "ardupilot", set_ros)
-        return read_ardupilot(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
-    if log_fmt == "tlog":
-        _check_stated_units(path, "tlog", gyro_unit, frame, column_map, time_unit)
-        _refuse_options(path, "tlog", set_ros)
-        return read_tlog(path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
+    if log_fmt in _ONE or log_fmt == "rosbag":
+        _check_stated_units(path, log_fmt, gyro_unit, frame, column_map, time_unit)
+        _refuse_options(path, log_fmt, set_ulog if log_fmt == "rosbag" else set_ros)
+    if log_fmt in _ONE:
+        return _ONE[log_fmt](path, instance=instance, mag_instance=mag_instance, gyro_max_dps=gyro_max_dps)
     if log_fmt == "rosbag":
-        _check_stated_units(path, "rosbag", gyro_unit, frame, column_map, time_unit)
-        _refuse_options(path, "rosbag", set_ulog)
-        return read_rosbag(path, imu_topic=imu_topic, temp_topic=temp_topic, mag_topic=mag_topic,
-                           gyro_max_dps=gyro_max_dps)
+        return read_rosbag(path, **ros_options, gyro_max_dps=gyro_max_dps)
     _refuse_options(path, log_fmt or "table", {**set_ulog, **set_ros})
     return tabular.read_log(path, fmt=log_fmt, gyro_unit=gyro_unit, frame=frame, column_map=column_map,
                             time_unit=time_unit, gyro_max_dps=gyro_max_dps)
@@ -177,39 +131,27 @@ def read_log(
 
 def read_gyros(path, *, fmt: str | None = None, instance: int | None = None, mag_instance: int | None = None,
                **options) -> list[pd.DataFrame]:
-    """Every gyro of a log, one frame each, as :func:`read_log` reads one.
+    """Every gyro of a log, one frame each in instance order, as :func:`read_log` reads one.
 
-    A PX4 ULog gives each ``sensor_gyro`` instance, an ArduPilot DataFlash log and a
-    telemetry log each IMU instance (``attrs["onboard"]`` says which); a table or a ROS
-    bag its one gyro.
-    With ``instance``, only that one. Other keywords are those of :func:`read_log`.
-
-    Returns
-    -------
-    list of pandas.DataFrame
-        In instance order.
+    A ULog, DataFlash or telemetry log gives each gyro instance (``attrs["onboard"]``
+    says which), a table or a ROS bag its one gyro; with ``instance``, only that one.
+    Other keywords are those of :func:`read_log`.
     """
     path = Path(path)
     log_fmt = log_format(path, fmt)
-    if instance is None and log_fmt in ("ulog", "ardupilot", "tlog"):
+    if instance is None and log_fmt in _EVERY:
         _check_stated_units(path, log_fmt, options.get("gyro_unit", "deg/s"), options.get("frame"),
                             options.get("column_map"), options.get("time_unit"))
-        _refuse_options(path, log_fmt, {k: options[k] for k in ("imu_topic", "temp_topic", "mag_topic")
-                                        if options.get(k) is not None})
-        every = {"ulog": read_ulog_gyros, "ardupilot": read_ardupilot_imus, "tlog": read_tlog_imus}[log_fmt]
-        return every(path, mag_instance=mag_instance, gyro_max_dps=options.get("gyro_max_dps", GYRO_MAX_DPS))
+        _refuse_options(path, log_fmt, {k: options[k] for k in _TOPICS if options.get(k) is not None})
+        return _EVERY[log_fmt](path, mag_instance=mag_instance, gyro_max_dps=options.get("gyro_max_dps", GYRO_MAX_DPS))
     return [read_log(path, fmt=fmt, instance=0 if instance is None else instance, mag_instance=mag_instance,
                      **options)]
 
 
 @dataclass(frozen=True)
 class ReadOptions:
-    """How to read a log: the options of :func:`read_log`, as one value.
-
-    Every entry point takes its read options as one of these (the command line builds it
-    once, :func:`gyrodrift.cli.options.read_options`); :meth:`read` reads a log with them. The
-    fields are :func:`read_log`'s keywords, with its defaults.
-    """
+    """How to read a log: the keywords of :func:`read_log` (with its defaults) as one value,
+    which every entry point takes; :meth:`read` reads a log with them."""
 
     fmt: str | None = None
     gyro_unit: str = "deg/s"

@@ -1,22 +1,13 @@
-"""Helpers shared by the binary-log readers (:mod:`~gyrodrift.io.ulog`,
-:mod:`~gyrodrift.io.ardupilot`, :mod:`~gyrodrift.io.rosbag`).
+"""Helpers shared by the binary-log readers (ULog, DataFlash, telemetry log, ROS bag).
 
-The readers get streams at different rates (a fast gyro, a slow temperature, a
-magnetometer in between) and put them on one time base: the gyro samples. The rules
-live here so every reader applies them the same way:
-
-* temperature and accelerometer: linear interpolation onto the gyro times, held at
-  the first/last value outside the stream (:func:`interp_held`);
-* magnetometer: each sample goes to the row of the first gyro sample at or after it,
-  the other rows stay NaN (:func:`on_following_rows`);
-* attitude heading: interpolated in unwrapped form, NaN outside the attitude stream
-  (:func:`interp_heading`).
-
-Times are in seconds, angles in degrees.
+They put streams of different rates on one time base, the gyro samples, by the rules of
+docs/log-formats.md, section "Alignment", and word the summary and notes every reader
+gives. Times are in seconds, angles in degrees.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Mapping, NamedTuple
 
 import numpy as np
@@ -34,9 +25,9 @@ from gyrodrift.conventions import (
     TEMP_RANGE_C,
     wrap_360,
 )
-from gyrodrift.errors import LogFormatError
-from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import message
+from gyrodrift.errors import ConfigError
+from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
+from gyrodrift.io.messages import log_error, one_line, option_error
 from gyrodrift.io.notes import NO_COMPASS, NO_TEMPERATURE_C, add_note, no_compass_note, no_temperature_note
 
 __all__ = [
@@ -51,6 +42,15 @@ __all__ = [
     "contract_frame",
     "binary_log_frame",
     "describe_rate",
+    "check_instance",
+    "check_reader_options",
+    "no_instance",
+    "measured_temperature",
+    "compass_on_rows",
+    "compass_parts",
+    "reference_heading",
+    "read_summary",
+    "last_values",
 ]
 
 
@@ -63,18 +63,12 @@ class Stream(NamedTuple):
 
 
 def increasing(stream: Stream) -> tuple[Stream, int]:
-    """Sort a stream by time and drop samples with a repeated time stamp.
-
-    Parameters
-    ----------
-    stream : Stream
-        Samples in recording order; rows with a NaN time are dropped too.
+    """Sort a stream by time, dropping NaN times and repeated time stamps (the first is kept).
 
     Returns
     -------
     Stream
-        The same samples with strictly increasing ``t`` (the first sample of each
-        repeated time stamp is kept, in recording order).
+        The samples with strictly increasing ``t``, in recording order within a time.
     int
         Number of samples dropped.
     """
@@ -100,19 +94,8 @@ def median_rate_hz(t: np.ndarray) -> float:
 def interp_held(t_src: np.ndarray, values: np.ndarray, t_dst: np.ndarray) -> np.ndarray:
     """Linear interpolation onto ``t_dst``, holding the first/last value outside ``t_src``.
 
-    Parameters
-    ----------
-    t_src : numpy.ndarray
-        Increasing source times (s), shape (n,).
-    values : numpy.ndarray
-        Source values, shape (n,) or (n, k); NaN samples are ignored.
-    t_dst : numpy.ndarray
-        Target times (s), shape (m,).
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (m,) or (m, k); all NaN for a column without any finite source value.
+    ``values`` has shape (n,) or (n, k); NaN samples are ignored, and a column without
+    a finite value gives NaN. Returns shape (m,) or (m, k).
     """
     values = np.asarray(values, dtype=np.float64)
     columns = values.reshape(values.shape[0], -1)
@@ -125,11 +108,9 @@ def interp_held(t_src: np.ndarray, values: np.ndarray, t_dst: np.ndarray) -> np.
 
 
 def interp_heading(t_src: np.ndarray, heading_deg: np.ndarray, t_dst: np.ndarray) -> np.ndarray:
-    """Interpolate a heading (deg) onto ``t_dst`` without jumps at the 0/360 wrap.
+    """Interpolate a heading (deg) onto ``t_dst`` in unwrapped form, wrapped to [0, 360).
 
-    The heading is unwrapped, interpolated linearly and wrapped to [0, 360) again.
-    Target times outside ``[t_src[0], t_src[-1]]`` get NaN (a reference is not
-    extrapolated). NaN source samples are ignored.
+    Times outside the source record get NaN; NaN source samples are ignored.
     """
     heading_deg = np.asarray(heading_deg, dtype=np.float64)
     ok = np.isfinite(heading_deg)
@@ -144,25 +125,15 @@ def interp_heading(t_src: np.ndarray, heading_deg: np.ndarray, t_dst: np.ndarray
 
 
 def on_following_rows(t_rows: np.ndarray, t_src: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, int]:
-    """Put each source sample on the row of the first ``t_rows`` at or after it.
+    """Put each source sample (shape (n, k)) on the row of the first ``t_rows`` at or after it.
 
-    Rows without a sample are NaN. When several samples fall on one row, the latest
-    one is kept. Samples before the first row or after the last row are dropped
-    (they lie outside the gyro record).
-
-    Parameters
-    ----------
-    t_rows : numpy.ndarray
-        Strictly increasing row times (s), shape (m,).
-    t_src : numpy.ndarray
-        Increasing sample times (s), shape (n,).
-    values : numpy.ndarray
-        Samples, shape (n, k).
+    Rows without a sample are NaN; of several samples on one row the latest is kept;
+    samples outside ``t_rows[0]..t_rows[-1]`` are dropped.
 
     Returns
     -------
     numpy.ndarray
-        Shape (m, k), NaN on rows without a sample.
+        Shape (m, k).
     int
         Number of rows that received a sample.
     """
@@ -178,13 +149,10 @@ def on_following_rows(t_rows: np.ndarray, t_src: np.ndarray, values: np.ndarray)
 
 
 def yaw_deg(w, x, y, z) -> np.ndarray:
-    """Yaw (deg, in [-180, 180]) of a quaternion, Z-Y-X (yaw-pitch-roll) convention.
+    """Yaw (deg, in [-180, 180]) of a quaternion, Z-Y-X convention.
 
-    ``yaw = atan2(2 (w z + x y), w² + x² − y² − z²)``: the rotation of the body x axis
-    about the world z axis. For a unit quaternion the denominator equals the usual
-    ``1 − 2 (y² + z²)``; this form also holds for a quaternion that is not normalised.
-    In NED this is the heading (clockwise from north); in ENU it is measured
-    counter-clockwise from east.
+    ``atan2(2 (w z + x y), w² + x² − y² − z²)``, which holds for a quaternion that is
+    not normalised (docs/log-formats.md, section "ROS bags").
     """
     w, x, y, z = (np.asarray(v, dtype=np.float64) for v in (w, x, y, z))
     return np.degrees(np.arctan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z))
@@ -197,15 +165,9 @@ def check_temperature(name: str, where: str, temp_c: np.ndarray) -> None:
         outside = np.flatnonzero((temp_c < lo) | (temp_c > hi))
     if outside.size:
         value = float(temp_c[outside[0]])
-        raise LogFormatError(
-            message(
-                name,
-                f"temperature {value!r} degC (sample {int(outside[0]) + 1}) is outside"
-                f" the plausible range {lo:g}..{hi:g} degC",
-                "check that this is the gyro temperature in degC (not Kelvin or raw counts)",
-                where=where,
-            )
-        )
+        raise log_error(name, f"temperature {value!r} degC (sample {int(outside[0]) + 1}) is outside"
+                        f" the plausible range {lo:g}..{hi:g} degC",
+                        "check that this is the gyro temperature in degC (not Kelvin or raw counts)", where=where)
 
 
 def contract_frame(
@@ -219,28 +181,12 @@ def contract_frame(
     *,
     gyro_max_dps: float = GYRO_MAX_DPS,
 ) -> pd.DataFrame:
-    """Assemble the input-contract DataFrame (all float64) and set ``df.attrs``.
+    """Assemble the input-contract DataFrame (all float64) with ``df.attrs`` = ``attrs``.
 
-    Every value is checked against its plausible range (:mod:`gyrodrift.io.limits`);
-    the first one outside raises :class:`LogFormatError` naming the file
-    (``attrs["source"]``), the gyro sample (the row) and its time, and the column.
-
-    Parameters
-    ----------
-    t : numpy.ndarray
-        Time (s), shape (n,).
-    gyro_dps : numpy.ndarray
-        Rates (deg/s), FRD body axes x, y, z, shape (n, 3).
-    temp_c : numpy.ndarray
-        Gyro temperature (degC), shape (n,).
-    mag, acc : numpy.ndarray or None
-        Magnetometer and specific force, FRD, shape (n, 3); None for no columns.
-    ref_heading : numpy.ndarray or None
-        Reference heading (deg, [0, 360)), shape (n,), or None for no column.
-    attrs : mapping
-        Copied into ``df.attrs``.
-    gyro_max_dps : float
-        Plausible full scale of the gyro axes, deg/s.
+    ``gyro_dps``, ``mag`` and ``acc`` are (n, 3) FRD arrays (None: no columns), ``temp_c``
+    and ``ref_heading`` (n,). The first value outside its plausible range
+    (:mod:`gyrodrift.io.limits`) raises :class:`LogFormatError` naming the file
+    (``attrs["source"]``), the gyro sample, its time and the column.
     """
     columns = {
         T: t,
@@ -260,14 +206,8 @@ def contract_frame(
         limit = limit_of(col, gyro_max_dps) if col in df.columns else None
         pos = None if limit is None else first_outside(df[col].to_numpy(), limit)
         if pos is not None:
-            raise LogFormatError(
-                message(
-                    str(attrs.get("source", "log")),
-                    outside_problem(col, df[col].iloc[pos], limit),
-                    limit.advice,
-                    where=f"gyro sample {pos + 1} (t = {float(t[pos]):.6f} s)",
-                )
-            )
+            raise log_error(str(attrs.get("source", "log")), outside_problem(col, df[col].iloc[pos], limit),
+                            limit.advice, where=f"gyro sample {pos + 1} (t = {float(t[pos]):.6f} s)")
     df.attrs = dict(attrs)
     return df
 
@@ -282,11 +222,10 @@ def binary_log_frame(name: str, fmt: str, t, gyro_dps, temp_c, mag, acc, ref_hea
                      **extra_attrs) -> pd.DataFrame:
     """The frame of a binary log (:func:`contract_frame`) with the ``attrs`` its reader gives.
 
-    ``attrs`` holds ``source`` (``name``), ``format`` (``fmt``), the units, ``frame``
-    "ned", ``compass`` ("mag", or :data:`~gyrodrift.io.notes.NO_COMPASS` when ``mag`` is
-    None), ``topics``, ``summary`` and ``extra_attrs``, with a note of a missing compass
-    (``no_compass_why`` not empty) and of a missing temperature (``temp_c`` None: every
-    row then reads :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C`; ``no_temp_why`` says why).
+    ``attrs``: ``source``, ``format``, the units, ``frame`` "ned", ``compass`` ("mag", or
+    "none" when ``mag`` is None), ``topics``, ``summary``, ``extra_attrs``, and a note for
+    a missing compass (``no_compass_why`` not empty) or temperature (``temp_c`` None:
+    every row then reads :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C`).
     """
     attrs = {"source": name, "format": fmt, "gyro_unit": "deg/s", "frame": "ned",
              "compass": NO_COMPASS if mag is None else "mag",
@@ -299,3 +238,95 @@ def binary_log_frame(name: str, fmt: str, t, gyro_dps, temp_c, mag, acc, ref_hea
         add_note(attrs, no_temperature_note(name, no_temp_why))
         temp_c = np.full(t.size, NO_TEMPERATURE_C)
     return contract_frame(t, gyro_dps, temp_c, mag, acc, ref_heading, attrs, gyro_max_dps=gyro_max_dps)
+
+
+def check_instance(value, option: str, allow_none: bool = False) -> None:
+    """Raise :class:`ConfigError` unless ``value`` is a non-negative int (or None if allowed)."""
+    if value is None and allow_none:
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ConfigError(one_line(f"{option} must be a non-negative integer, got {value!r}"))
+
+
+def check_reader_options(instances, mag_instance, gyro_max_dps) -> float:
+    """Check a reader's ``instances`` (None: all) and ``mag_instance``; return ``gyro_max_dps`` checked."""
+    for k in instances or ():
+        check_instance(k, "instance")
+    check_instance(mag_instance, "mag_instance", allow_none=True)
+    return check_gyro_max_dps(gyro_max_dps)
+
+
+def no_instance(name: str, kind: str, instance: int, present, option: str) -> ConfigError:
+    """The error for a sensor ``instance`` the log lacks, listing those ``present``."""
+    listed = ", ".join(str(k) for k in sorted(present))
+    return option_error(name, f"there is no {kind} instance {instance}; instances present: {listed}",
+                        f"choose one of them ({option}=N)")
+
+
+def measured_temperature(label: str, t: np.ndarray, temp: np.ndarray, said: str = "logs",
+                         samples: str = "samples") -> tuple[Stream | None, str]:
+    """The samples of a temperature that holds a value; or None and why it counts as not measured
+    (exactly 0 or NaN in every sample), worded "``label`` ``said`` 0 degC in all n ``samples``"."""
+    ok = np.isfinite(temp)
+    if ok.any() and np.any(temp[ok] != 0.0):
+        return Stream(label, t[ok], temp[ok]), ""
+    what = f"{NO_TEMPERATURE_C:g} degC" if ok.any() else "NaN"
+    return None, f"{label} {said} {what} in all {temp.size} {samples}"
+
+
+def compass_on_rows(t: np.ndarray, mag: Stream | None, acc, no_mag: str, no_acc: str, *, empty: str = "",
+                    sample: str = "sample", record: str = "gyro") -> tuple[np.ndarray | None, int, str]:
+    """The magnetometer samples on the rows ``t`` (None: no compass), the rows that got one, and
+    why there is no compass (``""`` when there is): ``no_mag``, ``no_acc``, ``empty`` (a stream
+    without samples, when given) or no ``sample`` within the ``record``."""
+    if mag is None:
+        return None, 0, no_mag
+    if acc is None:
+        return None, 0, no_acc
+    if empty and mag.t.size == 0:
+        return None, 0, empty
+    on_rows, rows = on_following_rows(t, mag.t, mag.values)
+    if rows == 0:
+        return None, 0, f"no {sample} of {mag.label} falls within the {record} record, t = {t[0]:.3f}..{t[-1]:.3f} s"
+    return on_rows, rows, ""
+
+
+def compass_parts(mag: Stream | None, rows: int, acc: str | None) -> list[str]:
+    """The compass part of a reader's summary: the magnetometer and accelerometer used (``rows``
+    of them got a sample), or "no compass" and the accelerometer ``acc`` (None: none)."""
+    if rows:
+        return [f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {rows} rows) + acc from {acc}"]
+    return ["no compass"] + ([f"acc from {acc}"] if acc is not None else [])
+
+
+def reference_heading(ref: Stream | None, t: np.ndarray, reference: bool, source: str,
+                      missing: str) -> tuple[np.ndarray | None, list[str]]:
+    """``ref_heading`` on the rows ``t`` from the heading stream ``ref`` (None: no reference),
+    and the summary's remark: "ref_heading from ``source``", or ``missing`` when asked for."""
+    if ref is None:
+        return None, [missing] if reference else []
+    ref, _ = increasing(ref)
+    return interp_heading(ref.t, ref.values, t), [f"ref_heading from {source}"]
+
+
+def read_summary(name: str, t: np.ndarray, gyro: str, temp: Stream | None, compass: list[str], extra: list[str],
+                 *, temp_rate: bool = True) -> str:
+    """One line on what a reader read: span and rows, ``gyro``, the temperature (with its rate
+    when ``temp_rate``), the ``compass`` parts and the ``extra`` remarks."""
+    parts = [f"{Path(name).name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows", gyro]
+    if temp is not None:
+        rate = f" ({describe_rate(temp.t)}, interpolated)" if temp_rate else ""
+        parts.append(f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}{rate}")
+    else:
+        parts.append(f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)")
+    return "; ".join(parts + compass + extra)
+
+
+def last_values(pairs) -> tuple[dict, set]:
+    """``{name: last value}`` of (name, value) pairs, and the names given more than one value."""
+    values: dict = {}
+    seen: dict[str, set] = {}
+    for key, value in pairs:
+        values[key] = value
+        seen.setdefault(key, set()).add(value)
+    return values, {k for k, v in seen.items() if len(v) > 1}

@@ -1,11 +1,9 @@
 """Arrow record batches of a CSV or Parquet file, read a block at a time.
 
-:class:`CsvBatches` checks the CSV text as it is read (encoding, gzip, ragged rows) and
-rereads the number columns as text from the row where pyarrow cannot read one as a
-number; :class:`ParquetBatches` reads row groups and gives dictionary columns the
-categories of the whole file. :func:`rechunk` cuts the batches into tables of a given
-number of rows. :class:`gyrodrift.io.chunked.LogChunks` turns these into frames of the
-input contract.
+:class:`CsvBatches` checks the CSV text as it is read and rereads the number columns as
+text from a row pyarrow cannot read as numbers; :class:`ParquetBatches` reads row groups;
+:func:`rechunk` cuts the batches into tables of a given number of rows
+(docs/log-formats.md, section "Reading in chunks").
 """
 
 from __future__ import annotations
@@ -32,16 +30,9 @@ __all__ = ["ColumnTypeChanged", "DEFAULT_BLOCK_SIZE_BYTES", "CsvBatches", "Parqu
 class ColumnTypeChanged(LogFormatError):
     """A cell of a pass-through CSV column does not fit the type the first block gave it.
 
-    Attributes
-    ----------
-    column : str
-        The column's name (after the column map).
-    value : str
-        The cell's text.
-    suggested_type : str
-        ``"float64"`` when the cell is a number (a column of whole numbers that turns
-        out to have fractions), else ``"string"``: a ``column_types`` entry that reads
-        the whole column.
+    ``column`` (after the column map) and ``value`` (the cell's text) name it;
+    ``suggested_type`` is ``"float64"`` for a number (whole numbers, then a fraction), else
+    ``"string"``: the ``column_types`` entry that reads the whole column.
     """
 
     def __init__(self, message: str, column: str, value: str):
@@ -67,9 +58,7 @@ _CONVERSION_ERROR = re.compile(
 
 
 class _CsvText(io.RawIOBase):
-    """The text of a CSV file as pyarrow reads it: gzip decompressed (recognised by
-    content), byte-order mark dropped, and checked piece by piece as ``read_log``
-    checks the whole text (NUL bytes, UTF-8), with the same messages."""
+    """A CSV file's text as pyarrow reads it: gunzipped, byte-order mark dropped, checked as it is read."""
 
     def __init__(self, path: Path, *, check: bool = True) -> None:
         super().__init__()
@@ -199,12 +188,8 @@ def _type_of(value) -> pa.DataType:
 
 
 class CsvBatches:
-    """Record batches of a CSV file, read with pyarrow's streaming reader.
-
-    Number columns are read as float64 until a cell needs the text path; the reader is
-    then reopened at the next row with those columns as text (see the module notes).
-    The types of other columns are fixed by the first block (or ``column_types``).
-    """
+    """Record batches of a CSV file from pyarrow's streaming reader; number columns switch to
+    text from a row that needs it, other columns' types are fixed by the first block."""
 
     def __init__(self, path: Path, renames: Mapping[str, str], column_types, block_size_bytes: int) -> None:
         self.path = path
@@ -329,8 +314,7 @@ class ParquetBatches:
         parquetfile.check_parquet_size(path)
         self._batch_rows = batch_rows
         try:
-            # pre_buffer=False: otherwise pyarrow buffers the byte ranges of every row group
-            # it will read, i.e. the whole file (1.3 GB of memory for a 1.1-GB file, measured)
+            # pre_buffer=False: otherwise pyarrow buffers every row group it will read, the whole file
             self._file = pa_pq.ParquetFile(path, pre_buffer=False)
             schema = self._file.schema_arrow
             # pandas turns integer/boolean columns with an empty cell anywhere into
@@ -359,8 +343,7 @@ class ParquetBatches:
         return any(b.column(0).null_count for b in self._file.iter_batches(self._batch_rows, columns=[name]))
 
     def _all_categories(self, name: str) -> list:
-        """The categories pandas gives column ``name`` read whole: the dictionaries of all
-        batches united, in order of appearance."""
+        """The categories pandas gives column ``name`` read whole: every batch's dictionary, in order."""
         seen: dict = {}
         for batch in self._file.iter_batches(self._batch_rows, columns=[name]):
             for value in batch.column(0).dictionary.to_pylist():

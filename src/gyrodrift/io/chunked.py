@@ -1,35 +1,9 @@
 """Read and write CSV and Parquet tables in chunks, in constant memory.
 
-:func:`iter_log_chunks` reads a log in the input contract chunk by chunk, and
-:class:`ChunkWriter` writes a result table chunk by chunk, atomically. Both go through
-the same code as the whole-table functions of :mod:`gyrodrift.io.tabular`
-(:func:`~gyrodrift.io.tabular.read_log`, :func:`~gyrodrift.io.tabular.write_table`), so:
-
-* the chunks of a log, concatenated (``pd.concat(chunks)``), equal ``read_log(path)``:
-  same columns, dtypes, values (bit for bit) and index; every check of ``read_log``
-  runs, and a problem is reported with the same one-line message, naming the line
-  (CSV) or data row (Parquet) in the whole file;
-* a table written in chunks reads back as ``write_table`` of the whole table writes it
-  (and for CSV the file is byte for byte the same).
-
-What a chunked reader cannot know in advance:
-
-* **The compass form and the notes** are known after the last chunk
-  (:attr:`LogChunks.compass`, :attr:`LogChunks.notes`).
-* **A required column empty at the start**: before the first chunk, a second reader
-  reads from the start to the column's first value, to raise ``read_log``'s message
-  or to fill a ``temp`` empty in every row with 0.0. Such a file is read twice.
-* **Types of pass-through CSV columns** come from the first ``block_size_bytes``; a
-  later value that does not fit raises :class:`ColumnTypeChanged` asking for
-  ``column_types`` (:func:`gyrodrift.pipeline.compensate_file` retries with it). An
-  integer column with empty cells only later is int64 in the first chunks and
-  float64 after.
-* **Several problems**: the first chunk's problem is reported first; a file with one
-  problem gets ``read_log``'s message.
-
-Where a CSV number column holds text, the file is read again from that row with the
-number columns as text (:mod:`gyrodrift.io.batches`). Memory grows with ``chunk_rows``,
-not with the file.
+:func:`iter_log_chunks` reads a log chunk by chunk through the code of
+:func:`gyrodrift.io.tabular.read_log`, so the chunks concatenated equal the whole log;
+:class:`ChunkWriter` writes the file :func:`gyrodrift.io.tabular.write_table` writes. What
+a chunked reader cannot know in advance: docs/log-formats.md, section "Reading in chunks".
 """
 
 from __future__ import annotations
@@ -53,26 +27,23 @@ __all__ = ["iter_log_chunks", "LogChunks", "ChunkWriter", "ColumnTypeChanged"]
 
 
 class LogChunks:
-    """The chunks of a log in the input contract; an iterator of DataFrames (see
-    :func:`iter_log_chunks`). Use it in a ``with`` block, or call :meth:`close`, to
-    close the file when the chunks are not read to the end.
+    """The chunks of a log in the input contract, an iterator of DataFrames (:func:`iter_log_chunks`).
+
+    Use it in a ``with`` block, or call :meth:`close`, to close the file when the chunks
+    are not read to the end.
 
     Attributes
     ----------
     source : str
-        The path as given.
     format : {"csv", "parquet"}
     gyro_unit, frame : str
         The options, canonical (as ``read_log`` puts them in ``df.attrs``).
     rows : int
         Data rows handed out so far.
     compass : {"heading", "mag", "both", "none"} or None
-        The compass forms holding data in the whole file (``read_log``'s
-        ``df.attrs["compass"]``); None until the last chunk has been read.
+        ``read_log``'s ``attrs["compass"]``; None until the last chunk has been read.
     notes : list of str or None
-        What the file lacks and what is done instead (``read_log``'s
-        ``df.attrs.get("notes", [])``, see :mod:`gyrodrift.io.notes`); None until the
-        last chunk has been read, ``[]`` when the file lacks nothing.
+        ``read_log``'s ``attrs.get("notes", [])``; None until the last chunk has been read.
     """
 
     def __init__(self, path: Path, table_fmt: str, opts, chunk_rows: int, column_types, block_size_bytes: int) -> None:
@@ -107,14 +78,7 @@ class LogChunks:
         return frame
 
     def _first_values(self, frame: pd.DataFrame) -> dict[str, int | None]:
-        """First value of each required column in the whole file.
-
-        When the first chunk holds no value of a column, the file is read again from its
-        start, on a reader of its own (the chunks still to come are not taken), up to the
-        column's first value or to the end: ``t`` or ``gyro_z`` then fail the check with
-        ``read_log``'s message, and ``temp`` either fails it (a first value after the
-        first row) or is empty in every row (then filled in).
-        """
+        """First value of each required column in the whole file (read again from the start where needed)."""
         first = validate.first_value_rows(frame)
         if None not in first.values():
             return first
@@ -207,40 +171,26 @@ def _chunk_format(path: Path, fmt: str | None) -> str:
     return formats.table_format(path, fmt, formats.READ_SUFFIXES)
 
 
-def iter_log_chunks(
-    path,
-    *,
-    fmt: str | None = None,
-    gyro_unit: str = "deg/s",
-    frame: str | None = None,
-    column_map: Mapping[str, str] | None = None,
-    time_unit: str | None = None,
-    gyro_max_dps: float = GYRO_MAX_DPS,
-    chunk_rows: int = 1_000_000,
-    column_types: Mapping[str, object] | None = None,
-    block_size_bytes: int = DEFAULT_BLOCK_SIZE_BYTES,
-) -> LogChunks:
+def iter_log_chunks(path, *, fmt: str | None = None, gyro_unit: str = "deg/s", frame: str | None = None,
+                    column_map: Mapping[str, str] | None = None, time_unit: str | None = None,
+                    gyro_max_dps: float = GYRO_MAX_DPS, chunk_rows: int = 1_000_000,
+                    column_types: Mapping[str, object] | None = None,
+                    block_size_bytes: int = DEFAULT_BLOCK_SIZE_BYTES) -> LogChunks:
     """Read a CSV or Parquet log in chunks of rows, each in the input contract.
 
-    ``pd.concat(list(iter_log_chunks(path, ...)))`` equals ``read_log(path, ...)``
-    (module notes), in constant memory.
+    ``pd.concat(list(iter_log_chunks(path, ...)))`` equals ``read_log(path, ...)``, in
+    constant memory (docs/log-formats.md, section "Reading in chunks").
 
     Parameters
     ----------
     path : str or os.PathLike
-        CSV (``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz``; gzip recognised by content)
-        or Parquet (``.parquet``, ``.pq``).
-    fmt : {"csv", "parquet"}, optional
-        Table format; overrides the file-name ending.
-    gyro_unit, frame, column_map, time_unit, gyro_max_dps
-        As for :func:`gyrodrift.io.tabular.read_log`; the time base is checked on the
-        first chunk.
+        CSV or Parquet, as :func:`gyrodrift.io.tabular.read_log`.
+    fmt, gyro_unit, frame, column_map, time_unit, gyro_max_dps
+        As :func:`gyrodrift.io.tabular.read_log`; the time base is judged on the first chunk.
     chunk_rows : int, default 1_000_000
-        Rows per chunk; every chunk but the last has exactly this many, except that a
-        CSV whose number columns hold text somewhere ends one chunk early there.
+        Rows per chunk.
     column_types : mapping of str to pyarrow.DataType or str, optional
-        CSV only: types of pass-through columns (names after ``column_map``), for a
-        column whose type the first block of the file does not show (see the notes).
+        CSV only: types of pass-through columns (names after ``column_map``).
     block_size_bytes : int, default 1 MiB
         CSV only: bytes pyarrow parses at a time; the first block fixes the types of
         pass-through columns.
@@ -248,20 +198,17 @@ def iter_log_chunks(
     Returns
     -------
     LogChunks
-        Iterator of :class:`pandas.DataFrame`; chunk ``k`` has the index
-        ``RangeIndex(k * chunk_rows, ...)`` (rows of the whole file) and ``attrs``
-        ``source``, ``format``, ``gyro_unit``, ``frame``. After the last chunk,
-        :attr:`LogChunks.compass` gives the compass form and :attr:`LogChunks.notes`
-        what the file lacks (no compass, no temperature).
+        Chunk ``k`` has the index ``RangeIndex(k * chunk_rows, ...)`` and ``attrs``
+        ``source``, ``format``, ``gyro_unit``, ``frame``.
 
     Raises
     ------
     LogFormatError
-        As ``read_log``: problems of the file as a whole (missing, empty, no header) at
-        the call, the others while the chunks are read; also a CSV cell that does not
-        fit the type the first block gave its pass-through column.
+        As ``read_log``: problems of the whole file at the call, the others while the
+        chunks are read; a CSV cell that does not fit its column's type
+        (:class:`ColumnTypeChanged`).
     ConfigError
-        As ``read_log``; a ULog or ROS bag; a bad ``chunk_rows`` or ``column_types``.
+        As ``read_log``; a binary log; a bad ``chunk_rows`` or ``column_types``.
     """
     path = Path(path)
     opts = validate.read_options(gyro_unit, frame, column_map, time_unit, gyro_max_dps)

@@ -1,9 +1,7 @@
 """Write a result table chunk by chunk to CSV or Parquet, atomically: :class:`ChunkWriter`.
 
-The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the whole
-table: both print CSV with :mod:`gyrodrift.io.csvfile` and store Parquet with the Arrow
-tables and settings of :mod:`gyrodrift.io.parquetfile`. :mod:`gyrodrift.io.chunked`
-exports :class:`ChunkWriter` with the chunked reader.
+The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the whole table
+(docs/log-formats.md, section "Writing tables").
 """
 
 from __future__ import annotations
@@ -25,22 +23,10 @@ __all__ = ["ChunkWriter"]
 
 
 class ChunkWriter:
-    """Write a table chunk by chunk to CSV or Parquet, atomically.
+    """Write a table chunk by chunk to CSV or Parquet, atomically, as a context manager.
 
-    Use it as a context manager: chunks go to a hidden temporary file beside ``path``,
-    which replaces ``path`` when the ``with`` block ends normally
-    (:func:`gyrodrift._atomic.atomic_path`); if the block raises, the temporary file
-    is removed and ``path`` is left as it was. pyarrow writes the file itself (a
-    :class:`pyarrow.OSFile`), without holding Python's GIL, so another thread can run
-    Python code meanwhile.
-
-    The file is the one :func:`gyrodrift.io.tabular.write_table` writes for the
-    concatenated chunks: for CSV byte for byte (one header, the same number formatting
-    and quoting; but where pyarrow cannot convert some chunks of a column, e.g. an object
-    column holding a list in one chunk, pandas prints those chunks, and prints numbers
-    its own way); for Parquet reading back equal, with chunks gathered into row groups of
-    at least ``row_group_rows`` rows. Categorical columns (e.g. ``gate_reason``) are
-    written as their values, as for text columns.
+    The chunks go to a temporary file that replaces ``path`` when the ``with`` block ends
+    normally (docs/log-formats.md, section "Writing tables").
 
     Parameters
     ----------
@@ -49,12 +35,10 @@ class ChunkWriter:
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
     row_group_rows : int
-        Parquet: rows gathered before a row group is written (pyarrow's default row
-        group size); the last one may be smaller.
+        Parquet: rows gathered before a row group is written; the last may be smaller.
     sync_every_s : float or None
-        Sync what has been written to disk at this interval, in a background thread,
-        while the chunks are written (None: only at the end). The file is synced before it
-        replaces ``path`` either way; syncing as it grows leaves little to wait for then.
+        Sync what has been written at this interval, in a background thread (None: only
+        at the end).
 
     Attributes
     ----------

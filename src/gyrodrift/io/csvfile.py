@@ -1,19 +1,8 @@
 """CSV text: what both table readers check and how they convert it; how both writers print it.
 
-Reading: a CSV log may be gzip-compressed (recognised by content,
-:func:`decompress_if_gzip`) and start with a UTF-8 byte-order mark (:data:`UTF8_BOM`);
-its text is checked for NUL bytes and UTF-8 whole or piece by piece
-(:func:`check_csv_text`). pyarrow converts the cells with :func:`csv_convert_options`
-in the whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and in the chunked
-reader (:func:`gyrodrift.io.chunked.iter_log_chunks`) alike, so a cell gets the same
-value either way.
-
-Writing: :func:`csv_header` prints the header line and :func:`write_csv_rows` the data
-lines of the Arrow table :func:`csv_table` makes of a DataFrame, for
-:func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
-alike, so a table written in chunks is byte for byte the table written whole;
-:func:`write_csv_with_pandas` prints the tables pyarrow cannot. Both quote the text cells
-and column names a spreadsheet would run as formulas (:mod:`gyrodrift.io.formula`).
+The whole-table and the chunked reader convert cells with the same options, and the
+whole-table and the chunk writer print the same lines (docs/log-formats.md, sections
+"Tables: CSV and Parquet" and "Writing tables").
 """
 
 from __future__ import annotations
@@ -34,7 +23,7 @@ import pyarrow.csv as pa_csv
 from gyrodrift.errors import LogFormatError
 from gyrodrift.io.formula import formula_safe_frame, formula_safe_table, formula_safe_text
 from gyrodrift.io.parquetfile import arrow_table
-from gyrodrift.io.messages import Source, format_error, message, one_line
+from gyrodrift.io.messages import Source, format_error, log_error, one_line
 from gyrodrift.io.validate import NUMERIC_COLS
 
 __all__ = [
@@ -73,13 +62,8 @@ CSV_EMPTY_ADVICE = "give a CSV log with a header row and at least one data row"
 
 def gzip_error(name: str, exc: Exception) -> LogFormatError:
     """The error for a file that starts like gzip but does not decompress."""
-    return LogFormatError(
-        message(
-            name,
-            f"is not a valid gzip file ({one_line(str(exc))})",
-            "re-compress the CSV with gzip or give the uncompressed .csv",
-        )
-    )
+    return log_error(name, f"is not a valid gzip file ({one_line(str(exc))})",
+                     "re-compress the CSV with gzip or give the uncompressed .csv")
 
 
 #: What decompressing a broken gzip file raises.
@@ -97,23 +81,17 @@ def decompress_if_gzip(data: bytes, name: str) -> bytes:
 
 
 def check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=None, final: bool = True) -> None:
-    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text.
+    """Raise :class:`LogFormatError` unless ``data`` looks like UTF-8 text (no NUL byte).
 
-    For text checked piece by piece (chunked reading), ``lines_before`` counts the
-    ``\n`` before ``data`` and ``decoder`` (a UTF-8 incremental decoder) carries an
-    unfinished character from one piece to the next; ``final`` marks the last piece.
+    Piece by piece: ``lines_before`` counts the line ends before ``data``, ``decoder`` (a
+    UTF-8 incremental decoder) carries an unfinished character on, ``final`` marks the last.
     """
     nul = data.find(b"\x00")
     if nul >= 0:
         line = lines_before + data.count(b"\n", 0, nul) + 1
-        raise LogFormatError(
-            message(
-                name,
-                "contains NUL bytes, so it is a binary file, not a CSV text file",
-                "export the log as comma-separated text with a header row (or give a .parquet file)",
-                where=f"line {line}",
-            )
-        )
+        raise log_error(name, "contains NUL bytes, so it is a binary file, not a CSV text file",
+                        "export the log as comma-separated text with a header row (or give a .parquet file)",
+                        where=f"line {line}")
     if decoder is None:
         decoder = codecs.getincrementaldecoder("utf-8")()
     elif not decoder.getstate()[0] and data.isascii() and not final:
@@ -123,14 +101,8 @@ def check_csv_text(data: bytes, name: str, *, lines_before: int = 0, decoder=Non
     except UnicodeDecodeError as exc:
         pos = exc.start - (len(exc.object) - len(data))  # in ``data``; < 0: in the piece before
         line = lines_before + data.count(b"\n", 0, max(pos, 0)) + 1
-        raise LogFormatError(
-            message(
-                name,
-                f"byte 0x{exc.object[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
-                "export or re-save the log as UTF-8 comma-separated text",
-                where=f"line {line}",
-            )
-        ) from exc
+        raise log_error(name, f"byte 0x{exc.object[exc.start]:02x} is not UTF-8 text, so this is not a CSV text file",
+                        "export or re-save the log as UTF-8 comma-separated text", where=f"line {line}") from exc
 
 
 def header_line(data: bytes, *, at_end: bool) -> bytes | None:
@@ -164,12 +136,9 @@ def csv_convert_options(
 ) -> pa_csv.ConvertOptions:
     """How pyarrow converts CSV cells, the same for the whole-file and the chunked reader.
 
-    Columns that become numeric contract columns (after stripping and ``column_map``) are
-    read as float64, or as text when ``numbers_as_text`` (a cell pyarrow cannot read as a
-    number: :func:`gyrodrift.io.validate.convert_numeric` then converts the text cell by
-    cell, with the same parser, and names the first bad cell). Every cell therefore gets
-    the same value whichever way its column was read. ``column_types`` pins the types of other columns
-    (by header name); the rest are inferred by pyarrow.
+    Numeric contract columns (after stripping and ``column_map``) are read as float64, or
+    as text when ``numbers_as_text`` (then converted cell by cell with the same parser);
+    ``column_types`` pins other columns' types (by header name); the rest are inferred.
     """
     kind = pa.string() if numbers_as_text else pa.float64()
     types = {raw: kind for raw in numeric_raw_names(names, column_map)}
@@ -279,13 +248,8 @@ def write_csv_rows(table: pa.Table, sink, header: bytes = b"") -> bool:
     """Write ``header`` and the CSV data lines of ``table`` to ``sink``; False, with nothing
     written, if pyarrow cannot print a column type of ``table`` (pandas writes it then).
 
-    Numbers and other values are printed by pyarrow (shortest round-trip floats, NaN as
-    an empty cell); text is quoted only where needed. Every line depends on its own row
-    only, so the lines of a table split in chunks are the lines of the whole table.
-    pyarrow's own writer prints straight into ``sink`` when no text needs quoting (it
-    would quote every text value otherwise); the column-by-column path (:func:`_csv_lines`)
-    prints the same values the same way. ``sink`` is best a :class:`pyarrow.NativeFile`:
-    pyarrow then writes without holding Python's GIL and without the text in memory.
+    Every line depends on its own row only, so a table split in chunks prints the lines of
+    the whole. ``sink`` is best a :class:`pyarrow.NativeFile` (written without the GIL).
     """
     if table.num_rows:
         try:

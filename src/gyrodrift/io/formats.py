@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Mapping
 
 from gyrodrift.errors import ConfigError
-from gyrodrift.io.messages import message, one_line
+from gyrodrift.io.messages import one_line, option_error
 
 __all__ = ["FORMATS", "READ_SUFFIXES", "WRITE_SUFFIXES", "table_format", "format_from_path", "log_format"]
 
@@ -77,13 +77,8 @@ def table_format(path: Path, fmt: str | None, suffixes: Mapping[str, str]) -> st
     if _pipe_or_device(path):  # a FIFO or /dev/stdout-like device without an ending carries text: CSV
         return "csv"
     accepted = ", ".join(sorted(suffixes))
-    raise ConfigError(
-        message(
-            str(path),
-            f"cannot tell the table format from the file name (accepted endings: {accepted})",
-            "rename the file or give the format explicitly (csv or parquet)",
-        )
-    )
+    raise option_error(str(path), f"cannot tell the table format from the file name (accepted endings: {accepted})",
+                       "rename the file or give the format explicitly (csv or parquet)")
 
 
 def format_from_path(path: Path) -> str | None:
@@ -116,12 +111,8 @@ def log_format(path: Path, fmt: str | None) -> str | None:
         found = _sniff(path)
     if found is None and path.is_file():
         endings = sorted(READ_SUFFIXES) + list(_ULOG_SUFFIXES + _ARDUPILOT_SUFFIXES + _TLOG_SUFFIXES + _ROSBAG_SUFFIXES)
-        raise ConfigError(
-            message(
-                str(path),
-                f"cannot tell the log format from the file name (accepted endings: {', '.join(endings)};"
-                " or a ROS 2 bag directory)",
-                f"rename the file or give the format explicitly ({', '.join(FORMATS)})",
-            )
-        )
+        raise option_error(str(path),
+                           f"cannot tell the log format from the file name (accepted endings: {', '.join(endings)};"
+                           " or a ROS 2 bag directory)",
+                           f"rename the file or give the format explicitly ({', '.join(FORMATS)})")
     return found

@@ -1,13 +1,8 @@
 """CSV cells a spreadsheet would run as a formula, made text: every CSV writer applies this.
 
-A spreadsheet reads a cell that starts with ``=``, ``+``, ``-`` or ``@`` (and, in some,
-a tab or a carriage return) as a formula; a pass-through text column or a header name
-from a hostile log could then run one in whoever opens the output (CSV injection,
-OWASP). Every text cell and every column name that starts so gets a leading ``'``, which
-a spreadsheet shows as text; number columns are printed as numbers and never changed
-(a negative number is no formula). :func:`formula_safe_table` does this to the Arrow
-table the CSV writers print (:mod:`gyrodrift.io.csvfile`), :func:`formula_safe_frame` to
-a DataFrame pandas prints.
+Text cells and column names that start like a formula get a leading ``'``; numbers are
+never changed (docs/log-formats.md, section "Writing tables"): :func:`formula_safe_table`
+for the Arrow tables the CSV writers print, :func:`formula_safe_frame` for pandas.
 """
 
 from __future__ import annotations

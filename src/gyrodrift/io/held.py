@@ -1,22 +1,8 @@
 """Held compass values: a table that repeats the last compass sample on every row.
 
-A log resampled onto the gyro's rows (a CSV exported from a ROS bag, say) often repeats
-the latest compass sample on every row until the next one comes. Read as they are, the
-repeats count as new measurements: the fused heading and the compass averages then weigh
-each sample by how long it was held, and the same data read from the bag (one compass
-sample per message, :func:`gyrodrift.io.align.on_following_rows`) give another result.
-
-:func:`drop_held` empties (NaN) the compass cells of every row whose compass values are
-bit for bit those of the row before: the ``heading`` and, when the table has all of
-``mag_x, mag_y, mag_z``, the magnetometer triple, compared together (a row is held when
-every one of these groups that has a value in the row equals the row before). The first
-row of a run of equal values keeps them. A real compass repeats itself by chance when
-its output is quantised and the unit is still (a heading stored to 0.001 deg with 0.5 deg
-of noise: about 1 sample in 1500); a table resampled onto the gyro rows repeats most of
-its samples (9 in 10 for a 10 Hz compass on 100 Hz rows). So the repeats count as held
-values only when they are at least :data:`HELD_MIN_SHARE` of the rows with a compass
-value (read in chunks: of the rows read so far); fewer, they are real samples and stay.
-:func:`held_note` says how many values were dropped. This module imports no module of
+:func:`drop_held` empties the compass cells of rows that repeat the row before bit for bit,
+when such repeats are common enough to be held values (docs/log-formats.md, section "Held
+compass values"); :func:`held_note` says how many. This module imports no module of
 gyrodrift.io, so that :mod:`gyrodrift.io.validate` can import it.
 """
 
@@ -47,8 +33,8 @@ class Held(NamedTuple):
 
 
 def compass_groups(columns) -> list[tuple[str, ...]]:
-    """The compass column groups of a table compared by :func:`drop_held`: ``heading`` and the
-    magnetometer triple, those the table has (the triple only when complete)."""
+    """The compass column groups :func:`drop_held` compares: ``heading`` and the complete
+    magnetometer triple, those the table has."""
     groups = [(HEADING,)] if HEADING in columns else []
     if all(c in columns for c in MAG_COLS):
         groups.append(tuple(MAG_COLS))
@@ -58,19 +44,9 @@ def compass_groups(columns) -> list[tuple[str, ...]]:
 def drop_held(frame: pd.DataFrame, prev: dict | None = None) -> Held:
     """Empty the compass cells of rows that repeat the row before (see the module notes).
 
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        Rows with numeric (float64) compass columns, as read (before unit or frame
-        conversions). Not changed.
-    prev : dict, optional
-        ``Held.last`` of the frame just before (rows read in chunks).
-
-    Returns
-    -------
-    Held
-        A new frame when rows were dropped (else ``frame`` itself), the count, and the
-        values of the last row for the next frame.
+    ``frame`` holds float64 compass columns as read (before unit or frame conversions) and
+    is not changed; ``prev`` is ``Held.last`` of the frame before it (rows read in chunks).
+    Returns ``frame`` itself when no row was dropped.
     """
     groups = compass_groups(frame.columns)
     if not groups or len(frame) == 0:

@@ -1,27 +1,8 @@
 """The plausible range of every input value, and the check each entry point runs with it.
 
-One definition of each limit, used by the table readers (:func:`gyrodrift.io.validate.normalise_frame`,
-whole or in chunks), the ULog and ROS bag readers (:func:`gyrodrift.io.align.contract_frame`),
-:func:`gyrodrift.compensate_arrays` / :func:`gyrodrift.compensate` and the streaming
-:meth:`gyrodrift.Compensator.push`:
-
-==========================  =====================================  ===========================
-input                       plausible                              why
-==========================  =====================================  ===========================
-``temp``                    :data:`TEMP_RANGE_C` (-60..150 degC)   gyro die temperature
-``gyro_x/y/z``              ``|rate| <= gyro_max_dps``             default :data:`GYRO_MAX_DPS`
-``heading``, ref_heading    ``|heading| <= HEADING_MAX_ABS_DEG``   wrapped to [0, 360) after
-``mag_x/y/z``               ``|component| <= MAG_MAX_ABS``         any unit (only ratios used)
-``acc_x/y/z``               ``|component| <= ACC_MAX_ABS``         g or m/s²
-==========================  =====================================  ===========================
-
-A value outside its range is refused, as a temperature outside :data:`TEMP_RANGE_C` always
-was: one line naming the file (or the stream), the row and the column, and what to check.
-Such a value is no reading of the sensor but a wrong column, a wrong unit or a corrupt
-record (a flipped bit in a float gives 5e38), and a single one would otherwise dominate
-everything integrated after it: a heading summed from a 1e16 deg/s rate keeps none of the
-later rates' digits. An empty cell (NaN) is never out of range: it holds the previous gyro
-or temperature value, or means "no compass sample".
+One definition of each limit, used by the table readers, the binary readers, the
+in-memory compensation and the streaming :meth:`gyrodrift.Compensator.push`; the ranges
+and why a value outside is refused: docs/log-formats.md, section "Plausible values".
 """
 
 from __future__ import annotations
@@ -49,16 +30,11 @@ __all__ = [
     "check_columns",
 ]
 
-#: Default plausible full scale of a gyro axis, deg/s. MEMS gyros saturate at 2000 to
-#: 4000 deg/s (6000 for the fastest); a larger rate is a wrong unit, a wrong column or a
-#: corrupt record. Set another one with ``gyro_max_dps`` (readers, compensate, Compensator).
+#: Default plausible full scale of a gyro axis, deg/s (``gyro_max_dps`` sets another).
 GYRO_MAX_DPS = 10_000.0
-#: Largest plausible magnitude of a heading before it is wrapped to [0, 360), deg (about
-#: 2800 turns: an unwrapped yaw of a long log fits; 1e308 does not, and its remainder
-#: modulo 360 carries no information).
+#: Largest plausible magnitude of a heading before it is wrapped to [0, 360), deg.
 HEADING_MAX_ABS_DEG = 1e6
-#: Largest plausible magnitude of a magnetometer component, in any unit: the Earth's field is
-#: about 0.5 gauss, 50 uT or 50 000 nT, and raw counts of a 16-bit sensor stay below 32 768.
+#: Largest plausible magnitude of a magnetometer component, in any unit.
 MAG_MAX_ABS = 1e8
 #: Largest plausible magnitude of a specific-force component, g or m/s² (1000 g).
 ACC_MAX_ABS = 1e4
@@ -91,19 +67,8 @@ def check_gyro_max_dps(gyro_max_dps) -> float:
 
 def limit_of(column: str, gyro_max_dps: float = GYRO_MAX_DPS, gyro_scale: float = 1.0,
              gyro_unit: str = "deg/s") -> Limit | None:
-    """The plausible range of ``column`` (None: a column without one).
-
-    Parameters
-    ----------
-    column : str
-        A contract column name.
-    gyro_max_dps : float
-        Plausible full scale of the gyro axes, deg/s.
-    gyro_scale : float
-        Multiplier from the unit the gyro values are in to deg/s (a table's ``gyro_unit``).
-    gyro_unit : str
-        That unit's name, for messages.
-    """
+    """The plausible range of contract ``column`` (None: a column without one); a gyro column's
+    in the unit whose multiplier to deg/s is ``gyro_scale`` (named ``gyro_unit`` in messages)."""
     if column == TEMP:
         lo, hi = TEMP_RANGE_C
         return Limit(lo, hi, "degC", "check the unit and the column (Kelvin? raw sensor counts?)")
@@ -140,18 +105,9 @@ def check_columns(source: str, columns: Mapping[str, object], gyro_max_dps: floa
                   row0: int = 0) -> None:
     """Raise :class:`LogFormatError` for the first value outside its plausible range.
 
-    Parameters
-    ----------
-    source : str
-        The name of the data, first in the message.
-    columns : mapping of str to array_like
-        Contract column name -> values (deg/s for the gyro); columns without a limit
-        and None values are skipped; a 2-d value holds the x, y, z columns of ``mag_*``
-        or ``acc_*`` (pass ``"mag"`` or ``"acc"`` as the name).
-    gyro_max_dps : float
-        Plausible full scale of the gyro axes, deg/s.
-    row0 : int
-        Row number of the first value (``row N`` in the message is ``row0 + index``).
+    ``columns`` maps contract column names to values (deg/s for the gyro; None skipped; a
+    2-d value under ``"mag"`` or ``"acc"`` holds the x, y, z columns); the message names
+    ``source``, ``row {row0 + index}`` and the column.
     """
     for name, values in columns.items():
         if values is None:

@@ -1,15 +1,8 @@
 """The message style of every reader, and the errors of a whole file.
 
-Every problem a user can fix raises :class:`~gyrodrift.errors.LogFormatError` (or
-:class:`~gyrodrift.errors.ConfigError` for a bad option) with a one-line message of the
-form::
-
-    <file>: <location>: <problem>; <what to do>
-
-where ``<location>`` is ``line N`` for CSV (the line number an editor shows: the header
-is line 1) or ``data row N`` for Parquet (1-based), optionally followed by
-``, column 'name'``. Parts that do not apply are left out. :func:`message` builds such a
-message; :class:`Source`, :func:`row_label` and :func:`cell_label` name the rows and cells.
+Every problem a user can fix is one line, ``<file>: <location>: <problem>; <what to do>``
+(docs/log-formats.md, section "Messages"): :func:`message` builds it, :class:`Source`,
+:func:`row_label` and :func:`cell_label` name the rows and cells.
 """
 
 from __future__ import annotations
@@ -17,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable, Iterable, NamedTuple
 
-from gyrodrift.errors import LogFormatError
+from gyrodrift.errors import ConfigError, LogFormatError
 
 __all__ = [
     "Source",
@@ -34,6 +27,9 @@ __all__ = [
     "read_error",
     "empty_file_error",
     "no_data_rows_error",
+    "optional_module",
+    "log_error",
+    "option_error",
 ]
 
 _MAX_NAMES_SHOWN = 30
@@ -67,9 +63,19 @@ def message(name: str, problem: str, advice: str, where: str = "") -> str:
     return one_line(f"{head}{problem}; {advice}")
 
 
+def log_error(name: str, problem: str, advice: str, where: str = "") -> LogFormatError:
+    """A :class:`LogFormatError` for the file ``name`` with the one-line :func:`message`."""
+    return LogFormatError(message(name, problem, advice, where))
+
+
+def option_error(name: str, problem: str, advice: str, where: str = "") -> ConfigError:
+    """A :class:`ConfigError` (a bad option for the file ``name``) with the one-line :func:`message`."""
+    return ConfigError(message(name, problem, advice, where))
+
+
 def format_error(src: Source, problem: str, advice: str, where: str = "") -> LogFormatError:
     """Return a :class:`LogFormatError` for ``src`` with a one-line message."""
-    return LogFormatError(message(src.name, problem, advice, where))
+    return log_error(src.name, problem, advice, where)
 
 
 def show_text(value: object) -> str:
@@ -92,13 +98,8 @@ def show_names(names) -> str:
 
 
 def physical_line(blocks: Iterable[bytes], nonempty_index: int) -> int:
-    """Return the 1-based file line of the ``nonempty_index``-th non-empty line.
-
-    pyarrow skips empty lines, so its row counts are counts of non-empty lines
-    (1-based, header included); this maps one back to what an editor shows. ``blocks``
-    are the file's bytes in order, in pieces of any size (line ends ``\n``, ``\r\n``
-    or ``\r``, as :meth:`bytes.splitlines` splits them).
-    """
+    """The 1-based file line of the ``nonempty_index``-th non-empty line (pyarrow counts only
+    those); ``blocks`` are the file's bytes in order, in pieces of any size."""
     count = 0
     line_no = 0
     carry = b""
@@ -175,3 +176,15 @@ def no_data_rows_error(src: Source) -> LogFormatError:
     """The error for a table without data rows."""
     problem = "has a header row but no data rows" if src.fmt == "csv" else "has no data rows"
     return format_error(src, problem, "give a log with at least one data row")
+
+
+def optional_module(name: str, what: str, package: str, extra: str):
+    """``from parent import attr`` for the dotted ``name``, or a :class:`ConfigError`: "``what`` needs
+    the optional package ``package``; install it with pip install 'gyrodrift[``extra``]'"."""
+    parent, _, attr = name.rpartition(".")
+    try:
+        return getattr(__import__(parent, fromlist=[attr]), attr)
+    except (ImportError, AttributeError) as exc:
+        raise ConfigError(
+            f"{what} needs the optional package {package}; install it with pip install 'gyrodrift[{extra}]'"
+        ) from exc

@@ -1,22 +1,6 @@
-"""Notes: what a log lacks and what gyrodrift does instead.
+"""Notes: what a log lacks and what gyrodrift does instead, one line each in ``attrs["notes"]``.
 
-A log without a compass, or without a usable gyro temperature, is read, not refused;
-the reader says so in one line per gap, kept in ``frame.attrs["notes"]`` (a list of
-str; :class:`gyrodrift.io.chunked.LogChunks` keeps them in its ``notes`` attribute):
-
-* **no compass** (no ``heading`` column nor a complete ``mag_*`` + ``acc_*`` form, or
-  those columns empty in every row; in a ULog, DataFlash log or ROS bag, no magnetometer
-  sample within the gyro record, or in a ULog or DataFlash log no accelerometer for the
-  tilt): ``attrs["compass"]`` is ``"none"`` (:data:`NO_COMPASS`);
-* **no usable gyro temperature** (no ``temp`` column, one empty in every row; in a
-  ULog, DataFlash log or ROS bag, none logged, or logged as exactly 0 or NaN
-  everywhere): ``temp`` is :data:`NO_TEMPERATURE_C` in every row, a temperature that
-  never changes, so the compensator's drift model takes the elapsed time as its ``T``
-  (``CompensatorConfig.temperature``, :class:`gyrodrift.model.ElapsedClock`).
-
-Every note has the form ``<file>: <what is missing> (<why>): <what is done instead>``
-(:func:`no_compass_note`, :func:`no_temperature_note`); :func:`add_note` appends one to
-a frame's ``attrs``, keeping notes other code put there.
+Which gaps get a note and how each is worded: docs/log-formats.md, section "Notes".
 """
 
 from __future__ import annotations
@@ -26,7 +10,7 @@ from typing import MutableMapping
 import pandas as pd
 
 from gyrodrift.conventions import ACC_COLS, HEADING, MAG_COLS, TEMP
-from gyrodrift.io.messages import show_names
+from gyrodrift.io.messages import one_line, show_names
 
 __all__ = [
     "NOTES",
@@ -54,51 +38,15 @@ _NO_COMPASS_DOES = "the heading is relative to the first sample and the drift is
 _NO_TEMPERATURE_DOES = f"temp set to {NO_TEMPERATURE_C:g} degC; the drift is modelled as a trend in elapsed time"
 
 
-def _one_line(text: str) -> str:
-    """Collapse line breaks (a topic or column name may hold one). This module imports no
-    other module of gyrodrift.io, so that :mod:`gyrodrift.io.validate` can import it."""
-    return " ".join(text.split())
-
-
 def no_compass_note(name: str, why: str) -> str:
-    """The note for a log without a compass.
-
-    Parameters
-    ----------
-    name : str
-        The log, as the user gave it.
-    why : str
-        What is missing, e.g. ``"no heading column nor mag_x..z with acc_x..z"``.
-
-    Returns
-    -------
-    str
-        ``"<name>: no compass (<why>): the heading is relative to the first sample and
-        the drift is learned from still periods only"``, on one line.
-    """
-    return _one_line(f"{name}: no compass ({why}): {_NO_COMPASS_DOES}")
+    """``"<name>: no compass (<why>): <what is done instead>"``, on one line."""
+    return one_line(f"{name}: no compass ({why}): {_NO_COMPASS_DOES}")
 
 
 def no_temperature_note(name: str, why: str, advice: str = "") -> str:
-    """The note for a log without a usable gyro temperature.
-
-    Parameters
-    ----------
-    name : str
-        The log, as the user gave it.
-    why : str
-        What is missing, e.g. ``"column 'temp' empty in every row"``.
-    advice : str, optional
-        Appended after ``"; "``: how to give the temperature if the log has it.
-
-    Returns
-    -------
-    str
-        ``"<name>: no usable gyro temperature (<why>): temp set to 0 degC; the drift is
-        modelled as a trend in elapsed time[; <advice>]"``, on one line.
-    """
+    """``"<name>: no usable gyro temperature (<why>): <what is done instead>[; <advice>]"``, on one line."""
     tail = f"; {advice}" if advice else ""
-    return _one_line(f"{name}: no usable gyro temperature ({why}): {_NO_TEMPERATURE_DOES}{tail}")
+    return one_line(f"{name}: no usable gyro temperature ({why}): {_NO_TEMPERATURE_DOES}{tail}")
 
 
 def add_note(attrs: MutableMapping[str, object], note: str) -> None:
@@ -120,13 +68,8 @@ def compass_columns_with_values(frame: pd.DataFrame) -> frozenset[str]:
 
 
 def compass_form(with_values: frozenset[str]) -> str:
-    """Return "heading", "mag", "both" or "none" (:data:`~gyrodrift.io.notes.NO_COMPASS`):
-    the compass forms that hold data.
-
-    ``with_values`` are the compass columns holding a value somewhere in the file
-    (:func:`compass_columns_with_values`, united over chunks). The raw form needs all
-    of ``mag_x, mag_y, mag_z, acc_x, acc_y, acc_z``.
-    """
+    """Return "heading", "mag", "both" or "none" (:data:`NO_COMPASS`): the compass forms holding data
+    in ``with_values``, the compass columns with a value somewhere in the file (united over chunks)."""
     heading = HEADING in with_values
     mag = all(c in with_values for c in _MAG_FORM_COLS)
     if heading and mag:
@@ -153,24 +96,11 @@ def _compass_gap(columns, with_values: frozenset[str]) -> str:
 
 
 def table_notes(name: str, columns, with_values: frozenset[str], temperature: str) -> list[str]:
-    """The notes of a table read whole or in chunks (see :mod:`gyrodrift.io.notes`).
+    """The notes of a table read whole or in chunks: no compass, then no temperature.
 
-    Parameters
-    ----------
-    name : str
-        The file, as the user gave it.
-    columns : sequence of str
-        The columns of the table as read (``temp`` included when it was filled in).
-    with_values : frozenset of str
-        Compass columns holding a value somewhere in the file.
-    temperature : {"measured", "absent", "empty"}
-        :attr:`gyrodrift.io.validate.Normalised.temperature` of the file.
-
-    Returns
-    -------
-    list of str
-        A compass note when :func:`compass_form` is "none", then a temperature note
-        when ``temperature`` is not "measured"; empty when the table lacks neither.
+    ``columns`` are the table's columns as read, ``with_values`` the compass columns with a
+    value somewhere in the file, ``temperature`` "measured", "absent" or "empty"
+    (:attr:`gyrodrift.io.validate.Normalised.temperature`).
     """
     notes = []
     if compass_form(with_values) == NO_COMPASS:

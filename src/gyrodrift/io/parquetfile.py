@@ -1,13 +1,5 @@
 """Parquet files: the size and read errors of both table readers; the Arrow tables and
-settings of both writers.
-
-:func:`check_parquet_size` and :func:`parquet_error` give the readers' messages for a
-file that is empty or not Parquet. :func:`arrow_table` turns a DataFrame into the Arrow
-table a Parquet file stores (and the CSV writer prints, :mod:`gyrodrift.io.csvfile`), and
-:func:`parquet_options` gives the writer settings, for
-:func:`gyrodrift.io.tabular.write_table` and :class:`gyrodrift.io.chunkwriter.ChunkWriter`
-alike; :func:`open_sink` opens the file both write to.
-"""
+settings of both writers (docs/log-formats.md, section "Writing tables")."""
 
 from __future__ import annotations
 
@@ -20,7 +12,7 @@ import pandas as pd
 import pyarrow as pa
 
 from gyrodrift.errors import LogFormatError
-from gyrodrift.io.messages import Source, empty_file_error, format_error, message, one_line
+from gyrodrift.io.messages import Source, empty_file_error, format_error, log_error, one_line
 
 __all__ = ["check_parquet_size", "parquet_error", "arrow_table", "parquet_options", "open_sink"]
 
@@ -78,9 +70,8 @@ def check_parquet_size(path: Path) -> None:
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise LogFormatError(
-            message(str(path), f"cannot read the input file ({exc.strerror})", "check that it is a readable file")
-        ) from exc
+        raise log_error(str(path), f"cannot read the input file ({exc.strerror})",
+                        "check that it is a readable file") from exc
     if size == 0:
         raise empty_file_error(str(path), _PARQUET_EMPTY_ADVICE)
 
@@ -95,9 +86,8 @@ def parquet_error(src: Source, exc: Exception) -> LogFormatError:
 
 
 def _arrow_column(column: pd.Series):
-    """One column as :meth:`pyarrow.Table.from_pandas` converts it (NaN and None as empty
-    cells), a categorical column as its values; a float column without NaN as it is,
-    without the pass that looks for NaN (it took most of the conversion of an output chunk)."""
+    """One column as :meth:`pyarrow.Table.from_pandas` converts it, a categorical as its values; a
+    float column without NaN without the pass that looks for NaN (most of an output chunk's conversion)."""
     if column.dtype.kind == "f":
         values = column.to_numpy()
         if not np.isnan(values).any():
@@ -107,13 +97,8 @@ def _arrow_column(column: pd.Series):
 
 
 def arrow_table(df: pd.DataFrame) -> pa.Table:
-    """``df`` as a pyarrow table, without index (raises pyarrow errors).
-
-    Categorical columns become plain columns of their values (a cast inside Arrow, cheap),
-    so a file holds the same whether a text column arrived categorical or not; such a
-    table has no schema metadata. Other tables keep pandas' metadata
-    (:meth:`pyarrow.Table.from_pandas`: e.g. an ``Int64`` column reads back as ``Int64``).
-    """
+    """``df`` as a pyarrow table without index, categorical columns as their values (raises
+    pyarrow errors)."""
     names = [str(c) for c in df.columns]
     categorical = any(isinstance(dtype, pd.CategoricalDtype) for dtype in df.dtypes)
     if categorical and len(set(names)) == len(names):  # duplicate names: from_pandas refuses them
@@ -124,19 +109,13 @@ def arrow_table(df: pd.DataFrame) -> pa.Table:
 
 
 def _parquet_dictionary_columns(schema: pa.Schema) -> list[str]:
-    """Columns worth dictionary encoding: all but floating-point ones.
-
-    pyarrow tries a dictionary for every column by default and gives up on float columns
-    of distinct values only after encoding a page; skipping them wrote a 10-million-row
-    output table 27 % faster (2.26 → 1.65 s) at the same size (measured).
-    """
+    """Columns worth dictionary encoding: all but floating-point ones (docs/log-formats.md,
+    section "Writing tables")."""
     return [f.name for f in schema if not pa.types.is_floating(f.type)]
 
 
 def parquet_options(schema: pa.Schema) -> dict:
-    """Writer settings: dictionaries only where they pay (:func:`_parquet_dictionary_columns`),
-    and min/max statistics only for the time column ``t`` (readers use them to find the
-    time span without reading rows); statistics on every column made the 10-million-row
-    output 27 % slower to write (median of 5: 1.84 s against 1.33 s, measured)."""
+    """Writer settings: dictionaries where they pay, min/max statistics for ``t`` only
+    (docs/log-formats.md, section "Writing tables")."""
     stats = ["t"] if "t" in schema.names else True
     return {"use_dictionary": _parquet_dictionary_columns(schema), "write_statistics": stats}

@@ -1,49 +1,7 @@
-"""Read ROS 1 and ROS 2 bags into the gyrodrift input contract.
+"""Read ROS 1 and ROS 2 bags into the gyrodrift input contract (needs rosbags, not ROS).
 
-Needs the optional package rosbags (``pip install 'gyrodrift[ros]'``); no ROS
-installation is used. Accepted: a ROS 1 ``.bag`` file, a ROS 2 bag directory (with
-``metadata.yaml``) or a single ROS 2 storage file (``.db3`` or ``.mcap``).
-
-Messages and columns
---------------------
-``sensor_msgs/Imu`` (one topic)
-    ``angular_velocity`` (rad/s) -> ``gyro_*`` (deg/s); ``linear_acceleration`` (m/s²,
-    specific force: a level, still IMU reads z ≈ +9.81 in ROS) -> ``acc_*``;
-    ``orientation`` -> ``ref_heading`` where it is set (``orientation_covariance[0]``
-    is not −1 and the quaternion is not zero). One output row per Imu message.
-``sensor_msgs/Temperature`` (one topic)
-    ``temperature`` (degC) -> ``temp``, interpolated linearly onto the Imu times and
-    held at the first/last value outside the temperature stream. A temperature that
-    is exactly 0 (or NaN) in every message counts as "not measured". Without a
-    measured temperature (no such topic, no message, not measured), ``temp`` is 0 in
-    every row and a note says so (:mod:`gyrodrift.io.notes`: the drift model is then
-    a trend in elapsed time).
-``sensor_msgs/MagneticField`` (one topic; a bag has no other compass form)
-    ``magnetic_field`` (tesla, kept in tesla) -> ``mag_*``, each sample on the row of
-    the first Imu message at or after it, NaN on the other rows. Without one (no such
-    topic, or no message within the Imu record): no ``mag_*`` columns, compass
-    "none" and a note.
-
-Time of a message: its ``header.stamp`` (``sec + nanosec * 1e-9`` s, absolute, not
-shifted to 0); if that stamp is zero, the time the bag recorded the message instead
-(counted in the summary). Imu messages with a repeated time are dropped (the first
-is kept, counted in the summary).
-
-Frames (REP-103): the body frame is FLU (x forward, y left, z up), the world frame ENU.
-They are converted to FRD/NED here: x stays, y and z change sign for the rate, the
-acceleration and the field (``gyro_z`` > 0 then means the heading increases, and
-level specific force reads ``acc_z`` ≈ −9.81); the orientation's yaw (measured
-counter-clockwise from east) becomes ``ref_heading = wrap_360(90 − yaw_enu)``
-(clockwise from north). The yaw is ``atan2(2 (w z + x y), w² + x² − y² − z²)``, which
-equals the usual ``1 − 2 (y² + z²)`` form for a unit quaternion and does not need one.
-An IMU without a magnetometer reports a yaw with an arbitrary origin, so its
-``ref_heading`` is only good for heading changes.
-
-Topics: an option (``imu_topic``, ``temp_topic``, ``mag_topic``) names the topic; if
-it is not given, the only topic of that type is used. Several, or a named topic the
-bag lacks, raise a one-line error that lists the topics and says which option to
-use; so does a bag without an Imu topic. A bag without a Temperature or a
-MagneticField topic is read without it (see above).
+Messages and columns, times, the FLU/ENU to FRD/NED conversion and how topics are
+chosen: docs/log-formats.md, section "ROS bags".
 """
 
 from __future__ import annotations
@@ -57,23 +15,14 @@ import pandas as pd
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
-    Stream,
-    check_temperature,
-    binary_log_frame,
-    describe_rate,
-    increasing,
-    interp_held,
-    median_rate_hz,
-    on_following_rows,
-    yaw_deg,
+    Stream, binary_log_frame, check_temperature, compass_on_rows, compass_parts, increasing, interp_held,
+    measured_temperature, median_rate_hz, read_summary, yaw_deg,
 )
 from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_TEMPERATURE_C
-from gyrodrift.io.messages import message, one_line
+from gyrodrift.io.messages import log_error, one_line, option_error, optional_module
 
 __all__ = ["read_rosbag", "ROS2_SUFFIXES"]
 
-_INSTALL = "pip install 'gyrodrift[ros]'"
 _IMU = "sensor_msgs/msg/Imu"
 _TEMPERATURE = "sensor_msgs/msg/Temperature"
 _MAGNETIC_FIELD = "sensor_msgs/msg/MagneticField"
@@ -120,37 +69,25 @@ _ROLES = (
 
 
 def _import_rosbags():
-    """Return rosbags' ``AnyReader`` and a default typestore, or raise :class:`ConfigError`."""
-    try:
-        from rosbags.highlevel import AnyReader
-        from rosbags.typesys import Stores, get_typestore
-    except ImportError as exc:
-        raise ConfigError(
-            f"reading ROS bags needs the optional package rosbags; install it with {_INSTALL}"
-        ) from exc
-    # used only for ROS 2 bags that do not embed their message definitions
-    return AnyReader, get_typestore(Stores.ROS2_HUMBLE)
+    """rosbags' ``AnyReader`` and the typestore of ROS 2 bags that do not embed their message definitions."""
+    what = "reading ROS bags"
+    any_reader = optional_module("rosbags.highlevel.AnyReader", what, "rosbags", "ros")
+    typesys = optional_module("rosbags.typesys", what, "rosbags", "ros")
+    return any_reader, typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
 
 
 def _check_bag_path(path: Path) -> None:
     """Raise :class:`LogFormatError` for a missing path, a plain directory or an empty file."""
     name = str(path)
     if not path.exists():
-        raise LogFormatError(
-            message(name, "input file does not exist", "check the path and the current directory")
-        )
+        raise log_error(name, "input file does not exist", "check the path and the current directory")
     if path.is_dir():
         if not (path / "metadata.yaml").is_file():
-            raise LogFormatError(
-                message(
-                    name,
-                    "is a directory without metadata.yaml, so not a ROS 2 bag",
-                    "give a ROS 2 bag directory, a .db3/.mcap file or a ROS 1 .bag file",
-                )
-            )
+            raise log_error(name, "is a directory without metadata.yaml, so not a ROS 2 bag",
+                            "give a ROS 2 bag directory, a .db3/.mcap file or a ROS 1 .bag file")
         return
     if path.stat().st_size == 0:
-        raise LogFormatError(message(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag"))
+        raise log_error(name, "file is empty", "give a ROS 1 .bag or a ROS 2 .db3/.mcap bag")
 
 
 def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
@@ -162,13 +99,8 @@ def _unreadable(path: Path, exc: BaseException) -> LogFormatError:
         repair = ", or repair an unclosed/truncated bag with 'rosbag reindex'"
     elif ".mcap" in kinds:
         repair = ", or repair a truncated file with 'mcap recover'"
-    return LogFormatError(
-        message(
-            str(path),
-            f"is not a readable ROS bag ({detail})",
-            f"check that the bag is complete and was closed properly (copy it again){repair}",
-        )
-    )
+    return log_error(str(path), f"is not a readable ROS bag ({detail})",
+                     f"check that the bag is complete and was closed properly (copy it again){repair}")
 
 
 # ---------------------------------------------------------------------------
@@ -187,48 +119,26 @@ def _show_topics(topics: dict[str, str]) -> str:
 
 
 def _choose_topic(topics: dict[str, str], role: _Role, given: str | None, name: str) -> str | None:
-    """The topic for ``role``: the one named by its option, else the only one of its type;
-    None when the bag has none and the role is not required."""
+    """The topic for ``role``: named by its option, else the only one of its type (None: none, not required)."""
     of_type = {t: typ for t, typ in topics.items() if typ == role.msgtype}
     if given is not None:
         if given not in topics:
-            raise ConfigError(
-                message(
-                    name,
-                    f"there is no topic {given!r} in the bag; {role.msgtype} topics: {_show_topics(of_type)}",
-                    f"fix {role.option}",
-                )
-            )
+            raise option_error(name,
+                               f"there is no topic {given!r} in the bag; {role.msgtype} topics: {_show_topics(of_type)}",
+                               f"fix {role.option}")
         if topics[given] != role.msgtype:
-            raise ConfigError(
-                message(
-                    name,
-                    f"topic {given!r} has type {topics[given]}, not {role.msgtype};"
-                    f" {role.msgtype} topics: {_show_topics(of_type)}",
-                    f"fix {role.option}",
-                )
-            )
+            raise option_error(name, f"topic {given!r} has type {topics[given]}, not {role.msgtype};"
+                               f" {role.msgtype} topics: {_show_topics(of_type)}", f"fix {role.option}")
         return given
     if len(of_type) == 1:
         return next(iter(of_type))
     if not of_type and not role.required:
         return None
     if not of_type:
-        raise LogFormatError(
-            message(
-                name,
-                f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
-                f" topics found: {_show_topics(topics)}",
-                role.advice,
-            )
-        )
-    raise ConfigError(
-        message(
-            name,
-            f"{len(of_type)} {role.msgtype} topics: {_show_topics(of_type)}",
-            f"choose one with {role.option}",
-        )
-    )
+        raise log_error(name, f"no {role.msgtype} topic in the bag (needed for {role.purpose});"
+                        f" topics found: {_show_topics(topics)}", role.advice)
+    raise option_error(name, f"{len(of_type)} {role.msgtype} topics: {_show_topics(of_type)}",
+                       f"choose one with {role.option}")
 
 
 # ---------------------------------------------------------------------------
@@ -294,13 +204,8 @@ def _to_stream(topic: str, raw: _Raw, width: int) -> tuple[Stream, int]:
 
 
 def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tuple[dict[str, str], dict[str, _Raw]]:
-    """Open the bag, choose the topics (topic -> msgtype; a type without a topic is left
-    out) and collect their messages.
-
-    Any error raised by rosbags or its storage back ends (sqlite3, MCAP, compression)
-    while reading means the file is not a readable bag: it becomes one
-    :class:`LogFormatError` (the original exception is chained for debugging).
-    """
+    """Open the bag, choose the topics (topic -> msgtype) and collect their messages; any error of
+    rosbags is one :class:`LogFormatError`."""
     any_reader, default_types = rosbags_api
     name = str(path)
     given = (imu_topic, temp_topic, mag_topic)
@@ -322,18 +227,13 @@ def _read_bag(rosbags_api, path: Path, imu_topic, temp_topic, mag_topic) -> tupl
 
 
 def _temperature(name: str, stream: Stream) -> tuple[Stream | None, str]:
-    """Temperature samples that hold a value, and ``""``; or None and why there is no
-    measured temperature (for the note): no message, or exactly 0 or NaN in all."""
-    temp = stream.values[:, 0]
-    ok = np.isfinite(temp)
-    if not temp.size:
+    """Temperature samples that hold a value, and ``""``; or None and why there is none."""
+    if not stream.t.size:
         return None, f"no message on {stream.label}"
-    if not ok.any() or not np.any(temp[ok] != 0.0):
-        what = f"{NO_TEMPERATURE_C:g} degC" if ok.any() else "NaN"
-        return None, f"{stream.label} is {what} in all {temp.size} messages"
-    out = Stream(stream.label, stream.t[ok], temp[ok])
-    check_temperature(name, stream.label, out.values)
-    return out, ""
+    out, why = measured_temperature(stream.label, stream.t, stream.values[:, 0], "is", "messages")
+    if out is not None:
+        check_temperature(name, stream.label, out.values)
+    return out, why
 
 
 def _reference_heading(imu: Stream) -> tuple[np.ndarray, int]:
@@ -351,30 +251,8 @@ def _reference_heading(imu: Stream) -> tuple[np.ndarray, int]:
 def _check_imu_count(name: str, imu: Stream) -> None:
     """The Imu topic needs at least two messages."""
     if imu.t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few messages ({imu.t.size}) on {imu.label}",
-                f"give a bag with at least {_MIN_IMU_SAMPLES} message(s) on it",
-            )
-        )
-
-
-def _summary(path: Path, t: np.ndarray, streams: dict[str, Stream | None], mag_count: int, notes: list[str]) -> str:
-    """One human line describing what was read (``mag_count`` 0: no compass)."""
-    imu, temp, mag = streams["imu"], streams["temp"], streams["mag"]
-    parts = [
-        f"{path.name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
-        f"gyro {median_rate_hz(t):.3g} Hz from {imu.label} (ROS FLU converted to FRD)",
-        f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
-        f" ({describe_rate(temp.t)}, interpolated)"
-        if temp is not None
-        else f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)",
-        f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_count} rows) + acc from {imu.label}"
-        if mag_count
-        else f"no compass; acc from {imu.label}",
-    ]
-    return "; ".join(parts + notes)
+        raise log_error(name, f"too few messages ({imu.t.size}) on {imu.label}",
+                        f"give a bag with at least {_MIN_IMU_SAMPLES} message(s) on it")
 
 
 def _notes(zero_stamps: int, dropped: int, ref_count: int) -> list[str]:
@@ -401,13 +279,8 @@ class _Gaps(NamedTuple):
 def _streams(
     name: str, chosen: dict[str, str], raw: dict[str, _Raw]
 ) -> tuple[dict[str, Stream | None], int, int, _Gaps]:
-    """Time-ordered Imu, temperature and magnetometer streams (FLU values as recorded).
-
-    Returns the streams (``"temp"``, ``"mag"``: None without a topic, without a
-    message, or for a temperature not measured), the number of messages timed by their
-    receive time, the number of Imu messages dropped for a repeated time, and why the
-    temperature or the magnetometer is None.
-    """
+    """Time-ordered Imu, temperature and magnetometer streams (FLU), the messages timed by their receive
+    time, the Imu messages dropped for a repeated time, and why temperature or magnetometer is None."""
     by_type = {msgtype: topic for topic, msgtype in chosen.items()}
     widths = {"imu": (_IMU, 11), "temp": (_TEMPERATURE, 1), "mag": (_MAGNETIC_FIELD, 3)}
     streams: dict[str, Stream | None] = {}
@@ -419,13 +292,8 @@ def _streams(
     _check_imu_count(name, streams["imu"])
     streams["imu"], dropped = increasing(streams["imu"])
     if streams["imu"].t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few Imu messages with distinct times ({streams['imu'].t.size}) on {streams['imu'].label}",
-                "give a longer bag",
-            )
-        )
+        raise log_error(name, f"too few Imu messages with distinct times ({streams['imu'].t.size}) on"
+                        f" {streams['imu'].label}", "give a longer bag")
     temp_gap = f"no {_TEMPERATURE} topic in the bag"
     if streams["temp"] is not None:
         streams["temp"], temp_gap = _temperature(name, increasing(streams["temp"])[0])
@@ -444,43 +312,32 @@ def read_rosbag(
 ) -> pd.DataFrame:
     """Read a ROS 1 or ROS 2 bag into the gyrodrift input contract.
 
+    See docs/log-formats.md, section "ROS bags", for the messages each column comes from.
+
     Parameters
     ----------
     path : str or os.PathLike
-        ROS 1 ``.bag`` file, ROS 2 bag directory (with ``metadata.yaml``) or ROS 2
-        ``.db3``/``.mcap`` file.
+        ROS 1 ``.bag`` file, ROS 2 bag directory or ROS 2 ``.db3``/``.mcap`` file.
     imu_topic, temp_topic, mag_topic : str, optional
-        Topics of type ``sensor_msgs/Imu``, ``sensor_msgs/Temperature`` and
-        ``sensor_msgs/MagneticField``. Each may be left out if the bag has exactly one
-        topic of that type.
+        Topics of type ``sensor_msgs/Imu``, ``Temperature`` and ``MagneticField``; each
+        may be left out when the bag has one topic of that type.
     gyro_max_dps : float, default 10000
-        Plausible full scale of the gyro axes, deg/s; a larger rate (a corrupt record)
-        is refused, as are the other implausible values of :mod:`gyrodrift.io.limits`.
+        Plausible full scale of the gyro axes, deg/s (:mod:`gyrodrift.io.limits`).
 
     Returns
     -------
     pandas.DataFrame
-        One row per Imu message: ``t`` (s, absolute, strictly increasing), ``gyro_z``,
-        ``gyro_x``, ``gyro_y`` (deg/s, body FRD), ``temp`` (degC; 0 in every row
-        without a measured temperature), ``mag_x``, ``mag_y``, ``mag_z`` (tesla, body
-        FRD, NaN on rows without a new sample; no columns without a compass),
-        ``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD) and
-        ``ref_heading`` (deg, [0, 360), NaN where the Imu has no orientation; no column
-        if it never has one). ``df.attrs``: ``source``, ``format`` ("rosbag"),
-        ``gyro_unit`` ("deg/s"), ``frame`` ("ned"), ``compass`` ("mag", or "none"),
-        ``mag_unit`` ("T", with the mag columns), ``acc_unit`` ("m/s^2"), ``topics``
-        (column group -> topic; None for a group without data), ``summary`` (one
-        line) and, when the bag has no compass or no measured temperature, ``notes``
-        (one line each, :mod:`gyrodrift.io.notes`).
+        One row per Imu message (``mag_*`` in tesla; ``ref_heading`` only when the Imu
+        has an orientation); ``attrs`` as docs/log-formats.md, section "Alignment",
+        with ``format`` "rosbag".
 
     Raises
     ------
     LogFormatError
         Missing, empty, unreadable or truncated bag; no Imu topic; fewer than two Imu
-        messages (with distinct times); an implausible temperature, gyro rate or
-        magnetometer or accelerometer value (:mod:`gyrodrift.io.limits`).
+        messages with distinct times; an implausible value.
     ConfigError
-        rosbags is not installed; a named topic is missing or has another type; several
+        rosbags is not installed; a named topic missing or of another type; several
         topics of a type and no option naming one.
     """
     gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
@@ -492,18 +349,17 @@ def read_rosbag(
     streams, zero_stamps, dropped, gaps = _streams(name, chosen, raw)
     imu, temp, mag = streams["imu"], streams["temp"], streams["mag"]
     t = imu.t
-    mag_rows, mag_count, compass_gap = None, 0, gaps.compass
     if mag is not None:
-        mag_rows, mag_count = on_following_rows(t, mag.t, mag.values * _FLU_TO_FRD)
-        if mag_count == 0:
-            mag_rows = None
-            compass_gap = f"no message of {mag.label} falls within the Imu record, t = {t[0]:.3f}..{t[-1]:.3f} s"
+        mag = Stream(mag.label, mag.t, mag.values * _FLU_TO_FRD)
+    mag_rows, mag_count, compass_gap = compass_on_rows(t, mag, imu, gaps.compass, "", sample="message",
+                                                       record="Imu")
     ref_heading, ref_count = _reference_heading(imu)
     topics = {"imu": imu.label, "temp": temp.label if temp is not None else None,
               "mag": mag.label if mag_count else None}
+    summary = read_summary(name, t, f"gyro {median_rate_hz(t):.3g} Hz from {imu.label} (ROS FLU converted to FRD)",
+                           temp, compass_parts(mag, mag_count, imu.label), _notes(zero_stamps, dropped, ref_count))
     return binary_log_frame(
         name, "rosbag", t, np.degrees(imu.values[:, 0:3]) * _FLU_TO_FRD,
         interp_held(temp.t, temp.values, t) if temp is not None else None, mag_rows, imu.values[:, 3:6] * _FLU_TO_FRD,
-        ref_heading if ref_count else None, topics=topics,
-        summary=_summary(path, t, streams, mag_count, _notes(zero_stamps, dropped, ref_count)),
-        no_compass_why=compass_gap, no_temp_why=gaps.temp, gyro_max_dps=gyro_max_dps, mag_unit="T")
+        ref_heading if ref_count else None, topics=topics, summary=summary, no_compass_why=compass_gap,
+        no_temp_why=gaps.temp, gyro_max_dps=gyro_max_dps, mag_unit="T")

@@ -1,16 +1,8 @@
 """Read input logs (CSV or Parquet) whole in the gyrodrift input contract; write result tables.
 
-:func:`read_log` turns a user's log into a validated :class:`pandas.DataFrame` in the
-units and frames of :mod:`gyrodrift.conventions`, with the checks, conversions and
-one-line error messages of :mod:`gyrodrift.io.validate`.
-
-:func:`write_table` writes a DataFrame as CSV or Parquet atomically, and
-:func:`check_output_path` refuses an output path that is the input log.
-
-:mod:`gyrodrift.io.chunked` reads and writes the same tables in chunks. Both share the
-per-frame checks and conversions (:func:`gyrodrift.io.validate.normalise_frame`), the
-CSV reading options and formatting (:mod:`gyrodrift.io.csvfile`) and the Parquet
-settings (:mod:`gyrodrift.io.parquetfile`), so both paths give identical results.
+:func:`read_log` checks and converts a table as docs/log-formats.md, section "Tables: CSV
+and Parquet", describes; :func:`write_table` and :func:`check_output_path` write results
+(section "Writing tables"). :mod:`gyrodrift.io.chunked` does both in chunks with the same code.
 """
 
 from __future__ import annotations
@@ -25,7 +17,6 @@ import pyarrow.csv as pa_csv
 import pyarrow.parquet as pa_pq
 
 from gyrodrift._atomic import atomic_path
-from gyrodrift.errors import ConfigError
 from gyrodrift.io.csvfile import (
     CSV_EMPTY_ADVICE,
     UTF8_BOM,
@@ -51,8 +42,8 @@ from gyrodrift.io.messages import (
     Source,
     check_input_path,
     empty_file_error,
-    message,
     no_data_rows_error,
+    option_error,
     physical_line,
     read_error,
 )
@@ -130,74 +121,46 @@ def _read_parquet_table(path: Path) -> tuple[pa.Table, Source]:
     return table, src
 
 
-def read_log(
-    path,
-    *,
-    fmt: str | None = None,
-    gyro_unit: str = "deg/s",
-    frame: str | None = None,
-    column_map: Mapping[str, str] | None = None,
-    time_unit: str | None = None,
-    gyro_max_dps: float = GYRO_MAX_DPS,
-) -> pd.DataFrame:
-    """Read and validate an input log; return it in contract units and frames.
+def read_log(path, *, fmt: str | None = None, gyro_unit: str = "deg/s", frame: str | None = None,
+             column_map: Mapping[str, str] | None = None, time_unit: str | None = None,
+             gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
+    """Read and validate a CSV or Parquet log; return it in contract units and frames.
+
+    See docs/log-formats.md, section "Tables: CSV and Parquet", for every check and
+    conversion, and section "Messages" for the wording of the errors.
 
     Parameters
     ----------
     path : str or os.PathLike
-        CSV (``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz``) with a header row, or
-        Parquet (``.parquet``, ``.pq``). Gzip-compressed CSV is recognised by content.
+        CSV (``.csv``, ``.csv.gz``, ``.txt``, ``.txt.gz``) with a header row, or Parquet
+        (``.parquet``, ``.pq``).
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
     gyro_unit : {"deg/s", "dps", "rad/s"}, default "deg/s"
-        Unit of the gyro columns ``gyro_x``, ``gyro_y``, ``gyro_z`` in the file (and of
-        their simulated biases ``true_bias_x``, ``true_bias_y``, ``true_bias_z``). Output is
-        always deg/s.
+        Unit of the gyro columns (and ``true_bias_*``) in the file; output is deg/s.
     frame : {"ned", "enu"}, optional
-        Axis convention of the file. ``"enu"`` (ROS REP-103, body FLU) is converted to
-        NED/FRD: ``heading`` and ``ref_heading`` become ``wrap_360(90 - value)``; the y
-        and z components (``gyro_y``, ``gyro_z``, ``true_bias_y``, ``true_bias_z``,
-        ``mag_y``, ``mag_z``, ``acc_y``, ``acc_z``) change sign. Default NED/FRD, and a
-        table whose accelerometer shows its z axis pointing up is then refused, naming
-        ``--frame enu`` (:func:`gyrodrift.io.validate.check_z_up`); ``"ned"`` given reads
-        it as it is (a unit lying upside down).
+        Axis convention of the file; ``"enu"`` (ROS REP-103) is converted to NED/FRD.
+        Default NED/FRD, with a table whose accelerometer shows z up refused.
     column_map : mapping of str to str, optional
-        ``{NEW: OLD}``: rename input column OLD to contract name NEW before validation.
+        ``{NEW: OLD}``: rename input column OLD to contract name NEW first.
     time_unit : {"s", "ms", "us", "ns"}, optional
-        Unit of ``t`` in the file; ``t`` is converted to s. Without it ``t`` is read as
-        s, and time stamps that look like another unit are refused naming the unit to
-        give (:mod:`gyrodrift.io.timebase`, decided on the whole file here and on the
-        first chunk by :func:`gyrodrift.io.chunked.iter_log_chunks`).
-    gyro_max_dps : float, default :data:`gyrodrift.io.limits.GYRO_MAX_DPS` (10000)
-        Plausible full scale of the gyro axes, deg/s: a larger rate is refused like an
-        implausible temperature (:mod:`gyrodrift.io.limits` lists every plausible range).
+        Unit of ``t`` in the file (docs/log-formats.md, section "Time base").
+    gyro_max_dps : float, default 10000
+        Plausible full scale of the gyro axes, deg/s (:mod:`gyrodrift.io.limits`).
 
     Returns
     -------
     pandas.DataFrame
-        All input columns in file order (renamed, names stripped). Numeric contract
-        columns are float64 with empty cells NaN, headings in [0, 360); others pass
-        through. ``df.attrs``: ``source``, ``format``, ``gyro_unit``, ``frame``,
-        ``compass`` ("heading", "mag", "both" or "none") and ``notes`` when the log
-        lacks a compass or a temperature. Without a usable ``temp``, ``temp`` is 0.0
-        in every row.
+        All input columns in file order, numeric contract columns float64; ``attrs``:
+        ``source``, ``format``, ``gyro_unit``, ``frame``, ``compass`` and ``notes``.
 
     Raises
     ------
     LogFormatError
         The file is missing, empty, not a table, ragged, lacks ``t`` or ``gyro_z``, or
-        holds bad values (non-numbers, inf, a non-increasing ``t``, a value outside
-        :mod:`gyrodrift.io.limits`, a first row without ``gyro_z``/``temp``). Later
-        empty ``gyro_z``/``temp`` cells stay NaN.
+        holds a bad value.
     ConfigError
-        An unknown ``fmt``, ``gyro_unit`` or ``frame``, an undecidable file-name ending,
-        or a ``column_map`` naming a column the file lacks.
-
-    Notes
-    -----
-    Messages are one line: ``<file>: line N, column 'c': <problem>; <what to do>``
-    for CSV (line numbers as an editor shows them, header = line 1) and
-    ``data row N`` (1-based) for Parquet.
+        An unknown ``fmt``, ``gyro_unit``, ``frame`` or ending, or a bad ``column_map``.
     """
     path = Path(path)
     opts = read_options(gyro_unit, frame, column_map, time_unit, gyro_max_dps)
@@ -228,12 +191,8 @@ def read_log(
 
 
 def _write_csv(df: pd.DataFrame, sink) -> None:
-    """Write ``df`` as UTF-8 CSV (no index, shortest round-trip floats, NaN as an empty
-    cell) to a binary file.
-
-    pyarrow formats the values (about ten times faster than pandas), see
-    :func:`write_csv_rows`; pandas writes tables pyarrow cannot convert or print.
-    """
+    """Write ``df`` as UTF-8 CSV (no index) to a binary file: pyarrow prints it, or pandas
+    what pyarrow cannot convert or print."""
     table = csv_table(df)
     if table is None or not write_csv_rows(table, sink, csv_header(df.columns)):
         write_csv_with_pandas(df, sink, header=True)
@@ -246,18 +205,13 @@ def _write_parquet(df: pd.DataFrame, sink) -> None:
 
 
 def formula_safe(df: pd.DataFrame) -> pd.DataFrame:
-    """A copy of ``df`` whose text cells and column names that start like a formula
-    (:data:`FORMULA_STARTS`) get a leading ``'``, so that a spreadsheet shows them as
-    text; number columns are left as they are (:mod:`gyrodrift.io.formula`, which every
-    CSV writer applies)."""
+    """A copy of ``df`` with its text cells and names that start like a formula quoted with ``'``
+    (:mod:`gyrodrift.io.formula`, which every CSV writer applies)."""
     return formula_safe_frame(df)
 
 
 def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_safe: bool = False) -> None:
-    """Write a DataFrame as CSV or Parquet, atomically.
-
-    Through a temporary file and :func:`os.replace`: readers never see a partial file,
-    and ``path`` is untouched if writing fails.
+    """Write a DataFrame as CSV or Parquet, atomically (docs/log-formats.md, section "Writing tables").
 
     Parameters
     ----------
@@ -268,14 +222,13 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_s
     fmt : {"csv", "parquet"}, optional
         Table format; overrides the file-name ending.
     spreadsheet_safe : bool, default False
-        Kept for callers that ask for it: every CSV is written with its formula-like
-        text cells and names quoted (:func:`formula_safe`); ``df`` itself is not changed.
+        Kept for callers that ask for it: every CSV is written spreadsheet-safe.
 
     Raises
     ------
     ConfigError
-        Unknown format or file-name ending, missing destination directory, a
-        destination that is a directory, or an OS error while writing.
+        Unknown format or ending, missing destination directory, a destination that is a
+        directory, or an OS error while writing.
     """
     path = Path(path)
     table_fmt = table_format(path, fmt, WRITE_SUFFIXES)
@@ -285,26 +238,10 @@ def write_table(df: pd.DataFrame, path, *, fmt: str | None = None, spreadsheet_s
 
 
 def check_output_path(in_path, out_path) -> None:
-    """Refuse an output path that is the input log itself.
-
-    Parameters
-    ----------
-    in_path, out_path : str or os.PathLike
-        Input log and planned output file.
-
-    Raises
-    ------
-    ConfigError
-        If both resolve to the same file (same real path, or the same file through a
-        hard link when both exist).
-    """
+    """Refuse (:class:`ConfigError`) an output path that is the input log itself: the same
+    real path, or the same file through a hard link."""
     from gyrodrift._paths import same_file
 
     if same_file(in_path, out_path):
-        raise ConfigError(
-            message(
-                str(out_path),
-                f"output file is the input log {str(in_path)!r}",
-                "the input is never overwritten: choose another -o",
-            )
-        )
+        raise option_error(str(out_path), f"output file is the input log {str(in_path)!r}",
+                           "the input is never overwritten: choose another -o")

@@ -1,24 +1,10 @@
 """The time base of a table's ``t`` column: its unit, and whether it is plausible.
 
-Tables state no unit for ``t``; the contract is seconds. ``--time-unit`` (``time_unit``
-in Python) names another unit of :data:`~gyrodrift.conventions.TIME_UNITS`, and the
-table readers multiply ``t`` by its factor as they read. Without it, the time stamps
-are checked for the marks of another unit (:func:`check_time_base`), because a log in
-milliseconds read as seconds runs at a thousandth of its rate without any error:
-
-* values above :data:`EPOCH_LIMIT` (1e12): ms, µs or ns since 1970 (the magnitude tells
-  which), or ns since boot;
-* a median time step of :data:`MAX_STEP_S` (1000) or more, or of :data:`MAX_WHOLE_STEP_S`
-  (10) or more in a column of whole numbers: ms, µs or ns since boot;
-* a median time step giving a sample rate above :data:`MAX_RATE_HZ` (100 kHz), checked
-  with or without ``time_unit``.
-
-Each is refused with the ``--time-unit`` to pass (the unit whose sample rate is the most
-ordinary). A sample rate below :data:`MIN_RATE_HZ` (1 Hz) that none of these catches is
-read, with a note. A file is judged on all its time stamps (on its first chunk when read
-in chunks); times that come one by one (``gyrodrift stream``, :class:`gyrodrift.Compensator`)
-are judged by :class:`TimeBaseWatch` on their first ones, with the same rules. This module imports no other module of gyrodrift.io but
-:mod:`gyrodrift.io.notes`, so that :mod:`gyrodrift.io.validate` can import it.
+:func:`check_time_base` looks for the marks of another unit than the one read (epoch
+magnitudes, large or whole-number steps, a rate above 100 kHz) and :class:`TimeBaseWatch`
+does so for time stamps that come one by one: docs/log-formats.md, section "Time base".
+This module imports no other module of gyrodrift.io, so that :mod:`gyrodrift.io.validate`
+can import it.
 """
 
 from __future__ import annotations
@@ -115,8 +101,8 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
     Parameters
     ----------
     t_raw : numpy.ndarray
-        The ``t`` column as in the file (before the unit's factor), strictly increasing;
-        at least two values are needed for a step (one value is judged on its magnitude only).
+        The ``t`` column as in the file (before the unit's factor); one value is judged on
+        its magnitude only.
     unit : str or None
         The canonical ``time_unit`` given (None: seconds, not stated; then the marks of
         another unit are looked for too).
@@ -124,8 +110,8 @@ def check_time_base(t_raw: np.ndarray, unit: str | None) -> TimeBase:
     Returns
     -------
     TimeBase
-        ``problem`` and ``advice`` (one clause each) when the time base is implausible,
-        else ``note`` when the sample rate is below :data:`MIN_RATE_HZ`, else neither.
+        ``problem`` and ``advice`` when the time base is implausible, else ``note`` when
+        the sample rate is below :data:`MIN_RATE_HZ`, else neither.
     """
     t_raw = np.asarray(t_raw, dtype=np.float64)
     if t_raw.size < 2:
@@ -166,19 +152,8 @@ def _advice(suggested: str | None) -> str:
 
 
 class TimeBaseWatch:
-    """:func:`check_time_base` for time stamps that come one by one.
-
-    The first time stamp is judged on its magnitude; the steps once :data:`STEPS` of them
-    have come (a single odd first step does not decide), and again at every time stamp
-    until :data:`DECIDED` have come (as a file read in chunks is judged on its first
-    chunk); :meth:`end` judges a stream that ended before :data:`STEPS` steps. Each
-    returns the :class:`TimeBase` found (a problem stops the stream; a note is said once).
-
-    Parameters
-    ----------
-    unit : str or None
-        The canonical time unit given (None: seconds, not stated), as for a file.
-    """
+    """:func:`check_time_base` for time stamps that come one by one, in the canonical ``unit``
+    (None: seconds, not stated); when each is judged: docs/log-formats.md, section "Time base"."""
 
     #: Steps needed before the steps are judged.
     STEPS = 8
@@ -221,14 +196,8 @@ class TimeBaseWatch:
 
 
 def time_base_notes(t_raw: np.ndarray, unit: str | None, name: str) -> tuple[str, ...]:
-    """:func:`check_time_base` for the file ``name``: raise its refusal, return its note.
-
-    Raises
-    ------
-    LogFormatError
-        ``<name>: column 't': <problem>; <advice>``, the message style of
-        :mod:`gyrodrift.io.validate`.
-    """
+    """:func:`check_time_base` for the file ``name``: raise its refusal as a :class:`LogFormatError`
+    (``<name>: column 't': <problem>; <advice>``), return its note."""
     found = check_time_base(t_raw, unit)
     if found.problem:
         raise LogFormatError(f"{name}: column 't': {found.problem}; {found.advice}")

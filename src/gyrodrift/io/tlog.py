@@ -1,47 +1,8 @@
-"""Read MAVLink telemetry logs (``.tlog``) into the gyrodrift input contract.
+"""Read MAVLink telemetry logs (``.tlog``) into the gyrodrift input contract (needs pymavlink).
 
-A ``.tlog`` is what a ground station (Mission Planner, QGroundControl, MAVProxy) records
-of the telemetry link: each MAVLink packet as received, after the time it arrived (8
-bytes, big-endian, µs since 1970). The IMU messages come at the stream rate the ground
-station asked for, 1 to 10 Hz, irregularly (packets are lost, or late); for many users it
-is the only record of a warm-up. Needs the optional package pymavlink (``pip install
-'gyrodrift[ardupilot]'``), whose ``ardupilotmega`` dialect decodes the packets; the
-framing is walked here, so that only the messages used are decoded, a corrupt stretch is
-skipped and counted, and a packet whose checksum fails is dropped and counted.
-
-Which messages give which column (MAVLink ``common.xml``; ArduPilot ``GCS_Common.cpp``)
--------------------------------------------------------------------------------------
-Only the packets of the vehicle's autopilot are read: the system of the first
-``HEARTBEAT`` from a component that is not a ground station, component 1
-(``MAV_COMP_ID_AUTOPILOT1``). Its ``autopilot`` field says whose numbering applies.
-
-``t`` (s)
-    The vehicle's own clock of the IMU message (``time_boot_ms`` ms, or ``time_usec``
-    µs for ``RAW_IMU``), not the arrival time. Packets that arrive out of order are
-    sorted; a reboot (the vehicle clock's offset from the arrival time moving by more
-    than :data:`REBOOT_S`) splits the log, and only the boot with the most IMU samples
-    is read (the summary says so).
-``gyro_x``, ``gyro_y``, ``gyro_z`` (deg/s, body FRD), ``acc_*`` (m/s²), ``mag_*`` (gauss)
-    IMU instance ``instance``: ArduPilot (``MAV_AUTOPILOT_ARDUPILOTMEGA``) sends IMU 0 as
-    ``RAW_IMU``, IMU 1 as ``SCALED_IMU2``, IMU 2 as ``SCALED_IMU3``, all in mrad/s, mG and
-    mgauss, in the body frame after its calibration, ``INS_TCAL`` correction and
-    ``AHRS_ORIENTATION``, as the DataFlash ``IMU`` message
-    (:class:`gyrodrift.onboard.Onboard` as for a ``.bin``); other autopilots send
-    ``SCALED_IMU``, ``SCALED_IMU2``, ``SCALED_IMU3`` (``RAW_IMU`` is raw counts there, and
-    not read). The magnetometer of the same message is the compass (``mag_instance``:
-    that of another IMU message); one that reads 0 in every sample is none.
-``temp`` (degC)
-    The IMU message's ``temperature`` (cdegC; a MAVLink 2 extension, 0 meaning "not
-    provided"), else the first barometer's, ``SCALED_PRESSURE.temperature`` (cdegC), the
-    board's temperature near the IMU (the summary says which), interpolated onto the
-    IMU samples. None of them: ``temp`` is 0 and a note says so (:mod:`gyrodrift.io.notes`).
-``ref_heading`` (deg, [0, 360)), with ``reference=True``
-    ``ATTITUDE.yaw`` (rad) interpolated in unwrapped form onto the IMU samples.
-
-Parameters come from the ``PARAM_VALUE`` messages the ground station received (the last
-value of each; PX4 sends integers bytewise in the float, ``MAV_PROTOCOL_CAPABILITY_
-PARAM_ENCODE_BYTEWISE``, decoded here). Errors are one line, ``<file>: <problem>; <what
-to do>``, as in :mod:`gyrodrift.io.validate`.
+The framing is walked here and only the messages used are decoded. Which messages give
+which column, and how reboots and damage are handled: docs/log-formats.md, section
+"MAVLink telemetry logs".
 """
 
 from __future__ import annotations
@@ -53,26 +14,17 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from gyrodrift.errors import ConfigError, LogFormatError
+from gyrodrift.errors import ConfigError
 from gyrodrift.io.align import (
-    Stream,
-    check_temperature,
-    binary_log_frame,
-    describe_rate,
-    increasing,
-    interp_heading,
-    interp_held,
-    on_following_rows,
+    Stream, binary_log_frame, check_reader_options, check_temperature, describe_rate, increasing, interp_held,
+    last_values, no_instance, on_following_rows, read_summary, reference_heading,
 )
-from gyrodrift.io.ardupilot import _check_instance  # the same rule for both MAVLink logs
-from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_TEMPERATURE_C
-from gyrodrift.io.messages import message, read_log_bytes
+from gyrodrift.io.limits import GYRO_MAX_DPS
+from gyrodrift.io.messages import log_error, optional_module, read_log_bytes
 from gyrodrift.onboard import ardupilot_onboard, px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_tlog", "read_tlog_imus", "REBOOT_S"]
 
-_INSTALL = "pip install 'gyrodrift[ardupilot]'"
 #: A vehicle clock that goes back by more than this (s) is a reboot.
 REBOOT_S = 5.0
 _MIN_IMU_SAMPLES = 2
@@ -98,20 +50,6 @@ class _Packets(NamedTuple):
     system: int | None  #: its system id
     skipped: int  #: bytes of no tlog record
     bad: int  #: packets of a wanted message whose checksum or length failed
-
-
-def _import_dialect():
-    try:
-        from pymavlink.dialects.v20 import ardupilotmega
-    except ImportError as exc:
-        raise ConfigError(
-            f"reading MAVLink telemetry logs (.tlog) needs the optional package pymavlink; install it with {_INSTALL}"
-        ) from exc
-    return ardupilotmega
-
-
-def _read_bytes(path: Path) -> bytes:
-    return read_log_bytes(path, "a telemetry log", "give the path of a .tlog file", "give a .tlog recorded by a ground station")
 
 
 def _frame_length(data: bytes, pos: int) -> int:
@@ -174,18 +112,16 @@ def _walk(data: bytes, dialect) -> _Packets:
 
 def _params(packets: _Packets) -> tuple[dict, set]:
     """``PARAM_VALUE`` name -> the last value, and the names received with more than one value."""
-    values: dict[str, float] = {}
-    seen: dict[str, set] = {}
-    for _, msg in packets.messages["PARAM_VALUE"]:
-        name = str(msg.param_id).split("\0", 1)[0]
-        value = float(msg.param_value)
-        code = _INT_TYPES.get(int(msg.param_type))
-        if packets.autopilot == _PX4 and code is not None:  # bytewise: the float's bytes hold the integer
-            raw = struct.pack("<f", value)
-            value = float(struct.unpack_from(code, raw)[0])
-        values[name] = value
-        seen.setdefault(name, set()).add(value)
-    return values, {n for n, v in seen.items() if len(v) > 1}
+    return last_values(_param_value(packets.autopilot, msg) for _, msg in packets.messages["PARAM_VALUE"])
+
+
+def _param_value(autopilot: int | None, msg) -> tuple[str, float]:
+    """Name and value of a ``PARAM_VALUE``, a PX4 integer decoded from the float's bytes."""
+    value = float(msg.param_value)
+    code = _INT_TYPES.get(int(msg.param_type))
+    if autopilot == _PX4 and code is not None:  # bytewise: the float's bytes hold the integer
+        value = float(struct.unpack_from(code, struct.pack("<f", value))[0])
+    return str(msg.param_id).split("\0", 1)[0], value
 
 
 def _vehicle_time(msg) -> float:
@@ -193,12 +129,8 @@ def _vehicle_time(msg) -> float:
 
 
 def _boots(imu_rows: list) -> list[tuple[float, float]]:
-    """The vehicle's boots: ranges of ``arrival - vehicle clock`` (s) of the IMU messages.
-
-    Within a boot that difference is the clock's offset plus the link's delay; a reboot
-    moves it by the time the vehicle was up, so gaps wider than :data:`REBOOT_S` between
-    the sorted differences separate the boots (a late packet of one boot still falls in
-    its own range)."""
+    """The vehicle's boots: ranges of ``arrival - vehicle clock`` (s) of the IMU messages,
+    split where the sorted offsets jump by more than :data:`REBOOT_S`."""
     offsets = np.sort([arrival - _vehicle_time(msg) for arrival, msg in imu_rows])
     cuts = np.flatnonzero(np.diff(offsets) > REBOOT_S)
     starts, ends = np.r_[0, cuts + 1], np.r_[cuts, offsets.size - 1]
@@ -255,29 +187,50 @@ def _onboard(autopilot, params, changed, instance: int, has_temp: bool, name: st
 
 
 def _open(path) -> tuple[str, _Packets]:
-    dialect = _import_dialect()
+    dialect = optional_module("pymavlink.dialects.v20.ardupilotmega", "reading MAVLink telemetry logs (.tlog)",
+                              "pymavlink", "ardupilot")
     path = Path(path)
     name = str(path)
-    packets = _walk(_read_bytes(path), dialect)
+    data = read_log_bytes(path, "a telemetry log", "give the path of a .tlog file",
+                          "give a .tlog recorded by a ground station")
+    packets = _walk(data, dialect)
     if not any(packets.messages[n] for n in ("RAW_IMU", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")):
         what = "no MAVLink packets" if packets.skipped and not any(packets.messages.values()) else "no IMU messages"
-        raise LogFormatError(message(name, f"{what} (RAW_IMU or SCALED_IMU*) found", "give a .tlog recorded with the "
-                                     "IMU stream on (Mission Planner: SRn_RAW_SENS; QGroundControl: the vehicle's "
-                                     "SCALED_IMU rate)"))
+        raise log_error(name, f"{what} (RAW_IMU or SCALED_IMU*) found", "give a .tlog recorded with the "
+                        "IMU stream on (Mission Planner: SRn_RAW_SENS; QGroundControl: the vehicle's "
+                        "SCALED_IMU rate)")
     return name, packets
+
+
+def read_tlog_imus(path, *, mag_instance: int | None = None, reference: bool = True,
+                   gyro_max_dps: float = GYRO_MAX_DPS, instances=None) -> list[pd.DataFrame]:
+    """Every IMU of a telemetry log (or the ``instances`` listed), each as :func:`read_tlog` reads
+    one, in instance order."""
+    gyro_max_dps = check_reader_options(instances, mag_instance, gyro_max_dps)
+    name, packets = _open(path)
+    names = _imu_names(packets.autopilot)
+    present = [k for k, n in enumerate(names) if packets.messages[n]]
+    if instances is None:
+        instances = present
+    for k in (*instances, *([mag_instance] if mag_instance is not None else [])):
+        if k not in present:
+            raise no_instance(name, "IMU", k, present, "instance")
+    params, changed = _params(packets)
+    return [_read(packets, params, changed, name, k, mag_instance, reference, gyro_max_dps) for k in instances]
 
 
 def read_tlog(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True,
               gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
     """Read a MAVLink telemetry log (``.tlog``) into the gyrodrift input contract.
 
+    See docs/log-formats.md, section "MAVLink telemetry logs", for the messages each
+    column comes from.
+
     Parameters
     ----------
     path : str or os.PathLike
-        The ``.tlog`` file.
     instance : int, default 0
-        IMU instance (module notes: ArduPilot ``RAW_IMU`` 0, ``SCALED_IMU2`` 1,
-        ``SCALED_IMU3`` 2).
+        IMU instance (ArduPilot: ``RAW_IMU`` 0, ``SCALED_IMU2`` 1, ``SCALED_IMU3`` 2).
     mag_instance : int, optional
         The IMU message whose magnetometer is the compass (default: ``instance``'s).
     reference : bool, default True
@@ -288,13 +241,9 @@ def read_tlog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     Returns
     -------
     pandas.DataFrame
-        One row per IMU sample: ``t`` (s, the vehicle's clock, strictly increasing),
-        ``gyro_z``, ``gyro_x``, ``gyro_y`` (deg/s, body FRD), ``temp`` (degC),
-        ``mag_*`` (gauss; no columns without a compass), ``acc_*`` (m/s²) and, with
-        ``reference``, ``ref_heading`` (deg). ``df.attrs``: ``source``, ``format``
-        ("tlog"), ``gyro_unit``, ``frame``, ``compass``, ``mag_unit``, ``acc_unit``,
-        ``topics``, ``summary``, ``onboard`` (:class:`gyrodrift.onboard.Onboard`, for
-        ArduPilot and PX4) and ``notes`` when the log lacks a compass or a temperature.
+        One row per IMU sample, ``t`` on the vehicle's clock; ``attrs`` as
+        docs/log-formats.md, section "Alignment", with ``format`` "tlog" and ``onboard``
+        (ArduPilot and PX4).
 
     Raises
     ------
@@ -304,30 +253,8 @@ def read_tlog(path, *, instance: int = 0, mag_instance: int | None = None, refer
     ConfigError
         pymavlink is not installed; ``instance`` or ``mag_instance`` not in the log.
     """
-    _check_instance(instance, "instance")
-    return _read_instances(path, [instance], mag_instance, reference, gyro_max_dps)[0]
-
-
-def read_tlog_imus(path, *, mag_instance: int | None = None, reference: bool = True,
-                   gyro_max_dps: float = GYRO_MAX_DPS) -> list[pd.DataFrame]:
-    """Every IMU of a telemetry log, each read as :func:`read_tlog` reads one, in instance order."""
-    return _read_instances(path, None, mag_instance, reference, gyro_max_dps)
-
-
-def _read_instances(path, instances, mag_instance, reference, gyro_max_dps) -> list[pd.DataFrame]:
-    _check_instance(mag_instance, "mag_instance", allow_none=True)
-    gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
-    name, packets = _open(path)
-    names = _imu_names(packets.autopilot)
-    present = [k for k, n in enumerate(names) if packets.messages[n]]
-    if instances is None:
-        instances = present
-    for k in (*instances, *([mag_instance] if mag_instance is not None else [])):
-        if k not in present:
-            raise ConfigError(message(name, f"there is no IMU instance {k}; instances present: "
-                                      f"{', '.join(map(str, present))}", "choose one of them (instance=N)"))
-    params, changed = _params(packets)
-    return [_read(packets, params, changed, name, k, mag_instance, reference, gyro_max_dps) for k in instances]
+    return read_tlog_imus(path, mag_instance=mag_instance, reference=reference, gyro_max_dps=gyro_max_dps,
+                          instances=[instance])[0]
 
 
 def _read(packets: _Packets, params, changed, name: str, instance: int, mag_instance, reference: bool,
@@ -338,8 +265,8 @@ def _read(packets: _Packets, params, changed, name: str, instance: int, mag_inst
     boot = boots[int(np.argmax(counts))]
     gyro, dropped = increasing(_imu_stream(_rows(packets, names[instance], boot), names[instance]))
     if gyro.t.size < _MIN_IMU_SAMPLES:
-        raise LogFormatError(message(name, f"too few IMU samples ({gyro.t.size}) in {names[instance]}",
-                                     f"give a log with at least {_MIN_IMU_SAMPLES} IMU samples"))
+        raise log_error(name, f"too few IMU samples ({gyro.t.size}) in {names[instance]}",
+                        f"give a log with at least {_MIN_IMU_SAMPLES} IMU samples")
     t = gyro.t
     temp, no_temp_why = _temperature(gyro, _rows(packets, "SCALED_PRESSURE", boot))
     if temp is not None:
@@ -352,17 +279,10 @@ def _read(packets: _Packets, params, changed, name: str, instance: int, mag_inst
     mag = Stream(mag.label, mag.t[mag_ok], mag.values[mag_ok])
     mag_on_rows, mag_rows = on_following_rows(t, mag.t, mag.values) if mag.t.size else (None, 0)
     no_compass_why = "" if mag_rows else f"the magnetometer of {mag.label} reads 0 in every sample"
-    extra = []
-    ref_heading = None
-    if reference:
-        att = _rows(packets, "ATTITUDE", boot)
-        if att:
-            ref = increasing(Stream("ATTITUDE", np.array([m.time_boot_ms * 1e-3 for m in att]),
-                                    np.degrees([m.yaw for m in att])))[0]
-            ref_heading = interp_heading(ref.t, ref.values, t)
-            extra.append("ref_heading from ATTITUDE.yaw")
-        else:
-            extra.append("no ATTITUDE messages, so no ref_heading")
+    att = _rows(packets, "ATTITUDE", boot) if reference else []
+    ref = Stream("ATTITUDE", np.array([m.time_boot_ms * 1e-3 for m in att]), np.degrees([m.yaw for m in att])) \
+        if att else None
+    ref_heading, extra = reference_heading(ref, t, reference, "ATTITUDE.yaw", "no ATTITUDE messages, so no ref_heading")
     if len(boots) > 1:
         extra.append(f"the vehicle rebooted {len(boots) - 1} time(s) during the log: the boot with the most "
                      f"{names[instance]} samples is read")
@@ -373,17 +293,13 @@ def _read(packets: _Packets, params, changed, name: str, instance: int, mag_inst
     if packets.bad:
         extra.append(f"{packets.bad} packets with a bad checksum dropped")
     onboard = _onboard(packets.autopilot, params, changed, instance, temp is not None, name)
-    parts = [f"{Path(name).name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
-             f"gyro {describe_rate(t)} from {names[instance]}",
-             f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
-             if temp is not None else f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)",
-             f"compass: mag from {mag.label} (on {mag_rows} rows)" if mag_rows else "no compass"]
+    compass_part = f"compass: mag from {mag.label} (on {mag_rows} rows)" if mag_rows else "no compass"
+    summary = read_summary(name, t, f"gyro {describe_rate(t)} from {names[instance]}", temp, [compass_part], extra,
+                           temp_rate=False)
     topics = {"gyro": names[instance], "temp": temp.label if temp is not None else None,
               "mag": mag.label if mag_rows else None, "acc": names[instance],
               "ref_heading": "ATTITUDE" if ref_heading is not None else None}
     return binary_log_frame(
         name, "tlog", t, gyro.values[:, :3], interp_held(temp.t, temp.values, t) if temp is not None else None,
-        mag_on_rows if mag_rows else None, gyro.values[:, 3:6], ref_heading, topics=topics,
-        summary="; ".join(parts + extra), no_compass_why=no_compass_why, no_temp_why=no_temp_why,
-        gyro_max_dps=gyro_max_dps, onboard=onboard)
-
+        mag_on_rows if mag_rows else None, gyro.values[:, 3:6], ref_heading, topics=topics, summary=summary,
+        no_compass_why=no_compass_why, no_temp_why=no_temp_why, gyro_max_dps=gyro_max_dps, onboard=onboard)

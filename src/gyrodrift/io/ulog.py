@@ -1,64 +1,7 @@
-"""Read PX4 ULog flight logs (``.ulg``) into the gyrodrift input contract.
+"""Read PX4 ULog flight logs (``.ulg``) into the gyrodrift input contract (needs pyulog).
 
-Needs the optional package pyulog: ``pip install 'gyrodrift[ulog]'``.
-
-Which topics give which column
-------------------------------
-``t``
-    The gyro sample times: ``timestamp_sample`` (µs since boot) where the topic has
-    it, else ``timestamp``; converted to seconds and kept absolute (not shifted to 0).
-``gyro_x``, ``gyro_y``, ``gyro_z`` (deg/s, body FRD)
-    ``sensor_combined`` (``gyro_rad[0..2]``, rad/s, vehicle body frame, calibrated by
-    PX4) when it is at least :data:`FASTER` times faster than ``sensor_gyro`` *and* it
-    comes from the chosen gyro instance (``sensor_selection.gyro_device_id`` equals that
-    instance's ``device_id``; without ``sensor_selection``, instance 0 is taken as the
-    one PX4 used). Otherwise ``sensor_gyro`` of that instance (``x, y, z``, rad/s,
-    uncalibrated, in the FRD *board* frame its message definition states), rotated to
-    the body frame (see below). The rate is never taken from another gyro chip than
-    the temperature.
-``temp`` (degC)
-    ``sensor_gyro.temperature`` of the instance, else ``sensor_accel.temperature`` of
-    the same chip (same ``device_id``). A temperature that is exactly 0 in every sample
-    (or NaN) counts as "not measured" (simulators log it so). Interpolated linearly
-    onto the gyro times, held at the first/last value before/after it. Without a
-    measured temperature, ``temp`` is 0 in every row and a note says so
-    (:mod:`gyrodrift.io.notes`: the drift model is then a trend in elapsed time).
-``acc_x``, ``acc_y``, ``acc_z`` (m/s², specific force, body FRD)
-    ``sensor_combined.accelerometer_m_s2[0..2]`` (time = ``timestamp`` +
-    ``accelerometer_timestamp_relative``), else ``sensor_accel`` of the gyro's chip
-    rotated to the body frame. Level and still reads ``acc_z`` ≈ −9.81. Interpolated
-    onto every gyro row like the temperature. No columns if the log has neither.
-``mag_x``, ``mag_y``, ``mag_z`` (gauss, body FRD)
-    With ``mag_instance`` given: ``sensor_mag`` of that instance (raw, board/sensor
-    frame, rotated to the body frame). Without it: the magnetometer PX4 selected
-    (``sensor_selection.mag_device_id``, else instance 0) -- from
-    ``vehicle_magnetometer`` (``magnetometer_ga[0..2]``, body frame, calibrated) when
-    that is at least :data:`FASTER` times faster than ``sensor_mag`` or there is no
-    ``sensor_mag``, else from ``sensor_mag``. Each sample goes on the row of the first
-    gyro sample at or after it; the other rows are NaN. No columns, compass "none" and
-    a note, when there is no compass: no magnetometer topic (and no ``mag_instance``),
-    no accelerometer for the tilt, or no magnetometer sample within the gyro record.
-``ref_heading`` (deg, [0, 360)), with ``reference=True``
-    Yaw of ``vehicle_attitude.q[0..3]`` (w, x, y, z; NED to body):
-    ``atan2(2 (w z + x y), 1 - 2 (y² + z²))``, interpolated in unwrapped form onto the
-    gyro rows, NaN outside the attitude record. For evaluation only.
-
-Board frame to body frame
--------------------------
-``sensor_gyro``, ``sensor_accel`` and ``sensor_mag`` hold driver output in the board
-(or external sensor) frame. For a sensor whose calibration slot ``CAL_<S>n_ID`` has
-``CAL_<S>n_ROT`` >= 0 (external) that rotation is applied; otherwise (internal, or
-no calibration slot for the sensor's ``device_id``) the board rotation
-``SENS_BOARD_ROT`` followed by the level trims ``SENS_BOARD_X_OFF``,
-``SENS_BOARD_Y_OFF``, ``SENS_BOARD_Z_OFF`` (deg) -- PX4's own order, checked on
-``sample_log_small.ulg`` (board yaw 180 deg, trims ~3 deg) where it turns
-``sensor_accel`` into ``sensor_combined``. Every rotation number PX4 defines is
-supported (:mod:`gyrodrift.rotations`); others raise :class:`LogFormatError` when a
-raw topic must be rotated. Calibration offsets and scales are *not* applied: those
-topics stay raw.
-
-Errors are one line, ``<file>: [<topic>: ]<problem>; <what to do>``, as in
-:mod:`gyrodrift.io.validate`.
+Which topic gives which column, how raw sensor topics are rotated to the body frame and
+what is checked: docs/log-formats.md, section "PX4 ULog".
 """
 
 from __future__ import annotations
@@ -75,20 +18,11 @@ import pandas as pd
 
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io.align import (
-    Stream,
-    check_temperature,
-    binary_log_frame,
-    describe_rate,
-    increasing,
-    interp_heading,
-    interp_held,
-    median_rate_hz,
-    on_following_rows,
-    yaw_deg,
+    Stream, binary_log_frame, check_reader_options, check_temperature, compass_on_rows, compass_parts, increasing,
+    interp_held, measured_temperature, median_rate_hz, no_instance, read_summary, reference_heading, yaw_deg,
 )
-from gyrodrift.io.limits import GYRO_MAX_DPS, check_gyro_max_dps
-from gyrodrift.io.notes import NO_TEMPERATURE_C
-from gyrodrift.io.messages import message, one_line, read_log_bytes
+from gyrodrift.io.limits import GYRO_MAX_DPS
+from gyrodrift.io.messages import log_error, one_line, optional_module, read_log_bytes
 from gyrodrift.onboard import px4_onboard, px4_sensor_rotation
 
 __all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
@@ -97,7 +31,6 @@ __all__ = ["read_ulog", "read_ulog_gyros", "FASTER"]
 #: when its median sample rate is at least this many times higher.
 FASTER = 4.0
 
-_INSTALL = "pip install 'gyrodrift[ulog]'"
 _MAGIC = b"ULog\x01\x12\x35"
 _FILE_HEADER_SIZE = 16
 _MSG_HEADER_SIZE = 3
@@ -113,15 +46,8 @@ _MAX_UNKNOWN_SIZE = 10000
 _MIN_GYRO_SAMPLES = 2
 #: Accelerometer time offset in sensor_combined that means "no sample".
 _RELATIVE_TIMESTAMP_INVALID = 2**31 - 1
-_TOPICS = (
-    "sensor_combined",
-    "sensor_gyro",
-    "sensor_accel",
-    "sensor_mag",
-    "vehicle_magnetometer",
-    "vehicle_attitude",
-    "sensor_selection",
-)
+_TOPICS = ("sensor_combined", "sensor_gyro", "sensor_accel", "sensor_mag", "vehicle_magnetometer", "vehicle_attitude",
+           "sensor_selection")
 _GYRO_COMBINED = ("gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]")
 _ACC_COMBINED = ("accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]")
 _XYZ = ("x", "y", "z")
@@ -133,62 +59,22 @@ _QUAT = ("q[0]", "q[1]", "q[2]", "q[3]")
 # ---------------------------------------------------------------------------
 
 
-def _import_pyulog():
-    """Return pyulog's ``ULog`` class, or raise :class:`ConfigError` naming the extra."""
-    try:
-        from pyulog import ULog
-    except ImportError as exc:
-        raise ConfigError(
-            f"reading PX4 ULog files needs the optional package pyulog; install it with {_INSTALL}"
-        ) from exc
-    return ULog
-
-
-def _read_file(path: Path) -> bytes:
-    """Return the file's bytes, or raise a one-line :class:`LogFormatError`."""
-    return read_log_bytes(path, "a ULog file", "give the path of a .ulg log", "give a PX4 .ulg log")
-
-
 def _truncated(name: str, start: int, total: int, in_header: bool) -> LogFormatError:
     """The error for a message that runs past the end of the file."""
     if in_header:
-        return LogFormatError(
-            message(
-                name,
-                f"the file ends inside the ULog header section (message at byte {start}, file size {total} bytes):"
-                " the file is truncated",
-                "copy the complete .ulg from the vehicle again",
-            )
-        )
-    return LogFormatError(
-        message(
-            name,
-            f"the file is truncated: its last message starts at byte {start} but the file ends at byte {total}",
-            "copy the complete .ulg from the vehicle again, or keep only the complete messages"
-            f" (the first {start} bytes, e.g. head -c {start})",
-        )
-    )
+        return log_error(name, f"the file ends inside the ULog header section (message at byte {start}, file size"
+                         f" {total} bytes): the file is truncated", "copy the complete .ulg from the vehicle again")
+    return log_error(name, f"the file is truncated: its last message starts at byte {start} but the file ends at byte"
+                     f" {total}", "copy the complete .ulg from the vehicle again, or keep only the complete messages"
+                     f" (the first {start} bytes, e.g. head -c {start})")
 
 
 def _check_framing(data: bytes, name: str) -> bool:
-    """Walk the ULog message chain; reject non-ULog, truncated or header-only files.
-
-    pyulog silently stops at a truncated last message and can loop for a long time on
-    a corrupt header section, so both are checked here first.
-
-    Returns
-    -------
-    bool
-        True if the data section holds a corrupt stretch (pyulog skips it and resyncs).
-    """
+    """Walk the message chain, refusing non-ULog, truncated or header-only files; True when the data
+    section holds a corrupt stretch (pyulog skips it)."""
     if len(data) < _FILE_HEADER_SIZE or not data.startswith(_MAGIC):
-        raise LogFormatError(
-            message(
-                name,
-                "is not a ULog file (it does not start with the ULog header bytes)",
-                "give a PX4 .ulg flight log, or name the right format",
-            )
-        )
+        raise log_error(name, "is not a ULog file (it does not start with the ULog header bytes)",
+                        "give a PX4 .ulg flight log, or name the right format")
     total = len(data)
     pos = _FILE_HEADER_SIZE
     in_header = True
@@ -201,42 +87,26 @@ def _check_framing(data: bytes, name: str) -> bool:
         known = _DEFINITION_TYPES if in_header else _DATA_TYPES
         if kind not in known and (kind == 0 or size == 0 or size > _MAX_UNKNOWN_SIZE):
             if in_header:
-                raise LogFormatError(
-                    message(
-                        name,
-                        f"the ULog header section is corrupt at byte {pos}",
-                        "copy the .ulg from the vehicle again; this file cannot be read",
-                    )
-                )
+                raise log_error(name, f"the ULog header section is corrupt at byte {pos}",
+                                "copy the .ulg from the vehicle again; this file cannot be read")
             return True
         if pos + _MSG_HEADER_SIZE + size > total:
             raise _truncated(name, pos, total, in_header)
         pos += _MSG_HEADER_SIZE + size
     if in_header:
-        raise LogFormatError(
-            message(name, "holds only the ULog header, no logged data", "give a log that recorded data")
-        )
+        raise log_error(name, "holds only the ULog header, no logged data", "give a log that recorded data")
     return False
 
 
 def _parse(ulog_class, data: bytes, name: str):
-    """Parse the ULog bytes with pyulog's ``ulog_class`` (only the topics used here).
-
-    Any exception pyulog raises means the file cannot be parsed: it becomes one
-    :class:`LogFormatError` (the original exception is chained for debugging).
-    """
+    """Parse the bytes with pyulog (the topics used only); any failure is one LogFormatError."""
     try:
         # pyulog prints warnings to stdout; keep them out of gyrodrift's output
         with contextlib.redirect_stdout(io.StringIO()):
             return ulog_class(io.BytesIO(data), message_name_filter_list=list(_TOPICS))
     except Exception as exc:  # any failure of a third-party parser on an untrusted file
-        raise LogFormatError(
-            message(
-                name,
-                f"cannot be parsed as a ULog file ({one_line(str(exc))})",
-                "check that it is a complete PX4 .ulg log",
-            )
-        ) from exc
+        raise log_error(name, f"cannot be parsed as a ULog file ({one_line(str(exc))})",
+                        "check that it is a complete PX4 .ulg log") from exc
 
 
 # ---------------------------------------------------------------------------
@@ -250,7 +120,6 @@ def _instances(ulog, topic: str) -> dict[int, Any]:
 
 
 def _label(topic: str, instance: int) -> str:
-    """Name a topic instance for messages: ``"sensor_gyro instance 0"``."""
     return f"{topic} instance {instance}"
 
 
@@ -258,14 +127,9 @@ def _fields(ds, names, name: str, where: str) -> np.ndarray:
     """Stack fields of a dataset as float64 columns, shape (n, len(names))."""
     missing = [f for f in names if f not in ds.data]
     if missing:
-        raise LogFormatError(
-            message(
-                name,
-                f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
-                "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
-                where=where,
-            )
-        )
+        raise log_error(name, f"field(s) {', '.join(missing)} missing; fields found: {', '.join(sorted(ds.data))}",
+                        "this PX4 version logs the topic differently; convert the log to CSV in the input contract",
+                        where=where)
     return np.column_stack([np.asarray(ds.data[f], dtype=np.float64) for f in names])
 
 
@@ -294,27 +158,16 @@ def _pick_instance(ulog, topic: str, instance: int, name: str, option: str):
     """Dataset of ``topic`` instance ``instance``; missing topic or instance raises."""
     found = _instances(ulog, topic)
     if not found:
-        raise LogFormatError(
-            message(
-                name,
-                f"no '{topic}' topic in the log",
-                f"log '{topic}' (PX4 logger profile) or convert the log to CSV",
-            )
-        )
+        raise log_error(name, f"no '{topic}' topic in the log",
+                        f"log '{topic}' (PX4 logger profile) or convert the log to CSV")
     if instance not in found:
-        present = ", ".join(str(k) for k in sorted(found))
-        raise ConfigError(
-            message(
-                name,
-                f"there is no {topic} instance {instance}; instances present: {present}",
-                f"choose one of them ({option}=N)",
-            )
-        )
+        raise no_instance(name, topic, instance, found, option)
     return found[instance]
 
 
 def _same_chip(ulog, topic: str, device: int | None, instance: int):
-    """Instance of ``topic`` with ``device_id`` == ``device`` (else the same instance number)."""
+    """(multi_id, dataset) of ``topic`` with ``device_id`` == ``device``; without device ids,
+    instance ``instance``; dataset None when there is none."""
     found = _instances(ulog, topic)
     if device is not None:
         for multi_id in sorted(found):
@@ -325,26 +178,17 @@ def _same_chip(ulog, topic: str, device: int | None, instance: int):
     return instance, found.get(instance)
 
 
-# ---------------------------------------------------------------------------
-# frames
-# ---------------------------------------------------------------------------
-
-
 def _board_to_body(params: dict, kind: str, device: int | None, name: str) -> tuple[np.ndarray, str]:
-    """Rotation from a sensor's board/sensor frame to the vehicle body frame, and its
-    description (:func:`gyrodrift.onboard.px4_sensor_rotation`); an unknown rotation
-    number is a :class:`LogFormatError`."""
+    """:func:`gyrodrift.onboard.px4_sensor_rotation`, an unknown rotation a :class:`LogFormatError`."""
     try:
         return px4_sensor_rotation(params, kind, device, where=name)
     except ConfigError as exc:
-        raise LogFormatError(
-            message(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
-                    "vehicle_magnetometer) or convert the log to CSV")
-        ) from None
+        raise log_error(name, f"{exc}".split(": ", 1)[1], "use the calibrated topics (sensor_combined, "
+                        "vehicle_magnetometer) or convert the log to CSV") from None
 
 
 # ---------------------------------------------------------------------------
-# streams
+# streams (docs/log-formats.md, section "PX4 ULog")
 # ---------------------------------------------------------------------------
 
 
@@ -357,7 +201,7 @@ def _combined_is_instance(ulog, device: int | None, instance: int) -> bool:
 
 
 def _gyro_stream(ulog, instance: int, name: str) -> Stream:
-    """Rates (rad/s, body FRD) from sensor_combined or sensor_gyro (rule in the module doc)."""
+    """Rates (rad/s, body FRD) from sensor_combined or sensor_gyro."""
     gyro = _pick_instance(ulog, "sensor_gyro", instance, name, "instance")
     device = _device_id(gyro)
     t_gyro = _time_s(gyro)
@@ -378,11 +222,7 @@ def _gyro_stream(ulog, instance: int, name: str) -> Stream:
 
 
 def _temperature_stream(ulog, instance: int) -> tuple[Stream | None, str]:
-    """Gyro temperature (degC): sensor_gyro, else sensor_accel of the same chip.
-
-    Returns the stream and ``""``, or None and why there is no usable temperature (for
-    the note): no temperature field, or one logged as exactly 0 or NaN in every sample.
-    """
+    """Gyro temperature (degC) from sensor_gyro, else sensor_accel of the same chip; or None and why."""
     gyro = _instances(ulog, "sensor_gyro")[instance]
     device = _device_id(gyro)
     candidates = [(_label("sensor_gyro", instance), gyro)]
@@ -394,21 +234,17 @@ def _temperature_stream(ulog, instance: int) -> tuple[Stream | None, str]:
         if "temperature" not in ds.data:
             reasons.append(f"{label} has no temperature field")
             continue
-        temp = np.asarray(ds.data["temperature"], dtype=np.float64)
-        ok = np.isfinite(temp)
-        if ok.any() and np.any(temp[ok] != 0.0):
-            t = _time_s(ds)
-            return Stream(label, t[ok], temp[ok]), ""
-        what = f"{NO_TEMPERATURE_C:g} degC" if ok.any() else "NaN"
-        reasons.append(f"{label} logs {what} in all {temp.size} samples")
+        stream, why = measured_temperature(label, _time_s(ds), np.asarray(ds.data["temperature"], dtype=np.float64))
+        if stream is not None:
+            return stream, ""
+        reasons.append(why)
     if len(candidates) == 1:
         reasons.append("no sensor_accel of the same chip")
     return None, ", ".join(reasons)
 
 
 def _acc_stream(ulog, instance: int, name: str) -> Stream | None:
-    """Specific force (m/s², body FRD): sensor_combined, else sensor_accel of the gyro's
-    chip; None if the log has neither."""
+    """Specific force (m/s², body FRD) from sensor_combined, else the gyro chip's sensor_accel."""
     combined = _instances(ulog, "sensor_combined").get(0)
     if combined is not None and all(f in combined.data for f in _ACC_COMBINED):
         t = np.asarray(combined.data["timestamp"], dtype=np.float64)
@@ -434,25 +270,8 @@ def _sensor_mag_stream(ulog, ds, instance: int, name: str) -> Stream:
     return Stream(f"{label} rotated by {how}", _time_s(ds), _fields(ds, _XYZ, name, label) @ rot.T)
 
 
-def _vehicle_mag(ulog, device: int | None):
-    """The vehicle_magnetometer instance of magnetometer ``device``, or (None, None).
-
-    Without logged device ids (older PX4: one instance, the selected magnetometer) or
-    without a ``device`` to match, instance 0 is used.
-    """
-    found = _instances(ulog, "vehicle_magnetometer")
-    if device is not None:
-        for multi_id in sorted(found):
-            if _device_id(found[multi_id]) == device:
-                return multi_id, found[multi_id]
-        if any(_device_id(d) is not None for d in found.values()):
-            return None, None
-    return (0, found[0]) if 0 in found else (None, None)
-
-
 def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream | None:
-    """Magnetometer (gauss, body FRD) by the rule in the module doc; None if the log has
-    neither sensor_mag nor vehicle_magnetometer (and ``mag_instance`` is not given)."""
+    """Magnetometer (gauss, body FRD); None without sensor_mag, vehicle_magnetometer and ``mag_instance``."""
     if mag_instance is not None:
         ds = _pick_instance(ulog, "sensor_mag", mag_instance, name, "mag_instance")
         return _sensor_mag_stream(ulog, ds, mag_instance, name)
@@ -463,7 +282,7 @@ def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream | None:
         wanted = selected.pop()
         chosen = next((k for k in sorted(mags) if _device_id(mags[k]) == wanted), chosen)
     device = _device_id(mags[chosen]) if chosen is not None else None
-    vm_id, vehicle = _vehicle_mag(ulog, device)
+    vm_id, vehicle = _same_chip(ulog, "vehicle_magnetometer", device, 0)
     if vehicle is not None and all(f in vehicle.data for f in _MAG_VEHICLE):
         t_vehicle = _time_s(vehicle)
         if chosen is None or median_rate_hz(t_vehicle) >= FASTER * median_rate_hz(_time_s(mags[chosen])):
@@ -488,128 +307,56 @@ def _reference_stream(ulog, name: str) -> Stream | None:
 # ---------------------------------------------------------------------------
 
 
-def _check_instance(value, option: str, allow_none: bool = False) -> None:
-    """Raise :class:`ConfigError` unless ``value`` is a non-negative int (or None if allowed)."""
-    if value is None and allow_none:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise ConfigError(one_line(f"{option} must be a non-negative integer, got {value!r}"))
-
-
-def _compass(t: np.ndarray, mag: Stream | None, acc: Stream | None) -> tuple[np.ndarray | None, int, str]:
-    """The magnetometer samples on the gyro rows (None: no compass), the number of rows
-    that got one, and why there is no compass (``""`` when there is one)."""
-    if mag is None:
-        return None, 0, "no sensor_mag nor vehicle_magnetometer topic in the log"
-    if acc is None:
-        return None, 0, (
-            "no accelerometer for the tilt, neither sensor_combined.accelerometer_m_s2 nor a sensor_accel of the"
-            " gyro's chip"
-        )
-    on_rows, rows = on_following_rows(t, mag.t, mag.values)
-    if rows == 0:
-        return None, 0, f"no sample of {mag.label} falls within the gyro record, t = {t[0]:.3f}..{t[-1]:.3f} s"
-    return on_rows, rows, ""
-
-
-def _summary(
-    name: str, t, gyro: Stream, temp: Stream | None, mag: Stream | None, mag_rows: int, acc: Stream | None,
-    extra: list[str],
-) -> str:
-    """One human line describing what was read (``mag_rows`` 0: no compass)."""
-    parts = [
-        f"{Path(name).name}: {t[-1] - t[0]:.1f} s of data from t={t[0]:.3f} s, {t.size} rows",
-        f"gyro {median_rate_hz(t):.3g} Hz from {gyro.label}",
-    ]
-    if temp is not None:
-        parts.append(
-            f"temperature {np.min(temp.values):.1f}..{np.max(temp.values):.1f} degC from {temp.label}"
-            f" ({describe_rate(temp.t)}, interpolated)"
-        )
-    else:
-        parts.append(f"no gyro temperature (temp set to {NO_TEMPERATURE_C:g} degC)")
-    if mag_rows:
-        parts.append(
-            f"compass: mag from {mag.label} ({describe_rate(mag.t)}, on {mag_rows} rows) + acc from {acc.label}"
-        )
-    else:
-        parts += ["no compass"] + ([f"acc from {acc.label}"] if acc is not None else [])
-    return "; ".join(parts + extra)
+def read_ulog_gyros(path, *, mag_instance: int | None = None, reference: bool = True,
+                    gyro_max_dps: float = GYRO_MAX_DPS, instances=None) -> list[pd.DataFrame]:
+    """Every ``sensor_gyro`` instance of a ULog (or the ``instances`` listed), each as
+    :func:`read_ulog` reads one, in instance order; the file is parsed once."""
+    gyro_max_dps = check_reader_options(instances, mag_instance, gyro_max_dps)
+    ulog_class = optional_module("pyulog.ULog", "reading PX4 ULog files", "pyulog", "ulog")
+    path = Path(path)
+    name = str(path)
+    data = read_log_bytes(path, "a ULog file", "give the path of a .ulg log", "give a PX4 .ulg log")
+    corrupt = _check_framing(data, name)
+    ulog = _parse(ulog_class, data, name)
+    if instances is None:
+        instances = sorted(_instances(ulog, "sensor_gyro")) or [0]
+    return [_read(ulog, name, corrupt, k, mag_instance, reference, gyro_max_dps) for k in instances]
 
 
 def read_ulog(path, *, instance: int = 0, mag_instance: int | None = None, reference: bool = True,
               gyro_max_dps: float = GYRO_MAX_DPS) -> pd.DataFrame:
     """Read a PX4 ULog (``.ulg``) into the gyrodrift input contract.
 
+    See docs/log-formats.md, section "PX4 ULog", for the topics each column comes from.
+
     Parameters
     ----------
     path : str or os.PathLike
-        The ``.ulg`` file.
     instance : int, default 0
         ``sensor_gyro`` multi-instance (the IMU chip) whose rate and temperature are used.
     mag_instance : int, optional
-        ``sensor_mag`` multi-instance to use as the compass. Default: the magnetometer
-        PX4 selected, from ``vehicle_magnetometer`` when that is logged much faster.
+        ``sensor_mag`` multi-instance of the compass; default the magnetometer PX4 selected.
     reference : bool, default True
         Add ``ref_heading`` (deg) from ``vehicle_attitude`` when the log has it.
     gyro_max_dps : float, default 10000
-        Plausible full scale of the gyro axes, deg/s; a larger rate (a corrupt record)
-        is refused, as are the other implausible values of :mod:`gyrodrift.io.limits`.
+        Plausible full scale of the gyro axes, deg/s (:mod:`gyrodrift.io.limits`).
 
     Returns
     -------
     pandas.DataFrame
-        One row per gyro sample, the columns of the module notes. ``df.attrs``:
-        ``source``, ``format`` ("ulog"), ``gyro_unit``, ``frame`` ("ned"), ``compass``,
-        ``mag_unit``, ``acc_unit``, ``topics`` (column group -> topic used),
-        ``summary`` (one line), ``onboard`` (:class:`gyrodrift.onboard.Onboard`) and
-        ``notes`` when there is no compass or no measured temperature.
+        One row per gyro sample; ``attrs`` as docs/log-formats.md, section "Alignment",
+        with ``format`` "ulog" and ``onboard`` (:class:`gyrodrift.onboard.Onboard`).
 
     Raises
     ------
     LogFormatError
-        A missing, non-ULog or corrupt file; a missing topic or field; fewer than 2
-        gyro samples; an implausible value (:mod:`gyrodrift.io.limits`); an
-        unsupported sensor rotation.
+        A missing, non-ULog or corrupt file; a missing topic or field; fewer than 2 gyro
+        samples; an implausible value; an unsupported sensor rotation.
     ConfigError
-        pyulog is not installed; ``instance`` or ``mag_instance`` is not a
-        non-negative integer or not in the log (the message lists those present).
-
-    Notes
-    -----
-    Samples with a repeated time stamp are dropped (the first is kept) and counted in
-    the summary; see the module documentation for the topic and alignment rules.
+        pyulog is not installed; a bad or absent ``instance`` or ``mag_instance``.
     """
-    _check_instance(instance, "instance")
-    return _read_instances(path, [instance], mag_instance, reference, gyro_max_dps)[0]
-
-
-def read_ulog_gyros(path, *, mag_instance: int | None = None, reference: bool = True,
-                    gyro_max_dps: float = GYRO_MAX_DPS) -> list[pd.DataFrame]:
-    """Every ``sensor_gyro`` instance of a ULog, each read as :func:`read_ulog` reads one,
-    in instance order (``attrs["onboard"].instance``).
-
-    Raises
-    ------
-    LogFormatError, ConfigError
-        As :func:`read_ulog`.
-    """
-    return _read_instances(path, None, mag_instance, reference, gyro_max_dps)
-
-
-def _read_instances(path, instances, mag_instance, reference, gyro_max_dps) -> list[pd.DataFrame]:
-    """The ``sensor_gyro`` ``instances`` of the ULog at ``path`` (None: all), parsed once."""
-    gyro_max_dps = check_gyro_max_dps(gyro_max_dps)
-    _check_instance(mag_instance, "mag_instance", allow_none=True)
-    ulog_class = _import_pyulog()
-    path = Path(path)
-    name = str(path)
-    data = _read_file(path)
-    corrupt = _check_framing(data, name)
-    ulog = _parse(ulog_class, data, name)
-    if instances is None:
-        instances = sorted(_instances(ulog, "sensor_gyro")) or [0]
-    return [_read(ulog, name, corrupt, k, mag_instance, reference, gyro_max_dps) for k in instances]
+    return read_ulog_gyros(path, mag_instance=mag_instance, reference=reference, gyro_max_dps=gyro_max_dps,
+                           instances=[instance])[0]
 
 
 def _changed_parameters(ulog) -> set[str]:
@@ -636,13 +383,8 @@ def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | Non
     """The body of :func:`read_ulog` on a parsed log."""
     gyro, dropped = increasing(_gyro_stream(ulog, instance, name))
     if gyro.t.size < _MIN_GYRO_SAMPLES:
-        raise LogFormatError(
-            message(
-                name,
-                f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
-                f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples",
-            )
-        )
+        raise log_error(name, f"too few gyro samples ({gyro.t.size}) in {gyro.label}",
+                        f"give a log with at least {_MIN_GYRO_SAMPLES} gyro samples")
     temp, no_temp_why = _temperature_stream(ulog, instance)
     if temp is not None:
         temp, _ = increasing(temp)
@@ -651,29 +393,27 @@ def _read(ulog, name: str, corrupt: bool, instance: int, mag_instance: int | Non
     acc = increasing(acc)[0] if acc is not None else None
     mag = increasing(mag)[0] if mag is not None else None
     t = gyro.t
-    mag_on_rows, mag_rows, no_compass_why = _compass(t, mag, acc)
-
-    extra = []
+    mag_on_rows, mag_rows, no_compass_why = compass_on_rows(
+        t, mag, acc, "no sensor_mag nor vehicle_magnetometer topic in the log",
+        "no accelerometer for the tilt, neither sensor_combined.accelerometer_m_s2 nor a sensor_accel of the gyro's"
+        " chip")
     ref = _reference_stream(ulog, name) if reference else None
-    ref_heading = None
-    if ref is not None:
-        ref, _ = increasing(ref)
-        ref_heading = interp_heading(ref.t, ref.values, t)
-        extra.append("ref_heading from vehicle_attitude")
-    elif reference:
-        extra.append("no vehicle_attitude, so no ref_heading")
+    ref_heading, extra = reference_heading(ref, t, reference, "vehicle_attitude",
+                                           "no vehicle_attitude, so no ref_heading")
     if dropped:
         extra.append(f"{dropped} gyro samples with a repeated time stamp dropped")
     if corrupt or ulog.file_corruption:
         extra.append("the file holds a corrupt stretch that pyulog skipped")
     if gyro.label == "sensor_combined" and int(ulog.initial_parameters.get("TC_G_ENABLE", 0)) == 1:
         extra.append("PX4 thermal gyro compensation was on (TC_G_ENABLE=1)")
-
+    acc_label = acc.label if acc is not None else None
     topics = {"gyro": gyro.label, "temp": temp.label if temp is not None else None,
-              "mag": mag.label if mag_rows else None, "acc": acc.label if acc is not None else None,
+              "mag": mag.label if mag_rows else None, "acc": acc_label,
               "ref_heading": ref.label if ref is not None else None}
+    summary = read_summary(name, t, f"gyro {median_rate_hz(t):.3g} Hz from {gyro.label}", temp,
+                           compass_parts(mag, mag_rows, acc_label), extra)
     return binary_log_frame(
         name, "ulog", t, np.degrees(gyro.values), interp_held(temp.t, temp.values, t) if temp is not None else None,
         mag_on_rows, interp_held(acc.t, acc.values, t) if acc is not None else None, ref_heading, topics=topics,
-        summary=_summary(name, t, gyro, temp, mag, mag_rows, acc, extra), no_compass_why=no_compass_why,
-        no_temp_why=no_temp_why, gyro_max_dps=gyro_max_dps, onboard=_onboard(ulog, instance, gyro, temp, name))
+        summary=summary, no_compass_why=no_compass_why, no_temp_why=no_temp_why, gyro_max_dps=gyro_max_dps,
+        onboard=_onboard(ulog, instance, gyro, temp, name))

@@ -1,13 +1,8 @@
-"""Checks and conversions shared by the table readers.
+"""Checks and conversions shared by the table readers, whole or in chunks.
 
-The whole-table reader (:func:`gyrodrift.io.tabular.read_log`) and the chunked reader
-(:func:`gyrodrift.io.chunked.iter_log_chunks`) bring the rows they read into the input
-contract with :func:`normalise_frame`: column map, required columns, numeric
-conversion, time checks, plausible ranges (:mod:`gyrodrift.io.limits`), gyro unit (deg/s)
-and frame (NED/FRD, headings in [0, 360)), and a ``temp`` of 0 degC where the file has no
-usable temperature. Every step works row by row, so the chunks of a file come out as the
-rows of the whole file. Messages follow :mod:`gyrodrift.io.messages`; what a file lacks is
-worded by :mod:`gyrodrift.io.notes`.
+:func:`normalise_frame` brings the rows of a table into the input contract, step by step
+as docs/log-formats.md, section "Tables: CSV and Parquet", lists; every step works row by
+row, so the chunks of a file come out as the rows of the whole file.
 """
 
 from __future__ import annotations
@@ -40,7 +35,7 @@ from gyrodrift.conventions import (
 )
 from gyrodrift.errors import ConfigError
 from gyrodrift.io.limits import GYRO_MAX_DPS, LIMITED_COLS, check_gyro_max_dps, first_outside, limit_of, outside_problem
-from gyrodrift.io.messages import Source, cell_label, format_error, message, one_line, row_label, show_names, show_text
+from gyrodrift.io.messages import Source, cell_label, format_error, one_line, option_error, row_label, show_names, show_text
 # the reader of stream.py takes these from here, with the checks
 from gyrodrift.io.messages import check_input_path, no_data_rows_error, read_error  # noqa: F401
 from gyrodrift.io.notes import NO_TEMPERATURE_C, TEMP_ABSENT, TEMP_EMPTY, TEMP_MEASURED, compass_columns_with_values
@@ -84,11 +79,6 @@ _CSV_NULL_VALUES = tuple(pa_csv.ConvertOptions().null_values)
 #: lower case); it includes every CSV null value, so a cell is empty whether the CSV reader
 #: or the text conversion decides.
 _NAN_TEXT = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none", "#n/a"} | {v.lower() for v in _CSV_NULL_VALUES})
-
-
-# ---------------------------------------------------------------------------
-# message helpers
-# ---------------------------------------------------------------------------
 
 
 # ---------------------------------------------------------------------------
@@ -157,10 +147,8 @@ class TableOptions(NamedTuple):
 
 def read_options(gyro_unit: str, frame: str | None, column_map: Mapping[str, str] | None,
                  time_unit: str | None = None, gyro_max_dps: float = GYRO_MAX_DPS) -> TableOptions:
-    """Check the table options (raising :class:`ConfigError`) and return them canonical.
-
-    ``frame`` None means NED/FRD, not stated: :func:`check_z_up` then refuses a table
-    whose accelerometer shows its z axis pointing up."""
+    """Check the table options (raising :class:`ConfigError`) and return them canonical;
+    ``frame`` None means NED/FRD, not stated (:func:`check_z_up` then applies)."""
     unit_name, scale = _gyro_scale(gyro_unit)
     frame_name = _frame_name(frame)
     return TableOptions(unit_name, scale, frame_name, check_column_map(column_map), *time_scale(time_unit),
@@ -202,34 +190,19 @@ def apply_column_map(frame: pd.DataFrame, column_map: dict[str, str], src: Sourc
     found = list(frame.columns)
     for new, old in column_map.items():
         if old not in frame.columns:
-            raise ConfigError(
-                message(
-                    src.name,
-                    f"column map {new}={old}: there is no column {old!r};"
-                    f" columns found: {show_names(found)}",
-                    "fix the --map NEW=OLD option (column_map in Python)",
-                )
-            )
+            raise option_error(src.name, f"column map {new}={old}: there is no column {old!r};"
+                               f" columns found: {show_names(found)}",
+                               "fix the --map NEW=OLD option (column_map in Python)")
     renamed = [next((n for n, o in column_map.items() if o == c), c) for c in found]
     for col in set(renamed):
         if renamed.count(col) > 1:
-            raise ConfigError(
-                message(
-                    src.name,
-                    f"column map would give two columns named {col!r}",
-                    "map each contract name from one input column only, or drop the other column",
-                )
-            )
+            raise option_error(src.name, f"column map would give two columns named {col!r}",
+                               "map each contract name from one input column only, or drop the other column")
     return frame.set_axis(renamed, axis=1)
 
 
 def _check_required_columns(frame: pd.DataFrame, src: Source) -> None:
-    """Raise if ``t`` or ``gyro_z`` is missing.
-
-    A log without ``temp`` is read (:func:`normalise_frame` fills it in); when another
-    required column is missing too, the message names ``temp`` as well, so that one
-    ``--map`` fixes both.
-    """
+    """Raise if ``t`` or ``gyro_z`` is missing (naming ``temp`` too when it is missing as well)."""
     missing = [c for c in REQUIRED_COLS if c not in frame.columns]
     if any(c != TEMP for c in missing):
         raise format_error(
@@ -247,11 +220,8 @@ def _is_plain_numeric(series: pd.Series) -> bool:
 
 
 def _objects_to_numbers(values: pd.Series) -> tuple[np.ndarray | None, int | None]:
-    """Convert cells that are Python objects (numbers, text, e.g. ``Decimal``) one by one.
-
-    Returns ``(values, None)`` or ``(None, pos)`` with the first cell that is not a number.
-    Slow, but only reached for object columns that are not all text.
-    """
+    """Convert object cells (numbers, text, ``Decimal``) one by one, slowly: ``(values, None)``,
+    or ``(None, pos)`` with the first cell that is not a number."""
     out = np.empty(len(values), dtype=np.float64)
     for pos, cell in enumerate(values.astype(object)):
         if cell is None or (isinstance(cell, float) and np.isnan(cell)):
@@ -281,15 +251,8 @@ def _canonical_nan(values: np.ndarray) -> np.ndarray:
 
 
 def _parse_text_numbers(series: pd.Series) -> tuple[np.ndarray | None, int | None]:
-    """Convert text cells to float64 with pyarrow's number parser, cell by cell.
-
-    A cell is stripped of white space; one whose lower-case text is in :data:`_NAN_TEXT`
-    is empty (NaN). Returns ``(values, None)``, or ``(None, pos)`` with the position of
-    the first cell that is not a number, or ``(None, None)`` when some cells are not text
-    at all. pyarrow's CSV reader parses numbers with the same parser, so a cell has the
-    same value whether its column was read as numbers or as text (and whether the file
-    was read whole or in chunks).
-    """
+    """Text cells to float64 with pyarrow's (the CSV reader's) parser, stripped, :data:`_NAN_TEXT` empty:
+    ``(values, None)``, ``(None, first bad pos)``, or ``(None, None)`` when some cells are not text."""
     try:
         text = pa.array(series.astype(object), type=pa.string(), from_pandas=True)
     except (pa.ArrowInvalid, pa.ArrowTypeError):
@@ -372,12 +335,8 @@ def first_value_rows(frame: pd.DataFrame) -> dict[str, int | None]:
 
 
 def _check_required_values(first: Mapping[str, int | None], src: Source) -> None:
-    """Reject an entirely empty ``t`` or ``gyro_z`` and leading empty gyro_z/temp cells.
-
-    ``first`` maps each required column of the frame to the row of its first value in
-    the whole file (None: empty in every row), see :func:`first_value_rows`. A ``temp``
-    empty in every row is no error: :func:`normalise_frame` fills it in.
-    """
+    """Reject an entirely empty ``t`` or ``gyro_z`` and leading empty gyro_z/temp cells;
+    ``first`` maps each required column to the file row of its first value (None: none)."""
     for col in (T, GYRO_Z):
         if first[col] is None:
             raise format_error(
@@ -397,11 +356,8 @@ def _check_required_values(first: Mapping[str, int | None], src: Source) -> None
 
 
 def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None) -> None:
-    """Reject empty time stamps and times that do not strictly increase.
-
-    ``prev_t_s`` is the time of the row just before the frame (chunked reading), so
-    that a step back across two chunks is caught too.
-    """
+    """Reject empty time stamps and times that do not strictly increase, also from ``prev_t_s``,
+    the time of the row just before the frame (chunked reading)."""
     t = frame[T].to_numpy()
     empty = np.flatnonzero(np.isnan(t))
     if empty.size:
@@ -427,9 +383,7 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
 
 
 def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> None:
-    """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`): temperature,
-    gyro rates (in the file's unit, against ``opts.gyro_max_dps``), headings, magnetometer
-    and accelerometer components."""
+    """Reject values outside their plausible range (:mod:`gyrodrift.io.limits`), gyro rates in the file's unit."""
     for col in LIMITED_COLS:
         if col not in frame.columns:
             continue
@@ -446,30 +400,13 @@ def _check_limits(frame: pd.DataFrame, src: Source, opts: "TableOptions") -> Non
 # ---------------------------------------------------------------------------
 
 
-def _to_deg_per_s(frame: pd.DataFrame, scale: float) -> pd.DataFrame:
-    """Multiply the gyro rate columns (and the ``true_bias_*`` truth) by ``scale``."""
-    if scale == 1.0:
-        return frame
-    out = frame.copy(deep=False)  # columns are replaced, never changed in place
-    for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
-        if col in out.columns:
-            out[col] = out[col] * scale
-    return out
-
-
 #: Median share of the specific force along +z beyond which a table is taken as z up (a tilt under 26 deg).
 Z_UP_SHARE = 0.9
 
 
 def check_z_up(frame: pd.DataFrame, src: Source) -> None:
-    """Refuse a table read as NED/FRD whose accelerometer says its z axis points up.
-
-    A still or slowly moving unit measures a specific force of 1 g pointing up; in the
-    contract's FRD body frame a level unit reads ``acc_z`` = -1 g. When the median over
-    the rows of ``acc_z / |acc|`` is above :data:`Z_UP_SHARE`, the z axis points up, as
-    in ROS logs (REP-103: ENU world, FLU body), and reading it as FRD would flip the
-    sign of ``gyro_y``, ``gyro_z`` and the heading. One line names ``--frame enu``.
-    """
+    """Refuse a table read as NED/FRD whose accelerometer says its z axis points up (the median of
+    ``acc_z / |acc|`` above :data:`Z_UP_SHARE`), naming ``--frame enu``."""
     if not all(c in frame.columns for c in ACC_COLS):
         return
     acc = frame[list(ACC_COLS)].to_numpy(dtype=np.float64)
@@ -487,21 +424,21 @@ def check_z_up(frame: pd.DataFrame, src: Source) -> None:
             where="column 'acc_z'")
 
 
-def _enu_to_ned(frame: pd.DataFrame) -> pd.DataFrame:
-    """Convert ROS ENU/FLU columns to NED/FRD: heading = 90 - yaw, y and z axes flip."""
+def _to_contract_frame(frame: pd.DataFrame, opts: TableOptions) -> pd.DataFrame:
+    """A new frame: gyro columns (and ``true_bias_*``) times ``opts.scale`` (to deg/s); for ENU/FLU
+    the headings ``90 - yaw`` and the y and z axes flipped; headings wrapped to [0, 360)."""
     out = frame.copy(deep=False)  # columns are replaced, never changed in place
-    for col in _HEADING_COLS:
-        if col in out.columns:
-            out[col] = wrap_360(90.0 - out[col].to_numpy())
-    for col in _FLU_TO_FRD_FLIP:
-        if col in out.columns:
-            out[col] = -out[col]
-    return out
-
-
-def _wrap_headings(frame: pd.DataFrame) -> pd.DataFrame:
-    """Wrap ``heading`` and ``ref_heading`` to [0, 360) deg (NaN stays NaN)."""
-    out = frame.copy(deep=False)  # columns are replaced, never changed in place
+    if opts.scale != 1.0:
+        for col in _GYRO_COLS + (TRUE_BIAS_X, TRUE_BIAS_Y, TRUE_BIAS_Z):
+            if col in out.columns:
+                out[col] = out[col] * opts.scale
+    if opts.frame == "enu":
+        for col in _HEADING_COLS:
+            if col in out.columns:
+                out[col] = wrap_360(90.0 - out[col].to_numpy())
+        for col in _FLU_TO_FRD_FLIP:
+            if col in out.columns:
+                out[col] = -out[col]
     for col in _HEADING_COLS:
         if col in out.columns:
             out[col] = wrap_360(out[col].to_numpy())
@@ -538,42 +475,31 @@ def normalise_frame(
 ) -> Normalised:
     """Check a frame of a table and bring it into the input contract.
 
-    The whole file (:func:`gyrodrift.io.tabular.read_log`) or one chunk of it
-    (:mod:`gyrodrift.io.chunked`) goes through here; every step is row by row, so the
-    chunks of a file come out as the rows of the whole.
-
-    A table without a compass form is read as it is (its compass columns, if any, stay
-    as read; :func:`compass_form` then gives "none"). A table without a usable
-    temperature (no ``temp`` column, or one empty in every row of the file) gets
-    ``temp`` = :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row: in place of
-    the empty column, or added as the last column. :func:`table_notes` words both.
-    Compass values that repeat the row before bit for bit are emptied (:mod:`gyrodrift.io.held`).
+    The whole file or one chunk of it goes through here (docs/log-formats.md, section
+    "Tables: CSV and Parquet"). A table without a usable temperature gets ``temp`` =
+    :data:`~gyrodrift.io.notes.NO_TEMPERATURE_C` in every row, in place of the empty column
+    or added last; held compass values are emptied.
 
     Parameters
     ----------
     frame : pandas.DataFrame
-        Rows as read (:func:`table_to_frame`), names stripped.
+        Rows as read (:func:`table_to_frame`).
     src : Source
         Where the rows are; ``src.row0`` is the file row of the frame's first row.
     opts : TableOptions
     prev_t_s : float, optional
-        Time (s) of the file row just before the frame, for the strictly-increasing check.
+        Time (s) of the file row just before the frame.
     first_values : callable, optional
-        ``first_values(converted_frame)`` gives the file row of the first value of each
-        required column the frame has (:func:`first_value_rows`); None skips that check
-        (later chunks).
+        Gives the file row of the first value of each required column
+        (:func:`first_value_rows`); None skips those checks (later chunks).
     temp_empty : bool, default False
-        With ``first_values`` None (later chunks): the file's ``temp`` column is empty
-        in every row, as the first chunk's ``temperature`` ("empty") said.
+        Later chunks: the first chunk found ``temp`` empty in every row of the file.
     prev_compass : dict, optional
-        ``last_compass`` of the frame before (chunks): held compass values are emptied
-        across chunks as in the whole file (:func:`~gyrodrift.io.held.drop_held`).
+        ``last_compass`` of the frame before (chunks).
 
     Returns
     -------
     Normalised
-        The frame (numeric contract columns float64 in deg/s and NED, headings in
-        [0, 360)), its compass columns with values, and where its temperature came from.
     """
     df = apply_column_map(frame, opts.renames, src)
     _check_required_columns(df, src)
@@ -597,10 +523,7 @@ def normalise_frame(
         temperature = TEMP_MEASURED
     _check_limits(df, src, opts)
     with_values = compass_columns_with_values(df)
-    df = _to_deg_per_s(df, opts.scale)
-    if opts.frame == "enu":
-        df = _enu_to_ned(df)
-    df = _wrap_headings(df)
+    df = _to_contract_frame(df, opts)
     if temperature != TEMP_MEASURED:
-        df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_wrap_headings)
+        df[TEMP] = np.full(len(df), NO_TEMPERATURE_C)  # df is a new frame (_to_contract_frame)
     return Normalised(df, with_values, temperature, notes, held, last_compass)
