@@ -254,7 +254,7 @@ def test_required_column_empty_everywhere(tmp_path):
 
 
 def test_time_empty_in_the_first_chunk_only(tmp_path):
-    rows = {i: f",0.5,20,1" for i in range(70)}
+    rows = {i: ",0.5,20,1" for i in range(70)}
     msg = _same_error(_write(tmp_path, _rows(300, rows), "te.csv"), 64)
     assert "line 2" in msg and "time is empty" in msg
 

@@ -13,7 +13,6 @@ import dataclasses
 import os
 import subprocess
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,6 @@ from gyrodrift.cli import main
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.config import config_from_dict, load_config
 from gyrodrift.errors import ConfigError, GyroDriftError
-from gyrodrift.model import TempRateConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 
