@@ -521,12 +521,14 @@ def epoch(mf, mc, t_end, temp_end):
     ng = mf[MF_E_NG]
     u = var_u = math.nan
     if not gap and ng >= VN_MIN_SAMPLES:
-        # the sensor's noise about a constant when still: the von Neumann ratio of successive
-        # differences to the variance, over its white value 2 n / (n - 1), near the noise's
-        # colour (as believed: its uncertainty widens the test); any motion may lower it
+        # the sensor's noise about a constant when still: the von Neumann ratio of the sum of
+        # squared successive differences to the sum of squared deviations, over its white
+        # value (mean 2, variance 4 (n - 2) / ((n - 1)(n + 1)) for n normal samples), near
+        # the noise's colour (as believed: its uncertainty widens the test); any motion may
+        # lower it
         ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
         if ss > 0.0:
-            mean0 = 2.0 * ng / (ng - 1.0)
+            mean0 = 2.0
             var0 = 4.0 * (ng - 2.0) / ((ng - 1.0) * (ng + 1.0))
             u = mf[MF_E_DG2] / ss / mean0
             var_u = var0 / (mean0 * mean0)
