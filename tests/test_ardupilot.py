@@ -283,10 +283,12 @@ def test_cli_compensate_bin_equals_compensating_the_simulated_csv(sim, flight, t
     np.testing.assert_allclose(a["t"], b["t"], rtol=0, atol=1e-12)  # TimeUS * 1e-6 against t + 5.0
     # float32 rates and whole milligauss in the log: the magnetometer's rounding (up to 0.5 mG of
     # ~250 mG horizontal) moves the compass heading by a few hundredths of a degree; the drift the
-    # model learns on this 2-min drive (0.2 deg/s RMS from the truth) moves by a twentieth of that
-    # at most
+    # model learns on this 2-min drive (about 0.5 deg/s RMS from the truth) moves by a fiftieth of
+    # that on 95 % of the rows, and where the rounding tips the weighing of the hypotheses for a
+    # few epochs (at 43 s) by an eighth of it
     err = float(np.sqrt(np.mean((b["bias_z"] - sim["true_bias_z"].to_numpy()) ** 2)))
-    assert np.abs(a["bias_z"] - b["bias_z"]).max() < 0.1 * err
+    moved = np.abs(a["bias_z"] - b["bias_z"])
+    assert np.quantile(moved, 0.95) < 0.02 * err and moved.max() < 0.2 * err
     assert np.abs((a["heading"] - b["heading"] + 180.0) % 360.0 - 180.0).max() < 0.3  # start and drift
     assert (a["gate_reason"].fillna("") == b["gate_reason"].fillna("")).mean() > 0.9  # 93.5 % with the gyro-aided tilt
     # --instance reaches the reader

@@ -121,13 +121,23 @@ MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 #: Probability that the last epoch's drift jumped (the modes' weights where the jump was kept).
 MF_JUMP = MF_RX_W + 1
-N_MF = MF_JUMP + 1
+#: The gyro noise's colour: the von Neumann ratio of a still epoch over its white value (1 for
+#: white noise; below 1 where the sensor's own filter correlates successive samples), as a
+#: Gaussian belief (mean, variance) learned from the epochs as likely still as they are.
+MF_COLOUR, MF_COLOUR_V = MF_JUMP + 1, MF_JUMP + 2
+N_MF = MF_COLOUR_V + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
 #: A moving epoch's gyro: white about its mean with this probability (a steady turn), else any
 #: serial structure (its ratio anywhere from 0 to 3 sd above the white value).
 VN_MOTION = 0.5
+#: Prior belief in the noise colour: white, within this standard deviation (real MEMS gyros
+#: with an on-chip low-pass filter read 0.8 or so), and its random walk per √s (a device's
+#: noise changes its colour slowly, if at all).
+COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
+#: Bounds of the colour where it sets the long-run noise (an AR(1) sequence's).
+COLOUR_MIN, COLOUR_MAX = 0.2, 1.5
 #: Largest heading variance a time gap adds to a moving platform, deg² (a heading anywhere).
 GAP_VAR_MAX = 90.0**2
 #: A clean compass innovation says something of the compass's epoch-level error only when its
@@ -459,7 +469,11 @@ def epoch(mf, mc, t_end, temp_end):
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
-    sig_s2 = mf[MF_SIG_S2]
+    # the noise the epoch's mean keeps: the successive differences' variance times the long-run
+    # factor of a first-order autoregressive noise of the learned colour c = 1 - ρ:
+    # (1 + ρ) / (1 - ρ)² of the differences' (1 for white noise)
+    colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
+    sig_s2 = mf[MF_SIG_S2] * (2.0 - colour) / (colour * colour)
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
     moving_q = arw + mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4] / 12.0
     if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
@@ -505,16 +519,23 @@ def epoch(mf, mc, t_end, temp_end):
     Hg[X_R] = -0.5 * dt * dt
     l_white = l_any = 0.0
     ng = mf[MF_E_NG]
+    u = var_u = math.nan
     if not gap and ng >= VN_MIN_SAMPLES:
-        # white noise about a constant when still (the von Neumann ratio of successive
-        # differences to the variance is near 2); any motion may lower it
+        # the sensor's noise about a constant when still: the von Neumann ratio of the sum of
+        # squared successive differences to the sum of squared deviations, over its white
+        # value (mean 2, variance 4 (n - 2) / ((n - 1)(n + 1)) for n normal samples), near
+        # the noise's colour (as believed: its uncertainty widens the test); any motion may
+        # lower it
         ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
         if ss > 0.0:
-            vn = mf[MF_E_DG2] / ss
-            mean0 = 2.0 * ng / (ng - 1.0)
+            mean0 = 2.0
             var0 = 4.0 * (ng - 2.0) / ((ng - 1.0) * (ng + 1.0))
-            l_white = _loggauss(vn - mean0, var0)
-            l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0)) + (1.0 - VN_MOTION) / (mean0 + 3.0 * math.sqrt(var0)))
+            u = mf[MF_E_DG2] / ss / mean0
+            var_u = var0 / (mean0 * mean0)
+            spread = var_u + mf[MF_COLOUR_V]
+            l_white = _loggauss(u - mf[MF_COLOUR], spread)
+            l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0))
+                             + (1.0 - VN_MOTION) / (mf[MF_COLOUR] + 3.0 * math.sqrt(spread)))
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
     D = Rc = h_still = 0.0
@@ -588,6 +609,13 @@ def epoch(mf, mc, t_end, temp_end):
     mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING]
     mf[MF_JUMP] = np.dot(mu, jumped)
     mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
+    mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
+    if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
+        # the colour learned from the epoch as far as it is still: a measurement of variance
+        # var_u / P(still) (a moving epoch's ratio says nothing of the sensor)
+        k = mf[MF_COLOUR_V] / (mf[MF_COLOUR_V] + var_u / mf[MF_PSTILL])
+        mf[MF_COLOUR] += k * (u - mf[MF_COLOUR])
+        mf[MF_COLOUR_V] *= 1.0 - k
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
     mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0
     # the rate filters follow the compensated mean rate, and interact (an IMM of their own): each
@@ -655,3 +683,5 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_RX] = 0.0
     mf[MF_RX_S] = 0.0
     mf[MF_RX_W] = NOISE_PRIOR_STEPS
+    mf[MF_COLOUR] = 1.0
+    mf[MF_COLOUR_V] = COLOUR_SD0**2
