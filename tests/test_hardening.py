@@ -773,3 +773,22 @@ def test_fuzz_profile_loader_json(data):
     with tempfile.TemporaryDirectory() as d:
         path = write_profile(Path(d) / "fuzz.json", data)
         _check_profile_file(path)
+
+
+def test_a_sigterm_in_a_finalizer_is_delivered_again():
+    """A SIGTERM whose Terminated is raised inside a finalizer (where it cannot propagate) is
+    not lost: the hook sends SIGTERM again, and the handler then raises it where it can."""
+    import gc
+    import time
+
+    from gyrodrift.cli.commands import Terminated, _sigterm_interrupts
+
+    class Finalised:
+        def __del__(self):
+            raise Terminated()
+
+    with pytest.raises(Terminated):
+        with _sigterm_interrupts():
+            Finalised()
+            gc.collect()
+            time.sleep(5.0)  # the signal sent again interrupts this

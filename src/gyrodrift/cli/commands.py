@@ -474,19 +474,43 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated()
 
 
+#: Delay before a SIGTERM that landed in a finalizer is sent again, s.
+REDELIVER_S = 0.05
+
+
+def _redeliver_terminated(hook):
+    """A ``sys.unraisablehook`` that sends SIGTERM again a moment later when :class:`Terminated`
+    was raised where it cannot propagate (a finalizer, a weakref callback: Python would print
+    it and go on), and passes every other exception to ``hook``."""
+
+    def unraisable(info) -> None:
+        if isinstance(info.exc_value, Terminated):
+            import threading
+
+            threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signal.SIGTERM)).start()
+            return
+        hook(info)
+
+    return unraisable
+
+
 @contextmanager
 def _sigterm_interrupts():
-    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread; the
-    handler in force before is restored afterwards. Nothing changes outside the main
-    thread (where Python cannot install handlers) or without SIGTERM."""
+    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread (sent
+    again if it first lands in a finalizer); the handler and the unraisable hook in force
+    before are restored afterwards. Nothing changes outside the main thread (where Python
+    cannot install handlers) or without SIGTERM."""
     try:
         previous = signal.signal(signal.SIGTERM, _raise_terminated)
     except (ValueError, OSError, AttributeError):
         yield
         return
+    hook = sys.unraisablehook
+    sys.unraisablehook = _redeliver_terminated(hook)
     try:
         yield
     finally:
+        sys.unraisablehook = hook
         # None: a handler installed outside Python, which cannot be put back; the default then
         signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
 
