@@ -333,7 +333,6 @@ def test_cli_calibrate_refusal_is_one_line(tmp_path, capsys):
 
 def test_compensate_prior_starts_from_the_tangent_and_warns_outside_the_range(tmp_path, capsys):
     from conftest import synthetic_log
-    from gyrodrift.calibrate import start_temperature
     from gyrodrift.cli import main
 
     params = tmp_path / "k.params"
@@ -343,7 +342,6 @@ def test_compensate_prior_starts_from_the_tangent_and_warns_outside_the_range(tm
     inside, outside = tmp_path / "in.csv", tmp_path / "out.csv"
     synthetic_log(duration_s=300.0, temp_c=lambda t: 20.0 + t / 30.0, drift_dps=drift).to_csv(inside, index=False)
     synthetic_log(duration_s=300.0, temp_c=lambda t: 40.0 + t / 30.0, drift_dps=drift).to_csv(outside, index=False)
-    assert start_temperature(inside) == 20.0
     assert main(["compensate", str(inside), "-o", str(tmp_path / "a.csv"), "-q", "--prior", str(params)]) == 0
     assert capsys.readouterr().err == ""
     first = pd.read_csv(tmp_path / "a.csv").iloc[0]
@@ -359,6 +357,24 @@ def test_compensate_prior_starts_from_the_tangent_and_warns_outside_the_range(tm
     assert main(["compensate", str(inside), "-o", str(tmp_path / "d.csv"), "-q", "--prior", str(params),
                  "--profile", str(prof)]) == 2
     assert "--prior and --profile" in capsys.readouterr().err
+
+
+def test_compensate_file_starts_from_a_prior_in_the_same_pass(tmp_path):
+    """``compensate_file(prior=...)``: in memory and in chunks, the drift model starts from the
+    calibration at the log's first temperature, and both give the same rows."""
+    from conftest import synthetic_log
+    from gyrodrift.pipeline import compensate_file
+
+    cal = fit_calibration(known_log(), source="k.csv")
+    drift = lambda t, temp: np.polynomial.polynomial.polyval(temp - 30.0, KNOWN["z"])  # noqa: E731
+    log = tmp_path / "in.csv"
+    synthetic_log(duration_s=300.0, temp_c=lambda t: 20.0 + t / 30.0, drift_dps=drift).to_csv(log, index=False)
+    compensate_file(log, tmp_path / "m.csv", prior=cal, chunked=False)
+    compensate_file(log, tmp_path / "c.csv", prior=cal, chunked=True, chunk_rows=500)
+    whole, chunks = pd.read_csv(tmp_path / "m.csv"), pd.read_csv(tmp_path / "c.csv")
+    a0, _, _ = prior_config(cal, temp_c=20.0).kalman.x0
+    assert whole["a"].iloc[0] == pytest.approx(a0, abs=1e-3)
+    pd.testing.assert_frame_equal(whole, chunks)
 
 
 def test_ardupilot_files_in_every_layout_read_the_same(tmp_path):

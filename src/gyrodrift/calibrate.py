@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -24,7 +23,7 @@ from gyrodrift.kernels.thermal import fit_polynomial
 __all__ = [
     "AXES", "AXIS_COLUMNS", "MIN_SPAN_C", "STILL_TOL_DPS", "STILL_TILT_DEG", "MIN_WINDOW_SAMPLES", "MEDIAN_WINDOW",
     "BIN_WIDTH_C", "CalibrationError", "AxisFit", "Calibration", "fit_calibration", "calibrate_log", "undo_onboard",
-    "sensor_rotation", "temperature_bins", "bin_means", "smooth_rate", "start_temperature", "prior_config",
+    "sensor_rotation", "temperature_bins", "bin_means", "smooth_rate", "prior_config",
     "prior_notes",
 ]
 
@@ -368,27 +367,6 @@ def calibrate_log(log, *, source: str | None = None, rotation=None, rotation_tex
 
 
 # ---------------------------------------------------------------------------- prior for the compensator
-
-
-def start_temperature(path, read_options=None) -> float:
-    """The first finite temperature (degC) of the log at ``path``: a CSV or Parquet log read up to
-    it in small chunks, another format read whole."""
-    from gyrodrift.io import log_format
-    from gyrodrift.io.chunked import iter_log_chunks
-    from gyrodrift.io import ReadOptions
-
-    opts = ReadOptions.of(read_options)  # a ReadOptions, or a dict of its fields
-    path = Path(path)
-    if log_format(path, opts.fmt) in ("csv", "parquet"):
-        with iter_log_chunks(path, chunk_rows=4096, **opts.table_keywords()) as chunks:
-            for chunk in chunks:
-                temps = chunk[TEMP].to_numpy(dtype=float)
-                finite = temps[np.isfinite(temps)]
-                if finite.size:
-                    return float(finite[0])
-        raise ConfigError(f"{path}: no temperature in the log; the temp column must have values")
-    temps = opts.read(path)[TEMP].to_numpy(dtype=float)
-    return float(temps[np.isfinite(temps)][0])
 
 
 def prior_config(cal: Calibration, config=None, temp_c: float = math.nan):

@@ -210,6 +210,7 @@ def compensate_file(
     progress=None,
     scale_factor: bool = False,
     smooth: bool = False,
+    prior=None,
     stream: bool | None = None,
 ) -> RunStats:
     """Compensate the log at ``input_path`` and write the output table to ``output_path``.
@@ -236,6 +237,10 @@ def compensate_file(
     smooth : bool
         Recompensate with the drift smoothed over the whole log
         (:func:`gyrodrift.smooth.smooth_output`; non-causal), in memory.
+    prior : gyrodrift.calibrate.Calibration, optional
+        An autopilot's thermal calibration (:func:`gyrodrift.paramfiles.read_prior`): the z drift
+        model starts from it at the log's first temperature (:func:`gyrodrift.calibrate.prior_config`),
+        read in the same pass as the rest.
     stream : bool, optional
         The old name of ``chunked`` (a DeprecationWarning).
 
@@ -265,6 +270,8 @@ def compensate_file(
         if can_chunk:
             _check_fits_in_memory(input_path, opts.fmt, *_why_in_memory(scale_factor, smooth))
         log = opts.read(input_path)
+        if prior is not None:
+            cfg = _with_prior(prior, cfg, log, input_path)
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
             from gyrodrift.smooth import smooth_output
@@ -281,7 +288,20 @@ def compensate_file(
         stats.regressor = str(out.attrs.get("drift_regressor", "temperature"))
         stats.notes = list(out.attrs.get("notes", ()))
         return stats
-    return _stream(input_path, output_path, cfg, opts, chunk_rows, progress)
+    return _stream(input_path, output_path, cfg, opts, chunk_rows, progress, prior)
+
+
+def _with_prior(prior, cfg: CompensatorConfig, log: pd.DataFrame, source) -> CompensatorConfig:
+    """``cfg`` started from the calibration ``prior`` at the first finite temperature of ``log``."""
+    from gyrodrift.calibrate import prior_config
+    from gyrodrift.errors import ConfigError
+
+    temps = log[TEMP].to_numpy(dtype=float)
+    finite = temps[np.isfinite(temps)]
+    if not finite.size:
+        raise ConfigError(f"{source}: no temperature in its first {len(temps)} rows; a calibration (--prior) starts "
+                          "the drift model at the log's first temperature")
+    return prior_config(prior, cfg, float(finite[0]))
 
 
 class _Ahead:
@@ -441,7 +461,7 @@ def _with_scale_factor(out: pd.DataFrame, cfg: CompensatorConfig) -> pd.DataFram
 
 
 def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: ReadOptions, chunk_rows: int,
-            progress=None) -> RunStats:
+            progress=None, prior=None) -> RunStats:
     """The chunked path: read ahead in one thread, write behind in another, compensate here,
     with a short GIL switch interval; a column that changes type starts the run over
     (docs/streaming.md, section "gyrodrift compensate")."""
@@ -454,7 +474,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: R
     try:
         while True:
             try:
-                stats = _stream_threads(input_path, output_path, cfg, opts, chunk_rows, column_types, progress)
+                stats = _stream_threads(input_path, output_path, cfg, opts, chunk_rows, column_types, progress, prior)
             except ColumnTypeChanged as exc:
                 pinned = column_types.get(exc.column)
                 if pinned == "string":
@@ -473,7 +493,7 @@ def _stream(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: R
 
 
 def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig, opts: ReadOptions, chunk_rows: int,
-                    column_types: dict[str, str], progress=None) -> RunStats:
+                    column_types: dict[str, str], progress=None, prior=None) -> RunStats:
     import itertools
 
     from gyrodrift.compensator.intake import Intake, chunk_arrays, needs_survey, survey
@@ -498,6 +518,8 @@ def _stream_threads(input_path: Path, output_path: Path, cfg: CompensatorConfig,
             if first is None:
                 raise LogFormatError(f"{source}: the log has no samples")
             check_input_columns(first, source)
+            if prior is not None:  # the drift model starts from the calibration at the first chunk's temperature
+                cfg = _with_prior(prior, cfg, first, input_path)
             whole = None
             if needs_survey(cfg, first):  # one reading of the whole file first (gyrodrift.compensator.intake)
                 with chunks_of(input_path) as again:

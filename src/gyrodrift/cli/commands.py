@@ -79,16 +79,14 @@ def _cmd_compensate(args) -> int:
     cfg, profile = warm_start(args, method_config(args))
     prior = None
     if args.prior:  # the z drift model starts from an autopilot's thermal calibration (gyrodrift.calibrate)
-        from gyrodrift.calibrate import prior_config, start_temperature
         from gyrodrift.paramfiles import read_prior
 
         if profile is not None:
             raise ConfigError("--prior and --profile both give the starting drift model; use one of them")
         prior = read_prior(args.prior, instance=args.instance)
-        cfg = prior_config(prior, cfg, start_temperature(args.input, read_options(args)))
     stats = compensate_file(args.input, args.output, cfg, read_options=read_options(args),
                             progress=_bar("compensating"), scale_factor=args.scale_factor,
-                            smooth=args.smooth)
+                            smooth=args.smooth, prior=prior)
     if profile is not None:  # the temperatures of the run are known once it is read
         warn(args.profile, profile_notes(profile, temp_range_c=(stats.temp_min_c, stats.temp_max_c)))
     if prior is not None:
