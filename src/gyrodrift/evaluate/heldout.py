@@ -1,31 +1,8 @@
 """Every method on the generator's scenarios (:mod:`gyrodrift.simulate.generator`), scored
 against truth, tuning and held-out seeds reported side by side.
 
-One *case* is a (class, seed) pair. Every method runs on the same generated log:
-
-==================  ======================================================================
-method              what it is
-==================  ======================================================================
-``default``         gyrodrift's default estimator (:class:`gyrodrift.CompensatorConfig`)
-``stkf``, ``kf``    the paper's strong tracking filter and its KF baseline
-``mlr-causal``      the paper's MLR fitted on the past only
-``poly3``           a cubic in temperature fitted on a separate still heating run of the same
-                    device (PX4's and ArduPilot's thermal calibration)
-``fusion-offset``   x-io Fusion's gyroscope offset correction (no temperature model)
-``fusion-ahrs``     x-io Fusion's AHRS (its heading only: compared with ``heading_fused``)
-``smoothed``        gyrodrift's forward-backward pass over the whole log (not causal)
-==================  ======================================================================
-
-Scores of a case and method (:data:`COLUMNS`): heading RMS (deg, the gyro-integrated
-``heading`` against ``ref_heading``), bias RMS (deg/s, against ``true_bias_z``), the RMS of
-the fused heading (deg; ``heading_fused``, or Fusion's AHRS), and for gyrodrift's own
-estimators the honesty of what they say: the share of rows whose truth lies within one and
-two standard deviations (``bias_sd``, ``heading_fused_sd``), and the precision and recall of
-the ``interference`` and ``turning`` labels against the generator's truth
-(:func:`gyrodrift.simulate.generator.truth_labels`; interference on compass rows).
-
-:func:`acceptance` says per class whether the default is at or below the best causal
-baseline in the median (heading and bias) and its fused heading at or below Fusion's AHRS.
+The methods, the scores and the acceptance: docs/evaluation.md, section "The generator's
+classes on held-out seeds".
 """
 
 from __future__ import annotations
@@ -69,7 +46,7 @@ def _share_within(err, sd, k) -> float:
 
 
 def _precision_recall(said: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
-    """Precision and recall of boolean labels (NaN where undefined: nothing said, nothing true)."""
+    """Precision and recall of boolean labels (NaN where undefined)."""
     hit = int(np.sum(said & truth))
     p = hit / int(said.sum()) if said.any() else math.nan
     r = hit / int(truth.sum()) if truth.any() else math.nan
@@ -161,7 +138,7 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
                   progress: Callable | None = None) -> pd.DataFrame:
     """Every method on ``n_seeds`` cases of each class in each split; one row per case and method.
 
-    The rows do not depend on ``workers``: each case comes from its own (class, seed).
+    The rows do not depend on ``workers``.
     """
     classes = list(CLASSES) if classes is None else list(classes)
     unknown = [c for c in classes if c not in CLASSES]
@@ -199,9 +176,8 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
 def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     """Per (split, class): the default's medians against the best causal baseline and Fusion's AHRS.
 
-    Columns: ``heading`` and ``bias`` (the default's median RMS), ``best_heading`` and
-    ``best_bias`` (the lowest median of :data:`CAUSAL_BASELINES`, and which), ``fused`` and
-    ``ahrs``, and ``ok_heading``, ``ok_bias``, ``ok_fused``.
+    Columns: the default's ``heading``, ``bias`` and ``fused`` median RMS; ``best_heading``,
+    ``best_bias`` (the lowest of :data:`CAUSAL_BASELINES`, and which) and ``ahrs``; ``ok_*``.
     """
     rows = []
     for (split, cls), part in summary.groupby(["split", "class"], sort=False):

@@ -1,34 +1,7 @@
 """A self-contained HTML report of one log compensated by several methods (``gyrodrift report``).
 
-The page holds everything inline: CSS in a ``<style>`` element, figures as base64
-PNG ``<img>`` elements (:mod:`gyrodrift.evaluate.plots`), no JavaScript and no external
-resource; a Content-Security-Policy in the page forbids loading any. It can be
-mailed or archived as one file and opened offline.
-
-Contents, top to bottom:
-
-1. what was read: file, rows, duration, sample rate, temperature range, compass
-   form, evaluation columns, methods run and methods skipped with the reason. The
-   default estimator (``adaptive``) runs first unless ``--methods`` says otherwise,
-   is named "adaptive (default)" in tables and legends, and is the method of the
-   single-method figures;
-2. the summary table, one row per method (plus the raw gyro): bias error
-   (``bias_z − true_bias_z``, deg/s) when the log has ``true_bias_z``, heading
-   error (``heading − ref_heading`` wrapped, deg) when it has ``ref_heading``,
-   filter updates and the share of rows gated per reason;
-3. figures, each with a short "how to read this" note: temperature, the thermal
-   calibration fit (``gyrodrift calibrate``'s, when the log is a still run over 5 degC
-   or more; else a note of why not), raw vs
-   compensated rate, drift estimates, drift-model parameters with the gates,
-   headings, heading error, Allan deviation of the rate error with a table of
-   noise terms. A figure the log cannot support is replaced by a one-line note
-   saying which column is missing;
-4. the gyrodrift version and every setting used.
-
-The figures and their notes: :mod:`gyrodrift.evaluate.report_figures`.
-
-matplotlib (``gyrodrift[plot]``) draws the figures and allantools
-(``gyrodrift[allan]``) computes the Allan deviation.
+What the page holds: docs/evaluation.md, section "The HTML report"; its figures and their
+notes: :mod:`gyrodrift.evaluate.report_figures`.
 """
 
 from __future__ import annotations
@@ -314,27 +287,22 @@ def build_report(
     Parameters
     ----------
     log : DataFrame
-        The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
+        The input log (input contract).
     outputs : mapping of str to DataFrame
-        Method name → output table, as returned by
-        :func:`gyrodrift.evaluate.compare.run_methods`. The default estimator
-        (:data:`gyrodrift.evaluate.compare.DEFAULT_METHOD`) is the method of the
-        single-method figures; without it ``stkf``, else the first one.
+        Method name → output table (:func:`gyrodrift.evaluate.compare.run_methods`).
     skipped : mapping of str to str, optional
-        Method name → why it did not run (listed in the header).
+        Method name → why it did not run.
     title : str
         Page title and heading (control characters shown as escapes, :mod:`gyrodrift._text`).
     source : str
-        What was read (file name), shown in the header (likewise).
+        What was read (file name), shown likewise.
     config : CompensatorConfig, optional
-        Settings the methods ran with (default: the defaults), listed at the end
-        and used for the motion test of the Allan figure.
+        Settings the methods ran with (default: the defaults).
 
     Returns
     -------
     str
-        The HTML document (UTF-8 text): inline CSS, figures as base64 PNG, no
-        script and no external resource.
+        The HTML document.
 
     Raises
     ------
@@ -387,7 +355,7 @@ def build_report(
 
 
 def write_report(path, html: str) -> None:
-    """Write the report atomically (temporary file in the same folder, then :func:`os.replace`).
+    """Write the report atomically (docs/output_files.md, section "Atomic outputs").
 
     Raises
     ------

@@ -1,12 +1,7 @@
 """The figures of ``gyrodrift report``: which figures a log supports, each with its note on
 how to read it, and the HTML they are embedded in.
 
-The Allan deviation is of the angular-rate *error*: the rate minus the true rate. The
-true rate is 0 on a motionless log (one whose reference heading, or else whose 1-s mean
-compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log with a reference,
-and unknown otherwise (the figure is then left out). It is computed over the longest
-stretch without a time gap; time stamps that jitter are first put on an even time base
-(:func:`gyrodrift.evaluate.allan.even_rate`), and the figure's note says so.
+The Allan figure's rate error and true rate: docs/evaluation.md, section "The HTML report".
 """
 
 from __future__ import annotations
