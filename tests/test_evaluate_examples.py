@@ -70,3 +70,11 @@ def test_plotbase_examples():
     xd, yd = minmax_decimate(x, y, 1000)
     assert (len(xd) <= 1000, float(yd.max()), float(xd[np.argmax(yd)])) == (True, 5.0, 54321.0)
     assert time_axis([0.0, 1800.0])[1] == "time from start (min)"
+
+
+def test_fleet_output_names():
+    from gyrodrift.fleet import common_root, output_path
+
+    assert common_root(["/data/runs/a/x.csv", "/data/runs/b/x.csv"]).as_posix() == "/data/runs"
+    assert output_path("logs/run1.csv.gz", "out").as_posix() == "out/run1_out.parquet"
+    assert output_path("runs/b/x.csv", "out", root="runs").as_posix() == "out/b/x_out.parquet"

@@ -1,19 +1,7 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
-``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many`) compensates every
-log as ``gyrodrift compensate`` does (:func:`gyrodrift.pipeline.compensate_file`),
-writes ``OUTDIR/<sub>/<stem>_out.parquet`` (or ``.csv``) atomically, mirroring the
-logs' folders below their common folder, and returns one summary row per log. A log
-that fails gives a row with ``status = "error"`` and a one-line message; it never
-stops the others.
-
-Parallelism: local ``spawn`` processes (``workers``; 1 runs in this process), or a
-Dask scheduler (``gyrodrift[fleet]``; every worker must see the logs and ``out_dir``
-at the same paths). Both give the same numbers as :func:`compensate` on each log.
-
-Summary columns (:data:`SUMMARY_COLUMNS`): ``file``, ``status``, ``error``, ``rows``,
-``duration_s`` (s), ``temp_min_c``, ``temp_max_c`` (degC), ``updates``, the final
-``a`` (deg/s/degC), ``b`` (deg), ``c`` (deg/s), and ``seconds`` (wall time).
+The logs, output names, summary and parallelism of ``gyrodrift batch``: docs/command-line.md,
+section "gyrodrift batch".
 """
 
 from __future__ import annotations
@@ -47,7 +35,7 @@ __all__ = [
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq", ".ulg", ".bin", ".bag", ".mcap", ".db3")
 #: Output table formats of :func:`process_one` and their file-name endings.
 OUT_FORMATS = {"parquet": ".parquet", "csv": ".csv"}
-#: Columns of the summary table, in order (see the module notes).
+#: Columns of the summary table, in order.
 SUMMARY_COLUMNS = (
     "file", "status", "error", "rows", "duration_s", "temp_min_c", "temp_max_c",
     "updates", "a", "b", "c", "seconds",
@@ -76,20 +64,7 @@ def _is_log(path: Path) -> bool:
 
 
 def find_logs(dir_or_glob) -> list[Path]:
-    """The logs in a folder, or the logs a glob pattern matches, sorted by path.
-
-    Parameters
-    ----------
-    dir_or_glob : str or os.PathLike
-        A folder (its own files, not sub-folders: every ``.csv``, ``.csv.gz``,
-        ``.parquet``, ``.pq``, ``.ulg``, ``.bin``, ``.bag``, ``.mcap``, ``.db3`` file and every
-        ROS 2 bag folder in it), a glob pattern (``logs/*.csv``, ``runs/**/*.parquet``;
-        matches with other endings are left out), or a single log file.
-
-    Returns
-    -------
-    list of pathlib.Path
-        Sorted by their text.
+    """The logs of a folder, a glob pattern or one log file, sorted by path.
 
     Raises
     ------
@@ -115,12 +90,7 @@ def find_logs(dir_or_glob) -> list[Path]:
 
 
 def common_root(paths) -> Path | None:
-    """The deepest folder holding every log of ``paths`` (None for none): the input folder
-    :func:`output_path` mirrors under the output folder.
-
-    >>> common_root(["/data/runs/a/x.csv", "/data/runs/b/x.csv"]).as_posix()
-    '/data/runs'
-    """
+    """The deepest folder holding every log of ``paths`` (None for none), mirrored under the output folder."""
     parents = [os.path.abspath(Path(p).parent) for p in paths]
     return Path(os.path.commonpath(parents)) if parents else None
 
@@ -128,14 +98,7 @@ def common_root(paths) -> Path | None:
 def output_path(path, out_dir, out_format: str = "parquet", root=None) -> Path:
     """Where :func:`process_one` writes the output of ``path``: ``out_dir/<sub>/<stem>_out.<ext>``.
 
-    ``<stem>`` is the file name without its log ending (``run.csv.gz`` → ``run``);
-    ``<sub>`` is the log's folder relative to ``root`` (:func:`common_root` of the logs),
-    so that logs of equal names in different folders do not clash; none without ``root``.
-
-    >>> output_path("logs/run1.csv.gz", "out").as_posix()
-    'out/run1_out.parquet'
-    >>> output_path("runs/b/x.csv", "out", root="runs").as_posix()
-    'out/b/x_out.parquet'
+    ``<sub>`` is the log's folder relative to ``root`` (none without it).
     """
     if out_format not in OUT_FORMATS:
         raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
@@ -165,32 +128,10 @@ def _error_text(err: BaseException) -> str:
 
 def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None,
                 chunk_rows: int | None = None) -> dict:
-    """Compensate one log into ``out_dir`` as ``gyrodrift compensate`` does; return its summary
-    row. Never raises.
+    """Compensate one log into ``out_dir`` as ``gyrodrift compensate`` does; return its summary row.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The log (any format :func:`gyrodrift.io.read_log` reads).
-    out_dir : str or os.PathLike
-        Existing folder for the output table (see :func:`output_path`; the sub-folder
-        below it is created).
-    config : CompensatorConfig, optional
-    out_format : {"parquet", "csv"}
-        Format of the output table.
-    root : str or os.PathLike, optional
-        The input folder mirrored under ``out_dir`` (:func:`output_path`).
-    read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.ReadOptions`).
-    chunk_rows : int, optional
-        Rows per chunk of the chunked path (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
-
-    Returns
-    -------
-    dict
-        The keys of :data:`SUMMARY_COLUMNS` (module notes). Any exception (a
-        :class:`~gyrodrift.errors.GyroDriftError` or anything unexpected) gives
-        ``status = "error"`` and a one-line ``error``.
+    Never raises: a failure is ``status = "error"`` with a one-line ``error``. The arguments
+    are those of :func:`process_many`; ``root`` is the folder mirrored (:func:`output_path`).
     """
     from gyrodrift.io import check_output_path
     from gyrodrift.pipeline import CHUNK_ROWS, compensate_file
@@ -315,43 +256,38 @@ def process_many(
 ) -> pd.DataFrame:
     """Compensate many logs in parallel; return the summary table, in the input order.
 
+    See docs/command-line.md, section "gyrodrift batch".
+
     Parameters
     ----------
     paths : iterable of str or os.PathLike
         The logs (see :func:`find_logs`).
     out_dir : str or os.PathLike
-        Existing folder for the outputs ``<sub>/<stem>_out.<ext>``: the logs' folders
-        below their :func:`common_root` are mirrored in it (see :func:`output_path`).
+        Existing folder for the outputs (see :func:`output_path`).
     config : CompensatorConfig, optional
         Settings for every log.
     workers : int, optional
-        Local processes (default :func:`os.cpu_count`); 1 runs in this process.
-        Ignored with ``dask_address``. The processes are started with ``spawn``: a
-        script that calls this with more than one worker needs the usual
-        ``if __name__ == "__main__":`` guard.
+        Local ``spawn`` processes (default :func:`os.cpu_count`); 1 runs in this process.
     dask_address : str or distributed cluster, optional
         Run on this Dask scheduler instead (needs ``gyrodrift[fleet]``).
     progress : callable, optional
-        ``progress(iterable, total)`` wraps the iteration over finished logs (e.g.
-        :func:`gyrodrift._progress.progress_iter`); it must yield the same items.
+        ``progress(iterable, total)`` wraps the finished logs and yields them.
     out_format : {"parquet", "csv"}
         Format of the output tables.
     read_options : ReadOptions or dict, optional
-        How to read every log (see :func:`process_one`).
+        How to read every log (:class:`gyrodrift.io.ReadOptions`).
     chunk_rows : int, optional
-        Rows per chunk of the chunked path (see :func:`process_one`).
+        Rows per chunk (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
 
     Returns
     -------
     pandas.DataFrame
-        One row per log (:data:`SUMMARY_COLUMNS`); ``rows`` and ``updates`` are
-        nullable integers (empty on error).
+        One row per log (:data:`SUMMARY_COLUMNS`).
 
     Raises
     ------
     ConfigError
-        Bad usage, before any log is processed (format, workers, ``out_dir``, clashing
-        or overwriting outputs, dask). Problems of single logs are rows, never raised.
+        Bad usage, before any log is processed; problems of single logs are rows.
     """
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
@@ -378,19 +314,7 @@ def process_many(
 # --------------------------------------------------------------------------- the summary
 
 def write_summary(summary: pd.DataFrame, path) -> None:
-    """Write a summary table as CSV, atomically, safe to open in a spreadsheet.
-
-    Parameters
-    ----------
-    summary : pandas.DataFrame
-        As :func:`process_many` returns it.
-    path : str or os.PathLike
-
-    Notes
-    -----
-    Text cells that start like a formula get a leading ``'``
-    (:func:`gyrodrift.io.tabular.formula_safe`); ``summary`` itself is not changed.
-    """
+    """Write a summary table as CSV, atomically, safe to open in a spreadsheet (``summary`` not changed)."""
     from gyrodrift.io import write_table
 
     write_table(summary, path, fmt="csv", spreadsheet_safe=True)
