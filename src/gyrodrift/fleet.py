@@ -29,6 +29,9 @@ __all__ = [
     "process_many",
     "summary_markdown",
     "write_summary",
+    "error_line",
+    "check_workers",
+    "map_jobs",
 ]
 
 #: File-name endings (lower case) that :func:`find_logs` picks up.
@@ -51,6 +54,26 @@ _STEM_SUFFIXES = tuple(sorted(LOG_SUFFIXES + (".txt", ".txt.gz"), key=len, rever
 
 def _one_line(text: str) -> str:
     return " ".join(str(text).split())
+
+
+def error_line(err: BaseException) -> str:
+    """``Type: message`` of an exception, on one line."""
+    text = _one_line(err)
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def map_jobs(job, items, workers: int, progress=None, on_error=None) -> list:
+    """``[job(item) for item in items]``, in this process or in worker processes (:mod:`gyrodrift._pool`).
+
+    ``progress(iterable, total)`` wraps the finished items; ``on_error(item, exception)`` is
+    the result of an item whose worker failed.
+    """
+    items = list(items)
+    if workers > 1 and len(items) > 1:
+        from gyrodrift._pool import map_processes
+
+        return map_processes(job, items, workers, progress, on_error=on_error)
+    return [job(item) for item in (progress(iter(items), len(items)) if progress is not None else items)]
 
 
 # --------------------------------------------------------------------------- finding logs
@@ -121,9 +144,7 @@ def _empty_row(path) -> dict:
 
 def _error_text(err: BaseException) -> str:
     """One line: the message of a user error; type and message of anything else."""
-    if isinstance(err, GyroDriftError):
-        return _one_line(str(err))
-    return _one_line(f"unexpected {type(err).__name__}: {err}")
+    return _one_line(err) if isinstance(err, GyroDriftError) else "unexpected " + error_line(err)
 
 
 def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None,
@@ -168,7 +189,8 @@ def _summary_frame(rows: list[dict]) -> pd.DataFrame:
     return df
 
 
-def _check_workers(workers) -> int:
+def check_workers(workers) -> int:
+    """A number of worker processes: ``workers``, checked, or one per CPU for None."""
     if workers is None:
         return max(1, os.cpu_count() or 1)
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
@@ -200,21 +222,8 @@ def _check_outputs(paths: list[Path], out_dir: Path, out_format: str, root: Path
 def _failed_future(path, err: BaseException, seconds: float = math.nan) -> dict:
     """Summary row for a log whose worker failed outside :func:`process_one` (crash, lost worker)."""
     row = _empty_row(path)
-    row.update(error=_one_line(f"worker failed: {type(err).__name__}: {err}"), seconds=seconds)
+    row.update(error="worker failed: " + error_line(err), seconds=seconds)
     return row
-
-
-def _run_serial(job, paths, progress) -> list[dict]:
-    items = iter(paths)
-    if progress is not None:
-        items = progress(items, len(paths))
-    return [job(p) for p in items]
-
-
-def _run_local(job, paths, workers: int, progress) -> list[dict]:
-    from gyrodrift._pool import map_processes
-
-    return map_processes(job, paths, workers, progress, on_error=_failed_future)
 
 
 def _run_dask(job, paths, address, progress) -> list[dict]:
@@ -293,7 +302,7 @@ def process_many(
     out_dir = Path(out_dir)
     if out_format not in OUT_FORMATS:
         raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
-    n_workers = _check_workers(workers)
+    n_workers = check_workers(workers)
     if not paths:
         return _summary_frame([])
     root = common_root(paths)
@@ -302,10 +311,8 @@ def process_many(
                   read_options=read_options, chunk_rows=chunk_rows)
     if dask_address is not None:
         rows = _run_dask(job, paths, dask_address, progress)
-    elif n_workers == 1 or len(paths) == 1:
-        rows = _run_serial(job, paths, progress)
     else:
-        rows = _run_local(job, paths, n_workers, progress)
+        rows = map_jobs(job, paths, n_workers, progress, on_error=_failed_future)
     for row, p in zip(rows, paths):
         row["file"] = str(p)
     return _summary_frame(rows)

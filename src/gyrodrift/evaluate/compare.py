@@ -22,8 +22,8 @@ from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.kernels.integrate import trapezoid
 
-__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "method_label", "run_method",
-           "run_methods", "calibration_from_log", "summary_table"]
+__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "valid_methods", "method_label",
+           "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "fusion-offset", "oracle")
 #: The estimator ``compensate`` runs when none is chosen.
@@ -52,7 +52,8 @@ def method_label(name: str) -> str:
     return f"{name} (default)" if name == DEFAULT_METHOD else name
 
 
-def _valid_methods() -> str:
+def valid_methods() -> str:
+    """Every method name, comma-separated, for messages."""
     return ", ".join([*METHODS, *sorted(n for n in ESTIMATORS if _is_estimator_method(n))])
 
 
@@ -150,7 +151,7 @@ def run_method(
         return _known_drift(log, config, fusion_offset_drift(log))
     if name == "oracle":
         return _oracle(log, config)
-    raise ConfigError(f"unknown method {name!r}; choose from: {_valid_methods()}")
+    raise ConfigError(f"unknown method {name!r}; choose from: {valid_methods()}")
 
 
 def run_methods(
@@ -167,7 +168,7 @@ def run_methods(
     """
     unknown = [m for m in methods if not is_method(m)]
     if unknown:
-        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {_valid_methods()}")
+        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {valid_methods()}")
     if isinstance(calibration, pd.DataFrame):
         calibration = calibration_from_log(calibration)
     outputs, skipped = {}, {}

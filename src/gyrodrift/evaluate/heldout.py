@@ -8,7 +8,6 @@ classes on held-out seeds".
 from __future__ import annotations
 
 import math
-import os
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
@@ -17,6 +16,7 @@ import pandas as pd
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
 from gyrodrift.evaluate.metrics import heading_error_deg
+from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
 
 __all__ = ["METHODS", "CAUSAL_BASELINES", "COLUMNS", "run_case", "run_generated", "summarise", "acceptance",
@@ -77,10 +77,6 @@ def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
     return row
 
 
-def _one_line(err: BaseException) -> str:
-    return f"{type(err).__name__}: {' '.join(str(err).split())}"
-
-
 def _run(name: str, log: pd.DataFrame, config: CompensatorConfig, case) -> pd.DataFrame:
     from gyrodrift.evaluate.compare import run_method
 
@@ -107,7 +103,7 @@ def run_case(cls: str, seed: int, methods: Sequence[str] = METHODS, *, config: C
     try:
         case = generate(cls, seed, duration_scale=duration_scale)
     except Exception as err:  # reported per case, never stops the whole run
-        return [{**base, **blank, "method": m, "status": "error", "error": "generator: " + _one_line(err)}
+        return [{**base, **blank, "method": m, "status": "error", "error": "generator: " + error_line(err)}
                 for m in methods]
     rows = []
     for name in methods:
@@ -116,7 +112,7 @@ def run_case(cls: str, seed: int, methods: Sequence[str] = METHODS, *, config: C
             out = _run(name, case.log, config, case)
             row.update(_score(case.log, out, own=name == "default"))
         except Exception as err:  # one failing method must not hide the others
-            row.update(status="error", error=_one_line(err))
+            row.update(status="error", error=error_line(err))
         rows.append(row)
     return rows
 
@@ -129,7 +125,7 @@ def _task(task):
 def _failed(task, err):
     cls, seed, methods, _, _ = task
     return [{"class": cls, "seed": seed, "split": split_of(seed), "method": m, "status": "error",
-             "error": "worker: " + _one_line(err)} for m in methods]
+             "error": "worker: " + error_line(err)} for m in methods]
 
 
 def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = ("held-out",), n_seeds: int = 20,
@@ -149,14 +145,7 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
         raise ConfigError(f"unknown method(s) {', '.join(bad)}; choose from: {', '.join(METHODS)}")
     tasks = [(c, s, tuple(methods), config or CompensatorConfig(), duration_scale)
              for split in splits for c in classes for s in seeds(split, n_seeds)]
-    workers = os.cpu_count() or 1 if workers is None else workers
-    if workers <= 1 or len(tasks) == 1:
-        items = progress(tasks, len(tasks)) if progress else tasks
-        results = [_task(t) for t in items]
-    else:
-        from gyrodrift._pool import map_processes
-
-        results = map_processes(_task, tasks, workers, progress, on_error=_failed)
+    results = map_jobs(_task, tasks, check_workers(workers), progress, on_error=_failed)
     df = pd.DataFrame([r for rows in results for r in rows], columns=list(COLUMNS))
     order = {m: i for i, m in enumerate(methods)}
     return df.sort_values(["split", "class", "seed", "method"], key=lambda s: s.map(order) if s.name == "method" else s,

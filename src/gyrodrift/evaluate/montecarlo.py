@@ -7,7 +7,6 @@ scenario families".
 from __future__ import annotations
 
 import math
-import os
 import zlib
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -18,9 +17,9 @@ import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators import ESTIMATORS
-from gyrodrift.evaluate.compare import METHODS, run_method
+from gyrodrift.evaluate.compare import is_method, run_method, valid_methods
 from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_stats, markdown_table
+from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,
     CompassModel,
@@ -156,11 +155,10 @@ def _check_seeds(seeds) -> list[int]:
 
 def _check_methods(methods) -> list[str]:
     names = [methods] if isinstance(methods, str) else list(methods)
-    unknown = [m for m in names if m not in METHODS and m not in ESTIMATORS]
+    unknown = [m for m in names if not is_method(m)]
     if unknown or not names:
-        valid = [*METHODS, *sorted(n for n in ESTIMATORS if n not in METHODS)]
         raise ConfigError(
-            f"unknown method(s) {', '.join(map(str, unknown)) or '(none given)'}; choose from: {', '.join(valid)}"
+            f"unknown method(s) {', '.join(map(str, unknown)) or '(none given)'}; choose from: {valid_methods()}"
         )
     if len(set(names)) != len(names):
         raise ConfigError(f"methods must not repeat, got {', '.join(names)}")
@@ -216,19 +214,9 @@ def simulate_case(case: Case, *, fs_hz: float = 10.0, calibration: bool = True):
     return log, cal
 
 
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
-
 def _row(family, seed, method, scenario, duration_s, **values) -> dict:
-    row = {
-        "family": family, "seed": int(seed), "method": method, "scenario": scenario,
-        "duration_s": float(duration_s), "heading_rms_deg": math.nan, "heading_max_deg": math.nan,
-        "bias_rms_dps": math.nan, "status": "ok", "error": "",
-    }
-    row.update(values)
-    return row
+    return {**dict.fromkeys(COLUMNS, math.nan), "family": family, "seed": int(seed), "method": method,
+            "scenario": scenario, "duration_s": float(duration_s), "status": "ok", "error": "", **values}
 
 
 def _score(out: pd.DataFrame) -> dict:
@@ -259,7 +247,7 @@ def run_case(
     try:
         log, cal = simulate_case(case, fs_hz=fs_hz, calibration="poly3" in methods)
     except Exception as err:  # reported per case, never stops the whole Monte Carlo
-        why = "simulation failed: " + _one_line(err)
+        why = "simulation failed: " + error_line(err)
         return [_row(family, seed, m, case.scenario, case.duration_s, status="error", error=why) for m in methods]
     rows = []
     for name in methods:
@@ -267,7 +255,7 @@ def run_case(
             out = run_method(name, log, config, calibration=cal)
             rows.append(_row(family, seed, name, case.scenario, case.duration_s, **_score(out)))
         except Exception as err:  # one failing method must not hide the others
-            rows.append(_row(family, seed, name, case.scenario, case.duration_s, status="error", error=_one_line(err)))
+            rows.append(_row(family, seed, name, case.scenario, case.duration_s, status="error", error=error_line(err)))
     return rows
 
 
@@ -281,7 +269,7 @@ def _failed_task(task: tuple, err: BaseException) -> list[dict]:
     family, seed, methods, duration_scale, _, _ = task
     scenario = FAMILIES[family].scenario
     duration = draw_case(family, seed, duration_scale=duration_scale).duration_s
-    why = "worker failed: " + _one_line(err)
+    why = "worker failed: " + error_line(err)
     return [_row(family, seed, m, scenario, duration, status="error", error=why) for m in methods]
 
 
@@ -335,33 +323,14 @@ def run_monte_carlo(
     names = _check_methods(methods)
     scale = _positive("duration_scale", duration_scale)
     fs = _positive("fs_hz", fs_hz)
-    if workers is None:
-        workers = os.cpu_count() or 1
-    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise ConfigError(f"workers must be a whole number >= 1, got {workers!r}")
+    n_workers = check_workers(workers)
     config = config or CompensatorConfig()
     tasks = [(f, s, tuple(names), scale, config, fs) for f in fams for s in seed_list]
-    if workers == 1 or len(tasks) == 1:
-        results = _run_serial(tasks, progress)
-    else:
-        results = _run_pool(tasks, int(workers), progress)
+    results = map_jobs(_run_task, tasks, n_workers, progress, on_error=_failed_task)
     rows = [row for task_rows in results for row in task_rows]
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     df.attrs = {"families": fams, "seeds": seed_list, "methods": names, "duration_scale": scale, "fs_hz": fs}
     return df
-
-
-def _run_serial(tasks, progress) -> list[list[dict]]:
-    items = iter(tasks)
-    if progress is not None:
-        items = progress(items, len(tasks))
-    return [_run_task(task) for task in items]
-
-
-def _run_pool(tasks, workers: int, progress) -> list[list[dict]]:
-    from gyrodrift._pool import map_processes
-
-    return map_processes(_run_task, tasks, workers, progress, on_error=_failed_task)
 
 
 # --------------------------------------------------------------------------- summary
