@@ -15,7 +15,8 @@ import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.evaluate.metrics import heading_error_deg
+from gyrodrift.evaluate.compare import run_method
+from gyrodrift.evaluate.metrics import heading_error_deg, markdown_table
 from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
 
@@ -78,8 +79,6 @@ def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
 
 
 def _run(name: str, log: pd.DataFrame, config: CompensatorConfig, case) -> pd.DataFrame:
-    from gyrodrift.evaluate.compare import run_method
-
     if name == "default":
         return run_method(config.estimator, log, config)
     if name == "fusion-ahrs":
@@ -189,8 +188,6 @@ def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
 
 def markdown(df: pd.DataFrame) -> str:
     """The acceptance table and the per-method medians of a run, Markdown."""
-    from gyrodrift.evaluate.metrics import markdown_table
-
     summ = summarise(df)
     acc = acceptance(summ)
     parts = []

@@ -7,22 +7,30 @@ experiments".
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from gyrodrift._version import __version__
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_360
+from gyrodrift.errors import ConfigError
+from gyrodrift.evaluate import plotbase, plots
+from gyrodrift.evaluate.allan import allan_deviation, noise_terms
 from gyrodrift.evaluate.compare import METHODS, run_methods
 from gyrodrift.evaluate.metrics import (
     bias_error,
     error_stats,
     heading_error_deg,
     heading_error_stats,
+    markdown_table,
     paper_table2,
 )
+from gyrodrift.evaluate.report import write_report
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor, heading_error, integrate_heading
 from gyrodrift.scale_factor.batch import heading_anchor
@@ -266,8 +274,6 @@ def allan_claims(allan: dict) -> list[Claim]:
 
 def allan_static(run: PaperRun, fs_hz: float, methods=("stkf", "kf", "mlr", "oracle")) -> dict:
     """``{label: (AllanResult, NoiseTerms)}`` of the raw and compensated rate of a motionless run (Fig. 6)."""
-    from gyrodrift.evaluate.allan import allan_deviation, noise_terms
-
     series = {"raw": run.log["gyro_z"].to_numpy(float)}
     series.update({m: run.outputs[m]["rate_z"].to_numpy(float) for m in methods if m in run.outputs})
     curves = {}
@@ -285,9 +291,6 @@ def _term(term, scale=1.0, unit=""):
 
 def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict, settings: PaperSettings) -> str:
     """``table2.md``: Table 2 ours beside the paper's, the claims, the Allan noise terms."""
-    from gyrodrift._version import __version__
-    from gyrodrift.evaluate.metrics import markdown_table
-
     lines = [
         "# The paper's experiments, regenerated",
         "",
@@ -327,8 +330,6 @@ def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict,
 
 def results_json(runs: dict[str, PaperRun], claims: list[Claim], allan: dict) -> dict:
     """Every number of the run, JSON-able."""
-    from dataclasses import asdict
-
     out = {"table2": {}, "envelopes": {}, "claims": [asdict(c) for c in claims], "allan": {}}
     for kind, df in table2_comparison(runs).items():
         out["table2"][kind] = {f"{src}:{stat}": {c: (None if pd.isna(v) else float(v)) for c, v in row.items()}
@@ -347,10 +348,6 @@ def results_json(runs: dict[str, PaperRun], claims: list[Claim], allan: dict) ->
 
 def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
     """PNG figures corresponding to the paper's Figures 1–9; returns the paths written."""
-    from pathlib import Path
-
-    from gyrodrift.evaluate import plotbase, plots
-
     out_dir = Path(out_dir)
     static, outages, vehicle = runs["static"], runs["static-outages"], runs["vehicle"]
     ours = "stkf" if "stkf" in static.outputs else next(iter(static.outputs))
@@ -489,8 +486,6 @@ def scale_factor_experiment(
 
 def scale_factor_run(settings: PaperSettings) -> dict:
     """The scale-factor simulation of Section 4.3 (Figs. 10 and 11)."""
-    from gyrodrift.simulate import DEFAULT_DURATION_S
-
     return scale_factor_experiment(
         seed=settings.seed, duration_s=DEFAULT_DURATION_S["scale-factor"] * settings.duration_scale,
         fs_hz=settings.fs_hz, compensator_config=settings.config,
@@ -518,21 +513,14 @@ def scale_factor_claims(sf: dict) -> list[Claim]:
 
 def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=None, figures: bool = True) -> list:
     """Run every experiment and write ``table2.md``, ``results.json`` and the figures."""
-    import json
-    from pathlib import Path
-
-    from gyrodrift.errors import ConfigError
-    from gyrodrift.evaluate.report import write_report
-
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
         raise ConfigError(f"{out_dir}: output folder does not exist; create it first")
-    runs = run_paper(settings, progress=progress)
-    if progress:
-        progress("Allan deviation")
+    say = progress or (lambda step: None)
+    runs = run_paper(settings, progress=say)
+    say("Allan deviation")
     allan = allan_static(runs["static"], settings.fs_hz)
-    if progress:
-        progress("scale factor")
+    say("scale factor")
     sf = scale_factor_run(settings)
     claims = check_claims(runs, allan) + scale_factor_claims(sf)
     write_report(out_dir / "table2.md", report_markdown(runs, claims, allan, settings))
@@ -541,11 +529,8 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
     write_report(out_dir / "results.json", json.dumps(numbers, indent=1))
     written = [out_dir / "table2.md", out_dir / "results.json"]
     if figures:
-        if progress:
-            progress("figures")
+        say("figures")
         written += write_figures(out_dir, runs, allan)
-        from gyrodrift.evaluate import plotbase, plots
-
         path = out_dir / "fig10_11_scale_factor.png"
         plotbase.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)
         written.append(path)

@@ -12,10 +12,12 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from gyrodrift.calibrate import BIN_WIDTH_C
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError
 from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.evaluate.compare import CAUSAL, method_label
 from gyrodrift.evaluate.metrics import heading_error_deg
 from gyrodrift.evaluate.plotbase import (
     MAX_POINTS,
@@ -32,6 +34,7 @@ from gyrodrift.evaluate.plotbase import (
     true_runs,
     unwrap_deg,
 )
+from gyrodrift.model import temp_rate
 
 __all__ = [
     "GATE_COLORS",
@@ -78,13 +81,6 @@ def _method_color(name: str, index: int) -> str:
     return METHOD_COLORS.get(name, _EXTRA_COLORS[index % len(_EXTRA_COLORS)])
 
 
-def _method_label(name: str) -> str:
-    """A method's legend name (:func:`gyrodrift.evaluate.compare.method_label`)."""
-    from gyrodrift.evaluate.compare import method_label
-
-    return method_label(name)
-
-
 def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None:
     if not out_by_method:
         raise ConfigError(f"{what} needs at least one method's output table")
@@ -111,8 +107,6 @@ def fig_temperature(out: pd.DataFrame):
     if "temp_rate" in out.columns:
         rate = float_column(out, "temp_rate")
     else:
-        from gyrodrift.model import temp_rate
-
         rate = temp_rate(t, pd.Series(temp).ffill().bfill().to_numpy())
     x, xlabel = time_axis(t)
     fig, (ax_t, ax_r) = new_figure(4.8, 2)
@@ -163,7 +157,7 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
         bias = float_column(out, "bias_z")
         core.append(bias)
         xm = time_axis(float_column(out, "t"))[0]
-        plot_line(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{_method_label(name)} bias_z", zorder=2)
+        plot_line(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{method_label(name)} bias_z", zorder=2)
     limits = robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
@@ -225,8 +219,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
     ``causal`` says which methods are causal (default :data:`gyrodrift.evaluate.compare.CAUSAL`).
     """
     _check_methods(out_by_method, "fig_heading_error")
-    if causal is None:
-        from gyrodrift.evaluate.compare import CAUSAL as causal
+    causal = CAUSAL if causal is None else causal
     fig, (ax,) = new_figure(4.0)
     xlabel = "time"
     n = 0
@@ -237,7 +230,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         n = max(n, t.size)
         err = heading_error_deg(float_column(out, "heading"), float_column(out, REF_HEADING))
         live = causal.get(name, True)
-        label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
+        label = method_label(name) if live else f"{method_label(name)} (non-causal)"
         plot_line(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
     return _labelled(fig, ax, "heading error (deg)", xlabel, "Heading error against the reference heading", n,
@@ -307,8 +300,6 @@ def _bin_means(temp: np.ndarray, rate: np.ndarray, temp_min: float, width: float
 
 def fig_calibration(log: pd.DataFrame, cal):
     """A thermal calibration (:func:`gyrodrift.calibrate.fit_calibration`) against the log it was fitted on."""
-    from gyrodrift.calibrate import BIN_WIDTH_C
-
     names = list(cal.axes)
     need_columns(log, ("temp", *(f"gyro_{a}" for a in names)), "fig_calibration")
     Figure, FigureCanvasAgg = require_matplotlib()

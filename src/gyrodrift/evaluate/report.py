@@ -9,19 +9,26 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import fields, is_dataclass
+from importlib import metadata
 from pathlib import Path
 from typing import Mapping
 
 import numpy as np
 import pandas as pd
 
+from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift._progress import progress_iter as _progress
 from gyrodrift._text import printable
+from gyrodrift._version import __version__
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.evaluate.compare import CAUSAL
 from gyrodrift.evaluate.compare import method_label as _label
+from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_deg, raw_heading_deg
+from gyrodrift.evaluate.plotbase import require_matplotlib
+from gyrodrift.evaluate.plots import GATE_COLORS
 from gyrodrift.evaluate.report_figures import esc, figure_plan, html_table, render_figure
 
 __all__ = ["build_report", "write_report"]
@@ -52,8 +59,6 @@ def _duration_text(seconds: float) -> str:
 
 
 def _causal(name: str) -> bool:
-    from gyrodrift.evaluate.compare import CAUSAL
-
     return CAUSAL.get(name, True)
 
 
@@ -120,8 +125,6 @@ def _read_section(log, outputs, skipped, source: str) -> str:
 
 def _raw_errors(log_like: pd.DataFrame, start_heading: float):
     """Bias error and heading error of the uncompensated gyro (None where no truth)."""
-    from gyrodrift.evaluate.metrics import heading_error_deg, raw_heading_deg
-
     bias = heading = None
     if TRUE_BIAS_Z in log_like.columns:
         bias = -log_like[TRUE_BIAS_Z].to_numpy(float)
@@ -133,8 +136,6 @@ def _raw_errors(log_like: pd.DataFrame, start_heading: float):
 
 
 def _stats(errors) -> dict | None:
-    from gyrodrift.evaluate.metrics import error_stats
-
     if errors is None:
         return None
     e = np.asarray(errors, dtype=float)
@@ -144,8 +145,6 @@ def _stats(errors) -> dict | None:
 
 
 def _summary_section(log, outputs) -> str:
-    from gyrodrift.evaluate.metrics import bias_error, heading_error_deg
-
     if not outputs:
         return '<section id="summary"><h2>Summary</h2><p class="note">No method ran: nothing to summarise.</p></section>'
     has_truth = TRUE_BIAS_Z in log.columns
@@ -155,8 +154,6 @@ def _summary_section(log, outputs) -> str:
         for r in out["gate_reason"].fillna("").astype(str).unique():
             if r and r not in reasons:
                 reasons.append(r)
-    from gyrodrift.evaluate.plots import GATE_COLORS
-
     reasons.sort(key=lambda r: list(GATE_COLORS).index(r) if r in GATE_COLORS else len(GATE_COLORS))
     header = ["method"]
     if has_truth:
@@ -227,10 +224,6 @@ def _flatten(obj, prefix: str = ""):
 
 
 def _versions() -> list[tuple[str, str]]:
-    from importlib import metadata
-
-    from gyrodrift._version import __version__
-
     out = [("gyrodrift", __version__), ("Python", sys.version.split()[0])]
     for dist in ("numpy", "pandas", "matplotlib", "allantools"):
         try:
@@ -313,9 +306,6 @@ def build_report(
     skipped = dict(skipped or {})
     outputs = dict(outputs)
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
-    from gyrodrift._version import __version__
-    from gyrodrift.evaluate.plotbase import require_matplotlib
-
     require_matplotlib()
     plan = figure_plan(log, outputs, config)
     parts = []
@@ -363,6 +353,4 @@ def write_report(path, html: str) -> None:
         The folder does not exist (named in the message), ``path`` is a folder, or
         writing fails.
     """
-    from gyrodrift._atomic import write_bytes_atomic
-
     write_bytes_atomic(Path(path), html.encode("utf-8"))
