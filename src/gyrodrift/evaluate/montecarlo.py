@@ -123,17 +123,21 @@ def _family_key(family: str) -> int:
     return zlib.crc32(family.encode("utf-8"))
 
 
-def _check_families(families) -> list[str]:
-    names = list(FAMILIES) if families is None else [families] if isinstance(families, str) else list(families)
-    unknown = [f for f in names if f not in FAMILIES]
+def _check_names(given, known, kind: tuple[str, str], choices: str) -> list[str]:
+    """``given`` (a name or names) as a list of distinct names ``known`` accepts; ``kind`` is (one, several)."""
+    names = [given] if isinstance(given, str) else list(given)
+    unknown = [n for n in names if not known(n)]
     if unknown or not names:
-        raise ConfigError(
-            f"unknown famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(map(str, unknown)) or '(none given)'}; "
-            f"choose from: {', '.join(FAMILIES)}"
-        )
+        raise ConfigError(f"unknown {kind[len(unknown) > 1]} {', '.join(map(str, unknown)) or '(none given)'}; "
+                          f"choose from: {choices}")
     if len(set(names)) != len(names):
-        raise ConfigError(f"families must not repeat, got {', '.join(names)}")
+        raise ConfigError(f"{kind[1]} must not repeat, got {', '.join(names)}")
     return names
+
+
+def _check_families(families) -> list[str]:
+    given = list(FAMILIES) if families is None else families
+    return _check_names(given, FAMILIES.__contains__, ("family", "families"), ", ".join(FAMILIES))
 
 
 def _check_seeds(seeds) -> list[int]:
@@ -154,15 +158,7 @@ def _check_seeds(seeds) -> list[int]:
 
 
 def _check_methods(methods) -> list[str]:
-    names = [methods] if isinstance(methods, str) else list(methods)
-    unknown = [m for m in names if not is_method(m)]
-    if unknown or not names:
-        raise ConfigError(
-            f"unknown method(s) {', '.join(map(str, unknown)) or '(none given)'}; choose from: {valid_methods()}"
-        )
-    if len(set(names)) != len(names):
-        raise ConfigError(f"methods must not repeat, got {', '.join(names)}")
-    return names
+    return _check_names(methods, is_method, ("method", "methods"), valid_methods())
 
 
 def _positive(name: str, value) -> float:
