@@ -22,8 +22,8 @@ from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.kernels.integrate import trapezoid
 
-__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "valid_methods", "method_label",
-           "run_method", "run_methods", "calibration_from_log", "summary_table"]
+__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_causal", "is_method", "valid_methods",
+           "method_label", "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "fusion-offset", "oracle")
 #: The estimator ``compensate`` runs when none is chosen.
@@ -57,11 +57,9 @@ def valid_methods() -> str:
     return ", ".join([*METHODS, *sorted(n for n in ESTIMATORS if _is_estimator_method(n))])
 
 
-def _causal(name: str):
+def is_causal(name: str) -> bool:
     """Whether a method is causal: :data:`CAUSAL`, else the registered estimator's ``causal``."""
-    if name in CAUSAL:
-        return CAUSAL[name]
-    return getattr(ESTIMATORS.get(name), "causal", None)
+    return CAUSAL[name] if name in CAUSAL else getattr(ESTIMATORS.get(name), "causal", True)
 
 
 def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
@@ -191,7 +189,7 @@ def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
     rows = {}
     for name, out in outputs.items():
         updates = int(updated_column(out, f"summary_table ({name})").sum())
-        row = {"causal": _causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
+        row = {"causal": is_causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
         if name == "oracle":
             row.update(updates=np.nan, gated_pct=np.nan)
         if TRUE_BIAS_Z in out.columns:

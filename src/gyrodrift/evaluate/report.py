@@ -24,7 +24,7 @@ from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import GyroDriftError
-from gyrodrift.evaluate.compare import CAUSAL
+from gyrodrift.evaluate.compare import is_causal
 from gyrodrift.evaluate.compare import method_label as _label
 from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_deg, raw_heading_deg
 from gyrodrift.evaluate.plotbase import require_matplotlib
@@ -56,10 +56,6 @@ def _duration_text(seconds: float) -> str:
     h, rest = divmod(int(round(seconds)), 3600)
     m, s = divmod(rest, 60)
     return (f"{h} h {m:02d} min {s:02d} s" if h else f"{m} min {s:02d} s") + f" ({seconds:.0f} s)"
-
-
-def _causal(name: str) -> bool:
-    return CAUSAL.get(name, True)
 
 
 # ------------------------------------------------------------------ what was read
@@ -100,7 +96,7 @@ def _read_section(log, outputs, skipped, source: str) -> str:
         units.append(f"gyro unit in file {log.attrs['gyro_unit']}")
     if "frame" in log.attrs:
         units.append(f"frame {str(log.attrs['frame']).upper()}")
-    run = [f"{esc(_label(m))}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
+    run = [f"{esc(_label(m))}" + ("" if is_causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
     rows = [
         ("file", esc(source)),
         ("rows", f"{len(log)}"),
@@ -187,7 +183,7 @@ def _summary_section(log, outputs) -> str:
         reason = out["gate_reason"].fillna("").astype(str)
         n = max(len(out), 1)
         share = [f"{100.0 * float((reason == r).sum()) / n:.1f} %" for r in reasons]
-        label = esc(_label(name)) + ("" if _causal(name) else " †")
+        label = esc(_label(name)) + ("" if is_causal(name) else " †")
         rows.append(
             [label] + error_cells(bias, heading)
             + [str(int(pd.to_numeric(updated_column(out, name), errors="coerce").fillna(0).sum())),
