@@ -1,7 +1,7 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
 The logs, output names, summary and parallelism of ``gyrodrift batch``: docs/command-line.md,
-section "gyrodrift batch".
+section "gyrodrift batch: a fleet of logs".
 """
 
 from __future__ import annotations
@@ -265,7 +265,7 @@ def process_many(
 ) -> pd.DataFrame:
     """Compensate many logs in parallel; return the summary table, in the input order.
 
-    See docs/command-line.md, section "gyrodrift batch".
+    See docs/command-line.md, section "gyrodrift batch: a fleet of logs".
 
     Parameters
     ----------
