@@ -1,8 +1,6 @@
 """Progress bars for long work: on a terminal only, silent in pipes, files and CI.
 
-The bar shows what is done of the total, the rate and the time left (ETA). It is
-tqdm's (``pip install 'gyrodrift[progress]'``) when tqdm is installed, else a
-one-line bar of the same content drawn here.
+tqdm's bar when it is installed, else one drawn here (docs/command-line.md, section "Progress bars").
 """
 
 from __future__ import annotations
@@ -74,23 +72,15 @@ def progress_iter(
     iterable : iterable
         What to iterate; its items are yielded unchanged.
     total : float or None
-        The amount the whole iteration does, in ``unit`` (items, or the sum of
-        ``size`` over the items); None when unknown (then no ETA is shown).
+        The amount the whole iteration does, in ``unit``; None when unknown.
     desc : str
         The bar's label.
     stream : file-like, optional
-        Where to draw (default ``sys.stderr``). Nothing is written when it is not a
-        terminal (a pipe, a file, CI).
+        Where to draw (default ``sys.stderr``); nothing is written off a terminal.
     unit : str
-        What ``total`` counts (``"rows"``, ``"logs"``), shown with the rate.
+        What ``total`` counts (``"rows"``, ``"logs"``).
     size : callable, optional
-        ``size(item)``: how far an item advances the bar (default 1 per item); e.g.
-        ``len`` for chunks of rows.
-
-    Notes
-    -----
-    Uses tqdm when it is installed (its bar shows the count, the rate and the ETA),
-    else a one-line ``\\r`` bar of the same content, erased at the end.
+        ``size(item)``: how far an item advances the bar (default 1; ``len`` for chunks of rows).
     """
     stream = sys.stderr if stream is None else stream
     if not _is_terminal(stream):

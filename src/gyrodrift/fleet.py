@@ -1,19 +1,7 @@
 """Fleets of logs: compensate many logs at once, on local processes or a Dask cluster.
 
-``gyrodrift batch DIR_OR_GLOB -o OUTDIR`` (or :func:`process_many`) compensates every
-log as ``gyrodrift compensate`` does (:func:`gyrodrift.pipeline.compensate_file`),
-writes ``OUTDIR/<sub>/<stem>_out.parquet`` (or ``.csv``) atomically, mirroring the
-logs' folders below their common folder, and returns one summary row per log. A log
-that fails gives a row with ``status = "error"`` and a one-line message; it never
-stops the others.
-
-Parallelism: local ``spawn`` processes (``workers``; 1 runs in this process), or a
-Dask scheduler (``gyrodrift[fleet]``; every worker must see the logs and ``out_dir``
-at the same paths). Both give the same numbers as :func:`compensate` on each log.
-
-Summary columns (:data:`SUMMARY_COLUMNS`): ``file``, ``status``, ``error``, ``rows``,
-``duration_s`` (s), ``temp_min_c``, ``temp_max_c`` (degC), ``updates``, the final
-``a`` (deg/s/degC), ``b`` (deg), ``c`` (deg/s), and ``seconds`` (wall time).
+The logs, output names, summary and parallelism of ``gyrodrift batch``: docs/command-line.md,
+section "gyrodrift batch: a fleet of logs".
 """
 
 from __future__ import annotations
@@ -41,13 +29,16 @@ __all__ = [
     "process_many",
     "summary_markdown",
     "write_summary",
+    "error_line",
+    "check_workers",
+    "map_jobs",
 ]
 
 #: File-name endings (lower case) that :func:`find_logs` picks up.
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq", ".ulg", ".bin", ".bag", ".mcap", ".db3")
 #: Output table formats of :func:`process_one` and their file-name endings.
 OUT_FORMATS = {"parquet": ".parquet", "csv": ".csv"}
-#: Columns of the summary table, in order (see the module notes).
+#: Columns of the summary table, in order.
 SUMMARY_COLUMNS = (
     "file", "status", "error", "rows", "duration_s", "temp_min_c", "temp_max_c",
     "updates", "a", "b", "c", "seconds",
@@ -65,6 +56,26 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+def error_line(err: BaseException) -> str:
+    """``Type: message`` of an exception, on one line."""
+    text = _one_line(err)
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def map_jobs(job, items, workers: int, progress=None, on_error=None) -> list:
+    """``[job(item) for item in items]``, in this process or in worker processes (:mod:`gyrodrift._pool`).
+
+    ``progress(iterable, total)`` wraps the finished items; ``on_error(item, exception)`` is
+    the result of an item whose worker failed.
+    """
+    items = list(items)
+    if workers > 1 and len(items) > 1:
+        from gyrodrift._pool import map_processes
+
+        return map_processes(job, items, workers, progress, on_error=on_error)
+    return [job(item) for item in (progress(iter(items), len(items)) if progress is not None else items)]
+
+
 # --------------------------------------------------------------------------- finding logs
 
 
@@ -76,20 +87,7 @@ def _is_log(path: Path) -> bool:
 
 
 def find_logs(dir_or_glob) -> list[Path]:
-    """The logs in a folder, or the logs a glob pattern matches, sorted by path.
-
-    Parameters
-    ----------
-    dir_or_glob : str or os.PathLike
-        A folder (its own files, not sub-folders: every ``.csv``, ``.csv.gz``,
-        ``.parquet``, ``.pq``, ``.ulg``, ``.bin``, ``.bag``, ``.mcap``, ``.db3`` file and every
-        ROS 2 bag folder in it), a glob pattern (``logs/*.csv``, ``runs/**/*.parquet``;
-        matches with other endings are left out), or a single log file.
-
-    Returns
-    -------
-    list of pathlib.Path
-        Sorted by their text.
+    """The logs of a folder, a glob pattern or one log file, sorted by path.
 
     Raises
     ------
@@ -115,12 +113,7 @@ def find_logs(dir_or_glob) -> list[Path]:
 
 
 def common_root(paths) -> Path | None:
-    """The deepest folder holding every log of ``paths`` (None for none): the input folder
-    :func:`output_path` mirrors under the output folder.
-
-    >>> common_root(["/data/runs/a/x.csv", "/data/runs/b/x.csv"]).as_posix()
-    '/data/runs'
-    """
+    """The deepest folder holding every log of ``paths`` (None for none), mirrored under the output folder."""
     parents = [os.path.abspath(Path(p).parent) for p in paths]
     return Path(os.path.commonpath(parents)) if parents else None
 
@@ -128,14 +121,7 @@ def common_root(paths) -> Path | None:
 def output_path(path, out_dir, out_format: str = "parquet", root=None) -> Path:
     """Where :func:`process_one` writes the output of ``path``: ``out_dir/<sub>/<stem>_out.<ext>``.
 
-    ``<stem>`` is the file name without its log ending (``run.csv.gz`` → ``run``);
-    ``<sub>`` is the log's folder relative to ``root`` (:func:`common_root` of the logs),
-    so that logs of equal names in different folders do not clash; none without ``root``.
-
-    >>> output_path("logs/run1.csv.gz", "out").as_posix()
-    'out/run1_out.parquet'
-    >>> output_path("runs/b/x.csv", "out", root="runs").as_posix()
-    'out/b/x_out.parquet'
+    ``<sub>`` is the log's folder relative to ``root`` (none without it).
     """
     if out_format not in OUT_FORMATS:
         raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
@@ -158,39 +144,15 @@ def _empty_row(path) -> dict:
 
 def _error_text(err: BaseException) -> str:
     """One line: the message of a user error; type and message of anything else."""
-    if isinstance(err, GyroDriftError):
-        return _one_line(str(err))
-    return _one_line(f"unexpected {type(err).__name__}: {err}")
+    return _one_line(err) if isinstance(err, GyroDriftError) else "unexpected " + error_line(err)
 
 
 def process_one(path, out_dir, *, config=None, out_format: str = "parquet", root=None, read_options=None,
                 chunk_rows: int | None = None) -> dict:
-    """Compensate one log into ``out_dir`` as ``gyrodrift compensate`` does; return its summary
-    row. Never raises.
+    """Compensate one log into ``out_dir`` as ``gyrodrift compensate`` does; return its summary row.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The log (any format :func:`gyrodrift.io.read_log` reads).
-    out_dir : str or os.PathLike
-        Existing folder for the output table (see :func:`output_path`; the sub-folder
-        below it is created).
-    config : CompensatorConfig, optional
-    out_format : {"parquet", "csv"}
-        Format of the output table.
-    root : str or os.PathLike, optional
-        The input folder mirrored under ``out_dir`` (:func:`output_path`).
-    read_options : ReadOptions or dict, optional
-        How to read the log (:class:`gyrodrift.io.ReadOptions`).
-    chunk_rows : int, optional
-        Rows per chunk of the chunked path (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
-
-    Returns
-    -------
-    dict
-        The keys of :data:`SUMMARY_COLUMNS` (module notes). Any exception (a
-        :class:`~gyrodrift.errors.GyroDriftError` or anything unexpected) gives
-        ``status = "error"`` and a one-line ``error``.
+    Never raises: a failure is ``status = "error"`` with a one-line ``error``. The arguments
+    are those of :func:`process_many`; ``root`` is the folder mirrored (:func:`output_path`).
     """
     from gyrodrift.io import check_output_path
     from gyrodrift.pipeline import CHUNK_ROWS, compensate_file
@@ -227,7 +189,8 @@ def _summary_frame(rows: list[dict]) -> pd.DataFrame:
     return df
 
 
-def _check_workers(workers) -> int:
+def check_workers(workers) -> int:
+    """A number of worker processes: ``workers``, checked, or one per CPU for None."""
     if workers is None:
         return max(1, os.cpu_count() or 1)
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
@@ -259,21 +222,8 @@ def _check_outputs(paths: list[Path], out_dir: Path, out_format: str, root: Path
 def _failed_future(path, err: BaseException, seconds: float = math.nan) -> dict:
     """Summary row for a log whose worker failed outside :func:`process_one` (crash, lost worker)."""
     row = _empty_row(path)
-    row.update(error=_one_line(f"worker failed: {type(err).__name__}: {err}"), seconds=seconds)
+    row.update(error="worker failed: " + error_line(err), seconds=seconds)
     return row
-
-
-def _run_serial(job, paths, progress) -> list[dict]:
-    items = iter(paths)
-    if progress is not None:
-        items = progress(items, len(paths))
-    return [job(p) for p in items]
-
-
-def _run_local(job, paths, workers: int, progress) -> list[dict]:
-    from gyrodrift._pool import map_processes
-
-    return map_processes(job, paths, workers, progress, on_error=_failed_future)
 
 
 def _run_dask(job, paths, address, progress) -> list[dict]:
@@ -315,49 +265,44 @@ def process_many(
 ) -> pd.DataFrame:
     """Compensate many logs in parallel; return the summary table, in the input order.
 
+    See docs/command-line.md, section "gyrodrift batch: a fleet of logs".
+
     Parameters
     ----------
     paths : iterable of str or os.PathLike
         The logs (see :func:`find_logs`).
     out_dir : str or os.PathLike
-        Existing folder for the outputs ``<sub>/<stem>_out.<ext>``: the logs' folders
-        below their :func:`common_root` are mirrored in it (see :func:`output_path`).
+        Existing folder for the outputs (see :func:`output_path`).
     config : CompensatorConfig, optional
         Settings for every log.
     workers : int, optional
-        Local processes (default :func:`os.cpu_count`); 1 runs in this process.
-        Ignored with ``dask_address``. The processes are started with ``spawn``: a
-        script that calls this with more than one worker needs the usual
-        ``if __name__ == "__main__":`` guard.
+        Local ``spawn`` processes (default :func:`os.cpu_count`); 1 runs in this process.
     dask_address : str or distributed cluster, optional
         Run on this Dask scheduler instead (needs ``gyrodrift[fleet]``).
     progress : callable, optional
-        ``progress(iterable, total)`` wraps the iteration over finished logs (e.g.
-        :func:`gyrodrift._progress.progress_iter`); it must yield the same items.
+        ``progress(iterable, total)`` wraps the finished logs and yields them.
     out_format : {"parquet", "csv"}
         Format of the output tables.
     read_options : ReadOptions or dict, optional
-        How to read every log (see :func:`process_one`).
+        How to read every log (:class:`gyrodrift.io.ReadOptions`).
     chunk_rows : int, optional
-        Rows per chunk of the chunked path (see :func:`process_one`).
+        Rows per chunk (default :data:`gyrodrift.pipeline.CHUNK_ROWS`).
 
     Returns
     -------
     pandas.DataFrame
-        One row per log (:data:`SUMMARY_COLUMNS`); ``rows`` and ``updates`` are
-        nullable integers (empty on error).
+        One row per log (:data:`SUMMARY_COLUMNS`).
 
     Raises
     ------
     ConfigError
-        Bad usage, before any log is processed (format, workers, ``out_dir``, clashing
-        or overwriting outputs, dask). Problems of single logs are rows, never raised.
+        Bad usage, before any log is processed; problems of single logs are rows.
     """
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
     if out_format not in OUT_FORMATS:
         raise ConfigError(f"unknown output format {out_format!r}; use one of: {', '.join(OUT_FORMATS)}")
-    n_workers = _check_workers(workers)
+    n_workers = check_workers(workers)
     if not paths:
         return _summary_frame([])
     root = common_root(paths)
@@ -366,10 +311,8 @@ def process_many(
                   read_options=read_options, chunk_rows=chunk_rows)
     if dask_address is not None:
         rows = _run_dask(job, paths, dask_address, progress)
-    elif n_workers == 1 or len(paths) == 1:
-        rows = _run_serial(job, paths, progress)
     else:
-        rows = _run_local(job, paths, n_workers, progress)
+        rows = map_jobs(job, paths, n_workers, progress, on_error=_failed_future)
     for row, p in zip(rows, paths):
         row["file"] = str(p)
     return _summary_frame(rows)
@@ -378,19 +321,7 @@ def process_many(
 # --------------------------------------------------------------------------- the summary
 
 def write_summary(summary: pd.DataFrame, path) -> None:
-    """Write a summary table as CSV, atomically, safe to open in a spreadsheet.
-
-    Parameters
-    ----------
-    summary : pandas.DataFrame
-        As :func:`process_many` returns it.
-    path : str or os.PathLike
-
-    Notes
-    -----
-    Text cells that start like a formula get a leading ``'``
-    (:func:`gyrodrift.io.tabular.formula_safe`); ``summary`` itself is not changed.
-    """
+    """Write a summary table as CSV, atomically, safe to open in a spreadsheet (``summary`` not changed)."""
     from gyrodrift.io import write_table
 
     write_table(summary, path, fmt="csv", spreadsheet_safe=True)

@@ -59,10 +59,7 @@ output: t, rate_z (deg/s, compensated), bias_z (deg/s, drift removed), heading
 
 
 def _bar(desc: str, unit: str = "it"):
-    """``progress(iterable, total, **options)``: a bar labelled ``desc`` counting ``unit`` on a terminal.
-
-    ``options`` (``unit``, ``size``) are those of :func:`gyrodrift._progress.progress_iter`.
-    """
+    """``progress(iterable, total, **options)`` of :func:`gyrodrift._progress.progress_iter`, labelled ``desc``."""
     from gyrodrift._progress import progress_iter
 
     def progress(iterable, total, **options):
@@ -162,14 +159,12 @@ def _cmd_simulate(args) -> int:
     return 0
 
 
-#: Least memory ``simulate`` takes per row of the log, bytes: a floor (a static log took about
-#: 260 B/row, one with --raw-mag --triad about 440, measured with GNU time over 1 M rows).
+#: Least memory ``simulate`` takes per row of the log, bytes (docs/command-line.md, section "Options").
 SIMULATE_MIN_BYTES_PER_ROW = 250
 
 
 def _check_simulated_rows(args) -> None:
-    """Refuse, before simulating, a log that cannot fit in this machine's memory, naming
-    the options that make it that long (Linux; elsewhere the run goes on)."""
+    """Refuse, before simulating, a log that cannot fit in the memory available (Linux)."""
     from gyrodrift.pipeline import _available_memory_bytes
     from gyrodrift.simulate import DEFAULT_DURATION_S
 
@@ -255,7 +250,7 @@ def _names(values, what: str) -> list[str] | None:
 
 
 def _cmd_generated(args, splits) -> int:
-    """``montecarlo --held-out`` / ``--tuning``: the generator's classes (:mod:`gyrodrift.evaluate.heldout`)."""
+    """``montecarlo --held-out`` / ``--tuning``: the generator's classes."""
     import time
 
     from gyrodrift.evaluate import heldout
@@ -273,8 +268,7 @@ def _cmd_generated(args, splits) -> int:
 
 
 def _runs_done(args, df, table: str, unit: str, done: str) -> int:
-    """Write every run (``-o``), print the summary ``table``, the line ``done`` and the first
-    failures (each run's ``unit``, seed and method); exit status 1 when every run failed."""
+    """Write every run (``-o``), print ``table``, ``done`` and the first failures; 1 when every run failed."""
     from gyrodrift.io import write_table
 
     if args.output:  # a CSV's text cells (error messages) never start a spreadsheet formula
@@ -451,21 +445,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _say_if_compiling() -> None:
-    """One line on stderr (a terminal, a file or a pipe) if the command compiles a kernel that
-    is not in numba's cache: ``pip install .`` compiles them all, so this is for an editable
-    install, or another numba or processor than the one the package was built with."""
+    """One line on stderr if the command compiles a kernel that is not in numba's cache."""
     from gyrodrift.kernels import say_when_compiling
 
     say_when_compiling()
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM received while :func:`main` runs.
-
-    A subclass of :class:`KeyboardInterrupt`, so that every clean-up that runs on
-    Ctrl-C (SIGINT) runs for SIGTERM too; the partial output file is removed
-    (:mod:`gyrodrift._atomic`).
-    """
+    """SIGTERM received while :func:`main` runs: every clean-up of Ctrl-C runs (docs/command-line.md, "Signals")."""
 
 
 def _raise_terminated(signum, frame) -> None:
@@ -477,9 +464,7 @@ REDELIVER_S = 0.05
 
 
 def _redeliver_terminated(hook):
-    """A ``sys.unraisablehook`` that sends SIGTERM again a moment later when :class:`Terminated`
-    was raised where it cannot propagate (a finalizer, a weakref callback: Python would print
-    it and go on), and passes every other exception to ``hook``."""
+    """A ``sys.unraisablehook`` that sends SIGTERM again when :class:`Terminated` cannot propagate, else ``hook``."""
 
     def unraisable(info) -> None:
         if isinstance(info.exc_value, Terminated):
@@ -494,10 +479,7 @@ def _redeliver_terminated(hook):
 
 @contextmanager
 def _sigterm_interrupts():
-    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread (sent
-    again if it first lands in a finalizer); the handler and the unraisable hook in force
-    before are restored afterwards. Nothing changes outside the main thread (where Python
-    cannot install handlers) or without SIGTERM."""
+    """While the block runs, SIGTERM raises :class:`Terminated` in the main thread; the handlers are restored."""
     try:
         previous = signal.signal(signal.SIGTERM, _raise_terminated)
     except (ValueError, OSError, AttributeError):
@@ -514,22 +496,9 @@ def _sigterm_interrupts():
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line and return the exit code.
+    """Run the command line on ``argv`` (default ``sys.argv[1:]``); return the exit status.
 
-    Parameters
-    ----------
-    argv : list of str, optional
-        The arguments (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        0 on success; 2 for bad input or usage, with one ``gyrodrift: error:`` line on
-        stderr; 130 when interrupted (SIGINT) and 143 when terminated (SIGTERM), after
-        removing the partial output; 141 (128 + SIGPIPE), quietly, when the program
-        reading the standard output closes it (``| head``); 1 when out of memory (and as a
-        command documents: ``batch`` when some logs failed, ``montecarlo`` when every run
-        failed).
+    The statuses: docs/command-line.md, section "Errors and exit status".
     """
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -563,8 +532,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _drop_stdout() -> None:
-    """Point the standard output at the null device, so that what is still buffered in it
-    goes nowhere at exit instead of raising a second BrokenPipeError there."""
+    """Point the standard output at the null device: what is still buffered goes nowhere at exit."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

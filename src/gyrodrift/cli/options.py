@@ -1,14 +1,7 @@
-"""The command line's one option layer: how to read a log, and the method's settings.
+"""The command line's one option layer: how to read a log (:func:`read_options`), and the
+method's settings (:func:`method_config`), made from the settings' declarations.
 
-Every subcommand that reads a log takes the input options of :func:`add_input_options` and
-turns them into one :class:`~gyrodrift.io.ReadOptions` (:func:`read_options`);
-every subcommand that runs an estimator takes the method options of
-:func:`add_method_options` and turns them into one
-:class:`~gyrodrift.compensator.CompensatorConfig` (:func:`method_config`). The method
-options are made from the settings' declarations (:func:`gyrodrift.settings.setting`: a
-``flag``, its help, unit and default), and every value given goes through the settings'
-one validator, so an option refuses what a settings file and Python refuse, in the same
-words after the option's name. No business logic here.
+See docs/command-line.md, section "Options". No business logic here.
 """
 
 from __future__ import annotations
@@ -41,8 +34,7 @@ def parse_map(text: str | None) -> dict[str, str] | None:
 
 
 class Renamed(argparse.Action):
-    """The old spelling of a renamed option: it still works, with a warning on stderr naming
-    the new one (``new``)."""
+    """The old spelling of a renamed option: it works, with a warning on stderr naming the new one."""
 
     def __init__(self, option_strings, dest, new: str, **kwargs):
         super().__init__(option_strings, dest, **kwargs)
@@ -92,8 +84,7 @@ def add_input_options(p, *, old_format: bool = True) -> None:
 
 
 def read_options(args: argparse.Namespace, *, with_format: bool = True) -> ReadOptions:
-    """The :class:`ReadOptions` of the options of :func:`add_input_options` (or only those of
-    :func:`add_table_options`); ``with_format`` False leaves the input format to the file name."""
+    """The :class:`ReadOptions` of the input options; ``with_format`` False leaves the format to the file name."""
     get = lambda name, default=None: getattr(args, name, default)  # noqa: E731
     return ReadOptions(fmt=get("input_format") if with_format else None, gyro_unit=args.gyro_unit, frame=args.frame,
                        column_map=parse_map(args.map), time_unit=args.time_unit, instance=get("instance", 0),
@@ -147,9 +138,7 @@ def add_method_options(p) -> None:
 
 
 def finish_command(p, func, *, inputs: bool = True, old_format: bool = True) -> None:
-    """End the options of a command that runs the method: the input options (``inputs``: it
-    reads a log; ``old_format`` as in :func:`add_input_options`), then the method options;
-    ``func(args)`` runs the command."""
+    """End a command that runs the method: the input options (if it reads a log), the method options, ``func``."""
     if inputs:
         add_input_options(p, old_format=old_format)
     add_method_options(p)
@@ -172,14 +161,12 @@ def _parse_set(item: str) -> tuple[str, str, object]:
 
 
 def method_config(args: argparse.Namespace):
-    """The :class:`~gyrodrift.compensator.CompensatorConfig` of the options of
-    :func:`add_method_options`: the ``--config`` file, then the options, then ``--set``.
+    """The :class:`~gyrodrift.compensator.CompensatorConfig` of the ``--config`` file, the options, then ``--set``.
 
     Raises
     ------
     ConfigError
-        One line naming the file and key, or the option, and what is wrong (the words of
-        :mod:`gyrodrift.settings`).
+        One line naming the file and key, or the option, and what is wrong.
     """
     from gyrodrift.compensator import CompensatorConfig
     from gyrodrift.config import TABLES, config_from_dict, load_toml
@@ -222,8 +209,7 @@ def _apply(cfg, changes: dict, where: str):
 
 
 def warm_start(args: argparse.Namespace, cfg):
-    """``(cfg, profile)``: ``cfg`` started from the ``--profile`` device profile, whose notes
-    for the estimator in use are printed as warnings; ``(cfg, None)`` without one."""
+    """``(cfg, profile)``: ``cfg`` warm-started from ``--profile`` (its notes printed); ``(cfg, None)`` without."""
     from gyrodrift._text import warn
     from gyrodrift.profile import load_profile, profile_notes, warm_config
 
@@ -235,10 +221,8 @@ def warm_start(args: argparse.Namespace, cfg):
 
 
 def check_numbers(parser: argparse.ArgumentParser, args) -> None:
-    """Refuse a number option that is not a setting (those are judged by :func:`method_config`)
-    outside the range of every setting (:func:`gyrodrift.settings.number_problem`: 0, or a
-    magnitude from 1e-9 to 1e9), and a sample rate above the highest a file may have
-    (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`), naming the option."""
+    """Refuse a number option that is not a setting outside the settings' range, and a rate above
+    :data:`gyrodrift.io.timebase.MAX_RATE_HZ`, naming the option."""
     from gyrodrift.io.timebase import MAX_RATE_HZ
     from gyrodrift.settings import number_problem
 

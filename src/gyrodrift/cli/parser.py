@@ -23,12 +23,7 @@ def _option_strings(parser: argparse.ArgumentParser) -> list[str]:
 
 
 class SuggestingParser(argparse.ArgumentParser):
-    """:class:`argparse.ArgumentParser` whose errors suggest the closest option or choice.
-
-    An unknown option (``--gyro-units``) names the closest option of the subcommand
-    given; a value outside the choices (``compensat``, ``--estimator stfk``) the closest
-    choice. Subparsers made with ``add_subparsers`` are of this class too.
-    """
+    """:class:`argparse.ArgumentParser` whose errors suggest the closest option or choice (its subparsers too)."""
 
     def error(self, message: str):
         match = _INVALID_CHOICE.search(message)

@@ -42,11 +42,7 @@ def _run_all(log, methods, config, calibration):
 
 
 def report_command(args: argparse.Namespace) -> int:
-    """Run ``gyrodrift report``: read, compensate with each method, write the HTML report.
-
-    Returns 0; problems the user can fix raise :class:`GyroDriftError` (the command
-    line prints them as one line and exits 2).
-    """
+    """Run ``gyrodrift report``: read, compensate with each method, write the HTML report; return 0."""
     from gyrodrift.evaluate.plotbase import require_matplotlib
     from gyrodrift.evaluate.report import build_report, write_report
     from gyrodrift.io import check_output_path

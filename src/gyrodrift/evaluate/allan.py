@@ -1,22 +1,7 @@
-"""Allan deviation of a gyro rate and the noise terms read from it.
+"""Allan deviation of a gyro rate (NIST SP 1065) and the noise terms of IEEE Std 952-1997 read from it.
 
-1. :func:`allan_deviation`: the (overlapping) Allan deviation of a rate record,
-   by allantools, with a chi-squared confidence interval per point (NIST SP 1065).
-   :func:`even_rate` first puts a jittered time base on an even one.
-2. :func:`noise_terms`: the angle random walk N, bias instability B, rate random
-   walk K and rate ramp R, read by the slope method of IEEE Std 952-1997, Annex C.
-
-The paper's Figure 6 (Section 4.1) compares these curves before and after
-compensation. allantools is optional: ``pip install 'gyrodrift[allan]'``.
-
-Examples
---------
->>> import numpy as np
->>> rng = np.random.default_rng(0)
->>> rate = rng.normal(0.0, 0.04 * np.sqrt(100.0), 200_000)  # N = 0.04 deg/√s at 100 Hz
->>> terms = noise_terms(allan_deviation(rate, 100.0))
->>> round(terms.arw.value, 3), terms.rate_ramp is None
-(0.04, True)
+The paper's Figure 6 (Section 4.1). How the deviation, its intervals and the terms are
+computed: docs/evaluation.md, section "Allan deviation and noise terms".
 """
 
 from __future__ import annotations
@@ -46,25 +31,21 @@ __all__ = [
 #: Probability content of the confidence intervals, erf(1/√2) ≈ 0.6827 (±1 sigma).
 ONE_SIGMA_CI = math.erf(1.0 / math.sqrt(2.0))
 
-#: Flicker (bias-instability) floor of the Allan deviation in units of B:
-#: σ = B·sqrt(2 ln 2 / π) ≈ 0.664 B (IEEE Std 952-1997, Annex C).
+#: Bias-instability floor of the Allan deviation in units of B (IEEE Std 952-1997, Annex C).
 BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
-#: A point belongs to a noise region when its local log-log slope is within this
-#: distance of the region's theoretical slope (−1/2, 0, +1/2, +1).
+#: Largest distance of a point's local log-log slope from a noise term's slope.
 SLOPE_TOLERANCE = 0.15
 
 #: Fewest consecutive points that make a region of one slope.
 MIN_POINTS = 2
 
-#: Points with fewer equivalent degrees of freedom than this (68 % interval wider
-#: than about −16 %/+33 %) are too uncertain to define a slope and are not used.
+#: Fewest equivalent degrees of freedom of a point that defines a slope.
 MIN_EDF = 10.0
 
 _TAU_KEYWORDS = ("octave", "decade", "log10", "all")
 
-#: Largest departure of a sample interval from the median interval, relative to it, that
-#: :func:`even_rate` takes as an even time base.
+#: Largest departure of a sample interval from the median one (relative) of an even time base.
 JITTER_TOL = 0.01
 
 
@@ -85,71 +66,30 @@ def _require_allantools():
 
 @dataclass(frozen=True)
 class AllanResult:
-    """Allan deviation of a rate record, with a confidence interval per point.
+    """Allan deviation of a rate record, with a confidence interval per point (read-only arrays)."""
 
-    Attributes
-    ----------
-    tau_s : (M,) ndarray
-        Averaging times actually used, s (integer multiples of the sample interval).
-    adev : (M,) ndarray
-        Allan deviation, in ``unit``.
-    adev_lo, adev_hi : (M,) ndarray
-        Bounds of the ``ci`` (default ≈ 68.27 %) chi-squared confidence interval of
-        each point, in ``unit`` (NIST SP 1065 eq. (45), from ``edf``).
-    n : (M,) ndarray of int
-        Number of second differences averaged at each tau.
-    unit : str
-        Unit of the input rate and of the deviations (``"deg/s"`` for gyro rates).
-    edf : (M,) ndarray
-        Equivalent degrees of freedom of each point (Greenhall & Riley 2004).
-    alpha : (M,) ndarray of int
-        Power-law noise exponent assumed for the EDF at each point (rate PSD ∝ f^α).
-    overlapping : bool
-        Overlapping (True) or non-overlapping Allan deviation.
-    ci : float
-        Probability content of ``adev_lo..adev_hi``.
-
-    The arrays are read-only.
-    """
-
-    tau_s: np.ndarray
-    adev: np.ndarray
-    adev_lo: np.ndarray
+    tau_s: np.ndarray  # averaging times used, s (whole sample intervals)
+    adev: np.ndarray  # in unit
+    adev_lo: np.ndarray  # bounds of the ci chi-squared interval (NIST SP 1065 eq. (45))
     adev_hi: np.ndarray
-    n: np.ndarray
-    unit: str
-    edf: np.ndarray
-    alpha: np.ndarray
+    n: np.ndarray  # second differences averaged at each tau
+    unit: str  # of the rate and the deviations ("deg/s" for gyro rates)
+    edf: np.ndarray  # equivalent degrees of freedom (Greenhall & Riley 2004)
+    alpha: np.ndarray  # the noise exponent assumed for the EDF (rate PSD ∝ f^α)
     overlapping: bool = True
-    ci: float = ONE_SIGMA_CI
+    ci: float = ONE_SIGMA_CI  # probability content of adev_lo..adev_hi
 
 
 @dataclass(frozen=True)
 class NoiseTerm:
-    """One noise coefficient read off an Allan-deviation curve.
+    """One noise coefficient read off an Allan-deviation curve."""
 
-    Attributes
-    ----------
-    value : float
-        The coefficient, in ``unit``.
-    lo, hi : float
-        Its confidence interval (same probability as the curve's), in ``unit``.
-    unit : str
-    tau_s : float
-        Averaging time at which the coefficient was read, s (N: 1, K: 3, R: √2 on
-        the fitted line, possibly extrapolated; B: the minimum).
-    fit_tau_s : tuple of float
-        Smallest and largest tau of the points used, s.
-    n_points : int
-        Number of curve points used.
-    """
-
-    value: float
-    lo: float
+    value: float  # in unit
+    lo: float  # its confidence interval, of the curve's probability
     hi: float
     unit: str
-    tau_s: float
-    fit_tau_s: tuple[float, float]
+    tau_s: float  # where it was read, s (N 1, K 3, R √2 on the fitted line; B the minimum)
+    fit_tau_s: tuple[float, float]  # smallest and largest tau of the points used, s
     n_points: int
 
     def scaled(self, factor: float, unit: str) -> "NoiseTerm":
@@ -161,27 +101,13 @@ class NoiseTerm:
 
 @dataclass(frozen=True)
 class NoiseTerms:
-    """Noise coefficients of a gyro (IEEE Std 952-1997, Annex C); None = not seen.
+    """Noise coefficients of a gyro (IEEE Std 952-1997, Annex C); None = not seen."""
 
-    Attributes
-    ----------
-    arw : NoiseTerm or None
-        Angle random walk N, unit·√s (deg/√s for a rate in deg/s); ADEV slope −1/2.
-    bias_instability : NoiseTerm or None
-        Bias instability B, unit (deg/s); ADEV slope 0.
-    rrw : NoiseTerm or None
-        Rate random walk K, unit/√s (deg/s/√s); ADEV slope +1/2.
-    rate_ramp : NoiseTerm or None
-        Rate ramp R, unit/s (deg/s²); ADEV slope +1.
-    unit : str
-        Unit of the rate the curve was computed from.
-    """
-
-    arw: NoiseTerm | None
-    bias_instability: NoiseTerm | None
-    rrw: NoiseTerm | None
-    rate_ramp: NoiseTerm | None
-    unit: str
+    arw: NoiseTerm | None  # angle random walk N, deg/√s for a rate in deg/s
+    bias_instability: NoiseTerm | None  # B, deg/s
+    rrw: NoiseTerm | None  # rate random walk K, deg/s/√s
+    rate_ramp: NoiseTerm | None  # R, deg/s²
+    unit: str  # of the rate the curve was computed from
 
     def _need_deg_s(self) -> None:
         if self.unit != "deg/s":
@@ -204,11 +130,7 @@ class NoiseTerms:
 
 
 def _local_slopes(tau_s: np.ndarray, dev: np.ndarray) -> np.ndarray:
-    """Local slope d(log σ)/d(log τ) at each point, NaN where it is not defined.
-
-    Interior points take the mean of the slopes of the two segments that meet
-    there; end points take their one segment.
-    """
+    """Local slope d(log σ)/d(log τ) at each point (mean of the two segments), NaN where undefined."""
     tau_s = np.asarray(tau_s, dtype=float)
     dev = np.asarray(dev, dtype=float)
     out = np.full(tau_s.shape, np.nan)
@@ -223,39 +145,19 @@ def _local_slopes(tau_s: np.ndarray, dev: np.ndarray) -> np.ndarray:
 
 
 def _alpha_from_slope(slope: np.ndarray) -> np.ndarray:
-    """Power-law exponent α (rate PSD ∝ f^α) from the local ADEV slope μ.
-
-    ADEV ∝ τ^μ with μ = −(α + 1)/2 for −3 < α < 1 (NIST SP 1065, power-law
-    noise types); μ = −1 is white or flicker phase noise, which ADEV cannot
-    tell apart, taken as white (α = +2: quantization noise in IEEE 952 terms).
-    Thresholds halfway between the theoretical slopes; a drift (μ ≈ +1) gets
-    α = −2, the lowest exponent the Allan-variance EDF accepts. Undefined slopes
-    (one-point curves) are taken as white rate noise, α = 0.
-    """
+    """Power-law exponent α (rate PSD ∝ f^α) from the local ADEV slope μ = −(α + 1)/2 (NIST SP 1065)."""
     s = np.asarray(slope, dtype=float)
     alpha = np.select([s < -0.75, s < -0.25, s < 0.25, s >= 0.25], [2, 0, -1, -2], default=0)
     return alpha.astype(int)
 
 
 def _noise_alpha(tau_s: np.ndarray, dev: np.ndarray) -> np.ndarray:
-    """Noise exponent for the EDF at each tau: from the slope, never whiter than at shorter taus.
-
-    In the IEEE 952 gyro model longer averaging only brings out redder noise
-    (quantization → ARW → bias instability → RRW → ramp), so α is made
-    non-increasing in tau (cumulative minimum). This also keeps a single noisy
-    long-tau point from being given the many degrees of freedom of white noise;
-    a redder α gives fewer degrees of freedom, a wider (conservative) interval.
-    """
+    """Noise exponent for the EDF at each tau: from the slope, never whiter than at shorter taus."""
     return np.minimum.accumulate(_alpha_from_slope(_local_slopes(tau_s, dev)))
 
 
 def _edf(at, alpha: int, m: int, n_phase: int, overlapping: bool) -> float:
-    """Greenhall EDF of one Allan-deviation point (d = 2, unmodified).
-
-    allantools does not implement white phase noise (α = 2) when fewer than three
-    strides fit the record (Greenhall & Riley 2004, case 4 with r ≤ d); flicker
-    phase noise (α = 1), the other noise with ADEV slope −1, is used there.
-    """
+    """Greenhall EDF of one Allan-deviation point (d = 2, unmodified; flicker for white phase where missing)."""
     try:
         return float(at.edf_greenhall(alpha=alpha, d=2, m=m, N=n_phase, overlapping=overlapping, modified=False))
     except NotImplementedError:
@@ -302,21 +204,18 @@ def allan_deviation(
 ) -> AllanResult:
     """Allan deviation of a rate record with a confidence interval per point.
 
+    See docs/evaluation.md, section "Allan deviation and noise terms".
+
     Parameters
     ----------
     rate : (N,) array_like
-        Rate samples at a constant rate ``fs_hz``, in ``unit`` (deg/s for a gyro).
-        Treated as allantools "frequency" data: each sample is the mean rate over
-        its sample interval. NaN or inf is refused: fill or drop gaps first.
+        Finite rate samples at ``fs_hz``, in ``unit``; each the mean rate over its interval.
     fs_hz : float
         Sample rate, Hz.
     taus : {"octave", "decade", "log10", "all"} or array_like
-        Averaging times: an allantools keyword (octave: 1, 2, 4, … samples) or
-        seconds, rounded to whole samples; duplicates and taus too long for the
-        record (fewer than 2 terms) are dropped.
+        An allantools keyword, or seconds (rounded to whole samples; too long ones dropped).
     overlapping : bool
-        Overlapping (``allantools.oadev``, SP 1065 eq. (11)) or plain
-        (``allantools.adev``, eq. (7)) Allan deviation.
+        Overlapping (SP 1065 eq. (11)) or plain (eq. (7)) Allan deviation.
     unit : str
         Unit of ``rate``, carried into the result.
     ci : float
@@ -326,26 +225,11 @@ def allan_deviation(
     -------
     AllanResult
 
-    Notes
-    -----
-    Confidence interval: chi-squared (SP 1065 eq. (45)) with the EDF of
-    ``allantools.edf_greenhall``, the noise type at each tau identified from the
-    curve's local slope (:func:`_noise_alpha`). allantools' ``err`` (σ/√n) is not
-    used: it ignores the correlation between overlapping terms.
-
     Raises
     ------
     ConfigError
         Non-finite samples, a bad ``fs_hz``/``taus``, a record too short for any
         tau, or allantools missing.
-
-    Examples
-    --------
-    The NBS14 10-point test data (NIST SP 1065, Section 12.4):
-
-    >>> r = allan_deviation([892, 809, 823, 798, 671, 644, 883, 903, 677], 1.0, taus=[1, 2], unit="")
-    >>> [round(float(v), 5) for v in r.adev]
-    [91.22945, 85.95287]
     """
     at = _require_allantools()
     y = np.asarray(rate, dtype=float)
@@ -392,33 +276,10 @@ def allan_deviation(
 
 
 def even_rate(t_s, rate) -> tuple[np.ndarray, float, bool]:
-    """A rate record on an even time base, for :func:`allan_deviation`.
+    """``(rate, fs_hz, resampled)``: a rate record on an even time base, for :func:`allan_deviation`.
 
-    Parameters
-    ----------
-    t_s : (N,) array_like
-        Sample times, s, increasing (N >= 3).
-    rate : (N,) array_like
-        Rate samples; each the mean rate over the interval that ends at its time (the
-        convention of :func:`allan_deviation`).
-
-    Returns
-    -------
-    rate : ndarray
-        ``rate`` itself when every interval is within :data:`JITTER_TOL` of the median
-        one; else N − 1 mean rates over even intervals (the integrated angle is
-        interpolated at N even times and differenced).
-    fs_hz : float
-        Sample rate of the returned record, Hz: (N − 1) / span.
-    resampled : bool
-        Whether the time base jittered and the record was resampled.
-
-    Examples
-    --------
-    >>> t = np.array([0.0, 0.1, 0.25, 0.3, 0.4])
-    >>> rate, fs, resampled = even_rate(t, [1.0, 1.0, 1.0, 1.0, 1.0])
-    >>> rate.round(12).tolist(), fs, resampled
-    ([1.0, 1.0, 1.0, 1.0], 10.0, True)
+    ``t_s`` are increasing times, s (N >= 3); ``rate`` is returned as it is when the time
+    base is even, else as N − 1 mean rates over even intervals (docs/evaluation.md).
     """
     t = np.asarray(t_s, dtype=float)
     r = np.asarray(rate, dtype=float)
@@ -454,13 +315,7 @@ def _longest_run(mask: np.ndarray) -> tuple[int, int] | None:
 
 
 def _sloped_term(res: AllanResult, usable, local, slope: float, tau_ref: float, unit: str, tol, min_points):
-    """Fixed-slope least-squares line through the region of ``slope``, read at ``tau_ref``.
-
-    In log-log the line is log σ = slope·log τ + c; with the slope fixed the
-    least-squares c is the mean of log σᵢ − slope·log τᵢ. The interval comes from the
-    same fit through the points' interval bounds (no √n narrowing: overlapping
-    estimates at neighbouring taus are strongly correlated).
-    """
+    """Fixed-slope least-squares line (log-log) through the region of ``slope``, read at ``tau_ref``."""
     run = _longest_run(usable & (np.abs(local - slope) <= tol))
     if run is None or run[1] - run[0] < min_points:
         return None
@@ -497,15 +352,16 @@ def noise_terms(
     min_points: int = MIN_POINTS,
     min_edf: float = MIN_EDF,
 ) -> NoiseTerms:
-    """Read N, B, K and R off an Allan-deviation curve (slope method).
+    """Read N, B, K and R off an Allan-deviation curve (IEEE Std 952-1997 Annex C, slope method).
+
+    See docs/evaluation.md, section "Allan deviation and noise terms".
 
     Parameters
     ----------
     result : AllanResult
         From :func:`allan_deviation`.
     tolerance : float
-        Largest distance of a point's local log-log slope from a term's
-        theoretical slope for the point to count in that term's region.
+        Largest distance of a point's local slope from a term's slope, in its region.
     min_points : int
         Fewest consecutive points that make a region.
     min_edf : float
@@ -515,28 +371,6 @@ def noise_terms(
     -------
     NoiseTerms
         Each term None when the curve has no region of its slope.
-
-    Notes
-    -----
-    The Allan variance of the IEEE Std 952-1997 gyro model (Annex C) is a sum of
-    power laws; each dominates the deviation somewhere with its own slope:
-
-    ===================  =====  ================  =========================
-    term                 slope  σ(τ)              read at
-    ===================  =====  ================  =========================
-    angle random walk N  −1/2   N/√τ              τ = 1 s: σ = N
-    bias instability B   0      B·sqrt(2 ln 2/π)  the minimum: B = σ/0.664
-    rate random walk K   +1/2   K·sqrt(τ/3)       τ = 3 s: σ = K
-    rate ramp R          +1     R·τ/√2            τ = √2 s: σ = R
-    ===================  =====  ================  =========================
-
-    A term's region is the longest run (earliest on a tie) of at least
-    ``min_points`` usable points whose local log-log slope (mean of the two
-    neighbouring segments) is within ``tolerance`` of its slope. N, K, R: a line of
-    that fixed slope is fitted in log-log and read at the standard tau; B: the
-    region's minimum / 0.664. The intervals come from the same fits through
-    ``adev_lo``/``adev_hi``. Points near a transition carry neighbouring terms, so
-    with several terms the coefficients come out high.
     """
     if not 0.0 < tolerance < 0.25:
         raise ConfigError(f"tolerance must be in (0, 0.25) so regions cannot overlap, got {tolerance!r}")

@@ -1,39 +1,6 @@
 """Run our method and the paper's baselines on the same log (``gyrodrift compare``).
 
-=================  ========================================================  ======
-method             what it is                                                causal
-=================  ========================================================  ======
-``stkf``           ours: the paper's strong tracking Kalman filter           yes
-``kf``             the paper's KF: plain Kalman filter on a constant bias    yes
-``stkf-s1``        the [a, b, c] filter with s = 1                           yes
-``lsm``            the paper's "modified LSM": a, b, c refitted every 10 s   yes
-                   over a sliding window
-``mlr``            the paper's MLR: one a, b, c fitted by least squares      **no**
-                   over every drift measurement of the whole log (the
-                   10-s interval measurements the paper's ``kf`` accepts)
-``smoothed``       the configured estimator's measurements smoothed          **no**
-                   forwards and backwards (:mod:`gyrodrift.smooth`), for
-                   recorded logs
-``poly3``          PX4-style cubic thermal calibration fitted on a separate  yes
-                   static heating run of the same device
-``fusion-offset``  x-io Fusion's run-time gyroscope offset correction        yes
-                   (stillness, then a 0.02-Hz filter; no temperature;
-                   :mod:`gyrodrift.fusion_offset`; needs ``imufusion``)
-``oracle``         subtracts the true drift (``true_bias_z``): the limit     --
-                   set by sensor noise alone
-=================  ========================================================  ======
-
-Any other registered estimator that can be built from settings alone (for example
-``adaptive``, see :mod:`gyrodrift.estimators`) is accepted as a method name too: it
-runs as :func:`compensate` with ``estimator=name``. The default estimator
-(:data:`DEFAULT_METHOD`, ``CompensatorConfig().estimator``) comes first in the
-default method list :data:`DEFAULT_METHODS` of ``compare`` and ``report``, and
-tables and figures name it "adaptive (default)" (:func:`method_label`).
-
-Every method sees the same log, the same compass gates and the same integration;
-only the drift estimate differs. The methods whose drift is known for every row
-without a filter (``poly3``, ``fusion-offset``, ``oracle``) integrate it from the
-first compass sample, without gates.
+What each method is, and what they share: docs/evaluation.md, section "Methods".
 """
 
 from __future__ import annotations
@@ -55,8 +22,8 @@ from gyrodrift.fusion_offset import available as fusion_offset_available
 from gyrodrift.fusion_offset import fusion_offset_drift
 from gyrodrift.kernels.integrate import trapezoid
 
-__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_method", "method_label", "run_method",
-           "run_methods", "calibration_from_log", "summary_table"]
+__all__ = ["METHODS", "DEFAULT_METHOD", "DEFAULT_METHODS", "CAUSAL", "is_causal", "is_method", "valid_methods",
+           "method_label", "run_method", "run_methods", "calibration_from_log", "summary_table"]
 
 METHODS = ("stkf", "kf", "stkf-s1", "lsm", "mlr", "smoothed", "poly3", "fusion-offset", "oracle")
 #: The estimator ``compensate`` runs when none is chosen.
@@ -81,27 +48,18 @@ def is_method(name: str) -> bool:
 
 
 def method_label(name: str) -> str:
-    """The name a table or figure shows for a method: ``"adaptive (default)"`` for the default estimator.
-
-    Examples
-    --------
-    >>> method_label(DEFAULT_METHOD)
-    'adaptive (default)'
-    >>> method_label("kf")
-    'kf'
-    """
+    """The name a table or figure shows for a method: ``"adaptive (default)"`` for the default estimator."""
     return f"{name} (default)" if name == DEFAULT_METHOD else name
 
 
-def _valid_methods() -> str:
+def valid_methods() -> str:
+    """Every method name, comma-separated, for messages."""
     return ", ".join([*METHODS, *sorted(n for n in ESTIMATORS if _is_estimator_method(n))])
 
 
-def _causal(name: str):
+def is_causal(name: str) -> bool:
     """Whether a method is causal: :data:`CAUSAL`, else the registered estimator's ``causal``."""
-    if name in CAUSAL:
-        return CAUSAL[name]
-    return getattr(ESTIMATORS.get(name), "causal", None)
+    return CAUSAL[name] if name in CAUSAL else getattr(ESTIMATORS.get(name), "causal", True)
 
 
 def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
@@ -110,11 +68,7 @@ def calibration_from_log(log: pd.DataFrame) -> Poly3Calibration:
 
 
 def _known_drift(log: pd.DataFrame, config: CompensatorConfig, drift_dps: np.ndarray) -> pd.DataFrame:
-    """The log compensated with a drift known for every row (deg/s), no filter: the oracle
-    (the true drift), ``poly3`` (an offline calibration) and ``fusion-offset`` (x-io
-    Fusion's run-time offset, computed before). The heading starts from the
-    same anchor as the filters' (the first compass sample) and integrates the same way;
-    the fused heading uses every compass sample; no gate applies."""
+    """The log compensated with a drift known for every row, deg/s, without a filter or gates (docs/evaluation.md)."""
     out = compensate(log, config, estimator=FixedParams())  # the columns and the anchor row
     t = out["t"].to_numpy()
     rate = log["gyro_z"].ffill().to_numpy(float) - drift_dps
@@ -156,13 +110,17 @@ def run_method(
     ----------
     name : str
         One of :data:`METHODS`, or another registered estimator name (e.g. ``adaptive``).
-        ``fusion-offset`` raises :class:`ConfigError` when ``imufusion`` is missing.
     log : DataFrame
         Input contract.
     config : CompensatorConfig, optional
-        Shared settings (gates, interval, prior); ``config.estimator`` is replaced.
+        Shared settings; ``config.estimator`` is replaced.
     calibration : Poly3Calibration or DataFrame, optional
         For ``poly3``: a fitted calibration, or the heating-run log to fit it on.
+
+    Raises
+    ------
+    ConfigError
+        An unknown method, or one that cannot run (no truth, calibration or ``imufusion``).
     """
     config = config or CompensatorConfig()
     if name in _FILTERS or _is_estimator_method(name):
@@ -191,7 +149,7 @@ def run_method(
         return _known_drift(log, config, fusion_offset_drift(log))
     if name == "oracle":
         return _oracle(log, config)
-    raise ConfigError(f"unknown method {name!r}; choose from: {_valid_methods()}")
+    raise ConfigError(f"unknown method {name!r}; choose from: {valid_methods()}")
 
 
 def run_methods(
@@ -201,21 +159,14 @@ def run_methods(
     *,
     calibration=None,
 ) -> tuple[dict[str, pd.DataFrame], dict[str, str]]:
-    """Run several methods; methods that cannot run on this log are skipped with a reason.
+    """Run several methods (default :data:`DEFAULT_METHODS`); return ``(outputs, skipped)``.
 
-    ``methods`` defaults to :data:`DEFAULT_METHODS` (the default estimator first).
-
-    Returns
-    -------
-    outputs : dict
-        Method name → output table, in the order given.
-    skipped : dict
-        Method name → why it was not run (no truth column, no calibration run,
-        ``imufusion`` not installed).
+    ``outputs`` maps each method to its output table in the order given, ``skipped`` each
+    method that cannot run on this log to the reason.
     """
     unknown = [m for m in methods if not is_method(m)]
     if unknown:
-        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {_valid_methods()}")
+        raise ConfigError(f"unknown method(s) {', '.join(unknown)}; choose from: {valid_methods()}")
     if isinstance(calibration, pd.DataFrame):
         calibration = calibration_from_log(calibration)
     outputs, skipped = {}, {}
@@ -234,21 +185,11 @@ def run_methods(
 
 
 def summary_table(outputs: dict[str, pd.DataFrame]) -> pd.DataFrame:
-    """One row per method: the paper's Table-2 statistics and more.
-
-    Columns (present when the log allows): ``causal``; ``updates`` (filter updates);
-    ``gated_pct`` (share of rows with compass aiding refused); bias drift error
-    (:func:`gyrodrift.evaluate.metrics.bias_error`: against ``true_bias_z`` when present,
-    deg/s) ``bias_mean``, ``bias_var``, ``bias_rms``, ``bias_max_abs``; heading
-    error against ``ref_heading`` (deg) ``heading_mean``, ``heading_var``,
-    ``heading_rms``, ``heading_min``, ``heading_max``. A table written before the
-    ``updated`` column was renamed is read with its ``update`` column
-    (:func:`gyrodrift.compensator.output.updated_column`).
-    """
+    """One row per method: the paper's Table-2 statistics and more (docs/evaluation.md, section "Methods")."""
     rows = {}
     for name, out in outputs.items():
         updates = int(updated_column(out, f"summary_table ({name})").sum())
-        row = {"causal": _causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
+        row = {"causal": is_causal(name), "updates": updates, "gated_pct": 100.0 * float(out["gated"].mean())}
         if name == "oracle":
             row.update(updates=np.nan, gated_pct=np.nan)
         if TRUE_BIAS_Z in out.columns:

@@ -1,37 +1,13 @@
 """Every method on the generator's scenarios (:mod:`gyrodrift.simulate.generator`), scored
 against truth, tuning and held-out seeds reported side by side.
 
-One *case* is a (class, seed) pair. Every method runs on the same generated log:
-
-==================  ======================================================================
-method              what it is
-==================  ======================================================================
-``default``         gyrodrift's default estimator (:class:`gyrodrift.CompensatorConfig`)
-``stkf``, ``kf``    the paper's strong tracking filter and its KF baseline
-``mlr-causal``      the paper's MLR fitted on the past only
-``poly3``           a cubic in temperature fitted on a separate still heating run of the same
-                    device (PX4's and ArduPilot's thermal calibration)
-``fusion-offset``   x-io Fusion's gyroscope offset correction (no temperature model)
-``fusion-ahrs``     x-io Fusion's AHRS (its heading only: compared with ``heading_fused``)
-``smoothed``        gyrodrift's forward-backward pass over the whole log (not causal)
-==================  ======================================================================
-
-Scores of a case and method (:data:`COLUMNS`): heading RMS (deg, the gyro-integrated
-``heading`` against ``ref_heading``), bias RMS (deg/s, against ``true_bias_z``), the RMS of
-the fused heading (deg; ``heading_fused``, or Fusion's AHRS), and for gyrodrift's own
-estimators the honesty of what they say: the share of rows whose truth lies within one and
-two standard deviations (``bias_sd``, ``heading_fused_sd``), and the precision and recall of
-the ``interference`` and ``turning`` labels against the generator's truth
-(:func:`gyrodrift.simulate.generator.truth_labels`; interference on compass rows).
-
-:func:`acceptance` says per class whether the default is at or below the best causal
-baseline in the median (heading and bias) and its fused heading at or below Fusion's AHRS.
+The methods, the scores and the acceptance: docs/evaluation.md, section "The generator's
+classes on held-out seeds".
 """
 
 from __future__ import annotations
 
 import math
-import os
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
@@ -39,7 +15,9 @@ import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.evaluate.metrics import heading_error_deg
+from gyrodrift.evaluate.compare import run_method
+from gyrodrift.evaluate.metrics import heading_error_deg, markdown_table
+from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
 
 __all__ = ["METHODS", "CAUSAL_BASELINES", "COLUMNS", "run_case", "run_generated", "summarise", "acceptance",
@@ -69,7 +47,7 @@ def _share_within(err, sd, k) -> float:
 
 
 def _precision_recall(said: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
-    """Precision and recall of boolean labels (NaN where undefined: nothing said, nothing true)."""
+    """Precision and recall of boolean labels (NaN where undefined)."""
     hit = int(np.sum(said & truth))
     p = hit / int(said.sum()) if said.any() else math.nan
     r = hit / int(truth.sum()) if truth.any() else math.nan
@@ -100,13 +78,7 @@ def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
     return row
 
 
-def _one_line(err: BaseException) -> str:
-    return f"{type(err).__name__}: {' '.join(str(err).split())}"
-
-
 def _run(name: str, log: pd.DataFrame, config: CompensatorConfig, case) -> pd.DataFrame:
-    from gyrodrift.evaluate.compare import run_method
-
     if name == "default":
         return run_method(config.estimator, log, config)
     if name == "fusion-ahrs":
@@ -130,7 +102,7 @@ def run_case(cls: str, seed: int, methods: Sequence[str] = METHODS, *, config: C
     try:
         case = generate(cls, seed, duration_scale=duration_scale)
     except Exception as err:  # reported per case, never stops the whole run
-        return [{**base, **blank, "method": m, "status": "error", "error": "generator: " + _one_line(err)}
+        return [{**base, **blank, "method": m, "status": "error", "error": "generator: " + error_line(err)}
                 for m in methods]
     rows = []
     for name in methods:
@@ -139,7 +111,7 @@ def run_case(cls: str, seed: int, methods: Sequence[str] = METHODS, *, config: C
             out = _run(name, case.log, config, case)
             row.update(_score(case.log, out, own=name == "default"))
         except Exception as err:  # one failing method must not hide the others
-            row.update(status="error", error=_one_line(err))
+            row.update(status="error", error=error_line(err))
         rows.append(row)
     return rows
 
@@ -152,7 +124,7 @@ def _task(task):
 def _failed(task, err):
     cls, seed, methods, _, _ = task
     return [{"class": cls, "seed": seed, "split": split_of(seed), "method": m, "status": "error",
-             "error": "worker: " + _one_line(err)} for m in methods]
+             "error": "worker: " + error_line(err)} for m in methods]
 
 
 def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = ("held-out",), n_seeds: int = 20,
@@ -161,7 +133,7 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
                   progress: Callable | None = None) -> pd.DataFrame:
     """Every method on ``n_seeds`` cases of each class in each split; one row per case and method.
 
-    The rows do not depend on ``workers``: each case comes from its own (class, seed).
+    The rows do not depend on ``workers``.
     """
     classes = list(CLASSES) if classes is None else list(classes)
     unknown = [c for c in classes if c not in CLASSES]
@@ -172,14 +144,7 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
         raise ConfigError(f"unknown method(s) {', '.join(bad)}; choose from: {', '.join(METHODS)}")
     tasks = [(c, s, tuple(methods), config or CompensatorConfig(), duration_scale)
              for split in splits for c in classes for s in seeds(split, n_seeds)]
-    workers = os.cpu_count() or 1 if workers is None else workers
-    if workers <= 1 or len(tasks) == 1:
-        items = progress(tasks, len(tasks)) if progress else tasks
-        results = [_task(t) for t in items]
-    else:
-        from gyrodrift._pool import map_processes
-
-        results = map_processes(_task, tasks, workers, progress, on_error=_failed)
+    results = map_jobs(_task, tasks, check_workers(workers), progress, on_error=_failed)
     df = pd.DataFrame([r for rows in results for r in rows], columns=list(COLUMNS))
     order = {m: i for i, m in enumerate(methods)}
     return df.sort_values(["split", "class", "seed", "method"], key=lambda s: s.map(order) if s.name == "method" else s,
@@ -199,9 +164,8 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
 def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     """Per (split, class): the default's medians against the best causal baseline and Fusion's AHRS.
 
-    Columns: ``heading`` and ``bias`` (the default's median RMS), ``best_heading`` and
-    ``best_bias`` (the lowest median of :data:`CAUSAL_BASELINES`, and which), ``fused`` and
-    ``ahrs``, and ``ok_heading``, ``ok_bias``, ``ok_fused``.
+    Columns: the default's ``heading``, ``bias`` and ``fused`` median RMS; ``best_heading``,
+    ``best_bias`` (the lowest of :data:`CAUSAL_BASELINES`, and which) and ``ahrs``; ``ok_*``.
     """
     rows = []
     for (split, cls), part in summary.groupby(["split", "class"], sort=False):
@@ -224,8 +188,6 @@ def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
 
 def markdown(df: pd.DataFrame) -> str:
     """The acceptance table and the per-method medians of a run, Markdown."""
-    from gyrodrift.evaluate.metrics import markdown_table
-
     summ = summarise(df)
     acc = acceptance(summ)
     parts = []

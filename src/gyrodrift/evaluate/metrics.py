@@ -1,9 +1,7 @@
 """Accuracy of a compensated log against a reference heading or the true drift.
 
-:func:`accuracy` summarises one run; :func:`table2` gives the statistics of the
-paper's Table 2 (static bias drift error, deg/s; dynamic heading error, deg) per
-method, beside the published numbers (:data:`PAPER_TABLE2`);
-:func:`markdown_table` renders them. Variances use ``ddof=1`` (MATLAB's ``var``).
+Heading and bias errors, their statistics, the paper's Table 2 and a Markdown renderer:
+docs/evaluation.md, section "Error statistics".
 """
 
 from __future__ import annotations
@@ -40,11 +38,7 @@ __all__ = [
 
 
 def heading_error_deg(heading_deg, ref_heading_deg) -> np.ndarray:
-    """Heading minus reference, deg, wrapped to [-180, 180).
-
-    >>> float(heading_error_deg(1.0, 359.0))
-    2.0
-    """
+    """Heading minus reference, deg, wrapped to [-180, 180)."""
     return wrap_180(np.asarray(heading_deg, dtype=float) - np.asarray(ref_heading_deg, dtype=float))
 
 
@@ -55,11 +49,7 @@ def raw_heading_deg(t_s, gyro_z_dps, start_deg: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Accuracy:
-    """Errors of one run; None where the log has no reference for it.
-
-    Heading errors in deg (against ``ref_heading``), bias errors in deg/s
-    (against ``true_bias_z``), for the raw gyro and the compensated one.
-    """
+    """Errors of one run (deg against ``ref_heading``, deg/s against ``true_bias_z``); None without that column."""
 
     heading_rms_raw: float | None
     heading_rms: float | None
@@ -74,11 +64,7 @@ def _rms(x) -> float:
 
 
 def accuracy(out: pd.DataFrame) -> Accuracy:
-    """Accuracy of a :func:`gyrodrift.compensator.compensate` output table.
-
-    The raw-gyro heading starts at the same heading as the compensated one; the raw
-    bias error is the whole drift (no compensation).
-    """
+    """Accuracy of a :func:`gyrodrift.compensator.compensate` output table, raw and compensated."""
     h_rms_raw = h_rms = h_max_raw = h_max = b_rms_raw = b_rms = None
     if REF_HEADING in out.columns:
         ok = out[REF_HEADING].notna().to_numpy()
@@ -104,13 +90,7 @@ def _column(out: pd.DataFrame, name: str, what: str) -> np.ndarray:
 
 
 def _window_means(t_s: np.ndarray, x: np.ndarray, window_s: float) -> np.ndarray:
-    """Means of ``x`` over consecutive non-overlapping windows of ``window_s`` seconds.
-
-    Windows start at the first time; window k holds t0 + k·w <= t < t0 + (k+1)·w.
-    Only windows the log covers completely (to within one median sample interval)
-    count; NaN samples are left out of a mean, and a window with no finite sample
-    is dropped.
-    """
+    """Means of ``x`` over the complete windows of ``window_s`` seconds (docs/evaluation.md)."""
     t_s = np.asarray(t_s, dtype=float)
     x = np.asarray(x, dtype=float)
     if t_s.size < 2:
@@ -132,27 +112,20 @@ def _window_means(t_s: np.ndarray, x: np.ndarray, window_s: float) -> np.ndarray
 def bias_error(out: pd.DataFrame, *, average_s: float | None = None) -> np.ndarray:
     """Bias drift error of a compensated log, deg/s (the static rows of the paper's Table 2).
 
+    ``bias_z − true_bias_z``, or ``rate_z`` without the truth (docs/evaluation.md, section
+    "Error statistics").
+
     Parameters
     ----------
     out : DataFrame
         Output table of :func:`gyrodrift.compensator.compensate`.
     average_s : float, optional
-        Average the error over consecutive non-overlapping windows of this many
-        seconds, starting at the first row; only complete windows count.
+        Average over consecutive windows of this many seconds; only complete windows count.
 
     Returns
     -------
     ndarray
-        One error per row (NaN where the truth is missing), or one per window
-        (window means; NaN rows left out) with ``average_s``.
-
-    Notes
-    -----
-    With ``true_bias_z`` (simulated logs) the error is ``bias_z − true_bias_z``, the
-    paper's quantity (Fig. 2). Otherwise it is ``rate_z``, an error only if the gyro
-    did not move, and it holds the white noise: the paper's variances are far below
-    the per-sample noise of its gyro, so average it (e.g. ``average_s=30``) to
-    compare with Table 2.
+        One error per row, or one mean per window with ``average_s``.
     """
     if TRUE_BIAS_Z in out.columns:
         e = _column(out, "bias_z", "bias_error") - out[TRUE_BIAS_Z].to_numpy(dtype=float)
@@ -166,21 +139,7 @@ def bias_error(out: pd.DataFrame, *, average_s: float | None = None) -> np.ndarr
 
 
 def error_stats(errors) -> dict[str, float]:
-    """Summary statistics of an error series (NaN values left out).
-
-    Returns
-    -------
-    dict
-        ``mean``, ``variance`` (ddof=1), ``std`` (ddof=1), ``min``, ``max``,
-        ``rms``, ``max_abs`` in the unit of ``errors`` (squared for the
-        variance), and ``n`` (number of finite values). ``variance``/``std`` are
-        NaN for a single value.
-
-    Examples
-    --------
-    >>> error_stats([1.0, -1.0, 1.0, -1.0])["rms"]
-    1.0
-    """
+    """``mean``, ``variance``, ``std`` (ddof=1), ``min``, ``max``, ``rms``, ``max_abs``, ``n`` of the finite errors."""
     e = np.asarray(errors, dtype=float).ravel()
     e = e[np.isfinite(e)]
     if e.size == 0:
@@ -199,19 +158,7 @@ def error_stats(errors) -> dict[str, float]:
 
 
 def heading_error_stats(out: pd.DataFrame) -> dict[str, float]:
-    """Statistics of the heading error against ``ref_heading``, deg.
-
-    The error is ``heading − ref_heading`` wrapped to [−180, 180) (so 359° against
-    1° is −2°, not 358°); rows without a reference (NaN) are left out. A log without any
-    compass sample (``compass_heading`` empty in every row) has a heading relative to its
-    first row: its error is taken after removing the offset at the first referenced row.
-
-    Returns
-    -------
-    dict
-        See :func:`error_stats`: ``mean``, ``variance`` (deg²), ``std``, ``min``,
-        ``max``, ``rms``, ``max_abs`` (deg) and ``n``.
-    """
+    """:func:`error_stats` of the wrapped heading error against ``ref_heading``, deg (docs/evaluation.md)."""
     ref = _column(out, REF_HEADING, "heading_error_stats")
     e = heading_error_deg(_column(out, "heading", "heading_error_stats"), ref)
     e = e[np.isfinite(ref)]
@@ -233,25 +180,21 @@ def table2(
     kind: str = "static",
     average_s: float | None = None,
 ) -> pd.DataFrame:
-    """Table 2 of the paper for your own runs: one column per compensation method.
+    """Table 2 of the paper for your own runs: one column per method.
 
     Parameters
     ----------
     out_by_method : mapping of str to DataFrame
-        Output table of :func:`gyrodrift.compensator.compensate` per method name;
-        the columns keep this order.
+        Output table per method name, in column order.
     kind : {"static", "dynamic"}
-        ``static``: bias drift error (deg/s, :func:`bias_error`) of motionless
-        logs; ``dynamic``: heading error (deg) against ``ref_heading``.
+        Bias drift error (deg/s) of motionless logs, or heading error (deg).
     average_s : float, optional
-        Static only: averaging window passed to :func:`bias_error`.
+        Static only: the averaging window of :func:`bias_error`.
 
     Returns
     -------
     DataFrame
-        Index :data:`TABLE2_STATS` (mean, variance, std, rms, max_abs; variance in
-        the squared unit), named after the quantity and unit; columns = methods.
-        Compare with :func:`paper_table2`.
+        Rows :data:`TABLE2_STATS`, named after the quantity; compare with :func:`paper_table2`.
     """
     if kind not in TABLE2_KINDS:
         raise ConfigError(f"kind must be one of {', '.join(TABLE2_KINDS)}, got {kind!r}")
@@ -284,10 +227,7 @@ def _paper_rows(means, variances):
     return MappingProxyType({m: MeanVariance(a, v) for m, a, v in zip(PAPER_METHODS, means, variances)})
 
 
-#: Table 2 of Feng, Li, Zhang (Sensors 2015, 15, 11222–11238), transcribed:
-#: ``static`` = bias drift error in the static experiment without interference,
-#: ``static_interference`` = with interference (mean deg/s, variance (deg/s)²),
-#: ``dynamic`` = heading error in the dynamic experiment (mean deg, variance deg²).
+#: Table 2 of Feng, Li, Zhang (Sensors 2015, 15, 11222–11238), transcribed (docs/evaluation.md).
 PAPER_TABLE2 = MappingProxyType(
     {
         "static": _paper_rows(
@@ -307,22 +247,7 @@ PAPER_TABLE2 = MappingProxyType(
 
 
 def paper_table2(kind: str = "static") -> pd.DataFrame:
-    """The paper's Table 2 numbers for one experiment, in the layout of :func:`table2`.
-
-    Parameters
-    ----------
-    kind : {"static", "static_interference", "dynamic"}
-
-    Returns
-    -------
-    DataFrame
-        Rows ``mean`` and ``variance``, columns :data:`PAPER_METHODS`.
-
-    Examples
-    --------
-    >>> float(paper_table2("dynamic").loc["mean", "Adaptive Algorithm"])
-    0.2743
-    """
+    """The paper's ``mean`` and ``variance`` of one experiment (a key of :data:`PAPER_TABLE2`) per method."""
     if kind not in PAPER_TABLE2:
         raise ConfigError(f"kind must be one of {', '.join(PAPER_TABLE2)}, got {kind!r}")
     rows = PAPER_TABLE2[kind]
@@ -347,30 +272,9 @@ def _cell(value, floatfmt: str) -> str:
 
 
 def markdown_table(df: pd.DataFrame, floatfmt: str = ".4g", *, index: bool = True) -> str:
-    """Render a table as GitHub-flavoured Markdown (no extra dependency).
+    """A table as GitHub-flavoured Markdown, no trailing newline (docs/evaluation.md).
 
-    Parameters
-    ----------
-    df : DataFrame
-    floatfmt : str
-        :func:`format` spec for floating-point cells (NaN renders empty).
-    index : bool
-        Include the index as the first column, headed by its name.
-
-    Returns
-    -------
-    str
-        Header, alignment row (numeric columns right-aligned) and one line per row,
-        joined by newlines, with no trailing newline. ``|`` in text is escaped.
-
-    Examples
-    --------
-    >>> df = pd.DataFrame({"KF": [0.5, 0.25]}, index=pd.Index(["mean", "variance"], name="stat"))
-    >>> print(markdown_table(df, ".2f"))
-    | stat | KF |
-    | :--- | ---: |
-    | mean | 0.50 |
-    | variance | 0.25 |
+    ``floatfmt`` is the :func:`format` spec of float cells; ``index`` puts the index first.
     """
     columns = [str(c) for c in df.columns]
     right = [pd.api.types.is_numeric_dtype(df[c]) and not pd.api.types.is_bool_dtype(df[c]) for c in df.columns]

@@ -1,28 +1,12 @@
 """Monte Carlo comparison of the drift estimators over every simulated scenario family.
 
-The families (:data:`FAMILIES`) are those of the paper's kind (continuous logs, a
-compass heading, a measured temperature) and adversarial ones
-(:data:`ADVERSARIAL_FAMILIES`, :mod:`gyrodrift.simulate.adversarial`) built to break
-a design that relies on those.
-
-One *case* is a (family, seed): a random device and compass, one simulated log, and
-(for ``poly3``) a separate calibration heating run of the same device. Every method
-runs on the same log (:func:`gyrodrift.evaluate.compare.run_method`) and is scored against
-its truth columns (:data:`COLUMNS`: wrapped heading RMS and max error in deg, bias
-RMS in deg/s, ``status`` and ``error``). Results do not depend on the number of
-workers.
-
-Examples
---------
->>> df = run_monte_carlo(["static"], 1, ["adaptive", "kf"], duration_scale=0.02, workers=1)
->>> list(df["method"]), list(df["status"])
-(['adaptive', 'kf'], ['ok', 'ok'])
+The families, cases, scores and summary: docs/evaluation.md, section "Monte Carlo over
+scenario families".
 """
 
 from __future__ import annotations
 
 import math
-import os
 import zlib
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -33,9 +17,9 @@ import pandas as pd
 
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.errors import ConfigError
-from gyrodrift.estimators import ESTIMATORS
-from gyrodrift.evaluate.compare import METHODS, run_method
+from gyrodrift.evaluate.compare import is_method, run_method, valid_methods
 from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_stats, markdown_table
+from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate import (
     DEFAULT_DURATION_S,
     CompassModel,
@@ -65,89 +49,43 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Family:
-    """A scenario family of the Monte Carlo.
+    """A scenario family of the Monte Carlo."""
 
-    Attributes
-    ----------
-    scenario : str
-        Simulated scenario (:data:`gyrodrift.simulate.SCENARIOS`).
-    duration_s : float
-        Default log length, s (scaled by ``duration_scale``).
-    description : str
-        One line for tables and help.
-    duration_range_s : tuple of float, optional
-        ``(low, high)``: each case draws its log length uniformly from this range,
-        s, whatever ``duration_scale`` (a family defined by its length: ``short``).
-        None: ``duration_s`` times the scale.
-    triad : bool
-        The log also has ``gyro_x``, ``gyro_y`` (the default
-        :class:`~gyrodrift.simulate.device.TriadModel`, its accelerometer noise included).
-    """
+    scenario: str  # simulated scenario (gyrodrift.simulate.SCENARIOS)
+    duration_s: float  # default log length, s (times duration_scale)
+    description: str  # one line for tables and help
+    duration_range_s: tuple[float, float] | None = None  # each case's length drawn from it, s, whatever the scale
+    triad: bool = False  # the log also has gyro_x, gyro_y and the default TriadModel's accelerometer
 
-    scenario: str
-    duration_s: float
-    description: str
-    duration_range_s: tuple[float, float] | None = None
-    triad: bool = False
+
+def _family(name: str, description: str, **options) -> tuple[str, Family]:
+    return name, Family(name, DEFAULT_DURATION_S[name], description, **options)
 
 
 #: The scenario families, by name: the six of the paper's kind, then :data:`ADVERSARIAL_FAMILIES`.
-FAMILIES: Mapping[str, Family] = MappingProxyType(
-    {
-        "static": Family("static", DEFAULT_DURATION_S["static"], "motionless, heated 23 -> 58 degC and cooled (3 h)"),
-        "interference-wander": Family(
-            "interference-wander", DEFAULT_DURATION_S["interference-wander"],
-            "static ramp with slowly wandering magnetic interference in four windows (3 h)",
-        ),
-        "vehicle": Family("vehicle", DEFAULT_DURATION_S["vehicle"], "car loops with 90 deg turns, 26 -> 37 degC (40 min)"),
-        "hysteresis": Family(
-            "hysteresis", DEFAULT_DURATION_S["hysteresis"],
-            "strongly nonlinear device with thermal lag and backlash, 10 -> 70 -> 10 degC cycles (4 h)",
-        ),
-        "cold-start": Family("cold-start", DEFAULT_DURATION_S["cold-start"], "warm-up from -20 to +60 degC (2 h)"),
-        "soak": Family(
-            "soak", DEFAULT_DURATION_S["soak"],
-            "12-h soak, slow yaw sway, temperature ramps, long compass outages during the ramps",
-        ),
-        "bursty": Family(
-            "bursty", DEFAULT_DURATION_S["bursty"],
-            "still and cooling, logged in 5-s records every ~300 s; half the cases without compass (2 h)",
-        ),
-        "ramp-interference": Family(
-            "ramp-interference", DEFAULT_DURATION_S["ramp-interference"],
-            "still, temperature falling ~0.8 degC/min, 10 min of ~30 deg wandering interference (90 min)",
-        ),
-        "sway": Family(
-            "sway", DEFAULT_DURATION_S["sway"],
-            "moored platform: yaw sway < 0.2 deg/s, 40-90 min compass outages, day/night temperature (12 h)",
-        ),
-        "vehicle-rawmag": Family(
-            "vehicle-rawmag", DEFAULT_DURATION_S["vehicle-rawmag"],
-            "the vehicle with raw magnetometer + accelerometer (tilted when braking, cornering) and x/y gyros, "
-            "no heading (40 min)",
-            triad=True,
-        ),
-        "vessel": Family(
-            "vessel", DEFAULT_DURATION_S["vessel"], "slow continuous turn 0.15-0.6 deg/s with wave yaw, warming (2 h)",
-        ),
-        "no-temp": Family(
-            "no-temp", DEFAULT_DURATION_S["no-temp"],
-            "bench unit warming up, turned every few minutes; temperature column constant 0 degC (1 h)",
-        ),
-        "short": Family(
-            "short", DEFAULT_DURATION_S["short"], "hand-held: a few seconds still, one 90-720 deg rotation (20-40 s)",
-            duration_range_s=(20.0, 40.0),
-        ),
-    }
-)
+FAMILIES: Mapping[str, Family] = MappingProxyType(dict([
+    _family("static", "motionless, heated 23 -> 58 degC and cooled (3 h)"),
+    _family("interference-wander", "static ramp with slowly wandering magnetic interference in four windows (3 h)"),
+    _family("vehicle", "car loops with 90 deg turns, 26 -> 37 degC (40 min)"),
+    _family("hysteresis", "strongly nonlinear device with thermal lag and backlash, 10 -> 70 -> 10 degC cycles (4 h)"),
+    _family("cold-start", "warm-up from -20 to +60 degC (2 h)"),
+    _family("soak", "12-h soak, slow yaw sway, temperature ramps, long compass outages during the ramps"),
+    _family("bursty", "still and cooling, logged in 5-s records every ~300 s; half the cases without compass (2 h)"),
+    _family("ramp-interference",
+            "still, temperature falling ~0.8 degC/min, 10 min of ~30 deg wandering interference (90 min)"),
+    _family("sway", "moored platform: yaw sway < 0.2 deg/s, 40-90 min compass outages, day/night temperature (12 h)"),
+    _family("vehicle-rawmag", "the vehicle with raw magnetometer + accelerometer (tilted when braking, cornering) and "
+            "x/y gyros, no heading (40 min)", triad=True),
+    _family("vessel", "slow continuous turn 0.15-0.6 deg/s with wave yaw, warming (2 h)"),
+    _family("no-temp", "bench unit warming up, turned every few minutes; temperature column constant 0 degC (1 h)"),
+    _family("short", "hand-held: a few seconds still, one 90-720 deg rotation (20-40 s)",
+            duration_range_s=(20.0, 40.0)),
+]))
 
 #: The adversarial families (:mod:`gyrodrift.simulate.adversarial`), in the order of :data:`FAMILIES`.
 ADVERSARIAL_FAMILIES = ("bursty", "ramp-interference", "sway", "vehicle-rawmag", "vessel", "no-temp", "short")
 
-#: Methods of the comparison by default: ours, the paper's, PX4's and x-io Fusion's
-#: baselines, then our non-causal smoother for recorded logs (:mod:`gyrodrift.smooth`),
-#: beside the non-causal MLR. ``fusion-offset`` needs ``imufusion``; without it its rows
-#: have ``status = "error"`` and say so.
+#: Methods of the comparison by default: ours, the paper's, PX4's and x-io Fusion's, our smoother.
 DEFAULT_METHODS = ("adaptive", "stkf", "kf", "mlr", "lsm", "poly3", "fusion-offset", "smoothed")
 
 #: The method the others are counted against in :func:`summarise`.
@@ -168,33 +106,15 @@ CALIBRATION_S = DEFAULT_DURATION_S["calibration"]
 
 @dataclass(frozen=True)
 class Case:
-    """One (family, seed) of the Monte Carlo: what is simulated, fully determined.
-
-    Attributes
-    ----------
-    family : str
-        Family name (:data:`FAMILIES`).
-    seed : int
-        Monte Carlo seed.
-    scenario : str
-        Scenario of the log.
-    duration_s : float
-        Log length, s.
-    log_seed, calibration_seed : int
-        :func:`gyrodrift.simulate.simulate` seeds of the log and of the calibration run.
-    device : DeviceModel
-        The randomised gyro (shared by the log and the calibration run).
-    compass : CompassModel
-        The randomised compass.
-    """
+    """One (family, seed) of the Monte Carlo: what is simulated, fully determined."""
 
     family: str
     seed: int
     scenario: str
-    duration_s: float
-    log_seed: int
+    duration_s: float  # log length, s
+    log_seed: int  # simulate() seeds of the log and of the calibration run
     calibration_seed: int
-    device: DeviceModel
+    device: DeviceModel  # the randomised gyro, shared by the log and the calibration run
     compass: CompassModel
 
 
@@ -203,17 +123,21 @@ def _family_key(family: str) -> int:
     return zlib.crc32(family.encode("utf-8"))
 
 
-def _check_families(families) -> list[str]:
-    names = list(FAMILIES) if families is None else [families] if isinstance(families, str) else list(families)
-    unknown = [f for f in names if f not in FAMILIES]
+def _check_names(given, known, kind: tuple[str, str], choices: str) -> list[str]:
+    """``given`` (a name or names) as a list of distinct names ``known`` accepts; ``kind`` is (one, several)."""
+    names = [given] if isinstance(given, str) else list(given)
+    unknown = [n for n in names if not known(n)]
     if unknown or not names:
-        raise ConfigError(
-            f"unknown famil{'y' if len(unknown) == 1 else 'ies'} {', '.join(map(str, unknown)) or '(none given)'}; "
-            f"choose from: {', '.join(FAMILIES)}"
-        )
+        raise ConfigError(f"unknown {kind[len(unknown) > 1]} {', '.join(map(str, unknown)) or '(none given)'}; "
+                          f"choose from: {choices}")
     if len(set(names)) != len(names):
-        raise ConfigError(f"families must not repeat, got {', '.join(names)}")
+        raise ConfigError(f"{kind[1]} must not repeat, got {', '.join(names)}")
     return names
+
+
+def _check_families(families) -> list[str]:
+    given = list(FAMILIES) if families is None else families
+    return _check_names(given, FAMILIES.__contains__, ("family", "families"), ", ".join(FAMILIES))
 
 
 def _check_seeds(seeds) -> list[int]:
@@ -234,16 +158,7 @@ def _check_seeds(seeds) -> list[int]:
 
 
 def _check_methods(methods) -> list[str]:
-    names = [methods] if isinstance(methods, str) else list(methods)
-    unknown = [m for m in names if m not in METHODS and m not in ESTIMATORS]
-    if unknown or not names:
-        valid = [*METHODS, *sorted(n for n in ESTIMATORS if n not in METHODS)]
-        raise ConfigError(
-            f"unknown method(s) {', '.join(map(str, unknown)) or '(none given)'}; choose from: {', '.join(valid)}"
-        )
-    if len(set(names)) != len(names):
-        raise ConfigError(f"methods must not repeat, got {', '.join(names)}")
-    return names
+    return _check_names(methods, is_method, ("method", "methods"), valid_methods())
 
 
 def _positive(name: str, value) -> float:
@@ -253,31 +168,9 @@ def _positive(name: str, value) -> float:
 
 
 def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
-    """Draw the device, compass and simulation seeds of one case.
+    """Draw the device, compass and simulation seeds of one case, from ``(crc32(family), seed)``.
 
-    The generator is seeded by ``(crc32(family), seed)``: a case is the same in every
-    process whatever else runs.
-
-    Parameters
-    ----------
-    family : str
-        One of :data:`FAMILIES`.
-    seed : int
-        Non-negative Monte Carlo seed.
-    duration_scale : float
-        Log length as a multiple of the family's default (not used by a family with
-        ``duration_range_s``).
-
-    Returns
-    -------
-    Case
-
-    Examples
-    --------
-    >>> draw_case("vehicle", 3) == draw_case("vehicle", 3)
-    True
-    >>> draw_case("vehicle", 3).device == draw_case("static", 3).device
-    False
+    ``duration_scale`` is the log length as a multiple of the family's default.
     """
     (family,) = _check_families([family])
     (seed,) = _check_seeds([seed])
@@ -303,24 +196,7 @@ def draw_case(family: str, seed: int, *, duration_scale: float = 1.0) -> Case:
 
 
 def simulate_case(case: Case, *, fs_hz: float = 10.0, calibration: bool = True):
-    """The log of a case and, if asked, its calibration run (same device and compass).
-
-    Parameters
-    ----------
-    case : Case
-        From :func:`draw_case`.
-    fs_hz : float
-        Gyro sample rate, Hz.
-    calibration : bool
-        Also simulate the ``calibration`` heating run (-10 → 60 degC, always
-        :data:`CALIBRATION_S` long, whatever the duration scale) for ``poly3``.
-
-    Returns
-    -------
-    log : DataFrame
-        Input contract with ``ref_heading`` and ``true_bias_z``.
-    calibration_log : DataFrame or None
-    """
+    """``(log, calibration_log)`` of a case at ``fs_hz``; the calibration heating run only if asked (else None)."""
     log = simulate(
         case.scenario, seed=case.log_seed, duration_s=case.duration_s, fs_hz=fs_hz,
         device=case.device, compass=case.compass, triad=TriadModel() if FAMILIES[case.family].triad else None,
@@ -334,19 +210,9 @@ def simulate_case(case: Case, *, fs_hz: float = 10.0, calibration: bool = True):
     return log, cal
 
 
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
-
 def _row(family, seed, method, scenario, duration_s, **values) -> dict:
-    row = {
-        "family": family, "seed": int(seed), "method": method, "scenario": scenario,
-        "duration_s": float(duration_s), "heading_rms_deg": math.nan, "heading_max_deg": math.nan,
-        "bias_rms_dps": math.nan, "status": "ok", "error": "",
-    }
-    row.update(values)
-    return row
+    return {**dict.fromkeys(COLUMNS, math.nan), "family": family, "seed": int(seed), "method": method,
+            "scenario": scenario, "duration_s": float(duration_s), "status": "ok", "error": "", **values}
 
 
 def _score(out: pd.DataFrame) -> dict:
@@ -367,26 +233,9 @@ def run_case(
     config: CompensatorConfig | None = None,
     fs_hz: float = 10.0,
 ) -> list[dict]:
-    """Simulate one case and run every method on it; one result row per method.
+    """Simulate one case (:func:`draw_case`) and run every method on it; one row (:data:`COLUMNS`) per method.
 
-    A method that fails gives a row with ``status = "error"`` and the reason; a case
-    whose simulation fails gives such a row for every method.
-
-    Parameters
-    ----------
-    family, seed, duration_scale :
-        See :func:`draw_case`.
-    methods : sequence of str
-        Method names (:func:`gyrodrift.evaluate.compare.run_method`).
-    config : CompensatorConfig, optional
-        Shared settings of every method (default :class:`CompensatorConfig`).
-    fs_hz : float
-        Gyro sample rate of the simulated logs, Hz.
-
-    Returns
-    -------
-    list of dict
-        Rows with the keys of :data:`COLUMNS`.
+    A failure is a row with ``status = "error"``, never raised.
     """
     methods = _check_methods(methods)
     case = draw_case(family, seed, duration_scale=duration_scale)
@@ -394,7 +243,7 @@ def run_case(
     try:
         log, cal = simulate_case(case, fs_hz=fs_hz, calibration="poly3" in methods)
     except Exception as err:  # reported per case, never stops the whole Monte Carlo
-        why = "simulation failed: " + _one_line(err)
+        why = "simulation failed: " + error_line(err)
         return [_row(family, seed, m, case.scenario, case.duration_s, status="error", error=why) for m in methods]
     rows = []
     for name in methods:
@@ -402,7 +251,7 @@ def run_case(
             out = run_method(name, log, config, calibration=cal)
             rows.append(_row(family, seed, name, case.scenario, case.duration_s, **_score(out)))
         except Exception as err:  # one failing method must not hide the others
-            rows.append(_row(family, seed, name, case.scenario, case.duration_s, status="error", error=_one_line(err)))
+            rows.append(_row(family, seed, name, case.scenario, case.duration_s, status="error", error=error_line(err)))
     return rows
 
 
@@ -416,7 +265,7 @@ def _failed_task(task: tuple, err: BaseException) -> list[dict]:
     family, seed, methods, duration_scale, _, _ = task
     scenario = FAMILIES[family].scenario
     duration = draw_case(family, seed, duration_scale=duration_scale).duration_s
-    why = "worker failed: " + _one_line(err)
+    why = "worker failed: " + error_line(err)
     return [_row(family, seed, m, scenario, duration, status="error", error=why) for m in methods]
 
 
@@ -443,28 +292,22 @@ def run_monte_carlo(
     seeds : int or iterable of int
         A count ``N`` (seeds ``0 .. N-1``) or the seeds themselves.
     methods : sequence of str
-        Methods (default :data:`DEFAULT_METHODS`); any name of
-        :data:`gyrodrift.evaluate.compare.METHODS` or a registered estimator.
+        Names of :data:`gyrodrift.evaluate.compare.METHODS` or registered estimators.
     duration_scale : float
-        Every log's length as a multiple of its family's default (the ``poly3``
-        calibration run keeps its 2 h, and ``short`` its 20–40 s).
+        Every log's length as a multiple of its family's default.
     config : CompensatorConfig, optional
-        Settings shared by every method and case (frozen for all families).
+        Settings shared by every method and case.
     workers : int, optional
-        Worker processes (default :func:`os.cpu_count`); 1 runs in this process.
-        The result does not depend on it.
+        Worker processes (default :func:`os.cpu_count`); the rows do not depend on it.
     progress : callable, optional
-        ``progress(iterable, total)`` wraps the iteration over finished cases (for a
-        progress bar) and yields the same items.
+        ``progress(iterable, total)`` wraps the finished cases and yields them.
     fs_hz : float
-        Gyro sample rate of the simulated logs, Hz (the paper's experiments use 10).
+        Gyro sample rate of the simulated logs, Hz.
 
     Returns
     -------
     DataFrame
-        Columns :data:`COLUMNS`, sorted by family (order given), seed, method (order
-        given); ``attrs`` holds ``families``, ``seeds``, ``methods``,
-        ``duration_scale`` and ``fs_hz``.
+        Columns :data:`COLUMNS`, in the order of families, seeds and methods; ``attrs`` holds the arguments.
 
     Raises
     ------
@@ -476,33 +319,14 @@ def run_monte_carlo(
     names = _check_methods(methods)
     scale = _positive("duration_scale", duration_scale)
     fs = _positive("fs_hz", fs_hz)
-    if workers is None:
-        workers = os.cpu_count() or 1
-    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise ConfigError(f"workers must be a whole number >= 1, got {workers!r}")
+    n_workers = check_workers(workers)
     config = config or CompensatorConfig()
     tasks = [(f, s, tuple(names), scale, config, fs) for f in fams for s in seed_list]
-    if workers == 1 or len(tasks) == 1:
-        results = _run_serial(tasks, progress)
-    else:
-        results = _run_pool(tasks, int(workers), progress)
+    results = map_jobs(_run_task, tasks, n_workers, progress, on_error=_failed_task)
     rows = [row for task_rows in results for row in task_rows]
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     df.attrs = {"families": fams, "seeds": seed_list, "methods": names, "duration_scale": scale, "fs_hz": fs}
     return df
-
-
-def _run_serial(tasks, progress) -> list[list[dict]]:
-    items = iter(tasks)
-    if progress is not None:
-        items = progress(items, len(tasks))
-    return [_run_task(task) for task in items]
-
-
-def _run_pool(tasks, workers: int, progress) -> list[list[dict]]:
-    from gyrodrift._pool import map_processes
-
-    return map_processes(_run_task, tasks, workers, progress, on_error=_failed_task)
 
 
 # --------------------------------------------------------------------------- summary
@@ -511,20 +335,8 @@ def _run_pool(tasks, workers: int, progress) -> list[list[dict]]:
 def summarise(df: pd.DataFrame, reference: str = REFERENCE_METHOD) -> pd.DataFrame:
     """Per family and method: mean and median of both RMS errors, and how often ``reference`` wins.
 
-    Parameters
-    ----------
-    df : DataFrame
-        Rows of :func:`run_monte_carlo`.
-    reference : str
-        The method the others are compared with (default ``adaptive``).
-
-    Returns
-    -------
-    DataFrame
-        One row per (family, method), then (with several families) an ``all`` family:
-        ``n``, ``failed``, mean and median heading (deg) and bias (deg/s) RMS,
-        ``pairs`` (cases both ran), ``wins`` (``reference`` lower in both RMS) and
-        ``better_mean``.
+    One row per (family, method) of the rows of :func:`run_monte_carlo`, then an ``all`` family
+    with several families (the columns: docs/evaluation.md, section "Monte Carlo over scenario families").
     """
     metrics = ["heading_rms_deg", "bias_rms_dps"]
     missing = [c for c in ("family", "seed", "method", *metrics, "status") if c not in df.columns]
@@ -579,22 +391,10 @@ def summarise(df: pd.DataFrame, reference: str = REFERENCE_METHOD) -> pd.DataFra
 
 
 def markdown(summary: pd.DataFrame, *, tuned_on: str | None = None, floatfmt: str = ".4g") -> str:
-    """Render :func:`summarise` as GitHub Markdown, with a legend.
+    """:func:`summarise` as GitHub Markdown with a legend, no trailing newline.
 
-    Parameters
-    ----------
-    summary : DataFrame
-        Output of :func:`summarise`.
-    tuned_on : str, optional
-        The family the settings were tuned on: it gets its own table, and the other
-        families (the settings frozen) theirs, so both are reported.
-    floatfmt : str
-        :func:`format` spec of the numbers.
-
-    Returns
-    -------
-    str
-        Markdown, no trailing newline.
+    ``tuned_on`` names the family the settings were tuned on: it gets a table apart from the
+    others'; ``floatfmt`` is the :func:`format` spec of the numbers.
     """
     reference = summary.attrs.get("reference", REFERENCE_METHOD)
     table = summary.copy()

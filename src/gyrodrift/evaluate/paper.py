@@ -1,55 +1,36 @@
 """Every experiment of the paper (Section 4, Table 2, Figures 1–11), regenerated on simulated data.
 
-``gyrodrift paper -o DIR`` runs them with default settings and writes ``DIR/table2.md``
-(our numbers beside the paper's), ``DIR/results.json`` (every number) and the figures.
-
-The experiments
----------------
-``static``
-    The motionless heating run (23 → 58 degC and back, 3 h): Figs. 1–4, Table 2 row 1.
-``static-outages``
-    The same run with aiding stopped in three windows of 300, 300 and 600 s. The paper
-    "makes the algorithms not work" there, so the compass is removed in those windows
-    (``no_compass`` outages): Fig. 5, Table 2 row 2.
-``static-interference``
-    Not in the paper: the same windows with the compass *disturbed* instead of
-    removed (the simulator's interference), so the gates must find them.
-``vehicle``
-    A car on rectangular loops, 26 → 37 degC, against a fibre-optic-gyro reference:
-    Figs. 7–9, Table 2 row 3.
-``allan``
-    Allan deviation of the raw and compensated static rate: Fig. 6.
-``scale-factor``
-    The heating run with a full turn every 2 min, on a gyro whose scale factor varies
-    with temperature: drift compensation, then a fixed and the adaptive scale factor of
-    :mod:`gyrodrift.scale_factor` (:func:`scale_factor_experiment`): Figs. 10 and 11.
-
-The poly3 baseline is fitted on a separate simulated heating run of the same device
-(``calibration`` scenario, another seed).
-
-Heading errors are drifts: the reference is aligned to each output's first heading
-(the gyro heading starts at the compass, whose own error at that moment would
-otherwise be counted as a constant offset for every method alike).
+``gyrodrift paper -o DIR`` writes ``table2.md``, ``results.json`` and the figures. The
+experiments, the claims checked and the outputs: docs/evaluation.md, section "The paper's
+experiments".
 """
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from gyrodrift._version import __version__
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.conventions import REF_HEADING, TEMP, T, wrap_360
+from gyrodrift.errors import ConfigError
+from gyrodrift.evaluate import plotbase, plots
+from gyrodrift.evaluate.allan import allan_deviation, noise_terms
 from gyrodrift.evaluate.compare import METHODS, run_methods
 from gyrodrift.evaluate.metrics import (
     bias_error,
     error_stats,
     heading_error_deg,
     heading_error_stats,
+    markdown_table,
     paper_table2,
 )
+from gyrodrift.evaluate.report import write_report
 from gyrodrift.fusion import FusionConfig
 from gyrodrift.scale_factor import ScaleFactorConfig, estimate_scale_factor, heading_error, integrate_heading
 from gyrodrift.scale_factor.batch import heading_anchor
@@ -67,30 +48,13 @@ OURS_TO_PAPER = {"mlr": "MLR", "kf": "KF", "lsm": "Modified LSM", "stkf": "Adapt
 
 @dataclass(frozen=True, kw_only=True)
 class PaperSettings:
-    """What to run.
+    """What to run (the defaults: docs/evaluation.md, section "The paper's experiments")."""
 
-    Attributes
-    ----------
-    seed : int
-        Seed of every simulated run (the calibration run uses ``seed + 1000``).
-    fs_hz : float
-        Gyro sample rate of the simulated runs, Hz.
-    duration_scale : float
-        Multiplies every scenario's default duration (0.1 for a quick check).
-    methods : tuple of str
-        Methods to compare (see :mod:`gyrodrift.evaluate.compare`); by default every method but
-        ``smoothed`` and ``fusion-offset`` (not in the paper; the Monte Carlo has both).
-    config : CompensatorConfig
-        Compensator settings shared by every method. The default pins the paper's
-        estimator (``stkf``, with the fused-heading settings that suit it), whatever the
-        package default is: the measurements MLR fits are then the paper's too.
-    """
-
-    seed: int = 1
+    seed: int = 1  # of every simulated run (the calibration run's is seed + 1000)
     fs_hz: float = 10.0
-    duration_scale: float = 1.0
+    duration_scale: float = 1.0  # times every scenario's default length
     methods: tuple[str, ...] = tuple(m for m in METHODS if m not in ("smoothed", "fusion-offset"))
-    config: CompensatorConfig = field(
+    config: CompensatorConfig = field(  # the paper's estimator, whatever the package default
         default_factory=lambda: CompensatorConfig(estimator="stkf", fusion=FusionConfig.tolerant()))
 
 
@@ -105,7 +69,7 @@ class PaperRun:
 
 
 def aligned(out: pd.DataFrame) -> pd.DataFrame:
-    """A copy whose ``ref_heading`` starts where the output's heading starts (module notes)."""
+    """A copy whose ``ref_heading`` starts where the output's heading starts (heading errors are drifts)."""
     out = out.copy()
     e0 = float(heading_error_deg(out["heading"].iloc[0], out[REF_HEADING].iloc[0]))
     out[REF_HEADING] = wrap_360(out[REF_HEADING].to_numpy() + e0)
@@ -122,7 +86,7 @@ def _blank_windows(log: pd.DataFrame, windows) -> pd.DataFrame:
 
 
 def run_paper(settings: PaperSettings = PaperSettings(), progress=None) -> dict[str, PaperRun]:
-    """Run every experiment (module notes); ``progress(name)`` is called before each."""
+    """Run every experiment of the paper but the scale factor's; ``progress(name)`` is called before each."""
     s = settings
     say = progress or (lambda name: None)
 
@@ -156,13 +120,8 @@ def _heading_stats(out):
 
 
 def table2_comparison(runs: dict[str, PaperRun]) -> dict[str, pd.DataFrame]:
-    """Table 2, ours beside the paper's, one DataFrame per row group.
-
-    Keys ``static``, ``static_interference`` (from the ``static-outages`` run: the
-    paper's outages) and ``dynamic``; rows are ``mean`` and ``variance`` for each of
-    ``paper`` and ``ours``; columns are the paper's four methods, then our extra
-    methods (``stkf-s1``, ``poly3``, ``oracle``, no paper value).
-    """
+    """Table 2, ours beside the paper's: one DataFrame per row group (``static``, ``static_interference``,
+    ``dynamic``), rows (source, statistic), a column per method."""
     groups = {"static": ("static", _bias_stats), "static_interference": ("static-outages", _bias_stats),
               "dynamic": ("vehicle", _heading_stats)}
     tables = {}
@@ -221,8 +180,7 @@ def same_size(paper: float, ours: float) -> bool:
 
 
 def check_claims(runs: dict[str, PaperRun], allan_terms: dict | None = None) -> list[Claim]:
-    """The paper's quantitative claims about Figs. 4, 5, 9, Table 2 (and Fig. 6 with
-    ``allan_terms``, the output of :func:`allan_static`), on our runs."""
+    """The paper's claims about Figs. 4, 5, 9, Table 2 (and Fig. 6 with ``allan_terms`` of :func:`allan_static`)."""
     claims = []
     static, outages, vehicle = (runs[k].outputs for k in ("static", "static-outages", "vehicle"))
 
@@ -282,14 +240,13 @@ def check_claims(runs: dict[str, PaperRun], allan_terms: dict | None = None) -> 
 
 
 def _adev_at(result, tau_s: float) -> float:
-    """Allan deviation at the computed tau nearest to ``tau_s`` (log distance)."""
+    """Allan deviation at the computed tau nearest to ``tau_s`` in log tau."""
     i = int(np.argmin(np.abs(np.log(result.tau_s / tau_s))))
     return float(result.adev[i])
 
 
 def allan_claims(allan: dict) -> list[Claim]:
-    """Fig. 6: compensation removes the rate ramp / long-tau growth; the adaptive algorithm and
-    KF are alike; a bump near the 10-s update interval remains (compared with the oracle)."""
+    """The paper's claims about Fig. 6: the long-tau growth removed, stkf and kf alike, the 10-s bump kept."""
     claims = []
     curves = {k: v[0] for k, v in allan.items()}
     terms = {k: v[1] for k, v in allan.items()}
@@ -316,13 +273,7 @@ def allan_claims(allan: dict) -> list[Claim]:
 
 
 def allan_static(run: PaperRun, fs_hz: float, methods=("stkf", "kf", "mlr", "oracle")) -> dict:
-    """Allan deviation of the raw and compensated rate of a motionless run (Fig. 6).
-
-    Returns ``{label: (AllanResult, NoiseTerms)}``; the true rate is 0, so the rate
-    itself is its error.
-    """
-    from gyrodrift.evaluate.allan import allan_deviation, noise_terms
-
+    """``{label: (AllanResult, NoiseTerms)}`` of the raw and compensated rate of a motionless run (Fig. 6)."""
     series = {"raw": run.log["gyro_z"].to_numpy(float)}
     series.update({m: run.outputs[m]["rate_z"].to_numpy(float) for m in methods if m in run.outputs})
     curves = {}
@@ -340,9 +291,6 @@ def _term(term, scale=1.0, unit=""):
 
 def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict, settings: PaperSettings) -> str:
     """``table2.md``: Table 2 ours beside the paper's, the claims, the Allan noise terms."""
-    from gyrodrift._version import __version__
-    from gyrodrift.evaluate.metrics import markdown_table
-
     lines = [
         "# The paper's experiments, regenerated",
         "",
@@ -382,8 +330,6 @@ def report_markdown(runs: dict[str, PaperRun], claims: list[Claim], allan: dict,
 
 def results_json(runs: dict[str, PaperRun], claims: list[Claim], allan: dict) -> dict:
     """Every number of the run, JSON-able."""
-    from dataclasses import asdict
-
     out = {"table2": {}, "envelopes": {}, "claims": [asdict(c) for c in claims], "allan": {}}
     for kind, df in table2_comparison(runs).items():
         out["table2"][kind] = {f"{src}:{stat}": {c: (None if pd.isna(v) else float(v)) for c, v in row.items()}
@@ -402,10 +348,6 @@ def results_json(runs: dict[str, PaperRun], claims: list[Claim], allan: dict) ->
 
 def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
     """PNG figures corresponding to the paper's Figures 1–9; returns the paths written."""
-    from pathlib import Path
-
-    from gyrodrift.evaluate import plotbase, plots
-
     out_dir = Path(out_dir)
     static, outages, vehicle = runs["static"], runs["static-outages"], runs["vehicle"]
     ours = "stkf" if "stkf" in static.outputs else next(iter(static.outputs))
@@ -436,13 +378,11 @@ def write_figures(out_dir, runs: dict[str, PaperRun], allan: dict) -> list:
 
 
 def _rms(x) -> float:
-    """Root mean square of ``x`` (NaN when empty)."""
     x = np.asarray(x, dtype=float)
     return float(np.sqrt(np.mean(np.square(x)))) if x.size else math.nan
 
 
 def _max_abs(x) -> float:
-    """Largest ``|x|`` (NaN when empty)."""
     x = np.asarray(x, dtype=float)
     return float(np.max(np.abs(x))) if x.size else math.nan
 
@@ -458,7 +398,7 @@ def scale_factor_experiment(
     compensator_config=None,
     causal: bool = False,
 ) -> dict:
-    """Section 4.3 on simulated data: drift compensation, then fixed and adaptive SF.
+    """Section 4.3 on simulated data: drift compensation, then the fixed and the adaptive scale factor.
 
     Parameters
     ----------
@@ -469,46 +409,19 @@ def scale_factor_experiment(
     fs_hz : float
         Gyro sample rate, Hz.
     device : DeviceModel, optional
-        Gyro model; scale-factor coefficients left ``None`` take the scenario's
-        (about 3 % over 23–58 degC).
+        Gyro model; scale-factor coefficients left ``None`` take the scenario's.
     compass : CompassModel, optional
     config : ScaleFactorConfig, optional
     compensator_config : CompensatorConfig, optional
         Settings of the drift compensator.
     causal : bool
-        Use the causal pass (``estimate_scale_factor(..., causal=True)``, what
-        :class:`gyrodrift.scale_factor.ScaleFactorTracker` computes online) instead of
-        the default one.
+        Use the causal pass of :func:`gyrodrift.scale_factor.estimate_scale_factor`.
 
     Returns
     -------
     dict
-        ``log`` (simulated), ``out`` (compensated), ``sf``
-        (:func:`gyrodrift.scale_factor.estimate_scale_factor`), ``turns`` (the rotation
-        measurements); ``fig10``: ``t`` (s), ``temp`` (degC),
-        ``sf_ideal`` (true SF), ``sf_fixed``, ``sf_adaptive`` (unitless); ``fig11``:
-        ``t`` (s) and the heading errors against the reference ``err_none``,
-        ``err_fixed``, ``err_adaptive`` and ``err_ideal`` (compensated with the true
-        SF: what the drift compensation alone leaves), deg; ``summary``:
-
-        ``heading_rms_deg``/``heading_max_deg`` (none/fixed/adaptive/ideal, whole
-        run), ``sf_heading_rms_deg``/``sf_heading_max_deg`` (heading minus the ideal
-        heading: the SF's share alone, as the open-loop drift residual cancels),
-        ``sf_rms``/``sf_max`` (SF error after the first update), ``turns``,
-        ``sf_updates``, ``sf_fixed``; and ``config``.
-
-    Examples
-    --------
-    The 3-h experiment at 10 Hz (about a second):
-
-    >>> res = scale_factor_experiment(seed=0, fs_hz=10.0)
-    >>> sorted(res)
-    ['config', 'fig10', 'fig11', 'log', 'out', 'sf', 'summary', 'turns']
-    >>> res["summary"]["sf_rms"]["adaptive"] < 1e-3 < res["summary"]["sf_rms"]["fixed"]
-    True
-    >>> part = res["summary"]["sf_heading_rms_deg"]
-    >>> bool(part["adaptive"] < part["fixed"] < part["none"])
-    True
+        ``log``, ``out``, ``sf``, ``turns``, ``fig10``, ``fig11``, ``summary`` and ``config``
+        (docs/evaluation.md, section "The paper's experiments").
     """
     config = config or ScaleFactorConfig()
     log = simulate(
@@ -573,8 +486,6 @@ def scale_factor_experiment(
 
 def scale_factor_run(settings: PaperSettings) -> dict:
     """The scale-factor simulation of Section 4.3 (Figs. 10 and 11)."""
-    from gyrodrift.simulate import DEFAULT_DURATION_S
-
     return scale_factor_experiment(
         seed=settings.seed, duration_s=DEFAULT_DURATION_S["scale-factor"] * settings.duration_scale,
         fs_hz=settings.fs_hz, compensator_config=settings.config,
@@ -582,7 +493,7 @@ def scale_factor_run(settings: PaperSettings) -> dict:
 
 
 def scale_factor_claims(sf: dict) -> list[Claim]:
-    """Fig. 10/11 claims: the adaptive SF follows the ideal one and gives the smallest heading error."""
+    """The paper's claims about Figs. 10 and 11: the adaptive SF follows the ideal one, with the least error."""
     s = sf["summary"]
     rms = s["sf_rms"]
     part = s["sf_heading_rms_deg"]
@@ -602,21 +513,14 @@ def scale_factor_claims(sf: dict) -> list[Claim]:
 
 def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=None, figures: bool = True) -> list:
     """Run every experiment and write ``table2.md``, ``results.json`` and the figures."""
-    import json
-    from pathlib import Path
-
-    from gyrodrift.errors import ConfigError
-    from gyrodrift.evaluate.report import write_report
-
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
         raise ConfigError(f"{out_dir}: output folder does not exist; create it first")
-    runs = run_paper(settings, progress=progress)
-    if progress:
-        progress("Allan deviation")
+    say = progress or (lambda step: None)
+    runs = run_paper(settings, progress=say)
+    say("Allan deviation")
     allan = allan_static(runs["static"], settings.fs_hz)
-    if progress:
-        progress("scale factor")
+    say("scale factor")
     sf = scale_factor_run(settings)
     claims = check_claims(runs, allan) + scale_factor_claims(sf)
     write_report(out_dir / "table2.md", report_markdown(runs, claims, allan, settings))
@@ -625,11 +529,8 @@ def write_paper(out_dir, settings: PaperSettings = PaperSettings(), *, progress=
     write_report(out_dir / "results.json", json.dumps(numbers, indent=1))
     written = [out_dir / "table2.md", out_dir / "results.json"]
     if figures:
-        if progress:
-            progress("figures")
+        say("figures")
         written += write_figures(out_dir, runs, allan)
-        from gyrodrift.evaluate import plotbase, plots
-
         path = out_dir / "fig10_11_scale_factor.png"
         plotbase.save_png(plots.fig_scale_factor(sf["fig10"], sf["fig11"]), path)
         written.append(path)

@@ -1,9 +1,6 @@
 """The canvas of gyrodrift's figures: matplotlib on demand, new Agg figures, time axes,
-min/max envelopes of long series, robust limits, and PNG output.
-
-Long series are drawn as a min/max envelope (:func:`minmax_decimate`): at most
-:data:`MAX_POINTS` points per line, keeping every spike that the full series has. Time
-axes run from the first row, in s, min (logs longer than 10 min) or h (longer than 2 h).
+min/max envelopes of long series, robust limits, and PNG output (docs/evaluation.md, section
+"Figures").
 """
 
 from __future__ import annotations
@@ -63,32 +60,9 @@ def float_column(table: pd.DataFrame, name: str) -> np.ndarray:
 
 
 def minmax_decimate(x, y, max_points: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
-    """Reduce a long series to at most ``max_points`` points by a min/max envelope.
+    """``(x, y)`` reduced to at most ``max_points`` points by a min/max envelope (the input when shorter).
 
-    The series is cut into equal bins of consecutive samples; each bin keeps its
-    smallest and its largest value, in time order, so the drawn line covers the
-    same band as the full series and no spike is lost.
-
-    Parameters
-    ----------
-    x, y : (N,) array_like
-        Abscissa (e.g. time) and values; NaN values are kept only where a whole
-        bin is NaN (a gap in the line).
-    max_points : int
-        Largest number of points returned (at least 2).
-
-    Returns
-    -------
-    x, y : ndarray
-        The input itself when N <= ``max_points``, else the envelope points.
-
-    Examples
-    --------
-    >>> x = np.arange(100_000.0)
-    >>> y = np.zeros_like(x); y[54_321] = 5.0
-    >>> xd, yd = minmax_decimate(x, y, 1000)
-    >>> len(xd) <= 1000, float(yd.max()), float(xd[np.argmax(yd)])
-    (True, 5.0, 54321.0)
+    Each bin of consecutive samples keeps its smallest and largest value, so no spike is lost.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -111,13 +85,7 @@ def minmax_decimate(x, y, max_points: int = MAX_POINTS) -> tuple[np.ndarray, np.
 
 
 def time_axis(t_s) -> tuple[np.ndarray, str]:
-    """Time from the first sample in s, min or h, and the matching axis label.
-
-    Minutes for spans longer than 10 min, hours for spans longer than 2 h.
-
-    >>> time_axis([0.0, 1800.0])[1]
-    'time from start (min)'
-    """
+    """Time from the first sample in s, min (spans over 10 min) or h (over 2 h), and the axis label."""
     t = np.asarray(t_s, dtype=float)
     rel = t - t[0] if t.size else t
     span = float(rel[-1]) if t.size else 0.0
@@ -145,8 +113,7 @@ def plot_line(ax, x, y, **kwargs):
 
 
 def robust_limits(core, background, max_ratio: float = 6.0) -> tuple[float, float] | None:
-    """y limits covering ``core`` fully and ``background`` robustly (1–99 %), not wider than
-    ``max_ratio`` times the core span (so a moving log's turns don't squash the drift)."""
+    """y limits covering ``core`` fully and ``background`` robustly (1–99 %), at most ``max_ratio`` core spans."""
     core = np.concatenate([np.asarray(c, dtype=float).ravel() for c in core]) if core else np.array([])
     core = core[np.isfinite(core)]
     if core.size == 0:
@@ -182,8 +149,7 @@ def unwrap_deg(deg: np.ndarray) -> np.ndarray:
 
 
 def align_turns(unwrapped: np.ndarray, anchor: np.ndarray) -> np.ndarray:
-    """Shift an unwrapped heading by whole turns to lie within 180 deg of ``anchor`` at
-    their first common finite row."""
+    """Shift an unwrapped heading by whole turns to within 180 deg of ``anchor`` at their first common row."""
     both = np.flatnonzero(np.isfinite(unwrapped) & np.isfinite(anchor))
     if both.size == 0:
         return unwrapped
@@ -204,22 +170,11 @@ def png_base64(fig, *, dpi: float = 100) -> str:
 
 
 def save_png(fig, path, *, dpi: float = 100) -> None:
-    """Write the figure as PNG, atomically.
-
-    The image goes to a hidden temporary file in the destination folder, which then
-    replaces ``path`` in one step (:func:`os.replace`): no reader sees a partial file
-    and an existing ``path`` is kept if rendering fails.
+    """Write the figure as PNG, atomically (docs/output_files.md, section "Atomic outputs").
 
     Raises
     ------
     ConfigError
         The destination folder does not exist, ``path`` is a folder, or writing fails.
     """
-    path = Path(path)
-    data = _png_bytes(fig, dpi)
-    _atomic_write(path, data)
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    """Write bytes to ``path`` atomically."""
-    write_bytes_atomic(path, data)
+    write_bytes_atomic(Path(path), _png_bytes(fig, dpi))

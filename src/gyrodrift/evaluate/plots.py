@@ -1,10 +1,7 @@
-"""Figures of a compensated log, after Figures 1–9 of Feng, Li, Zhang (Sensors 2015).
+"""Figures of a compensated log, after Figures 1–11 of Feng, Li, Zhang (Sensors 2015).
 
-Every ``fig_*`` function takes output tables (or arrays) and returns a new
-:class:`matplotlib.figure.Figure` drawn with the Agg renderer, without pyplot: the
-caller owns the figure (:func:`gyrodrift.evaluate.plotbase.save_png`,
-:func:`gyrodrift.evaluate.plotbase.png_base64`). matplotlib is optional:
-``pip install 'gyrodrift[plot]'``.
+Each ``fig_*`` function returns a new matplotlib Figure the caller owns; what each draws:
+docs/evaluation.md, section "Figures".
 """
 
 from __future__ import annotations
@@ -15,10 +12,12 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from gyrodrift.calibrate import BIN_WIDTH_C
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import ConfigError
 from gyrodrift.evaluate.allan import BIAS_INSTABILITY_FACTOR
+from gyrodrift.evaluate.compare import CAUSAL, method_label
 from gyrodrift.evaluate.metrics import heading_error_deg
 from gyrodrift.evaluate.plotbase import (
     MAX_POINTS,
@@ -35,6 +34,7 @@ from gyrodrift.evaluate.plotbase import (
     true_runs,
     unwrap_deg,
 )
+from gyrodrift.model import temp_rate
 
 __all__ = [
     "GATE_COLORS",
@@ -60,8 +60,7 @@ GATE_COLORS = {
     "interference": "#d62728",
 }
 
-#: Line colour of each method (the paper's: adaptive blue, KF red, MLR green, LSM black; the paper's
-#: adaptive filter is ``stkf`` here, and gyrodrift's default estimator ``adaptive`` is magenta).
+#: Line colour of each method (the paper's, and magenta for gyrodrift's default estimator).
 METHOD_COLORS = {
     "adaptive": "#c51b7d",
     "stkf": "#1f4fd6",
@@ -82,22 +81,13 @@ def _method_color(name: str, index: int) -> str:
     return METHOD_COLORS.get(name, _EXTRA_COLORS[index % len(_EXTRA_COLORS)])
 
 
-def _method_label(name: str) -> str:
-    """A method's legend name: the default estimator's says so (:func:`gyrodrift.evaluate.compare.method_label`)."""
-    from gyrodrift.evaluate.compare import method_label
-
-    return method_label(name)
-
-
 def _check_methods(out_by_method: Mapping[str, pd.DataFrame], what: str) -> None:
     if not out_by_method:
         raise ConfigError(f"{what} needs at least one method's output table")
 
 
 def _labelled(fig, ax, ylabel: str, xlabel: str, title: str, n: int, legend_at: str, **legend):
-    """``fig`` with its one axes ``ax`` labelled: axis labels, title, a legend at ``legend_at``
-    (more of :meth:`matplotlib.axes.Axes.legend`'s keywords in ``legend``) and the note of an
-    envelope of ``n`` points (:func:`~gyrodrift.evaluate.plotbase.envelope_note`)."""
+    """``fig`` with its one axes labelled, a legend at ``legend_at`` and the envelope note of ``n`` points."""
     ax.set_ylabel(ylabel)
     ax.set_xlabel(xlabel)
     ax.set_title(title)
@@ -110,28 +100,13 @@ def _labelled(fig, ax, ylabel: str, xlabel: str, title: str, n: int, legend_at: 
 
 
 def fig_temperature(out: pd.DataFrame):
-    """Temperature and its rate of change over time (paper Fig. 1a and 7).
-
-    Parameters
-    ----------
-    out : DataFrame
-        An output table (``t``, ``temp``, ``temp_rate``) or an input log (``t``,
-        ``temp``); without ``temp_rate`` T' is computed as the compensator does
-        (:func:`gyrodrift.model.temp_rate`, default settings).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Two stacked axes: temperature (degC) and T' (degC/s).
-    """
+    """Temperature and its rate of change T' over time (paper Figs. 1a and 7), from an output table or a log."""
     need_columns(out, ("t", "temp"), "fig_temperature")
     t = float_column(out, "t")
     temp = float_column(out, "temp")
     if "temp_rate" in out.columns:
         rate = float_column(out, "temp_rate")
     else:
-        from gyrodrift.model import temp_rate
-
         rate = temp_rate(t, pd.Series(temp).ffill().bfill().to_numpy())
     x, xlabel = time_axis(t)
     fig, (ax_t, ax_r) = new_figure(4.8, 2)
@@ -147,22 +122,7 @@ def fig_temperature(out: pd.DataFrame):
 
 
 def fig_rates(out: pd.DataFrame, *, method: str | None = None):
-    """Raw and compensated angular rate (paper Fig. 3).
-
-    Parameters
-    ----------
-    out : DataFrame
-        Output table with ``t``, ``gyro_z`` (raw input, deg/s) and ``rate_z``
-        (compensated, deg/s).
-    method : str, optional
-        Method name for the legend.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One axes with two lines; each line has at most :data:`MAX_POINTS` points
-        (min/max envelope of the full series, so peaks are kept).
-    """
+    """Raw ``gyro_z`` and compensated ``rate_z`` of an output table (paper Fig. 3); ``method`` names it."""
     need_columns(out, ("t", "gyro_z", "rate_z"), "fig_rates")
     t = float_column(out, "t")
     x, xlabel = time_axis(t)
@@ -175,23 +135,7 @@ def fig_rates(out: pd.DataFrame, *, method: str | None = None):
 
 
 def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
-    """Estimated drift of each method against the true drift (paper Fig. 2).
-
-    Parameters
-    ----------
-    out_by_method : mapping of str to DataFrame
-        Output table per method (same log). The raw ``gyro_z`` and, when present,
-        ``true_bias_z`` are taken from the first table. The ``oracle`` method is not
-        drawn when the truth is (its bias is the truth). The default estimator's
-        line is labelled "adaptive (default)".
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One axes: raw rate (faint), true drift (black dashed) and one ``bias_z``
-        line per method, deg/s. The y range follows the drift lines; a moving
-        log's turns in the raw rate are clipped.
-    """
+    """Each method's ``bias_z`` against the true drift (paper Fig. 2); raw rate and truth from the first table."""
     _check_methods(out_by_method, "fig_bias")
     first = next(iter(out_by_method.values()))
     need_columns(first, ("t", "gyro_z"), "fig_bias")
@@ -213,7 +157,7 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
         bias = float_column(out, "bias_z")
         core.append(bias)
         xm = time_axis(float_column(out, "t"))[0]
-        plot_line(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{_method_label(name)} bias_z", zorder=2)
+        plot_line(ax, xm, bias, color=_method_color(name, i), lw=1.1, label=f"{method_label(name)} bias_z", zorder=2)
     limits = robust_limits(core, raw)
     if limits is not None:
         ax.set_ylim(*limits)
@@ -222,23 +166,7 @@ def fig_bias(out_by_method: Mapping[str, pd.DataFrame]):
 
 
 def fig_params(out: pd.DataFrame, *, method: str | None = None):
-    """Drift-model parameters a, b, c over time, with the gated intervals shaded.
-
-    Parameters
-    ----------
-    out : DataFrame
-        Output table with ``t``, ``a``, ``b``, ``c``, ``updated`` and ``gate_reason``
-        (an older table's ``update`` is read as ``updated``, with a FutureWarning).
-    method : str, optional
-        Method name for the title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Three stacked axes: a (deg/s/degC), b (deg/degC), c (deg/s). Refused rows are
-        shaded by reason (:data:`GATE_COLORS`, ``gid`` ``"gate-<reason>"``); updates
-        are dots.
-    """
+    """Drift-model parameters a, b, c of an output table over time, updates as dots, refused rows shaded."""
     need_columns(out, ("t", "a", "b", "c", "gate_reason"), "fig_params")
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -286,26 +214,12 @@ def _shade(ax, x: np.ndarray, mask: np.ndarray, color: str, gid: str) -> None:
 
 
 def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping[str, bool] | None = None):
-    """Heading error of each method against ``ref_heading`` (paper Figs. 4, 5, 9).
+    """Each method's wrapped heading error against ``ref_heading`` (paper Figs. 4, 5, 9), non-causal ones dashed.
 
-    Parameters
-    ----------
-    out_by_method : mapping of str to DataFrame
-        Output table per method, each with ``t``, ``heading`` and ``ref_heading``.
-    causal : mapping of str to bool, optional
-        Whether each method is causal (default :data:`gyrodrift.evaluate.compare.CAUSAL`);
-        non-causal methods are dashed and marked "(non-causal)" in the legend;
-        the default estimator is labelled "adaptive (default)".
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One axes, one line per method: ``heading − ref_heading`` wrapped to
-        [−180, 180), deg.
+    ``causal`` says which methods are causal (default :data:`gyrodrift.evaluate.compare.CAUSAL`).
     """
     _check_methods(out_by_method, "fig_heading_error")
-    if causal is None:
-        from gyrodrift.evaluate.compare import CAUSAL as causal
+    causal = CAUSAL if causal is None else causal
     fig, (ax,) = new_figure(4.0)
     xlabel = "time"
     n = 0
@@ -316,7 +230,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
         n = max(n, t.size)
         err = heading_error_deg(float_column(out, "heading"), float_column(out, REF_HEADING))
         live = causal.get(name, True)
-        label = _method_label(name) if live else f"{_method_label(name)} (non-causal)"
+        label = method_label(name) if live else f"{method_label(name)} (non-causal)"
         plot_line(ax, x, err, color=_method_color(name, i), lw=1.0, ls="-" if live else "--", label=label)
     ax.axhline(0.0, color="#555555", lw=0.6)
     return _labelled(fig, ax, "heading error (deg)", xlabel, "Heading error against the reference heading", n,
@@ -324,22 +238,7 @@ def fig_heading_error(out_by_method: Mapping[str, pd.DataFrame], causal: Mapping
 
 
 def fig_heading(out: pd.DataFrame, *, method: str | None = None):
-    """Compass heading, compensated gyro heading and reference heading, unwrapped (paper Fig. 8).
-
-    Parameters
-    ----------
-    out : DataFrame
-        Output table with ``t``, ``heading`` and ``compass_heading``; ``ref_heading``
-        is drawn when present.
-    method : str, optional
-        Method name for the legend.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One axes, deg. Each heading is unwrapped (no jumps at 0/360) and shifted by
-        whole turns to start within 180 deg of the reference (or the gyro heading).
-    """
+    """Compass, compensated gyro and (when present) reference heading, unwrapped (paper Fig. 8)."""
     need_columns(out, ("t", "heading", "compass_heading"), "fig_heading")
     t = float_column(out, "t")
     x, xlabel = time_axis(t)
@@ -362,23 +261,9 @@ def fig_heading(out: pd.DataFrame, *, method: str | None = None):
 
 
 def fig_allan(curves: Mapping[str, object], terms: Mapping[str, object] | None = None):
-    """Allan deviation curves with confidence bands and noise terms (paper Fig. 6).
+    """Allan deviation curves (label → AllanResult, one unit) with their bands (paper Fig. 6).
 
-    Parameters
-    ----------
-    curves : mapping of str to AllanResult
-        Label → :class:`gyrodrift.evaluate.allan.AllanResult` (e.g. raw and compensated rate
-        error), all in the same unit.
-    terms : mapping of str to NoiseTerms, optional
-        Label → :class:`gyrodrift.evaluate.allan.NoiseTerms`; each term found is marked on
-        its curve and annotated: N at τ = 1 s (circle), B at the τ of its minimum
-        (σ = 0.664 B, square), K at τ = 3 s (triangle).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One log-log axes: one line per curve (``gid`` ``"curve"``) with its
-        confidence band (shaded), term markers (``gid`` ``"term"``).
+    ``terms`` (label → NoiseTerms) marks N, B and K on the curves.
     """
     if not curves:
         raise ConfigError("fig_allan needs at least one Allan-deviation curve")
@@ -414,25 +299,7 @@ def _bin_means(temp: np.ndarray, rate: np.ndarray, temp_min: float, width: float
 
 
 def fig_calibration(log: pd.DataFrame, cal):
-    """A thermal calibration fit against its data (:func:`gyrodrift.calibrate.fit_calibration`).
-
-    Parameters
-    ----------
-    log : DataFrame
-        The still heating or cooling log the calibration was fitted on (``temp`` degC;
-        ``gyro_x``, ``gyro_y``, ``gyro_z`` deg/s for the fitted axes).
-    cal : gyrodrift.calibrate.Calibration
-        The fit.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One column per fitted axis. Top: samples, bin means and the fitted cubic
-        against temperature; bottom: bin mean minus fit, deg/s, with ± the residual
-        RMS.
-    """
-    from gyrodrift.calibrate import BIN_WIDTH_C
-
+    """A thermal calibration (:func:`gyrodrift.calibrate.fit_calibration`) against the log it was fitted on."""
     names = list(cal.axes)
     need_columns(log, ("temp", *(f"gyro_{a}" for a in names)), "fig_calibration")
     Figure, FigureCanvasAgg = require_matplotlib()
@@ -473,17 +340,8 @@ def fig_calibration(log: pd.DataFrame, cal):
 
 
 def fig_scale_factor(fig10: pd.DataFrame, fig11: pd.DataFrame):
-    """Scale factor and the heading error it causes (paper Figs. 10 and 11).
-
-    Parameters
-    ----------
-    fig10 : DataFrame
-        ``t`` (s), ``sf_ideal``, ``sf_fixed``, ``sf_adaptive`` (unitless).
-    fig11 : DataFrame
-        ``t`` (s) and heading errors (deg) ``err_none``, ``err_fixed``,
-        ``err_adaptive`` (and optionally ``err_ideal``), as returned by
-        :func:`gyrodrift.evaluate.paper.scale_factor_experiment`.
-    """
+    """Scale factor and the heading error it causes (paper Figs. 10 and 11), from the tables of
+    :func:`gyrodrift.evaluate.paper.scale_factor_experiment`."""
     need_columns(fig10, ("t", "sf_ideal", "sf_fixed", "sf_adaptive"), "fig_scale_factor")
     need_columns(fig11, ("t", "err_none", "err_fixed", "err_adaptive"), "fig_scale_factor")
     x, xlabel = time_axis(float_column(fig10, "t"))

@@ -1,34 +1,7 @@
 """A self-contained HTML report of one log compensated by several methods (``gyrodrift report``).
 
-The page holds everything inline: CSS in a ``<style>`` element, figures as base64
-PNG ``<img>`` elements (:mod:`gyrodrift.evaluate.plots`), no JavaScript and no external
-resource; a Content-Security-Policy in the page forbids loading any. It can be
-mailed or archived as one file and opened offline.
-
-Contents, top to bottom:
-
-1. what was read: file, rows, duration, sample rate, temperature range, compass
-   form, evaluation columns, methods run and methods skipped with the reason. The
-   default estimator (``adaptive``) runs first unless ``--methods`` says otherwise,
-   is named "adaptive (default)" in tables and legends, and is the method of the
-   single-method figures;
-2. the summary table, one row per method (plus the raw gyro): bias error
-   (``bias_z − true_bias_z``, deg/s) when the log has ``true_bias_z``, heading
-   error (``heading − ref_heading`` wrapped, deg) when it has ``ref_heading``,
-   filter updates and the share of rows gated per reason;
-3. figures, each with a short "how to read this" note: temperature, the thermal
-   calibration fit (``gyrodrift calibrate``'s, when the log is a still run over 5 degC
-   or more; else a note of why not), raw vs
-   compensated rate, drift estimates, drift-model parameters with the gates,
-   headings, heading error, Allan deviation of the rate error with a table of
-   noise terms. A figure the log cannot support is replaced by a one-line note
-   saying which column is missing;
-4. the gyrodrift version and every setting used.
-
-The figures and their notes: :mod:`gyrodrift.evaluate.report_figures`.
-
-matplotlib (``gyrodrift[plot]``) draws the figures and allantools
-(``gyrodrift[allan]``) computes the Allan deviation.
+What the page holds: docs/evaluation.md, section "The HTML report"; its figures and their
+notes: :mod:`gyrodrift.evaluate.report_figures`.
 """
 
 from __future__ import annotations
@@ -36,19 +9,26 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import fields, is_dataclass
+from importlib import metadata
 from pathlib import Path
 from typing import Mapping
 
 import numpy as np
 import pandas as pd
 
+from gyrodrift._atomic import write_bytes_atomic
 from gyrodrift._progress import progress_iter as _progress
 from gyrodrift._text import printable
+from gyrodrift._version import __version__
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.compensator.output import updated_column
 from gyrodrift.conventions import MAG_COLS, REF_HEADING, TRUE_BIAS_Z
 from gyrodrift.errors import GyroDriftError
+from gyrodrift.evaluate.compare import is_causal
 from gyrodrift.evaluate.compare import method_label as _label
+from gyrodrift.evaluate.metrics import bias_error, error_stats, heading_error_deg, raw_heading_deg
+from gyrodrift.evaluate.plotbase import require_matplotlib
+from gyrodrift.evaluate.plots import GATE_COLORS
 from gyrodrift.evaluate.report_figures import esc, figure_plan, html_table, render_figure
 
 __all__ = ["build_report", "write_report"]
@@ -76,12 +56,6 @@ def _duration_text(seconds: float) -> str:
     h, rest = divmod(int(round(seconds)), 3600)
     m, s = divmod(rest, 60)
     return (f"{h} h {m:02d} min {s:02d} s" if h else f"{m} min {s:02d} s") + f" ({seconds:.0f} s)"
-
-
-def _causal(name: str) -> bool:
-    from gyrodrift.evaluate.compare import CAUSAL
-
-    return CAUSAL.get(name, True)
 
 
 # ------------------------------------------------------------------ what was read
@@ -122,7 +96,7 @@ def _read_section(log, outputs, skipped, source: str) -> str:
         units.append(f"gyro unit in file {log.attrs['gyro_unit']}")
     if "frame" in log.attrs:
         units.append(f"frame {str(log.attrs['frame']).upper()}")
-    run = [f"{esc(_label(m))}" + ("" if _causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
+    run = [f"{esc(_label(m))}" + ("" if is_causal(m) else " <span class=nc>(non-causal)</span>") for m in outputs]
     rows = [
         ("file", esc(source)),
         ("rows", f"{len(log)}"),
@@ -147,8 +121,6 @@ def _read_section(log, outputs, skipped, source: str) -> str:
 
 def _raw_errors(log_like: pd.DataFrame, start_heading: float):
     """Bias error and heading error of the uncompensated gyro (None where no truth)."""
-    from gyrodrift.evaluate.metrics import heading_error_deg, raw_heading_deg
-
     bias = heading = None
     if TRUE_BIAS_Z in log_like.columns:
         bias = -log_like[TRUE_BIAS_Z].to_numpy(float)
@@ -160,8 +132,6 @@ def _raw_errors(log_like: pd.DataFrame, start_heading: float):
 
 
 def _stats(errors) -> dict | None:
-    from gyrodrift.evaluate.metrics import error_stats
-
     if errors is None:
         return None
     e = np.asarray(errors, dtype=float)
@@ -171,8 +141,6 @@ def _stats(errors) -> dict | None:
 
 
 def _summary_section(log, outputs) -> str:
-    from gyrodrift.evaluate.metrics import bias_error, heading_error_deg
-
     if not outputs:
         return '<section id="summary"><h2>Summary</h2><p class="note">No method ran: nothing to summarise.</p></section>'
     has_truth = TRUE_BIAS_Z in log.columns
@@ -182,8 +150,6 @@ def _summary_section(log, outputs) -> str:
         for r in out["gate_reason"].fillna("").astype(str).unique():
             if r and r not in reasons:
                 reasons.append(r)
-    from gyrodrift.evaluate.plots import GATE_COLORS
-
     reasons.sort(key=lambda r: list(GATE_COLORS).index(r) if r in GATE_COLORS else len(GATE_COLORS))
     header = ["method"]
     if has_truth:
@@ -217,7 +183,7 @@ def _summary_section(log, outputs) -> str:
         reason = out["gate_reason"].fillna("").astype(str)
         n = max(len(out), 1)
         share = [f"{100.0 * float((reason == r).sum()) / n:.1f} %" for r in reasons]
-        label = esc(_label(name)) + ("" if _causal(name) else " †")
+        label = esc(_label(name)) + ("" if is_causal(name) else " †")
         rows.append(
             [label] + error_cells(bias, heading)
             + [str(int(pd.to_numeric(updated_column(out, name), errors="coerce").fillna(0).sum())),
@@ -254,10 +220,6 @@ def _flatten(obj, prefix: str = ""):
 
 
 def _versions() -> list[tuple[str, str]]:
-    from importlib import metadata
-
-    from gyrodrift._version import __version__
-
     out = [("gyrodrift", __version__), ("Python", sys.version.split()[0])]
     for dist in ("numpy", "pandas", "matplotlib", "allantools"):
         try:
@@ -314,27 +276,22 @@ def build_report(
     Parameters
     ----------
     log : DataFrame
-        The input log (input contract, as read by :func:`gyrodrift.io.read_log`).
+        The input log (input contract).
     outputs : mapping of str to DataFrame
-        Method name → output table, as returned by
-        :func:`gyrodrift.evaluate.compare.run_methods`. The default estimator
-        (:data:`gyrodrift.evaluate.compare.DEFAULT_METHOD`) is the method of the
-        single-method figures; without it ``stkf``, else the first one.
+        Method name → output table (:func:`gyrodrift.evaluate.compare.run_methods`).
     skipped : mapping of str to str, optional
-        Method name → why it did not run (listed in the header).
+        Method name → why it did not run.
     title : str
         Page title and heading (control characters shown as escapes, :mod:`gyrodrift._text`).
     source : str
-        What was read (file name), shown in the header (likewise).
+        What was read (file name), shown likewise.
     config : CompensatorConfig, optional
-        Settings the methods ran with (default: the defaults), listed at the end
-        and used for the motion test of the Allan figure.
+        Settings the methods ran with (default: the defaults).
 
     Returns
     -------
     str
-        The HTML document (UTF-8 text): inline CSS, figures as base64 PNG, no
-        script and no external resource.
+        The HTML document.
 
     Raises
     ------
@@ -345,9 +302,6 @@ def build_report(
     skipped = dict(skipped or {})
     outputs = dict(outputs)
     title, source = printable(title), printable(source)  # one line each, whatever the file name holds
-    from gyrodrift._version import __version__
-    from gyrodrift.evaluate.plotbase import require_matplotlib
-
     require_matplotlib()
     plan = figure_plan(log, outputs, config)
     parts = []
@@ -387,7 +341,7 @@ def build_report(
 
 
 def write_report(path, html: str) -> None:
-    """Write the report atomically (temporary file in the same folder, then :func:`os.replace`).
+    """Write the report atomically (docs/output_files.md, section "Atomic outputs").
 
     Raises
     ------
@@ -395,6 +349,4 @@ def write_report(path, html: str) -> None:
         The folder does not exist (named in the message), ``path`` is a folder, or
         writing fails.
     """
-    from gyrodrift._atomic import write_bytes_atomic
-
     write_bytes_atomic(Path(path), html.encode("utf-8"))

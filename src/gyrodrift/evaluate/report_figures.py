@@ -1,12 +1,7 @@
 """The figures of ``gyrodrift report``: which figures a log supports, each with its note on
 how to read it, and the HTML they are embedded in.
 
-The Allan deviation is of the angular-rate *error*: the rate minus the true rate. The
-true rate is 0 on a motionless log (one whose reference heading, or else whose 1-s mean
-compensated rate, never turns), ``d(ref_heading)/dt`` on a moving log with a reference,
-and unknown otherwise (the figure is then left out). It is computed over the longest
-stretch without a time gap; time stamps that jitter are first put on an even time base
-(:func:`gyrodrift.evaluate.allan.even_rate`), and the figure's note says so.
+The Allan figure's rate error and true rate: docs/evaluation.md, section "The HTML report".
 """
 
 from __future__ import annotations
@@ -18,10 +13,14 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
+from gyrodrift.calibrate import CalibrationError, fit_calibration
 from gyrodrift.compensator import CompensatorConfig
 from gyrodrift.conventions import REF_HEADING, TRUE_BIAS_Z
+from gyrodrift.evaluate import plots
+from gyrodrift.evaluate.allan import allan_deviation, even_rate, noise_terms
 from gyrodrift.evaluate.compare import DEFAULT_METHOD
 from gyrodrift.evaluate.compare import method_label as _label
+from gyrodrift.evaluate.plotbase import png_base64
 
 __all__ = ["ALLAN_METHODS", "esc", "html_table", "main_method", "figure_plan", "render_figure"]
 
@@ -116,8 +115,6 @@ def _allan_inputs(outputs, config: CompensatorConfig) -> _AllanInput | str:
         return "no evenly sampled stretch of 3 rows or more: Allan deviation not shown"
     rows = slice(int(rows[0]), int(rows[-1]) + 1)
     tt = t[rows]
-    from gyrodrift.evaluate.allan import even_rate
-
     rates = {"raw gyro_z": base["gyro_z"].ffill().to_numpy(float)[rows] - true_rate[rows]}
     chosen = [m for m in ALLAN_METHODS if m in outputs] or [main]
     for name in chosen:
@@ -175,8 +172,6 @@ _HOW = {
 
 
 def figure_plan(log, outputs, config) -> list[_Figure]:
-    from gyrodrift.evaluate import plots
-
     main = main_method(outputs)
     first = next(iter(outputs.values()), None)
     temp_table = first if first is not None else log
@@ -215,9 +210,6 @@ def figure_plan(log, outputs, config) -> list[_Figure]:
 
 def _calibration_figure(log) -> _Figure:
     """The thermal calibration fit of the log, or a note saying why the log gives none."""
-    from gyrodrift.calibrate import CalibrationError, fit_calibration
-    from gyrodrift.evaluate import plots
-
     title = "Thermal calibration fit (gyrodrift calibrate)"
     try:
         cal = fit_calibration(log, source="this log")
@@ -236,9 +228,6 @@ def _allan_figure(outputs, config) -> _Figure:
     entry = _Figure("allan", "Allan deviation of the rate error", how)
 
     def make():
-        from gyrodrift.evaluate import plots
-        from gyrodrift.evaluate.allan import allan_deviation, noise_terms
-
         curves = {label: allan_deviation(r, inputs.fs_hz) for label, r in inputs.rates.items()}
         terms = {label: noise_terms(c) for label, c in curves.items()}
         entry.extra = _terms_table(terms)
@@ -278,8 +267,6 @@ def _terms_table(terms: Mapping[str, object]) -> str:
 
 
 def render_figure(entry: _Figure) -> str:
-    from gyrodrift.evaluate.plotbase import png_base64
-
     head = f'<section class="figure" id="fig-{entry.key}"><h2>{esc(entry.title)}</h2>'
     if entry.make is None:
         return head + f'<p class="missing">{esc(entry.missing)}</p></section>'
