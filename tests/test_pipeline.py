@@ -190,7 +190,7 @@ def test_a_log_that_cannot_fit_in_memory_is_refused_before_reading(logs, tmp_pat
 
     rows = len(pd.read_csv(logs["csv"]))
     available = rows * pipeline.IN_MEMORY_MIN_BYTES_PER_ROW // 2
-    monkeypatch.setattr(pipeline, "_available_memory_bytes", lambda: available)
+    monkeypatch.setattr(pipeline, "available_memory_bytes", lambda: available)
     monkeypatch.setattr("gyrodrift.io.read_log", lambda *a, **k: pytest.fail("read before the check"))
     out = tmp_path / "out.csv"
     with pytest.raises(GyroDriftError, match=expected) as info:
@@ -205,6 +205,6 @@ def test_a_log_that_cannot_fit_in_memory_is_refused_before_reading(logs, tmp_pat
 def test_streaming_needs_no_memory_check(logs, tmp_path, monkeypatch):
     from gyrodrift import pipeline
 
-    monkeypatch.setattr(pipeline, "_available_memory_bytes", lambda: 1)
+    monkeypatch.setattr(pipeline, "available_memory_bytes", lambda: 1)
     compensate_file(logs["csv"], tmp_path / "out.csv")  # streams: constant memory, never refused
     assert (tmp_path / "out.csv").exists()

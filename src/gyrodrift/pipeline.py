@@ -26,7 +26,7 @@ from gyrodrift.conventions import GYRO_Z, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wra
 from gyrodrift.errors import GyroDriftError
 from gyrodrift.io import ReadOptions
 
-__all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS"]
+__all__ = ["compensate_file", "describe_log", "RunStats", "CHUNK_ROWS", "available_memory_bytes"]
 
 #: Rows per chunk of the streaming path: small enough to overlap reading, compensating and writing and to bound memory.
 CHUNK_ROWS = 250_000
@@ -391,7 +391,7 @@ SF_COLUMNS = ("sf", "sf_sd", "rate_sf", "heading_sf")
 IN_MEMORY_MIN_BYTES_PER_ROW = 300
 
 
-def _available_memory_bytes() -> int | None:
+def available_memory_bytes() -> int | None:
     """``MemAvailable`` plus ``SwapFree`` of /proc/meminfo, bytes; None where there is none."""
     try:
         with open("/proc/meminfo") as f:
@@ -435,7 +435,7 @@ def _why_in_memory(scale_factor: bool, smooth: bool) -> tuple[str, str]:
 def _check_fits_in_memory(path: Path, fmt: str | None, why: str, advice: str) -> None:
     """Refuse, before reading, a table log the in-memory path cannot hold (Linux; elsewhere
     the run goes on); ``why`` it is in memory and the ``advice`` (:func:`_why_in_memory`)."""
-    rows, available = _estimated_rows(path, fmt), _available_memory_bytes()
+    rows, available = _estimated_rows(path, fmt), available_memory_bytes()
     if rows is None or available is None:
         return
     need = rows * IN_MEMORY_MIN_BYTES_PER_ROW

@@ -165,12 +165,12 @@ SIMULATE_MIN_BYTES_PER_ROW = 250
 
 def _check_simulated_rows(args) -> None:
     """Refuse, before simulating, a log that cannot fit in the memory available (Linux)."""
-    from gyrodrift.pipeline import _available_memory_bytes
+    from gyrodrift.pipeline import available_memory_bytes
     from gyrodrift.simulate import DEFAULT_DURATION_S
 
     duration_s = args.duration_s if args.duration_s is not None else DEFAULT_DURATION_S[args.scenario]
     rows = duration_s * args.fs_hz
-    available = _available_memory_bytes()
+    available = available_memory_bytes()
     if available is None or rows * SIMULATE_MIN_BYTES_PER_ROW <= available:
         return
     raise ConfigError(
