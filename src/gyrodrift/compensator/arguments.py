@@ -21,15 +21,19 @@ from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.errors import ArgumentTypeError, LogFormatError
 from gyrodrift.estimators.base import DriftEstimator
 
-__all__ = ["shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
+__all__ = ["short", "shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
            "column", "rows", "check_log", "frame_column"]
 
 
-def shown(value) -> str:
-    """A value for a message: its type and a short repr, on one line."""
+def short(value) -> str:
+    """A value for a message: its repr, shortened and on one line."""
     text = " ".join(repr(value).split())
-    text = text if len(text) <= 40 else text[:37] + "..."
-    return f"{type(value).__name__} {text}"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def shown(value) -> str:
+    """A value for a message: its type and :func:`short` repr."""
+    return f"{type(value).__name__} {short(value)}"
 
 
 def check_source(source) -> str:

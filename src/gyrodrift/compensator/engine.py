@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from gyrodrift._columns import read_only_floats
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
@@ -42,11 +43,6 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     view = a.view()
     view.flags.writeable = False
     return view
-
-
-def _input(a) -> np.ndarray:
-    """A float64, contiguous, read-only view of an input column (a copy only when needed)."""
-    return _read_only(np.ascontiguousarray(a, dtype=float))
 
 
 _NO_FIELD = _read_only(np.empty(0))
@@ -221,9 +217,9 @@ class ChunkEngine:
             heading = np.asarray(heading, dtype=float) + self.cfg.declination_deg
         if self._clock is not None:
             T = self._clock(t)
-        t, g, T, heading = (_input(a) for a in (t, g, T, heading))
-        norm = _NO_FIELD if norm is None else _input(norm)
-        dip = _NO_FIELD if dip is None else _input(dip)
+        t, g, T, heading = (read_only_floats(a) for a in (t, g, T, heading))
+        norm = _NO_FIELD if norm is None else read_only_floats(norm)
+        dip = _NO_FIELD if dip is None else read_only_floats(dip)
         if self._t0 is None:
             if not (np.isfinite(g[0]) and np.isfinite(T[0])):
                 raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")

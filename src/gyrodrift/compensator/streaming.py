@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
-from gyrodrift.compensator.arguments import check_config, check_estimator, check_source
+from gyrodrift.compensator.arguments import check_config, check_estimator, check_source, short, shown
 from gyrodrift.compensator.config import CompensatorConfig
 from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
@@ -410,12 +410,12 @@ def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
     if isinstance(value, float):  # the common case (numpy's float64 too), without the generic checks
         x = float(value)
     elif isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise GyroDriftError(f"{source}: {arg} must be a number, got {type(value).__name__} {_shown(value)}")
+        raise GyroDriftError(f"{source}: {arg} must be a number, got {shown(value)}")
     else:
         try:
             x = float(value)
         except (OverflowError, ValueError):
-            raise GyroDriftError(f"{source}: {arg} = {_shown(value)} is not a float (too large)") from None
+            raise GyroDriftError(f"{source}: {arg} = {short(value)} is not a float (too large)") from None
     limit = limits[column]
     if limit is not None and not limit.lo <= x <= limit.hi and not math.isnan(x):
         raise GyroDriftError(f"{source}: {arg}: {outside_problem(column, x, limit)}; {limit.advice}")
@@ -431,7 +431,7 @@ def _triple(source: str, arg: str, value, columns: tuple[str, ...], limits: dict
     except TypeError:
         items = None
     if items is None or len(items) != 3:
-        raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {_shown(value)}")
+        raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {short(value)}")
     return tuple(_number(source, f"{arg}[{k}]", v, c, limits) for k, (v, c) in enumerate(zip(items, columns)))
 
 
@@ -450,9 +450,3 @@ def _checked_sample(source: str, limits: dict, t_s, gyro_z_dps, temp_c, heading_
         None if gyro_x_dps is None else _number(source, "gyro_x_dps", gyro_x_dps, GYRO_X, limits),
         None if gyro_y_dps is None else _number(source, "gyro_y_dps", gyro_y_dps, GYRO_Y, limits),
     )
-
-
-def _shown(value) -> str:
-    """A value for a message: its repr, shortened and on one line."""
-    text = " ".join(repr(value).split())
-    return text if len(text) <= 40 else text[:37] + "..."
