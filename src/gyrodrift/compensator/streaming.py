@@ -30,48 +30,19 @@ class Compensator:
     """Streaming compensator: feed samples in time order, get compensated rows back.
 
     :meth:`push` returns a list of :class:`CompensatedSample`, one row per sample from the
-    first: while the initialisation window fills (``init_s``) the rows are *provisional*,
-    compensated causally with the drift model known before any measurement (the prior, or
-    the profile of a warm start), with ``bias_sd`` and ``heading_sd`` saying how little
-    that is and ``gate_reason`` ``init``. From the end of the window on, the rows are those
-    of :func:`gyrodrift.compensate` on the same data, bit for bit (the same kernels);
-    there the init window's rows are compensated with what the window taught, which a
-    stream cannot wait for. ``provisional=False`` holds the window's rows back instead and
-    returns them all at once when it ends (then every row equals the batch's), and
-    :meth:`flush` gives the rows still held when the samples end first.
+    first. While the initialisation window fills (``init_s``) the rows are *provisional*
+    (``gate_reason`` ``init``); from its end on they are those of :func:`gyrodrift.compensate`
+    on the same data, bit for bit. ``provisional=False`` holds the window's rows back and
+    returns them at once when it ends (every row then equals the batch's); :meth:`flush` gives
+    the rows still held when the samples end first.
 
-    The x and y axes (``rate_x``, ``bias_x``, ...; :mod:`gyrodrift.triad`) are compensated
-    too when the first sample gives ``gyro_x_dps``, ``gyro_y_dps`` and ``acc``, with the
-    same numbers as :func:`gyrodrift.compensate` on a log with those columns.
-
-    With ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`), every row
-    also carries ``sf``, ``sf_sd``, ``rate_sf`` and ``heading_sf`` of the online scale-factor
-    estimate (Sec. 4.3, :class:`gyrodrift.scale_factor.ScaleFactorTracker`, fed each row
-    as it is output, with the held temperature): the same numbers as
-    ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
-    fields are NaN and no work is done for them.
-
-    The front end is that of :func:`gyrodrift.compensate`
-    (:class:`gyrodrift.compensator.intake.Intake`), less what needs the whole log: the
-    magnetometer is not calibrated (``mag_calibration``; a note says so), and
-    ``temperature="auto"`` takes the column unless told :meth:`temperature_absent`.
-
-    ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
-    sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
-
-    Every sample goes to the gyro-unit check of :func:`gyrodrift.compensate`
-    (:class:`gyrodrift.gyro_units.GyroUnitCheck`): :attr:`notes` says when the gyro turns
-    about 57.3 times less or more than the compass. ``gyro_unit`` is the unit the rates were
-    read in before they were converted to deg/s (``"rad/s"`` gives the advice for that
-    unit), as for :func:`gyrodrift.compensate_arrays`.
-
-    ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
-    :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
-    to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
-    own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
-    the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
-    without a unit (epoch or whole-number milliseconds) belong to text without a stated
-    unit: :meth:`judge_times_as` asks for them (``gyrodrift stream`` does, for its text).
+    The first sample decides the x and y axes (``gyro_x_dps``, ``gyro_y_dps`` and ``acc``);
+    ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`) adds the online scale
+    factor (``sf``, ``sf_sd``, ``rate_sf``, ``heading_sf``; NaN without it). ``gyro_max_dps``
+    (deg/s) bounds the gyro as a log's rows are bounded; ``gyro_unit`` is the unit the rates
+    were read in (for the gyro-unit note), ``time_unit`` that of the times pushed (``"s"``,
+    ``"ms"``, ``"us"``, ``"ns"``). What each does, and what the front end of a stream leaves
+    out: ``docs/streaming.md`` ("The Compensator object").
 
     Examples
     --------
@@ -203,7 +174,7 @@ class Compensator:
             (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
             temperature, heading, magnetometer and accelerometer; NaN is no value and
             holds); a time that is not finite or does not increase, or a sample rate
-            above 100 kHz (class notes). The refused sample is not taken: the
+            above 100 kHz (``docs/streaming.md``). The refused sample is not taken: the
             compensator stays as it was.
         """
         if temp_c is None and self._clock:
