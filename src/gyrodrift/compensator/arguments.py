@@ -1,12 +1,6 @@
-"""The checks of the Python API's arguments, run before any compiled code sees them.
-
-:func:`gyrodrift.compensate`, :func:`gyrodrift.compensate_arrays` and
-:class:`gyrodrift.Compensator` take their arguments through these functions: an argument
-of the wrong kind is an :class:`~gyrodrift.errors.ArgumentTypeError` (a
-:class:`TypeError` too), arrays of the wrong shape or of unequal lengths a
-:class:`~gyrodrift.errors.LogFormatError`, each one line saying what is expected. The
-compiled kernels index their inputs without bounds checks, so arrays that disagree on
-the number of samples must never reach them.
+"""The checks of the Python API's arguments, run before any compiled code sees them (which
+indexes its inputs unchecked): a wrong kind is an :class:`~gyrodrift.errors.ArgumentTypeError`,
+a wrong shape or length a :class:`~gyrodrift.errors.LogFormatError`, each one line.
 """
 
 from __future__ import annotations

@@ -1,18 +1,9 @@
 """The engine: one log compensated chunk by chunk, with the same numbers whatever the chunks.
 
-:class:`ChunkEngine` is what every entry point runs: :func:`gyrodrift.compensate` (one
-chunk, the whole log), the chunked file path (:mod:`gyrodrift.pipeline`) and the
-streaming :class:`gyrodrift.Compensator` (one row at a time). It owns the state arrays
-of :mod:`gyrodrift.kernels.layout`, calls :func:`gyrodrift.kernels.loop.prepare` and
-:func:`~gyrodrift.kernels.loop.run_chunk` on each chunk, grows their ring buffers, and
-runs the initialisation once the init window is complete (its rows are held back
-until then).
-
-The estimator: one of the paper's Kalman filters (``stkf``, ``stkf-s1``, ``kf``) is
-updated inside the row loop, on its own arrays; any other estimator with the linear
-drift of eq. (2) (``lsm``, ``mlr-causal``, ``fixed``, one of the user's) is updated here,
-in Python, at the end of each update interval (``MODE_EXTERNAL``). The default estimator
-runs in :class:`gyrodrift.compensator.model_engine.ModelEngine`, a subclass.
+:class:`ChunkEngine` runs the paper's filters for every entry point, its estimator updated in
+the row loop (``stkf``, ``stkf-s1``, ``kf``) or in Python at interval ends (any other drift of
+eq. 2); the default estimator runs in the subclass
+:class:`~gyrodrift.compensator.model_engine.ModelEngine`. Design: ``docs/engine.md`` ("The engine").
 """
 
 from __future__ import annotations
@@ -49,11 +40,10 @@ _NO_FIELD = _read_only(np.empty(0))
 
 
 def compiled(dispatcher, args):
-    """The compiled function numba's ``dispatcher`` runs for ``args`` (its overload for their
-    types, which the dispatcher compiled or loaded on an earlier call with them), to be called
-    with arguments of the same types without the dispatcher typing each of them again on
-    every call (a one-row call of the streaming path); the dispatcher itself when there is
-    none (not compiled yet, or ``NUMBA_DISABLE_JIT``: a plain function)."""
+    """The compiled overload numba's ``dispatcher`` runs for the types of ``args`` (compiled or
+    loaded on an earlier call), to call without the dispatcher typing every argument again (a
+    one-row call of the streaming path); the dispatcher itself when there is none yet (or with
+    ``NUMBA_DISABLE_JIT``)."""
     overloads = getattr(dispatcher, "overloads", None)
     if overloads is None:
         return dispatcher
@@ -432,18 +422,11 @@ class ChunkEngine:
 
     # --------------------------------------------------------------- finish
     def provisional(self) -> tuple:
-        """The provisional row of the last :meth:`window_row`: compensated causally with the
-        drift model in force before any measurement (the prior, or a warm start's profile),
-        its ``bias_sd`` saying how little that is; the heading integrated from the first
-        compass sample (from 0 before one, relative), ``heading_fused`` the same from that
-        sample on (NaN before it, as the fused filter's), reason ``init``. The streaming
-        :class:`gyrodrift.Compensator` emits them so that every sample gets a row at once;
-        the engine's own rows of the window are made all the same, when it ends, and the
-        rows after it are the same as without provisional rows.
+        """The provisional row of the last :meth:`window_row`, compensated causally with the drift
+        model in force before any measurement (``docs/engine.md``, "Provisional rows").
 
-        Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as
-        :meth:`feed_row` gives them: ``out`` the N_OUT float outputs and ``codes`` the N_CODES
-        codes, in the order of :mod:`gyrodrift.kernels.layout`."""
+        Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as :meth:`feed_row`
+        gives them (the order of :mod:`gyrodrift.kernels.layout`)."""
         w = self._window
         ti, gi, Ti, hi, Tpi = w.t[-1], w.g[-1], w.T[-1], w.heading[-1], w.Tp[-1]
         if self._prov_model is None:  # nothing updates the estimator before the window ends

@@ -1,24 +1,7 @@
-"""The front end of every entry point, written once (:class:`Intake`).
-
-:func:`gyrodrift.compensate` (a whole log), the chunked file path and the streaming
-:class:`gyrodrift.Compensator` (one row at a time) drive one :class:`Intake`, which runs:
-
-1. dead magnetometer samples emptied (:class:`gyrodrift.compass.DeadField`);
-2. the tilt of a raw compass (:class:`gyrodrift.attitude.RawTilt`, decided on the first rows);
-3. the magnetometer calibration of the whole log (:mod:`gyrodrift.magcal`; a stream has none);
-4. the compass heading, field strength and dip (:func:`gyrodrift.compass.compass_columns`);
-5. the engine, built once, its ``T`` the temperature or the elapsed time (:func:`uses_clock`);
-   it adds the declination;
-6. the x and y axes of the rows out of the engine (:class:`gyrodrift.triad.TriadCompensator`,
-   decided on the first rows);
-7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
-
-Rows that come one by one also have their time base judged here, on the first ones
-(:class:`gyrodrift.io.timebase.TimeBaseWatch`, :meth:`Intake.time_stamp`); a whole log or a
-file is judged on all its time stamps before it comes in.
-
-What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
-once for it (:func:`survey`), :func:`gyrodrift.compensate` takes it from the log in memory.
+"""The front end of every entry point, written once (:class:`Intake`): dead magnetometer samples,
+the tilt and calibration of a raw compass, the compass columns, the engine, the x and y axes, the
+gyro-unit check, the time base of rows that come one by one, and the notes. Its stages and
+:class:`WholeLog`: ``docs/engine.md`` ("The front end").
 """
 
 from __future__ import annotations
@@ -126,7 +109,7 @@ def survey(chunks, config, source: str) -> WholeLog:
 
 
 class Intake:
-    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
+    """The front end of one log (``docs/engine.md``): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
 
     Parameters
     ----------
@@ -207,7 +190,7 @@ class Intake:
     # ------------------------------------------------------------------ chunks
     def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None):
         """Heading (deg, NaN = no sample), field strength and dip (None without a raw
-        compass) of these rows: stages 1 to 4 of the module notes."""
+        compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end")."""
         n = len(t)
         if heading is not None and not self._heading_seen:
             self._heading_seen = bool(np.isfinite(heading).any())

@@ -1,14 +1,8 @@
 """The engine of the default estimator's model: :class:`ModelEngine`, and :func:`make_engine`.
 
-:class:`ModelEngine` is a :class:`~gyrodrift.compensator.engine.ChunkEngine` whose rows run
-through the model's row loop (:func:`gyrodrift.kernels.evloop.run`) instead of the paper's
-interval loop: the same chunked, resumable feeding, the same held init window (its rows
-come out when it is complete, their gyro-alone heading anchored on its first compass
-sample) and the same provisional rows while it fills, so the three entry points give the
-same bits. The model needs no initialisation from the window: it learns from the first row;
-once the window is complete, the rows of its first epoch, compensated with the prior while
-nothing was measured, are compensated again with the drift learned by that epoch's end
-(:func:`gyrodrift.kernels.evloop.settle`).
+A :class:`~gyrodrift.compensator.engine.ChunkEngine` whose rows run through the model's row
+loop (:func:`gyrodrift.kernels.evloop.run`); how it differs: ``docs/engine.md`` ("The model's
+engine").
 """
 
 from __future__ import annotations
@@ -36,8 +30,7 @@ def make_engine(config, estimator, source: str = "arrays", *, clock: bool = Fals
 
 
 class ModelEngine(ChunkEngine):
-    """Resumable compensation of one log by the model (see the module notes and
-    :class:`ChunkEngine` for the interface)."""
+    """Resumable compensation of one log by the model (the interface of :class:`ChunkEngine`)."""
 
     def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False, record: bool = True):
         self._start_state(config, estimator, source, clock)

@@ -1,17 +1,6 @@
-"""Least-squares baselines of the paper: MLR (whole log) and the "modified LSM" (sliding window).
-
-Both solve the weighted least-squares problem of eq. (2) over drift measurements m with
-rows ``h = [T, T', 1]``::
-
-    min_x  sum_i (m_i - h_i x)^2 / r_i  [ + (x - x0)^T P0^-1 (x - x0) ]
-
-MLR fits a whole log, which spans the temperature range: plain least squares
-(SVD, :func:`numpy.linalg.lstsq`), exact on noiseless data. The modified LSM refits
-a short window, in which T barely moves and T' may be flat: a, b and c are then
-nearly collinear and plain least squares amplifies the compass noise without bound
-(tried: drift errors of tens of deg/s on the simulated static run). It is therefore
-regularised by the Kalman filters' prior (the bracketed term), which leaves every
-well-determined combination to the data.
+"""Least-squares baselines of the paper: MLR (whole log), MLR on the past, and the "modified LSM"
+(sliding window), all the weighted least squares of eq. (2) over drift measurements
+(``docs/engine.md``, "The least-squares baselines").
 """
 
 from __future__ import annotations
@@ -29,7 +18,7 @@ __all__ = ["fit_linear_drift", "WindowedLsm", "CausalMlr", "FixedParams"]
 
 
 def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
-    """Weighted least-squares [a, b, c] (module notes).
+    """Weighted least-squares [a, b, c] of eq. (2) (``docs/engine.md``, "The least-squares baselines").
 
     Parameters
     ----------

@@ -1,20 +1,6 @@
 """Compass aiding of the paper's filters: the drift measurements of eqs. (4)–(6), the gates,
-and the interval decision.
-
-Every update interval (10 s) the change of (gyro heading − compass heading) measures the
-drift: ``m = Δ(∫gyro − compass)/Δt`` with H the interval means of ``[T, T', 1]``
-(:func:`compass_measurement`). The interval is refused (:func:`row_condition`, first
-reason seen; :func:`close`) for a gap, a field anomaly, turning, or a compass that
-disagrees with the compensated gyro; refused intervals hold the parameters (eq. 5).
-Lock-out recovery (:func:`steady_disagreement`) accepts an interval after a run of
-refusals whose compass-minus-gyro rates agree: the drift moved, not the compass.
-
-Initialisation (:func:`init_measurements`): the first ``init_s`` seconds split into
-``stack_depth`` sub-windows; each motionless one gives one drift measurement, its mean
-gyro rate (the paper's y1..y3).
-
-The default estimator does not use this module: its model decides by evidence
-(:mod:`gyrodrift.kernels.evidence`).
+the interval decision, lock-out recovery and the initialisation (``docs/engine.md``, "The
+paper's filters, row by row"; the gates: ``docs/conventions.md``).
 """
 
 from __future__ import annotations
@@ -277,14 +263,8 @@ def in_force(fs, ist, cfg, ef, ei):
 @jit
 def init_measurements(t, g, T, Tp, heading, e, n_windows, init_s, cfg, ist, stack, acc, depth):
     """The drift measurements of the init window, rows ``0..e`` (inclusive), into the
-    stack and ``acc``; returns (measurements, anchor row).
-
-    The window is split at ``t[0] + j init_s / n_windows``; a sub-window is motionless
-    when the gyro standard deviation is at most ``still_std_dps`` and the compass turned
-    at most ``still_heading_deg`` (median of its last third against its first third);
-    each motionless one gives its mean gyro rate (trapezoid integral over the
-    sub-window) with H the means of [T, T', 1] and variance ``N²/Δt``. The anchor row is
-    the first compass sample of the window (-1: none; the heading cannot be anchored).
+    stack and ``acc``: one per motionless sub-window (``docs/engine.md``, "Initialisation").
+    Returns (measurements, anchor row: the window's first compass sample, -1 without one).
     """
     n = e + 1
     I_raw = np.zeros(n)

@@ -1,18 +1,6 @@
-"""The paper's drift filters over the parameters [a, b, c] of eq. (2), on the estimator arrays.
-
-States are modelled as constant between updates (Φ = Γ = I, Section 3.2). The state of
-an estimator is two arrays, ``ef`` (floats) and ``ei`` (integers), laid out in
-:mod:`gyrodrift.kernels.layout`.
-
-At every accepted interval ``P⁻ = cap(s P + Q)`` (eq. 10, s the fading factor; s = 1 is
-the plain Kalman filter: ``stkf``, ``stkf-s1``, ``kf``), then the Joseph-form correction;
-over a refused interval ``P ← cap(P + Q)``: no fading, since fading discounts old
-measurements and there are none. Only the ``active`` states take part (``kf``: c alone).
-
-Bounded covariance: a direction the measurements do not see (T' ≡ 0 leaves b
-unobservable; a flat temperature confounds a with c) would grow as ``s**N`` under
-fading; P is capped at ``diag(max_var)`` (by default the prior) in the whitened
-eigenbasis (:func:`gyrodrift.kernels.numeric.cap_covariance`).
+"""The paper's drift filters over [a, b, c] (eq. 10 with a fixed fading factor s; s = 1 the plain
+Kalman filter), on the estimator arrays of :mod:`gyrodrift.kernels.layout` (``docs/engine.md``,
+"The Kalman filters").
 """
 
 from __future__ import annotations

@@ -1,12 +1,5 @@
-"""Numbers the kernels share: angle wrapping, sums, small-matrix algebra, the Kalman
-correction and the covariance cap.
-
-* :func:`wrap360`, :func:`wrap180`: angles to [0, 360) and [-180, 180) (the scalar forms
-  of :func:`gyrodrift.conventions.wrap_360` and ``wrap_180``).
-* :func:`matmul`, :func:`matvec`, :func:`solve`: products and solves of
-  the 1x1 to 3x3 matrices of the filters, as loops (no BLAS call for such sizes).
-* :func:`correct`: the measurement update of eq. (10) in Joseph form;
-  :func:`cap_covariance`: the bound on the covariance (see :mod:`gyrodrift.kernels.kalman`).
+"""Numbers the kernels share: angle wrapping, small-matrix algebra as loops (no BLAS call for
+1x1 to 3x3), the Kalman correction of eq. (10) in Joseph form and the covariance cap.
 """
 
 from __future__ import annotations
