@@ -168,29 +168,45 @@ def seed_heading(mf, delta):
     combine(mf)
 
 
+@jit(inline=True)
+def _moments(X, P, w, ref, clean, step_var, x, Pm):
+    """Add the moments of the bank ``X``, ``P`` with weights ``w`` to ``x``, ``Pm`` (zeros): δ
+    averaged as an angle about ``ref``; ``clean``: for a clean mode, without a disturbance e,
+    and ``step_var`` added to e's variance for each clean mode mixed into a disturbed one."""
+    for i in range(NM):
+        for k in range(NX):
+            v = X[i, k]
+            if k == X_DELTA:
+                v = ref + wrap180(v - ref)
+            elif k == X_E and clean:  # a clean compass has no disturbance
+                v = 0.0
+            x[k] += w[i] * v
+    dx = np.empty(NX)
+    for i in range(NM):
+        if w[i] == 0.0:
+            continue
+        for k in range(NX):
+            dx[k] = X[i, k] - x[k]
+        dx[X_DELTA] = wrap180(X[i, X_DELTA] - x[X_DELTA])
+        if clean:
+            dx[X_E] = 0.0
+        for r in range(NX):
+            for c in range(NX):
+                if clean and (r == X_E or c == X_E):
+                    continue
+                Pm[r, c] += w[i] * (P[i, r, c] + dx[r] * dx[c])
+        if _is_clean(i) and not clean:  # a disturbance begins: a step of unknown size
+            Pm[X_E, X_E] += w[i] * step_var
+
+
 @jit
 def combine(mf):
     """The moment-matched mixture of the bank into MF_XC, MF_PC (δ averaged as an angle)."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    mu = mf[MF_MU:MF_MU + NM]
     xc = np.zeros(NX)
-    ref = X[0, X_DELTA]
-    for j in range(NM):
-        for k in range(NX):
-            v = X[j, k]
-            if k == X_DELTA:
-                v = ref + wrap180(v - ref)
-            xc[k] += mu[j] * v
     Pc = np.zeros((NX, NX))
-    dx = np.empty(NX)
-    for j in range(NM):
-        for k in range(NX):
-            dx[k] = X[j, k] - xc[k]
-        dx[X_DELTA] = wrap180(X[j, X_DELTA] - xc[X_DELTA])
-        for r in range(NX):
-            for c in range(NX):
-                Pc[r, c] += mu[j] * (P[j, r, c] + dx[r] * dx[c])
+    _moments(X, P, mf[MF_MU:MF_MU + NM], X[0, X_DELTA], False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
@@ -296,34 +312,11 @@ def _mix(mf, Pi, step_var):
             cbar[j] += Pi[i, j] * mu[i]
     X0 = np.zeros((NM, NX))
     P0 = np.zeros((NM, NX, NX))
-    dx = np.empty(NX)
+    w = np.empty(NM)
     for j in range(NM):
-        ref = X[j, X_DELTA]
         for i in range(NM):
-            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-            for k in range(NX):
-                v = X[i, k]
-                if k == X_DELTA:
-                    v = ref + wrap180(v - ref)
-                elif k == X_E and _is_clean(j):  # a clean compass has no disturbance
-                    v = 0.0
-                X0[j, k] += w * v
-        for i in range(NM):
-            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-            if w == 0.0:
-                continue
-            for k in range(NX):
-                dx[k] = X[i, k] - X0[j, k]
-            dx[X_DELTA] = wrap180(X[i, X_DELTA] - X0[j, X_DELTA])
-            if _is_clean(j):
-                dx[X_E] = 0.0
-            for r in range(NX):
-                for c in range(NX):
-                    if _is_clean(j) and (r == X_E or c == X_E):
-                        continue
-                    P0[j, r, c] += w * (P[i, r, c] + dx[r] * dx[c])
-            if _is_clean(i) and not _is_clean(j):  # a disturbance begins: a step of unknown size
-                P0[j, X_E, X_E] += w * step_var
+            w[i] = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
+        _moments(X, P, w, X[j, X_DELTA], _is_clean(j), step_var, X0[j], P0[j])
     X[:, :] = X0
     P[:, :, :] = P0
     return cbar
