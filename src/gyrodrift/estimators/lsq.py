@@ -55,8 +55,21 @@ def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
     return x_scaled / scale
 
 
+class _Fitted(LinearDrift):
+    """A least-squares estimator: the parameters ``_x`` of its last fit, held through refused intervals."""
+
+    causal: ClassVar[bool] = True
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    def hold(self) -> np.ndarray:
+        return self.params
+
+
 @register
-class WindowedLsm(LinearDrift):
+class WindowedLsm(_Fitted):
     """The paper's "modified LSM" (``lsm``): a, b, c refitted at every update over the
     last ``window`` accepted measurements (default 30: 300 s at the 10-s interval).
 
@@ -69,7 +82,6 @@ class WindowedLsm(LinearDrift):
     """
 
     name: ClassVar[str] = "lsm"
-    causal: ClassVar[bool] = True
 
     def __init__(self, config: KalmanConfig = KalmanConfig(), window: int = 30):
         if not (isinstance(window, int) and window >= 1):
@@ -77,10 +89,6 @@ class WindowedLsm(LinearDrift):
         self.config = config
         self._rows: deque[tuple[float, np.ndarray, float]] = deque(maxlen=window)
         self._x = np.array(config.x0, dtype=float)
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
 
     @property
     def cov(self) -> np.ndarray:
@@ -101,12 +109,9 @@ class WindowedLsm(LinearDrift):
         self._x = fit_linear_drift(*self._arrays(), prior=self.config)
         return self.params
 
-    def hold(self) -> np.ndarray:
-        return self.params
-
 
 @register
-class CausalMlr(LinearDrift):
+class CausalMlr(_Fitted):
     """The paper's MLR fitted on the past only (``mlr-causal``): at every update a, b, c are
     the regularised weighted least squares of every measurement accepted so far
     (:func:`fit_linear_drift` with the prior, accumulated as normal equations), so a row
@@ -119,7 +124,6 @@ class CausalMlr(LinearDrift):
     """
 
     name: ClassVar[str] = "mlr-causal"
-    causal: ClassVar[bool] = True
 
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
@@ -127,10 +131,6 @@ class CausalMlr(LinearDrift):
         self._info = np.diag(1.0 / np.square(np.array(config.p0_sd, dtype=float)))
         self._vec = self._info @ x0
         self._x = x0
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
 
     @property
     def cov(self) -> np.ndarray:
@@ -146,12 +146,9 @@ class CausalMlr(LinearDrift):
         self._x = np.linalg.solve(self._info, self._vec)
         return self.params
 
-    def hold(self) -> np.ndarray:
-        return self.params
-
 
 @register
-class FixedParams(Unaided, LinearDrift):
+class FixedParams(Unaided, _Fitted):
     """Fixed a, b, c (``fixed``): ignores all observations.
 
     With parameters fitted by :func:`fit_linear_drift` over every measurement of the
@@ -159,12 +156,7 @@ class FixedParams(Unaided, LinearDrift):
     """
 
     name: ClassVar[str] = "fixed"
-    causal: ClassVar[bool] = True
 
     def __init__(self, params=(0.0, 0.0, 0.0)):
         check_drift_triple("fixed parameters", params)
         self._x = np.array(params, dtype=float)
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()

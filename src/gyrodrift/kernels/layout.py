@@ -31,10 +31,6 @@ MODE_FIXED, MODE_EXTERNAL = 0, 2
 #: ``ist[I_PENDING]`` after an interval end in MODE_EXTERNAL: what the caller must do.
 PENDING_NONE, PENDING_UPDATE, PENDING_HOLD = 0, 1, 2
 
-#: Status returned by :func:`gyrodrift.kernels.loop.run_chunk` below 0: a row whose time
-#: is not finite or does not increase is at ``-(status) - 1``.
-STATUS_BAD_TIME = -1
-
 # ---------------------------------------------------------------- float state
 
 F_T, F_G, F_TEMP, F_TP, F_BIAS, F_RATE = 0, 1, 2, 3, 4, 5  # the previous row
