@@ -287,20 +287,24 @@ class ChunkEngine:
         self._initialise(inputs, cols.column(L.O_TEMP_RATE))
         return self._run(inputs, cols)
 
-    def _initialise(self, inputs, Tp) -> None:
-        """The init window's measurements, the estimator's first update and the field reference.
-
-        The window ends at the first row at or after ``t_start``, or at the last row when the
-        log ends before (a short log: the window is what there is)."""
-        t, g, T, heading, norm, dip = inputs
-        cfg = self.cfg
+    def _window_end(self, t, holds: str) -> int:
+        """The init window's last row: the first at or after ``t_start``, or the last row of a log
+        that ends before (a short log: the window is what there is; a note says it is
+        compensated from ``holds`` and the prior)."""
         if t.size < 2:  # no time span: the init window's measurements would divide by zero
             raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
-        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)  # first row with t >= t_start
-        span = min(float(cfg.init_s), float(t[e] - t[0]))
+        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
         if t[e] < self._fs[L.F_TSTART]:
             self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
-                              f"{cfg.init_s:g}-s init window: compensated from its still parts and the prior")
+                              f"{self.cfg.init_s:g}-s init window: compensated from {holds} and the prior")
+        return e
+
+    def _initialise(self, inputs, Tp) -> None:
+        """The init window's measurements, the estimator's first update and the field reference."""
+        t, g, T, heading, norm, dip = inputs
+        cfg = self.cfg
+        e = self._window_end(t, "its still parts")
+        span = min(float(cfg.init_s), float(t[e] - t[0]))
         found, anchor = aiding.init_measurements(t, g, T, Tp, heading, e, cfg.stack_depth, max(span, 1e-9),
                                                  self._set, self._ist, self._stack, self._acc, cfg.stack_depth)
         if anchor < 0:

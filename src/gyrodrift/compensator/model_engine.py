@@ -13,7 +13,6 @@ import numpy as np
 
 from gyrodrift.compensator.engine import ChunkEngine, _read_only, compiled, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
-from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
@@ -51,12 +50,7 @@ class ModelEngine(ChunkEngine):
 
     def _initialise(self, inputs, Tp) -> None:
         t, g, T, heading, norm, dip = inputs
-        if t.size < 2:  # as the paper's filters: a log is at least two samples (a time span)
-            raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
-        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
-        if t[e] < self._fs[L.F_TSTART]:
-            self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
-                              f"{self.cfg.init_s:g}-s init window: compensated from what it holds and the prior")
+        e = self._window_end(t, "what it holds")
         if not np.isfinite(heading[: e + 1]).any():
             self.notes.append(f"{self.source}: no compass sample in the first {t[e] - t[0]:.1f} s: the heading "
                               "starts at 0 deg at the first sample (relative)")
