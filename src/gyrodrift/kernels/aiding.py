@@ -13,7 +13,7 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels import kalman
 from gyrodrift.kernels.layout import (
     C_COMPASS_SD, C_GYRO_NOISE, C_INTERF, C_INTERVAL, C_MAX_AGE, C_PRIOR_A, C_PRIOR_B, C_STILL_HEADING, C_STILL_STD,
-    F_COV, F_PA, F_PB, F_PC, F_S0, F_S1, I_AFTER_INT, I_N_ACC, I_PENDING, I_REFUSED_N, I_S0_OK, I_S1_OK, I_STACK_N,
+    F_COV, F_PA, F_S0, F_S1, I_AFTER_INT, I_N_ACC, I_PENDING, I_REFUSED_N, I_S0_OK, I_S1_OK, I_STACK_N,
     I_STICKY, I_UNOBS, K_DEPTH, K_MODE, K_RELOCK, MODE_EXTERNAL, N_SNAP, NO_STICKY, PENDING_HOLD, PENDING_UPDATE,
     R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, S_HEADING, S_IBIAS, S_IRAW, S_IT, S_ITP, S_T,
     UNOBS_A, UNOBS_B, UNOBSERVABLE_SD_FRACTION,
@@ -246,15 +246,8 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, ef, ei, intervals
 def in_force(fs, ist, cfg, ef, ei):
     """The parameters and covariance of a kernel estimator into ``fs`` (F_PA.., F_COV) and
     the unobservable code into ``ist``."""
-    p = kalman.params(ef, ei)
-    C = kalman.cov(ef, ei)
-    fs[F_PA] = p[0]
-    fs[F_PB] = p[1]
-    fs[F_PC] = p[2]
-    for r in range(3):
-        for c in range(3):
-            fs[F_COV + 3 * r + c] = C[r, c]
-    ist[I_UNOBS] = unobservable_code(C, cfg[C_PRIOR_A], cfg[C_PRIOR_B])
+    kalman.put_state(ef, ei, fs, F_PA, F_COV)
+    ist[I_UNOBS] = unobservable_code(kalman.cov(ef, ei), cfg[C_PRIOR_A], cfg[C_PRIOR_B])
 
 
 # ------------------------------------------------------------ initialisation

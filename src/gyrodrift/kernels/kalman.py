@@ -11,7 +11,7 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels.layout import EF_FADING, EF_MAX_VAR, EF_P, EF_Q, EF_Z, EI_ACTIVE, EI_N_ACTIVE
 from gyrodrift.kernels.numeric import cap_covariance, correct
 
-__all__ = ["views", "update", "hold", "params", "cov"]
+__all__ = ["views", "update", "hold", "params", "cov", "put_state"]
 
 
 @jit(inline=True)
@@ -103,3 +103,14 @@ def params(ef, ei):
 def cov(ef, ei):
     """Covariance (3x3) of [a, b, c]."""
     return ef[EF_P:EF_P + 9].reshape((3, 3)).copy()
+
+
+@jit(inline=True)
+def put_state(ef, ei, out, p0, c0):
+    """The parameters in force into ``out[p0:p0 + 3]`` and their covariance (row-major) into ``out[c0:c0 + 9]``."""
+    p = params(ef, ei)
+    C = cov(ef, ei)
+    for r in range(3):
+        out[p0 + r] = p[r]
+        for c in range(3):
+            out[c0 + 3 * r + c] = C[r, c]

@@ -253,24 +253,13 @@ def residual_ok(m, h, r, dt, params, cov, rates, held, relock, residual_deg, res
 
 
 @jit(inline=True)
-def _in_force(axis, xf, ef, ei):
-    """A kernel filter's parameters and covariance into ``xf`` (the rows use them)."""
-    p = kalman.params(ef, ei)
-    C = kalman.cov(ef, ei)
-    for k in range(3):
-        xf[XF_PARAMS + 3 * axis + k] = p[k]
-        for j in range(3):
-            xf[XF_COV + 9 * axis + 3 * k + j] = C[k, j]
-
-
-@jit(inline=True)
 def _hold(axis, xf, xi, xk, ef, ei):
     """A refused interval for one axis: the filter's hold, or the caller's (PENDING_HOLD)."""
     if xk[XK_EXTERNAL + axis] == 1:
         xi[XI_PENDING + axis] = PENDING_HOLD
         return
     kalman.hold(ef, ei, 1.0)
-    _in_force(axis, xf, ef, ei)
+    kalman.put_state(ef, ei, xf, XF_PARAMS + 3 * axis, XF_COV + 9 * axis)
 
 
 @jit(inline=True)
@@ -293,7 +282,7 @@ def _update(axis, m, h, r, xf, xi, xk, ef, ei):
     R = np.empty((1, 1))
     R[0, 0] = r
     kalman.update(ef, ei, y, H, R)
-    _in_force(axis, xf, ef, ei)
+    kalman.put_state(ef, ei, xf, XF_PARAMS + 3 * axis, XF_COV + 9 * axis)
 
 
 @jit(inline=True)
