@@ -22,7 +22,8 @@ from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled", "FLOAT_COLUMNS",
+           "CODE_COLUMNS"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -487,17 +488,17 @@ class ChunkEngine:
         return np.concatenate(self._accepted) if self._accepted else np.zeros((0, L.N_MEAS))
 
 
+#: Names of the engine's float output columns and of its codes, in the order of :mod:`gyrodrift.kernels.layout`.
+FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
+                 "heading_sd", "temp_rate")
+CODE_COLUMNS = ("updated", "reason", "unobs")
+
+
 def output_columns(t: np.ndarray, heading: np.ndarray, cols: Columns) -> dict:
     """The output columns of :meth:`ChunkEngine.feed` (views of ``cols``) for rows at times
     ``t`` whose compass heading was ``heading``."""
-    return {
-        "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
-        "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
-        "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
-        "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-        "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
-        "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
-    }
+    return {"t": t, **{name: cols.column(k) for k, name in enumerate(FLOAT_COLUMNS)}, "compass_heading": heading,
+            **{name: cols.code(k) for k, name in enumerate(CODE_COLUMNS)}}
 
 
 def _joined(held: list[tuple]) -> tuple[tuple, Columns]:

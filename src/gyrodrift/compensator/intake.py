@@ -73,12 +73,7 @@ class MagFit:
 
     def add(self, t, g, mag, acc, gyro_xy=None) -> None:
         """Rows with a raw compass, in order."""
-        if self.tilt is None:
-            self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
-        down = None
-        if self.tilt.uses_gyro:
-            gxy = np.asarray(gyro_xy, dtype=float)
-            down = self.tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        self.tilt, down = _gravity(self.tilt, self.config, self.source, t, g, acc, gyro_xy)
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
 
     def fit(self):
@@ -86,6 +81,17 @@ class MagFit:
         from gyrodrift import magcal
 
         return None if self.tilt is None else magcal.fit(*self.samples.arrays())
+
+
+def _gravity(tilt: RawTilt | None, config, source: str, t, g, acc, gyro_xy) -> tuple[RawTilt, np.ndarray | None]:
+    """The tilt of a raw compass (made on the first rows: ``config.tilt`` with or without
+    ``gyro_xy``) and the gyro-aided gravity of these rows (None: the accelerometer's)."""
+    if tilt is None:
+        tilt = RawTilt(config.tilt, gyro_xy is not None, source)
+    if not tilt.uses_gyro:
+        return tilt, None
+    gxy = np.asarray(gyro_xy, dtype=float)
+    return tilt, tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
 
 
 def survey(chunks, config, source: str) -> WholeLog:
@@ -197,13 +203,8 @@ class Intake:
         if mag is None or acc is None:  # the engine wraps the heading itself
             return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None
         mag = self._dead.mask(mag)
-        if self._tilt is None:
-            self._tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
         self._raw_seen = True
-        down = None
-        if self._tilt.uses_gyro:
-            gxy = np.asarray(gyro_xy, dtype=float)
-            down = self._tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        self._tilt, down = _gravity(self._tilt, self.config, self.source, t, g, acc, gyro_xy)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)

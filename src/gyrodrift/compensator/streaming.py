@@ -12,6 +12,7 @@ import numpy as np
 from gyrodrift import gating
 from gyrodrift.compensator.arguments import check_config, check_estimator, check_source, short, shown
 from gyrodrift.compensator.config import CompensatorConfig
+from gyrodrift.compensator.engine import CODE_COLUMNS, FLOAT_COLUMNS
 from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
@@ -328,19 +329,13 @@ class Compensator:
                 out[L.O_HEADING_SD])
 
 
-#: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
-_FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
-                  "heading_sd", "temp_rate")
-_CODE_COLUMNS = ("updated", "reason", "unobs")
-
-
 def _engine_rows(cols: dict | None):
     """(t, float outputs, codes, compass heading) of each row of the engine's output columns
     (none for None), the outputs and codes in the order of :mod:`gyrodrift.kernels.layout`."""
     if cols is None:
         return ()
-    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-               zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
+    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in FLOAT_COLUMNS)),
+               zip(*(cols[k].tolist() for k in CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
 def _new_sample(t: float, out, codes, compass: float, new=object.__new__, cls=CompensatedSample,
