@@ -43,9 +43,11 @@ def _put(P, active, Pa):
 
 
 @jit
-def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
-    """One accepted update with a fixed fading factor: ``P⁻ = cap(s P + Q)``, then the
-    Joseph-form correction, then the cap again; x, P in place (active states only)."""
+def update(ef, ei, y, H, R):
+    """One accepted observation ``y = H x + v``, ``v ~ N(0, R)`` (rows ``[T, T', 1]``):
+    ``P⁻ = cap(s P + Q)`` (eq. 10), the Joseph-form correction, the cap again; the estimator
+    arrays in place (active states only)."""
+    x, P, Q, max_var, active = views(ef, ei)
     m = y.size
     na = active.size
     Ha = np.empty((m, na))
@@ -58,7 +60,7 @@ def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
     mv = max_var[active]
-    P_prior = cap_covariance(fading * Pa + Qa, mv)
+    P_prior = cap_covariance(ef[EF_FADING] * Pa + Qa, mv)
     xa, P_post = correct(xa, P_prior, y, Ha, R)
     _put(P, active, cap_covariance(P_post, mv))
     for j in range(na):
@@ -66,31 +68,13 @@ def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
 
 
 @jit
-def _fixed_hold(P, Q, max_var, active, intervals):
-    """``intervals`` refused intervals: ``P ← cap(P + intervals Q)`` on the active states."""
+def hold(ef, ei, intervals):
+    """``intervals`` refused intervals (1, or more when a time gap skipped some): ``P ←
+    cap(P + intervals Q)`` on the active states (no fading)."""
+    x, P, Q, max_var, active = views(ef, ei)
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
     _put(P, active, cap_covariance(1.0 * Pa + intervals * Qa, max_var[active]))
-
-
-# ---------------------------------------------------------------- the estimator
-
-
-@jit
-def update(ef, ei, y, H, R):
-    """One accepted observation ``y = H x + v``, ``v ~ N(0, R)`` (rows ``[T, T', 1]``); the
-    estimator arrays are updated in place."""
-    z, P, Q, max_var, active = views(ef, ei)
-    _fixed_update(z, P, Q, max_var, active, y, H, R, ef[EF_FADING])
-
-
-@jit
-def hold(ef, ei, intervals):
-    """``intervals`` refused intervals (1, or more when a time gap skipped some): ``P ←
-    cap(P + intervals Q)`` (no fading; the random walk of the states grows with the time
-    elapsed, up to the cap)."""
-    z, P, Q, max_var, active = views(ef, ei)
-    _fixed_hold(P, Q, max_var, active, intervals)
 
 
 @jit

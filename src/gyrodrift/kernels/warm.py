@@ -68,8 +68,6 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.kalman.hold": ["F1 I1 f"],
     "kernels.kalman.params": ["F1 I1"],
     "kernels.kalman.cov": ["F1 I1"],
-    "kernels.kalman._fixed_update": ["F1 F2 F2 F1 I1 F1 F2 F2 f"],
-    "kernels.kalman._fixed_hold": ["F2 F2 F1 I1 f"],
     "kernels.kalman._sub": ["F2 I1"],
     "kernels.kalman._put": ["F2 I1 F2"],
     "kernels.numeric.correct": ["F1 F2 F1 F2 F2"],
