@@ -187,16 +187,10 @@ def stacked(stack, n):
 
 @jit
 def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, ef, ei, intervals):
-    """Decide the interval ending at a boundary row and update or hold the estimator;
-    returns (update, reason).
-
-    Accepted: no refusal seen in it and a compass sample at both ends at least half an
-    interval apart; the measurement (eqs. 4–6) is then refused for interference when its
-    residual exceeds ``interference_deg``, unless lock-out recovery accepts it. The
-    estimator (``ef``, ``ei``) is updated with the stacked measurements (``depth`` rows,
-    eq. 3) or held for ``intervals`` intervals (more than one when a time gap skipped
-    some); in MODE_EXTERNAL the caller does it (``ist[I_PENDING]``, one hold).
-    """
+    """Decide the interval ending at a boundary row (``docs/engine.md``, "The paper's filters,
+    row by row") and update the estimator (``ef``, ``ei``) with the stacked measurements (eq. 3)
+    or hold it for ``intervals`` intervals; in MODE_EXTERNAL the caller does it
+    (``ist[I_PENDING]``). Returns (update, reason)."""
     mode = icfg[K_MODE]
     reason = ist[I_STICKY]
     end_ok = ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE])

@@ -138,7 +138,7 @@ def _loggauss(nu, S):
 
 @jit
 def init_state(mf, mc, x0, P0, t_ref):
-    """Start the bank: every mode at the prior ``x0`` (5,), ``P0`` (5, 5) (drift states centred
+    """Start the bank: every mode at the prior ``x0`` (NX,), ``P0`` (NX, NX) (drift states centred
     on ``t_ref``), mode probabilities from the settings, the rate filters at rest."""
     mf[MF_TREF] = t_ref
     pc, ps = mc[MC_P_CLEAN0], mc[MC_P_STILL0]
@@ -213,7 +213,7 @@ def combine(mf):
 
 @jit(inline=True)
 def bias_var(Pc, hT, hTp):
-    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (5, 5)."""
+    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (NX, NX)."""
     v = (Pc[1, 1] * hT * hT + Pc[2, 2] * hTp * hTp + Pc[3, 3] + 2.0 * Pc[1, 2] * hT * hTp
          + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp)
     return max(v, 0.0)

@@ -39,14 +39,8 @@ def wrap180(x):
 
 @jit
 def cap_covariance(P, max_var):
-    """P limited to at most ``diag(max_var)`` in every direction (``P <= P_max``).
-
-    In coordinates where ``P_max`` is the identity, eigenvalues of P above 1 are clipped
-    to 1; directions already known better than the cap keep their variance (clipping each
-    variance on its own would not: with a and c strongly correlated it would inflate the
-    variance of the well-known combination ``a*T + c``). P stays symmetric positive
-    definite. Returns a new matrix.
-    """
+    """A new P limited to at most ``diag(max_var)`` in every direction, symmetric positive definite:
+    in coordinates where the cap is the identity, eigenvalues above 1 are clipped to 1 (``docs/engine.md``)."""
     scale = np.sqrt(max_var)
     M = P / np.outer(scale, scale)
     if np.trace(M) <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
