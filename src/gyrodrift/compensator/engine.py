@@ -269,7 +269,7 @@ class ChunkEngine:
             g = float(cols.g_held[0]) if fix & 1 else g
             T = float(cols.T_held[0]) if fix & 2 else T
             heading = float(cols.h_wrapped[0]) if fix & 4 else heading
-        w.add(t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0]))
+        w.rows.append((t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0])))
         if not t - self._fs[L.F_TSTART] >= 0:
             return None
         self._hold_window_rows()
@@ -433,7 +433,7 @@ class ChunkEngine:
         Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as :meth:`feed_row`
         gives them (the order of :mod:`gyrodrift.kernels.layout`)."""
         w = self._window
-        ti, gi, Ti, hi, Tpi = w.t[-1], w.g[-1], w.T[-1], w.heading[-1], w.Tp[-1]
+        ti, gi, Ti, hi, _, _, Tpi, _ = w.rows[-1]
         if self._prov_model is None:  # nothing updates the estimator before the window ends
             C = np.asarray(self.est.cov, dtype=float).reshape(9)
             unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
@@ -534,27 +534,17 @@ class _RowMemory:
 class _WindowRows:
     """The rows of the init window taken one by one (:meth:`ChunkEngine.window_row`), as
     :func:`gyrodrift.kernels.loop.prepare` left them: the inputs the row loop takes (held
-    cells filled, the compass wrapped), T' and the gap flags, in growing lists."""
+    cells filled, the compass wrapped), T' and the gap flag, one tuple a row."""
 
     def __init__(self):
-        self.t, self.g, self.T, self.heading, self.norm, self.dip, self.Tp, self.gap = ([] for _ in range(8))
-
-    def add(self, t, g, T, heading, norm, dip, Tp, gap) -> None:
-        self.t.append(t)
-        self.g.append(g)
-        self.T.append(T)
-        self.heading.append(heading)
-        self.norm.append(norm)
-        self.dip.append(dip)
-        self.Tp.append(Tp)
-        self.gap.append(gap)
+        self.rows: list[tuple] = []  # (t, g, T, heading, norm, dip, T', gap)
 
     def chunk(self) -> tuple[tuple, Columns]:
         """The rows as one prepared chunk, as :meth:`ChunkEngine.feed` holds one: inputs and columns."""
-        cols, helper = new_columns(len(self.t))
+        t, g, T, heading, norm, dip, Tp, gap = zip(*self.rows)
+        cols, helper = new_columns(len(t))
         join(helper)
-        cols.column(L.O_TEMP_RATE)[:] = self.Tp
-        cols.code(L.OC_GAP)[:] = self.gap
-        inputs = tuple(_read_only(np.array(v, dtype=float))
-                       for v in (self.t, self.g, self.T, self.heading, self.norm, self.dip))
+        cols.column(L.O_TEMP_RATE)[:] = Tp
+        cols.code(L.OC_GAP)[:] = gap
+        inputs = tuple(_read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip))
         return inputs, cols
