@@ -212,10 +212,7 @@ class ChunkEngine:
         norm = _NO_FIELD if norm is None else read_only_floats(norm)
         dip = _NO_FIELD if dip is None else read_only_floats(dip)
         if self._t0 is None:
-            if not (np.isfinite(g[0]) and np.isfinite(T[0])):
-                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
-            self._t0 = float(t[0])
-            self._fs[L.F_TSTART] = self._t0 + self.cfg.init_s
+            self._first_row(float(t[0]), g[0], T[0])
         whole = self._held is None or (not self._held and float(t[-1]) - self._fs[L.F_TSTART] >= 0)
         helper = None
         if whole and buffers is not None:
@@ -258,10 +255,7 @@ class ChunkEngine:
             T = float(self._clock((t,))[0])
         heading += self.cfg.declination_deg  # magnetic to true north, as in feed
         if self._t0 is None:
-            if not (math.isfinite(g) and math.isfinite(T)):
-                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
-            self._t0 = t
-            self._fs[L.F_TSTART] = t + self.cfg.init_s
+            self._first_row(t, g, T)
         r = self._row or self._new_row()
         fix = self._prepare_row(r, t, g, T, heading, norm, dip)
         cols = r.cols
@@ -274,6 +268,14 @@ class ChunkEngine:
             return None
         self._hold_window_rows()
         return self._close_window()
+
+    def _first_row(self, t: float, g: float, T: float) -> None:
+        """The log's first row, which needs gyro and temperature values; the init window ends
+        ``init_s`` after it."""
+        if not (math.isfinite(g) and math.isfinite(T)):
+            raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
+        self._t0 = t
+        self._fs[L.F_TSTART] = t + self.cfg.init_s
 
     def _hold_window_rows(self) -> None:
         """The rows taken by :meth:`window_row` since the last chunk, held as one prepared chunk."""
