@@ -322,11 +322,7 @@ class Compensator:
     @staticmethod
     def _values(t: float, out, codes, compass: float) -> tuple:
         """The fields of :class:`CompensatedSample` from the engine's float outputs and codes."""
-        reason = _REASONS[codes[L.OC_REASON]]
-        return (t, out[L.O_RATE], out[L.O_BIAS], out[L.O_HEADING], out[L.O_A], out[L.O_B], out[L.O_C],
-                codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
-                UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
-                out[L.O_HEADING_SD])
+        return tuple(vars(_new_sample(t, out, codes, compass)).values())
 
 
 def _engine_rows(cols: dict | None):
