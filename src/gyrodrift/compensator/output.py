@@ -62,26 +62,9 @@ LEGACY_UPDATED = "update"
 
 
 def updated_column(out: pd.DataFrame, what: str = "output table") -> pd.Series:
-    """The ``updated`` column of an output table (1 where the filter took a measurement).
-
-    Parameters
-    ----------
-    out : DataFrame
-        An output table; one written before the rename, with ``update`` instead, is
-        read too, with a :class:`FutureWarning` saying so.
-    what : str
-        What the table is, for the messages.
-
-    Returns
-    -------
-    Series
-        The column, as it is in the table.
-
-    Raises
-    ------
-    LogFormatError
-        The table has neither column.
-    """
+    """The ``updated`` column of an output table (1 where the filter took a measurement), or the
+    ``update`` column of a table written under that earlier name, with a :class:`FutureWarning`;
+    ``what`` names the table in messages. A :class:`LogFormatError` when it has neither."""
     if "updated" in out.columns:
         return out["updated"]
     if LEGACY_UPDATED in out.columns:

@@ -156,11 +156,9 @@ class Compensator:
         heading_deg : float, optional
             Compass heading, deg clockwise from magnetic north; NaN = no sample.
         mag, acc : 3-sequences, optional
-            Raw FRD magnetometer and accelerometer (used when ``heading_deg`` is NaN
-            to compute a tilt-compensated heading, and to detect field anomalies); ``acc`` also
-            aids the x and y axes. With ``gyro_x_dps`` and ``gyro_y_dps`` on the first sample
-            (and ``config.tilt`` ``"gyro"``), the tilt is the gyro-aided gravity of
-            :mod:`gyrodrift.attitude`, as in :func:`gyrodrift.compensate`.
+            Raw FRD magnetometer and accelerometer: the compass when ``heading_deg`` is NaN (its
+            tilt gyro-aided with ``config.tilt`` ``"gyro"`` and ``gyro_x_dps``, ``gyro_y_dps`` on
+            the first sample) and the field-anomaly check; ``acc`` also aids the x and y axes.
         gyro_x_dps, gyro_y_dps : float, optional
             Raw roll- and pitch-axis rates, deg/s (FRD; NaN: hold). Given with ``acc`` on
             the first sample, every row gets ``rate_x, rate_y, bias_x, bias_y`` and
@@ -169,14 +167,10 @@ class Compensator:
         Raises
         ------
         GyroDriftError
-            An argument that is not a number (``mag`` and ``acc``: not three numbers;
-            None is allowed where the argument is optional), naming the argument; a
-            value outside its plausible range, as a log's cell is refused
-            (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
-            temperature, heading, magnetometer and accelerometer; NaN is no value and
-            holds); a time that is not finite or does not increase, or a sample rate
-            above 100 kHz (``docs/streaming.md``). The refused sample is not taken: the
-            compensator stays as it was.
+            An argument that is not a number (``mag``, ``acc``: three numbers; None where
+            optional) or is outside its plausible range as a log's cell (:mod:`gyrodrift.io.limits`;
+            NaN holds), naming it; a time that is not finite or does not increase, or a sample
+            rate above 100 kHz. The refused sample is not taken: the compensator stays as it was.
         """
         if temp_c is None and self._clock:
             temp_c = math.nan

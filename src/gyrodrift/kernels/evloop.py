@@ -49,10 +49,8 @@ RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading co
 RF_N = RF_INIT_RAW + 1
 
 # ------------------------------------------------------------------ epoch history
-#: One row per epoch, for the smoother (:mod:`gyrodrift.smooth`): its end time (s), length
-#: (s), temperature change (degC, the drift's random walk), the combined drift states
-#: [a, b, c', r] and their covariance (upper triangle, row by row: aa ab ac ar bb bc br cc cr rr),
-#: and the probability that the drift jumped in it.
+#: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
+#: drift states [a, b, c', r], their covariance (upper triangle: aa ab ac ar bb bc br cc cr rr), P(jump).
 H_T, H_DT, H_DTEMP, H_X, H_P, H_JUMP = 0, 1, 2, 3, 7, 17
 N_HIST = 18
 
