@@ -27,8 +27,7 @@ NUMBER_RANGE = (1e-9, 1e9)
 #: Largest whole-number setting (a setting may declare a smaller one).
 WHOLE_MAX = 1_000_000
 #: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
-#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
-#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`).
+#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets give.
 DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
 #: :data:`DRIFT_PARAM_BOUNDS` in words, for messages.
 DRIFT_BOUNDS_TEXT = "|a| <= {:g} deg/s/degC, |b| <= {:g} deg/degC, |c| <= {:g} deg/s".format(*DRIFT_PARAM_BOUNDS)
