@@ -1,23 +1,7 @@
-"""Settings declared once: each field's unit and bounds as metadata, and one validator.
-
-Every settings class (:class:`~gyrodrift.compensator.CompensatorConfig` and the tables it
-holds, :class:`~gyrodrift.scale_factor.ScaleFactorConfig`, the device
-:class:`~gyrodrift.profile.Profile`) declares each field with :func:`setting`: its default,
-its unit and its bounds. Its ``__post_init__`` calls :func:`check`, which converts each
-value to the declared type (a whole number to a float for a number setting, a list to a
-tuple) and refuses a value of another type or outside its bounds. A TOML file
-(:func:`apply_settings`, used by :mod:`gyrodrift.config`), a device profile
-(:mod:`gyrodrift.profile`) and a command-line option (:mod:`gyrodrift.cli.options`) all reach
-the same function, so the same bad value gives the same words, ``<key> = <value> <what is
-wrong>``; each route puts where the value came from before them (the class, the file and
-table, the option).
-
-Besides its own bounds, every number setting is 0 or of a magnitude within
-:data:`NUMBER_RANGE` (or inf where it takes inf), and every whole number at most
-:data:`WHOLE_MAX` or its own maximum: a finite value outside them would reach arithmetic
-that cannot take it (``compass_sigma_deg = 1e308`` squares to inf, ``p0_sd = 1e-300`` to a
-covariance of zeros). Values learned from data (``x0``, a covariance, a profile's
-parameters) are ``measured`` and bounded by their own limits only.
+"""Settings declared once: each field's unit and bounds as metadata (:func:`setting`), and one
+validator (:func:`check`) that every route to a setting reaches: a Python construction, a TOML
+file, a device profile and a command-line option give the same words for the same bad value,
+``<key> = <value> <what is wrong>``. The rules: ``docs/settings-and-profiles.md`` ("The validator").
 """
 
 from __future__ import annotations
@@ -43,8 +27,7 @@ NUMBER_RANGE = (1e-9, 1e9)
 #: Largest whole-number setting (a setting may declare a smaller one).
 WHOLE_MAX = 1_000_000
 #: Largest plausible magnitude of the drift-model parameters a (deg/s/degC), b (deg/degC) and
-#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets
-#: give (the reasoning is in the notes of :mod:`gyrodrift.profile`).
+#: c (deg/s), and of their standard deviations: ten times and more what MEMS data sheets give.
 DRIFT_PARAM_BOUNDS = (1.0, 1000.0, 50.0)
 #: :data:`DRIFT_PARAM_BOUNDS` in words, for messages.
 DRIFT_BOUNDS_TEXT = "|a| <= {:g} deg/s/degC, |b| <= {:g} deg/degC, |c| <= {:g} deg/s".format(*DRIFT_PARAM_BOUNDS)
@@ -328,7 +311,7 @@ def number_problem(key: str, value) -> str | None:
 
 def check_values(cls, values: dict) -> dict:
     """``values`` (name -> value) of the settings class ``cls`` converted to their declared
-    types, each within its bounds (module notes).
+    types, each within its bounds (``docs/settings-and-profiles.md``).
 
     Raises
     ------

@@ -1,12 +1,6 @@
-"""The checks of the Python API's arguments, run before any compiled code sees them.
-
-:func:`gyrodrift.compensate`, :func:`gyrodrift.compensate_arrays` and
-:class:`gyrodrift.Compensator` take their arguments through these functions: an argument
-of the wrong kind is an :class:`~gyrodrift.errors.ArgumentTypeError` (a
-:class:`TypeError` too), arrays of the wrong shape or of unequal lengths a
-:class:`~gyrodrift.errors.LogFormatError`, each one line saying what is expected. The
-compiled kernels index their inputs without bounds checks, so arrays that disagree on
-the number of samples must never reach them.
+"""The checks of the Python API's arguments, run before any compiled code sees them (which
+indexes its inputs unchecked): a wrong kind is an :class:`~gyrodrift.errors.ArgumentTypeError`,
+a wrong shape or length a :class:`~gyrodrift.errors.LogFormatError`, each one line.
 """
 
 from __future__ import annotations
@@ -21,15 +15,19 @@ from gyrodrift.compensator.memory import OutputBuffers
 from gyrodrift.errors import ArgumentTypeError, LogFormatError
 from gyrodrift.estimators.base import DriftEstimator
 
-__all__ = ["shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
+__all__ = ["short", "shown", "check_source", "check_config", "check_estimator", "check_callable", "check_buffers",
            "column", "rows", "check_log", "frame_column"]
 
 
-def shown(value) -> str:
-    """A value for a message: its type and a short repr, on one line."""
+def short(value) -> str:
+    """A value for a message: its repr, shortened and on one line."""
     text = " ".join(repr(value).split())
-    text = text if len(text) <= 40 else text[:37] + "..."
-    return f"{type(value).__name__} {text}"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def shown(value) -> str:
+    """A value for a message: its type and :func:`short` repr."""
+    return f"{type(value).__name__} {short(value)}"
 
 
 def check_source(source) -> str:

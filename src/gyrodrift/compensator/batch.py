@@ -106,15 +106,12 @@ def compensate_arrays(
     Raises
     ------
     LogFormatError
-        No samples; arrays of another shape than given above, or of unequal lengths; a
-        median time step giving a sample rate above the plausible one of a file
-        (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`); a first sample without gyro or temperature; a value outside its plausible range
-        (:mod:`gyrodrift.io.limits`: the gyro beyond ``gyro_max_dps``, the temperature,
-        heading, magnetometer or accelerometer), naming the row.
+        No samples; arrays of another shape than given above, or of unequal lengths; a median
+        time step above the plausible sample rate of a file (:data:`gyrodrift.io.timebase.MAX_RATE_HZ`);
+        a first sample without gyro or temperature; a value outside its plausible range
+        (:mod:`gyrodrift.io.limits`; the gyro's is ``gyro_max_dps``), naming the row.
     ArgumentTypeError
-        An argument of the wrong kind (an array that is not numbers, a ``config`` that is
-        not a :class:`CompensatorConfig`, an ``estimator`` that is not a drift estimator
-        instance, ...), saying what is expected; a :class:`TypeError` too.
+        An argument of the wrong kind, saying what is expected (a :class:`TypeError` too).
     """
     source = check_source(source)
     cfg = check_config(config)

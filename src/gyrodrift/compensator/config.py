@@ -18,65 +18,40 @@ TEMPERATURE_MODES = ("auto", "measured", "clock")
 
 @dataclass(frozen=True, kw_only=True)
 class CompensatorConfig:
-    """All settings of the compensator: the paper's structure, with the ``adaptive`` estimator.
+    """All settings of the compensator (``docs/settings-and-profiles.md``, "The compensator's settings").
 
     Attributes
     ----------
     update_interval_s : float
-        Δt between filter updates, s (paper: 10 s).
+        Δt between the paper's filter updates, s (paper: 10 s).
     init_s : float
         Length of the initialisation window at the start of the log, s.
     stack_depth : int
-        Number of measurements stacked in y (paper: 3).
+        Number of measurements stacked in y (eq. 3; paper: 3).
     compass_sigma_deg : float
         Standard deviation of the compass heading noise, deg.
     gyro_noise_dps_rthz : float
         Gyro white-noise density, deg/s/√Hz (ADXRS623: 0.04).
     estimator : str
-        Name of the drift estimator (see :mod:`gyrodrift.estimators`). Default
-        ``adaptive`` (heading, the paper's drift model and the compass's errors in one
-        model whose hypotheses are weighed by evidence; ``docs/results.md``); ``stkf`` is
-        the paper's strong tracking Kalman filter.
+        Name of the drift estimator (:mod:`gyrodrift.estimators`; default ``adaptive``).
     kalman : KalmanConfig
-        Fading factor s, x0, P0 and Q of the Kalman estimators.
+        Fading factor s, prior x0, P0 and Q of the Kalman estimators (and the prior of all).
     temp_rate : TempRateConfig
-        How T' is computed (see :mod:`gyrodrift.model`).
+        How T' is computed (:mod:`gyrodrift.model`).
     gate : GateConfig
-        Thresholds of the aiding gates (see :mod:`gyrodrift.gating`).
+        Thresholds of the aiding gates (:mod:`gyrodrift.gating`).
     fusion : FusionConfig or None
-        The fused heading (``heading_fused``; see :mod:`gyrodrift.fusion`). None
-        (default): the settings that suit ``estimator`` (:attr:`fusion_settings`).
+        The fused heading of the paper's filters; None: :attr:`fusion_settings`.
     adaptive : AdaptiveConfig
-        Settings of the ``adaptive`` estimator's model (:class:`gyrodrift.estimators.AdaptiveConfig`);
-        used only when ``estimator`` is ``adaptive``.
+        Settings of the ``adaptive`` estimator's model (``docs/model.md``).
     declination_deg : float
-        Magnetic declination at the log's place, deg, east positive (true north =
-        magnetic north + declination). It is added to every compass heading (given, or
-        from the magnetometer) as it enters the engine, so that ``compass_heading``,
-        ``heading`` and ``heading_fused`` are in true north, the north of ``ref_heading``
-        (a reference such as PX4's attitude yaw is in true north). 0 (default): they
-        stay in magnetic north. The drift estimate does not depend on it.
+        Magnetic declination, deg east, added to every compass heading (0: magnetic north).
     tilt : str
-        The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``): ``"accel"`` (default) the
-        accelerometer alone; ``"gyro"`` the gravity propagated with ``gyro_x``, ``gyro_y``,
-        ``gyro_z`` and corrected by the accelerometer near 1 g (:mod:`gyrodrift.attitude`)
-        when the log has ``gyro_x`` and ``gyro_y`` (else the accelerometer alone); why it is
-        not the default: ``docs/results.md``.
+        The tilt of a raw compass: ``"accel"`` (default) or ``"gyro"`` (:mod:`gyrodrift.attitude`).
     mag_calibration : bool
-        Fit a hard-iron offset and axis scales to a raw magnetometer over the whole log and
-        apply them before the heading, when the log turns through more than 270° of
-        heading (:mod:`gyrodrift.magcal`; a note says whether and how well). Not causal:
-        the streaming :class:`~gyrodrift.Compensator` does not calibrate, and its notes say
-        so. Default False.
+        Calibrate a raw magnetometer over the whole log first (:mod:`gyrodrift.magcal`; not causal).
     temperature : str
-        What ``T`` of the drift model is. ``"auto"`` (default): the temperature column,
-        unless it never changes over the log (a sensor without a temperature, a column
-        filled with a constant), then the elapsed time (:class:`gyrodrift.model.ElapsedClock`:
-        ``a`` becomes the drift's change per 300 s, and a note says so); the streaming
-        :class:`~gyrodrift.Compensator` cannot see the whole log and takes the column
-        (unless told :meth:`~gyrodrift.Compensator.temperature_absent`).
-        ``"measured"``: always the column. ``"clock"``: always the elapsed time (a stream
-        without temperature).
+        What ``T`` of the drift model is: ``"auto"`` (default), ``"measured"`` or ``"clock"``.
     """
 
     update_interval_s: float = setting(10.0, "s", gt=0.0, flag="--update-interval-s",

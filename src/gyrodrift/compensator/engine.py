@@ -1,18 +1,9 @@
 """The engine: one log compensated chunk by chunk, with the same numbers whatever the chunks.
 
-:class:`ChunkEngine` is what every entry point runs: :func:`gyrodrift.compensate` (one
-chunk, the whole log), the chunked file path (:mod:`gyrodrift.pipeline`) and the
-streaming :class:`gyrodrift.Compensator` (one row at a time). It owns the state arrays
-of :mod:`gyrodrift.kernels.layout`, calls :func:`gyrodrift.kernels.loop.prepare` and
-:func:`~gyrodrift.kernels.loop.run_chunk` on each chunk, grows their ring buffers, and
-runs the initialisation once the init window is complete (its rows are held back
-until then).
-
-The estimator: one of the paper's Kalman filters (``stkf``, ``stkf-s1``, ``kf``) is
-updated inside the row loop, on its own arrays; any other estimator with the linear
-drift of eq. (2) (``lsm``, ``mlr-causal``, ``fixed``, one of the user's) is updated here,
-in Python, at the end of each update interval (``MODE_EXTERNAL``). The default estimator
-runs in :class:`gyrodrift.compensator.model_engine.ModelEngine`, a subclass.
+:class:`ChunkEngine` runs the paper's filters for every entry point, its estimator updated in
+the row loop (``stkf``, ``stkf-s1``, ``kf``) or in Python at interval ends (any other drift of
+eq. 2); the default estimator runs in the subclass
+:class:`~gyrodrift.compensator.model_engine.ModelEngine`. Design: ``docs/engine.md`` ("The engine").
 """
 
 from __future__ import annotations
@@ -21,6 +12,7 @@ import math
 
 import numpy as np
 
+from gyrodrift._columns import read_only_floats
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.estimators import Observation
 from gyrodrift.estimators.base import LinearDrift
@@ -30,7 +22,8 @@ from gyrodrift.kernels import layout as L
 from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
-__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled"]
+__all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled", "FLOAT_COLUMNS",
+           "CODE_COLUMNS"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
@@ -44,20 +37,14 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     return view
 
 
-def _input(a) -> np.ndarray:
-    """A float64, contiguous, read-only view of an input column (a copy only when needed)."""
-    return _read_only(np.ascontiguousarray(a, dtype=float))
-
-
 _NO_FIELD = _read_only(np.empty(0))
 
 
 def compiled(dispatcher, args):
-    """The compiled function numba's ``dispatcher`` runs for ``args`` (its overload for their
-    types, which the dispatcher compiled or loaded on an earlier call with them), to be called
-    with arguments of the same types without the dispatcher typing each of them again on
-    every call (a one-row call of the streaming path); the dispatcher itself when there is
-    none (not compiled yet, or ``NUMBA_DISABLE_JIT``: a plain function)."""
+    """The compiled overload numba's ``dispatcher`` runs for the types of ``args`` (compiled or
+    loaded on an earlier call), to call without the dispatcher typing every argument again (a
+    one-row call of the streaming path); the dispatcher itself when there is none yet (or with
+    ``NUMBA_DISABLE_JIT``)."""
     overloads = getattr(dispatcher, "overloads", None)
     if overloads is None:
         return dispatcher
@@ -221,14 +208,11 @@ class ChunkEngine:
             heading = np.asarray(heading, dtype=float) + self.cfg.declination_deg
         if self._clock is not None:
             T = self._clock(t)
-        t, g, T, heading = (_input(a) for a in (t, g, T, heading))
-        norm = _NO_FIELD if norm is None else _input(norm)
-        dip = _NO_FIELD if dip is None else _input(dip)
+        t, g, T, heading = (read_only_floats(a) for a in (t, g, T, heading))
+        norm = _NO_FIELD if norm is None else read_only_floats(norm)
+        dip = _NO_FIELD if dip is None else read_only_floats(dip)
         if self._t0 is None:
-            if not (np.isfinite(g[0]) and np.isfinite(T[0])):
-                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
-            self._t0 = float(t[0])
-            self._fs[L.F_TSTART] = self._t0 + self.cfg.init_s
+            self._first_row(float(t[0]), g[0], T[0])
         whole = self._held is None or (not self._held and float(t[-1]) - self._fs[L.F_TSTART] >= 0)
         helper = None
         if whole and buffers is not None:
@@ -271,10 +255,7 @@ class ChunkEngine:
             T = float(self._clock((t,))[0])
         heading += self.cfg.declination_deg  # magnetic to true north, as in feed
         if self._t0 is None:
-            if not (math.isfinite(g) and math.isfinite(T)):
-                raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
-            self._t0 = t
-            self._fs[L.F_TSTART] = t + self.cfg.init_s
+            self._first_row(t, g, T)
         r = self._row or self._new_row()
         fix = self._prepare_row(r, t, g, T, heading, norm, dip)
         cols = r.cols
@@ -282,11 +263,19 @@ class ChunkEngine:
             g = float(cols.g_held[0]) if fix & 1 else g
             T = float(cols.T_held[0]) if fix & 2 else T
             heading = float(cols.h_wrapped[0]) if fix & 4 else heading
-        w.add(t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0]))
+        w.rows.append((t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0])))
         if not t - self._fs[L.F_TSTART] >= 0:
             return None
         self._hold_window_rows()
         return self._close_window()
+
+    def _first_row(self, t: float, g: float, T: float) -> None:
+        """The log's first row, which needs gyro and temperature values; the init window ends
+        ``init_s`` after it."""
+        if not (math.isfinite(g) and math.isfinite(T)):
+            raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
+        self._t0 = t
+        self._fs[L.F_TSTART] = t + self.cfg.init_s
 
     def _hold_window_rows(self) -> None:
         """The rows taken by :meth:`window_row` since the last chunk, held as one prepared chunk."""
@@ -301,20 +290,24 @@ class ChunkEngine:
         self._initialise(inputs, cols.column(L.O_TEMP_RATE))
         return self._run(inputs, cols)
 
-    def _initialise(self, inputs, Tp) -> None:
-        """The init window's measurements, the estimator's first update and the field reference.
-
-        The window ends at the first row at or after ``t_start``, or at the last row when the
-        log ends before (a short log: the window is what there is)."""
-        t, g, T, heading, norm, dip = inputs
-        cfg = self.cfg
+    def _window_end(self, t, holds: str) -> int:
+        """The init window's last row: the first at or after ``t_start``, or the last row of a log
+        that ends before (a short log: the window is what there is; a note says it is
+        compensated from ``holds`` and the prior)."""
         if t.size < 2:  # no time span: the init window's measurements would divide by zero
             raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
-        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)  # first row with t >= t_start
-        span = min(float(cfg.init_s), float(t[e] - t[0]))
+        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
         if t[e] < self._fs[L.F_TSTART]:
             self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
-                              f"{cfg.init_s:g}-s init window: compensated from its still parts and the prior")
+                              f"{self.cfg.init_s:g}-s init window: compensated from {holds} and the prior")
+        return e
+
+    def _initialise(self, inputs, Tp) -> None:
+        """The init window's measurements, the estimator's first update and the field reference."""
+        t, g, T, heading, norm, dip = inputs
+        cfg = self.cfg
+        e = self._window_end(t, "its still parts")
+        span = min(float(cfg.init_s), float(t[e] - t[0]))
         found, anchor = aiding.init_measurements(t, g, T, Tp, heading, e, cfg.stack_depth, max(span, 1e-9),
                                                  self._set, self._ist, self._stack, self._acc, cfg.stack_depth)
         if anchor < 0:
@@ -436,20 +429,13 @@ class ChunkEngine:
 
     # --------------------------------------------------------------- finish
     def provisional(self) -> tuple:
-        """The provisional row of the last :meth:`window_row`: compensated causally with the
-        drift model in force before any measurement (the prior, or a warm start's profile),
-        its ``bias_sd`` saying how little that is; the heading integrated from the first
-        compass sample (from 0 before one, relative), ``heading_fused`` the same from that
-        sample on (NaN before it, as the fused filter's), reason ``init``. The streaming
-        :class:`gyrodrift.Compensator` emits them so that every sample gets a row at once;
-        the engine's own rows of the window are made all the same, when it ends, and the
-        rows after it are the same as without provisional rows.
+        """The provisional row of the last :meth:`window_row`, compensated causally with the drift
+        model in force before any measurement (``docs/engine.md``, "Provisional rows").
 
-        Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as
-        :meth:`feed_row` gives them: ``out`` the N_OUT float outputs and ``codes`` the N_CODES
-        codes, in the order of :mod:`gyrodrift.kernels.layout`."""
+        Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as :meth:`feed_row`
+        gives them (the order of :mod:`gyrodrift.kernels.layout`)."""
         w = self._window
-        ti, gi, Ti, hi, Tpi = w.t[-1], w.g[-1], w.T[-1], w.heading[-1], w.Tp[-1]
+        ti, gi, Ti, hi, _, _, Tpi, _ = w.rows[-1]
         if self._prov_model is None:  # nothing updates the estimator before the window ends
             C = np.asarray(self.est.cov, dtype=float).reshape(9)
             unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
@@ -504,17 +490,17 @@ class ChunkEngine:
         return np.concatenate(self._accepted) if self._accepted else np.zeros((0, L.N_MEAS))
 
 
+#: Names of the engine's float output columns and of its codes, in the order of :mod:`gyrodrift.kernels.layout`.
+FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
+                 "heading_sd", "temp_rate")
+CODE_COLUMNS = ("updated", "reason", "unobs")
+
+
 def output_columns(t: np.ndarray, heading: np.ndarray, cols: Columns) -> dict:
     """The output columns of :meth:`ChunkEngine.feed` (views of ``cols``) for rows at times
     ``t`` whose compass heading was ``heading``."""
-    return {
-        "t": t, "bias_z": cols.column(L.O_BIAS), "rate_z": cols.column(L.O_RATE),
-        "heading": cols.column(L.O_HEADING), "a": cols.column(L.O_A), "b": cols.column(L.O_B),
-        "c": cols.column(L.O_C), "bias_sd": cols.column(L.O_BIAS_SD), "heading_fused": cols.column(L.O_FUSED),
-        "heading_fused_sd": cols.column(L.O_FUSED_SD), "heading_sd": cols.column(L.O_HEADING_SD),
-        "temp_rate": cols.column(L.O_TEMP_RATE), "compass_heading": heading, "updated": cols.code(L.OC_UPDATE),
-        "reason": cols.code(L.OC_REASON), "unobs": cols.code(L.OC_UNOBS),
-    }
+    return {"t": t, **{name: cols.column(k) for k, name in enumerate(FLOAT_COLUMNS)}, "compass_heading": heading,
+            **{name: cols.code(k) for k, name in enumerate(CODE_COLUMNS)}}
 
 
 def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
@@ -550,27 +536,17 @@ class _RowMemory:
 class _WindowRows:
     """The rows of the init window taken one by one (:meth:`ChunkEngine.window_row`), as
     :func:`gyrodrift.kernels.loop.prepare` left them: the inputs the row loop takes (held
-    cells filled, the compass wrapped), T' and the gap flags, in growing lists."""
+    cells filled, the compass wrapped), T' and the gap flag, one tuple a row."""
 
     def __init__(self):
-        self.t, self.g, self.T, self.heading, self.norm, self.dip, self.Tp, self.gap = ([] for _ in range(8))
-
-    def add(self, t, g, T, heading, norm, dip, Tp, gap) -> None:
-        self.t.append(t)
-        self.g.append(g)
-        self.T.append(T)
-        self.heading.append(heading)
-        self.norm.append(norm)
-        self.dip.append(dip)
-        self.Tp.append(Tp)
-        self.gap.append(gap)
+        self.rows: list[tuple] = []  # (t, g, T, heading, norm, dip, T', gap)
 
     def chunk(self) -> tuple[tuple, Columns]:
         """The rows as one prepared chunk, as :meth:`ChunkEngine.feed` holds one: inputs and columns."""
-        cols, helper = new_columns(len(self.t))
+        t, g, T, heading, norm, dip, Tp, gap = zip(*self.rows)
+        cols, helper = new_columns(len(t))
         join(helper)
-        cols.column(L.O_TEMP_RATE)[:] = self.Tp
-        cols.code(L.OC_GAP)[:] = self.gap
-        inputs = tuple(_read_only(np.array(v, dtype=float))
-                       for v in (self.t, self.g, self.T, self.heading, self.norm, self.dip))
+        cols.column(L.O_TEMP_RATE)[:] = Tp
+        cols.code(L.OC_GAP)[:] = gap
+        inputs = tuple(_read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip))
         return inputs, cols

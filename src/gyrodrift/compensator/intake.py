@@ -1,24 +1,7 @@
-"""The front end of every entry point, written once (:class:`Intake`).
-
-:func:`gyrodrift.compensate` (a whole log), the chunked file path and the streaming
-:class:`gyrodrift.Compensator` (one row at a time) drive one :class:`Intake`, which runs:
-
-1. dead magnetometer samples emptied (:class:`gyrodrift.compass.DeadField`);
-2. the tilt of a raw compass (:class:`gyrodrift.attitude.RawTilt`, decided on the first rows);
-3. the magnetometer calibration of the whole log (:mod:`gyrodrift.magcal`; a stream has none);
-4. the compass heading, field strength and dip (:func:`gyrodrift.compass.compass_columns`);
-5. the engine, built once, its ``T`` the temperature or the elapsed time (:func:`uses_clock`);
-   it adds the declination;
-6. the x and y axes of the rows out of the engine (:class:`gyrodrift.triad.TriadCompensator`,
-   decided on the first rows);
-7. the gyro unit against the compass (:class:`gyrodrift.gyro_units.GyroUnitCheck`), and the notes.
-
-Rows that come one by one also have their time base judged here, on the first ones
-(:class:`gyrodrift.io.timebase.TimeBaseWatch`, :meth:`Intake.time_stamp`); a whole log or a
-file is judged on all its time stamps before it comes in.
-
-What needs the whole log comes as a :class:`WholeLog`: the chunked file path reads the file
-once for it (:func:`survey`), :func:`gyrodrift.compensate` takes it from the log in memory.
+"""The front end of every entry point, written once (:class:`Intake`): dead magnetometer samples,
+the tilt and calibration of a raw compass, the compass columns, the engine, the x and y axes, the
+gyro-unit check, the time base of rows that come one by one, and the notes. Its stages and
+:class:`WholeLog`: ``docs/engine.md`` ("The front end").
 """
 
 from __future__ import annotations
@@ -90,12 +73,7 @@ class MagFit:
 
     def add(self, t, g, mag, acc, gyro_xy=None) -> None:
         """Rows with a raw compass, in order."""
-        if self.tilt is None:
-            self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
-        down = None
-        if self.tilt.uses_gyro:
-            gxy = np.asarray(gyro_xy, dtype=float)
-            down = self.tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        self.tilt, down = _gravity(self.tilt, self.config, self.source, t, g, acc, gyro_xy)
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
 
     def fit(self):
@@ -103,6 +81,17 @@ class MagFit:
         from gyrodrift import magcal
 
         return None if self.tilt is None else magcal.fit(*self.samples.arrays())
+
+
+def _gravity(tilt: RawTilt | None, config, source: str, t, g, acc, gyro_xy) -> tuple[RawTilt, np.ndarray | None]:
+    """The tilt of a raw compass (made on the first rows: ``config.tilt`` with or without
+    ``gyro_xy``) and the gyro-aided gravity of these rows (None: the accelerometer's)."""
+    if tilt is None:
+        tilt = RawTilt(config.tilt, gyro_xy is not None, source)
+    if not tilt.uses_gyro:
+        return tilt, None
+    gxy = np.asarray(gyro_xy, dtype=float)
+    return tilt, tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
 
 
 def survey(chunks, config, source: str) -> WholeLog:
@@ -126,7 +115,7 @@ def survey(chunks, config, source: str) -> WholeLog:
 
 
 class Intake:
-    """The front end of one log (see the module notes): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
+    """The front end of one log (``docs/engine.md``): chunks (:meth:`feed`) or rows (:meth:`row_compass`).
 
     Parameters
     ----------
@@ -207,20 +196,15 @@ class Intake:
     # ------------------------------------------------------------------ chunks
     def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None):
         """Heading (deg, NaN = no sample), field strength and dip (None without a raw
-        compass) of these rows: stages 1 to 4 of the module notes."""
+        compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end")."""
         n = len(t)
         if heading is not None and not self._heading_seen:
             self._heading_seen = bool(np.isfinite(heading).any())
         if mag is None or acc is None:  # the engine wraps the heading itself
             return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None
         mag = self._dead.mask(mag)
-        if self._tilt is None:
-            self._tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
         self._raw_seen = True
-        down = None
-        if self._tilt.uses_gyro:
-            gxy = np.asarray(gyro_xy, dtype=float)
-            down = self._tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
+        self._tilt, down = _gravity(self._tilt, self.config, self.source, t, g, acc, gyro_xy)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)

@@ -1,8 +1,5 @@
-"""Memory for the engine's output: fresh columns on 4-KB pages, or kept between calls.
-
-A 10M-row log has about 1 GB of fresh output. Its pages are faulted in (and zeroed by
-the OS) on the first write, on the critical path; see the notes below and
-``benchmarks/README.md``. :class:`OutputBuffers` keeps that memory between calls.
+"""Memory for the engine's output: fresh columns on 4-KB pages, faulted in by a helper thread, or
+kept between calls (:class:`OutputBuffers`). Why: ``docs/engine.md`` ("Output memory").
 """
 
 from __future__ import annotations
@@ -49,15 +46,10 @@ def new_columns(n: int) -> tuple[Columns, object]:
 class OutputBuffers:
     """Memory for the output columns of a whole-log call, kept from call to call.
 
-    :func:`gyrodrift.compensate_arrays` writes about 90 bytes of output per row. New
-    memory costs a page fault per 4 KB on its first write, which on a virtual machine can
-    take longer than the compensation itself (``benchmarks/README.md``). Code that
-    compensates many logs of similar length in one process (a Monte Carlo, a parameter
-    sweep, a service) can make one ``OutputBuffers`` and pass it to every call as
-    ``buffers=``: the pages are faulted in once, here.
-
-    The table a call returns *views* this memory: the next call with the same buffers
-    overwrites it. Copy what must outlive that call (``out.copy()``).
+    Code that compensates many logs in one process (a Monte Carlo, a sweep, a service) can
+    pass one to every call as ``buffers=``: its pages are faulted in once, here, not at every
+    call (``docs/engine.md``, "Output memory"). The table a call returns *views* this memory:
+    the next call with the same buffers overwrites it; copy what must outlive it.
 
     Parameters
     ----------
@@ -94,17 +86,7 @@ class OutputBuffers:
         return Columns(self._out[:N_OUT * n], codes, s[:n], s[n:2 * n], s[2 * n:3 * n], n)
 
 
-# ------------------------------------------------------------ fresh memory
-#
-# A 10M-row log has about 1 GB of fresh output (13 columns, T', the gap flags). Its pages
-# are faulted in (and zeroed by the OS) on the first write, on the critical path: with
-# transparent huge pages that is cheap on memory the process just freed (0.07 s per GB)
-# but on a VM whose host takes free memory back (Firecracker, free page reporting) it
-# costs about 2 s per GB, and the first large call of a process runs on such memory.
-# 4-KB pages more often come from memory that is still backed (faulting 0.88 GB of them
-# took 0.29-0.52 s, once 2.7 s); a helper thread faults them in ahead of the compiled
-# loop (MADV_POPULATE_WRITE, which leaves the contents alone), off the critical path when
-# a second core is free (measurements: benchmarks/README.md).
+# ------------------------------------------------------------ fresh memory: docs/engine.md, "Output memory"
 
 #: ``madvise`` advice (Linux): fault pages in writable, keeping the contents (5.14); no huge pages.
 _MADV_POPULATE_WRITE = 23
@@ -145,7 +127,7 @@ def _span(a, lo: int, hi: int) -> tuple[int, int]:
 
 
 def small_pages(a: np.ndarray) -> np.ndarray:
-    """``a`` (fresh, not yet written) on 4-KB pages when it is large (see above); returns it."""
+    """``a`` (fresh, not yet written) on 4-KB pages when it is large; returns it."""
     if a.nbytes >= _SMALL_PAGES_MIN_BYTES and _load_madvise():
         _madvise(*_span(a, 0, a.size), _MADV_NOHUGEPAGE)  # a failure only leaves huge pages
     return a

@@ -1,14 +1,8 @@
 """The engine of the default estimator's model: :class:`ModelEngine`, and :func:`make_engine`.
 
-:class:`ModelEngine` is a :class:`~gyrodrift.compensator.engine.ChunkEngine` whose rows run
-through the model's row loop (:func:`gyrodrift.kernels.evloop.run`) instead of the paper's
-interval loop: the same chunked, resumable feeding, the same held init window (its rows
-come out when it is complete, their gyro-alone heading anchored on its first compass
-sample) and the same provisional rows while it fills, so the three entry points give the
-same bits. The model needs no initialisation from the window: it learns from the first row;
-once the window is complete, the rows of its first epoch, compensated with the prior while
-nothing was measured, are compensated again with the drift learned by that epoch's end
-(:func:`gyrodrift.kernels.evloop.settle`).
+A :class:`~gyrodrift.compensator.engine.ChunkEngine` whose rows run through the model's row
+loop (:func:`gyrodrift.kernels.evloop.run`); how it differs: ``docs/engine.md`` ("The model's
+engine").
 """
 
 from __future__ import annotations
@@ -19,7 +13,6 @@ import numpy as np
 
 from gyrodrift.compensator.engine import ChunkEngine, _read_only, compiled, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
-from gyrodrift.errors import LogFormatError
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
 from gyrodrift.kernels import layout as L
@@ -36,8 +29,7 @@ def make_engine(config, estimator, source: str = "arrays", *, clock: bool = Fals
 
 
 class ModelEngine(ChunkEngine):
-    """Resumable compensation of one log by the model (see the module notes and
-    :class:`ChunkEngine` for the interface)."""
+    """Resumable compensation of one log by the model (the interface of :class:`ChunkEngine`)."""
 
     def __init__(self, config, estimator, source: str = "arrays", *, clock: bool = False, record: bool = True):
         self._start_state(config, estimator, source, clock)
@@ -58,12 +50,7 @@ class ModelEngine(ChunkEngine):
 
     def _initialise(self, inputs, Tp) -> None:
         t, g, T, heading, norm, dip = inputs
-        if t.size < 2:  # as the paper's filters: a log is at least two samples (a time span)
-            raise LogFormatError(f"{self.source}: the log has a single sample; give at least two samples")
-        e = min(int(np.searchsorted(t, self._fs[L.F_TSTART], "left")), t.size - 1)
-        if t[e] < self._fs[L.F_TSTART]:
-            self.notes.append(f"{self.source}: the log is {t[e] - t[0]:.1f} s long, shorter than the "
-                              f"{self.cfg.init_s:g}-s init window: compensated from what it holds and the prior")
+        e = self._window_end(t, "what it holds")
         if not np.isfinite(heading[: e + 1]).any():
             self.notes.append(f"{self.source}: no compass sample in the first {t[e] - t[0]:.1f} s: the heading "
                               "starts at 0 deg at the first sample (relative)")

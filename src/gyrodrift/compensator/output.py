@@ -1,16 +1,5 @@
-"""What the compensator gives back: one row (:class:`CompensatedSample`) or a table.
-
-The output table (:func:`output_frame`) has the columns of the output contract
-(:data:`gyrodrift.conventions.OUTPUT_COLS`), then ``temp_rate``, ``compass_heading``,
-``unobservable``, ``bias_sd``, ``heading_fused``, ``heading_fused_sd``, ``heading_sd``;
-``gate_reason`` and ``unobservable`` are categoricals (:data:`gyrodrift.gating.REASONS`,
-:data:`UNOBSERVABLE`). Its ``attrs`` carry the accepted drift measurements
-(:data:`MEASUREMENT_COLUMNS`), the estimator's name and its final parameters and
-covariance.
-
-The column ``updated`` (1 where the filter took a measurement) was named ``update``
-before; that name shadowed :meth:`pandas.DataFrame.update` (``out.update`` was the
-method, not the column). :func:`updated_column` reads either.
+"""What the compensator gives back: one row (:class:`CompensatedSample`) or a table
+(:func:`output_frame`; its columns: :func:`gyrodrift.compensate`, its ``attrs``: :func:`with_attrs`).
 """
 
 from __future__ import annotations
@@ -73,26 +62,9 @@ LEGACY_UPDATED = "update"
 
 
 def updated_column(out: pd.DataFrame, what: str = "output table") -> pd.Series:
-    """The ``updated`` column of an output table (1 where the filter took a measurement).
-
-    Parameters
-    ----------
-    out : DataFrame
-        An output table; one written before the rename, with ``update`` instead, is
-        read too, with a :class:`FutureWarning` saying so.
-    what : str
-        What the table is, for the messages.
-
-    Returns
-    -------
-    Series
-        The column, as it is in the table.
-
-    Raises
-    ------
-    LogFormatError
-        The table has neither column.
-    """
+    """The ``updated`` column of an output table (1 where the filter took a measurement), or the
+    ``update`` column of a table written under that earlier name, with a :class:`FutureWarning`;
+    ``what`` names the table in messages. A :class:`LogFormatError` when it has neither."""
     if "updated" in out.columns:
         return out["updated"]
     if LEGACY_UPDATED in out.columns:

@@ -10,8 +10,9 @@ from dataclasses import replace
 import numpy as np
 
 from gyrodrift import gating
-from gyrodrift.compensator.arguments import check_config, check_estimator, check_source
+from gyrodrift.compensator.arguments import check_config, check_estimator, check_source, short, shown
 from gyrodrift.compensator.config import CompensatorConfig
+from gyrodrift.compensator.engine import CODE_COLUMNS, FLOAT_COLUMNS
 from gyrodrift.compensator.intake import Intake, _float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
@@ -30,48 +31,19 @@ class Compensator:
     """Streaming compensator: feed samples in time order, get compensated rows back.
 
     :meth:`push` returns a list of :class:`CompensatedSample`, one row per sample from the
-    first: while the initialisation window fills (``init_s``) the rows are *provisional*,
-    compensated causally with the drift model known before any measurement (the prior, or
-    the profile of a warm start), with ``bias_sd`` and ``heading_sd`` saying how little
-    that is and ``gate_reason`` ``init``. From the end of the window on, the rows are those
-    of :func:`gyrodrift.compensate` on the same data, bit for bit (the same kernels);
-    there the init window's rows are compensated with what the window taught, which a
-    stream cannot wait for. ``provisional=False`` holds the window's rows back instead and
-    returns them all at once when it ends (then every row equals the batch's), and
-    :meth:`flush` gives the rows still held when the samples end first.
+    first. While the initialisation window fills (``init_s``) the rows are *provisional*
+    (``gate_reason`` ``init``); from its end on they are those of :func:`gyrodrift.compensate`
+    on the same data, bit for bit. ``provisional=False`` holds the window's rows back and
+    returns them at once when it ends (every row then equals the batch's); :meth:`flush` gives
+    the rows still held when the samples end first.
 
-    The x and y axes (``rate_x``, ``bias_x``, ...; :mod:`gyrodrift.triad`) are compensated
-    too when the first sample gives ``gyro_x_dps``, ``gyro_y_dps`` and ``acc``, with the
-    same numbers as :func:`gyrodrift.compensate` on a log with those columns.
-
-    With ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`), every row
-    also carries ``sf``, ``sf_sd``, ``rate_sf`` and ``heading_sf`` of the online scale-factor
-    estimate (Sec. 4.3, :class:`gyrodrift.scale_factor.ScaleFactorTracker`, fed each row
-    as it is output, with the held temperature): the same numbers as
-    ``estimate_scale_factor(compensate(log), scale_factor, causal=True)``. Without it those
-    fields are NaN and no work is done for them.
-
-    The front end is that of :func:`gyrodrift.compensate`
-    (:class:`gyrodrift.compensator.intake.Intake`), less what needs the whole log: the
-    magnetometer is not calibrated (``mag_calibration``; a note says so), and
-    ``temperature="auto"`` takes the column unless told :meth:`temperature_absent`.
-
-    ``gyro_max_dps`` is the plausible full scale of the gyro (deg/s, default 10000): every
-    sample is checked as a log's rows are (:mod:`gyrodrift.io.limits`, the same limits).
-
-    Every sample goes to the gyro-unit check of :func:`gyrodrift.compensate`
-    (:class:`gyrodrift.gyro_units.GyroUnitCheck`): :attr:`notes` says when the gyro turns
-    about 57.3 times less or more than the compass. ``gyro_unit`` is the unit the rates were
-    read in before they were converted to deg/s (``"rad/s"`` gives the advice for that
-    unit), as for :func:`gyrodrift.compensate_arrays`.
-
-    ``time_unit`` is the unit of the times pushed: None or ``"s"`` (default) seconds, as
-    :func:`gyrodrift.compensate_arrays` takes them; ``"ms"``, ``"us"``, ``"ns"`` converted
-    to seconds. The times are judged as :func:`gyrodrift.compensate_arrays` judges its
-    own and a file read with that unit is (:class:`gyrodrift.io.timebase.TimeBaseWatch`, on
-    the first samples): a sample rate above 100 kHz is refused. The guesses of a file read
-    without a unit (epoch or whole-number milliseconds) belong to text without a stated
-    unit: :meth:`judge_times_as` asks for them (``gyrodrift stream`` does, for its text).
+    The first sample decides the x and y axes (``gyro_x_dps``, ``gyro_y_dps`` and ``acc``);
+    ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`) adds the online scale
+    factor (``sf``, ``sf_sd``, ``rate_sf``, ``heading_sf``; NaN without it). ``gyro_max_dps``
+    (deg/s) bounds the gyro as a log's rows are bounded; ``gyro_unit`` is the unit the rates
+    were read in (for the gyro-unit note), ``time_unit`` that of the times pushed (``"s"``,
+    ``"ms"``, ``"us"``, ``"ns"``). What each does, and what the front end of a stream leaves
+    out: ``docs/streaming.md`` ("The Compensator object").
 
     Examples
     --------
@@ -184,11 +156,9 @@ class Compensator:
         heading_deg : float, optional
             Compass heading, deg clockwise from magnetic north; NaN = no sample.
         mag, acc : 3-sequences, optional
-            Raw FRD magnetometer and accelerometer (used when ``heading_deg`` is NaN
-            to compute a tilt-compensated heading, and to detect field anomalies); ``acc`` also
-            aids the x and y axes. With ``gyro_x_dps`` and ``gyro_y_dps`` on the first sample
-            (and ``config.tilt`` ``"gyro"``), the tilt is the gyro-aided gravity of
-            :mod:`gyrodrift.attitude`, as in :func:`gyrodrift.compensate`.
+            Raw FRD magnetometer and accelerometer: the compass when ``heading_deg`` is NaN (its
+            tilt gyro-aided with ``config.tilt`` ``"gyro"`` and ``gyro_x_dps``, ``gyro_y_dps`` on
+            the first sample) and the field-anomaly check; ``acc`` also aids the x and y axes.
         gyro_x_dps, gyro_y_dps : float, optional
             Raw roll- and pitch-axis rates, deg/s (FRD; NaN: hold). Given with ``acc`` on
             the first sample, every row gets ``rate_x, rate_y, bias_x, bias_y`` and
@@ -197,14 +167,10 @@ class Compensator:
         Raises
         ------
         GyroDriftError
-            An argument that is not a number (``mag`` and ``acc``: not three numbers;
-            None is allowed where the argument is optional), naming the argument; a
-            value outside its plausible range, as a log's cell is refused
-            (:mod:`gyrodrift.io.limits`: the gyro rates beyond ``gyro_max_dps``, the
-            temperature, heading, magnetometer and accelerometer; NaN is no value and
-            holds); a time that is not finite or does not increase, or a sample rate
-            above 100 kHz (class notes). The refused sample is not taken: the
-            compensator stays as it was.
+            An argument that is not a number (``mag``, ``acc``: three numbers; None where
+            optional) or is outside its plausible range as a log's cell (:mod:`gyrodrift.io.limits`;
+            NaN holds), naming it; a time that is not finite or does not increase, or a sample
+            rate above 100 kHz. The refused sample is not taken: the compensator stays as it was.
         """
         if temp_c is None and self._clock:
             temp_c = math.nan
@@ -350,17 +316,7 @@ class Compensator:
     @staticmethod
     def _values(t: float, out, codes, compass: float) -> tuple:
         """The fields of :class:`CompensatedSample` from the engine's float outputs and codes."""
-        reason = _REASONS[codes[L.OC_REASON]]
-        return (t, out[L.O_RATE], out[L.O_BIAS], out[L.O_HEADING], out[L.O_A], out[L.O_B], out[L.O_C],
-                codes[L.OC_UPDATE], int(reason != ""), reason, out[L.O_TEMP_RATE], compass,
-                UNOBSERVABLE[codes[L.OC_UNOBS]], out[L.O_BIAS_SD], out[L.O_FUSED], out[L.O_FUSED_SD],
-                out[L.O_HEADING_SD])
-
-
-#: The engine's columns in the order of the float outputs and of the codes of :mod:`gyrodrift.kernels.layout`.
-_FLOAT_COLUMNS = ("bias_z", "rate_z", "heading", "a", "b", "c", "bias_sd", "heading_fused", "heading_fused_sd",
-                  "heading_sd", "temp_rate")
-_CODE_COLUMNS = ("updated", "reason", "unobs")
+        return tuple(vars(_new_sample(t, out, codes, compass)).values())
 
 
 def _engine_rows(cols: dict | None):
@@ -368,8 +324,8 @@ def _engine_rows(cols: dict | None):
     (none for None), the outputs and codes in the order of :mod:`gyrodrift.kernels.layout`."""
     if cols is None:
         return ()
-    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in _FLOAT_COLUMNS)),
-               zip(*(cols[k].tolist() for k in _CODE_COLUMNS)), cols["compass_heading"].tolist())
+    return zip(cols["t"].tolist(), zip(*(cols[k].tolist() for k in FLOAT_COLUMNS)),
+               zip(*(cols[k].tolist() for k in CODE_COLUMNS)), cols["compass_heading"].tolist())
 
 
 def _new_sample(t: float, out, codes, compass: float, new=object.__new__, cls=CompensatedSample,
@@ -410,12 +366,12 @@ def _number(source: str, arg: str, value, column: str, limits: dict) -> float:
     if isinstance(value, float):  # the common case (numpy's float64 too), without the generic checks
         x = float(value)
     elif isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise GyroDriftError(f"{source}: {arg} must be a number, got {type(value).__name__} {_shown(value)}")
+        raise GyroDriftError(f"{source}: {arg} must be a number, got {shown(value)}")
     else:
         try:
             x = float(value)
         except (OverflowError, ValueError):
-            raise GyroDriftError(f"{source}: {arg} = {_shown(value)} is not a float (too large)") from None
+            raise GyroDriftError(f"{source}: {arg} = {short(value)} is not a float (too large)") from None
     limit = limits[column]
     if limit is not None and not limit.lo <= x <= limit.hi and not math.isnan(x):
         raise GyroDriftError(f"{source}: {arg}: {outside_problem(column, x, limit)}; {limit.advice}")
@@ -431,7 +387,7 @@ def _triple(source: str, arg: str, value, columns: tuple[str, ...], limits: dict
     except TypeError:
         items = None
     if items is None or len(items) != 3:
-        raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {_shown(value)}")
+        raise GyroDriftError(f"{source}: {arg} must be three numbers (x, y, z) or None, got {short(value)}")
     return tuple(_number(source, f"{arg}[{k}]", v, c, limits) for k, (v, c) in enumerate(zip(items, columns)))
 
 
@@ -450,9 +406,3 @@ def _checked_sample(source: str, limits: dict, t_s, gyro_z_dps, temp_c, heading_
         None if gyro_x_dps is None else _number(source, "gyro_x_dps", gyro_x_dps, GYRO_X, limits),
         None if gyro_y_dps is None else _number(source, "gyro_y_dps", gyro_y_dps, GYRO_Y, limits),
     )
-
-
-def _shown(value) -> str:
-    """A value for a message: its repr, shortened and on one line."""
-    text = " ".join(repr(value).split())
-    return text if len(text) <= 40 else text[:37] + "..."

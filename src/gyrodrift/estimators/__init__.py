@@ -1,20 +1,7 @@
-"""Drift estimators behind one interface (:class:`DriftEstimator`), by name.
-
-===========  ==================================================================
-name         estimator
-===========  ==================================================================
-``stkf``     strong tracking Kalman filter over [a, b, c], eqs. (3)–(10)
-``stkf-s1``  the same filter with s = 1 (plain Kalman filter over [a, b, c])
-``kf``       the paper's KF baseline: plain Kalman filter on a constant bias only
-``lsm``      the paper's "modified LSM": a, b, c refitted over a sliding window
-``mlr-causal`` the paper's MLR fitted on the measurements accepted so far
-``fixed``    fixed a, b, c (with a whole-log fit: the paper's MLR, non-causal)
-``adaptive`` heading, drift and compass error in one model, hypotheses weighed by
-             evidence (beyond the paper; :class:`AdaptiveConfig`; the default)
-===========  ==================================================================
-
-The PX4-style cubic calibration (``poly3``, :func:`fit_poly3`) is a baseline of
-:mod:`gyrodrift.evaluate.compare`: its drift is not eq. (2), so it does not run in the engine.
+"""Drift estimators behind one interface (:class:`DriftEstimator`), by name (:data:`ESTIMATORS`):
+``adaptive`` (the default, ``docs/model.md``), the paper's ``stkf``, ``stkf-s1``, ``kf``,
+``lsm``, ``mlr-causal``, ``fixed``, and the ``poly3`` baseline (:func:`fit_poly3`), which does
+not run in the engine. What each is: ``docs/engine.md`` ("The estimators").
 """
 
 from gyrodrift.estimators.base import (

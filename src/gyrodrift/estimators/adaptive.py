@@ -1,11 +1,6 @@
-"""The default estimator: one model of gyro, compass and platform, judged by evidence.
-
-The model and its equations are in :mod:`gyrodrift.kernels.evidence` (states heading,
-the drift model of eq. 2 and the compass's slow error; four hypotheses — compass clean or
-disturbed, platform still or moving — weighted by how well each explains the data). This
-module holds its settings (:class:`AdaptiveConfig`, each a physical quantity with its unit)
-and the estimator object the engine runs (:class:`AdaptiveModel`): the model's arrays, the
-prior, and the paper's absolute ``[a, b, c]`` and their covariance for profiles and reports.
+"""The default estimator: the settings (:class:`AdaptiveConfig`) and the state
+(:class:`AdaptiveModel`) of the model of :mod:`gyrodrift.kernels.evidence`, which
+``docs/model.md`` describes with every setting.
 """
 
 from __future__ import annotations
@@ -27,72 +22,54 @@ __all__ = ["AdaptiveConfig", "AdaptiveModel"]
 
 @dataclass(frozen=True, kw_only=True)
 class AdaptiveConfig:
-    """Settings of the default estimator's model (:mod:`gyrodrift.kernels.evidence`).
+    """Settings of the default estimator's model (``docs/model.md``, "Settings").
 
     Attributes
     ----------
     epoch_s : float
-        Length of an epoch, s: the model weighs and updates once per epoch (the rows of a
-        log sampled more slowly make an epoch each).
+        Length of an epoch, the model's step, s.
     clean_s, disturbed_s : float
-        Mean length of a spell of clean compass and of a magnetic disturbance, s (the
-        Markov chain of the compass hypotheses).
+        Mean length of a clean-compass spell and of a magnetic disturbance, s.
     still_s, moving_s : float
         Mean length of a still and of a moving spell of the platform, s.
     slope_walk : float
-        Random walk of a per √degC of temperature change, deg/s/degC/√degC (a drift curved
-        in temperature has a slope that changes as the temperature moves).
+        Random walk of a per √degC of temperature change, deg/s/degC/√degC.
     rate_walk : float
         Random walk of b per √s, deg/s/(degC/s)/√s.
     drift_walk : float
         Random walk of the drift c' in time, deg/s/√s (bias instability).
     drift_walk_temp : float
-        Random walk of c' per √degC of temperature change, deg/s/√degC (hysteresis, lag
-        and curvature: drift the linear model does not explain moves when T moves).
+        Random walk of c' per √degC of temperature change, deg/s/√degC.
     drift_rate_dps2, drift_rate_s : float
-        Stationary standard deviation (deg/s²) and correlation time (s) of the rate at which
-        the drift departs from eq. (2).
+        Standard deviation (deg/s²) and correlation time (s) of the drift's departure rate r.
     drift_jump_dps, drift_jump_s : float
-        A jump of the drift (a knee, a hysteresis switching as heating turns to cooling, a
-        thermal shock): its standard deviation (deg/s) and the mean time between jumps (s);
-        the still, clean hypothesis weighs every epoch with and without one. Off (0) by
-        default: a jump also explains the start of a slow turn, whose compass the model then
-        takes for disturbed; set it (0.3 deg/s, say) for a still device whose drift switches.
+        Standard deviation of a drift jump (deg/s; 0, the default: off) and mean time between jumps (s).
     compass_error_deg, compass_error_s : float
-        Standard deviation (deg) and correlation time (s) of the compass's slow error d
-        (deviation, slow wander): a Gauss–Markov process.
+        Standard deviation (deg) and correlation time (s) of the compass's slow error d.
     disturbance_step_deg, disturbance_walk, disturbance_s : float
-        A magnetic disturbance: the standard deviation of its step when it begins (deg), its
-        random walk (deg/√s) and the time over which it decays (s).
+        A disturbance's step (deg, standard deviation), random walk (deg/√s) and decay time (s).
     turn_error_s : float
-        The compass's error while turning per deg/s of turn rate, deg/(deg/s) = s (the
-        tilt of cornering, the compass's lag).
+        Compass error while turning per deg/s of turn rate, s.
     deviation_span_deg : float
-        Heading change over which the compass's slow error decorrelates, deg (deviation is
-        a function of heading).
+        Heading change over which the compass's slow error decorrelates, deg.
     turn_walks : tuple of 4 floats
-        Random walks of the true rate under the motion models, deg/s/√s, from slow turns
-        and long sways to waves and manoeuvres.
+        Random walks of the true rate under the motion models, slow to agile, deg/s/√s.
     turn_shares : tuple of 4 floats
-        Prior shares of the motion models in a moving epoch (sum below 1); the rest is a
-        rate that none predicts (a start, a stop), within ``rate_any_dps``.
+        Prior shares of the motion models in a moving epoch (sum below 1; the rest is any rate).
     rate_any_dps : float
         Standard deviation of a rate no motion model predicts, deg/s.
     angular_accel_dps2 : float
-        Typical angular acceleration, deg/s² (the error of the trapezoid integral between
-        samples of a moving platform).
+        Typical angular acceleration, deg/s².
     gap_turn_dps : float
-        Rate at which the heading of a moving platform is lost across a time gap, deg/s.
+        Rate at which a moving platform's heading is lost across a time gap, deg/s.
     still_walk : float
-        Heading random walk of a still platform, deg/√s (micro-motion).
+        Heading random walk of a still platform, deg/√s.
     gap_factor : float
-        A time step longer than this many typical steps (a running estimate of the log's
-        own spacing) is a time gap.
+        A time step longer than this many typical steps is a time gap.
     field_norm_sd, field_dip_deg : float
-        Scatter of a clean raw magnetometer's field strength (fraction of the reference)
-        and dip (deg).
+        Scatter of a clean raw field's strength (fraction of the reference) and dip (deg).
     noise_memory_s : float
-        Memory of the running estimates of the gyro's and the compass's white noise, s.
+        Memory of the measured gyro and compass white noise, s.
     p_clean0, p_still0 : float
         Probabilities of a clean compass and of a still platform at the start.
     heading_sd0 : float
@@ -172,11 +149,9 @@ class AdaptiveConfig:
 
 @register
 class AdaptiveModel(LinearDrift):
-    """The default estimator (``adaptive``): the model of :mod:`gyrodrift.kernels.evidence`.
-
-    The engine (:class:`gyrodrift.compensator.engine.ModelEngine`) runs it row by row; this
-    object holds its arrays and the prior, and reports the paper's absolute ``[a, b, c]``
-    (:attr:`params`) and their covariance (:attr:`cov`).
+    """The default estimator (``adaptive``): the arrays and prior of the model that
+    :class:`gyrodrift.compensator.model_engine.ModelEngine` runs row by row, and the paper's
+    absolute ``[a, b, c]`` (:attr:`params`) and covariance (:attr:`cov`).
 
     Parameters
     ----------

@@ -1,10 +1,8 @@
 """The one interface every drift estimator implements, and the registry of estimators.
 
-An estimator owns the drift-model parameters ``x = [a, b, c]`` (eq. 2) and nothing else.
-The compensator (:mod:`gyrodrift.compensator`) turns compass aiding into
-:class:`Observation` objects, linear in x, and tells the estimator about every
-update interval: :meth:`DriftEstimator.update` when the aiding was accepted,
-:meth:`DriftEstimator.hold` when it was refused (outage).
+An estimator owns the drift-model parameters ``x = [a, b, c]`` (eq. 2) and nothing else: the
+compensator gives it :class:`Observation` objects, linear in x, at every accepted update
+interval (:meth:`DriftEstimator.update`) and says when one was refused (:meth:`DriftEstimator.hold`).
 """
 
 from __future__ import annotations

@@ -1,12 +1,6 @@
-"""The strong tracking Kalman filter of Feng et al. (2015), its s = 1 twin, and the KF baseline.
-
-States ``x = [a, b, c]`` of the drift model (eq. 2), modelled as constant between
-updates (Φ = Γ = I, Section 3.2). At every accepted update interval
-``P- = s*P + Q`` then a Joseph-form correction (eq. 10); over a refused interval only Q
-is added, and P is capped (by default at the prior) so that directions the
-measurements do not see stay bounded. The equations are those of
-:mod:`gyrodrift.kernels.kalman`; the classes here hold the settings and the state
-arrays and give them the :class:`~gyrodrift.estimators.base.DriftEstimator` interface.
+"""The strong tracking Kalman filter of Feng et al. (2015), its s = 1 twin, and the KF baseline:
+settings and state arrays of the filters of :mod:`gyrodrift.kernels.kalman`, behind the
+:class:`~gyrodrift.estimators.base.DriftEstimator` interface (``docs/engine.md``, "The Kalman filters").
 """
 
 from __future__ import annotations
@@ -37,9 +31,8 @@ class KalmanConfig:
     Attributes
     ----------
     fading : float
-        Fading factor s >= 1 of eq. (10); memory is about ``1/(1 - 1/s)`` updates
-        (default 1.2: about 6 updates, 60 s at the 10-s interval; chosen on the
-        simulated static and vehicle runs, see the README). Ignored by ``kf``.
+        Fading factor s >= 1 of eq. (10); memory about ``1/(1 - 1/s)`` updates (1.2: about 6).
+        Ignored by ``kf``.
     x0 : tuple of 3 floats
         Prior mean of [a (deg/s/degC), b (deg/degC), c (deg/s)].
     p0_sd : tuple of 3 floats
@@ -48,10 +41,9 @@ class KalmanConfig:
         Process-noise standard deviations of [a, b, c] per update interval;
         Q = diag(q_sd²).
     max_sd : tuple of 3 floats, optional
-        Cap on each standard deviation (see module notes); default ``p0_sd``. A cap
-        above :data:`~gyrodrift.estimators.base.DRIFT_PARAM_BOUNDS` is allowed (a filter
-        without cap, for reference); ``x0``, ``p0_sd``, ``q_sd`` and the standard
-        deviations of ``p0_cov`` must lie within them (:class:`ConfigError` otherwise).
+        Cap on each standard deviation (``docs/engine.md``); default ``p0_sd``. A cap above
+        :data:`~gyrodrift.estimators.base.DRIFT_PARAM_BOUNDS` is allowed (no cap, for reference);
+        ``x0``, ``p0_sd``, ``q_sd`` and the standard deviations of ``p0_cov`` must lie within them.
     p0_cov : 3x3 nested tuple, optional
         A full prior covariance replacing ``diag(p0_sd²)`` (a warm start from a device
         profile keeps the strong a–c correlation); the cap stays ``max_sd``/``p0_sd``.
@@ -186,19 +178,14 @@ class PlainKalmanDrift(KalmanDrift):
 class BiasKalman(KernelFilter):
     """The paper's KF baseline (``kf``): a plain Kalman filter on a constant bias c alone.
 
-    The filter of :class:`KalmanDrift` with s = 1 and only c active; a and b stay 0, so
-    through an outage the last bias is held and the temperature is ignored (Section 4,
-    Figs. 4, 5 and 9).
+    The filter of :class:`KalmanDrift` with s = 1 and only c active; a and b stay 0 (Section 4).
 
     Parameters
     ----------
     config : KalmanConfig
         Prior of c (``x0[2]``, ``p0_sd[2]``, cap ``max_sd[2]``).
     bias_q_sd : float
-        Random-walk standard deviation of the bias per update interval, deg/s. With
-        no temperature model the bias must wander to follow the drift: 0.02 deg/s
-        balanced bias and heading error on the simulated static and vehicle runs
-        (0.003 lags far behind, 0.05 is noisy).
+        Random-walk standard deviation of the bias per update interval, deg/s (``docs/engine.md``).
     """
 
     name: ClassVar[str] = "kf"

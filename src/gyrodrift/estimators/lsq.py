@@ -1,17 +1,6 @@
-"""Least-squares baselines of the paper: MLR (whole log) and the "modified LSM" (sliding window).
-
-Both solve the weighted least-squares problem of eq. (2) over drift measurements m with
-rows ``h = [T, T', 1]``::
-
-    min_x  sum_i (m_i - h_i x)^2 / r_i  [ + (x - x0)^T P0^-1 (x - x0) ]
-
-MLR fits a whole log, which spans the temperature range: plain least squares
-(SVD, :func:`numpy.linalg.lstsq`), exact on noiseless data. The modified LSM refits
-a short window, in which T barely moves and T' may be flat: a, b and c are then
-nearly collinear and plain least squares amplifies the compass noise without bound
-(tried: drift errors of tens of deg/s on the simulated static run). It is therefore
-regularised by the Kalman filters' prior (the bracketed term), which leaves every
-well-determined combination to the data.
+"""Least-squares baselines of the paper: MLR (whole log), MLR on the past, and the "modified LSM"
+(sliding window), all the weighted least squares of eq. (2) over drift measurements
+(``docs/engine.md``, "The least-squares baselines").
 """
 
 from __future__ import annotations
@@ -29,7 +18,7 @@ __all__ = ["fit_linear_drift", "WindowedLsm", "CausalMlr", "FixedParams"]
 
 
 def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
-    """Weighted least-squares [a, b, c] (module notes).
+    """Weighted least-squares [a, b, c] of eq. (2) (``docs/engine.md``, "The least-squares baselines").
 
     Parameters
     ----------
@@ -66,8 +55,21 @@ def fit_linear_drift(m, H, r, prior: KalmanConfig | None = None) -> np.ndarray:
     return x_scaled / scale
 
 
+class _Fitted(LinearDrift):
+    """A least-squares estimator: the parameters ``_x`` of its last fit, held through refused intervals."""
+
+    causal: ClassVar[bool] = True
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._x.copy()
+
+    def hold(self) -> np.ndarray:
+        return self.params
+
+
 @register
-class WindowedLsm(LinearDrift):
+class WindowedLsm(_Fitted):
     """The paper's "modified LSM" (``lsm``): a, b, c refitted at every update over the
     last ``window`` accepted measurements (default 30: 300 s at the 10-s interval).
 
@@ -80,7 +82,6 @@ class WindowedLsm(LinearDrift):
     """
 
     name: ClassVar[str] = "lsm"
-    causal: ClassVar[bool] = True
 
     def __init__(self, config: KalmanConfig = KalmanConfig(), window: int = 30):
         if not (isinstance(window, int) and window >= 1):
@@ -88,10 +89,6 @@ class WindowedLsm(LinearDrift):
         self.config = config
         self._rows: deque[tuple[float, np.ndarray, float]] = deque(maxlen=window)
         self._x = np.array(config.x0, dtype=float)
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
 
     @property
     def cov(self) -> np.ndarray:
@@ -112,12 +109,9 @@ class WindowedLsm(LinearDrift):
         self._x = fit_linear_drift(*self._arrays(), prior=self.config)
         return self.params
 
-    def hold(self) -> np.ndarray:
-        return self.params
-
 
 @register
-class CausalMlr(LinearDrift):
+class CausalMlr(_Fitted):
     """The paper's MLR fitted on the past only (``mlr-causal``): at every update a, b, c are
     the regularised weighted least squares of every measurement accepted so far
     (:func:`fit_linear_drift` with the prior, accumulated as normal equations), so a row
@@ -130,7 +124,6 @@ class CausalMlr(LinearDrift):
     """
 
     name: ClassVar[str] = "mlr-causal"
-    causal: ClassVar[bool] = True
 
     def __init__(self, config: KalmanConfig = KalmanConfig()):
         self.config = config
@@ -138,10 +131,6 @@ class CausalMlr(LinearDrift):
         self._info = np.diag(1.0 / np.square(np.array(config.p0_sd, dtype=float)))
         self._vec = self._info @ x0
         self._x = x0
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()
 
     @property
     def cov(self) -> np.ndarray:
@@ -157,12 +146,9 @@ class CausalMlr(LinearDrift):
         self._x = np.linalg.solve(self._info, self._vec)
         return self.params
 
-    def hold(self) -> np.ndarray:
-        return self.params
-
 
 @register
-class FixedParams(Unaided, LinearDrift):
+class FixedParams(Unaided, _Fitted):
     """Fixed a, b, c (``fixed``): ignores all observations.
 
     With parameters fitted by :func:`fit_linear_drift` over every measurement of the
@@ -170,12 +156,7 @@ class FixedParams(Unaided, LinearDrift):
     """
 
     name: ClassVar[str] = "fixed"
-    causal: ClassVar[bool] = True
 
     def __init__(self, params=(0.0, 0.0, 0.0)):
         check_drift_triple("fixed parameters", params)
         self._x = np.array(params, dtype=float)
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._x.copy()

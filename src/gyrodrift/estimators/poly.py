@@ -1,10 +1,6 @@
-"""PX4-style thermal calibration baseline (``poly3``): a cubic in temperature, fitted offline.
-
-What flight controllers do today (PX4 ``Tools/process_sensor_caldata.py``, see
-``shared/guide/field-notes.md``): a static heating run of the same device is recorded
-first; the gyro output, median-filtered, is fitted by a cubic in ``T - T_ref`` with
-``T_ref`` the middle of the calibrated range; in use the temperature is clamped to that
-range (no extrapolation). There is no T' term and no adaptation.
+"""PX4-style thermal calibration baseline (``poly3``): a cubic in temperature, fitted offline on a
+still heating run of the same device and clamped to its range in use; no T' term, no adaptation
+(``docs/engine.md``, "The least-squares baselines").
 """
 
 from __future__ import annotations

@@ -1,40 +1,8 @@
 """The equations of gyrodrift, written once, compiled with numba.
 
-Every equation the compensator runs lives in this package, once: the streaming
-:class:`gyrodrift.Compensator`, :func:`gyrodrift.compensate` and the chunked file path
-all call the same functions, so they give the same bits by construction.
-
-==================  ============================================================
-module              what it holds
-==================  ============================================================
-:mod:`.layout`      the state and settings arrays: index names, reason codes
-:mod:`.numeric`     angle wrapping, small-matrix algebra, the Kalman correction
-                    (Joseph form) and the covariance cap
-:mod:`.kalman`      the drift filters: eq. (10) with a fixed fading factor
-                    (``stkf``, ``stkf-s1``, ``kf``) and the ``adaptive`` filter
-:mod:`.drift`       eq. (2)/(5) and the T' estimate
-:mod:`.aiding`      eqs. (4)–(6): compass and zero-rate measurements, the gates,
-                    lock-out recovery, initialisation
-:mod:`.fusion`      the fused heading (one-state Kalman filter)
-:mod:`.loop`        the row loop: input checks, compensation, integration,
-                    gating, interval decisions, fused heading
-:mod:`.tilt`        the x and y axes: their row loop, aided by the gravity direction
-:mod:`.evidence`    the default estimator's model (hypotheses weighed by evidence)
-:mod:`.evloop`      its row loop
-:mod:`.thermal`     the thermal calibration's polynomial (numpy, not compiled)
-==================  ============================================================
-
-The functions are cached on disk (``cache=True``): ``pip install .`` compiles every one
-of them into the package (:mod:`.warm`, run by ``setup.py``), and a function missing from
-the cache (an editable install, another numba or processor) is compiled on first use; with
-``NUMBA_DISABLE_JIT=1`` the same source runs as plain Python (slow; for debugging,
-and as an oracle in the tests). :func:`say_when_compiling` prints one line when numba
-starts compiling, so a command line says why it pauses.
-
-numba checks a cached function against its own file only, while the row loop inlines
-functions of the other modules here: importing this package therefore compares a digest
-of all their sources with the one the cache was made from, and empties the cache when
-they differ.
+The streaming :class:`gyrodrift.Compensator`, :func:`gyrodrift.compensate` and the chunked
+file path all call these functions, so they give the same bits by construction. The modules,
+the on-disk cache and its digest of all their sources: ``docs/engine.md`` ("The kernels").
 """
 
 from __future__ import annotations

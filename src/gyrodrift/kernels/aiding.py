@@ -1,20 +1,6 @@
 """Compass aiding of the paper's filters: the drift measurements of eqs. (4)–(6), the gates,
-and the interval decision.
-
-Every update interval (10 s) the change of (gyro heading − compass heading) measures the
-drift: ``m = Δ(∫gyro − compass)/Δt`` with H the interval means of ``[T, T', 1]``
-(:func:`compass_measurement`). The interval is refused (:func:`row_condition`, first
-reason seen; :func:`close`) for a gap, a field anomaly, turning, or a compass that
-disagrees with the compensated gyro; refused intervals hold the parameters (eq. 5).
-Lock-out recovery (:func:`steady_disagreement`) accepts an interval after a run of
-refusals whose compass-minus-gyro rates agree: the drift moved, not the compass.
-
-Initialisation (:func:`init_measurements`): the first ``init_s`` seconds split into
-``stack_depth`` sub-windows; each motionless one gives one drift measurement, its mean
-gyro rate (the paper's y1..y3).
-
-The default estimator does not use this module: its model decides by evidence
-(:mod:`gyrodrift.kernels.evidence`).
+the interval decision, lock-out recovery and the initialisation (``docs/engine.md``, "The
+paper's filters, row by row"; the gates: ``docs/conventions.md``).
 """
 
 from __future__ import annotations
@@ -27,7 +13,7 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels import kalman
 from gyrodrift.kernels.layout import (
     C_COMPASS_SD, C_GYRO_NOISE, C_INTERF, C_INTERVAL, C_MAX_AGE, C_PRIOR_A, C_PRIOR_B, C_STILL_HEADING, C_STILL_STD,
-    F_COV, F_PA, F_PB, F_PC, F_S0, F_S1, I_AFTER_INT, I_N_ACC, I_PENDING, I_REFUSED_N, I_S0_OK, I_S1_OK, I_STACK_N,
+    F_COV, F_PA, F_S0, F_S1, I_AFTER_INT, I_N_ACC, I_PENDING, I_REFUSED_N, I_S0_OK, I_S1_OK, I_STACK_N,
     I_STICKY, I_UNOBS, K_DEPTH, K_MODE, K_RELOCK, MODE_EXTERNAL, N_SNAP, NO_STICKY, PENDING_HOLD, PENDING_UPDATE,
     R_FIELD, R_GAP, R_INTERFERENCE, R_NO_COMPASS, R_NONE, R_TURNING, S_HEADING, S_IBIAS, S_IRAW, S_IT, S_ITP, S_T,
     UNOBS_A, UNOBS_B, UNOBSERVABLE_SD_FRACTION,
@@ -201,16 +187,10 @@ def stacked(stack, n):
 
 @jit
 def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, ef, ei, intervals):
-    """Decide the interval ending at a boundary row and update or hold the estimator;
-    returns (update, reason).
-
-    Accepted: no refusal seen in it and a compass sample at both ends at least half an
-    interval apart; the measurement (eqs. 4–6) is then refused for interference when its
-    residual exceeds ``interference_deg``, unless lock-out recovery accepts it. The
-    estimator (``ef``, ``ei``) is updated with the stacked measurements (``depth`` rows,
-    eq. 3) or held for ``intervals`` intervals (more than one when a time gap skipped
-    some); in MODE_EXTERNAL the caller does it (``ist[I_PENDING]``, one hold).
-    """
+    """Decide the interval ending at a boundary row (``docs/engine.md``, "The paper's filters,
+    row by row") and update the estimator (``ef``, ``ei``) with the stacked measurements (eq. 3)
+    or hold it for ``intervals`` intervals; in MODE_EXTERNAL the caller does it
+    (``ist[I_PENDING]``). Returns (update, reason)."""
     mode = icfg[K_MODE]
     reason = ist[I_STICKY]
     end_ok = ist[I_S1_OK] == 1 and not (t_boundary - fs[F_S1] > cfg[C_MAX_AGE])
@@ -260,15 +240,8 @@ def close(t_boundary, fs, ist, cfg, icfg, stack, refused, acc, ef, ei, intervals
 def in_force(fs, ist, cfg, ef, ei):
     """The parameters and covariance of a kernel estimator into ``fs`` (F_PA.., F_COV) and
     the unobservable code into ``ist``."""
-    p = kalman.params(ef, ei)
-    C = kalman.cov(ef, ei)
-    fs[F_PA] = p[0]
-    fs[F_PB] = p[1]
-    fs[F_PC] = p[2]
-    for r in range(3):
-        for c in range(3):
-            fs[F_COV + 3 * r + c] = C[r, c]
-    ist[I_UNOBS] = unobservable_code(C, cfg[C_PRIOR_A], cfg[C_PRIOR_B])
+    kalman.put_state(ef, ei, fs, F_PA, F_COV)
+    ist[I_UNOBS] = unobservable_code(kalman.cov(ef, ei), cfg[C_PRIOR_A], cfg[C_PRIOR_B])
 
 
 # ------------------------------------------------------------ initialisation
@@ -277,14 +250,8 @@ def in_force(fs, ist, cfg, ef, ei):
 @jit
 def init_measurements(t, g, T, Tp, heading, e, n_windows, init_s, cfg, ist, stack, acc, depth):
     """The drift measurements of the init window, rows ``0..e`` (inclusive), into the
-    stack and ``acc``; returns (measurements, anchor row).
-
-    The window is split at ``t[0] + j init_s / n_windows``; a sub-window is motionless
-    when the gyro standard deviation is at most ``still_std_dps`` and the compass turned
-    at most ``still_heading_deg`` (median of its last third against its first third);
-    each motionless one gives its mean gyro rate (trapezoid integral over the
-    sub-window) with H the means of [T, T', 1] and variance ``N²/Δt``. The anchor row is
-    the first compass sample of the window (-1: none; the heading cannot be anchored).
+    stack and ``acc``: one per motionless sub-window (``docs/engine.md``, "Initialisation").
+    Returns (measurements, anchor row: the window's first compass sample, -1 without one).
     """
     n = e + 1
     I_raw = np.zeros(n)

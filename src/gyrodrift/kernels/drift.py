@@ -1,11 +1,7 @@
-"""The drift model, eq. (2)/(5) ``B_d = a T + b T' + c``, and the T' estimate.
-
-T' (degC/s) of a sample is the least-squares slope of the 1-s temperature means (bins of
-``bin_s`` seconds aligned on the first sample) over the trailing window of
-``window_bins`` bins before the sample's own bin (see :mod:`gyrodrift.model`): causal,
-and robust to quantised temperature. The tracker's state is in ``fs``/``ist`` (``F_TP_*``,
-``I_TP_*``) and the ring of closed bins ``bins`` (bin number, mean time, mean
-temperature; at least ``window_bins + 2`` rows).
+"""The drift model, eq. (2)/(5) ``B_d = a T + b T' + c``, and the T' estimate
+(``docs/conventions.md``, "How T' is computed"), resumable across chunks: its state is in
+``fs``/``ist`` (``F_TP_*``, ``I_TP_*``) and the ring ``bins`` of closed bins (bin number, mean
+time, mean temperature; at least ``window_bins + 2`` rows).
 """
 
 from __future__ import annotations

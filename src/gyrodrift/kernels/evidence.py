@@ -1,58 +1,14 @@
 """The default estimator's model: heading, drift and compass error, judged by evidence.
 
-One linear-Gaussian model of the gyro, the compass and the platform, written once:
+Four linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e]`` (δ = heading − ∫gyro; a, b,
+c' the drift of eq. 2 centred on ``T_ref``; d the compass's slow error; r the drift's rate of
+departure from eq. 2; e a magnetic disturbance), one per hypothesis (compass clean or
+disturbed × platform still or moving), stepped once per epoch (:func:`epoch`: δ moves by
+minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
+interacting multiple model (:func:`combine`). The model and every term: ``docs/model.md``.
 
-* states ``x = [δ, a, b, c, d, r, e]``: δ = heading − ∫gyro (deg; the heading is ``∫gyro + δ``),
-  the drift model of eq. (2) centred on ``T_ref`` (``bias = a (T − T_ref) + b T' + c``;
-  deg/s/degC, deg/s per degC/s, deg/s), d, the compass's own slowly varying error (deg: the
-  deviation of hard and soft iron, a function of heading, and slow wander; a Gauss–Markov
-  process that decorrelates with time and with the heading turned),
-  r, the rate at which the drift departs from eq. (2) (deg/s², a Gauss–Markov process that
-  c follows: knees, lag and curvature make the drift move for a while in one direction), and
-  e, the magnetic disturbance on the compass (deg; zero while the compass is clean);
-* the gyro is the input: over an *epoch* (about a second of rows) δ changes by minus the
-  integral of the drift (eq. 5 integrated), with the gyro's white noise;
-* the compass measures ``heading + d`` (the mean over the epoch's samples, with the compass's
-  white noise divided by their number, plus the error an epoch's mean keeps — tilt while
-  accelerating, vibration — measured from the clean innovations' excess over their predicted
-  variance, plus an error proportional to the turn rate: the tilt of cornering and the
-  compass's lag): eqs. (4)–(6) as one measurement of δ whose change over time carries the
-  drift, as the paper's ΔA/Δt does;
-* the drift parameters random-walk: a and c' with the temperature change (curvature,
-  hysteresis and lag show as drift that moves when the temperature moves), c' also in time
-  (bias instability), b slowly; d is a first-order Gauss–Markov process whose variance
-  grows with the heading turned (deviation is a function of heading).
-
-The questions hand-written gates used to answer are *hypotheses* carried side by side, an
-interacting multiple model (IMM; Bar-Shalom, Li, Kirubarajan 2001, ch. 11): four filters of
-the model above, one per mode (compass clean / disturbed) × (platform still / moving),
-mixed every epoch by a Markov chain of mode changes and weighted by how well each explains
-the epoch's data:
-
-* **still** filters hold the heading (δ moves with the gyro integral) and take the epoch's
-  mean gyro rate as a measurement of the drift (eq. 1 with zero true rate), and expect the
-  gyro within the epoch to be white noise about it (the von Neumann ratio of the successive
-  differences to the variance near 2), where motion may leave structure;
-* **moving** filters propagate δ with the drift; the gyro is explained as drift plus a
-  true rate, which is predicted by small random-walk filters of the rate (from a slow one
-  for turns of hundredths of a deg/s to an agile one for manoeuvres) or is any rate at all
-  (a start or a stop): the mixture of the three is the moving platform's likelihood of the
-  epoch's gyro;
-* **clean** filters take the compass measurement (likelihood: its Gaussian innovation);
-* **disturbed** filters take it with a disturbance e on top (a state of their own: a step of
-  unknown size when the disturbance begins, then a fast random walk that decays in time and
-  decorrelates as the heading turns, so an offset that stays through turns is no disturbance;
-  zero in the clean filters), so a step, a ramp or a wander of the compass is explained by e, which
-  is the only state a disturbed compass corrects (a Schmidt update: heading and drift are
-  considered, not corrected) while the heading is known better than a disturbance is large; with a raw magnetometer the field strength
-  and dip add their own likelihoods (near the reference when clean, anywhere within ±50 % and
-  ±30 deg when disturbed).
-
-The output is the moment-matched mixture; the mode probabilities are the labels
-(:mod:`gyrodrift.kernels.evloop`).
-
-Arrays: ``mf`` floats (layout ``MF_*``), ``mc`` settings (``MC_*``). All functions are pure
-numba on these arrays, so batch, chunked and streaming runs give the same bits.
+Arrays: ``mf`` floats (``MF_*``), ``mc`` settings (``MC_*``). All functions are pure numba on
+these arrays, so batch, chunked and streaming runs give the same bits.
 """
 
 from __future__ import annotations
@@ -115,33 +71,25 @@ MF_PDIST, MF_PSTILL, MF_FIELD_DOM = MF_LAST_D_T + 1, MF_LAST_D_T + 2, MF_LAST_D_
 MF_UPDATED = MF_FIELD_DOM + 1  # the last epoch used a measurement (1) or not
 MF_NS_S, MF_NS_W = MF_UPDATED + 1, MF_UPDATED + 2  # the gyro noise: forgotten sums of ½(Δg)² and of steps
 MF_NW_S, MF_NW_W = MF_UPDATED + 3, MF_UPDATED + 4  # the compass noise: the same of ½(ΔD)²
-#: The compass error an epoch's mean keeps beyond the white noise (deg²; tilt while
-#: accelerating, vibration): from the clean innovations' excess over their predicted variance,
-#: forgotten sums and weight.
+#: The compass error an epoch's mean keeps beyond white noise (deg²): value, forgotten sum and weight.
 MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 #: Probability that the last epoch's drift jumped (the modes' weights where the jump was kept).
 MF_JUMP = MF_RX_W + 1
-#: The gyro noise's colour: the von Neumann ratio of a still epoch over its white value (1 for
-#: white noise; below 1 where the sensor's own filter correlates successive samples), as a
-#: Gaussian belief (mean, variance) learned from the epochs as likely still as they are.
+#: The gyro noise's colour (a still epoch's von Neumann ratio over its white value): belief mean, variance.
 MF_COLOUR, MF_COLOUR_V = MF_JUMP + 1, MF_JUMP + 2
 N_MF = MF_COLOUR_V + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
-#: A moving epoch's gyro: white about its mean with this probability (a steady turn), else any
-#: serial structure (its ratio anywhere from 0 to 3 sd above the white value).
+#: Probability that a moving epoch's gyro is white about its mean (a steady turn).
 VN_MOTION = 0.5
-#: Prior belief in the noise colour: white, within this standard deviation (real MEMS gyros
-#: with an on-chip low-pass filter read 0.8 or so), and its random walk per √s (a device's
-#: noise changes its colour slowly, if at all).
+#: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
 #: Bounds of the colour where it sets the long-run noise (an AR(1) sequence's).
 COLOUR_MIN, COLOUR_MAX = 0.2, 1.5
 #: Largest heading variance a time gap adds to a moving platform, deg² (a heading anywhere).
 GAP_VAR_MAX = 90.0**2
-#: A clean compass innovation says something of the compass's epoch-level error only when its
-#: predicted variance is below this, deg² (the heading known to a few degrees).
+#: Largest predicted variance of a clean compass innovation that measures MF_RX, deg².
 RX_S_MAX = 25.0
 #: Mean time a motion keeps its character, s: the rate filters' chance of handing over.
 RATE_SWITCH_S = 10.0
@@ -190,7 +138,7 @@ def _loggauss(nu, S):
 
 @jit
 def init_state(mf, mc, x0, P0, t_ref):
-    """Start the bank: every mode at the prior ``x0`` (5,), ``P0`` (5, 5) (drift states centred
+    """Start the bank: every mode at the prior ``x0`` (NX,), ``P0`` (NX, NX) (drift states centred
     on ``t_ref``), mode probabilities from the settings, the rate filters at rest."""
     mf[MF_TREF] = t_ref
     pc, ps = mc[MC_P_CLEAN0], mc[MC_P_STILL0]
@@ -199,10 +147,7 @@ def init_state(mf, mc, x0, P0, t_ref):
     for j in range(NM):
         X[j, :] = x0
         P[j, :, :] = P0
-        # a disturbance present from the first sample cannot be told from the heading: the
-        # disturbed filters start with the compass's own error scale, not a step's; with a
-        # step's they would know the heading to tens of degrees only, and the mixing would
-        # start the clean filters from that every epoch (clean could then never win back)
+        # e of the disturbed filters starts at the compass's error scale (docs/model.md, "The start")
         if not _is_clean(j):
             P[j, X_E, X_E] = mc[MC_SIG_D] ** 2
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps)
@@ -223,36 +168,52 @@ def seed_heading(mf, delta):
     combine(mf)
 
 
+@jit(inline=True)
+def _moments(X, P, w, ref, clean, step_var, x, Pm):
+    """Add the moments of the bank ``X``, ``P`` with weights ``w`` to ``x``, ``Pm`` (zeros): δ
+    averaged as an angle about ``ref``; ``clean``: for a clean mode, without a disturbance e,
+    and ``step_var`` added to e's variance for each clean mode mixed into a disturbed one."""
+    for i in range(NM):
+        for k in range(NX):
+            v = X[i, k]
+            if k == X_DELTA:
+                v = ref + wrap180(v - ref)
+            elif k == X_E and clean:  # a clean compass has no disturbance
+                v = 0.0
+            x[k] += w[i] * v
+    dx = np.empty(NX)
+    for i in range(NM):
+        if w[i] == 0.0:
+            continue
+        for k in range(NX):
+            dx[k] = X[i, k] - x[k]
+        dx[X_DELTA] = wrap180(X[i, X_DELTA] - x[X_DELTA])
+        if clean:
+            dx[X_E] = 0.0
+        for r in range(NX):
+            for c in range(NX):
+                if clean and (r == X_E or c == X_E):
+                    continue
+                Pm[r, c] += w[i] * (P[i, r, c] + dx[r] * dx[c])
+        if _is_clean(i) and not clean:  # a disturbance begins: a step of unknown size
+            Pm[X_E, X_E] += w[i] * step_var
+
+
 @jit
 def combine(mf):
     """The moment-matched mixture of the bank into MF_XC, MF_PC (δ averaged as an angle)."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    mu = mf[MF_MU:MF_MU + NM]
     xc = np.zeros(NX)
-    ref = X[0, X_DELTA]
-    for j in range(NM):
-        for k in range(NX):
-            v = X[j, k]
-            if k == X_DELTA:
-                v = ref + wrap180(v - ref)
-            xc[k] += mu[j] * v
     Pc = np.zeros((NX, NX))
-    dx = np.empty(NX)
-    for j in range(NM):
-        for k in range(NX):
-            dx[k] = X[j, k] - xc[k]
-        dx[X_DELTA] = wrap180(X[j, X_DELTA] - xc[X_DELTA])
-        for r in range(NX):
-            for c in range(NX):
-                Pc[r, c] += mu[j] * (P[j, r, c] + dx[r] * dx[c])
+    _moments(X, P, mf[MF_MU:MF_MU + NM], X[0, X_DELTA], False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
 
 @jit(inline=True)
 def bias_var(Pc, hT, hTp):
-    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (5, 5)."""
+    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (NX, NX)."""
     v = (Pc[1, 1] * hT * hT + Pc[2, 2] * hTp * hTp + Pc[3, 3] + 2.0 * Pc[1, 2] * hT * hTp
          + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp)
     return max(v, 0.0)
@@ -351,34 +312,11 @@ def _mix(mf, Pi, step_var):
             cbar[j] += Pi[i, j] * mu[i]
     X0 = np.zeros((NM, NX))
     P0 = np.zeros((NM, NX, NX))
-    dx = np.empty(NX)
+    w = np.empty(NM)
     for j in range(NM):
-        ref = X[j, X_DELTA]
         for i in range(NM):
-            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-            for k in range(NX):
-                v = X[i, k]
-                if k == X_DELTA:
-                    v = ref + wrap180(v - ref)
-                elif k == X_E and _is_clean(j):  # a clean compass has no disturbance
-                    v = 0.0
-                X0[j, k] += w * v
-        for i in range(NM):
-            w = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-            if w == 0.0:
-                continue
-            for k in range(NX):
-                dx[k] = X[i, k] - X0[j, k]
-            dx[X_DELTA] = wrap180(X[i, X_DELTA] - X0[j, X_DELTA])
-            if _is_clean(j):
-                dx[X_E] = 0.0
-            for r in range(NX):
-                for c in range(NX):
-                    if _is_clean(j) and (r == X_E or c == X_E):
-                        continue
-                    P0[j, r, c] += w * (P[i, r, c] + dx[r] * dx[c])
-            if _is_clean(i) and not _is_clean(j):  # a disturbance begins: a step of unknown size
-                P0[j, X_E, X_E] += w * step_var
+            w[i] = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
+        _moments(X, P, w, X[j, X_DELTA], _is_clean(j), step_var, X0[j], P0[j])
     X[:, :] = X0
     P[:, :, :] = P0
     return cbar
@@ -399,8 +337,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     a few degrees)."""
     ll = 0.0
     still = _is_still(j)
-    # the compass errs more while the platform turns (the tilt of cornering, the compass's lag):
-    # not at all when still; when moving, with the rate the mode's drift leaves of the gyro
+    # the compass's error while turning: none when still; else with the rate this mode's drift leaves
     turn = 0.0 if still or gap else mc[MC_K_TURN] * (dG - np.dot(Hg, x)) / dt
     if not gap:
         if still:
@@ -420,8 +357,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         ll += l_white if still else l_any
     excess = math.nan
     if n_c > 0.0:
-        # a disturbed compass tells nothing but its e, unless the heading is known less well than
-        # a disturbance is large (at the start, after a long gap): then it still says that much
+        # a disturbed compass corrects e alone, unless the heading is known worse than a step is large
         only = -1 if _is_clean(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
@@ -445,8 +381,7 @@ def epoch(mf, mc, t_end, temp_end):
         return
     gap = mf[MF_E_GAP] == 1.0
     dG, dTc, dTp = mf[MF_E_G], mf[MF_E_TC], mf[MF_E_TP]
-    # the temperature change over the epoch: from the smoothed T' (no quantisation flips), or
-    # exactly when T is the clock (whose T' is 0 in the model)
+    # the temperature change over the epoch: from T' (no quantisation flips), or T itself for the clock
     dtemp = abs(temp_end - mf[MF_E_T_START]) if mc[MC_CLOCK] == 1.0 else abs(dTp)
     # Markov chain of mode changes over dt
     pcd, pdc = _switch(dt, mc[MC_TAU_CLEAN]), _switch(dt, mc[MC_TAU_DIST])
@@ -469,9 +404,8 @@ def epoch(mf, mc, t_end, temp_end):
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
-    # the noise the epoch's mean keeps: the successive differences' variance times the long-run
-    # factor of a first-order autoregressive noise of the learned colour c = 1 - ρ:
-    # (1 + ρ) / (1 - ρ)² of the differences' (1 for white noise)
+    # the per-sample noise of the learned colour c = 1 - ρ (an AR(1) noise): (1 + ρ) / (1 - ρ)²
+    # times the successive differences' variance
     colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
     sig_s2 = mf[MF_SIG_S2] * (2.0 - colour) / (colour * colour)
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
@@ -488,8 +422,7 @@ def epoch(mf, mc, t_end, temp_end):
             x[X_DELTA] -= dG
         else:  # δ moves by minus the drift integral (eq. 5)
             x[X_DELTA] -= drift_int
-        # the compass's slow error d and a disturbance e decorrelate in time and as the heading
-        # turns (deviation is a function of heading): by the turn this mode sees, none when still
+        # d and e decorrelate in time and with the heading this mode turned (none when still)
         turned = 0.0 if still or gap else abs(dG - drift_int)
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
         phi_e = math.exp(-dt / mc[MC_TAU_E] - turned / mc[MC_L_DEV])
@@ -521,11 +454,8 @@ def epoch(mf, mc, t_end, temp_end):
     ng = mf[MF_E_NG]
     u = var_u = math.nan
     if not gap and ng >= VN_MIN_SAMPLES:
-        # the sensor's noise about a constant when still: the von Neumann ratio of the sum of
-        # squared successive differences to the sum of squared deviations, over its white
-        # value (mean 2, variance 4 (n - 2) / ((n - 1)(n + 1)) for n normal samples), near
-        # the noise's colour (as believed: its uncertainty widens the test); any motion may
-        # lower it
+        # the von Neumann ratio over its white value (mean 2, variance 4 (n - 2) / ((n - 1)(n + 1))):
+        # near the believed colour when still (docs/model.md, "Stillness")
         ss = mf[MF_E_S2] - mf[MF_E_S1] ** 2 / ng
         if ss > 0.0:
             mean0 = 2.0
@@ -558,12 +488,8 @@ def epoch(mf, mc, t_end, temp_end):
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
         Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
-    # the still, clean mode weighs the data twice: with the drift as the model carries it, and
-    # with a jump of the drift (a knee, a hysteresis switching, a thermal shock: rare, of unknown
-    # size); the mode's likelihood is their sum, its state the likelier one's. Only there can a
-    # jump be told from a motion: the gyro measures the drift and the compass says the heading
-    # held. A moving platform's rate, or a disturbed compass, would explain a jump as readily as
-    # the jump explains them, so there the drift keeps its slow dynamics
+    # the still, clean mode weighs the data with and without a jump of the drift: its likelihood
+    # the sum, its state the likelier one's (docs/model.md, "Drift jumps")
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
@@ -611,17 +537,13 @@ def epoch(mf, mc, t_end, temp_end):
     mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
     if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
-        # the colour learned from the epoch as far as it is still: a measurement of variance
-        # var_u / P(still) (a moving epoch's ratio says nothing of the sensor)
+        # the colour learned from the epoch as far as it is still: variance var_u / P(still)
         k = mf[MF_COLOUR_V] / (mf[MF_COLOUR_V] + var_u / mf[MF_PSTILL])
         mf[MF_COLOUR] += k * (u - mf[MF_COLOUR])
         mf[MF_COLOUR_V] *= 1.0 - k
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
     mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0
-    # the rate filters follow the compensated mean rate, and interact (an IMM of their own): each
-    # starts the next epoch from the filters (and the "any rate" model, whose estimate is the
-    # measured rate) weighted by how well they explained this one, so a new steady turn is
-    # predicted by the slow filters once the agile ones have found it
+    # the rate filters follow the compensated mean rate and interact (docs/model.md, "Motion")
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     if not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
@@ -657,8 +579,7 @@ def epoch(mf, mc, t_end, temp_end):
     else:
         for k in range(N_RATE):
             mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt
-    # the measured noise: the gyro's from successive rows while still, the compass's from
-    # successive samples; sums forgotten over ``noise_memory_s``
+    # the measured noise (gyro while still, compass always), sums forgotten over ``noise_memory_s``
     keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
     if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
         mf[MF_NS_S] = keep * mf[MF_NS_S] + 0.5 * mf[MF_E_DG2]

@@ -1,26 +1,10 @@
 """The row loop of the default estimator's model (:mod:`gyrodrift.kernels.evidence`).
 
 Per row: the drift in force (eq. 5, the mixture's a, b, c), the compensated rate, the
-trapezoid integrals, the epoch's sums; at the end of each epoch (the first row at least
-``epoch_s`` after its start) the model's step. A time step far longer than the log's own
-typical spacing (``gap_factor`` times a running typical step) is a time gap: the epoch
-before it closes, the gap is an epoch of its own without a drift measurement (the still modes
-hold the heading across it; the moving ones lose some of it), and the integrals across it
-follow the likelier platform: still, the gyro is taken to have read its drift (the heading
-holds); moving, the trapezoid of the samples at its ends. A held cell (an empty gyro or
-temperature) is a gap too.
-
-Outputs per row (columns of :mod:`gyrodrift.kernels.layout`): bias, rate, the gyro-alone
-heading (anchored on the first compass sample), a, b, c (the paper's absolute parameters),
-``bias_sd``, the fused heading (``∫gyro + δ``) and its standard deviation, the gyro-alone
-heading's standard deviation; codes: ``updated`` at an epoch end that used a measurement,
-and the reason, from the mode probabilities of the last epoch: ``gap``, ``no_compass`` (no
-compass sample for ``compass_max_age_s``), ``turning`` (the compensated rate, averaged over
-about the turning window, above the turning rate: the compass's errors grow with the turn,
-:mod:`~gyrodrift.kernels.evidence`), ``field`` or ``interference`` (the disturbed modes
-outweigh the clean ones; ``field`` when the field strength and dip are what say so), or none.
-
-State: ``mf`` (the model, :mod:`~gyrodrift.kernels.evidence`) and ``rf`` (the rows: ``R_*``).
+trapezoid integrals and the epoch's sums; the model's step at each epoch end and at each time
+gap; the outputs and codes of :mod:`gyrodrift.kernels.layout`. What each output, code and
+gap rule is: ``docs/model.md`` ("The row loop"). State: ``mf`` (the model) and ``rf`` (the
+rows, ``RF_*``).
 """
 
 from __future__ import annotations
@@ -65,10 +49,8 @@ RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading co
 RF_N = RF_INIT_RAW + 1
 
 # ------------------------------------------------------------------ epoch history
-#: One row per epoch, for the smoother (:mod:`gyrodrift.smooth`): its end time (s), length
-#: (s), temperature change (degC, the drift's random walk), the combined drift states
-#: [a, b, c', r] and their covariance (upper triangle, row by row: aa ab ac ar bb bc br cc cr rr),
-#: and the probability that the drift jumped in it.
+#: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
+#: drift states [a, b, c', r], their covariance (upper triangle: aa ab ac ar bb bc br cc cr rr), P(jump).
 H_T, H_DT, H_DTEMP, H_X, H_P, H_JUMP = 0, 1, 2, 3, 7, 17
 N_HIST = 18
 
@@ -86,7 +68,6 @@ def _open(mf, t, temp):
               MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
               ev.MF_E_NG):
         mf[k] = 0.0
-
 
 
 @jit
@@ -309,15 +290,10 @@ def unobservable(mf, rc):
 
 @jit
 def settle(t, g, T, Tp, heading, last, n_init, tref, rf, out, codes, cap):
-    """The init window's rows ``0..last``, once it is complete: the rows of its first epoch
-    (to ``rf[RF_FIRST_ROW]``), compensated with the prior while nothing was measured, are
-    compensated again with the drift learned by that epoch's end (bias, rate, a, b, c and
-    ``bias_sd``); the window's first ``n_init`` rows (those before its end time) get reason
-    ``init`` where nothing else refused the compass, and ``updated`` 0 (what the window taught
-    is in the rows after it); the integrated rate moves by the change (not across time gaps, where it
-    held), and so does the loop's integral; the gyro-alone heading (the column holds the
-    integrated rate while the window is held) is anchored on the window's first compass
-    sample, or left relative to the first row without one."""
+    """Settle the init window's rows ``0..last`` once it is complete (``docs/model.md``, "The
+    init window"): the first epoch's rows again with the drift learned by its end, reason
+    ``init`` and ``updated`` 0 on the first ``n_init`` rows, the integrated rate corrected, and
+    the gyro-alone heading anchored on the window's first compass sample."""
     first = int(rf[RF_FIRST_ROW])
     d = rf[RF_FIRST_DRIFT:RF_FIRST_DRIFT + 9]
     a, b, c = d[0], d[1], d[2]

@@ -1,8 +1,5 @@
-"""The fused heading: the compensated gyro and the compass in a one-state Kalman filter.
-
-See :mod:`gyrodrift.fusion` for the filter and its settings. :func:`step` is one row on
-scalars, called by the row loop (:mod:`gyrodrift.kernels.loop`) and by
-:func:`fuse_rows` (a whole log, for the fused heading of other methods' outputs).
+"""The fused heading (:mod:`gyrodrift.fusion`): :func:`step`, one row on scalars, for the row loop
+(:mod:`gyrodrift.kernels.loop`) and :func:`fuse_rows` (a whole log).
 """
 
 from __future__ import annotations
@@ -18,22 +15,14 @@ __all__ = ["step", "fuse_rows"]
 @jit(inline=True)
 def step(psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t, t, rate, compass, allow, bias_sd,
          R, N2, tau, gate, relock, consistent, held):
-    """One row of the fused-heading filter (see :mod:`gyrodrift.fusion`) on scalars.
+    """One row of the fused-heading filter on scalars (``docs/heading_and_axes.md``, "Fused heading").
 
     State in: ``psi, P, t_prev, r_prev, started, t0, isd, sd_prev, rej_t, nu0, cons_t``
     (``rej_t``: time of the first compass sample of the current run of refused ones, NaN if
     none; ``cons_t`` the time since which its innovations stayed within 2 σ_c of ``nu0``);
     settings ``R = σ_c², N2 = N², tau = τ_b, gate, relock, consistent`` (s); ``held``: the step
-    from the previous row is a time gap, across which the heading holds.
-
-    A refused run re-anchors the filter on the compass (ψ = compass, P = σ_c²) after
-    ``relock`` seconds, or after ``consistent`` seconds in which its innovations stayed
-    within 2 σ_c of each other: the compass is again self-consistent and turns with the
-    gyro (a new offset, not a wandering disturbance), so no lock-out lasts. Returns the new
-    state
-    then (ψ in [0, 360), σ_ψ, σ of the gyro-alone heading), NaN before the first compass
-    sample. Pure: one function for the streaming row and the batch loop, so both give
-    the same bits.
+    from the previous row is a time gap, across which the heading holds. Returns the new state
+    then (ψ in [0, 360), σ_ψ, σ of the gyro-alone heading), NaN before the first compass sample.
     """
     if started == 0.0:
         if math.isnan(compass):

@@ -1,8 +1,5 @@
-"""The heading integral of a whole array: the trapezoid rule of eq. (5), written once.
-
-The compiled row loops integrate row by row; the evaluation code (the known-drift baselines of
-:mod:`gyrodrift.evaluate.compare`, the smoother's rates in :mod:`gyrodrift.smooth`, the raw heading of
-:mod:`gyrodrift.evaluate.metrics`) integrates whole arrays with this. Plain numpy, not compiled.
+"""The heading integral of a whole array, the trapezoid rule of eq. (5), for the code outside the
+compiled row loops (baselines, smoother, metrics): numpy, not compiled.
 """
 
 from __future__ import annotations

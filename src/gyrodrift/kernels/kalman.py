@@ -1,18 +1,6 @@
-"""The paper's drift filters over the parameters [a, b, c] of eq. (2), on the estimator arrays.
-
-States are modelled as constant between updates (Φ = Γ = I, Section 3.2). The state of
-an estimator is two arrays, ``ef`` (floats) and ``ei`` (integers), laid out in
-:mod:`gyrodrift.kernels.layout`.
-
-At every accepted interval ``P⁻ = cap(s P + Q)`` (eq. 10, s the fading factor; s = 1 is
-the plain Kalman filter: ``stkf``, ``stkf-s1``, ``kf``), then the Joseph-form correction;
-over a refused interval ``P ← cap(P + Q)``: no fading, since fading discounts old
-measurements and there are none. Only the ``active`` states take part (``kf``: c alone).
-
-Bounded covariance: a direction the measurements do not see (T' ≡ 0 leaves b
-unobservable; a flat temperature confounds a with c) would grow as ``s**N`` under
-fading; P is capped at ``diag(max_var)`` (by default the prior) in the whitened
-eigenbasis (:func:`gyrodrift.kernels.numeric.cap_covariance`).
+"""The paper's drift filters over [a, b, c] (eq. 10 with a fixed fading factor s; s = 1 the plain
+Kalman filter), on the estimator arrays of :mod:`gyrodrift.kernels.layout` (``docs/engine.md``,
+"The Kalman filters").
 """
 
 from __future__ import annotations
@@ -23,7 +11,7 @@ from gyrodrift.kernels import jit
 from gyrodrift.kernels.layout import EF_FADING, EF_MAX_VAR, EF_P, EF_Q, EF_Z, EI_ACTIVE, EI_N_ACTIVE
 from gyrodrift.kernels.numeric import cap_covariance, correct
 
-__all__ = ["views", "update", "hold", "params", "cov"]
+__all__ = ["views", "update", "hold", "params", "cov", "put_state"]
 
 
 @jit(inline=True)
@@ -55,9 +43,11 @@ def _put(P, active, Pa):
 
 
 @jit
-def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
-    """One accepted update with a fixed fading factor: ``P⁻ = cap(s P + Q)``, then the
-    Joseph-form correction, then the cap again; x, P in place (active states only)."""
+def update(ef, ei, y, H, R):
+    """One accepted observation ``y = H x + v``, ``v ~ N(0, R)`` (rows ``[T, T', 1]``):
+    ``P⁻ = cap(s P + Q)`` (eq. 10), the Joseph-form correction, the cap again; the estimator
+    arrays in place (active states only)."""
+    x, P, Q, max_var, active = views(ef, ei)
     m = y.size
     na = active.size
     Ha = np.empty((m, na))
@@ -70,7 +60,7 @@ def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
     mv = max_var[active]
-    P_prior = cap_covariance(fading * Pa + Qa, mv)
+    P_prior = cap_covariance(ef[EF_FADING] * Pa + Qa, mv)
     xa, P_post = correct(xa, P_prior, y, Ha, R)
     _put(P, active, cap_covariance(P_post, mv))
     for j in range(na):
@@ -78,31 +68,13 @@ def _fixed_update(x, P, Q, max_var, active, y, H, R, fading):
 
 
 @jit
-def _fixed_hold(P, Q, max_var, active, intervals):
-    """``intervals`` refused intervals: ``P ← cap(P + intervals Q)`` on the active states."""
+def hold(ef, ei, intervals):
+    """``intervals`` refused intervals (1, or more when a time gap skipped some): ``P ←
+    cap(P + intervals Q)`` on the active states (no fading)."""
+    x, P, Q, max_var, active = views(ef, ei)
     Pa = _sub(P, active)
     Qa = _sub(Q, active)
     _put(P, active, cap_covariance(1.0 * Pa + intervals * Qa, max_var[active]))
-
-
-# ---------------------------------------------------------------- the estimator
-
-
-@jit
-def update(ef, ei, y, H, R):
-    """One accepted observation ``y = H x + v``, ``v ~ N(0, R)`` (rows ``[T, T', 1]``); the
-    estimator arrays are updated in place."""
-    z, P, Q, max_var, active = views(ef, ei)
-    _fixed_update(z, P, Q, max_var, active, y, H, R, ef[EF_FADING])
-
-
-@jit
-def hold(ef, ei, intervals):
-    """``intervals`` refused intervals (1, or more when a time gap skipped some): ``P ←
-    cap(P + intervals Q)`` (no fading; the random walk of the states grows with the time
-    elapsed, up to the cap)."""
-    z, P, Q, max_var, active = views(ef, ei)
-    _fixed_hold(P, Q, max_var, active, intervals)
 
 
 @jit
@@ -115,3 +87,14 @@ def params(ef, ei):
 def cov(ef, ei):
     """Covariance (3x3) of [a, b, c]."""
     return ef[EF_P:EF_P + 9].reshape((3, 3)).copy()
+
+
+@jit(inline=True)
+def put_state(ef, ei, out, p0, c0):
+    """The parameters in force into ``out[p0:p0 + 3]`` and their covariance (row-major) into ``out[c0:c0 + 9]``."""
+    p = params(ef, ei)
+    C = cov(ef, ei)
+    for r in range(3):
+        out[p0 + r] = p[r]
+        for c in range(3):
+            out[c0 + 3 * r + c] = C[r, c]

@@ -1,19 +1,8 @@
 """Layout of the arrays the kernels share: index names, codes, sizes.
 
-These are the arrays of the paper's filters and their row loop (:mod:`gyrodrift.kernels.loop`);
-the default estimator's model keeps its own (:mod:`gyrodrift.kernels.evidence`). The
-engine's state is a handful of flat arrays (few arguments make a cheap call from
-Python, which the streaming path pays on every sample):
-
-* ``fs`` float state and ``ist`` integer state of one log (``F_*``, ``I_*``);
-* ``cfg`` float and ``icfg`` integer settings (``C_*``, ``K_*``);
-* ring buffers: ``bins`` (T' bins), ``lb`` (the turning window), ``stack``
-  (measurements of eq. 3), ``refused`` (lock-out recovery), ``acc`` (accepted
-  measurements, for the caller);
-* the estimator's ``ef`` floats and ``ei`` integers (``EF_*``, ``EI_*``): one filter of
-  three states (:mod:`gyrodrift.kernels.kalman`);
-* the outputs ``out`` (float columns ``O_*``, each ``cap`` long, one after the other)
-  and ``codes`` (int8 columns ``OC_*``).
+The arrays of the paper's filters and their row loop (:mod:`gyrodrift.kernels.loop`), then
+those of the x and y axes (:mod:`gyrodrift.kernels.tilt`); the default estimator's model keeps
+its own (:mod:`gyrodrift.kernels.evidence`). What each array holds: ``docs/engine.md`` ("Arrays").
 """
 
 from __future__ import annotations
@@ -33,9 +22,7 @@ NO_STICKY = -1
 #: ``a`` plus 2 for ``b``, the indices into this tuple.
 UNOBSERVABLE_NAMES = ("", "a", "b", "a+b")
 UNOBS_A, UNOBS_B = 1, 2
-#: A parameter is not observable while its standard deviation is above this fraction of
-#: its prior one: the measurements have not pinned it down (a flat temperature leaves a
-#: confounded with c; T' ≡ 0 leaves b free).
+#: A parameter is not observable while its standard deviation is above this fraction of its prior one.
 UNOBSERVABLE_SD_FRACTION = 0.5
 
 #: Estimator modes: fixed fading (``stkf``, ``stkf-s1``, ``kf``), or a Python estimator
@@ -43,10 +30,6 @@ UNOBSERVABLE_SD_FRACTION = 0.5
 MODE_FIXED, MODE_EXTERNAL = 0, 2
 #: ``ist[I_PENDING]`` after an interval end in MODE_EXTERNAL: what the caller must do.
 PENDING_NONE, PENDING_UPDATE, PENDING_HOLD = 0, 1, 2
-
-#: Status returned by :func:`gyrodrift.kernels.loop.run_chunk` below 0: a row whose time
-#: is not finite or does not increase is at ``-(status) - 1``.
-STATUS_BAD_TIME = -1
 
 # ---------------------------------------------------------------- float state
 
@@ -123,10 +106,7 @@ OC_UPDATE, OC_REASON, OC_UNOBS, OC_GAP = 0, 1, 2, 3
 N_CODES = 4
 
 
-# =================================================================== the x/y axes
-# The arrays of :mod:`gyrodrift.kernels.tilt` (gravity aiding of gyro_x and gyro_y,
-# :class:`gyrodrift.triad.TriadCompensator`): float state ``xf``, integer state ``xi``,
-# settings ``xc`` (floats) and ``xk`` (integers), and the ring ``ring`` of the last rows.
+# =================================================================== the x/y axes: xf, xi, xc, xk, ring
 
 #: Reasons an x/y interval is refused, in the order the gates are tried; the codes are
 #: the indices into this tuple (:data:`gyrodrift.triad.TRIAD_REASONS` is this tuple).
@@ -139,38 +119,29 @@ XG_NONE = -1
 #: finite or does not increase; no temperature on the first row.
 XS_BAD_TIME, XS_NO_TEMP = -1, -2
 
-#: Columns of a row of ``ring``: time (s), the trapezoid integrals of φ' and θ' (deg),
-#: T (degC s), T' (degC), tanθ sinφ and cos φ (s), gyro_x, gyro_y and rate_z (deg),
-#: the specific force (g) and 1 when the accelerometer row is usable.
+#: Columns of a row of ``ring``: time, the trapezoid integrals (N_XU), the specific force, usable.
 XW_T, XW_IPHI, XW_ITH, XW_IT, XW_ITP, XW_IK1, XW_IK2, XW_IGX, XW_IGY, XW_IRZ = range(10)
 XW_F0, XW_F1, XW_F2, XW_OK = 10, 11, 12, 13
 N_XW = 14
 #: Number of integrated quantities (XW_IPHI..XW_IRZ, in that order).
 N_XU = 9
 
-#: Means over an edge window: time (s), the integrals XW_IPHI..XW_IK2, roll and pitch
-#: (deg), norm of the mean specific force (g), tilt (deg), largest component standard
-#: deviation (g), usable rows.
+#: Means over an edge window: time, the integrals XW_IPHI..XW_IK2, roll, pitch, |f|, tilt, spread, rows.
 XE_T, XE_IPHI, XE_ITH, XE_IT, XE_ITP, XE_IK1, XE_IK2 = range(7)
 XE_ROLL, XE_PITCH, XE_NORM, XE_TILT, XE_SPREAD, XE_N = 7, 8, 9, 10, 11, 12
 N_XE = 13
 
-#: Float state: time of the first row, interval number, last time, accelerometer scale
-#: (g per input unit; NaN until known), the integrals (N_XU), the last row's integrands
-#: (N_XU), the held gyro_x, gyro_y, T, T', then per axis (x, y) the parameters [a, b, c]
-#: in force and their covariance (3x3, row-major), the start edge of the open interval
-#: (N_XE), per axis the measurement [m, h_T, h_T', r] of an interval just accepted, its
-#: time, and per axis the rates of the residual refusals in a row (lock-out recovery).
-XF_T0, XF_K, XF_TLAST, XF_SCALE = 0, 1, 2, 3
-XF_I = 4
-XF_U = XF_I + N_XU
-XF_GX, XF_GY, XF_TEMP, XF_TP = XF_U + N_XU, XF_U + N_XU + 1, XF_U + N_XU + 2, XF_U + N_XU + 3
-XF_PARAMS = XF_TP + 1  # (2, 3)
-XF_COV = XF_PARAMS + 6  # (2, 9)
-XF_EDGE = XF_COV + 18
-XF_MEAS = XF_EDGE + N_XE  # (2, 4)
-XF_T_MEAS = XF_MEAS + 8
-XF_RELOCK = XF_T_MEAS + 1  # (2, max(relock, 1))
+#: Float state (``docs/engine.md``, "Arrays").
+XF_T0, XF_K, XF_TLAST, XF_SCALE = 0, 1, 2, 3  # first time, interval number, last time, g per input unit
+XF_I = 4  # the integrals (N_XU)
+XF_U = XF_I + N_XU  # the last row's integrands (N_XU)
+XF_GX, XF_GY, XF_TEMP, XF_TP = XF_U + N_XU, XF_U + N_XU + 1, XF_U + N_XU + 2, XF_U + N_XU + 3  # held values
+XF_PARAMS = XF_TP + 1  # (2, 3): [a, b, c] in force per axis
+XF_COV = XF_PARAMS + 6  # (2, 9): their covariance, row-major
+XF_EDGE = XF_COV + 18  # the open interval's start edge (N_XE)
+XF_MEAS = XF_EDGE + N_XE  # (2, 4): [m, h_T, h_T', r] of an interval just accepted
+XF_T_MEAS = XF_MEAS + 8  # its time
+XF_RELOCK = XF_T_MEAS + 1  # (2, max(relock, 1)): rates of the residual refusals in a row
 
 
 def xf_size(relock_intervals: int) -> int:
@@ -178,25 +149,17 @@ def xf_size(relock_intervals: int) -> int:
     return XF_RELOCK + 2 * max(relock_intervals, 1)
 
 
-#: Integer state: a row was taken, the open interval has a gap or held cell, a turning
-#: row, the start edge is usable, ``tilt_gated`` now, an interval was decided; the ring's
-#: head, rows and turning-window start (rows after the head); per axis the residual
-#: refusals in a row, the accepted updates and the PENDING_* action for a Python
-#: estimator; the refusals by reason (len(TILT_REASON_NAMES)).
-XI_STARTED, XI_BAD, XI_TURNING, XI_EDGE_OK, XI_GATED, XI_DECIDED = 0, 1, 2, 3, 4, 5
-XI_HEAD, XI_N, XI_TURN_J = 6, 7, 8
-XI_REFUSALS, XI_UPDATES, XI_PENDING = 9, 11, 13  # each (2,)
-XI_REASONS = 15
+#: Integer state (``docs/engine.md``, "Arrays").
+XI_STARTED, XI_BAD, XI_TURNING, XI_EDGE_OK, XI_GATED, XI_DECIDED = 0, 1, 2, 3, 4, 5  # flags (0/1)
+XI_HEAD, XI_N, XI_TURN_J = 6, 7, 8  # the ring's head, rows and turning-window start
+XI_REFUSALS, XI_UPDATES, XI_PENDING = 9, 11, 13  # each (2,): residual refusals in a row, updates, PENDING_*
+XI_REASONS = 15  # refusals by reason
 N_XI = XI_REASONS + len(TILT_REASON_NAMES)
 
-#: Float settings: update interval, largest time step, turning rate and window, gyro
-#: noise density, edge window, accepted departure of |f| from 1 g, component spread,
-#: accelerometer noise, largest tilt, residual floor and factor (units of
-#: :class:`gyrodrift.triad.TriadConfig` and :class:`gyrodrift.compensator.CompensatorConfig`).
+#: Float settings, in the units of :class:`gyrodrift.triad.TriadConfig` and ``CompensatorConfig``.
 XC_INTERVAL, XC_MAX_GAP, XC_TURN_RATE, XC_TURN_WIN, XC_GYRO_NOISE, XC_EDGE_S = range(6)
 XC_NORM_TOL, XC_SPREAD, XC_ACC_NOISE, XC_MAX_TILT, XC_RESID_DEG, XC_RESID_K = range(6, 12)
 N_XC = 12
-#: Integer settings: relock intervals, then per axis 1 when its estimator is run by the
-#: caller (a Python estimator: PENDING_* in ``xi``) instead of the kernels.
+#: Integer settings: relock intervals, then per axis 1 when the caller runs its estimator (PENDING_*).
 XK_RELOCK, XK_EXTERNAL = 0, 1  # XK_EXTERNAL: (2,)
 N_XK = 3

@@ -1,27 +1,10 @@
 """The row loop of the paper's filters: every sample of a log, in chunks of any size, resumable.
 
 :func:`prepare` checks a chunk and derives its inputs (held cells, wrapped compass, T');
-:func:`run_chunk` then compensates its rows. Per row (Feng, Li, Zhang 2015, Sections
-2–3): ``bias = a T + b T' + c`` with the parameters in force (eq. 5),
-``rate = gyro − bias``, the trapezoid integrals of gyro, T, T', bias and rate, the heading
-``anchor + ∫rate`` (wrapped to [0, 360); across a time gap longer than ``max_gap_s`` the unit
-is taken as still: the heading holds and the gyro is taken to have read its drift), the gates of the current interval
-(:func:`gyrodrift.kernels.aiding.row_condition`), and at the first row of each new
-update interval the interval decision (:func:`gyrodrift.kernels.aiding.close`; the
-estimator holds for as many intervals as a time gap skipped); then the fused heading
-(:func:`gyrodrift.kernels.fusion.step`). The default estimator has a row loop of its own
-(:mod:`gyrodrift.kernels.evloop`).
-A gap outranks any refusal seen before it in the interval (``gap`` from that row on).
-
-The rows of the init window (``ist[I_INIT_END]`` ≥ 0, the first call after the window is
-complete) are compensated with the parameters the initialisation produced, without
-gates or interval decisions; their heading is anchored on the window's first compass
-sample once the window is done.
-
-The state lives in the arrays of :mod:`gyrodrift.kernels.layout`, in local variables
-during the loop. :func:`run_chunk` returns early (the next row to do) when a ring buffer
-needs to grow, or, with an estimator run by the caller (MODE_EXTERNAL), after an interval
-end; the caller then calls again from that row, with the same results as one call.
+:func:`run_chunk` then compensates its rows (Feng, Li, Zhang 2015, Sections 2–3: eq. 5,
+the trapezoid heading, the gates, the interval decisions, the fused heading). What a row and an
+interval go through: ``docs/engine.md`` ("The paper's filters, row by row"). The state lives
+in the arrays of :mod:`gyrodrift.kernels.layout`.
 """
 
 from __future__ import annotations

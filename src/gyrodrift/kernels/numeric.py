@@ -1,12 +1,5 @@
-"""Numbers the kernels share: angle wrapping, sums, small-matrix algebra, the Kalman
-correction and the covariance cap.
-
-* :func:`wrap360`, :func:`wrap180`: angles to [0, 360) and [-180, 180) (the scalar forms
-  of :func:`gyrodrift.conventions.wrap_360` and ``wrap_180``).
-* :func:`matmul`, :func:`matmul_t`, :func:`matvec`, :func:`solve`: products and solves of
-  the 1x1 to 3x3 matrices of the filters, as loops (no BLAS call for such sizes).
-* :func:`correct`: the measurement update of eq. (10) in Joseph form;
-  :func:`cap_covariance`: the bound on the covariance (see :mod:`gyrodrift.kernels.kalman`).
+"""Numbers the kernels share: angle wrapping, small-matrix algebra as loops (no BLAS call for
+1x1 to 3x3), the Kalman correction of eq. (10) in Joseph form and the covariance cap.
 """
 
 from __future__ import annotations
@@ -15,7 +8,7 @@ import numpy as np
 
 from gyrodrift.kernels import jit
 
-__all__ = ["wrap360", "wrap360_all", "wrap180", "near_boundary", "cap_covariance", "matmul", "matmul_t", "matvec", "solve", "correct"]
+__all__ = ["wrap360", "wrap360_all", "wrap180", "near_boundary", "cap_covariance", "matmul", "matvec", "solve", "correct"]
 
 
 @jit(inline=True)
@@ -46,14 +39,8 @@ def wrap180(x):
 
 @jit
 def cap_covariance(P, max_var):
-    """P limited to at most ``diag(max_var)`` in every direction (``P <= P_max``).
-
-    In coordinates where ``P_max`` is the identity, eigenvalues of P above 1 are clipped
-    to 1; directions already known better than the cap keep their variance (clipping each
-    variance on its own would not: with a and c strongly correlated it would inflate the
-    variance of the well-known combination ``a*T + c``). P stays symmetric positive
-    definite. Returns a new matrix.
-    """
+    """A new P limited to at most ``diag(max_var)`` in every direction, symmetric positive definite:
+    in coordinates where the cap is the identity, eigenvalues above 1 are clipped to 1 (``docs/engine.md``)."""
     scale = np.sqrt(max_var)
     M = P / np.outer(scale, scale)
     if np.trace(M) <= 1.0:  # P is PSD: no eigenvalue of M can exceed its trace
@@ -77,21 +64,6 @@ def matmul(A, B):
             acc = A[i, 0] * B[0, j]
             for k in range(1, q):
                 acc += A[i, k] * B[k, j]
-            out[i, j] = acc
-    return out
-
-
-@jit(inline=True)
-def matmul_t(A, B):
-    """``A @ B.T`` of small matrices (see :func:`matmul`)."""
-    p, q = A.shape
-    r = B.shape[0]
-    out = np.empty((p, r))
-    for i in range(p):
-        for j in range(r):
-            acc = A[i, 0] * B[j, 0]
-            for k in range(1, q):
-                acc += A[i, k] * B[j, k]
             out[i, j] = acc
     return out
 
@@ -157,7 +129,7 @@ def correct(x, P, y, H, R):
     n = x.size
     m = y.size
     HP = matmul(H, P)
-    S = matmul_t(HP, H) + R
+    S = matmul(HP, H.T) + R
     K = np.ascontiguousarray(solve(S, HP).T)  # P H^T S^-1, as P and S are symmetric
     Hx = matvec(H, x)
     innovation = np.empty(m)
@@ -166,7 +138,7 @@ def correct(x, P, y, H, R):
     A = -matmul(K, H)
     for i in range(n):
         A[i, i] += 1.0
-    P_post = matmul_t(matmul(A, P), A) + matmul_t(matmul(K, R), K)
+    P_post = matmul(matmul(A, P), A.T) + matmul(matmul(K, R), K.T)
     out = np.empty((n, n))
     for i in range(n):
         for j in range(n):

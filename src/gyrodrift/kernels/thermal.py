@@ -1,9 +1,5 @@
-"""The thermal calibration's polynomial, fitted once.
-
-PX4's offline cubic (the ``poly3`` baseline, :func:`gyrodrift.estimators.fit_poly3`) and
-``gyrodrift calibrate`` (:func:`gyrodrift.calibrate.fit_calibration`) both fit the gyro rate of
-a still heating run by a cubic in ``T - T_ref``; this is that fit. It is plain numpy: one
-least-squares solve over a whole run, not a per-row loop, so it is not compiled.
+"""The thermal calibration's cubic in ``T - T_ref``, fitted once for the ``poly3`` baseline and
+``gyrodrift calibrate``: one least-squares solve over a whole run (numpy, not compiled).
 """
 
 from __future__ import annotations

@@ -1,36 +1,9 @@
 """The x and y gyro axes: their drift, aided by gravity, row by row.
 
-The method is in the module notes of :mod:`gyrodrift.triad`; these are its equations, in
-the order a row meets them. :func:`run` is the row loop of
-:class:`gyrodrift.triad.TriadCompensator`, for chunks of any size (one row included):
-
-* :func:`acc_scale`, :func:`specific_force`: the accelerometer's unit (g or m/s²) and
-  whether a row is usable (norm within 0.5–1.5 g);
-* :func:`euler_rates`: the Euler kinematics ``φ' = p + tanθ (q sinφ + r cosφ)``,
-  ``θ' = q cosφ − r sinφ`` and the coefficients ``tanθ sinφ`` and ``cos φ``;
-* in :func:`run`: the held cells, the trapezoid integrals of those and of T, T', gyro_x,
-  gyro_y, rate_z, the drift of eq. (2)/(5) (:func:`gyrodrift.kernels.drift.bias`) and
-  the interval boundary (a grid of ``update_interval_s`` from the first row);
-* :func:`window_step`: the turning gate of each row (window means of the compensated
-  rates) and the rows kept for the next edge window;
-* at a boundary, :func:`close`: the edge window means (:func:`edge_window`), the gates
-  in the order of :data:`~gyrodrift.kernels.layout.TILT_REASON_NAMES`
-  (:func:`refusal`, then :func:`residual_ok` per axis with the lock-out recovery of
-  :func:`gyrodrift.kernels.aiding.steady_disagreement`), the measurement
-  (:func:`measurement`) and the estimators' update or hold
-  (:func:`gyrodrift.kernels.kalman.update`, :func:`~gyrodrift.kernels.kalman.hold`).
-
-:func:`close` and the estimator steps it calls are inlined into :func:`run`
-(``inline=True``): numba optimises a function together with the compiled functions it
-calls, so every separately compiled level above the Kalman filters would optimise their
-code once more (a first compilation of about 20 s this way, about 50 s otherwise).
-
-The state is in the arrays of the x/y section of :mod:`gyrodrift.kernels.layout`. An
-axis whose estimator is not one of the kernels' filters (a Python estimator,
-``xk[XK_EXTERNAL + axis]``) is left to the caller at each interval end:
-``xi[XI_PENDING + axis]`` says whether to update it with the measurement in
-``xf[XF_MEAS..]`` or to hold it, and the caller puts its new parameters and covariance
-in ``xf[XF_PARAMS..]``, ``xf[XF_COV..]``.
+:func:`run` is the row loop of :class:`gyrodrift.triad.TriadCompensator` for chunks of any
+size; :func:`close` decides an interval. The method (Euler kinematics, edge windows, the
+measurement, the gates): ``docs/heading_and_axes.md`` ("The x and y gyro axes"); the state
+arrays and why :func:`close` is inlined: ``docs/engine.md``.
 """
 
 from __future__ import annotations
@@ -120,16 +93,10 @@ def roll_pitch(f0, f1, f2):
 
 @jit
 def window_step(ring, xf, xi, turn_win, turn_rate, keep_s):
-    """The turning gate at the ring's newest row, then the rows that are no longer needed
-    dropped from the ring.
-
-    The window starts at the first row of the interval not older than ``turn_win`` s;
-    when it spans at least half of that, the window means of the compensated x and y rates
-    (``(∫gyro − a∫T − b∫T' − c Δt)/Δt`` with the parameters in force) and of ``rate_z`` are
-    checked against ``turn_rate`` (deg/s); above it, ``xi[XI_TURNING]`` is set. Rows older
-    than ``keep_s`` (the longer of the turning and edge windows) are then dropped, the
-    newest always kept.
-    """
+    """The turning gate at the ring's newest row (``xi[XI_TURNING]`` set when a window mean of
+    the compensated x, y or z rate over the last ``turn_win`` s of the interval, spanning at
+    least half of it, is above ``turn_rate``), then the rows older than ``keep_s`` dropped (the
+    newest kept)."""
     cap = ring.shape[0]
     head = xi[XI_HEAD]
     n = xi[XI_N]
@@ -167,12 +134,7 @@ def edge_window(ring, head, n, edge_s, e):
     """Means over the usable rows of the last ``edge_s`` s of the ring (its ``n`` rows from
     ``head``, the newest the interval's boundary) into ``e`` (layout XE_*); False when the
     window is unusable: fewer than 3 rows, fewer than 3 or 80 % usable accelerometer rows,
-    or spanning less than half of ``edge_s``.
-
-    The means are those of the integrals of the ring, of roll and pitch (deg, per row),
-    the norm and tilt from level (deg) of the mean specific force, and the largest
-    standard deviation of a specific-force component (g).
-    """
+    or spanning less than half of ``edge_s``."""
     cap = ring.shape[0]
     t_end = ring[(head + n - 1) % cap, XW_T]
     lo = t_end - edge_s
@@ -249,15 +211,8 @@ def refusal(bad, start_ok, end_ok, start, end, turning, xc):
 
 @jit
 def measurement(start, end, gyro_noise, acc_noise):
-    """The drift measurements of x and y over the interval between two edges, their row of
-    H and variances (module notes of :mod:`gyrodrift.triad`).
-
-    ``M_φ = [Ī_φ'(B) − Ī_φ'(A) − (φ̄(B) − φ̄(A))]/Δt`` and the same for θ, ``Δt`` the
-    difference of the edges' mean times; ``m_y = M_θ/k2``, ``m_x = M_φ − k1 m_y`` with
-    ``k1``, ``k2`` the window-matched means of ``tanθ sinφ`` and ``cos φ``; H's row is the
-    window-matched means ``[T, T', 1]``. ``R = N²/Δt + (σ_A² + σ_B²)/Δt²`` per angle, with
-    ``σ²`` (deg²) the variance of an edge's mean angle (``max(acc_noise, spread)``
-    radians over the usable rows), propagated through ``k1``, ``k2``.
+    """The drift measurements of x and y between two edges (the analogue of eqs. 4 and 6:
+    ``docs/heading_and_axes.md``, "Measurement"), their row of H and variances.
 
     Returns (m_x, m_y (deg/s), h_T (degC), h_T' (degC/s), r_x, r_y ((deg/s)²), Δt (s)).
     """
@@ -298,24 +253,13 @@ def residual_ok(m, h, r, dt, params, cov, rates, held, relock, residual_deg, res
 
 
 @jit(inline=True)
-def _in_force(axis, xf, ef, ei):
-    """A kernel filter's parameters and covariance into ``xf`` (the rows use them)."""
-    p = kalman.params(ef, ei)
-    C = kalman.cov(ef, ei)
-    for k in range(3):
-        xf[XF_PARAMS + 3 * axis + k] = p[k]
-        for j in range(3):
-            xf[XF_COV + 9 * axis + 3 * k + j] = C[k, j]
-
-
-@jit(inline=True)
 def _hold(axis, xf, xi, xk, ef, ei):
     """A refused interval for one axis: the filter's hold, or the caller's (PENDING_HOLD)."""
     if xk[XK_EXTERNAL + axis] == 1:
         xi[XI_PENDING + axis] = PENDING_HOLD
         return
     kalman.hold(ef, ei, 1.0)
-    _in_force(axis, xf, ef, ei)
+    kalman.put_state(ef, ei, xf, XF_PARAMS + 3 * axis, XF_COV + 9 * axis)
 
 
 @jit(inline=True)
@@ -338,7 +282,7 @@ def _update(axis, m, h, r, xf, xi, xk, ef, ei):
     R = np.empty((1, 1))
     R[0, 0] = r
     kalman.update(ef, ei, y, H, R)
-    _in_force(axis, xf, ef, ei)
+    kalman.put_state(ef, ei, xf, XF_PARAMS + 3 * axis, XF_COV + 9 * axis)
 
 
 @jit(inline=True)

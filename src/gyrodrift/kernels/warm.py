@@ -1,27 +1,9 @@
 """Compile every kernel, for every argument type a command passes, into numba's cache.
 
-``pip install .`` runs this while it builds the wheel (``setup.py``), so the compiled
-kernels are installed next to their sources (``kernels/__pycache__``, ``attitude``'s
-``__pycache__``) and no command compiles after an install. numba checks a cached kernel
-against the content of its source file, its own version and the processor, so a wheel
-built on one machine and installed on another processor or with another numba compiles
-again on first use (each path once; the command line says so on stderr).
-
-By hand, for an install without the compiled copies (an editable install, a read-only
-site-packages with ``NUMBA_CACHE_DIR`` set, another numba)::
-
-    python -m gyrodrift.kernels.warm            # two processes
-    python -m gyrodrift.kernels.warm --jobs 1
-
-:data:`SIGNATURES` lists the functions called from Python and those compiled through them
-(numba caches each), with the argument types of every call in gyrodrift and its tests;
-``tests/test_warm.py`` checks that the commands compile nothing outside it. Argument codes:
-``f`` float64, ``i`` int64, ``b`` bool; arrays ``F`` float64, ``I`` int64, ``B`` bool,
-``C`` int8, then the number of dimensions (C order), and ``r`` when read-only.
-
-This module imports only the standard library at the top; :func:`command` runs it in a new
-interpreter that loads the kernels without the package's ``__init__`` (which imports
-pandas): the build, where only numba, numpy and scipy are installed, and the second process.
+``pip install .`` runs it while it builds the wheel (``setup.py``); by hand, for an install
+without the compiled copies: ``python -m gyrodrift.kernels.warm [--jobs 1]``. When and why,
+and how it runs without the package's ``__init__``: ``docs/engine.md`` ("Compiled copies").
+Only the standard library is imported at the top.
 """
 
 from __future__ import annotations
@@ -36,7 +18,9 @@ import types
 
 __all__ = ["SIGNATURES", "GROUPS", "command", "compile_group", "main"]
 
-#: function (module path under ``gyrodrift``) -> its argument types, one string per signature.
+#: function (module path under ``gyrodrift``) -> its argument types, one string per signature:
+#: ``f`` float64, ``i`` int64, ``b`` bool; arrays ``F`` float64, ``I`` int64, ``B`` bool, ``C`` int8,
+#: then the number of dimensions (C order), and ``r`` when read-only.
 SIGNATURES: dict[str, list[str]] = {
     # the default estimator's model (gyrodrift.kernels.evloop and .evidence)
     "kernels.evloop.run": ["F1r F1r F1r F1r F1r B1r F1r F1r i F1 F1 F1 F1 F1 C1 i F2",
@@ -84,8 +68,6 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.kalman.hold": ["F1 I1 f"],
     "kernels.kalman.params": ["F1 I1"],
     "kernels.kalman.cov": ["F1 I1"],
-    "kernels.kalman._fixed_update": ["F1 F2 F2 F1 I1 F1 F2 F2 f"],
-    "kernels.kalman._fixed_hold": ["F2 F2 F1 I1 f"],
     "kernels.kalman._sub": ["F2 I1"],
     "kernels.kalman._put": ["F2 I1 F2"],
     "kernels.numeric.correct": ["F1 F2 F1 F2 F2"],
