@@ -404,8 +404,8 @@ def epoch(mf, mc, t_end, temp_end):
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
-    # the per-sample noise of the learned colour c = 1 - ρ (an AR(1) noise): (1 + ρ) / (1 - ρ)²
-    # times the successive differences' variance
+    # the long-run noise per sample of the learned colour c = 1 - ρ (an AR(1) noise): (1 + ρ) / (1 - ρ)²
+    # times half the successive differences' mean square
     colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
     sig_s2 = mf[MF_SIG_S2] * (2.0 - colour) / (colour * colour)
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
