@@ -23,13 +23,13 @@ from gyrodrift.model import CLOCK_UNIT_S, ElapsedClock
 from gyrodrift.compensator.memory import Columns, OutputBuffers, join, new_columns
 
 __all__ = ["ChunkEngine", "settings_arrays", "compiled_arrays", "output_columns", "compiled", "FLOAT_COLUMNS",
-           "CODE_COLUMNS"]
+           "CODE_COLUMNS", "read_only"]
 
 #: Rows of the accepted-measurement buffer to start with (it grows).
 _ACC_ROWS = 64
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
+def read_only(a: np.ndarray) -> np.ndarray:
     """A read-only view of ``a``: the kernels take their inputs read-only, one compiled
     version whether the caller's arrays are writable or not (pandas gives read-only ones)."""
     view = a.view()
@@ -37,7 +37,7 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     return view
 
 
-_NO_FIELD = _read_only(np.empty(0))
+_NO_FIELD = read_only(np.empty(0))
 
 
 def compiled(dispatcher, args):
@@ -228,8 +228,8 @@ class ChunkEngine:
                 raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing")
             if self._clock is not None:
                 cols.column(L.O_TEMP_RATE)[:] = 0.0
-            inputs = (t, _read_only(cols.g_held) if fix & 1 else g, _read_only(cols.T_held) if fix & 2 else T,
-                      _read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip)
+            inputs = (t, read_only(cols.g_held) if fix & 1 else g, read_only(cols.T_held) if fix & 2 else T,
+                      read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip)
             if self._held is not None:
                 self._held.append((inputs, cols))
                 if not t[-1] - self._fs[L.F_TSTART] >= 0:
@@ -335,8 +335,8 @@ class ChunkEngine:
 
     def _run(self, inputs, cols: Columns) -> dict:
         t, g, T, heading, norm, dip = inputs
-        Tp = _read_only(cols.column(L.O_TEMP_RATE))
-        gap = _read_only(cols.code(L.OC_GAP).view(np.bool_))
+        Tp = read_only(cols.column(L.O_TEMP_RATE))
+        gap = read_only(cols.code(L.OC_GAP).view(np.bool_))
         i = 0
         while i < t.size:
             i = loop.run_chunk(t, g, T, Tp, heading, gap, norm, dip, i, self._fs, self._ist, self._set, self._iset,
@@ -508,7 +508,7 @@ def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
     n = sum(cols.n for _, cols in held)
     joined, helper = new_columns(n)
     join(helper)
-    inputs = tuple(_read_only(np.concatenate([part[0][k] for part in held])) if held[0][0][k].size else held[0][0][k]
+    inputs = tuple(read_only(np.concatenate([part[0][k] for part in held])) if held[0][0][k].size else held[0][0][k]
                    for k in range(6))
     joined.column(L.O_TEMP_RATE)[:] = np.concatenate([cols.column(L.O_TEMP_RATE) for _, cols in held])
     joined.code(L.OC_GAP)[:] = np.concatenate([cols.code(L.OC_GAP) for _, cols in held])
@@ -528,9 +528,9 @@ class _RowMemory:
         self.prepare = self.run = None
         # the read-only views the kernels take (they see what is written to the arrays above)
         for name in ("t", "g", "T", "heading", "norm", "dip", "Tp", "gap"):
-            setattr(self, "ro_" + name, _read_only(getattr(self, name)))
+            setattr(self, "ro_" + name, read_only(getattr(self, name)))
         for name in ("g_held", "T_held", "h_wrapped"):
-            setattr(self, "ro_" + name, _read_only(getattr(self.cols, name)))
+            setattr(self, "ro_" + name, read_only(getattr(self.cols, name)))
 
 
 class _WindowRows:
@@ -548,5 +548,5 @@ class _WindowRows:
         join(helper)
         cols.column(L.O_TEMP_RATE)[:] = Tp
         cols.code(L.OC_GAP)[:] = gap
-        inputs = tuple(_read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip))
+        inputs = tuple(read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip))
         return inputs, cols

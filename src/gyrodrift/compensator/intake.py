@@ -22,7 +22,7 @@ from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
 from gyrodrift.triad import TRIAD_COLUMNS
 
-__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays"]
+__all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays", "optional_float"]
 
 #: Rows taken one by one (:meth:`Intake.row_compass`) given to the gyro-unit check at a time.
 UNIT_ROWS = 4096
@@ -317,7 +317,7 @@ class Intake:
             self._decide_xy(gx is not None and gy is not None and acc is not None)
         down = None
         if self._tilt.uses_gyro:  # every row: the gravity filter runs over all of them
-            down = self._tilt.down((t,), (_float(gx),), (_float(gy),), (g,),
+            down = self._tilt.down((t,), (optional_float(gx),), (optional_float(gy),), (g,),
                                    np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))[0]
         if mag is not None and acc is not None:
             self._raw_seen = True
@@ -335,6 +335,6 @@ class Intake:
         return heading, norm, dip
 
 
-def _float(v) -> float:
+def optional_float(v) -> float:
     """A float from an optional number (None: NaN)."""
     return math.nan if v is None else float(v)

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from gyrodrift.compensator.engine import ChunkEngine, _read_only, compiled, output_columns, settings_arrays
+from gyrodrift.compensator.engine import ChunkEngine, read_only, compiled, output_columns, settings_arrays
 from gyrodrift.estimators.adaptive import AdaptiveModel
 from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels import evloop
@@ -84,8 +84,8 @@ class ModelEngine(ChunkEngine):
 
     def _run(self, inputs, cols) -> dict:
         t, g, T, heading, norm, dip = inputs
-        Tp = _read_only(cols.column(L.O_TEMP_RATE))
-        held = _read_only(cols.code(L.OC_GAP).view(np.bool_))
+        Tp = read_only(cols.column(L.O_TEMP_RATE))
+        held = read_only(cols.code(L.OC_GAP).view(np.bool_))
         start = 0
         if self._init_last is not None:  # the init window's rows first, then settled; the rest after
             last = self._init_last

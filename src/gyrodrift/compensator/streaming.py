@@ -13,7 +13,7 @@ from gyrodrift import gating
 from gyrodrift.compensator.arguments import check_config, check_estimator, check_source, short, shown
 from gyrodrift.compensator.config import CompensatorConfig
 from gyrodrift.compensator.engine import CODE_COLUMNS, FLOAT_COLUMNS
-from gyrodrift.compensator.intake import Intake, _float
+from gyrodrift.compensator.intake import Intake, optional_float
 from gyrodrift.compensator.output import UNOBSERVABLE, CompensatedSample
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP
 from gyrodrift.errors import GyroDriftError
@@ -211,13 +211,13 @@ class Compensator:
             out, codes, compass = engine.feed_row(t_s, g, float(temp_c), heading, norm, dip)
             row = self._sample(t_s, out, codes, compass)
             if xy is not None:
-                values = xy.feed_row(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
+                values = xy.feed_row(t_s, optional_float(gyro_x_dps), optional_float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
                                      row.rate_z)
                 for name, value in zip(TRIAD_COLUMNS, values):
                     object.__setattr__(row, name, value)  # the sample was made for this push and is not shared yet
             return [row]
         if xy is not None:  # the x/y inputs wait with the row in the engine's init window
-            self._intake.hold_xy(t_s, _float(gyro_x_dps), _float(gyro_y_dps), float(temp_c), ax)
+            self._intake.hold_xy(t_s, optional_float(gyro_x_dps), optional_float(gyro_y_dps), float(temp_c), ax)
         cols = engine.window_row(t_s, g, float(temp_c), heading, norm, dip)
         if cols is None:
             if not self._provisional:
