@@ -2,7 +2,8 @@
 
     python tools/check_structure.py          # prints what it finds; exit 1 if anything
 
-Imports are read with ``ast`` from ``src/gyrodrift`` (module level and inside functions).
+Imports are read with ``ast`` from ``src/gyrodrift`` (module level and inside functions);
+``tests/test_layering.py`` asserts on the same graph (:func:`import_graph`).
 A private name is one starting with ``_`` imported from another gyrodrift module
 (``from gyrodrift.x import _y``) or used as an attribute of one (``x._y``); importing a
 public name from a private module (``from gyrodrift._atomic import atomic_path``) is fine.
@@ -15,7 +16,8 @@ import sys
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-MAX_LINES = 800
+PACKAGE = "gyrodrift"
+MAX_LINES = 700
 
 
 def modules() -> dict[str, Path]:
@@ -28,7 +30,7 @@ def modules() -> dict[str, Path]:
     return found
 
 
-def _resolve(name: str, mods: dict[str, Path]) -> str | None:
+def _resolve_name(name: str, mods: dict[str, Path]) -> str | None:
     while name and name not in mods:
         name = name.rpartition(".")[0]
     return name or None
@@ -38,16 +40,13 @@ def imports(mods: dict[str, Path]):
     """(importer, imported module, names imported from it, aliases) for every gyrodrift import."""
     for mod, path in mods.items():
         tree = ast.parse(path.read_text(encoding="utf-8"))
-        package = mod if path.name == "__init__.py" else mod.rpartition(".")[0]
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 for a in node.names:
                     if a.name.startswith("gyrodrift"):
-                        yield mod, _resolve(a.name, mods), [], a.asname or a.name, tree
+                        yield mod, _resolve_name(a.name, mods), [], a.asname or a.name, tree
             elif isinstance(node, ast.ImportFrom):
-                base = node.module or ""
-                if node.level:
-                    base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else []))
+                base = _resolve(mod, path, node)
                 if not base.startswith("gyrodrift"):
                     continue
                 for a in node.names:
@@ -55,18 +54,105 @@ def imports(mods: dict[str, Path]):
                     if sub in mods:  # a submodule
                         yield mod, sub, [], a.asname or a.name, tree
                     else:
-                        yield mod, _resolve(base, mods), [a.name], None, tree
+                        yield mod, _resolve_name(base, mods), [a.name], None, tree
+
+
+def _resolve(module: str, path: Path, node: ast.ImportFrom) -> str:
+    """The absolute module a ``from ... import`` in ``module`` (at ``path``) names."""
+    if node.level == 0:
+        return node.module or ""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    for _ in range(node.level - 1):
+        package = package.rpartition(".")[0]
+    return f"{package}.{node.module}" if node.module else package
+
+
+def _with_parents(name: str, mods: dict[str, Path]) -> set[str]:
+    """``name`` and the packages above it (importing it runs their ``__init__``); ``gyrodrift``
+    itself only when it is ``name``: every import of the package runs it first."""
+    parts = name.split(".")
+    prefixes = {".".join(parts[:i]) for i in range(2, len(parts) + 1)} | ({name} if name == PACKAGE else set())
+    return prefixes & mods.keys()
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the gyrodrift modules its imports run (module level and inside functions).
+    ``from gyrodrift.x import y`` imports ``gyrodrift.x.y`` when that is a module, else
+    ``gyrodrift.x``; a package's ``__init__`` runs before its submodules, except ``gyrodrift``
+    itself (every import runs it; naming it counts) and the packages above the importer
+    (already running)."""
+    mods = modules()
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for module, path in mods.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = _resolve(module, path, node)
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in mods else base for a in node.names]
+            for target in targets:
+                if target == PACKAGE or target.startswith(PACKAGE + "."):
+                    # the packages above the importer are already loading: reaching a sibling
+                    # through them is no import of their __init__, naming one itself is
+                    above = _with_parents(module, mods) - {target}
+                    graph[module] |= _with_parents(target, mods) - above
+        graph[module].discard(module)
+    return graph
+
+
+def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's algorithm, iterative; the components of more than one module."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    counter = 0
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            for child in children:
+                if child not in index:
+                    index[child] = low[child] = counter
+                    counter += 1
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                    break
+                if child in on_stack:
+                    low[node] = min(low[node], index[child])
+            else:
+                work.pop()
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[node])
+                if low[node] == index[node]:
+                    component = []
+                    while True:
+                        member = stack.pop()
+                        on_stack.discard(member)
+                        component.append(member)
+                        if member == node:
+                            break
+                    if len(component) > 1:
+                        found.append(sorted(component))
+    return found
 
 
 def main() -> int:
     mods = modules()
     problems = []
-    graph: dict[str, set[str]] = {m: set() for m in mods}
     for mod, target, names, alias, tree in imports(mods):
         if target is None or target == mod:
             continue
-        if not mod.startswith(target + "."):  # a package importing its own submodule is no circle
-            graph[mod].add(target)
         for name in names:
             if name.startswith("_") and not name.startswith("__"):
                 problems.append(f"{mod} imports the private name {name} of {target}")
@@ -75,36 +161,7 @@ def main() -> int:
                 if (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
                         and isinstance(node.value, ast.Name) and node.value.id == alias.split(".")[-1]):
                     problems.append(f"{mod} uses the private name {alias}.{node.attr}")
-    # circles: strongly connected components of the module graph
-    index, low, stack, on, sccs, counter = {}, {}, [], set(), [], [0]
-
-    def visit(v):
-        index[v] = low[v] = counter[0]
-        counter[0] += 1
-        stack.append(v)
-        on.add(v)
-        for w in graph[v]:
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in on:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            comp = []
-            while True:
-                w = stack.pop()
-                on.discard(w)
-                comp.append(w)
-                if w == v:
-                    break
-            if len(comp) > 1:
-                sccs.append(sorted(comp))
-
-    sys.setrecursionlimit(10000)
-    for v in graph:
-        if v not in index:
-            visit(v)
-    problems += [f"import circle: {' <-> '.join(c)}" for c in sccs]
+    problems += [f"import circle: {' <-> '.join(c)}" for c in strongly_connected(import_graph())]
     for mod, path in mods.items():
         n = len(path.read_text(encoding="utf-8").splitlines())
         if n > MAX_LINES:
