@@ -489,6 +489,31 @@ def test_chunk_writer_exception_leaves_nothing(tmp_path, name):
     assert path.read_bytes() == b"old content" and [p.name for p in tmp_path.iterdir()] == [name]
 
 
+def test_chunk_writer_interrupted_while_closing_leaves_no_finalizer_error(tmp_path, monkeypatch):
+    # SIGTERM (a KeyboardInterrupt) inside pyarrow's close: the temporary file is removed, and
+    # the garbage collector must not close the writer again on the closed file.
+    import gc
+
+    import pyarrow.parquet as pa_pq
+
+    real_close = pa_pq.ParquetWriter.close
+
+    def interrupted_close(self):
+        real_close(self)
+        self.is_open = True  # as if the signal landed before pyarrow marked it closed
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pa_pq.ParquetWriter, "close", interrupted_close)
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    with pytest.raises(KeyboardInterrupt):
+        with ChunkWriter(tmp_path / "out.parquet") as out:
+            out.write(_output_frame().iloc[:100])
+    out = None
+    gc.collect()
+    assert unraisable == [] and list(tmp_path.iterdir()) == []
+
+
 def test_chunk_writer_read_error_inside_leaves_nothing(tmp_path):
     path = _write(tmp_path, _rows(300, {200: "20.0,abc,20,1"}), "in.csv")
     with pytest.raises(LogFormatError, match="line 202"):

@@ -66,7 +66,7 @@ class ChunkWriter:
         self._stack: ExitStack | None = None
         self._sink: pa.NativeFile | None = None
         self._names: list[str] | None = None
-        self._parquet: pa_pq.ParquetWriter | None = None
+        self._parquet: _ParquetWriter | None = None
 
     def __enter__(self) -> "ChunkWriter":
         if self._stack is not None:
@@ -116,7 +116,7 @@ class ChunkWriter:
 
     def _write_parquet(self, table: pa.Table) -> None:
         if self._parquet is None:
-            self._parquet = pa_pq.ParquetWriter(self._sink, table.schema, **parquetfile.parquet_options(table.schema))
+            self._parquet = _ParquetWriter(self._sink, table.schema, **parquetfile.parquet_options(table.schema))
         elif not table.schema.equals(self._parquet.schema, check_metadata=False):
             try:
                 table = table.cast(self._parquet.schema)
@@ -165,6 +165,18 @@ class ChunkWriter:
                 raise
             return False
         return bool(stack.__exit__(None, None, None))
+
+
+class _ParquetWriter(pa_pq.ParquetWriter):
+    """pyarrow's writer, not closed by the garbage collector.
+
+    :meth:`ChunkWriter.__exit__` closes it; one left open was interrupted (an error, Ctrl-C,
+    SIGTERM) and its temporary file is already closed and removed, where pyarrow's finalizer
+    would fail with "Invalid operation on closed file".
+    """
+
+    def __del__(self) -> None:
+        self.is_open = False
 
 
 @dataclass(frozen=True)
