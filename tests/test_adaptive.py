@@ -182,6 +182,24 @@ def test_a_still_gyro_with_coloured_noise_is_still(rho, bursty):
     assert np.abs((heading - heading[0] + 180.0) % 360.0 - 180.0).max() < 2.0
 
 
+def test_b_is_not_learned_from_the_start_up_of_the_temperature_rate():
+    """On an exponential warm-up T' is a linear function of T, so eq. (2)'s b cannot be told
+    from a: the model must keep b's prior spread (``unobservable`` flags b) and not learn it
+    from the start-up of the T' estimate (0, then slopes over a few bins), which the drift did
+    not follow. Over the init window the model takes T' as the window's own slope."""
+    tau = 300.0
+    log = synthetic_log(duration_s=600.0, fs_hz=10.0, compass_hz=5.0, gyro_noise_dps=0.02, compass_noise_deg=0.5,
+                        temp_c=lambda t: 30.0 + 20.0 * (1.0 - np.exp(-t / tau)),
+                        drift_dps=lambda t, T: 0.02 * (T - 30.0) + 8.0 * (20.0 / tau) * np.exp(-t / tau) - 0.1)
+    out = compensate(log)
+    t = out["t"].to_numpy()
+    after = (t > 30.0) & (t < 300.0)
+    assert all("b" in str(code) for code in out["unobservable"].to_numpy()[after])
+    init = out["gate_reason"].to_numpy() == "init"
+    tp = out["temp_rate"].to_numpy()
+    assert init.sum() > 100 and np.all(tp[init] == tp[np.flatnonzero(init)[-1] + 1])
+
+
 def test_settings_are_checked():
     with pytest.raises(ConfigError, match="epoch_s"):
         AdaptiveConfig(epoch_s=0.0)

@@ -89,6 +89,9 @@ class ModelEngine(ChunkEngine):
         start = 0
         if self._init_last is not None:  # the init window's rows first, then settled; the rest after
             last = self._init_last
+            # T' over the init window is the window's own slope: the trailing estimate at its
+            # last row (the rows are reported after it), not the start-up of the estimate
+            cols.column(L.O_TEMP_RATE)[:last] = Tp[last]
             self._loop(t[:last + 1], g[:last + 1], T[:last + 1], Tp[:last + 1], heading[:last + 1], held[:last + 1],
                        norm[:last + 1] if norm.size else norm, dip[:last + 1] if dip.size else dip, cols)
             n_init = last if t[last] >= self._fs[L.F_TSTART] else last + 1  # the rows before the window's end
