@@ -18,7 +18,9 @@ from gyrodrift.model import temp_rate
 
 #: The model with no process noise on the drift: a still log then determines a, b, c as a
 #: least-squares fit of the zero-rate measurements does.
-FROZEN = AdaptiveConfig(slope_walk=0.0, rate_walk=0.0, drift_walk=0.0, drift_walk_temp=0.0, drift_rate_dps2=1e-9)
+# eq. (2) alone: no walks, no departure, no curvature (the known-answer tests' drift is linear in T)
+FROZEN = AdaptiveConfig(slope_walk=0.0, rate_walk=0.0, drift_walk=0.0, drift_walk_temp=0.0, drift_rate_dps2=1e-9,
+                        curvature_sd=0.0)
 
 
 def test_a_noiseless_still_log_gives_a_b_c_exactly():
@@ -198,6 +200,25 @@ def test_b_is_not_learned_from_the_start_up_of_the_temperature_rate():
     init = out["gate_reason"].to_numpy() == "init"
     tp = out["temp_rate"].to_numpy()
     assert init.sum() > 100 and np.all(tp[init] == tp[np.flatnonzero(init)[-1] + 1])
+
+
+def test_a_curved_drift_is_extrapolated_through_an_outage():
+    """A hot IMU's drift is curved in temperature (0.002 deg/s/degC² here): learned while the
+    compass is there, the curvature carries the drift through 20 min without compass while the
+    platform sways and the temperature keeps rising (a drift linear in T, its slope walking,
+    leaves 0.21 deg/s RMS there; with the curvature 0.10)."""
+    log = synthetic_log(duration_s=2400.0, fs_hz=10.0, compass_hz=5.0, gyro_noise_dps=0.01, compass_noise_deg=0.5,
+                        temp_c=lambda t: 25.0 + 30.0 * (1.0 - np.exp(-t / 900.0)),
+                        drift_dps=lambda t, T: 0.02 * (T - 25.0) + 0.002 * (T - 25.0) ** 2 - 0.3,
+                        heading_deg=lambda t: 100.0 + np.where(t > 1200.0, 30.0 * np.sin((t - 1200.0) / 3.0), 0.0))
+    t = log["t"].to_numpy()
+    log.loc[t > 1200.0, "heading"] = np.nan
+    out = compensate(log)
+    err = (out["bias_z"] - out["true_bias_z"]).to_numpy()[t > 1300.0]
+    assert np.sqrt(np.mean(err**2)) < 0.15
+    # the a and c columns are the drift's tangent at the row's temperature
+    row = out.iloc[-1]
+    assert row["a"] * row["temp"] + row["b"] * row["temp_rate"] + row["c"] == pytest.approx(row["bias_z"], abs=1e-9)
 
 
 def test_settings_are_checked():

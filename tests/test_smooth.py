@@ -7,23 +7,25 @@ import pytest
 from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.errors import ConfigError
 from gyrodrift.estimators import AdaptiveConfig
-from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_HIST
+from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_DRIFT, N_HIST
 from gyrodrift.evaluate.metrics import bias_error
 from gyrodrift.simulate import simulate
 from gyrodrift.smooth import _transition, smooth_epochs, smooth_output
 
-TRIU = [(r, c) for r in range(4) for c in range(r, 4)]
+TRIU = [(r, c) for r in range(N_DRIFT) for c in range(r, N_DRIFT)]
+N = N_DRIFT
 
 
-def _forward(rng, K, st, *, jump_at=None, jump=0.0, truth=(0.02, 3.0, -0.4, 0.0)):
-    """A Kalman filter of the drift states [a, b, c', r] on direct bias measurements, its
+def _forward(rng, K, st, *, jump_at=None, jump=0.0, truth=(0.02, 3.0, -0.4, 0.0, 1e-3)):
+    """A Kalman filter of the drift states [a, b, c', r, a2] on direct bias measurements, its
     history in the engine's layout, and what it was built from (for the whole-system check)."""
     dts = rng.uniform(0.5, 3.0, K)
     dtemps = rng.uniform(0.0, 0.2, K)
-    H = np.column_stack([rng.normal(0, 5, K), rng.normal(0, 0.05, K), np.ones(K), np.zeros(K)])
+    hT = rng.normal(0, 5, K)
+    H = np.column_stack([hT, rng.normal(0, 0.05, K), np.ones(K), np.zeros(K), hT**2])
     R = rng.uniform(1e-4, 1e-3, K)
     z_true = np.array(truth, dtype=float)
-    x, P = np.zeros(4), np.diag([0.05, 5.0, 1.0, 1e-6]) ** 2
+    x, P = np.zeros(N), np.diag([0.05, 5.0, 1.0, 1e-6, 1e-3]) ** 2
     prior = (x.copy(), P.copy())
     hist = np.zeros((K, N_HIST))
     y = np.zeros(K)
@@ -44,38 +46,48 @@ def _forward(rng, K, st, *, jump_at=None, jump=0.0, truth=(0.02, 3.0, -0.4, 0.0)
         x = x + Kg * (y[k] - H[k] @ x)
         P = P - np.outer(Kg, H[k] @ P)
         hist[k, H_T], hist[k, H_DT], hist[k, H_DTEMP], hist[k, H_JUMP] = t, dts[k], dtemps[k], jumps[k]
-        hist[k, H_X:H_X + 4] = x
-        hist[k, H_P:H_P + 10] = [P[r, c] for r, c in TRIU]
+        hist[k, H_X:H_X + N] = x
+        hist[k, H_P:H_P + len(TRIU)] = [P[r, c] for r, c in TRIU]
     return hist, dict(H=H, R=R, y=y, prior=prior)
 
 
 def _whole_system(hist, data, st):
-    """The same linear-Gaussian model solved at once: weighted least squares over every state."""
+    """The same linear-Gaussian model solved at once: weighted least squares over every state
+    (the curvature a2, which has no process noise, one unknown for all epochs)."""
     K = hist.shape[0]
+    M = N - 1  # the states that move: a, b, c', r
     rows, rhs, w = [], [], []
+
+    def col(k, j):
+        return M * K if j == M else M * k + j
 
     def put(coeffs, value, var):
         rows.append(coeffs), rhs.append(value), w.append(1.0 / var)
 
     x0, P0 = data["prior"]
     Q0 = np.linalg.cholesky(np.linalg.inv(P0))  # whitening of the prior (full matrix)
-    for j in range(4):
-        row = np.zeros(4 * K)
-        row[:4] = Q0.T[j]
+    for j in range(N):
+        row = np.zeros(M * K + 1)
+        for i in range(N):
+            row[col(0, i)] = Q0.T[j][i]
         put(row, Q0.T[j] @ x0, 1.0)
     for k in range(1, K):
         F, Q = _transition(hist[k, H_DT], hist[k, H_DTEMP], hist[k, H_JUMP], st)
-        for j in range(4):
-            row = np.zeros(4 * K)
-            row[4 * k + j] = 1.0
-            row[4 * (k - 1):4 * k] -= F[j]
+        assert Q[M, M] == 0.0 and np.all(F[:M, M] == 0.0)
+        for j in range(M):
+            row = np.zeros(M * K + 1)
+            row[col(k, j)] = 1.0
+            for i in range(M):
+                row[col(k - 1, i)] -= F[j, i]
             put(row, 0.0, Q[j, j])
     for k in range(K):
-        row = np.zeros(4 * K)
-        row[4 * k:4 * k + 4] = data["H"][k]
+        row = np.zeros(M * K + 1)
+        for i in range(N):
+            row[col(k, i)] += data["H"][k][i]
         put(row, data["y"][k], data["R"][k])
     A, W = np.array(rows), np.array(w)
-    return np.linalg.solve(A.T @ (A * W[:, None]), A.T @ (W * np.array(rhs))).reshape(K, 4)
+    v = np.linalg.solve(A.T @ (A * W[:, None]), A.T @ (W * np.array(rhs)))
+    return np.column_stack([v[:M * K].reshape(K, M), np.full(K, v[M * K])])
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -84,7 +96,7 @@ def test_rts_equals_the_whole_linear_system_solved_at_once(seed):
     hist, data = _forward(np.random.default_rng(seed), 40, st, jump_at=20, jump=0.5)
     sm = smooth_epochs(hist, CompensatorConfig(adaptive=st))
     np.testing.assert_allclose(sm.states, _whole_system(hist, data, st), rtol=1e-6, atol=1e-8)
-    np.testing.assert_array_equal(sm.filtered, hist[:, H_X:H_X + 4])
+    np.testing.assert_array_equal(sm.filtered, hist[:, H_X:H_X + N])
     assert np.allclose(sm.states[-1], sm.filtered[-1])  # the last epoch: nothing after it
 
 
@@ -92,7 +104,7 @@ def test_a_jump_is_not_carried_back_across_its_epoch():
     """A step of c' the forward pass kept: the epochs before it keep their own level."""
     st = AdaptiveConfig(drift_jump_dps=0.3)  # the jump variant on
     rng = np.random.default_rng(5)
-    hist, _ = _forward(rng, 60, st, jump_at=30, jump=1.0, truth=(0.0, 0.0, 0.2, 0.0))
+    hist, _ = _forward(rng, 60, st, jump_at=30, jump=1.0, truth=(0.0, 0.0, 0.2, 0.0, 0.0))
     sm = smooth_epochs(hist, CompensatorConfig(adaptive=st))
     assert np.all(np.abs(sm.states[5:29, 2] - 0.2) < 0.05)
     assert np.all(np.abs(sm.states[31:, 2] - 1.2) < 0.05)
@@ -106,7 +118,7 @@ def test_the_smoothed_covariance_is_no_larger_than_the_filtered():
     hist, _ = _forward(np.random.default_rng(3), 30, st)
     sm = smooth_epochs(hist, CompensatorConfig(adaptive=st))
     for k in range(hist.shape[0]):
-        P_f = np.zeros((4, 4))
+        P_f = np.zeros((N, N))
         for m, (r, c) in enumerate(TRIU):
             P_f[r, c] = P_f[c, r] = hist[k, H_P + m]
         assert np.all(np.linalg.eigvalsh(P_f - sm.cov[k]) > -1e-12)  # smoothed ≤ filtered
@@ -143,7 +155,8 @@ def test_smoothed_rows_use_the_states_of_their_own_epoch():
     for k in (1, 50, 200):
         rows = (t > s.t[k - 1]) & (t <= s.t[k])
         assert rows.any()
-        assert np.all(sm.loc[rows, "a"].to_numpy() == s.states[k, 0])
+        hT = sm.loc[rows, "temp"].to_numpy() - sm.attrs["temp_ref_c"]
+        np.testing.assert_allclose(sm.loc[rows, "a"].to_numpy(), s.states[k, 0] + 2.0 * s.states[k, 4] * hT, rtol=1e-12)
         assert np.all(sm.loc[rows, "b"].to_numpy() == s.states[k, 1])
 
 

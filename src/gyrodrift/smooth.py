@@ -14,7 +14,7 @@ import pandas as pd
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError
-from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_HIST
+from gyrodrift.kernels.evloop import H_DT, H_DTEMP, H_JUMP, H_P, H_T, H_X, N_DRIFT, N_HIST
 from gyrodrift.kernels.integrate import trapezoid
 from gyrodrift.model import ElapsedClock
 
@@ -25,9 +25,10 @@ __all__ = ["SmoothedDrift", "smooth_epochs", "smooth_output"]
 class SmoothedDrift:
     """Smoothed drift states, one set per epoch end.
 
-    ``t`` (K,) epoch ends, s; ``states`` (K, 4) ``[a (deg/s/degC), b (deg/s per degC/s),
-    c' (deg/s at T_ref), r (deg/s²)]``; ``cov`` (K, 4, 4) their covariance; ``filtered`` (K, 4)
-    the forward pass's states, for comparison.
+    ``t`` (K,) epoch ends, s; ``states`` (K, 5) ``[a (deg/s/degC), b (deg/s per degC/s),
+    c' (deg/s at T_ref), r (deg/s²), a2 (deg/s/degC²)]`` (the drift ``a (T - T_ref) + a2 (T -
+    T_ref)² + b T' + c'``); ``cov`` (K, 5, 5) their covariance; ``filtered`` (K, 5) the forward
+    pass's states, for comparison.
     """
 
     t: np.ndarray
@@ -37,12 +38,12 @@ class SmoothedDrift:
 
 
 def _unpack(hist: np.ndarray):
-    """States (K, 4) and covariances (K, 4, 4) of the epoch history."""
-    x = hist[:, H_X:H_X + 4].copy()
-    P = np.empty((hist.shape[0], 4, 4))
+    """States (K, N_DRIFT) and covariances (K, N_DRIFT, N_DRIFT) of the epoch history."""
+    x = hist[:, H_X:H_X + N_DRIFT].copy()
+    P = np.empty((hist.shape[0], N_DRIFT, N_DRIFT))
     m = 0
-    for r in range(4):
-        for c in range(r, 4):
+    for r in range(N_DRIFT):
+        for c in range(r, N_DRIFT):
             P[:, r, c] = P[:, c, r] = hist[:, H_P + m]
             m += 1
     return x, P
@@ -51,11 +52,11 @@ def _unpack(hist: np.ndarray):
 def _transition(dt: float, dtemp: float, jump: float, st) -> tuple[np.ndarray, np.ndarray]:
     """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC, a jump kept with chance ``jump``."""
     phi = np.exp(-dt / st.drift_rate_s)
-    F = np.eye(4)
+    F = np.eye(N_DRIFT)
     F[2, 3] = st.drift_rate_s * (1.0 - phi)
     F[3, 3] = phi
     Q = np.diag([st.slope_walk**2 * dtemp, st.rate_walk**2 * dt, st.drift_walk**2 * dt + st.drift_walk_temp**2 * dtemp
-                  + jump * st.drift_jump_dps**2, st.drift_rate_dps2**2 * (1.0 - phi * phi)])
+                  + jump * st.drift_jump_dps**2, st.drift_rate_dps2**2 * (1.0 - phi * phi), 0.0])  # a2: constant
     return F, Q
 
 
@@ -128,17 +129,18 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     tref = float(out.attrs["temp_ref_c"])
     Tp = out["temp_rate"].to_numpy(float)
     k = np.minimum(np.searchsorted(sm.t, t, side="left"), sm.t.size - 1)
-    a, b, c = sm.states[k, 0], sm.states[k, 1], sm.states[k, 2]
-    bias = a * (T - tref) + b * Tp + c
+    a, b, c, a2 = sm.states[k, 0], sm.states[k, 1], sm.states[k, 2], sm.states[k, 4]
+    bias = a * (T - tref) + a2 * (T - tref) ** 2 + b * Tp + c
     old_bias = out["bias_z"].to_numpy(float)
     hold = (out["gate_reason"].astype(str) == "gap").to_numpy()
     res = out.copy()
-    res["a"], res["b"], res["c"] = a, b, c - a * tref
+    a_tangent = a + 2.0 * a2 * (T - tref)  # eq. (2)'s a: the slope at T
+    res["a"], res["b"], res["c"] = a_tangent, b, bias - a_tangent * T - b * Tp
     res["bias_z"] = bias
     res["rate_z"] = out["rate_z"].to_numpy(float) + (old_bias - bias)
     res["heading"] = wrap_360(out["heading"].to_numpy(float) + trapezoid(t, old_bias - bias, hold))
-    h = np.stack([T - tref, Tp, np.ones(t.size)], axis=1)
-    bias_sd = np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", h, sm.cov[k][:, :3, :3], h), 0.0))
+    h = np.stack([T - tref, Tp, np.ones(t.size), np.zeros(t.size), (T - tref) ** 2], axis=1)
+    bias_sd = np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", h, sm.cov[k], h), 0.0))
     res["bias_sd"] = bias_sd
     if "heading_sd" in out.columns:  # the forward variance with the smoothed bias_sd integrated instead
         old_sd = out["bias_sd"].to_numpy(float)

@@ -34,6 +34,9 @@ class AdaptiveConfig:
         Mean length of a still and of a moving spell of the platform, s.
     slope_walk : float
         Random walk of a per √degC of temperature change, deg/s/degC/√degC.
+    curvature_sd : float
+        Prior standard deviation of the drift's curvature in temperature (the a2 of
+        ``a2 (T - T_ref)²``), deg/s/degC².
     rate_walk : float
         Random walk of b per √s, deg/s/(degC/s)/√s.
     drift_walk : float
@@ -82,6 +85,7 @@ class AdaptiveConfig:
     still_s: float = setting(300.0, "s", gt=0.0)
     moving_s: float = setting(300.0, "s", gt=0.0)
     slope_walk: float = setting(0.003, "deg/s/degC per √degC", ge=0.0, most=1.0)
+    curvature_sd: float = setting(1e-3, "deg/s/degC²", ge=0.0, most=1.0)
     rate_walk: float = setting(0.01, "deg/degC per √s", ge=0.0, most=1000.0)
     drift_walk: float = setting(2e-4, "deg/s per √s", ge=0.0, most=50.0)
     drift_walk_temp: float = setting(0.02, "deg/s per √degC", ge=0.0, most=50.0)
@@ -189,6 +193,7 @@ class AdaptiveModel(LinearDrift):
         P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
         P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
         P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
+        P0[ev.X_A2, ev.X_A2] = self.settings.curvature_sd ** 2
 
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
@@ -200,11 +205,17 @@ class AdaptiveModel(LinearDrift):
 
     @property
     def params(self) -> np.ndarray:
-        """The paper's absolute [a, b, c] (deg/s/degC, deg/s per degC/s, deg/s) in force."""
+        """The paper's absolute [a, b, c] (deg/s/degC, deg/s per degC/s, deg/s) in force: the
+        drift's tangent at ``T_ref`` (the model's curvature a2 is its own, :attr:`curvature`)."""
         if not self._started:
             return self._x0.copy()
         x = self.mf[ev.MF_XC:ev.MF_XC + ev.NX]
         return np.array([x[ev.X_A], x[ev.X_B], x[ev.X_C] - x[ev.X_A] * self.mf[ev.MF_TREF]])
+
+    @property
+    def curvature(self) -> float:
+        """The drift's curvature in temperature a2 (deg/s/degC²; 0 before the first row)."""
+        return float(self.mf[ev.MF_XC + ev.X_A2]) if self._started else 0.0
 
     @property
     def centred_cov(self) -> np.ndarray:

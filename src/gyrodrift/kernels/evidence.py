@@ -23,11 +23,11 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 4, 7
+NM, NX = 4, 8
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
 N_RATE = 4
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING = 0, 1, 2, 3
-X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E = 0, 1, 2, 3, 4, 5, 6
+X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2 = 0, 1, 2, 3, 4, 5, 6, 7
 
 # ------------------------------------------------------------------ float state
 MF_X = 0                      # (NM, NX) states per mode
@@ -77,7 +77,9 @@ MF_RX, MF_RX_S, MF_RX_W = MF_NW_W + 1, MF_NW_W + 2, MF_NW_W + 3
 MF_JUMP = MF_RX_W + 1
 #: The gyro noise's colour (a still epoch's von Neumann ratio over its white value): belief mean, variance.
 MF_COLOUR, MF_COLOUR_V = MF_JUMP + 1, MF_JUMP + 2
-N_MF = MF_COLOUR_V + 1
+#: The epoch's ∫(T - T_ref)² dt (degC² s) and its Σ to each compass sample (the curvature's regressors).
+MF_E_TC2, MF_E_STC2 = MF_COLOUR_V + 1, MF_COLOUR_V + 2
+N_MF = MF_E_STC2 + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
@@ -212,10 +214,11 @@ def combine(mf):
 
 
 @jit(inline=True)
-def bias_var(Pc, hT, hTp):
-    """Variance of ``a hT + b hTp + c`` under the covariance ``Pc`` (NX, NX)."""
+def bias_var(Pc, hT, hTp, hT2):
+    """Variance of ``a hT + b hTp + c + a2 hT2`` under the covariance ``Pc`` (NX, NX)."""
     v = (Pc[1, 1] * hT * hT + Pc[2, 2] * hTp * hTp + Pc[3, 3] + 2.0 * Pc[1, 2] * hT * hTp
-         + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp)
+         + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp
+         + hT2 * (Pc[7, 7] * hT2 + 2.0 * (Pc[1, 7] * hT + Pc[2, 7] * hTp + Pc[3, 7])))
     return max(v, 0.0)
 
 
@@ -280,11 +283,11 @@ def _update(x, P, H, z, R, wrap, only=-1):
 
 
 @jit(inline=True)
-def _rows(P, f01, f02, f03, f05, g, pd, pr, pe):
+def _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
     """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05: its a, b,
     c', r entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
     for k in range(NX):
-        P[X_DELTA, k] += f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k]
+        P[X_DELTA, k] += f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k] + f07 * P[X_A2, k]
         P[X_C, k] += g * P[X_R, k]
         P[X_D, k] *= pd
         P[X_R, k] *= pr
@@ -292,11 +295,11 @@ def _rows(P, f01, f02, f03, f05, g, pd, pr, pe):
 
 
 @jit(inline=True)
-def _transition(P, f01, f02, f03, f05, g, pd, pr, pe):
+def _transition(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
     """``P`` ← F P Fᵀ in place, no temporary (F as :func:`_rows` has it): rows, then columns."""
-    _rows(P, f01, f02, f03, f05, g, pd, pr, pe)
+    _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe)
     Pt = P.T
-    _rows(Pt, f01, f02, f03, f05, g, pd, pr, pe)
+    _rows(Pt, f01, f02, f03, f05, f07, g, pd, pr, pe)
 
 
 @jit
@@ -380,7 +383,7 @@ def epoch(mf, mc, t_end, temp_end):
     if not dt > 0.0:
         return
     gap = mf[MF_E_GAP] == 1.0
-    dG, dTc, dTp = mf[MF_E_G], mf[MF_E_TC], mf[MF_E_TP]
+    dG, dTc, dTp, dTc2 = mf[MF_E_G], mf[MF_E_TC], mf[MF_E_TP], mf[MF_E_TC2]
     # the temperature change over the epoch: from T' (no quantisation flips), or T itself for the clock
     dtemp = abs(temp_end - mf[MF_E_T_START]) if mc[MC_CLOCK] == 1.0 else abs(dTp)
     # Markov chain of mode changes over dt
@@ -417,7 +420,7 @@ def epoch(mf, mc, t_end, temp_end):
         x = X[j]
         Pj = P[j]
         still = _is_still(j)
-        drift_int = x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt
+        drift_int = x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt + x[X_A2] * dTc2
         if still:  # the heading holds: δ moves with the gyro integral
             x[X_DELTA] -= dG
         else:  # δ moves by minus the drift integral (eq. 5)
@@ -433,9 +436,9 @@ def epoch(mf, mc, t_end, temp_end):
         x[X_D] *= phi_d
         x[X_E] *= phi_e
         if still:
-            _transition(Pj, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
+            _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
         else:
-            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, gain_r, phi_d, phi_r, phi_e)
+            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, gain_r, phi_d, phi_r, phi_e)
         Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
         Pj[X_A, X_A] += q_a
         Pj[X_B, X_B] += q_b
@@ -447,6 +450,7 @@ def epoch(mf, mc, t_end, temp_end):
     # the epoch's data, shared by every mode: the gyro's integral and its serial structure
     Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
     Hg[X_A] = dTc
+    Hg[X_A2] = dTc2
     Hg[X_B] = dTp
     Hg[X_C] = dt
     Hg[X_R] = -0.5 * dt * dt
@@ -480,6 +484,7 @@ def epoch(mf, mc, t_end, temp_end):
         Hs[X_E] = 1.0
         Hm[:] = Hs
         Hm[X_A] = dTc - mf[MF_E_STC] / n_c
+        Hm[X_A2] = dTc2 - mf[MF_E_STC2] / n_c
         Hm[X_B] = dTp - mf[MF_E_STP] / n_c
         Hm[X_C] = dt - mf[MF_E_ST] / n_c
         if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
@@ -548,8 +553,8 @@ def epoch(mf, mc, t_end, temp_end):
     if not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
         xm = (mu[CLEAN_MOVING] * X[CLEAN_MOVING] + mu[DIST_MOVING] * X[DIST_MOVING]) / (mu[CLEAN_MOVING] + mu[DIST_MOVING])
-        r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt)) / dt
-        Rr = (arw + bias_var(Pc, dTc, dTp) * dt * dt) / (dt * dt)
+        r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
+        Rr = (arw + bias_var(Pc, dTc, dTp, dTc2) * dt * dt) / (dt * dt)
         lw = np.empty(N_RATE + 1)
         ws = np.empty(N_RATE + 1)
         Ps = np.empty(N_RATE + 1)

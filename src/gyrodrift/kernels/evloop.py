@@ -41,18 +41,21 @@ RF_STARTED, RF_SEEN = 16, 17  # a row was taken; a compass sample came (1.0)
 RF_UNOBS = 18  # unobservable code in force
 RF_FUSED_ON = 19  # an epoch with a compass sample has closed: the fused heading is known (1.0)
 #: The first epoch: its last row (-1 until it closes) and the drift learned by its end: a, b,
-#: c' and their covariance (aa, bb, cc, ab, ac, bc).
+#: c', a2 and their covariance (upper triangle: aa ab ac aa2 bb bc ba2 cc ca2 a2a2).
 RF_FIRST_ROW = 20
 RF_FIRST_DRIFT = 21
-RF_HIST_N = RF_FIRST_DRIFT + 9  # epochs recorded in the history
+RF_HIST_N = RF_FIRST_DRIFT + 14  # epochs recorded in the history
 RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading column holds ∫rate (settle anchors it)
 RF_N = RF_INIT_RAW + 1
 
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
-#: drift states [a, b, c', r], their covariance (upper triangle: aa ab ac ar bb bc br cc cr rr), P(jump).
-H_T, H_DT, H_DTEMP, H_X, H_P, H_JUMP = 0, 1, 2, 3, 7, 17
-N_HIST = 18
+#: drift states [a, b, c', r, a2] (N_DRIFT), their covariance (upper triangle, row by row), P(jump).
+N_DRIFT = 5
+H_T, H_DT, H_DTEMP, H_X = 0, 1, 2, 3
+H_P = H_X + N_DRIFT
+H_JUMP = H_P + N_DRIFT * (N_DRIFT + 1) // 2
+N_HIST = H_JUMP + 1
 
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
@@ -66,7 +69,7 @@ def _open(mf, t, temp):
     mf[MF_E_T_START] = temp
     for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
               MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
-              ev.MF_E_NG):
+              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2):
         mf[k] = 0.0
 
 
@@ -96,11 +99,11 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
         hist[k, H_DT] = dt
         hist[k, H_DTEMP] = dtemp
         hist[k, H_JUMP] = mf[ev.MF_JUMP]
-        xs = (X_A, X_B, X_C, ev.X_R)
+        xs = (X_A, X_B, X_C, ev.X_R, ev.X_A2)
         m = 0
-        for r in range(4):
+        for r in range(N_DRIFT):
             hist[k, H_X + r] = mf[MF_XC + xs[r]]
-            for c in range(r, 4):
+            for c in range(r, N_DRIFT):
                 hist[k, H_P + m] = Pc[xs[r] * NX + xs[c]]
                 m += 1
         rf[RF_HIST_N] = k + 1
@@ -139,8 +142,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             c_t, c_g, c_T, c_Tp = ti, gi, Ti, Tpi
             rf[RF_STARTED] = 1.0
             _open(mf, ti, Ti)
-        a, b, c = xc[X_A], xc[X_B], xc[X_C]
-        bias = a * (Ti - tref) + b * Tpi + c
+        a, b, c, a2 = xc[X_A], xc[X_B], xc[X_C], xc[ev.X_A2]
+        bias = a * (Ti - tref) + b * Tpi + c + a2 * (Ti - tref) ** 2
         rate = gi - bias
         h = ti - c_t
         gap = False
@@ -189,6 +192,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mf[ev.MF_E_NG] += 1.0
             I_bias += 0.5 * (bias + c_bias) * h
             mf[MF_E_TC] += 0.5 * (Ti + c_T - 2.0 * tref) * h
+            mf[ev.MF_E_TC2] += 0.5 * ((Ti - tref) ** 2 + (c_T - tref) ** 2) * h
             mf[MF_E_TP] += 0.5 * (Tpi + c_Tp) * h
             w = 1.0 - math.exp(-h / tau_turn)
             rf[RF_MEAN_RATE] += w * (rate - rf[RF_MEAN_RATE])
@@ -199,6 +203,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mf[MF_E_DREF] = D
             mf[MF_E_SD] += wrap180(D - mf[MF_E_DREF])
             mf[MF_E_STC] += mf[MF_E_TC]
+            mf[ev.MF_E_STC2] += mf[ev.MF_E_TC2]
             mf[MF_E_STP] += mf[MF_E_TP]
             mf[MF_E_ST] += ti - mf[MF_E_T0]
             mf[MF_E_SG] += mf[MF_E_G]
@@ -226,23 +231,26 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias, hist)
             if rf[RF_FIRST_ROW] < 0.0:
                 rf[RF_FIRST_ROW] = i
-                for k, (r, c_) in enumerate(((X_A, X_A), (X_B, X_B), (X_C, X_C), (X_A, X_B), (X_A, X_C), (X_B, X_C))):
-                    rf[RF_FIRST_DRIFT + 3 + k] = Pc[r, c_]
-                rf[RF_FIRST_DRIFT] = xc[X_A]
-                rf[RF_FIRST_DRIFT + 1] = xc[X_B]
-                rf[RF_FIRST_DRIFT + 2] = xc[X_C]
+                xs = (X_A, X_B, X_C, ev.X_A2)
+                m = 4
+                for r in range(4):
+                    rf[RF_FIRST_DRIFT + r] = xc[xs[r]]
+                    for c_ in range(r, 4):
+                        rf[RF_FIRST_DRIFT + m] = Pc[xs[r], xs[c_]]
+                        m += 1
             updated = 1 if mf[MF_UPDATED] == 1.0 and not gap else 0
             _open(mf, ti, Ti)
-        bsd = math.sqrt(ev.bias_var(Pc, Ti - tref, Tpi))
+        bsd = math.sqrt(ev.bias_var(Pc, Ti - tref, Tpi, (Ti - tref) ** 2))
         if rf[RF_SEEN] == 1.0:
             rf[RF_ISD] += bsd * h
         ix = np.uint64(i)
         out[o_bias + ix] = bias
         out[o_rate + ix] = rate
         out[O_BIAS_SD * cap + ix] = bsd
-        out[O_A * cap + ix] = xc[X_A]
+        a_tangent = xc[X_A] + 2.0 * xc[ev.X_A2] * (Ti - tref)  # eq. (2)'s a: the slope at T
+        out[O_A * cap + ix] = a_tangent
         out[O_B * cap + ix] = xc[X_B]
-        out[O_C * cap + ix] = xc[X_C] - xc[X_A] * tref
+        out[O_C * cap + ix] = bias - a_tangent * Ti - xc[X_B] * Tpi
         out[o_heading + ix] = I_rate if rf[RF_INIT_RAW] == 1.0 else wrap360(rf[RF_ANCHOR] + I_rate)
         sig_w = mc[MC_COMPASS_SD]
         if rf[RF_FUSED_ON] == 1.0:
@@ -295,24 +303,32 @@ def settle(t, g, T, Tp, heading, last, n_init, tref, rf, out, codes, cap):
     ``init`` and ``updated`` 0 on the first ``n_init`` rows, the integrated rate corrected, and
     the gyro-alone heading anchored on the window's first compass sample."""
     first = int(rf[RF_FIRST_ROW])
-    d = rf[RF_FIRST_DRIFT:RF_FIRST_DRIFT + 9]
-    a, b, c = d[0], d[1], d[2]
+    d = rf[RF_FIRST_DRIFT:RF_FIRST_DRIFT + 14]
+    a, b, c, a2 = d[0], d[1], d[2], d[3]
     corr = 0.0
     prev = 0.0
+    hv = np.empty(4)
     for i in range(min(first + 1, last + 1)):
         hT = T[i] - tref
         hTp = Tp[i]
-        bias = a * hT + b * hTp + c
+        bias = a * hT + b * hTp + c + a2 * hT * hT
         db = bias - out[O_BIAS * cap + i]
         if i > 0 and codes[OC_REASON * cap + i] != R_GAP:
             corr -= 0.5 * (db + prev) * (t[i] - t[i - 1])
         prev = db
-        var = (d[3] * hT * hT + d[4] * hTp * hTp + d[5] + 2.0 * d[6] * hT * hTp + 2.0 * d[7] * hT + 2.0 * d[8] * hTp)
+        hv[0], hv[1], hv[2], hv[3] = hT, hTp, 1.0, hT * hT
+        var = 0.0
+        m = 4
+        for r in range(4):
+            for c_ in range(r, 4):
+                var += (1.0 if r == c_ else 2.0) * d[m] * hv[r] * hv[c_]
+                m += 1
+        a_tangent = a + 2.0 * a2 * hT
         out[O_BIAS * cap + i] = bias
         out[O_RATE * cap + i] = g[i] - bias
-        out[O_A * cap + i] = a
+        out[O_A * cap + i] = a_tangent
         out[O_B * cap + i] = b
-        out[O_C * cap + i] = c - a * tref
+        out[O_C * cap + i] = bias - a_tangent * T[i] - b * hTp
         out[O_BIAS_SD * cap + i] = math.sqrt(max(var, 0.0))
         out[O_HEADING * cap + i] += corr
     end = min(first, last)
