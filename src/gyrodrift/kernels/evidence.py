@@ -216,9 +216,10 @@ def combine(mf):
 @jit(inline=True)
 def bias_var(Pc, hT, hTp, hT2):
     """Variance of ``a hT + b hTp + c + a2 hT2`` under the covariance ``Pc`` (NX, NX)."""
-    v = (Pc[1, 1] * hT * hT + Pc[2, 2] * hTp * hTp + Pc[3, 3] + 2.0 * Pc[1, 2] * hT * hTp
-         + 2.0 * Pc[1, 3] * hT + 2.0 * Pc[2, 3] * hTp
-         + hT2 * (Pc[7, 7] * hT2 + 2.0 * (Pc[1, 7] * hT + Pc[2, 7] * hTp + Pc[3, 7])))
+    A, B, C, A2 = X_A, X_B, X_C, X_A2
+    v = (Pc[A, A] * hT * hT + Pc[B, B] * hTp * hTp + Pc[C, C] + 2.0 * Pc[A, B] * hT * hTp
+         + 2.0 * Pc[A, C] * hT + 2.0 * Pc[B, C] * hTp
+         + hT2 * (Pc[A2, A2] * hT2 + 2.0 * (Pc[A, A2] * hT + Pc[B, A2] * hTp + Pc[C, A2])))
     return max(v, 0.0)
 
 
@@ -284,8 +285,8 @@ def _update(x, P, H, z, R, wrap, only=-1):
 
 @jit(inline=True)
 def _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
-    """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05: its a, b,
-    c', r entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
+    """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05, f07: its a,
+    b, c', r, a2 entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
     for k in range(NX):
         P[X_DELTA, k] += f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k] + f07 * P[X_A2, k]
         P[X_C, k] += g * P[X_R, k]
