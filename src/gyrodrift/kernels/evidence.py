@@ -497,6 +497,7 @@ def epoch(mf, mc, t_end, temp_end):
     # the still, clean mode weighs the data with and without a jump of the drift: its likelihood
     # the sum, its state the likelier one's (docs/model.md, "Drift jumps")
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
+    p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
     jumped = np.zeros(NM)
@@ -515,6 +516,21 @@ def epoch(mf, mc, t_end, temp_end):
                 P[j, :, :] = Pb
                 excess[j] = exb
                 jumped[j] = 1.0
+        elif not _is_clean(j) and n_c > 0.0 and p_step > 0.0:
+            # a disturbance may step again while it lasts: the data weighed with and without a
+            # new step of e, the likelier kept (docs/model.md, "Disturbance steps")
+            xb, Pb = X[j].copy(), P[j].copy()
+            Pb[X_E, X_E] += mc[MC_SIG_STEP] ** 2
+            lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+            llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+            la, lb = math.log(1.0 - p_step) + lla, math.log(p_step) + llb
+            top = max(la, lb)
+            ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
+            excess[j] = exa
+            if lb > la:
+                X[j, :] = xb
+                P[j, :, :] = Pb
+                excess[j] = exb
         else:
             ll[j], excess[j] = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
                                         Hs, Hm, field_ll)
