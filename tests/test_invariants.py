@@ -45,7 +45,7 @@ SHORT, LONG = _profile(4), _profile(200)
 
 UNMET_CLEAN = pytest.mark.xfail(strict=True, reason=(
     "issue 21 invariant not met: a slow sway (5 deg, 93-s period) under a 2-deg compass (seed 25) "
-    "gives heading_fused 2.15 deg RMS against the compass's 2.00; docs/results.md"))
+    "gives heading_fused 2.02 deg RMS against the compass's 2.00; docs/results.md"))
 UNMET_DISTURBED = pytest.mark.xfail(strict=True, reason=(
     "issue 21 invariant not met: a 10-deg ramp over 20 s on a 5-deg, 30-s sway "
     "under a 1-deg compass (seed 0) gives heading_fused 3.3 deg RMS through it against the gyro "
