@@ -494,46 +494,38 @@ def epoch(mf, mc, t_end, temp_end):
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
         Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
-    # the still, clean mode weighs the data with and without a jump of the drift: its likelihood
-    # the sum, its state the likelier one's (docs/model.md, "Drift jumps")
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
     excess = np.zeros(NM)
     jumped = np.zeros(NM)
     for j in range(NM):
-        if p_jump > 0.0 and jump_var > 0.0 and j == CLEAN_STILL:
-            xb, Pb = X[j].copy(), P[j].copy()
-            Pb[X_C, X_C] += jump_var
-            lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-            llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-            la, lb = math.log(1.0 - p_jump) + lla, math.log(p_jump) + llb
-            top = max(la, lb)
-            ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
-            excess[j] = exa
-            if lb > la:  # the likelier of the two is kept (a jump rarely is: merged, its
-                X[j, :] = xb  # variance would be process noise every epoch)
-                P[j, :, :] = Pb
-                excess[j] = exb
-                jumped[j] = 1.0
+        # the alternative a mode weighs beside its own prediction: a jump of the drift (the still,
+        # clean mode; docs/model.md, "Drift jumps") or a new step of a disturbance while it lasts
+        # (the disturbed modes; "Disturbance steps"); its likelihood the sum, its state the likelier one's
+        k, var, p = -1, 0.0, 0.0
+        if j == CLEAN_STILL and p_jump > 0.0 and jump_var > 0.0:
+            k, var, p = X_C, jump_var, p_jump
         elif not _is_clean(j) and n_c > 0.0 and p_step > 0.0:
-            # a disturbance may step again while it lasts: the data weighed with and without a
-            # new step of e, the likelier kept (docs/model.md, "Disturbance steps")
-            xb, Pb = X[j].copy(), P[j].copy()
-            Pb[X_E, X_E] += mc[MC_SIG_STEP] ** 2
-            lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-            llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-            la, lb = math.log(1.0 - p_step) + lla, math.log(p_step) + llb
-            top = max(la, lb)
-            ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
-            excess[j] = exa
-            if lb > la:
-                X[j, :] = xb
-                P[j, :, :] = Pb
-                excess[j] = exb
-        else:
+            k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
+        if k < 0:
             ll[j], excess[j] = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
                                         Hs, Hm, field_ll)
+            continue
+        xb, Pb = X[j].copy(), P[j].copy()
+        Pb[k, k] += var
+        lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+        llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+        la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
+        top = max(la, lb)
+        ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
+        excess[j] = exa
+        if lb > la:  # the likelier of the two is kept (merged, the rare alternative's variance
+            X[j, :] = xb  # would be process noise every epoch)
+            P[j, :, :] = Pb
+            excess[j] = exb
+            if k == X_C:
+                jumped[j] = 1.0
     # mode probabilities
     top = -math.inf
     for j in range(NM):
