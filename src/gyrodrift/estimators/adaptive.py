@@ -89,7 +89,7 @@ class AdaptiveConfig:
     rate_walk: float = setting(0.01, "deg/degC per √s", ge=0.0, most=1000.0)
     drift_walk: float = setting(2e-4, "deg/s per √s", ge=0.0, most=50.0)
     drift_walk_temp: float = setting(0.02, "deg/s per √degC", ge=0.0, most=50.0)
-    drift_rate_dps2: float = setting(0.0003, "deg/s²", ge=0.0, most=50.0)
+    drift_rate_dps2: float = setting(0.00015, "deg/s²", ge=0.0, most=50.0)
     drift_rate_s: float = setting(300.0, "s", gt=0.0)
     drift_jump_dps: float = setting(0.0, "deg/s", ge=0.0, most=50.0)
     drift_jump_s: float = setting(600.0, "s", gt=0.0)
