@@ -50,7 +50,12 @@ class AdaptiveConfig:
     compass_error_deg, compass_error_s : float
         Standard deviation (deg) and correlation time (s) of the compass's slow error d.
     disturbance_step_deg, disturbance_walk, disturbance_s : float
-        A disturbance's step (deg, standard deviation), random walk (deg/√s) and decay time (s).
+        A disturbance's step (deg, standard deviation), random walk (deg/√s; a wandering
+        disturbance) and decay time (s).
+    steady_walk : float
+        Random walk of a steady disturbance, deg/√s (docs/model.md, "Hypotheses").
+    scale_factor_sd : float
+        The gyro's scale-factor uncertainty, as a fraction of the angle turned (docs/model.md, "Motion").
     turn_error_s : float
         Compass error while turning per deg/s of turn rate, s.
     deviation_span_deg : float
@@ -62,7 +67,8 @@ class AdaptiveConfig:
     rate_any_dps : float
         Standard deviation of a rate no motion model predicts, deg/s.
     angular_accel_dps2 : float
-        Typical angular acceleration, deg/s².
+        Angular acceleration of a platform at any rate (no motion model), deg/s²: the trapezoid
+        integral's error between its samples.
     gap_turn_dps : float
         Rate at which a moving platform's heading is lost across a time gap, deg/s.
     still_walk : float
@@ -97,6 +103,8 @@ class AdaptiveConfig:
     compass_error_s: float = setting(3600.0, "s", gt=0.0)
     disturbance_step_deg: float = setting(30.0, "deg", gt=0.0, most=360.0)
     disturbance_walk: float = setting(1.0, "deg per √s", ge=0.0, most=360.0)
+    steady_walk: float = setting(0.3, "deg per √s", ge=0.0, most=360.0)
+    scale_factor_sd: float = setting(0.01, ge=0.0, most=1.0)
     disturbance_s: float = setting(1800.0, "s", gt=0.0)
     turn_error_s: float = setting(0.5, "s", ge=0.0)
     deviation_span_deg: float = setting(90.0, "deg", gt=0.0)
@@ -136,6 +144,8 @@ class AdaptiveConfig:
         mc[ev.MC_SIG_JUMP], mc[ev.MC_TAU_JUMP] = self.drift_jump_dps, self.drift_jump_s
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s
+        mc[ev.MC_Q_E_STEADY] = self.steady_walk
+        mc[ev.MC_SF_SD] = self.scale_factor_sd
         mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks
         mc[ev.MC_SHARE:ev.MC_SHARE + ev.N_RATE] = self.turn_shares
         mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps

@@ -1,9 +1,10 @@
 """The default estimator's model: heading, drift and compass error, judged by evidence.
 
-Four linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e]`` (δ = heading − ∫gyro; a, b,
-c' the drift of eq. 2 centred on ``T_ref``; d the compass's slow error; r the drift's rate of
-departure from eq. 2; e a magnetic disturbance), one per hypothesis (compass clean or
-disturbed × platform still or moving), stepped once per epoch (:func:`epoch`: δ moves by
+Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2]`` (δ = heading − ∫gyro; a,
+b, c' the drift of eq. 2 centred on ``T_ref``; d the compass's slow error; r the drift's rate of
+departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in temperature), one per
+hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
+moving), stepped once per epoch (:func:`epoch`: δ moves by
 minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
 interacting multiple model (:func:`combine`). The model and every term: ``docs/model.md``.
 
@@ -23,10 +24,12 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 4, 8
+NM, NX = 6, 8
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
 N_RATE = 4
-CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING = 0, 1, 2, 3
+CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
+#: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
+STEADY_SHARE = 0.5
 X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2 = 0, 1, 2, 3, 4, 5, 6, 7
 
 # ------------------------------------------------------------------ float state
@@ -79,7 +82,10 @@ MF_JUMP = MF_RX_W + 1
 MF_COLOUR, MF_COLOUR_V = MF_JUMP + 1, MF_JUMP + 2
 #: The epoch's ∫(T - T_ref)² dt (degC² s) and its Σ to each compass sample (the curvature's regressors).
 MF_E_TC2, MF_E_STC2 = MF_COLOUR_V + 1, MF_COLOUR_V + 2
-N_MF = MF_E_STC2 + 1
+#: The epoch's Σ h³ of the steps (s³), and the motion's agility believed after the last moving epoch:
+#: the rate predictors' mean walk variance ((deg/s)²/s) and the weight of any rate.
+MF_E_H3, MF_WQ2, MF_WANY = MF_E_STC2 + 1, MF_E_STC2 + 2, MF_E_STC2 + 3
+N_MF = MF_WANY + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
@@ -107,10 +113,10 @@ NOISE_PRIOR_STEPS = 20.0
  MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
- MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP) = range(34)
+ MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_SD) = range(36)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 34
+MC_Q_W = 36
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -130,7 +136,18 @@ def _is_clean(j):
 
 @jit(inline=True)
 def _is_still(j):
-    return j == CLEAN_STILL or j == DIST_STILL
+    return j == CLEAN_STILL or j == DIST_STILL or j == STEADY_STILL
+
+
+@jit(inline=True)
+def _is_steady(j):
+    return j == STEADY_STILL or j == STEADY_MOVING
+
+
+@jit(inline=True)
+def _share(j):
+    """Prior share of mode ``j`` within its compass class (clean: 1)."""
+    return 1.0 if _is_clean(j) else (STEADY_SHARE if _is_steady(j) else 1.0 - STEADY_SHARE)
 
 
 @jit(inline=True)
@@ -152,10 +169,15 @@ def init_state(mf, mc, x0, P0, t_ref):
         # e of the disturbed filters starts at the compass's error scale (docs/model.md, "The start")
         if not _is_clean(j):
             P[j, X_E, X_E] = mc[MC_SIG_D] ** 2
-        mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps)
+        mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps) * _share(j)
+    rest = 1.0
+    mf[MF_WQ2] = 0.0
     for k in range(N_RATE):
         mf[MF_W + 2 * k] = 0.0
         mf[MF_W + 2 * k + 1] = 1.0
+        mf[MF_WQ2] += mc[MC_SHARE + k] * mc[MC_Q_W + k] ** 2
+        rest -= mc[MC_SHARE + k]
+    mf[MF_WANY] = rest
     combine(mf)
 
 
@@ -362,7 +384,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     excess = math.nan
     if n_c > 0.0:
         # a disturbed compass corrects e alone, unless the heading is known worse than a step is large
-        only = -1 if _is_clean(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
+        only = -1 if _is_clean(j) or _is_steady(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
         nu = wrap180(z - np.dot(H, x))
@@ -395,7 +417,8 @@ def epoch(mf, mc, t_end, temp_end):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
             si, sj = _is_still(i), _is_still(j)
-            pc = (1.0 - pcd if cj else pcd) if ci else (pdc if cj else 1.0 - pdc)
+            pc = (1.0 - pcd if cj else pcd * _share(j)) if ci else (pdc if cj else (1.0 - pdc) * (
+                (1.0 - pdc if _is_steady(i) == _is_steady(j) else pdc)))  # a disturbance changes character as often as it ends
             ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
             Pi[i, j] = pc * ps
     cbar = _mix(mf, Pi, mc[MC_SIG_STEP] ** 2)
@@ -413,7 +436,9 @@ def epoch(mf, mc, t_end, temp_end):
     colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
     sig_s2 = mf[MF_SIG_S2] * (2.0 - colour) / (colour * colour)
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
-    moving_q = arw + mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4] / 12.0
+    # the trapezoid's error within each step under the motion believed: the rate's walk over the
+    # step (h³/12 each), or for any rate an angular acceleration (h⁴/12 each)
+    moving_q = arw + (mf[MF_WQ2] * mf[MF_E_H3] + mf[MF_WANY] * mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4]) / 12.0
     if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
         moving_q = min(moving_q + (mc[MC_OMEGA_GAP] * dt) ** 2 + mc[MC_SIG_ACC] ** 2 * dt**4 / 12.0, GAP_VAR_MAX)
     ll = np.zeros(NM)
@@ -431,7 +456,7 @@ def epoch(mf, mc, t_end, temp_end):
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
         phi_e = math.exp(-dt / mc[MC_TAU_E] - turned / mc[MC_L_DEV])
         q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
-        q_e = mc[MC_Q_E] ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
+        q_e = (mc[MC_Q_E_STEADY] if _is_steady(j) else mc[MC_Q_E]) ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
         x[X_D] *= phi_d
@@ -440,7 +465,8 @@ def epoch(mf, mc, t_end, temp_end):
             _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
         else:
             _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, gain_r, phi_d, phi_r, phi_e)
-        Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
+        # a moving heading also errs with the gyro's scale factor, by a fraction of the angle turned
+        Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q + (mc[MC_SF_SD] * turned) ** 2
         Pj[X_A, X_A] += q_a
         Pj[X_B, X_B] += q_b
         Pj[X_C, X_C] += q_c
@@ -546,9 +572,9 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_S] = keep * mf[MF_RX_S] + ex
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
-    mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING]
+    mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING] + mu[STEADY_STILL] + mu[STEADY_MOVING]
     mf[MF_JUMP] = np.dot(mu, jumped)
-    mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL]
+    mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL] + mu[STEADY_STILL]
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
     if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
         # the colour learned from the epoch as far as it is still: variance var_u / P(still)
@@ -561,7 +587,8 @@ def epoch(mf, mc, t_end, temp_end):
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     if not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
-        xm = (mu[CLEAN_MOVING] * X[CLEAN_MOVING] + mu[DIST_MOVING] * X[DIST_MOVING]) / (mu[CLEAN_MOVING] + mu[DIST_MOVING])
+        xm = ((mu[CLEAN_MOVING] * X[CLEAN_MOVING] + mu[DIST_MOVING] * X[DIST_MOVING] + mu[STEADY_MOVING] * X[STEADY_MOVING])
+              / (mu[CLEAN_MOVING] + mu[DIST_MOVING] + mu[STEADY_MOVING]))
         r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp, dTc2) * dt * dt) / (dt * dt)
         lw = np.empty(N_RATE + 1)
@@ -581,6 +608,10 @@ def epoch(mf, mc, t_end, temp_end):
         Ps[N_RATE] = Rr
         pw = np.exp(lw - np.max(lw))
         pw /= np.sum(pw)
+        mf[MF_WQ2] = 0.0
+        for k in range(N_RATE):
+            mf[MF_WQ2] += pw[k] * mc[MC_Q_W + k] ** 2
+        mf[MF_WANY] = pw[N_RATE]
         switch = _switch(dt, RATE_SWITCH_S)
         wk = np.empty(N_RATE + 1)
         for k in range(N_RATE):

@@ -69,7 +69,7 @@ def _open(mf, t, temp):
     mf[MF_E_T_START] = temp
     for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
               MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
-              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2):
+              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2, ev.MF_E_H3):
         mf[k] = 0.0
 
 
@@ -179,6 +179,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 I_rate += 0.5 * (rate + c_rate) * h
                 mf[MF_E_G] += 0.5 * (gi + c_g) * h
                 mf[MF_E_H2] += h * h
+                mf[ev.MF_E_H3] += h * h * h
                 mf[MF_E_H4] += h * h * h * h
                 dg = gi - c_g
                 mf[MF_E_DG2] += dg * dg
