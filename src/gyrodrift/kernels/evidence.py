@@ -358,9 +358,9 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
     when still; drift plus a true rate when moving, the rate from the random-walk predictors
     or any rate), its serial structure, the compass (with the disturbance e in a disturbed
-    mode, which alone it corrects) and the field. Returns the log-likelihood and the compass
-    innovation's excess over its predicted variance (NaN: none, or the heading not known to
-    a few degrees)."""
+    mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
+    predicted variance (NaN: none, or the heading not known to a few degrees), and the compass
+    innovation and its variance (NaN: no compass)."""
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
@@ -381,20 +381,21 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
             m = np.max(lk)
             ll += m + math.log(np.sum(np.exp(lk - m)))
         ll += l_white if still else l_any
-    excess = math.nan
+    excess = nu = S = math.nan
     if n_c > 0.0:
         # a disturbed compass corrects e alone, unless the heading is known worse than a step is large
         only = -1 if _is_clean(j) or _is_steady(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
         nu = wrap180(z - np.dot(H, x))
-        s_pred = _quad(P, H) + Rc + turn * turn - mf[MF_RX]
+        S = _quad(P, H) + Rc + turn * turn
+        s_pred = S - mf[MF_RX]
         if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
             excess = nu * nu - s_pred
         ll += _update(x, P, H, z, Rc + turn * turn, True, only)
         if _is_clean(j):
             ll += field_ll
-    return ll, excess
+    return ll, excess, nu, S
 
 
 @jit
@@ -535,19 +536,27 @@ def epoch(mf, mc, t_end, temp_end):
         elif not _is_clean(j) and n_c > 0.0 and p_step > 0.0:
             k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
         if k < 0:
-            ll[j], excess[j] = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
-                                        Hs, Hm, field_ll)
+            ll[j], excess[j], _, _ = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
+                                              h_still, Hs, Hm, field_ll)
             continue
         xb, Pb = X[j].copy(), P[j].copy()
         Pb[k, k] += var
-        lla, exa = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
-        llb, exb = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll)
+        lla, exa, nu, S = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
+                                   Hm, field_ll)
+        if k == X_E:  # e is in the compass alone: the step changes its innovation's variance only
+            llb = lla - _loggauss(nu, S) + _loggauss(nu, S + var)
+        else:
+            llb, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
+                                      Hm, field_ll)
         la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
         top = max(la, lb)
         ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
         excess[j] = exa
         if lb > la:  # the likelier of the two is kept (merged, the rare alternative's variance
-            X[j, :] = xb  # would be process noise every epoch)
+            if k == X_E:  # would be process noise every epoch)
+                _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
+                                        Hs, Hm, field_ll)
+            X[j, :] = xb
             P[j, :, :] = Pb
             excess[j] = exb
             if k == X_C:
