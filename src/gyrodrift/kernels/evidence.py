@@ -383,7 +383,8 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         ll += l_white if still else l_any
     excess = nu = S = math.nan
     if n_c > 0.0:
-        # a disturbed compass corrects e alone, unless the heading is known worse than a step is large
+        # a wandering disturbance's compass corrects e alone, unless the heading is known worse
+        # than a step is large; a steady one's corrects every state
         only = -1 if _is_clean(j) or _is_steady(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
@@ -418,8 +419,12 @@ def epoch(mf, mc, t_end, temp_end):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
             si, sj = _is_still(i), _is_still(j)
-            pc = (1.0 - pcd if cj else pcd * _share(j)) if ci else (pdc if cj else (1.0 - pdc) * (
-                (1.0 - pdc if _is_steady(i) == _is_steady(j) else pdc)))  # a disturbance changes character as often as it ends
+            if ci:
+                pc = 1.0 - pcd if cj else pcd * _share(j)
+            elif cj:
+                pc = pdc
+            else:  # a disturbance goes on, and changes kind about as often as it ends
+                pc = (1.0 - pdc) * (1.0 - pdc if _is_steady(i) == _is_steady(j) else pdc)
             ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
             Pi[i, j] = pc * ps
     cbar = _mix(mf, Pi, mc[MC_SIG_STEP] ** 2)
@@ -457,7 +462,8 @@ def epoch(mf, mc, t_end, temp_end):
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
         phi_e = math.exp(-dt / mc[MC_TAU_E] - turned / mc[MC_L_DEV])
         q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
-        q_e = (mc[MC_Q_E_STEADY] if _is_steady(j) else mc[MC_Q_E]) ** 2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
+        walk_e = mc[MC_Q_E_STEADY] if _is_steady(j) else mc[MC_Q_E]
+        q_e = walk_e**2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
         x[X_D] *= phi_d
@@ -552,8 +558,10 @@ def epoch(mf, mc, t_end, temp_end):
         top = max(la, lb)
         ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
         excess[j] = exa
-        if lb > la:  # the likelier of the two is kept (merged, the rare alternative's variance
-            if k == X_E:  # would be process noise every epoch)
+        # the likelier of the two is kept (merged, the rare alternative's variance would be
+        # process noise every epoch)
+        if lb > la:
+            if k == X_E:
                 _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
                                         Hs, Hm, field_ll)
             X[j, :] = xb
