@@ -170,15 +170,25 @@ def init_state(mf, mc, x0, P0, t_ref):
         if not _is_clean(j):
             P[j, X_E, X_E] = mc[MC_SIG_D] ** 2
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps) * _share(j)
-    rest = 1.0
-    mf[MF_WQ2] = 0.0
+    shares = np.empty(N_RATE + 1)
+    shares[N_RATE] = 1.0
     for k in range(N_RATE):
         mf[MF_W + 2 * k] = 0.0
         mf[MF_W + 2 * k + 1] = 1.0
-        mf[MF_WQ2] += mc[MC_SHARE + k] * mc[MC_Q_W + k] ** 2
-        rest -= mc[MC_SHARE + k]
-    mf[MF_WANY] = rest
+        shares[k] = mc[MC_SHARE + k]
+        shares[N_RATE] -= shares[k]
+    _set_agility(mf, mc, shares)
     combine(mf)
+
+
+@jit(inline=True)
+def _set_agility(mf, mc, w):
+    """The motion's agility from the weights ``w`` (N_RATE + 1) of the rate predictors and of
+    any rate: their mean walk variance ((deg/s)²/s) and the weight of any rate."""
+    mf[MF_WQ2] = 0.0
+    for k in range(N_RATE):
+        mf[MF_WQ2] += w[k] * mc[MC_Q_W + k] ** 2
+    mf[MF_WANY] = w[N_RATE]
 
 
 @jit
@@ -221,6 +231,19 @@ def _moments(X, P, w, ref, clean, step_var, x, Pm):
                 Pm[r, c] += w[i] * (P[i, r, c] + dx[r] * dx[c])
         if _is_clean(i) and not clean:  # a disturbance begins: a step of unknown size
             Pm[X_E, X_E] += w[i] * step_var
+
+
+@jit(inline=True)
+def _set_labels(mf):
+    """P(disturbed) and P(still) from the mode probabilities."""
+    p_dist = p_still = 0.0
+    for j in range(NM):
+        if not _is_clean(j):
+            p_dist += mf[MF_MU + j]
+        if _is_still(j):
+            p_still += mf[MF_MU + j]
+    mf[MF_PDIST] = p_dist
+    mf[MF_PSTILL] = p_still
 
 
 @jit
@@ -589,9 +612,8 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_S] = keep * mf[MF_RX_S] + ex
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
-    mf[MF_PDIST] = mu[DIST_STILL] + mu[DIST_MOVING] + mu[STEADY_STILL] + mu[STEADY_MOVING]
+    _set_labels(mf)
     mf[MF_JUMP] = np.dot(mu, jumped)
-    mf[MF_PSTILL] = mu[CLEAN_STILL] + mu[DIST_STILL] + mu[STEADY_STILL]
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
     if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
         # the colour learned from the epoch as far as it is still: variance var_u / P(still)
@@ -604,8 +626,13 @@ def epoch(mf, mc, t_end, temp_end):
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     if not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
-        xm = ((mu[CLEAN_MOVING] * X[CLEAN_MOVING] + mu[DIST_MOVING] * X[DIST_MOVING] + mu[STEADY_MOVING] * X[STEADY_MOVING])
-              / (mu[CLEAN_MOVING] + mu[DIST_MOVING] + mu[STEADY_MOVING]))
+        xm = np.zeros(NX)
+        p_moving = 0.0
+        for j in range(NM):
+            if not _is_still(j):
+                xm += mu[j] * X[j]
+                p_moving += mu[j]
+        xm /= p_moving
         r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp, dTc2) * dt * dt) / (dt * dt)
         lw = np.empty(N_RATE + 1)
@@ -625,10 +652,7 @@ def epoch(mf, mc, t_end, temp_end):
         Ps[N_RATE] = Rr
         pw = np.exp(lw - np.max(lw))
         pw /= np.sum(pw)
-        mf[MF_WQ2] = 0.0
-        for k in range(N_RATE):
-            mf[MF_WQ2] += pw[k] * mc[MC_Q_W + k] ** 2
-        mf[MF_WANY] = pw[N_RATE]
+        _set_agility(mf, mc, pw)
         switch = _switch(dt, RATE_SWITCH_S)
         wk = np.empty(N_RATE + 1)
         for k in range(N_RATE):
