@@ -71,7 +71,9 @@ def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
         labels = truth_labels(log)
         reason = out["gate_reason"].astype(str).to_numpy()
         compass = np.isfinite(out["compass_heading"].to_numpy(float))
-        p, r = _precision_recall((reason == "interference") & compass, labels["disturbed"].to_numpy() & compass)
+        # `field` is the same verdict (a disturbed compass), reached by the field strength and dip
+        said = np.isin(reason, ("interference", "field")) & compass
+        p, r = _precision_recall(said, labels["disturbed"].to_numpy() & compass)
         row.update(interference_precision=p, interference_recall=r)
         p, r = _precision_recall(reason == "turning", labels["turning"].to_numpy())
         row.update(turning_precision=p, turning_recall=r)
