@@ -108,6 +108,30 @@ def test_mixing_without_mode_changes_leaves_every_filter_as_it_was():
     assert P == pytest.approx(P0, abs=1e-12)
 
 
+def test_disturbances_are_mixed_as_angles():
+    """Two filters whose compass disturbances are 170 and -170 deg (20 deg apart across north)
+    mix to about 180 deg with a spread of 10 deg, not to 0 with a spread of 170; so does δ."""
+    est = AdaptiveModel()
+    est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
+    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
+    X[:] = 0.0
+    P[:] = np.eye(ev.NX)
+    mu = np.full(ev.NM, 1e-12)
+    mu[ev.DIST_STILL] = mu[ev.DIST_MOVING] = 0.5
+    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    X[ev.DIST_STILL, ev.X_E], X[ev.DIST_MOVING, ev.X_E] = 170.0, -170.0 + 720.0  # two turns unwrapped
+    X[ev.DIST_STILL, ev.X_DELTA], X[ev.DIST_MOVING, ev.X_DELTA] = 5.0, -5.0 - 360.0
+    ev.combine(mf)
+    xc = mf[ev.MF_XC:ev.MF_XC + ev.NX]
+    Pc = mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)
+    assert abs((xc[ev.X_E] + 180.0) % 360.0 - 180.0) == pytest.approx(180.0, abs=1e-6)
+    assert Pc[ev.X_E, ev.X_E] == pytest.approx(1.0 + 100.0, rel=1e-6)
+    assert (xc[ev.X_DELTA] + 180.0) % 360.0 - 180.0 == pytest.approx(0.0, abs=1e-6)
+    assert Pc[ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 25.0, rel=1e-6)
+
+
 def test_combine_is_the_moment_matched_mixture():
     est = AdaptiveModel()
     est.start(25.0, 0.5, 0.04)

@@ -205,14 +205,15 @@ def seed_heading(mf, delta):
 @jit(inline=True)
 def _moments(X, P, w, ref, clean, step_var, x, Pm):
     """Add the moments of the bank ``X``, ``P`` with weights ``w`` to ``x``, ``Pm`` (zeros): δ
-    averaged as an angle about ``ref``; ``clean``: for a clean mode, without a disturbance e,
-    and ``step_var`` added to e's variance for each clean mode mixed into a disturbed one."""
+    and e averaged as angles about ``ref``'s (a mode's δ and e, (NX,)); ``clean``: for a clean
+    mode, without a disturbance e, and ``step_var`` added to e's variance for each clean mode
+    mixed into a disturbed one."""
     for i in range(NM):
         for k in range(NX):
             v = X[i, k]
-            if k == X_DELTA:
-                v = ref + wrap180(v - ref)
-            elif k == X_E and clean:  # a clean compass has no disturbance
+            if k == X_DELTA or k == X_E:  # angles: a still mode's δ and e follow a turn unwrapped
+                v = ref[k] + wrap180(v - ref[k])
+            if k == X_E and clean:  # a clean compass has no disturbance
                 v = 0.0
             x[k] += w[i] * v
     dx = np.empty(NX)
@@ -222,8 +223,7 @@ def _moments(X, P, w, ref, clean, step_var, x, Pm):
         for k in range(NX):
             dx[k] = X[i, k] - x[k]
         dx[X_DELTA] = wrap180(X[i, X_DELTA] - x[X_DELTA])
-        if clean:
-            dx[X_E] = 0.0
+        dx[X_E] = 0.0 if clean else wrap180(X[i, X_E] - x[X_E])
         for r in range(NX):
             for c in range(NX):
                 if clean and (r == X_E or c == X_E):
@@ -248,12 +248,19 @@ def _set_labels(mf):
 
 @jit
 def combine(mf):
-    """The moment-matched mixture of the bank into MF_XC, MF_PC (δ averaged as an angle)."""
+    """The moment-matched mixture of the bank into MF_XC, MF_PC (δ and e averaged as angles)."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
     xc = np.zeros(NX)
     Pc = np.zeros((NX, NX))
-    _moments(X, P, mf[MF_MU:MF_MU + NM], X[0, X_DELTA], False, 0.0, xc, Pc)
+    # angles about the first mode's δ and the likeliest disturbed mode's e
+    ref = X[0].copy()
+    top = -1.0
+    for j in range(NM):
+        if not _is_clean(j) and mf[MF_MU + j] > top:
+            top = mf[MF_MU + j]
+            ref[X_E] = X[j, X_E]
+    _moments(X, P, mf[MF_MU:MF_MU + NM], ref, False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
@@ -365,7 +372,7 @@ def _mix(mf, Pi, step_var):
     for j in range(NM):
         for i in range(NM):
             w[i] = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-        _moments(X, P, w, X[j, X_DELTA], _is_clean(j), step_var, X0[j], P0[j])
+        _moments(X, P, w, X[j], _is_clean(j), step_var, X0[j], P0[j])
     X[:, :] = X0
     P[:, :, :] = P0
     return cbar
@@ -489,8 +496,9 @@ def epoch(mf, mc, t_end, temp_end):
         q_e = walk_e**2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
-        x[X_D] *= phi_d
-        x[X_E] *= phi_e
+        # the compass's errors are angles: they decay towards 0 from within ±180 deg
+        x[X_D] = wrap180(x[X_D]) * phi_d
+        x[X_E] = wrap180(x[X_E]) * phi_e
         if still:
             _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
         else:
