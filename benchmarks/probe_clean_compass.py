@@ -1,0 +1,68 @@
+"""How often the default's fused heading is worse than a clean compass, on random draws of the
+clean-compass invariant's scenarios (``tests/test_invariants.py``; docs/results.md, issue 21).
+
+The property test stops at its first counterexample; this probe draws ``N`` scenarios of the
+same kind from one seed (numpy, not hypothesis) and counts those where ``heading_fused`` is worse
+than the compass alone (RMS against the truth after 30 s), listing the worst:
+
+    PYTHONPATH=src python benchmarks/probe_clean_compass.py [N] [SEED]     # 90 and 7 by default
+
+A fifth of a minute for 90 draws on the 2-core machine.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from test_invariants import _rms, scenario_log  # the property's own scenarios
+
+from gyrodrift.compensator import compensate
+from gyrodrift.conventions import wrap_180
+
+KINDS = ("still", "sway", "turn")
+
+
+def draw(rng: np.random.Generator, k: int) -> dict:
+    """One scenario of the property's kind; the kinds in turn, and the turn rate a hundredth of
+    its range half the time (slow turns are where the property fails)."""
+    return {"a": rng.uniform(-0.02, 0.02), "c": rng.uniform(-0.5, 0.5), "t0": rng.uniform(10.0, 40.0),
+            "rise": rng.choice([0.0, rng.uniform(0.0, 20.0)]), "kind": KINDS[k % 3], "h0": rng.uniform(0.0, 359.0),
+            "amp": rng.uniform(5.0, 60.0), "period": rng.uniform(30.0, 300.0),
+            "rate": rng.uniform(-5.0, 5.0) * rng.choice([1.0, 0.02]), "gyro_noise": rng.uniform(0.01, 0.2),
+            "compass_noise": rng.uniform(0.3, 3.0), "seed": int(rng.integers(0, 10_000))}
+
+
+def fused_and_compass(p: dict) -> tuple[float, float]:
+    """RMS (deg) of the fused heading and of the compass against the truth, after 30 s."""
+    log = scenario_log(p)
+    out = compensate(log)
+    truth = log["ref_heading"]
+    rows = (out["t"] > 30.0).to_numpy() & out["compass_heading"].notna().to_numpy()
+    return (_rms(wrap_180(out["heading_fused"] - truth), rows), _rms(wrap_180(out["compass_heading"] - truth), rows))
+
+
+def main(n: int = 90, seed: int = 7) -> None:
+    warnings.simplefilter("ignore")
+    rng = np.random.default_rng(seed)
+    fails = []
+    for k in range(n):
+        p = draw(rng, k)
+        fused, compass = fused_and_compass(p)
+        if fused > compass:
+            fails.append((fused, compass, p))
+    print(f"{len(fails)} of {n} draws: heading_fused worse than the clean compass")
+    for fused, compass, p in sorted(fails, key=lambda f: -f[0])[:8]:
+        motion = f"rate {p['rate']:+.3f} deg/s" if p["kind"] == "turn" else f"{p['amp']:.1f} deg, {p['period']:.0f} s"
+        print(f"  fused {fused:6.2f} deg, compass {compass:5.2f} deg: {p['kind']:5s} {motion}, "
+              f"compass noise {p['compass_noise']:.2f} deg, gyro noise {p['gyro_noise']:.3f} deg/s, "
+              f"temperature rise {p['rise']:.1f} degC, seed {p['seed']}")
+
+
+if __name__ == "__main__":
+    main(*(int(a) for a in sys.argv[1:3]))
