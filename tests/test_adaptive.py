@@ -109,7 +109,7 @@ def test_mixing_without_mode_changes_leaves_every_filter_as_it_was():
 
 
 def test_disturbances_are_mixed_as_angles():
-    """Two filters whose compass disturbances are 170 and -170 deg (20 deg apart across north)
+    """Two filters whose compass disturbances are 170 and -170 deg (20 deg apart, across 180)
     mix to about 180 deg with a spread of 10 deg, not to 0 with a spread of 170; so does δ."""
     est = AdaptiveModel()
     est.start(25.0, 0.5, 0.04)
