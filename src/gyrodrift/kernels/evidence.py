@@ -203,18 +203,19 @@ def seed_heading(mf, delta):
 
 
 @jit(inline=True)
-def _moments(X, P, w, ref, clean, step_var, x, Pm):
+def _moments(X, P, w, ref_delta, ref_e, clean, step_var, x, Pm):
     """Add the moments of the bank ``X``, ``P`` with weights ``w`` to ``x``, ``Pm`` (zeros): δ
-    and e averaged as angles about ``ref``'s (a mode's δ and e, (NX,)); ``clean``: for a clean
-    mode, without a disturbance e, and ``step_var`` added to e's variance for each clean mode
-    mixed into a disturbed one."""
+    and e averaged as angles about ``ref_delta`` and ``ref_e``; ``clean``: for a clean mode,
+    without a disturbance e, and ``step_var`` added to e's variance for each clean mode mixed
+    into a disturbed one."""
     for i in range(NM):
         for k in range(NX):
             v = X[i, k]
-            if k == X_DELTA or k == X_E:  # angles: a still mode's δ and e follow a turn unwrapped
-                v = ref[k] + wrap180(v - ref[k])
-            if k == X_E and clean:  # a clean compass has no disturbance
-                v = 0.0
+            # angles: a still mode's δ and e follow a turn unwrapped
+            if k == X_DELTA:
+                v = ref_delta + wrap180(v - ref_delta)
+            elif k == X_E:
+                v = 0.0 if clean else ref_e + wrap180(v - ref_e)  # a clean compass has no disturbance
             x[k] += w[i] * v
     dx = np.empty(NX)
     for i in range(NM):
@@ -254,13 +255,13 @@ def combine(mf):
     xc = np.zeros(NX)
     Pc = np.zeros((NX, NX))
     # angles about the first mode's δ and the likeliest disturbed mode's e
-    ref = X[0].copy()
+    ref_e = 0.0
     top = -1.0
     for j in range(NM):
         if not _is_clean(j) and mf[MF_MU + j] > top:
             top = mf[MF_MU + j]
-            ref[X_E] = X[j, X_E]
-    _moments(X, P, mf[MF_MU:MF_MU + NM], ref, False, 0.0, xc, Pc)
+            ref_e = X[j, X_E]
+    _moments(X, P, mf[MF_MU:MF_MU + NM], X[0, X_DELTA], ref_e, False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
@@ -372,7 +373,7 @@ def _mix(mf, Pi, step_var):
     for j in range(NM):
         for i in range(NM):
             w[i] = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-        _moments(X, P, w, X[j], _is_clean(j), step_var, X0[j], P0[j])
+        _moments(X, P, w, X[j, X_DELTA], X[j, X_E], _is_clean(j), step_var, X0[j], P0[j])
     X[:, :] = X0
     P[:, :, :] = P0
     return cbar
