@@ -104,13 +104,18 @@ def _rms(err, rows) -> float:
     return float(np.sqrt(np.mean(e**2)))
 
 
-def _clean(p) -> None:
+def fused_and_compass_rms(p) -> tuple[float, float]:
+    """RMS (deg) against the truth, after 30 s, of ``heading_fused`` and of the compass on a
+    scenario (or on ``synthetic_log(**p)``); also used by ``benchmarks/probe_clean_compass.py``."""
     log = scenario_log(p) if isinstance(p, dict) and "kind" in p else synthetic_log(**p)
     out = compensate(log)
     truth = log["ref_heading"]
     rows = (out["t"] > 30.0).to_numpy() & out["compass_heading"].notna().to_numpy()
-    fused = _rms(wrap_180(out["heading_fused"] - truth), rows)
-    compass = _rms(wrap_180(out["compass_heading"] - truth), rows)
+    return _rms(wrap_180(out["heading_fused"] - truth), rows), _rms(wrap_180(out["compass_heading"] - truth), rows)
+
+
+def _clean(p) -> None:
+    fused, compass = fused_and_compass_rms(p)
     assert fused <= compass, (fused, compass)
 
 
