@@ -37,6 +37,8 @@ class GateConfig:
     ----------
     turn_rate_dps, turn_window_s : float
         Turning when the compensated rate, averaged over the window (s), exceeds this, deg/s.
+        The default estimator averages only as long as the gyro's noise needs, at most over
+        about the window (``gyrodrift.kernels.evloop.turn_weight``).
     interference_deg : float
         Largest accepted compass-vs-gyro heading change disagreement per interval, deg.
     field_norm_tol, dip_tol_deg : float

@@ -46,7 +46,10 @@ RF_FIRST_ROW = 20
 RF_FIRST_DRIFT = 21
 RF_HIST_N = RF_FIRST_DRIFT + 14  # epochs recorded in the history
 RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading column holds ∫rate (settle anchors it)
-RF_N = RF_INIT_RAW + 1
+#: The gyro's noise as the turning label sees it, moving or not: half the squared successive
+#: differences and their count, forgotten over RATE_SWITCH_S (a motion's character changes)
+RF_TURN_S, RF_TURN_W = RF_INIT_RAW + 1, RF_INIT_RAW + 2
+RF_N = RF_INIT_RAW + 3
 
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
@@ -60,6 +63,10 @@ N_HIST = H_JUMP + 1
 # ------------------------------------------------------------------ row settings
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
 RC_N = 5
+#: The turning threshold in standard deviations of the averaged rate's noise: the averaging is
+#: as short as the gyro's learned noise allows, so that noise alone crosses the threshold about
+#: once in 3.5 million rows (5 sd), and never longer than half the turn window.
+TURN_NOISE_SDS = 5.0
 
 
 @jit(inline=True)
@@ -84,6 +91,10 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
         mf[MF_NORM_REF] = mf[MF_E_NORM] / mf[MF_E_NF]
         mf[MF_DIP_REF] = mf[MF_E_DIP] / mf[MF_E_NF]
     ev.epoch(mf, mc, t, temp)
+    if mf[MF_E_NDG] >= 1.0 and dt > 0.0:
+        keep = math.exp(-dt / ev.RATE_SWITCH_S)
+        rf[RF_TURN_S] = keep * rf[RF_TURN_S] + 0.5 * mf[MF_E_DG2]
+        rf[RF_TURN_W] = keep * rf[RF_TURN_W] + mf[MF_E_NDG]
     if mf[MF_E_NF] > 0.0 and mf[MF_PDIST] < 0.1:  # the reference follows a clean field slowly
         mf[MF_NORM_REF] += 0.01 * (mf[MF_E_NORM] / mf[MF_E_NF] - mf[MF_NORM_REF])
         mf[MF_DIP_REF] += 0.01 * (mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF])
@@ -127,6 +138,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     epoch_s = mc[MC_EPOCH]
     log_gap_factor = math.log(mc[MC_GAP_FACTOR])
     tau_turn = 0.5 * rc[RC_TURN_WIN]
+    w_noise = turn_weight(mf, rf, rc[RC_TURN_RATE])
     xc = mf[MF_XC:MF_XC + NX]
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     o_bias, o_rate, o_heading = O_BIAS * cap, O_RATE * cap, O_HEADING * cap
@@ -195,8 +207,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             mf[MF_E_TC] += 0.5 * (Ti + c_T - 2.0 * tref) * h
             mf[ev.MF_E_TC2] += 0.5 * ((Ti - tref) ** 2 + (c_T - tref) ** 2) * h
             mf[MF_E_TP] += 0.5 * (Tpi + c_Tp) * h
-            w = 1.0 - math.exp(-h / tau_turn)
-            rf[RF_MEAN_RATE] += w * (rate - rf[RF_MEAN_RATE])
+            rf[RF_MEAN_RATE] += max(1.0 - math.exp(-h / tau_turn), w_noise) * (rate - rf[RF_MEAN_RATE])
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = ti, gi, Ti, Tpi, bias, rate
         if not math.isnan(hi):  # a compass sample: D = compass - ∫gyro
             D = hi - I_raw
@@ -230,6 +241,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         updated = 0
         if gap or (not first and ti - mf[MF_E_T0] >= epoch_s):
             _close(mf, mc, rf, rc, ti, Ti, I_raw, I_bias, hist)
+            w_noise = turn_weight(mf, rf, rc[RC_TURN_RATE])  # the noise learned by the epoch
             if rf[RF_FIRST_ROW] < 0.0:
                 rf[RF_FIRST_ROW] = i
                 xs = (X_A, X_B, X_C, ev.X_A2)
@@ -282,6 +294,23 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
     return stop
+
+
+@jit(inline=True)
+def turn_weight(mf, rf, turn_rate):
+    """The weight of a row in the averaged rate that puts ``turn_rate`` (deg/s)
+    :data:`TURN_NOISE_SDS` standard deviations of its noise away from 0. The noise is the
+    gyro's variance per sample over the last epochs, still or moving (``RF_TURN_S``; before
+    the first epoch the model's prior), in the long run (the model's learned colour); an
+    exponential average of weight w keeps w / (2 - w) of it, about h / 2τ."""
+    colour = min(max(mf[ev.MF_COLOUR], ev.COLOUR_MIN), ev.COLOUR_MAX)
+    s2 = rf[RF_TURN_S] / rf[RF_TURN_W] if rf[RF_TURN_W] > 0.0 else mf[MF_SIG_S2]
+    s2 *= (2.0 - colour) / (colour * colour)
+    if not s2 > 0.0:
+        return 1.0
+    # w / (2 - w) = v  <=>  w = 2v / (1 + v), v the share of s² allowed
+    v = min((turn_rate / TURN_NOISE_SDS) ** 2 / s2, 1.0)
+    return 2.0 * v / (1.0 + v)
 
 
 @jit
