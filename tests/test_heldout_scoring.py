@@ -45,3 +45,29 @@ def test_labels_without_any_truth_or_verdict_are_undefined():
     row = _score(*_case(["", ""], [0.0, 0.0], [0.0, 0.0]), own=True)
     assert np.isnan(row["interference_precision"]) and np.isnan(row["interference_recall"])
     assert np.isnan(row["turning_precision"]) and np.isnan(row["turning_recall"])
+
+
+def test_labels_are_pooled_over_a_class_s_cases():
+    """Two cases: one with 3 rows labelled, 2 of 4 true rows hit; one with 1 false label and no
+    truth (precision 0 alone, undefined recall). Pooled: 2 of 4 labelled, 2 of 4 true."""
+    from gyrodrift.evaluate.heldout import COLUMNS, pooled_labels
+
+    base = dict.fromkeys(COLUMNS, np.nan)
+    rows = [{**base, "split": "held-out", "class": "vessel", "seed": 1, "method": "default", "status": "ok",
+             "turning_said": 3, "turning_true": 4, "turning_hits": 2, "interference_said": 0,
+             "interference_true": 0, "interference_hits": 0},
+            {**base, "split": "held-out", "class": "vessel", "seed": 2, "method": "default", "status": "ok",
+             "turning_said": 1, "turning_true": 0, "turning_hits": 0, "interference_said": 0,
+             "interference_true": 0, "interference_hits": 0},
+            {**base, "split": "held-out", "class": "vessel", "seed": 2, "method": "stkf", "status": "ok"}]
+    out = pooled_labels(pd.DataFrame(rows, columns=list(COLUMNS))).iloc[0]
+    assert out["turning_precision"] == pytest.approx(0.5) and out["turning_recall"] == pytest.approx(0.5)
+    assert np.isnan(out["interference_precision"]) and np.isnan(out["interference_recall"])
+
+
+def test_a_case_s_label_counts_are_its_rows():
+    reasons = ["", "interference", "field", "", "interference", "turning"]
+    big = DISTURBED_DEG + 5.0
+    row = _score(*_case(reasons, [0.0, big, big, big, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 10.0]), own=True)
+    assert (row["interference_said"], row["interference_true"], row["interference_hits"]) == (3, 3, 2)
+    assert (row["turning_said"], row["turning_true"], row["turning_hits"]) == (1, 1, 1)

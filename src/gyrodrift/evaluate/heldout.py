@@ -21,7 +21,7 @@ from gyrodrift.fleet import check_workers, error_line, map_jobs
 from gyrodrift.simulate.generator import CLASSES, generate, seeds, split_of, truth_labels
 
 __all__ = ["METHODS", "CAUSAL_BASELINES", "COLUMNS", "run_case", "run_generated", "summarise", "acceptance",
-           "markdown"]
+           "markdown", "pooled_labels"]
 
 #: Methods of a run, in order (``default`` is gyrodrift's default estimator).
 METHODS = ("default", "stkf", "kf", "mlr-causal", "poly3", "fusion-offset", "fusion-ahrs", "smoothed")
@@ -32,7 +32,11 @@ FUSED_BASELINE = "fusion-ahrs"
 
 COLUMNS = ("class", "seed", "split", "method", "rows", "heading_rms_deg", "bias_rms_dps", "fused_rms_deg",
            "bias_in_1sd", "bias_in_2sd", "fused_in_1sd", "fused_in_2sd", "interference_precision",
-           "interference_recall", "turning_precision", "turning_recall", "status", "error")
+           "interference_recall", "turning_precision", "turning_recall", "interference_said", "interference_true",
+           "interference_hits", "turning_said", "turning_true", "turning_hits", "status", "error")
+#: The label counts per case (rows labelled, rows truly so, rows both), pooled over a class's cases
+#: for its precision and recall: a case with a few labels and no truth has precision 0 alone.
+LABELS = ("interference", "turning")
 
 
 def _rms(x) -> float:
@@ -48,10 +52,18 @@ def _share_within(err, sd, k) -> float:
 
 def _precision_recall(said: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
     """Precision and recall of boolean labels (NaN where undefined)."""
-    hit = int(np.sum(said & truth))
-    p = hit / int(said.sum()) if said.any() else math.nan
-    r = hit / int(truth.sum()) if truth.any() else math.nan
-    return p, r
+    return _ratios(int(said.sum()), int(truth.sum()), int(np.sum(said & truth)))
+
+
+def _ratios(said, true, hits) -> tuple[float, float]:
+    """Precision and recall from counts of rows labelled, truly so and both (NaN where undefined)."""
+    return (hits / said if said > 0 else math.nan), (hits / true if true > 0 else math.nan)
+
+
+def _label_row(name: str, said: np.ndarray, truth: np.ndarray) -> dict:
+    p, r = _precision_recall(said, truth)
+    return {f"{name}_precision": p, f"{name}_recall": r, f"{name}_said": int(said.sum()),
+            f"{name}_true": int(truth.sum()), f"{name}_hits": int(np.sum(said & truth))}
 
 
 def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
@@ -73,10 +85,8 @@ def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
         compass = np.isfinite(out["compass_heading"].to_numpy(float))
         # `field` is the same verdict (a disturbed compass), reached by the field strength and dip
         said = np.isin(reason, ("interference", "field")) & compass
-        p, r = _precision_recall(said, labels["disturbed"].to_numpy() & compass)
-        row.update(interference_precision=p, interference_recall=r)
-        p, r = _precision_recall(reason == "turning", labels["turning"].to_numpy())
-        row.update(turning_precision=p, turning_recall=r)
+        row.update(_label_row("interference", said, labels["disturbed"].to_numpy() & compass))
+        row.update(_label_row("turning", reason == "turning", labels["turning"].to_numpy()))
     return row
 
 
@@ -156,7 +166,9 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     """Median per (split, class, method) of every score, and the cases that ran and failed."""
     ok = df[df["status"] == "ok"]
-    scores = [c for c in COLUMNS if c not in ("class", "seed", "split", "method", "rows", "status", "error")]
+    counts = {f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")}
+    scores = [c for c in COLUMNS if c not in ("class", "seed", "split", "method", "rows", "status", "error")
+              and c not in counts]
     med = ok.groupby(["split", "class", "method"], sort=False)[scores].median()
     counts = df.groupby(["split", "class", "method"], sort=False)["status"].agg(
         n=lambda s: int((s == "ok").sum()), failed=lambda s: int((s != "ok").sum()))
@@ -204,6 +216,21 @@ def markdown(df: pd.DataFrame) -> str:
                                                "fused_in_2sd", "interference_precision", "interference_recall",
                                                "turning_precision", "turning_recall"]]
     parts += ["", "The default's honesty (medians over cases)", "", markdown_table(own, ".2f", index=False)]
+    parts += ["", "The default's labels, rows pooled over cases (precision / recall)", "",
+              markdown_table(pooled_labels(df), ".2f", index=False)]
     return "\n".join(parts)
+
+
+def pooled_labels(df: pd.DataFrame) -> pd.DataFrame:
+    """Per (split, class): the default's label precision and recall over all its cases' rows."""
+    own = df[(df["status"] == "ok") & (df["method"] == "default")]
+    counts = [f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")]
+    sums = own.groupby(["split", "class"], sort=False)[counts].sum()
+    out = sums.index.to_frame(index=False)
+    for name in LABELS:
+        pr = [_ratios(*row) for row in sums[[f"{name}_said", f"{name}_true", f"{name}_hits"]].to_numpy()]
+        out[f"{name}_precision"] = [p for p, _ in pr]
+        out[f"{name}_recall"] = [r for _, r in pr]
+    return out
 
 
