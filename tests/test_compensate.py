@@ -415,3 +415,14 @@ def test_the_turning_label_follows_a_quiet_gyro_and_averages_a_noisy_one():
     assert hits / said.sum() >= 0.97 and hits / truth.sum() >= 0.97, (hits, said.sum(), truth.sum())
     said, truth = _turn_labels(100.0, 5.0, lambda t: np.full_like(t, 10.0))
     assert not truth.any() and said.mean() < 1e-3, said.sum()
+
+
+def test_a_still_unit_is_not_called_turning_before_its_drift_is_known():
+    """A still unit with a 3 deg/s drift: in its first second the drift is the prior's (sd about
+    4 deg/s), so its compensated rate cannot say it turns (the label asked the rate to beat the
+    threshold alone, and called 8 of those rows turning)."""
+    log = synthetic_log(duration_s=120.0, fs_hz=10.0, compass_hz=10.0, drift_dps=lambda t, T: np.full_like(t, 3.0),
+                        gyro_noise_dps=0.02, compass_noise_deg=0.3, seed=1)
+    out = compensate(log)
+    assert out["bias_sd"].iloc[0] > 2.0  # the drift is unknown at first
+    assert not (out["gate_reason"] == "turning").any()

@@ -282,7 +282,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             reason = R_GAP
         elif rf[RF_SEEN] == 0.0 or ti - rf[RF_T_COMPASS] > rc[RC_MAX_AGE]:
             reason = R_NO_COMPASS
-        elif abs(rf[RF_MEAN_RATE]) > rc[RC_TURN_RATE]:
+        elif abs(rf[RF_MEAN_RATE]) > rc[RC_TURN_RATE] + bsd:  # beyond what the drift leaves unknown
             reason = R_TURNING
         elif mf[MF_PDIST] >= 0.5:
             reason = R_FIELD if mf[MF_FIELD_DOM] == 1.0 else R_INTERFERENCE
