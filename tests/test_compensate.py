@@ -403,8 +403,8 @@ def _turn_labels(fs_hz, noise_dps, heading_deg):
 
 def test_the_turning_label_follows_a_quiet_gyro_and_averages_a_noisy_one():
     """A turntable's moves (30 deg/s for 6 s, abrupt) seen by a quiet 200-Hz gyro: the label
-    starts and ends with the moves (a fixed 1-s average ran on for about a second after each:
-    precision 0.82). A still gyro vibrating at 5 deg/s per sample: almost never turning."""
+    starts and ends with the moves, within a few rows. A still gyro vibrating at 5 deg/s per
+    sample: almost never turning (the average is long enough for its noise)."""
 
     def moves(t):
         phase, k = np.mod(t - 90.0, 60.0), np.floor((t - 90.0) / 60.0)
@@ -419,8 +419,7 @@ def test_the_turning_label_follows_a_quiet_gyro_and_averages_a_noisy_one():
 
 def test_a_still_unit_is_not_called_turning_before_its_drift_is_known():
     """A still unit with a 3 deg/s drift: in its first second the drift is the prior's (sd about
-    4 deg/s), so its compensated rate cannot say it turns (the label asked the rate to beat the
-    threshold alone, and called 8 of those rows turning)."""
+    4 deg/s), so its compensated rate cannot say it turns."""
     log = synthetic_log(duration_s=120.0, fs_hz=10.0, compass_hz=10.0, drift_dps=lambda t, T: np.full_like(t, 3.0),
                         gyro_noise_dps=0.02, compass_noise_deg=0.3, seed=1)
     out = compensate(log)

@@ -166,9 +166,9 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     """Median per (split, class, method) of every score, and the cases that ran and failed."""
     ok = df[df["status"] == "ok"]
-    counts = {f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")}
+    label_counts = {f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")}  # pooled, not medians
     scores = [c for c in COLUMNS if c not in ("class", "seed", "split", "method", "rows", "status", "error")
-              and c not in counts]
+              and c not in label_counts]
     med = ok.groupby(["split", "class", "method"], sort=False)[scores].median()
     counts = df.groupby(["split", "class", "method"], sort=False)["status"].agg(
         n=lambda s: int((s == "ok").sum()), failed=lambda s: int((s != "ok").sum()))

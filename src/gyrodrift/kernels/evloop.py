@@ -64,8 +64,8 @@ N_HIST = H_JUMP + 1
 RC_TURN_RATE, RC_TURN_WIN, RC_MAX_AGE, RC_PRIOR_A, RC_PRIOR_B = 0, 1, 2, 3, 4
 RC_N = 5
 #: The turning threshold in standard deviations of the averaged rate's noise: the averaging is
-#: as short as the gyro's learned noise allows, so that noise alone crosses the threshold about
-#: once in 3.5 million rows (5 sd), and never longer than half the turn window.
+#: as short as the gyro's learned noise allows while noise alone crosses the threshold at a row
+#: with a chance of about 6e-7 (5 sd, either sign), and never longer than half the turn window.
 TURN_NOISE_SDS = 5.0
 
 
