@@ -65,6 +65,8 @@ def test_auto_takes_the_clock_only_for_a_flat_temperature_without_warm_start():
     assert not uses_clock(cfg)  # streaming: the whole log is not known
     warm = replace(cfg, kalman=replace(cfg.kalman, x0=(0.03, 0.0, -0.8)))
     assert not uses_clock(warm, [45.0, 45.0])
+    exact = replace(cfg, kalman=replace(cfg.kalman, p0_sd=(1e-4, 1e-3, 1e-3)))  # a calibration of zero drift
+    assert not uses_clock(exact, [45.0, 45.0])
     assert uses_clock(replace(cfg, temperature="clock"), [20.0, 30.0])
     assert not uses_clock(replace(cfg, temperature="measured"), [0.0, 0.0])
     with pytest.raises(ConfigError, match="temperature = .* must be one of"):

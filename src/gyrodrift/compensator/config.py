@@ -105,8 +105,8 @@ def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:
     """Whether the drift model's ``T`` is the elapsed time (``cfg.temperature``): ``temp_c``
     is the whole log's temperature column, degC, or whether it never changes (a bool; None:
     not known, as in streaming). ``"auto"`` keeps the temperature for a warm start (a
-    profile's or a calibration's ``x0``): its model gives the drift at a constant
-    temperature too."""
+    profile's or a calibration's ``x0``, ``p0_sd`` or ``p0_cov``): its model gives the drift at
+    a constant temperature too."""
     if cfg.temperature == "auto":
         flat = temp_c if temp_c is None or isinstance(temp_c, bool) else temperature_is_flat(temp_c)
         return bool(flat) and not _warm(cfg)
@@ -114,8 +114,10 @@ def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:
 
 
 def _warm(cfg: CompensatorConfig) -> bool:
-    """Whether the drift model starts from a warm start (not the default prior)."""
-    return cfg.kalman.x0 != (0.0, 0.0, 0.0) or cfg.kalman.p0_cov is not None
+    """Whether the drift model starts from a warm start (not the default prior): its own ``x0``,
+    ``p0_sd`` (a calibration of zero drift is one too) or ``p0_cov``."""
+    default = KalmanConfig()
+    return cfg.kalman.x0 != default.x0 or cfg.kalman.p0_sd != default.p0_sd or cfg.kalman.p0_cov is not None
 
 
 def clock_config(cfg: CompensatorConfig) -> CompensatorConfig:
