@@ -37,6 +37,7 @@ COLUMNS = ("class", "seed", "split", "method", "rows", "heading_rms_deg", "bias_
 #: The label counts per case (rows labelled, rows truly so, rows both), pooled over a class's cases
 #: for its precision and recall: a case with a few labels and no truth has precision 0 alone.
 LABELS = ("interference", "turning")
+LABEL_COUNTS = tuple(f"{name}_{k}" for name in LABELS for k in ("said", "true", "hits"))
 
 
 def _rms(x) -> float:
@@ -50,20 +51,17 @@ def _share_within(err, sd, k) -> float:
     return float(np.mean(np.abs(err[ok]) <= k * sd[ok])) if ok.any() else math.nan
 
 
-def _precision_recall(said: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
-    """Precision and recall of boolean labels (NaN where undefined)."""
-    return _ratios(int(said.sum()), int(truth.sum()), int(np.sum(said & truth)))
-
-
 def _ratios(said, true, hits) -> tuple[float, float]:
     """Precision and recall from counts of rows labelled, truly so and both (NaN where undefined)."""
     return (hits / said if said > 0 else math.nan), (hits / true if true > 0 else math.nan)
 
 
 def _label_row(name: str, said: np.ndarray, truth: np.ndarray) -> dict:
-    p, r = _precision_recall(said, truth)
-    return {f"{name}_precision": p, f"{name}_recall": r, f"{name}_said": int(said.sum()),
-            f"{name}_true": int(truth.sum()), f"{name}_hits": int(np.sum(said & truth))}
+    """A label's counts (boolean rows said and true) and its precision and recall."""
+    n_said, n_true, hits = int(said.sum()), int(truth.sum()), int(np.sum(said & truth))
+    p, r = _ratios(n_said, n_true, hits)
+    return {f"{name}_precision": p, f"{name}_recall": r, f"{name}_said": n_said, f"{name}_true": n_true,
+            f"{name}_hits": hits}
 
 
 def _score(log: pd.DataFrame, out: pd.DataFrame, own: bool) -> dict:
@@ -166,9 +164,8 @@ def run_generated(classes: Iterable[str] | None = None, splits: Sequence[str] = 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     """Median per (split, class, method) of every score, and the cases that ran and failed."""
     ok = df[df["status"] == "ok"]
-    label_counts = {f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")}  # pooled, not medians
     scores = [c for c in COLUMNS if c not in ("class", "seed", "split", "method", "rows", "status", "error")
-              and c not in label_counts]
+              and c not in LABEL_COUNTS]  # counts are pooled (pooled_labels), not medians
     med = ok.groupby(["split", "class", "method"], sort=False)[scores].median()
     counts = df.groupby(["split", "class", "method"], sort=False)["status"].agg(
         n=lambda s: int((s == "ok").sum()), failed=lambda s: int((s != "ok").sum()))
@@ -224,8 +221,7 @@ def markdown(df: pd.DataFrame) -> str:
 def pooled_labels(df: pd.DataFrame) -> pd.DataFrame:
     """Per (split, class): the default's label precision and recall over all its cases' rows."""
     own = df[(df["status"] == "ok") & (df["method"] == "default")]
-    counts = [f"{n}_{k}" for n in LABELS for k in ("said", "true", "hits")]
-    sums = own.groupby(["split", "class"], sort=False)[counts].sum()
+    sums = own.groupby(["split", "class"], sort=False)[list(LABEL_COUNTS)].sum()
     out = sums.index.to_frame(index=False)
     for name in LABELS:
         pr = [_ratios(*row) for row in sums[[f"{name}_said", f"{name}_true", f"{name}_hits"]].to_numpy()]

@@ -430,6 +430,15 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     return ll, excess, nu, S
 
 
+@jit(inline=True)
+def long_run(mf, half_msd):
+    """The gyro's long-run noise variance per sample from ``half_msd``, half the mean square of
+    its successive differences: for the learned colour c = 1 - ρ (an AR(1) noise) that times
+    (1 + ρ) / (1 - ρ)²."""
+    colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
+    return half_msd * (2.0 - colour) / (colour * colour)
+
+
 @jit
 def epoch(mf, mc, t_end, temp_end):
     """Close the epoch ending at ``t_end`` (temperature ``temp_end``): predict, weigh the
@@ -468,10 +477,7 @@ def epoch(mf, mc, t_end, temp_end):
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
-    # the long-run noise per sample of the learned colour c = 1 - ρ (an AR(1) noise): (1 + ρ) / (1 - ρ)²
-    # times half the successive differences' mean square
-    colour = min(max(mf[MF_COLOUR], COLOUR_MIN), COLOUR_MAX)
-    sig_s2 = mf[MF_SIG_S2] * (2.0 - colour) / (colour * colour)
+    sig_s2 = long_run(mf, mf[MF_SIG_S2])
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
     # the trapezoid's error within each step under the motion believed: the rate's walk over the
     # step (h³/12 each), or for any rate an angular acceleration (h⁴/12 each)

@@ -303,9 +303,7 @@ def turn_weight(mf, rf, turn_rate):
     gyro's variance per sample over the last epochs, still or moving (``RF_TURN_S``; before
     the first epoch the model's prior), in the long run (the model's learned colour); an
     exponential average of weight w keeps w / (2 - w) of it, about h / 2τ."""
-    colour = min(max(mf[ev.MF_COLOUR], ev.COLOUR_MIN), ev.COLOUR_MAX)
-    s2 = rf[RF_TURN_S] / rf[RF_TURN_W] if rf[RF_TURN_W] > 0.0 else mf[MF_SIG_S2]
-    s2 *= (2.0 - colour) / (colour * colour)
+    s2 = ev.long_run(mf, rf[RF_TURN_S] / rf[RF_TURN_W] if rf[RF_TURN_W] > 0.0 else mf[MF_SIG_S2])
     if not s2 > 0.0:
         return 1.0
     # w / (2 - w) = v  <=>  w = 2v / (1 + v), v the share of s² allowed
