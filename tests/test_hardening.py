@@ -792,3 +792,29 @@ def test_a_sigterm_in_a_finalizer_is_delivered_again():
             Finalised()
             gc.collect()
             time.sleep(5.0)  # the signal sent again interrupts this
+
+
+def test_an_interrupted_batch_removes_what_its_stopped_workers_left(tmp_path, monkeypatch):
+    """A worker stopped before it could remove its temporary leaves it behind (its process then
+    gone); the interrupted batch removes it before it stops. Other hidden files stay."""
+    from gyrodrift import _atomic, fleet
+
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    synthetic_log(duration_s=60.0).to_csv(logs / "log00.csv", index=False)
+    out = tmp_path / "out"
+    out.mkdir()
+    probe = subprocess.Popen([sys.executable, "-c", "pass"])  # a stopped worker: its process is gone
+    probe.wait()
+    left = out / f"{_atomic._prefix(fleet.output_path(logs / 'log00.csv', out))}{probe.pid}-{'a' * 12}"
+    other = out / ".keep"
+    other.write_bytes(b"")
+
+    def stopped(*args, **kwargs):
+        left.write_bytes(b"partial")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fleet, "map_jobs", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        fleet.process_many([logs / "log00.csv"], out, workers=2)
+    assert not left.exists() and other.exists()

@@ -312,10 +312,24 @@ def process_many(
     if dask_address is not None:
         rows = _run_dask(job, paths, dask_address, progress)
     else:
-        rows = map_jobs(job, paths, n_workers, progress, on_error=_failed_future)
+        try:
+            rows = map_jobs(job, paths, n_workers, progress, on_error=_failed_future)
+        except BaseException:
+            _remove_stopped_writes(paths, out_dir, out_format, root)
+            raise
     for row, p in zip(rows, paths):
         row["file"] = str(p)
     return _summary_frame(rows)
+
+
+def _remove_stopped_writes(paths, out_dir: Path, out_format: str, root) -> None:
+    """After an interruption, the temporaries of outputs whose workers were stopped mid-write.
+    A stopped worker removes its own, unless it is stopped before it can; its process is gone
+    by now, so what it left is stale (:func:`gyrodrift._atomic.remove_stale_temporaries`)."""
+    from gyrodrift._atomic import remove_stale_temporaries
+
+    for p in paths:
+        remove_stale_temporaries(output_path(p, out_dir, out_format, root))
 
 
 # --------------------------------------------------------------------------- the summary
