@@ -82,3 +82,22 @@ def test_the_unit_check_ends_on_times_coarser_than_its_window():
     worker.join(20.0)
     assert not worker.is_alive()
     assert len(check._ratios) == n - 1
+
+
+def test_the_unit_check_measures_known_turns_and_any_chunking_gives_the_same():
+    """A gyro at a constant 3 deg/s beside a compass turning 6 deg/s (wrapping through 360):
+    every closed 10-s window measures a ratio of 2 exactly (the trapezoid is exact on a constant
+    rate), whatever the chunks, an empty gyro cell holding the value before it."""
+    t = np.arange(0.0, 200.0, 0.1)
+    gyro = np.full(t.size, 3.0)
+    gyro[[5, 6, 700]] = np.nan  # held at 3 deg/s
+    heading = np.full(t.size, np.nan)
+    heading[::5] = np.mod(40.0 + 6.0 * t[::5], 360.0)
+    whole = GyroUnitCheck("k.csv", "deg/s")
+    whole.add(t, gyro, heading)
+    assert len(whole._ratios) == 19 and np.allclose(whole._ratios, 2.0, rtol=1e-9, atol=0.0)
+    for cuts in ([1, 2, 999], [37, 1500], list(range(1, t.size, 97))):
+        chunked = GyroUnitCheck("k.csv", "deg/s")
+        for part in np.split(np.arange(t.size), cuts):
+            chunked.add(t[part], gyro[part], heading[part])
+        assert np.allclose(chunked._ratios, whole._ratios, rtol=1e-12, atol=0.0)

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from gyrodrift.kernels import jit
+
 __all__ = ["WINDOW_S", "MIN_TURN_DEG", "MIN_WINDOWS", "AGREE_FACTOR", "RATIO_LIMIT", "MAX_RATE_DPS", "GyroUnitCheck"]
 
 #: Length of the windows whose compass and gyro turns are compared, s.
@@ -28,6 +30,64 @@ RATIO_LIMIT = 15.0
 MAX_RATE_DPS = 2000.0
 
 
+#: The check's state between chunks (:func:`_turns`): rows taken, the last row's time, held gyro
+#: (deg/s) and gyro integral (deg), the unwrapped compass of the last sample (deg, NaN before
+#: one), the open window's start (time, unwrapped compass, integral; NaN time before one) and
+#: the largest finite |gyro| (deg/s).
+S_ROWS, S_T, S_G, S_INTEGRAL, S_HEADING, S_START_T, S_START_H, S_START_I, S_MAX_RATE = range(9)
+N_STATE = 9
+
+
+@jit
+def _turns(t, g, heading, state):
+    """Rows into the check's windows; returns the compass/gyro turn ratios of the windows
+    closed (``state`` in place, :data:`S_ROWS` ...).
+
+    The gyro is integrated by the trapezoid, an empty cell holding the value before it (as
+    the compensator does); the compass is unwrapped from sample to sample. A window closes
+    at the first compass sample at least ``WINDOW_S`` after its start and later than it
+    (times coarser than the window still move on); it counts when the compass turned at
+    least ``MIN_TURN_DEG`` and the gyro turned at all.
+    """
+    ratios = np.empty(t.size)
+    n = 0
+    t_prev, g_prev, integral = state[S_T], state[S_G], state[S_INTEGRAL]
+    last_h, start_t, start_h, start_i = state[S_HEADING], state[S_START_T], state[S_START_H], state[S_START_I]
+    big = state[S_MAX_RATE]
+    for i in range(t.size):
+        gi = g[i]
+        if math.isfinite(gi):
+            big = max(big, abs(gi))
+        else:
+            gi = g_prev
+        integral += 0.5 * (gi + g_prev) * (t[i] - t_prev)
+        t_prev, g_prev = t[i], gi
+        h = heading[i]
+        if not math.isfinite(h):
+            continue
+        last_h = h if math.isnan(last_h) else last_h + ((h - last_h + 180.0) % 360.0 - 180.0)
+        if math.isnan(start_t):
+            start_t, start_h, start_i = t[i], last_h, integral
+        elif t[i] >= start_t + WINDOW_S and t[i] > start_t:
+            d_compass, d_gyro = last_h - start_h, integral - start_i
+            if abs(d_compass) >= MIN_TURN_DEG and d_gyro != 0.0:
+                ratios[n] = d_compass / d_gyro
+                n += 1
+            start_t, start_h, start_i = t[i], last_h, integral
+    state[S_ROWS] += t.size
+    state[S_T], state[S_G], state[S_INTEGRAL] = t_prev, g_prev, integral
+    state[S_HEADING], state[S_START_T], state[S_START_H], state[S_START_I] = last_h, start_t, start_h, start_i
+    state[S_MAX_RATE] = big
+    return ratios[:n]
+
+
+def _read_only(x: np.ndarray) -> np.ndarray:
+    """A read-only view of ``x`` (one compiled signature, whatever the caller's arrays)."""
+    view = x.view()
+    view.flags.writeable = False
+    return view
+
+
 class GyroUnitCheck:
     """Compass turn against integrated gyro turn, fed chunk by chunk (see the module notes).
 
@@ -38,52 +98,23 @@ class GyroUnitCheck:
     def __init__(self, source: str, gyro_unit: str | None = None) -> None:
         self.source = source
         self.gyro_unit = gyro_unit
-        self._last = None  # (t, gyro, integral) of the last row
-        self._start = None  # (t, unwrapped compass, integral) at the start of the open window
-        self._last_heading = math.nan  # unwrapped compass of the last compass sample
+        self._state = np.zeros(N_STATE)
+        self._state[S_HEADING] = math.nan
+        self._state[S_START_T] = math.nan
         self._ratios: list[float] = []
-        self._max_rate_dps = 0.0
 
     def add(self, t_s, gyro_dps, heading_deg) -> None:
         """Account for rows in order: time (s), raw heading-axis rate (deg/s, as read) and
         compass heading (deg, NaN where there is no sample)."""
-        t = np.asarray(t_s, dtype=np.float64)
+        t = np.ascontiguousarray(t_s, dtype=np.float64)
         if t.size == 0:
             return
-        g = np.asarray(gyro_dps, dtype=np.float64)
-        ok = np.isfinite(g)
-        if ok.any():
-            self._max_rate_dps = max(self._max_rate_dps, float(np.max(np.abs(g[ok]))))
-        t_prev, g_prev, i_prev = self._last if self._last is not None else (t[0], g[0] if ok[0] else 0.0, 0.0)
-        # an empty gyro cell holds the value before it, as in the compensator
-        held = np.where(ok, np.arange(g.size), -1)
-        np.maximum.accumulate(held, out=held)
-        g = np.where(held >= 0, g[np.maximum(held, 0)], g_prev)
-        steps = 0.5 * (g + np.r_[g_prev, g[:-1]]) * np.diff(np.r_[t_prev, t])
-        integral = i_prev + np.cumsum(steps)
-        self._last = (float(t[-1]), float(g[-1]), float(integral[-1]))
-        h = np.asarray(heading_deg, dtype=np.float64)
-        rows = np.flatnonzero(np.isfinite(h))
-        if rows.size == 0:
-            return
-        turns = np.diff(np.r_[self._last_heading if math.isfinite(self._last_heading) else h[rows[0]], h[rows]])
-        unwrapped = (self._last_heading if math.isfinite(self._last_heading) else h[rows[0]]) + np.cumsum(
-            (turns + 180.0) % 360.0 - 180.0
-        )
-        self._last_heading = float(unwrapped[-1])
-        tc, ic = t[rows], integral[rows]
-        if self._start is None:
-            self._start = (float(tc[0]), float(unwrapped[0]), float(ic[0]))
-        while True:
-            # a later sample even where the window's length is below the times' resolution
-            j = max(int(np.searchsorted(tc, self._start[0] + WINDOW_S, "left")),
-                    int(np.searchsorted(tc, self._start[0], "right")))
-            if j >= tc.size:
-                return
-            d_compass, d_gyro = unwrapped[j] - self._start[1], ic[j] - self._start[2]
-            if abs(d_compass) >= MIN_TURN_DEG and d_gyro != 0.0:
-                self._ratios.append(float(d_compass / d_gyro))
-            self._start = (float(tc[j]), float(unwrapped[j]), float(ic[j]))
+        g = np.ascontiguousarray(gyro_dps, dtype=np.float64)
+        h = np.ascontiguousarray(heading_deg, dtype=np.float64)
+        if self._state[S_ROWS] == 0.0:  # the first row: no step before it
+            first = g[0] if math.isfinite(g[0]) else 0.0
+            self._state[S_T], self._state[S_G] = t[0], first
+        self._ratios.extend(_turns(_read_only(t), _read_only(g), _read_only(h), self._state).tolist())
 
     @property
     def ratio(self) -> float:
@@ -112,7 +143,7 @@ class GyroUnitCheck:
             fix = "if it is in deg/s, drop --gyro-unit rad/s" if rad else "check the gyro unit"
             return (f"{head} turns {1.0 / ratio:.3g} times more than the compass over {len(self._ratios)} turning "
                     f"{WINDOW_S:g}-s windows (57.3 would mean deg/s converted as rad/s); {fix}")
-        if rad and math.isnan(ratio) and self._max_rate_dps > MAX_RATE_DPS:
-            return (f"{head} reaches {self._max_rate_dps:.4g} deg/s after the rad/s conversion, beyond any MEMS "
+        if rad and math.isnan(ratio) and self._state[S_MAX_RATE] > MAX_RATE_DPS:
+            return (f"{head} reaches {self._state[S_MAX_RATE]:.4g} deg/s after the rad/s conversion, beyond any MEMS "
                     f"gyro's range ({MAX_RATE_DPS:g} deg/s); if it is in deg/s, drop --gyro-unit rad/s")
         return None

@@ -82,6 +82,8 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.tilt.window_step": ["F2 F1 I1 f f f"],
     "attitude.propagate": ["F1r F1r F1r F1r F2r F1 F2"],
     "attitude._rotate": ["f f f f f f"],
+    # the gyro-unit check (gyrodrift.gyro_units)
+    "gyro_units._turns": ["F1r F1r F1r F1"],
 }
 
 #: The functions split in two groups of about the same compile time (one process each);
