@@ -25,7 +25,7 @@ from gyrodrift.estimators import AdaptiveConfig, FixedParams, KalmanConfig
 from gyrodrift.io import read_log
 from gyrodrift.io.align import contract_frame
 from gyrodrift.io.chunked import iter_log_chunks
-from gyrodrift.io.limits import GYRO_MAX_DPS, HEADING_MAX_ABS_DEG, MAG_MAX_ABS
+from gyrodrift.io.limits import GYRO_MAX_DPS, HEADING_MAX_ABS_DEG, MAG_MAX_ABS, Limit, first_outside
 from gyrodrift.profile import Profile, compensate_warm
 
 
@@ -93,6 +93,20 @@ def test_chunked_reader_refuses_in_a_later_chunk(tmp_path, log):
     with pytest.raises(LogFormatError, match=r"line 3502, column 'gyro_x'"):
         for _ in iter_log_chunks(path, chunk_rows=1000):
             pass
+
+
+@pytest.mark.parametrize("cells, first", [
+    ({}, None), ({5: np.nan}, None), ({5: np.inf}, 5), ({7: -np.inf, 9: 20.0}, 7), ({3: 10.0 + 1e-9}, 3),
+    ({2: -10.0, 4: 10.0}, None), ({0: np.nan, 6: -11.0}, 6),
+])
+def test_first_outside_finds_the_first_value_beyond_the_limit(cells, first):
+    """NaN is never outside; an infinity always is; the limits themselves are inside."""
+    values = np.zeros(12)
+    for i, v in cells.items():
+        values[i] = v
+    assert first_outside(values, Limit(-10.0, 10.0, "u", "fix")) == first
+    assert first_outside(np.full(4, np.nan), Limit(-10.0, 10.0, "u", "fix")) is None
+    assert first_outside(np.zeros(0), Limit(-10.0, 10.0, "u", "fix")) is None
 
 
 @pytest.mark.parametrize(

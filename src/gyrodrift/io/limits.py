@@ -90,6 +90,9 @@ def limit_of(column: str, gyro_max_dps: float = GYRO_MAX_DPS, gyro_scale: float 
 def first_outside(values: np.ndarray, limit: Limit) -> int | None:
     """Index of the first value outside ``limit`` (infinities included, NaN never), or None."""
     values = np.asarray(values, dtype=np.float64)
+    # one pass each for the extremes (NaN skipped; NaN itself when all are): most logs stop here
+    if values.size == 0 or not (np.fmin.reduce(values) < limit.lo or np.fmax.reduce(values) > limit.hi):
+        return None
     with np.errstate(invalid="ignore"):
         outside = np.flatnonzero((values < limit.lo) | (values > limit.hi))
     return int(outside[0]) if outside.size else None
