@@ -54,6 +54,10 @@ def test_clock_in_chunks_equals_the_clock_at_once():
     ([20.0, 20.0, np.nan, 20.0], True),
     ([np.nan, np.nan], True),
     ([20.0, 20.0625, 20.0], False),
+    ([], True),
+    ([np.inf, 20.0, np.nan, 20.0], True),
+    ([-np.inf, np.inf], True),
+    ([20.0, np.inf, 21.0], False),
 ])
 def test_flat_temperature(temp, flat):
     assert temperature_is_flat(temp) is flat

@@ -120,7 +120,14 @@ def drift(params, temp_c, temp_rate_cps):
 def temperature_is_flat(temp_c) -> bool:
     """Whether a temperature column cannot explain any drift: every finite value the same, or none finite."""
     temp_c = np.asarray(temp_c, dtype=float)
-    seen = temp_c[np.isfinite(temp_c)]
+    if temp_c.size == 0:
+        return True
+    lo, hi = np.fmin.reduce(temp_c, axis=None), np.fmax.reduce(temp_c, axis=None)  # NaN skipped
+    if math.isfinite(lo) and math.isfinite(hi):
+        return bool(lo == hi)
+    if math.isnan(lo):  # nothing but NaN
+        return True
+    seen = temp_c[np.isfinite(temp_c)]  # an infinity: the finite values alone
     return seen.size == 0 or bool(seen.min() == seen.max())
 
 
