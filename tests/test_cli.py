@@ -121,7 +121,7 @@ def test_demo_runs_on_the_built_in_log(tmp_path):
     res = run_module("demo", "-o", str(tmp_path / "demo.csv"))
     assert res.returncode == 0, res.stderr
     assert "filter updates" in res.stdout and "drift error RMS" in res.stdout
-    out = pd.read_csv(tmp_path / "demo.csv", dtype={"gate_reason": str})
+    out = pd.read_csv(tmp_path / "demo.csv", dtype={"gate_reason": str, "unobservable": str})
     assert {"interference", "init"} <= set(out["gate_reason"].dropna())
 
 
