@@ -113,6 +113,7 @@ class _Recipe:
     records: tuple[tuple[float, float], ...] = ()
     compass_form: str = "heading"
     temp_channel_c: float | None = None
+    held_jitter_deg: float | None = None  # the heading written on every row: held, plus this jitter per row
 
 
 def _u(rng, lo, hi) -> float:
@@ -442,6 +443,20 @@ def _no_temp_robot(rng, scale):
                    rate=rate, offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), temp_channel_c=0.0)
 
 
+def _held_compass(rng, scale):
+    """A board on a bench warming up, turned by hand now and then, logged at 50–100 Hz with a
+    heading on every row from a 5–20-Hz magnetometer (each sample held until the next, plus the
+    tilt compensation's jitter per row); interference on half."""
+    duration = _u(rng, 900.0, 3600.0) * scale
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 60.0, 300.0), duration - 60.0, (30.0, 180.0), (10.0, 60.0),
+                                  (120.0, 600.0)))
+    episodes = _disturbances(rng, duration, (1, 2), (5.0, 30.0), (30.0, 300.0)) if rng.random() < 0.5 else []
+    return _Recipe(duration, float(rng.choice([50.0, 100.0])), _device(rng),
+                   _compass(rng, noise=(0.5, 3.0), rate_hz=float(rng.choice([5.0, 8.0, 10.0, 20.0]))),
+                   _warmup(rng), rate=rate, offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360),
+                   held_jitter_deg=_u(rng, 0.1, 0.6))
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -464,6 +479,7 @@ _BUILDERS: dict[str, Callable] = {
     "turntable": _turntable,
     "no-temp-robot": _no_temp_robot,
     "day-parked": _day_parked,
+    "held-compass": _held_compass,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -500,6 +516,22 @@ def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.nd
     if rec.records:
         keep &= in_records(t, rec.records)
     return np.flatnonzero(keep)
+
+
+def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:
+    """The compass heading on every row: each sample held until the next (none before the
+    first, none in an outage), plus white jitter of ``jitter_deg`` per row, wrapped."""
+    idx = np.flatnonzero(mask)
+    out = np.full(t.size, np.nan)
+    if idx.size:
+        last = np.maximum.accumulate(np.where(mask, np.arange(t.size), -1))
+        seen = last >= 0
+        out[seen] = heading[last[seen]]
+        out[seen] += jitter_deg * rng.standard_normal(int(seen.sum()))
+        out = np.where(np.isfinite(out), wrap_360(out), np.nan)
+    for start, dur in dropouts:
+        out[(t >= start) & (t < start + dur)] = np.nan
+    return out
 
 
 def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCase:
@@ -549,6 +581,8 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
                     interference_offset_deg=offset, compass_dropouts=rec.dropouts)
     mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
+    if rec.held_jitter_deg is not None:
+        heading = _held(tl, heading, mask, rec.dropouts, rec.held_jitter_deg, rng["compass"])
     cols = {T: tl, GYRO_Z: gyro, TEMP: temp}
     if rec.compass_form == "heading":
         cols[HEADING] = heading
