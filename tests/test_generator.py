@@ -10,8 +10,8 @@ from gyrodrift.simulate.generator import generate, seeds
 def test_a_held_compass_is_on_every_row_correlated_and_never_repeated():
     """``held-compass``: each magnetometer sample is held until the next and jittered per row,
     so the heading is on every logged row (no outage in this class), no two successive values
-    are equal (a reader drops exact repeats as held cells), and successive rows are strongly
-    correlated while turns aside the jitter is small against the sample's own noise."""
+    are equal (a reader drops exact repeats as held cells), the sample rate leaves several rows
+    per sample, and on still rows most steps are jitter alone and successive errors correlate."""
     case = generate("held-compass", seeds("tuning", 3)[2], duration_scale=0.2)
     log = case.log
     h = log["heading"].to_numpy()

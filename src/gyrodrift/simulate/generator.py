@@ -521,14 +521,11 @@ def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.nd
 def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:
     """The compass heading on every row: each sample held until the next (none before the
     first, none in an outage), plus white jitter of ``jitter_deg`` per row, wrapped."""
-    idx = np.flatnonzero(mask)
     out = np.full(t.size, np.nan)
-    if idx.size:
-        last = np.maximum.accumulate(np.where(mask, np.arange(t.size), -1))
-        seen = last >= 0
-        out[seen] = heading[last[seen]]
-        out[seen] += jitter_deg * rng.standard_normal(int(seen.sum()))
-        out = np.where(np.isfinite(out), wrap_360(out), np.nan)
+    last = np.maximum.accumulate(np.where(mask, np.arange(t.size), -1))
+    seen = last >= 0
+    if seen.any():
+        out[seen] = wrap_360(heading[last[seen]] + jitter_deg * rng.standard_normal(int(seen.sum())))
     for start, dur in dropouts:
         out[(t >= start) & (t < start + dur)] = np.nan
     return out
