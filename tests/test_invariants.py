@@ -242,3 +242,24 @@ def test_aiding_adds_to_a_good_calibration(case, err_a, err_c):
 @LONG
 def test_aiding_adds_to_a_good_calibration_200(case, err_a, err_c):
     _prior(case, err_a, err_c)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 21 invariant not met: a throttle-correlated compass offset held through a "
+                   "whole flight is taken for the heading once a yaw wobble has decorrelated the disturbance, so the "
+                   "clean compass after landing is refused as a new disturbance: heading_fused 9-12 deg RMS against "
+                   "a 0.5-0.8-deg compass (docs/results.md, 'A compass offset through a flight')")
+@pytest.mark.parametrize("seed", [1_000_000, 1_000_002, 1_000_006])
+def test_after_landing_the_fused_heading_returns_to_a_clean_compass(seed):
+    """Held-out multicopter runs of the generator: from 10 s after landing (the compass clean
+    again) to the end, ``heading_fused`` is within 0.5 deg RMS of the compass alone."""
+    from gyrodrift.simulate.generator import generate
+
+    log = generate("multicopter", seed).log
+    out = compensate(log)
+    t = log["t"].to_numpy()
+    offset = log["true_compass_offset"].to_numpy()
+    landed = t > t[np.flatnonzero(np.abs(offset) > 0.01)[-1]] + 10.0
+    truth = log["ref_heading"].to_numpy()
+    fused = float(np.sqrt(np.mean(wrap_180(out["heading_fused"].to_numpy() - truth)[landed] ** 2)))
+    alone = float(np.sqrt(np.mean(wrap_180(log["heading"].to_numpy() - truth)[landed & log["heading"].notna().to_numpy()] ** 2)))
+    assert fused <= alone + 0.5, (fused, alone)
