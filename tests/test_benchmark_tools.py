@@ -1,0 +1,46 @@
+"""The diagnosis aids in ``benchmarks/``: run comparison (known ratios) and the hypothesis trace."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+sys.path.insert(0, str(BENCH))
+
+import compare_runs  # noqa: E402
+
+
+def _run(rows):
+    return pd.DataFrame([dict(zip(("class", "seed", "heading_rms_deg", "bias_rms_dps", "fused_rms_deg"), r),
+                              method="default", split="tuning") for r in rows]).set_index(["class", "seed"])
+
+
+def test_ratios_are_matched_by_class_and_seed_and_averaged_geometrically():
+    before = _run([("a", 1, 1.0, 0.01, 2.0), ("a", 2, 4.0, 0.02, 1.0), ("b", 1, 1.0, 0.01, 1.0), ("b", 9, 1.0, 1.0, 1.0)])
+    after = _run([("a", 2, 1.0, 0.02, 4.0), ("a", 1, 4.0, 0.01, 2.0), ("b", 1, 2.0, 0.01, 1.0), ("c", 1, 1.0, 1.0, 1.0)])
+    r = compare_runs.ratios(before, after)
+    assert sorted(r.index) == [("a", 1), ("a", 2), ("b", 1)]  # only seeds in both runs
+    assert r.loc[("a", 1), "heading_rms_deg"] == 4.0 and r.loc[("a", 2), "fused_rms_deg"] == 4.0
+    gm = compare_runs.geometric_means(r)
+    assert np.isclose(gm.loc["a", "heading_rms_deg"], 1.0)  # 4 and 1/4
+    assert np.isclose(gm.loc["a", "fused_rms_deg"], 2.0)  # 1 and 4
+    assert np.isclose(gm.loc["b", "heading_rms_deg"], 2.0)
+    assert np.isclose(gm.loc["all", "heading_rms_deg"], 2.0 ** (1 / 3))
+
+
+def test_the_trace_prints_every_hypothesis_of_each_epoch_asked_for():
+    out = subprocess.run([sys.executable, str(BENCH / "trace_hypotheses.py"), "no-temp-robot", "0", "--from", "20",
+                          "--to", "23"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    epochs = [ln for ln in lines if ln.startswith("t ")]
+    assert len(epochs) == 4 and all("truth rate" in ln for ln in epochs)
+    modes = [ln.split()[0] for ln in lines if not ln.startswith("t ")]
+    assert modes == [str(j) for j in range(6)] * 4
+    probs = np.array([float(ln.split()[2]) for ln in lines if not ln.startswith("t ")]).reshape(4, 6)
+    assert np.allclose(probs.sum(axis=1), 1.0, atol=2e-3)
