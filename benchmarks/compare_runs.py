@@ -51,9 +51,7 @@ def score(run: pd.DataFrame, baseline_path: str) -> float:
     base = pd.read_csv(baseline_path)
     base = base[(base["method"] != "default") & base["split"].isin(runs["split"].unique())
                 & base["seed"].isin(runs["seed"]) & base["class"].isin(runs["class"])]
-    acc = heldout.acceptance(heldout.summarise(pd.concat([runs, base])))
-    return float(np.nansum(np.log(acc["heading"] / acc["best_heading"])) + np.nansum(np.log(acc["bias"] / acc["best_bias"]))
-                 + np.nansum(np.log(acc["fused"] / acc["ahrs"])))
+    return heldout.tuning_score(heldout.acceptance(heldout.summarise(pd.concat([runs, base]))))
 
 
 def main(argv=None) -> int:

@@ -48,10 +48,7 @@ def main(argv=None) -> int:
                                              "interference_precision", "interference_recall", "turning_precision",
                                              "turning_recall"]]
     print(own.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
-    import numpy as np
-
-    score = float(np.nansum(np.log(acc["heading"] / acc["best_heading"])) + np.nansum(np.log(acc["bias"] / acc["best_bias"]))
-                  + np.nansum(np.log(acc["fused"] / acc["ahrs"])))
+    score = heldout.tuning_score(acc)
     print(f"score {score:+.2f} (sum of log ratios to the best baseline; lower is better)")
     print("ok heading", int(acc.ok_heading.sum()), "bias", int(acc.ok_bias.sum()), "fused", int(acc.ok_fused.sum()),
           "of", len(acc), "; failed runs", int((df.status != "ok").sum()))

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrodrift.evaluate.heldout import _score
+from gyrodrift.evaluate.heldout import _score, tuning_score
 from gyrodrift.simulate.generator import DISTURBED_DEG, TRUE_COMPASS_OFFSET, TRUE_RATE_Z
 
 
@@ -71,3 +71,9 @@ def test_a_case_s_label_counts_are_its_rows():
     row = _score(*_case(reasons, [0.0, big, big, big, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 10.0]), own=True)
     assert (row["interference_said"], row["interference_true"], row["interference_hits"]) == (3, 3, 2)
     assert (row["turning_said"], row["turning_true"], row["turning_hits"]) == (1, 1, 1)
+
+
+def test_the_tuning_score_sums_the_log_ratios_and_skips_a_class_without_a_baseline():
+    acc = pd.DataFrame({"heading": [2.0, 1.0], "best_heading": [1.0, 1.0], "bias": [0.01, 0.02],
+                        "best_bias": [0.02, np.nan], "fused": [1.0, 3.0], "ahrs": [1.0, 1.0]})
+    assert tuning_score(acc) == pytest.approx(np.log(2.0) + np.log(0.5) + np.log(3.0))

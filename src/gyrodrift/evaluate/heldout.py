@@ -197,6 +197,14 @@ def acceptance(summary: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def tuning_score(acc: pd.DataFrame) -> float:
+    """The sum over the rows of an :func:`acceptance` table of the log ratios of the default's
+    medians to the best causal baseline's (heading, bias) and to Fusion's AHRS (fused): one
+    number to compare settings on the same seeds, lower is better (``benchmarks/tune_adaptive.py``)."""
+    return float(np.nansum(np.log(acc["heading"] / acc["best_heading"])) + np.nansum(np.log(acc["bias"] / acc["best_bias"]))
+                 + np.nansum(np.log(acc["fused"] / acc["ahrs"])))
+
+
 def markdown(df: pd.DataFrame) -> str:
     """The acceptance table and the per-method medians of a run, Markdown."""
     summ = summarise(df)
