@@ -41,12 +41,11 @@ def main(argv=None) -> int:
     from gyrodrift.compensator import compensate
     from gyrodrift.kernels import evidence as ev
 
-    truth = None
-    if args.seed is not None:
+    truth = args.seed is not None  # a generated case carries its truth columns
+    if truth:
         from gyrodrift.simulate.generator import generate
 
         log = generate(args.source, args.seed).log
-        truth = log
     else:
         from gyrodrift.io import read_log
 
@@ -74,17 +73,19 @@ def main(argv=None) -> int:
         X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
         mu = mf[ev.MF_MU:ev.MF_MU + ev.NM]
         line = f"t {t_end:8.1f}"
-        if truth is not None:
-            i = min(int(np.searchsorted(truth["t"].to_numpy(), t_end)), len(truth) - 1)
-            line += (f" | truth rate {truth['true_rate_z'].iloc[i]:+.3f} drift {truth['true_bias_z'].iloc[i]:+.3f}"
-                     f" offset {truth['true_compass_offset'].iloc[i]:+.1f}")
+        if truth:
+            i = min(int(np.searchsorted(log["t"].to_numpy(), t_end)), len(log) - 1)
+            line += (f" | truth rate {log['true_rate_z'].iloc[i]:+.3f} drift {log['true_bias_z'].iloc[i]:+.3f}"
+                     f" offset {log['true_compass_offset'].iloc[i]:+.1f}")
         print(line)
         last = {}
-        for j, ll, nu, S, pdd, d, e in calls:  # the likelier alternative's call comes last
+        for j, ll, nu, S, pdd, d, e in calls:  # a mode's last update (its alternative's, if it weighs one)
             last[j] = (ll, nu, S, pdd, d, e)
         for j in modes:
             x = X[j]
-            drift = (x[ev.X_A] * sums[0] + x[ev.X_B] * sums[1] + x[ev.X_C] * dt + x[ev.X_A2] * sums[2]) / dt
+            # the drift integral as the epoch measures it (c' and its rate r at the epoch end), per s
+            drift = (x[ev.X_A] * sums[0] + x[ev.X_B] * sums[1] + x[ev.X_C] * dt - 0.5 * x[ev.X_R] * dt * dt
+                     + x[ev.X_A2] * sums[2]) / dt
             ll, nu, S, pdd, d, e = last.get(j, (np.nan,) * 6)
             print(f"   {j} P {mu[j]:9.3e} ll {ll:+8.2f} nu {nu:+7.2f} S {S:8.2f} Pdd {pdd:8.2f} drift {drift:+.4f}"
                   f" d {d:+6.2f} e {e:+7.2f}")
