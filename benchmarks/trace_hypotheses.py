@@ -1,5 +1,5 @@
 """Trace the default model's hypotheses epoch by epoch on one generated case or one log (a
-diagnosis aid: how the traces in docs/results.md were taken).
+diagnosis aid: the kind of trace docs/results.md quotes).
 
     python benchmarks/trace_hypotheses.py multicopter 1000000 --from 300 --to 330
     python benchmarks/trace_hypotheses.py path/to/log.csv --from 30 --to 60 --every 5
