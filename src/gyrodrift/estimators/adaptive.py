@@ -103,7 +103,7 @@ class AdaptiveConfig:
     compass_error_s: float = setting(3600.0, "s", gt=0.0)
     disturbance_step_deg: float = setting(30.0, "deg", gt=0.0, most=360.0)
     disturbance_walk: float = setting(1.0, "deg per √s", ge=0.0, most=360.0)
-    steady_walk: float = setting(0.3, "deg per √s", ge=0.0, most=360.0)
+    steady_walk: float = setting(0.1, "deg per √s", ge=0.0, most=360.0)
     scale_factor_sd: float = setting(0.01, ge=0.0, most=1.0)
     disturbance_s: float = setting(1800.0, "s", gt=0.0)
     turn_error_s: float = setting(0.5, "s", ge=0.0)

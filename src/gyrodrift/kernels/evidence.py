@@ -357,26 +357,58 @@ def _transition(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
 
 
 @jit
-def _mix(mf, Pi, step_var):
-    """IMM mixing: each mode's starting state and covariance from the bank, weighted by the
-    probabilities of having come from each mode; returns the predicted mode probabilities."""
+def _branches(mf, Pi, step_var, XB, PB, wb):
+    """The two starting points of each mode ``j`` over an epoch: row ``j`` of the banks ``XB``,
+    ``PB`` the switched-in branch (the IMM mixture of the other modes, weighted by the chances
+    of having come from each) and row ``NM + j`` the mode's own state carried on; ``wb`` their
+    prior probabilities. Each is updated by the epoch's data before the two are merged, so a
+    mode of small weight keeps its own history where the data prefer it (docs/model.md,
+    "Hypotheses")."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    mu = mf[MF_MU:MF_MU + NM].copy()
-    cbar = np.zeros(NM)
-    for j in range(NM):
-        for i in range(NM):
-            cbar[j] += Pi[i, j] * mu[i]
-    X0 = np.zeros((NM, NX))
-    P0 = np.zeros((NM, NX, NX))
+    mu = mf[MF_MU:MF_MU + NM]
     w = np.empty(NM)
     for j in range(NM):
+        c = 0.0
         for i in range(NM):
-            w[i] = Pi[i, j] * mu[i] / cbar[j] if cbar[j] > 0.0 else (1.0 if i == j else 0.0)
-        _moments(X, P, w, X[j, X_DELTA], X[j, X_E], _is_clean(j), step_var, X0[j], P0[j])
-    X[:, :] = X0
-    P[:, :, :] = P0
-    return cbar
+            w[i] = 0.0 if i == j else Pi[i, j] * mu[i]
+            c += w[i]
+        wb[j] = c
+        wb[NM + j] = Pi[j, j] * mu[j]
+        XB[NM + j, :] = X[j]
+        PB[NM + j, :, :] = P[j]
+        if c > 0.0:
+            for i in range(NM):
+                w[i] /= c
+            XB[j, :] = 0.0
+            PB[j, :, :] = 0.0
+            _moments(X, P, w, X[j, X_DELTA], X[j, X_E], _is_clean(j), step_var, XB[j], PB[j])
+        else:
+            XB[j, :] = X[j]
+            PB[j, :, :] = P[j]
+
+
+@jit
+def _merge(xa, Pa, qa, xb, Pb, qb, x, P):
+    """The moments of two branches of one mode (weights ``qa + qb = 1``) into ``x``, ``P``: δ
+    and e averaged as angles about branch b's."""
+    for k in range(NX):
+        va = xa[k]
+        if k == X_DELTA or k == X_E:
+            va = xb[k] + wrap180(xa[k] - xb[k])
+        x[k] = qa * va + qb * xb[k]
+    da = np.empty(NX)
+    db = np.empty(NX)
+    for k in range(NX):
+        da[k] = xa[k] - x[k]
+        db[k] = xb[k] - x[k]
+    da[X_DELTA] = wrap180(xa[X_DELTA] - x[X_DELTA])
+    db[X_DELTA] = wrap180(xb[X_DELTA] - x[X_DELTA])
+    da[X_E] = wrap180(xa[X_E] - x[X_E])
+    db[X_E] = wrap180(xb[X_E] - x[X_E])
+    for r in range(NX):
+        for c in range(NX):
+            P[r, c] = qa * (Pa[r, c] + da[r] * da[c]) + qb * (Pb[r, c] + db[r] * db[c])
 
 
 @jit(inline=True)
@@ -467,9 +499,11 @@ def epoch(mf, mc, t_end, temp_end):
                 pc = (1.0 - pdc) * (1.0 - pdc if _is_steady(i) == _is_steady(j) else pdc)
             ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
             Pi[i, j] = pc * ps
-    cbar = _mix(mf, Pi, mc[MC_SIG_STEP] ** 2)
-    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
-    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    NB = 2 * NM
+    X = np.empty((NB, NX))
+    P = np.empty((NB, NX, NX))
+    wb = np.empty(NB)
+    _branches(mf, Pi, mc[MC_SIG_STEP] ** 2, X, P, wb)
     # process noise of the drift, shared by every mode
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
@@ -484,10 +518,11 @@ def epoch(mf, mc, t_end, temp_end):
     moving_q = arw + (mf[MF_WQ2] * mf[MF_E_H3] + mf[MF_WANY] * mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4]) / 12.0
     if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
         moving_q = min(moving_q + (mc[MC_OMEGA_GAP] * dt) ** 2 + mc[MC_SIG_ACC] ** 2 * dt**4 / 12.0, GAP_VAR_MAX)
-    ll = np.zeros(NM)
-    for j in range(NM):
-        x = X[j]
-        Pj = P[j]
+    ll = np.zeros(NB)
+    for r in range(NB):
+        j = r % NM
+        x = X[r]
+        Pj = P[r]
         still = _is_still(j)
         drift_int = x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt + x[X_A2] * dTc2
         if still:  # the heading holds: δ moves with the gyro integral
@@ -497,10 +532,12 @@ def epoch(mf, mc, t_end, temp_end):
         # d and e decorrelate in time and with the heading this mode turned (none when still)
         turned = 0.0 if still or gap else abs(dG - drift_int)
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
-        phi_e = math.exp(-dt / mc[MC_TAU_E] - turned / mc[MC_L_DEV])
+        # a steady disturbance is fixed in the world: it does not change as the platform turns
+        te = 0.0 if _is_steady(j) else turned / mc[MC_L_DEV]
+        phi_e = math.exp(-dt / mc[MC_TAU_E] - te)
         q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
         walk_e = mc[MC_Q_E_STEADY] if _is_steady(j) else mc[MC_Q_E]
-        q_e = walk_e**2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * turned / mc[MC_L_DEV]))
+        q_e = walk_e**2 * dt + mc[MC_SIG_STEP] ** 2 * (1.0 - math.exp(-2.0 * te))
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
         # the compass's errors are angles: they decay towards 0 from within ±180 deg
@@ -568,9 +605,13 @@ def epoch(mf, mc, t_end, temp_end):
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
-    excess = np.zeros(NM)
-    jumped = np.zeros(NM)
-    for j in range(NM):
+    excess = np.zeros(NB)
+    jumped = np.zeros(NB)
+    for r in range(NB):
+        j = r % NM
+        if wb[r] == 0.0:
+            ll[r], excess[r] = -math.inf, math.nan
+            continue
         # the alternative a mode weighs beside its own prediction: a jump of the drift (the still,
         # clean mode; docs/model.md, "Drift jumps") or a new step of a disturbance while it lasts
         # (the disturbed modes; "Disturbance steps"); its likelihood the sum, its state the likelier one's
@@ -580,12 +621,12 @@ def epoch(mf, mc, t_end, temp_end):
         elif not _is_clean(j) and n_c > 0.0 and p_step > 0.0:
             k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
         if k < 0:
-            ll[j], excess[j], _, _ = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
+            ll[r], excess[r], _, _ = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
                                               h_still, Hs, Hm, field_ll)
             continue
-        xb, Pb = X[j].copy(), P[j].copy()
+        xb, Pb = X[r].copy(), P[r].copy()
         Pb[k, k] += var
-        lla, exa, nu, S = _measure(X[j], P[j], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
+        lla, exa, nu, S = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
                                    Hm, field_ll)
         if k == X_E:  # e is in the compass alone: the step changes its innovation's variance only
             llb = lla - _loggauss(nu, S) + _loggauss(nu, S + var)
@@ -594,30 +635,42 @@ def epoch(mf, mc, t_end, temp_end):
                                       Hm, field_ll)
         la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
         top = max(la, lb)
-        ll[j] = top + math.log(math.exp(la - top) + math.exp(lb - top))
-        excess[j] = exa
+        ll[r] = top + math.log(math.exp(la - top) + math.exp(lb - top))
+        excess[r] = exa
         # the likelier of the two is kept (merged, the rare alternative's variance would be
         # process noise every epoch)
         if lb > la:
             if k == X_E:
                 _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
                                         Hs, Hm, field_ll)
-            X[j, :] = xb
-            P[j, :, :] = Pb
-            excess[j] = exb
+            X[r, :] = xb
+            P[r, :, :] = Pb
+            excess[r] = exb
             if k == X_C:
-                jumped[j] = 1.0
-    # mode probabilities
+                jumped[r] = 1.0
+    # each mode: its two branches merged, weighted by prior and likelihood; mode probabilities
+    Xm = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    Pm = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    lm = np.empty(NM)
     top = -math.inf
     for j in range(NM):
-        ll[j] += math.log(max(cbar[j], 1e-300))
-        top = max(top, ll[j])
+        la = math.log(max(wb[j], 1e-300)) + ll[j]
+        lb = math.log(max(wb[NM + j], 1e-300)) + ll[NM + j]
+        t2 = max(la, lb)
+        qa, qb = math.exp(la - t2), math.exp(lb - t2)
+        lm[j] = t2 + math.log(qa + qb)
+        qa, qb = qa / (qa + qb), qb / (qa + qb)
+        _merge(X[j], P[j], qa, X[NM + j], P[NM + j], qb, Xm[j], Pm[j])
+        ea, eb = excess[j], excess[NM + j]
+        excess[j] = ea if not math.isfinite(eb) else (eb if not math.isfinite(ea) else qa * ea + qb * eb)
+        jumped[j] = qa * jumped[j] + qb * jumped[NM + j]
+        top = max(top, lm[j])
     tot = 0.0
     for j in range(NM):
-        ll[j] = math.exp(ll[j] - top)
-        tot += ll[j]
+        lm[j] = math.exp(lm[j] - top)
+        tot += lm[j]
     for j in range(NM):
-        mf[MF_MU + j] = max(ll[j] / tot, 1e-12)
+        mf[MF_MU + j] = max(lm[j] / tot, 1e-12)
     combine(mf)
     mu = mf[MF_MU:MF_MU + NM]
     p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
@@ -628,7 +681,7 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
     _set_labels(mf)
-    mf[MF_JUMP] = np.dot(mu, jumped)
+    mf[MF_JUMP] = np.dot(mu, jumped[:NM])
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
     if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
         # the colour learned from the epoch as far as it is still: variance var_u / P(still)
@@ -645,7 +698,7 @@ def epoch(mf, mc, t_end, temp_end):
         p_moving = 0.0
         for j in range(NM):
             if not _is_still(j):
-                xm += mu[j] * X[j]
+                xm += mu[j] * Xm[j]
                 p_moving += mu[j]
         xm /= p_moving
         r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
