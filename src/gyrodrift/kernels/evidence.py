@@ -670,7 +670,7 @@ def epoch(mf, mc, t_end, temp_end):
         lm[j] = math.exp(lm[j] - top)
         tot += lm[j]
     for j in range(NM):
-        mf[MF_MU + j] = max(lm[j] / tot, 1e-12)
+        mf[MF_MU + j] = lm[j] / tot
     combine(mf)
     mu = mf[MF_MU:MF_MU + NM]
     p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
