@@ -91,6 +91,9 @@ N_MF = MF_WANY + 1
 VN_MIN_SAMPLES = 8.0
 #: Probability that a moving epoch's gyro is white about its mean (a steady turn).
 VN_MOTION = 0.5
+#: The smallest mode probability: a numerical guard only, far below any weight that competes
+#: (a mode refuted for many epochs must not keep its own branch alive to re-fit the data).
+MU_MIN = 1e-150
 #: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
 #: Bounds of the colour where it sets the long-run noise (an AR(1) sequence's).
@@ -670,7 +673,7 @@ def epoch(mf, mc, t_end, temp_end):
         lm[j] = math.exp(lm[j] - top)
         tot += lm[j]
     for j in range(NM):
-        mf[MF_MU + j] = lm[j] / tot
+        mf[MF_MU + j] = max(lm[j] / tot, MU_MIN)
     combine(mf)
     mu = mf[MF_MU:MF_MU + NM]
     p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
