@@ -88,9 +88,10 @@ def test_a_schmidt_update_corrects_one_state_and_keeps_the_others():
     assert np.linalg.eigvalsh(0.5 * (P_k + P_k.T)).min() > 0.0
 
 
-def test_mixing_without_mode_changes_leaves_every_filter_as_it_was():
-    """IMM mixing with the identity transition: each mode keeps its own state and covariance
-    (the disturbance of the clean modes stays zero)."""
+def test_without_mode_changes_each_mode_starts_from_its_own_state():
+    """The epoch's branches under the identity transition: no mode is switched into (weight 0),
+    and each mode's own branch is its state and covariance as they were, with the mode's
+    probability as its weight (the disturbance of the clean modes stays zero)."""
     est = AdaptiveModel()
     mc = est.start(25.0, 0.5, 0.04)
     mf = est.mf
@@ -101,11 +102,42 @@ def test_mixing_without_mode_changes_leaves_every_filter_as_it_was():
     X[[ev.CLEAN_STILL, ev.CLEAN_MOVING], ev.X_E] = 0.0
     mu = np.arange(1.0, ev.NM + 1.0) / np.sum(np.arange(1.0, ev.NM + 1.0))
     mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
-    X0, P0 = X.copy(), P.copy()
-    cbar = ev._mix(mf, np.eye(ev.NM), mc[ev.MC_SIG_STEP] ** 2)
-    assert cbar == pytest.approx(mu)
-    assert X == pytest.approx(X0, abs=1e-12)
-    assert P == pytest.approx(P0, abs=1e-12)
+    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
+    ev._branches(mf, np.eye(ev.NM), mc[ev.MC_SIG_STEP] ** 2, XB, PB, wb)
+    assert wb[:ev.NM] == pytest.approx(np.zeros(ev.NM))
+    assert wb[ev.NM:] == pytest.approx(mu)
+    assert XB[ev.NM:] == pytest.approx(X, abs=1e-12)
+    assert PB[ev.NM:] == pytest.approx(P, abs=1e-12)
+
+
+def test_a_switched_in_branch_is_the_mixture_of_the_other_modes():
+    """With every mode switching to every other alike, mode j's switched-in branch is the
+    moment-matched mixture of the other modes (weights their probabilities), and its own
+    branch weighs its probability times the chance of staying."""
+    est = AdaptiveModel()
+    mc = est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    rng = np.random.default_rng(8)
+    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
+    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
+    X[:] = rng.normal(size=X.shape)
+    X[:, ev.X_DELTA] = 0.0  # no angle wraps: plain moments
+    X[:, ev.X_E] = 0.0
+    mu = np.arange(1.0, ev.NM + 1.0) / np.sum(np.arange(1.0, ev.NM + 1.0))
+    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
+    np.fill_diagonal(Pi, 0.9)
+    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
+    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    j = ev.DIST_MOVING
+    others = [i for i in range(ev.NM) if i != j]
+    w = mu[others] / mu[others].sum()
+    xm = w @ X[others]
+    Pm = sum(wi * (P[i] + np.outer(X[i] - xm, X[i] - xm)) for wi, i in zip(w, others))
+    assert wb[j] == pytest.approx(0.1 / (ev.NM - 1) * mu[others].sum())
+    assert wb[ev.NM + j] == pytest.approx(0.9 * mu[j])
+    assert XB[j] == pytest.approx(xm, abs=1e-12)
+    assert PB[j] == pytest.approx(Pm, abs=1e-12)
 
 
 def test_disturbances_are_mixed_as_angles():

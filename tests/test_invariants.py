@@ -47,15 +47,15 @@ UNMET_CLEAN = pytest.mark.xfail(strict=True, reason=(
     "issue 21 invariant not met: a slow sway (5 deg, 133-s period) under a 2-deg compass (seed 4) "
     "gives heading_fused 27.0 deg RMS against the compass's 2.0; docs/results.md"))
 UNMET_DISTURBED = pytest.mark.xfail(strict=True, reason=(
-    "issue 21 invariant not met: a 10-deg ramp over 20 s on a 5-deg, 30-s sway "
-    "under a 1-deg compass (seed 0) gives heading_fused 2.7 deg RMS through it against the gyro "
-    "alone's 1.5 (+1 allowed): the ramp's first degrees are taken as heading; docs/results.md"))
+    "issue 21 invariant not met: a 10-deg ramp over 26 s on a 5-deg, 30-s sway "
+    "under a 1-deg compass (seed 0) gives heading_fused 2.5 deg RMS through it against the gyro "
+    "alone's 1.4 (+1 allowed): the ramp's first degrees are taken as heading; docs/results.md"))
 #: The counterexamples hypothesis found, drawn first in every run (so an edit to this file, which
 #: changes the derandomized draws, cannot hide them).
 CLEAN_CASE = (dict(a=0.0, c=0.0, t0=10.0, rise=0.0, kind="sway", h0=0.0, amp=5.0, period=133.0, rate=0.0,
                    gyro_noise=0.03125, compass_noise=2.0, seed=4), (120.0, 20.0, -10.0, "step"))
 DISTURBED_CASE = (dict(a=0.0, c=0.0, t0=10.0, rise=0.0, kind="sway", h0=0.0, amp=5.0, period=30.0, rate=0.0,
-                       gyro_noise=0.125, compass_noise=1.0, seed=0), (120.0, 20.0, 10.0, "ramp"))
+                       gyro_noise=0.125, compass_noise=1.0, seed=0), (120.0, 26.0, 10.0, "ramp"))
 PRIOR_CASE = (dict(a=0.0, c=0.0, t0=10.0, rise=0.0, kind="still", h0=0.0, amp=5.0, period=30.0, rate=0.0,
                    gyro_noise=0.125, compass_noise=1.0, seed=0), (120.0, 20.0, -10.0, "step"))
 UNMET_SLOW_TURN = pytest.mark.xfail(strict=True, reason=(
@@ -244,11 +244,12 @@ def test_aiding_adds_to_a_good_calibration_200(case, err_a, err_c):
     _prior(case, err_a, err_c)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 21 invariant not met: a throttle-correlated compass offset held through a "
-                   "whole flight is taken for the heading once a yaw wobble has decorrelated the disturbance, so the "
-                   "clean compass after landing is refused as a new disturbance: heading_fused 9-12 deg RMS against "
-                   "a 0.5-0.8-deg compass (docs/results.md, 'A compass offset through a flight')")
-@pytest.mark.parametrize("seed", [1_000_000, 1_000_002, 1_000_006])
+AFTER_LANDING_UNMET = pytest.mark.xfail(strict=True, reason=(
+    "issue 21 invariant not met: after this flight's landing heading_fused is 1.37 deg RMS against the "
+    "compass's 0.58 (docs/results.md, 'A compass offset through a flight')"))
+
+
+@pytest.mark.parametrize("seed", [pytest.param(1_000_000, marks=AFTER_LANDING_UNMET), 1_000_002, 1_000_006])
 def test_after_landing_the_fused_heading_returns_to_a_clean_compass(seed):
     """Held-out multicopter runs of the generator: from 10 s after landing (the compass clean
     again) to the end, ``heading_fused`` is within 0.5 deg RMS of the compass alone."""
