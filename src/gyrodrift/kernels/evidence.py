@@ -6,7 +6,8 @@ departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in temp
 hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
 moving), stepped once per epoch (:func:`epoch`: δ moves by
 minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
-interacting multiple model (:func:`combine`). The model and every term: ``docs/model.md``.
+interacting multiple model in which each mode also carries its own state (:func:`_branches`,
+:func:`combine`). The model and every term: ``docs/model.md``.
 
 Arrays: ``mf`` floats (``MF_*``), ``mc`` settings (``MC_*``). All functions are pure numba on
 these arrays, so batch, chunked and streaming runs give the same bits.
