@@ -115,7 +115,7 @@ def test_a_switched_in_branch_is_the_mixture_of_the_other_modes():
     moment-matched mixture of the other modes (weights their probabilities), and its own
     branch weighs its probability times the chance of staying."""
     est = AdaptiveModel()
-    mc = est.start(25.0, 0.5, 0.04)
+    est.start(25.0, 0.5, 0.04)
     mf = est.mf
     rng = np.random.default_rng(8)
     X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
