@@ -93,7 +93,7 @@ VN_MIN_SAMPLES = 8.0
 #: Probability that a moving epoch's gyro is white about its mean (a steady turn).
 VN_MOTION = 0.5
 #: The smallest mode probability: a numerical guard only, far below any weight that competes
-#: (a mode refuted for many epochs must not keep its own branch alive to re-fit the data).
+#: (a higher floor keeps a refuted mode's own branch weighted enough to re-fit the data).
 MU_MIN = 1e-150
 #: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
