@@ -345,7 +345,7 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     # without jumps aiding still resumes, but the fused heading follows the compass less closely:
     # the heating's first minutes leave the heading off by degrees, which the compass's slow
     # error d then holds, and the drift's fall from 1.1 to 0 deg/s within a minute, at 660 s,
-    # costs the gyro heading 100 deg and is taken for a steady disturbance until about 880 s
+    # costs the gyro heading 100 deg and is labelled interference until about 880 s
     # (16 % of the rows): 10.0 deg RMS against the compass's 2.1 and the gyro's 67
     # (docs/results.md, "Memory for every hypothesis")
     out = compensate(log)
