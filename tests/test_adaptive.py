@@ -164,6 +164,35 @@ def test_disturbances_are_mixed_as_angles():
     assert Pc[ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 25.0, rel=1e-6)
 
 
+def test_angles_are_mixed_about_a_likely_mode_not_a_refuted_one():
+    """A refuted still mode whose heading stayed put while the platform turned lies half a turn
+    from the likely ones (181 and 179 deg, probabilities 0.8 and 0.2): the mixture is 180.6 deg
+    with a spread of 0.8 x 0.2 x 2², as are the switched-in branches, whatever mode receives them."""
+    est = AdaptiveModel()
+    est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
+    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
+    X[:] = 0.0
+    P[:] = np.eye(ev.NX)
+    mu = np.full(ev.NM, 1e-150)
+    mu[ev.CLEAN_MOVING], mu[ev.STEADY_MOVING] = 0.8, 0.2
+    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    X[ev.CLEAN_MOVING, ev.X_DELTA], X[ev.STEADY_MOVING, ev.X_DELTA] = 181.0, 179.0
+    ev.combine(mf)
+    xc = mf[ev.MF_XC:ev.MF_XC + ev.NX]
+    Pc = mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)
+    assert xc[ev.X_DELTA] % 360.0 == pytest.approx(180.6, abs=1e-9)
+    assert Pc[ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 0.8 * 0.2 * 4.0, rel=1e-9)
+    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
+    np.fill_diagonal(Pi, 0.9)
+    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
+    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    for j in (ev.CLEAN_STILL, ev.DIST_STILL, ev.STEADY_STILL):  # the refuted modes: 0 deg
+        assert XB[j, ev.X_DELTA] % 360.0 == pytest.approx(180.6, abs=1e-6)
+        assert PB[j, ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 0.8 * 0.2 * 4.0, rel=1e-6)
+
+
 def test_combine_is_the_moment_matched_mixture():
     est = AdaptiveModel()
     est.start(25.0, 0.5, 0.04)

@@ -258,14 +258,16 @@ def combine(mf):
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
     xc = np.zeros(NX)
     Pc = np.zeros((NX, NX))
-    # angles about the first mode's δ and the likeliest disturbed mode's e
+    # angles about the likeliest mode's δ and the likeliest disturbed mode's e (a refuted mode's
+    # δ may be half a turn away, and the likely modes must not fall on both sides of its wrap)
     ref_e = 0.0
     top = -1.0
     for j in range(NM):
         if not _is_clean(j) and mf[MF_MU + j] > top:
             top = mf[MF_MU + j]
             ref_e = X[j, X_E]
-    _moments(X, P, mf[MF_MU:MF_MU + NM], X[0, X_DELTA], ref_e, False, 0.0, xc, Pc)
+    ref_delta = X[np.argmax(mf[MF_MU:MF_MU + NM]), X_DELTA]
+    _moments(X, P, mf[MF_MU:MF_MU + NM], ref_delta, ref_e, False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
@@ -386,7 +388,9 @@ def _branches(mf, Pi, step_var, XB, PB, wb):
                 w[i] /= c
             XB[j, :] = 0.0
             PB[j, :, :] = 0.0
-            _moments(X, P, w, X[j, X_DELTA], X[j, X_E], _is_clean(j), step_var, XB[j], PB[j])
+            # angles about the likeliest source's (mode j's own may be half a turn away)
+            k = np.argmax(w)
+            _moments(X, P, w, X[k, X_DELTA], X[k, X_E], _is_clean(j), step_var, XB[j], PB[j])
         else:
             XB[j, :] = X[j]
             PB[j, :, :] = P[j]
