@@ -193,6 +193,30 @@ def test_angles_are_mixed_about_a_likely_mode_not_a_refuted_one():
         assert PB[j, ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 0.8 * 0.2 * 4.0, rel=1e-6)
 
 
+def test_a_switched_in_disturbance_is_mixed_about_a_disturbed_source():
+    """A disturbed mode receiving a likely clean mode (e 0, no angle) and two disturbed ones at
+    170 and -170 deg takes those two as 170 and 190 (about a disturbed source), not as 170 and
+    -170 (about the clean one's 0, where they would cancel)."""
+    est = AdaptiveModel()
+    est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
+    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
+    X[:] = 0.0
+    P[:] = np.eye(ev.NX)
+    mu = np.full(ev.NM, 1e-150)
+    mu[ev.CLEAN_MOVING], mu[ev.DIST_STILL], mu[ev.STEADY_STILL] = 0.6, 0.2, 0.2
+    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    X[ev.DIST_STILL, ev.X_E], X[ev.STEADY_STILL, ev.X_E] = 170.0, -170.0
+    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
+    np.fill_diagonal(Pi, 0.9)
+    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
+    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    j = ev.DIST_MOVING  # sources: the clean one 0.6, the disturbed ones 0.2 each (e 0 for the clean one)
+    e = (XB[j, ev.X_E] + 180.0) % 360.0 - 180.0
+    assert abs(e) == pytest.approx(180.0 * 0.4, abs=1e-6)  # 0.6 x 0 (clean) + 0.2 x 170 + 0.2 x 190
+
+
 def test_combine_is_the_moment_matched_mixture():
     est = AdaptiveModel()
     est.start(25.0, 0.5, 0.04)

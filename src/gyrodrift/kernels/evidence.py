@@ -388,9 +388,16 @@ def _branches(mf, Pi, step_var, XB, PB, wb):
                 w[i] /= c
             XB[j, :] = 0.0
             PB[j, :, :] = 0.0
-            # angles about the likeliest source's (mode j's own may be half a turn away)
+            # angles about the likeliest source's (mode j's own may be half a turn away); e about
+            # the likeliest disturbed source's (a clean mode's e is no angle), else mode j's own
             k = np.argmax(w)
-            _moments(X, P, w, X[k, X_DELTA], X[k, X_E], _is_clean(j), step_var, XB[j], PB[j])
+            ref_e = X[j, X_E]
+            top = 0.0
+            for i in range(NM):
+                if not _is_clean(i) and w[i] > top:
+                    top = w[i]
+                    ref_e = X[i, X_E]
+            _moments(X, P, w, X[k, X_DELTA], ref_e, _is_clean(j), step_var, XB[j], PB[j])
         else:
             XB[j, :] = X[j]
             PB[j, :, :] = P[j]
