@@ -213,7 +213,7 @@ class ChunkEngine:
         dip = _NO_FIELD if dip is None else read_only_floats(dip)
         if self._t0 is None:
             self._first_row(float(t[0]), g[0], T[0])
-        whole = self._held is None or (not self._held and float(t[-1]) - self._fs[L.F_TSTART] >= 0)
+        whole = self._held is None or (not self._held and float(t[-1]) >= self._fs[L.F_TSTART])
         helper = None
         if whole and buffers is not None:
             cols = buffers.take(n)
