@@ -239,6 +239,19 @@ def _moments(X, P, w, ref_delta, ref_e, clean, step_var, x, Pm):
 
 
 @jit(inline=True)
+def _likeliest_e(X, w, default):
+    """The disturbance e of the disturbed mode of largest weight ``w`` (a clean mode's e is no
+    angle to average about), or ``default`` when no disturbed mode has weight."""
+    ref_e = default
+    top = 0.0
+    for i in range(NM):
+        if not _is_clean(i) and w[i] > top:
+            top = w[i]
+            ref_e = X[i, X_E]
+    return ref_e
+
+
+@jit(inline=True)
 def _set_labels(mf):
     """P(disturbed) and P(still) from the mode probabilities."""
     p_dist = p_still = 0.0
@@ -260,14 +273,8 @@ def combine(mf):
     Pc = np.zeros((NX, NX))
     # angles about the likeliest mode's δ and the likeliest disturbed mode's e (a refuted mode's
     # δ may be half a turn away, and the likely modes must not fall on both sides of its wrap)
-    ref_e = 0.0
-    top = -1.0
-    for j in range(NM):
-        if not _is_clean(j) and mf[MF_MU + j] > top:
-            top = mf[MF_MU + j]
-            ref_e = X[j, X_E]
-    ref_delta = X[np.argmax(mf[MF_MU:MF_MU + NM]), X_DELTA]
-    _moments(X, P, mf[MF_MU:MF_MU + NM], ref_delta, ref_e, False, 0.0, xc, Pc)
+    mu = mf[MF_MU:MF_MU + NM]
+    _moments(X, P, mu, X[np.argmax(mu), X_DELTA], _likeliest_e(X, mu, 0.0), False, 0.0, xc, Pc)
     mf[MF_XC:MF_XC + NX] = xc
     mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
 
@@ -388,16 +395,9 @@ def _branches(mf, Pi, step_var, XB, PB, wb):
                 w[i] /= c
             XB[j, :] = 0.0
             PB[j, :, :] = 0.0
-            # angles about the likeliest source's (mode j's own may be half a turn away); e about
-            # the likeliest disturbed source's (a clean mode's e is no angle), else mode j's own
-            k = np.argmax(w)
-            ref_e = X[j, X_E]
-            top = 0.0
-            for i in range(NM):
-                if not _is_clean(i) and w[i] > top:
-                    top = w[i]
-                    ref_e = X[i, X_E]
-            _moments(X, P, w, X[k, X_DELTA], ref_e, _is_clean(j), step_var, XB[j], PB[j])
+            # angles about the likeliest source's (mode j's own may be half a turn away)
+            _moments(X, P, w, X[np.argmax(w), X_DELTA], _likeliest_e(X, w, X[j, X_E]), _is_clean(j), step_var,
+                     XB[j], PB[j])
         else:
             XB[j, :] = X[j]
             PB[j, :, :] = P[j]
