@@ -110,6 +110,30 @@ def test_without_mode_changes_each_mode_starts_from_its_own_state():
     assert PB[ev.NM:] == pytest.approx(P, abs=1e-12)
 
 
+def _bank(mu):
+    """A started model's bank with every state 0, every covariance the identity and the mode
+    probabilities ``mu``: (mf, X, P), X and P views into mf."""
+    est = AdaptiveModel()
+    est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
+    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
+    X[:] = 0.0
+    P[:] = np.eye(ev.NX)
+    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    return mf, X, P
+
+
+def _switched_in(mf):
+    """The two branches of every mode (XB, PB, wb) when each mode stays with chance 0.9 and
+    switches to every other alike."""
+    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
+    np.fill_diagonal(Pi, 0.9)
+    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
+    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    return XB, PB, wb
+
+
 def test_a_switched_in_branch_is_the_mixture_of_the_other_modes():
     """With every mode switching to every other alike, mode j's switched-in branch is the
     moment-matched mixture of the other modes (weights their probabilities), and its own
@@ -125,10 +149,7 @@ def test_a_switched_in_branch_is_the_mixture_of_the_other_modes():
     X[:, ev.X_E] = 0.0
     mu = np.arange(1.0, ev.NM + 1.0) / np.sum(np.arange(1.0, ev.NM + 1.0))
     mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
-    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
-    np.fill_diagonal(Pi, 0.9)
-    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
-    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    XB, PB, wb = _switched_in(mf)
     j = ev.DIST_MOVING
     others = [i for i in range(ev.NM) if i != j]
     w = mu[others] / mu[others].sum()
@@ -143,16 +164,9 @@ def test_a_switched_in_branch_is_the_mixture_of_the_other_modes():
 def test_disturbances_are_mixed_as_angles():
     """Two filters whose compass disturbances are 170 and -170 deg (20 deg apart, across 180)
     mix to about 180 deg with a spread of 10 deg, not to 0 with a spread of 170; so does δ."""
-    est = AdaptiveModel()
-    est.start(25.0, 0.5, 0.04)
-    mf = est.mf
-    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
-    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
-    X[:] = 0.0
-    P[:] = np.eye(ev.NX)
     mu = np.full(ev.NM, 1e-12)
     mu[ev.DIST_STILL] = mu[ev.DIST_MOVING] = 0.5
-    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    mf, X, P = _bank(mu)
     X[ev.DIST_STILL, ev.X_E], X[ev.DIST_MOVING, ev.X_E] = 170.0, -170.0 + 720.0  # two turns unwrapped
     X[ev.DIST_STILL, ev.X_DELTA], X[ev.DIST_MOVING, ev.X_DELTA] = 5.0, -5.0 - 360.0
     ev.combine(mf)
@@ -168,26 +182,16 @@ def test_angles_are_mixed_about_a_likely_mode_not_a_refuted_one():
     """A refuted still mode whose heading stayed put while the platform turned lies half a turn
     from the likely ones (181 and 179 deg, probabilities 0.8 and 0.2): the mixture is 180.6 deg
     with a spread of 0.8 x 0.2 x 2², as are the switched-in branches, whatever mode receives them."""
-    est = AdaptiveModel()
-    est.start(25.0, 0.5, 0.04)
-    mf = est.mf
-    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
-    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
-    X[:] = 0.0
-    P[:] = np.eye(ev.NX)
     mu = np.full(ev.NM, 1e-150)
     mu[ev.CLEAN_MOVING], mu[ev.STEADY_MOVING] = 0.8, 0.2
-    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    mf, X, P = _bank(mu)
     X[ev.CLEAN_MOVING, ev.X_DELTA], X[ev.STEADY_MOVING, ev.X_DELTA] = 181.0, 179.0
     ev.combine(mf)
     xc = mf[ev.MF_XC:ev.MF_XC + ev.NX]
     Pc = mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)
     assert xc[ev.X_DELTA] % 360.0 == pytest.approx(180.6, abs=1e-9)
     assert Pc[ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 0.8 * 0.2 * 4.0, rel=1e-9)
-    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
-    np.fill_diagonal(Pi, 0.9)
-    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
-    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    XB, PB, _ = _switched_in(mf)
     for j in (ev.CLEAN_STILL, ev.DIST_STILL, ev.STEADY_STILL):  # the refuted modes: 0 deg
         assert XB[j, ev.X_DELTA] % 360.0 == pytest.approx(180.6, abs=1e-6)
         assert PB[j, ev.X_DELTA, ev.X_DELTA] == pytest.approx(1.0 + 0.8 * 0.2 * 4.0, rel=1e-6)
@@ -197,21 +201,11 @@ def test_a_switched_in_disturbance_is_mixed_about_a_disturbed_source():
     """A disturbed mode receiving a likely clean mode (e 0, no angle) and two disturbed ones at
     170 and -170 deg takes those two as 170 and 190 (about a disturbed source), not as 170 and
     -170 (about the clean one's 0, where they would cancel)."""
-    est = AdaptiveModel()
-    est.start(25.0, 0.5, 0.04)
-    mf = est.mf
-    X = mf[ev.MF_X:ev.MF_X + ev.NM * ev.NX].reshape(ev.NM, ev.NX)
-    P = mf[ev.MF_P:ev.MF_P + ev.NM * ev.NX * ev.NX].reshape(ev.NM, ev.NX, ev.NX)
-    X[:] = 0.0
-    P[:] = np.eye(ev.NX)
     mu = np.full(ev.NM, 1e-150)
     mu[ev.CLEAN_MOVING], mu[ev.DIST_STILL], mu[ev.STEADY_STILL] = 0.6, 0.2, 0.2
-    mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
+    mf, X, _ = _bank(mu)
     X[ev.DIST_STILL, ev.X_E], X[ev.STEADY_STILL, ev.X_E] = 170.0, -170.0
-    Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
-    np.fill_diagonal(Pi, 0.9)
-    XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
-    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    XB, _, _ = _switched_in(mf)
     j = ev.DIST_MOVING  # sources: the clean one 0.6, the disturbed ones 0.2 each (e 0 for the clean one)
     e = (XB[j, ev.X_E] + 180.0) % 360.0 - 180.0
     assert abs(e) == pytest.approx(180.0 * 0.4, abs=1e-6)  # 0.6 x 0 (clean) + 0.2 x 170 + 0.2 x 190
