@@ -211,6 +211,27 @@ def test_a_switched_in_disturbance_is_mixed_about_a_disturbed_source():
     assert abs(e) == pytest.approx(180.0 * 0.4, abs=1e-6)  # 0.6 x 0 (clean) + 0.2 x 170 + 0.2 x 190
 
 
+@pytest.mark.parametrize("clock", [False, True])
+def test_the_drift_departure_rate_is_renewed_as_the_temperature_moves(clock):
+    """r's variance gained over an epoch (docs/model.md, States): at a steady temperature only
+    the time part, over a change of ``drift_rate_degc ln 2 / 2`` half the stationary variance
+    beside it, over a large change all of it; on the clock the whole of it with time. The
+    smoother's transition (gyrodrift.smooth) gains the same."""
+    from gyrodrift.smooth import _transition
+
+    st = AdaptiveConfig()
+    mc = st.settings_array(1.0, 0.01)
+    mc[ev.MC_CLOCK] = float(clock)
+    dt = 2.0
+    phi = np.exp(-dt / st.drift_rate_s)
+    renew_t = 1.0 - phi * phi
+    for dtemp, share in ((0.0, 0.0), (st.drift_rate_degc * np.log(2.0) / 2.0, 0.5), (1e3, 1.0)):
+        want = (st.drift_rate_dps2**2 * renew_t if clock
+                else share * st.drift_rate_dps2**2 + st.drift_rate_time_dps2**2 * renew_t)
+        assert ev.r_walk(mc, phi, dtemp) == pytest.approx(want, rel=1e-12)
+        assert _transition(dt, dtemp, 0.0, st, clock)[1][3, 3] == pytest.approx(want, rel=1e-12)
+
+
 def test_combine_is_the_moment_matched_mixture():
     est = AdaptiveModel()
     est.start(25.0, 0.5, 0.04)

@@ -49,22 +49,29 @@ def _unpack(hist: np.ndarray):
     return x, P
 
 
-def _transition(dt: float, dtemp: float, jump: float, st) -> tuple[np.ndarray, np.ndarray]:
-    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC, a jump kept with chance ``jump``."""
+def _transition(dt: float, dtemp: float, jump: float, st, clock: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """F and Q of the drift states over an epoch of ``dt`` s and ``dtemp`` degC (clock units
+    where ``clock``), a jump kept with chance ``jump``; r's as :func:`gyrodrift.kernels.evidence.r_walk`."""
     phi = np.exp(-dt / st.drift_rate_s)
     F = np.eye(N_DRIFT)
     F[2, 3] = st.drift_rate_s * (1.0 - phi)
     F[3, 3] = phi
+    if clock:
+        q_r = st.drift_rate_dps2**2 * (1.0 - phi * phi)
+    else:
+        q_r = (st.drift_rate_dps2**2 * (1.0 - np.exp(-2.0 * dtemp / st.drift_rate_degc))
+               + st.drift_rate_time_dps2**2 * (1.0 - phi * phi))
     Q = np.diag([st.slope_walk**2 * dtemp, st.rate_walk**2 * dt, st.drift_walk**2 * dt + st.drift_walk_temp**2 * dtemp
-                  + jump * st.drift_jump_dps**2, st.drift_rate_dps2**2 * (1.0 - phi * phi), 0.0])  # a2: constant
+                  + jump * st.drift_jump_dps**2, q_r, 0.0])  # a2: constant
     return F, Q
 
 
-def smooth_epochs(hist: np.ndarray, config=None) -> SmoothedDrift:
+def smooth_epochs(hist: np.ndarray, config=None, clock: bool = False) -> SmoothedDrift:
     """Rauch–Tung–Striebel smoothing of the model's drift states over its epoch history.
 
     ``hist`` is the engine's ``out.attrs["epochs"]`` (K, N_HIST); ``config`` the
-    :class:`~gyrodrift.compensator.CompensatorConfig` the log was compensated with.
+    :class:`~gyrodrift.compensator.CompensatorConfig` the log was compensated with; ``clock``
+    whether its T was the clock (``out.attrs["drift_regressor"]``).
     """
     from gyrodrift.compensator import CompensatorConfig
 
@@ -76,7 +83,7 @@ def smooth_epochs(hist: np.ndarray, config=None) -> SmoothedDrift:
     xs, Ps = x.copy(), P.copy()
     st = config.adaptive
     for k in range(x.shape[0] - 2, -1, -1):
-        F, Q = _transition(hist[k + 1, H_DT], hist[k + 1, H_DTEMP], hist[k + 1, H_JUMP], st)
+        F, Q = _transition(hist[k + 1, H_DT], hist[k + 1, H_DTEMP], hist[k + 1, H_JUMP], st, clock)
         Pm = F @ P[k] @ F.T + Q
         C = np.linalg.solve(Pm.T, (P[k] @ F.T).T).T  # P F^T Pm^-1 (Pm symmetric)
         xs[k] = x[k] + C @ (xs[k + 1] - F @ x[k])
@@ -119,13 +126,14 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     t = out["t"].to_numpy(float)
     if len(hist) == 0:
         return out.copy()
-    if out.attrs.get("drift_regressor") == "clock":  # the model's T was the elapsed time
+    clock = out.attrs.get("drift_regressor") == "clock"
+    if clock:  # the model's T was the elapsed time
         T = ElapsedClock(config.gate.max_gap_s)(t)
     elif "temp" not in out.columns:
         raise ConfigError("smoothing needs the input 'temp' column (degC) in the compensated table")
     else:
         T = _held(out["temp"].to_numpy(float))
-    sm = smooth_epochs(hist, config)
+    sm = smooth_epochs(hist, config, clock)
     tref = float(out.attrs["temp_ref_c"])
     Tp = out["temp_rate"].to_numpy(float)
     k = np.minimum(np.searchsorted(sm.t, t, side="left"), sm.t.size - 1)

@@ -45,6 +45,11 @@ class AdaptiveConfig:
         Random walk of c' per √degC of temperature change, deg/s/√degC.
     drift_rate_dps2, drift_rate_s : float
         Standard deviation (deg/s²) and correlation time (s) of the drift's departure rate r.
+    drift_rate_degc : float
+        Temperature change over which r renews, degC: r departs as the temperature moves
+        (on the clock, with time over ``drift_rate_s``).
+    drift_rate_time_dps2 : float
+        Standard deviation of the part of r that renews with time at a steady temperature, deg/s².
     drift_jump_dps, drift_jump_s : float
         Standard deviation of a drift jump (deg/s; 0, the default: off) and mean time between jumps (s).
     compass_error_deg, compass_error_s : float
@@ -97,6 +102,8 @@ class AdaptiveConfig:
     drift_walk_temp: float = setting(0.02, "deg/s per √degC", ge=0.0, most=50.0)
     drift_rate_dps2: float = setting(0.00015, "deg/s²", ge=0.0, most=50.0)
     drift_rate_s: float = setting(300.0, "s", gt=0.0)
+    drift_rate_degc: float = setting(10.0, "degC", gt=0.0)
+    drift_rate_time_dps2: float = setting(5e-5, "deg/s²", ge=0.0, most=50.0)
     drift_jump_dps: float = setting(0.0, "deg/s", ge=0.0, most=50.0)
     drift_jump_s: float = setting(600.0, "s", gt=0.0)
     compass_error_deg: float = setting(2.0, "deg", ge=0.0, most=360.0)
@@ -141,6 +148,7 @@ class AdaptiveConfig:
         mc[ev.MC_K_TURN] = self.turn_error_s
         mc[ev.MC_L_DEV] = self.deviation_span_deg
         mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
+        mc[ev.MC_T_R], mc[ev.MC_SIG_RT] = self.drift_rate_degc, self.drift_rate_time_dps2
         mc[ev.MC_SIG_JUMP], mc[ev.MC_TAU_JUMP] = self.drift_jump_dps, self.drift_jump_s
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s

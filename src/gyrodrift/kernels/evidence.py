@@ -117,10 +117,11 @@ NOISE_PRIOR_STEPS = 20.0
  MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
- MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_SD) = range(36)
+ MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_SD,
+ MC_T_R, MC_SIG_RT) = range(38)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 36
+MC_Q_W = 38
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -486,6 +487,19 @@ def long_run(mf, half_msd):
     return half_msd * (2.0 - colour) / (colour * colour)
 
 
+@jit(inline=True)
+def r_walk(mc, phi_r, dtemp):
+    """The variance r (the drift's departure rate) gains over an epoch of ``dtemp`` degC in
+    which it decays by ``phi_r``: its stationary variance times the share renewed by the
+    temperature's change (``1 - exp(-2 |ΔT| / T_r)``), plus a smaller part renewed with time
+    (``1 - phi_r²``). On the clock (no temperature) time stands for the temperature and the
+    whole of it renews with time."""
+    renew_t = 1.0 - phi_r * phi_r
+    if mc[MC_CLOCK] == 1.0:
+        return mc[MC_SIG_R] ** 2 * renew_t
+    return mc[MC_SIG_R] ** 2 * (1.0 - math.exp(-2.0 * dtemp / mc[MC_T_R])) + mc[MC_SIG_RT] ** 2 * renew_t
+
+
 @jit
 def epoch(mf, mc, t_end, temp_end):
     """Close the epoch ending at ``t_end`` (temperature ``temp_end``): predict, weigh the
@@ -522,7 +536,7 @@ def epoch(mf, mc, t_end, temp_end):
     # process noise of the drift, shared by every mode
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
-    q_r = mc[MC_SIG_R] ** 2 * (1.0 - phi_r * phi_r)
+    q_r = r_walk(mc, phi_r, dtemp)
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
