@@ -20,7 +20,7 @@ from gyrodrift.model import temp_rate
 #: least-squares fit of the zero-rate measurements does.
 # eq. (2) alone: no walks, no departure, no curvature (the known-answer tests' drift is linear in T)
 FROZEN = AdaptiveConfig(slope_walk=0.0, rate_walk=0.0, drift_walk=0.0, drift_walk_temp=0.0, drift_rate_dps2=1e-9,
-                        curvature_sd=0.0)
+                        drift_rate_time_dps2=0.0, curvature_sd=0.0)
 
 
 def test_a_noiseless_still_log_gives_a_b_c_exactly():
