@@ -88,6 +88,33 @@ def test_a_schmidt_update_corrects_one_state_and_keeps_the_others():
     assert np.linalg.eigvalsh(0.5 * (P_k + P_k.T)).min() > 0.0
 
 
+@pytest.mark.parametrize("gap", [False, True])
+def test_the_compass_errs_with_the_turn_rate_across_a_time_gap_too(gap):
+    """A moving mode's compass innovation variance is ``H P H + R + (turn_error_s * rate)²``,
+    the rate being what the mode's drift leaves of the gyro's integral over the epoch, whether
+    the epoch is sampled or one step across a time gap (the trapezoid's integral); a still
+    mode's has no turn term."""
+    est = AdaptiveModel()
+    mc = est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    dt, dG, Rc = 0.05, -2.5, 0.4
+    x = np.zeros(ev.NX)
+    x[ev.X_C] = -1.0  # the drift, deg/s: the mode's rate is (dG - dt * c) / dt = -49 deg/s
+    Hg = np.zeros(ev.NX)
+    Hg[ev.X_C] = dt
+    Hs = np.zeros(ev.NX)
+    Hs[[ev.X_DELTA, ev.X_D, ev.X_E]] = 1.0
+    Hm = Hs.copy()
+    Hm[ev.X_C] = 0.0  # the compass sample at the epoch's end
+    for j, turn in ((ev.CLEAN_MOVING, mc[ev.MC_K_TURN] * (dG - dt * x[ev.X_C]) / dt), (ev.CLEAN_STILL, 0.0)):
+        P = np.eye(ev.NX)
+        H = Hs if j == ev.CLEAN_STILL else Hm
+        _, _, nu, S = ev._measure(x.copy(), P.copy(), j, mf, mc, gap, dt, dG, 1e-4, Hg, 0.0, 0.0, 1.0, 3.0, Rc, 0.0,
+                                  Hs, Hm, 0.0)
+        assert S == pytest.approx(H @ P @ H + Rc + turn**2, rel=1e-12)
+    assert mc[ev.MC_K_TURN] * 49.0 == pytest.approx(24.5)  # the turn term above is not zero
+
+
 def test_without_mode_changes_each_mode_starts_from_its_own_state():
     """The epoch's branches under the identity transition: no mode is switched into (weight 0),
     and each mode's own branch is its state and covariance as they were, with the mode's

@@ -443,7 +443,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
-    turn = 0.0 if still or gap else mc[MC_K_TURN] * (dG - np.dot(Hg, x)) / dt
+    turn = 0.0 if still else mc[MC_K_TURN] * (dG - np.dot(Hg, x)) / dt
     if not gap:
         if still:
             ll += _update(x, P, Hg, dG, arw, False)
