@@ -216,3 +216,45 @@ def test_calibration_in_batch_equals_chunked(tmp_path):
         assert whole[c].equals(parts[c]), c
     note = [n for n in s_whole.notes if "magnetometer" in n]
     assert note and note == [n for n in s_parts.notes if "magnetometer" in n]
+
+
+def _level_raw_log(offset_ut) -> pd.DataFrame:
+    """A level unit turning at 1.5 deg/s for 10 min, its compass a raw magnetometer (the Earth's
+    field plus ``offset_ut``, µT, FRD) and an accelerometer reading 1 g up."""
+    from conftest import synthetic_log
+
+    log = synthetic_log(duration_s=600.0, fs_hz=10.0, heading_deg=lambda t: 30.0 + 1.5 * t, gyro_noise_dps=0.01)
+    psi = np.radians(log["ref_heading"].to_numpy())
+    on = log["heading"].notna().to_numpy()
+    field = np.column_stack([H_UT * np.cos(psi), -H_UT * np.sin(psi), np.full(psi.size, V_UT)]) + np.asarray(offset_ut)
+    field[~on] = np.nan
+    log[["mag_x", "mag_y", "mag_z"]] = field + 0.05 * np.random.default_rng(2).standard_normal(field.shape)
+    log[["acc_x", "acc_y", "acc_z"]] = np.tile([0.0, 0.0, -1.0], (len(log), 1))
+    return log.drop(columns=["heading"])
+
+
+def test_a_magnetometer_that_needs_calibrating_is_said_to_by_every_entry_point(tmp_path):
+    """A hard-iron offset of about a fifth of the field (whose strength then scatters with the
+    heading): batch, chunked file and stream give the same note naming ``mag_calibration``;
+    the calibrated field and a log compensated with the calibration give none."""
+    from gyrodrift.pipeline import compensate_file
+
+    clean = gyrodrift.compensate(_level_raw_log((0.0, 0.0, 0.0)))
+    assert not any("looks uncalibrated" in n for n in clean.attrs["notes"])
+    log = _level_raw_log((8.0, -5.0, 0.0))
+    cols = [c for c in log.columns if not c.startswith("true_bias_")]
+    log[cols].to_csv(tmp_path / "in.csv", index=False)
+    batch = gyrodrift.compensate(log)
+    said = [n for n in batch.attrs["notes"] if "looks uncalibrated" in n]
+    assert len(said) == 1 and "mag_calibration = true" in said[0]
+    parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", CompensatorConfig(), chunked=True,
+                            chunk_rows=500)
+    assert [n for n in parts.notes if "looks uncalibrated" in n] == [said[0].replace("log:", f"{tmp_path / 'in.csv'}:")]
+    comp = gyrodrift.Compensator(source="log")
+    for r in log.itertuples(index=False):
+        comp.push(r.t, r.gyro_z, r.temp, mag=(r.mag_x, r.mag_y, r.mag_z), acc=(r.acc_x, r.acc_y, r.acc_z))
+    comp.flush()
+    assert [n for n in comp.notes if "looks uncalibrated" in n] == said
+    calibrated = gyrodrift.compensate(log, CompensatorConfig(mag_calibration=True))
+    assert not any("looks uncalibrated" in n for n in calibrated.attrs["notes"])
+    assert any("magnetometer calibrated from the log" in n for n in calibrated.attrs["notes"])

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "MagCalibration", "MagSamples", "fit",
+    "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration", "MagSamples", "fit",
+    "uncalibrated_note",
 ]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
@@ -25,6 +26,9 @@ MAX_RESIDUAL = 0.05
 MIN_TILT_SPREAD_DEG = 15.0
 #: Samples :class:`MagSamples` keeps at most.
 CAPACITY = 8192
+#: A magnetometer whose fit from the log moves its heading by more than this (RMS over the kept
+#: samples, deg) is said to need calibrating (:func:`uncalibrated_note`).
+UNCALIBRATED_DEG = 3.0
 
 
 @dataclass(frozen=True)
@@ -143,3 +147,39 @@ def fit(mag, down) -> MagCalibration:
         return MagCalibration(False, **result, why=f"the fit leaves {100 * resid:.1f} % of the field, more than "
                                                      f"{100 * MAX_RESIDUAL:.0f} %")
     return MagCalibration(True, **result)
+
+
+def uncalibrated_note(samples: MagSamples, source: str) -> str | None:
+    """A note for a log compensated without the calibration when its magnetometer looks
+    uncalibrated; None otherwise. It does when the raw field's strength scatters by more than
+    :data:`MAX_RESIDUAL` (relative RMS about its median: a calibrated field's is constant), the
+    fit from the log itself (:func:`fit`, when it holds) explains that scatter (leaves less than
+    a third of it), and the fit moves the tilt-compensated heading of the kept samples by more
+    than :data:`UNCALIBRATED_DEG` RMS. The compass then errs with the heading by that much,
+    which the default model takes for drift or disturbance."""
+    from gyrodrift.compass import tilt_compensated_heading
+    from gyrodrift.conventions import wrap_180
+
+    mag, down = samples.arrays()
+    strength = np.linalg.norm(mag, axis=1)
+    if strength.size == 0:
+        return None
+    scatter = float(np.sqrt(np.mean((strength / np.median(strength) - 1.0) ** 2)))
+    if not scatter > MAX_RESIDUAL:
+        return None
+    cal = fit(mag, down)
+    if not cal.ok or not cal.residual < scatter / 3.0:
+        return None
+    before = tilt_compensated_heading(*mag.T, *(-down).T)
+    after = tilt_compensated_heading(*cal.apply(mag).T, *(-down).T)
+    moved = np.abs(np.asarray(wrap_180(after - before), dtype=float))
+    moved = moved[np.isfinite(moved)]
+    rms = float(np.sqrt(np.mean(moved**2))) if moved.size else 0.0
+    if not rms > UNCALIBRATED_DEG:
+        return None
+    o = ", ".join(f"{v:.3g}" for v in cal.offset)
+    return (f"{source}: the magnetometer looks uncalibrated: its field strength scatters by {100 * scatter:.1f} % "
+            f"(RMS), and a fit from this log (hard iron ({o})) leaves {100 * cal.residual:.2f} % and moves its heading "
+            f"by {rms:.0f} deg RMS, up to "
+            f"{moved.max():.0f} deg, and the drift learned from it errs with that; set mag_calibration = true "
+            "(--config) to calibrate it from the log, or calibrate the magnetometer")

@@ -20,6 +20,7 @@ from gyrodrift.compensator.output import output_frame
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
+from gyrodrift.magcal import MagSamples, uncalibrated_note
 from gyrodrift.triad import TRIAD_COLUMNS
 
 __all__ = ["Intake", "WholeLog", "MagFit", "survey", "needs_survey", "chunk_arrays", "optional_float"]
@@ -152,6 +153,10 @@ class Intake:
         self._tilt: RawTilt | None = None
         self._raw_seen = False  # a raw compass sample came: the tilt note (and the stream's calibration note)
         self._dead = DeadField()
+        # a raw compass's samples, for the note of a magnetometer that needs calibrating
+        self._survey = None if config.mag_calibration else MagSamples()
+        self._survey_rows: list[tuple] = []  # rows taken one by one, not yet in the survey
+        self._survey_note: tuple[int, str | None] | None = None  # (samples seen, note) once judged
         self._heading_seen = False  # a heading with a value: a compass even when the magnetometer is dead
         self.units = GyroUnitCheck(source, gyro_unit)
         self._unit_rows: list[tuple] = []  # (t, gyro, heading) of rows not yet given to the unit check
@@ -189,8 +194,11 @@ class Intake:
             if self.config.mag_calibration:  # no calibration without the whole log: a stream has none
                 raw.append(self._cal.note(self.source) if self._cal is not None else f"{self.source}: magnetometer "
                            "not calibrated: a stream does not see the whole log the fit needs (mag_calibration)")
+            else:
+                raw.append(self._uncalibrated())
         self._check_unit_rows()
-        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen)]), *raw, *self.engine.notes,
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen)]), *filter(None, raw),
+                *self.engine.notes,
                 *filter(None, [self.units.note()])]
 
     # ------------------------------------------------------------------ chunks
@@ -205,6 +213,8 @@ class Intake:
         mag = self._dead.mask(mag)
         self._raw_seen = True
         self._tilt, down = _gravity(self._tilt, self.config, self.source, t, g, acc, gyro_xy)
+        if self._survey is not None:
+            self._survey.add(mag, accel_down(acc) if down is None else down)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)
@@ -311,6 +321,21 @@ class Intake:
             self._unit_rows = []
             self.units.add(t, g, heading)
 
+    def _survey_flush(self) -> None:
+        """The raw compass rows taken one by one since the last call, to the survey (in order)."""
+        if self._survey_rows:
+            both = np.array(self._survey_rows, dtype=float)
+            self._survey_rows = []
+            self._survey.add(both[:, :3], both[:, 3:])
+
+    def _uncalibrated(self) -> str | None:
+        """The note of a magnetometer that needs calibrating (:func:`gyrodrift.magcal.uncalibrated_note`),
+        judged again only when more samples came."""
+        self._survey_flush()
+        if self._survey_note is None or self._survey_note[0] != self._survey.seen:
+            self._survey_note = (self._survey.seen, uncalibrated_note(self._survey, self.source))
+        return self._survey_note[1]
+
     def _row_compass(self, t, g, heading, mag, acc, gx, gy) -> tuple[float, float, float]:
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
@@ -329,6 +354,10 @@ class Intake:
         f = [float(v) for v in acc] if down is None else [-float(v) for v in down]
         if not all(math.isfinite(v) for v in (*mag, *f)):
             return heading, math.nan, math.nan
+        if self._survey is not None and acc is not None:  # as the chunks' rows (compass() needs acc)
+            self._survey_rows.append((*mag, *(accel_down(acc)[0] if down is None else down)))
+            if len(self._survey_rows) >= UNIT_ROWS:
+                self._survey_flush()
         norm, dip = (float(v) for v in field_norm_dip(*mag, *f))
         if not math.isfinite(heading):
             heading = float(tilt_compensated_heading(*mag, *f))
