@@ -44,3 +44,21 @@ def test_the_trace_prints_every_hypothesis_of_each_epoch_asked_for():
     assert modes == [str(j) for j in range(6)] * 4
     probs = np.array([float(ln.split()[2]) for ln in lines if not ln.startswith("t ")]).reshape(4, 6)
     assert np.allclose(probs.sum(axis=1), 1.0, atol=2e-3)
+
+
+def test_the_bursty_probe_draws_time_gaps_inside_turns():
+    """``probe_bursty_turns.draw``: every stall is a time gap (20 typical steps or more), most
+    fall inside a turn, and the gyro less its drift integrates to the reference heading."""
+    import probe_bursty_turns
+
+    log = probe_bursty_turns.draw(np.random.default_rng(0))
+    t = log["t"].to_numpy()
+    steps = np.diff(t)
+    typical = np.median(steps)
+    stalls = steps > 1.5 * typical
+    assert stalls.sum() > 20 and np.all(steps[stalls] >= 20.0 * typical)
+    rate = (log["gyro_z"] - log["true_bias_z"]).to_numpy()
+    assert np.mean(np.abs(rate[1:][stalls]) > 10.0) > 0.3  # a third or more of the stalls in a turn
+    turned = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * steps)])
+    err = (log["ref_heading"].to_numpy() - log["ref_heading"].iloc[0] - turned + 180.0) % 360.0 - 180.0
+    assert np.abs(err).max() < 1.0  # the gyro's noise and the stalls' trapezoids only (0.33 deg here)
