@@ -155,8 +155,8 @@ def uncalibrated_note(samples: MagSamples, source: str) -> str | None:
     :data:`MAX_RESIDUAL` (relative RMS about its median: a calibrated field's is constant), the
     fit from the log itself (:func:`fit`, when it holds) explains that scatter (leaves less than
     a third of it), and the fit moves the tilt-compensated heading of the kept samples by more
-    than :data:`UNCALIBRATED_DEG` RMS. The compass then errs with the heading by that much,
-    which the default model takes for drift or disturbance."""
+    than :data:`UNCALIBRATED_DEG` RMS. The compass then errs with the heading by that much, and
+    the default model can take that for drift or for a disturbance."""
     from gyrodrift.compass import tilt_compensated_heading
     from gyrodrift.conventions import wrap_180
 
@@ -181,5 +181,5 @@ def uncalibrated_note(samples: MagSamples, source: str) -> str | None:
     return (f"{source}: the magnetometer looks uncalibrated: its field strength scatters by {100 * scatter:.1f} % "
             f"(RMS), and a fit from this log (hard iron ({o})) leaves {100 * cal.residual:.2f} % and moves its heading "
             f"by {rms:.0f} deg RMS, up to "
-            f"{moved.max():.0f} deg, and the drift learned from it errs with that; set mag_calibration = true "
+            f"{moved.max():.0f} deg, an error the drift estimate can absorb; set mag_calibration = true "
             "(--config) to calibrate it from the log, or calibrate the magnetometer")
