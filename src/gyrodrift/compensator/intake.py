@@ -324,9 +324,12 @@ class Intake:
     def _survey_flush(self) -> None:
         """The raw compass rows taken one by one since the last call, to the survey (in order)."""
         if self._survey_rows:
-            both = np.array(self._survey_rows, dtype=float)
+            rows = np.array(self._survey_rows, dtype=float)
             self._survey_rows = []
-            self._survey.add(both[:, :3], both[:, 3:])
+            down = rows[:, 3:6]
+            accel = rows[:, 6] == 0.0
+            down[accel] = accel_down(down[accel])
+            self._survey.add(rows[:, :3], down)
 
     def _uncalibrated(self) -> str | None:
         """The note of a magnetometer that needs calibrating (:func:`gyrodrift.magcal.uncalibrated_note`),
@@ -355,7 +358,8 @@ class Intake:
         if not all(math.isfinite(v) for v in (*mag, *f)):
             return heading, math.nan, math.nan
         if self._survey is not None and acc is not None:  # as the chunks' rows (compass() needs acc)
-            self._survey_rows.append((*mag, *(accel_down(acc)[0] if down is None else down)))
+            # the accelerometer's down vector is taken at the flush, over many rows at once
+            self._survey_rows.append((*mag, *(acc if down is None else down), 0.0 if down is None else 1.0))
             if len(self._survey_rows) >= UNIT_ROWS:
                 self._survey_flush()
         norm, dip = (float(v) for v in field_norm_dip(*mag, *f))
