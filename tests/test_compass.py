@@ -67,3 +67,25 @@ def test_real_log_two_ccw_turns_from_raw_mag(shared_data):
     heading = tilt_compensated_heading(*log.loc[rows, ["mag_x", "mag_y", "mag_z", "acc_x", "acc_y", "acc_z"]].to_numpy().T)
     total = float(np.sum(wrap_180(np.diff(heading))))
     assert total == pytest.approx(-720.0, abs=10.0)
+
+
+def test_one_row_and_many_give_the_same_bits():
+    """A stream's row (``kernels.compass.row``, as :class:`Intake` calls it) and a whole log's
+    rows (``compass_columns``) agree to the bit, NaN and a given heading included; the arrays
+    keep their shape, scalars give 0-d arrays."""
+    from gyrodrift.compass import compass_columns
+    from gyrodrift.kernels import compass as kernel
+
+    rng = np.random.default_rng(7)
+    mag, acc = body_readings(rng.uniform(0, 360, 500), rng.uniform(-80, 80, 500), rng.uniform(-180, 180, 500))
+    mag, acc = mag * rng.uniform(0.01, 100.0, (500, 1)), acc * 9.80665 + 0.05 * rng.standard_normal((500, 3))
+    mag[3, 1] = np.nan
+    acc[4] = np.nan
+    heading, norm, dip = compass_columns(500, None, mag, acc)
+    rows = np.array([kernel.row(*m, *a) for m, a in zip(mag.tolist(), acc.tolist())])
+    assert np.array_equal(rows, np.column_stack([heading, norm, dip]), equal_nan=True)
+    assert np.isnan(rows[3]).all() and np.isnan(rows[4]).all() and np.isfinite(rows[5:]).all()
+    assert np.array_equal(tilt_compensated_heading(*mag.T, *acc.T), heading, equal_nan=True)
+    grid = tilt_compensated_heading(mag[:6, 0].reshape(2, 3), mag[:6, 1].reshape(2, 3), mag[:6, 2].reshape(2, 3),
+                                    0.0, 0.0, -1.0)
+    assert grid.shape == (2, 3) and np.shape(tilt_compensated_heading(0.0, -0.2, 0.4, 0.0, 0.0, -1.0)) == ()

@@ -15,6 +15,7 @@ import numpy as np
 
 from gyrodrift.conventions import wrap_360
 from gyrodrift.io.notes import no_compass_note
+from gyrodrift.kernels import compass as compass_kernel
 
 __all__ = ["MIN_FIELD", "roll_pitch_deg", "tilt_compensated_heading", "field_norm_dip", "compass_columns",
            "usable_field", "DeadField"]
@@ -48,17 +49,19 @@ def roll_pitch_deg(acc_x, acc_y, acc_z):
     return np.degrees(roll), np.degrees(pitch)
 
 
-def _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
-    """Magnetic field rotated into the local level frame: (north-ish, east-ish, down)."""
-    mx, my, mz = (np.asarray(v, dtype=float) for v in (mag_x, mag_y, mag_z))
-    roll_deg, pitch_deg = roll_pitch_deg(acc_x, acc_y, acc_z)
-    phi, theta = np.radians(roll_deg), np.radians(pitch_deg)
-    sphi, cphi, sth, cth = np.sin(phi), np.cos(phi), np.sin(theta), np.cos(theta)
-    # Undo roll (about x), then pitch (about y): horizontal x, y and vertical z parts.
-    horiz_x = mx * cth + (my * sphi + mz * cphi) * sth
-    horiz_y = my * cphi - mz * sphi
-    vert = -mx * sth + (my * sphi + mz * cphi) * cth
-    return horiz_x, horiz_y, vert
+def _components(*values):
+    """The arguments broadcast against each other, as new contiguous 1-d float64 arrays (the
+    kernel's one signature), and their common shape."""
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in values))
+    return [np.array(a, dtype=float).ravel() for a in arrays], arrays[0].shape
+
+
+def _compass(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
+    """Heading, field strength and dip of every sample (:func:`gyrodrift.kernels.compass.rows`)."""
+    parts, shape = _components(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
+    heading, norm, dip = (np.empty(parts[0].size) for _ in range(3))
+    compass_kernel.rows(*parts, heading, norm, dip)
+    return heading.reshape(shape), norm.reshape(shape), dip.reshape(shape)
 
 
 def tilt_compensated_heading(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
@@ -83,15 +86,12 @@ def tilt_compensated_heading(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
     >>> float(tilt_compensated_heading(0.0, -0.2, 0.4, 0.0, 0.0, -1.0))
     90.0
     """
-    hx, hy, _ = _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
-    return wrap_360(np.degrees(np.arctan2(-hy, hx)))
+    return _compass(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)[0]
 
 
 def field_norm_dip(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z):
     """Field strength (input unit) and dip angle (deg, positive = field points down)."""
-    hx, hy, vert = _level_field(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)
-    horiz = np.hypot(hx, hy)
-    return np.sqrt(horiz**2 + vert**2), np.degrees(np.arctan2(vert, horiz))
+    return _compass(mag_x, mag_y, mag_z, acc_x, acc_y, acc_z)[1:]
 
 
 def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
@@ -120,9 +120,7 @@ def compass_columns(n: int, heading_deg=None, mag=None, acc=None, down=None):
     if mag is not None and acc is not None:
         mag = np.asarray(mag, dtype=float)
         acc = np.asarray(acc, dtype=float) if down is None else -np.asarray(down, dtype=float)
-        with np.errstate(invalid="ignore"):
-            norm, dip = field_norm_dip(*mag.T, *acc.T)
-            from_mag = tilt_compensated_heading(*mag.T, *acc.T)
+        from_mag, norm, dip = _compass(*mag.T, *acc.T)
         heading = np.where(np.isfinite(heading), heading, from_mag)
     with np.errstate(invalid="ignore"):
         heading = np.where(np.isfinite(heading), wrap_360(heading), np.nan)

@@ -13,13 +13,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrodrift.attitude import RawTilt, accel_down
-from gyrodrift.compass import DeadField, compass_columns, field_norm_dip, tilt_compensated_heading
+from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
+from gyrodrift.kernels.compass import row as compass_row
 from gyrodrift.magcal import MagSamples, uncalibrated_note
 from gyrodrift.triad import TRIAD_COLUMNS
 
@@ -354,18 +355,17 @@ class Intake:
         self._heading_seen = self._heading_seen or math.isfinite(heading)
         if mag is None or (acc is None and down is None):
             return heading, math.nan, math.nan
-        f = [float(v) for v in acc] if down is None else [-float(v) for v in down]
-        if not all(math.isfinite(v) for v in (*mag, *f)):
+        mx, my, mz = mag
+        fx, fy, fz = acc if down is None else (-down[0], -down[1], -down[2])
+        if not math.isfinite(mx + my + mz + fx + fy + fz):  # each at most 1e8: a sum overflows only with an inf
             return heading, math.nan, math.nan
         if self._survey is not None and acc is not None:  # as the chunks' rows (compass() needs acc)
             # the accelerometer's down vector is taken at the flush, over many rows at once
-            self._survey_rows.append((*mag, *(acc if down is None else down), 0.0 if down is None else 1.0))
+            self._survey_rows.append((mx, my, mz, *(acc if down is None else down), 0.0 if down is None else 1.0))
             if len(self._survey_rows) >= UNIT_ROWS:
                 self._survey_flush()
-        norm, dip = (float(v) for v in field_norm_dip(*mag, *f))
-        if not math.isfinite(heading):
-            heading = float(tilt_compensated_heading(*mag, *f))
-        return heading, norm, dip
+        from_mag, norm, dip = compass_row(float(mx), float(my), float(mz), float(fx), float(fy), float(fz))
+        return (heading if math.isfinite(heading) else from_mag), norm, dip
 
 
 def optional_float(v) -> float:

@@ -350,9 +350,13 @@ def _new_sample(t: float, out, codes, compass: float, new=object.__new__, cls=Co
 
 
 def _limits(gyro_max_dps: float) -> dict:
-    """The plausible range of every checked input column (:mod:`gyrodrift.io.limits`), by name."""
+    """The plausible range of every checked input column (:mod:`gyrodrift.io.limits`), by name,
+    and the three ranges of ``MAG_COLS`` and of ``ACC_COLS`` (:func:`_range`) under those tuples."""
     names = ("", GYRO_Z, TEMP, HEADING, GYRO_X, GYRO_Y, *MAG_COLS, *ACC_COLS)
-    return {name: limit_of(name, gyro_max_dps) for name in names}
+    limits = {name: limit_of(name, gyro_max_dps) for name in names}
+    for columns in (MAG_COLS, ACC_COLS):  # a triple's three ranges, for _triple's common case
+        limits[columns] = tuple(_range(limits[c]) for c in columns)
+    return limits
 
 
 def _range(limit) -> tuple[float, float]:
@@ -382,6 +386,13 @@ def _triple(source: str, arg: str, value, columns: tuple[str, ...], limits: dict
     """``mag`` or ``acc``: None, or three checked floats."""
     if value is None:
         return None
+    if type(value) in (tuple, list) and len(value) == 3:  # the common sample: three floats in range (NaN: none)
+        x, y, z = value
+        if isinstance(x, float) and isinstance(y, float) and isinstance(z, float):  # numpy's float64 too
+            x, y, z = float(x), float(y), float(z)
+            (xlo, xhi), (ylo, yhi), (zlo, zhi) = limits[columns]
+            if (xlo <= x <= xhi or x != x) and (ylo <= y <= yhi or y != y) and (zlo <= z <= zhi or z != z):
+                return x, y, z
     try:
         items = list(value) if not isinstance(value, (str, bytes)) else None
     except TypeError:
