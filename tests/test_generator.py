@@ -24,3 +24,42 @@ def test_a_held_compass_is_on_every_row_correlated_and_never_repeated():
     # held: most steps are jitter only (differences of two jitters), a few are new samples
     assert np.median(np.abs(step)) < 1.0 and rows_per_sample >= 2.5
     assert np.corrcoef(err[:-1][still[:-1]], err[1:][still[:-1]])[0, 1] > 0.5
+
+
+def test_a_stalling_logger_loses_rows_inside_the_turns():
+    """``handheld-stalls``: steps of 50-250 ms (20-100 times the median step at 200-400 Hz)
+    after every 0.2-1.5 s of rows, some of them while the board turns, and a heading at 10 Hz."""
+    log = generate("handheld-stalls", seeds("tuning", 1)[0], duration_scale=0.5).log
+    t = log["t"].to_numpy()
+    dt = np.diff(t)
+    median = np.median(dt)
+    stalls = dt > 10.0 * median
+    assert median <= 0.005 + 1e-9 and 0.05 - median <= dt[stalls].min() and dt[stalls].max() <= 0.25 + median
+    per_s = stalls.sum() / (t[-1] - t[0])
+    assert 1.0 / 1.5 / 1.2 < per_s < 1.0 / 0.2 and stalls.sum() > 50
+    turning = np.abs(log["true_rate_z"].to_numpy()) > 10.0
+    assert np.count_nonzero(stalls & turning[1:] & turning[:-1]) > 10
+    assert 9.0 < np.isfinite(log["heading"]).sum() / (t[-1] - t[0]) < 11.0
+
+
+def test_an_uncalibrated_magnetometer_errs_with_the_heading():
+    """``rawmag-uncalibrated``: the raw field's strength varies with the heading (hard iron), the
+    tilt-compensated heading errs by a function of the heading that a constant cannot remove, and
+    the same seed's ``rawmag-drive`` heading (the class it is built on) has none of it."""
+    from gyrodrift.compass import field_norm_dip, tilt_compensated_heading
+    from gyrodrift.conventions import ACC_COLS, MAG_COLS
+
+    seed = seeds("tuning", 1)[0]
+    case = generate("rawmag-uncalibrated", seed, duration_scale=0.3)
+    hard = np.array(case.compass.hard_iron_ut)
+    b_h = case.compass.field_ut * np.cos(np.radians(case.compass.dip_deg))
+    assert 0.2 <= np.hypot(hard[0], hard[1]) / b_h <= 0.6
+    errs = []
+    for log in (case.log, generate("rawmag-drive", seed, duration_scale=0.3).log):
+        rows = log["mag_x"].notna().to_numpy()
+        parts = [log[c].to_numpy()[rows] for c in (*MAG_COLS, *ACC_COLS)]
+        err = (tilt_compensated_heading(*parts) - log["ref_heading"].to_numpy()[rows] + 180.0) % 360.0 - 180.0
+        norm, _ = field_norm_dip(*parts)
+        errs.append((np.std(err), np.std(norm) / np.mean(norm)))
+    (uncal_err, uncal_norm), (cal_err, cal_norm) = errs
+    assert uncal_err > 5.0 > cal_err and uncal_norm > 3.0 * cal_norm

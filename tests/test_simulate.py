@@ -318,6 +318,9 @@ def test_unknown_scenario_lists_valid_names():
         (CompassModel, {"interference": [(10.0, 5.0)]}, "interference"),
         (CompassModel, {"interference": [(10.0, 5.0, 90.0)]}, "interference"),
         (CompassModel, {"dip_deg": 95.0}, "dip_deg"),
+        (CompassModel, {"hard_iron_ut": (1.0, 2.0)}, "hard_iron_ut"),
+        (CompassModel, {"hard_iron_ut": (1.0, float("nan"), 0.0)}, "hard_iron_ut\\[1\\]"),
+        (CompassModel, {"soft_iron_gain": (1.0, 0.0, 1.0)}, "soft_iron_gain\\[1\\]"),
     ],
 )
 def test_invalid_models_name_the_field(cls, kwargs, field):

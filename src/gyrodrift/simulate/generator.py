@@ -114,6 +114,7 @@ class _Recipe:
     compass_form: str = "heading"
     temp_channel_c: float | None = None
     held_jitter_deg: float | None = None  # the heading written on every row: held, plus this jitter per row
+    stalls: bool = False  # the logger stalls: 50-250 ms of rows lost after every 0.2-1.5 s (_stalled)
 
 
 def _u(rng, lo, hi) -> float:
@@ -457,6 +458,29 @@ def _held_compass(rng, scale):
                    held_jitter_deg=_u(rng, 0.1, 0.6))
 
 
+def _rawmag_uncalibrated(rng, scale):
+    """:func:`_rawmag_drive` with a magnetometer nobody calibrated: a hard-iron field of 20–60 %
+    of the horizontal Earth field in a random body direction (and a vertical part within ±50 % of
+    it) and per-axis gains of 0.9–1.1, so its heading errs by up to 12–37 deg, with the heading."""
+    rec = _rawmag_drive(rng, scale)
+    b_h = rec.compass.field_ut * math.cos(math.radians(rec.compass.dip_deg))
+    size, angle = _u(rng, 0.2, 0.6) * b_h, _u(rng, 0.0, 2.0 * math.pi)
+    hard = (size * math.cos(angle), size * math.sin(angle), _u(rng, -0.5, 0.5) * b_h)
+    gains = tuple(_u(rng, 0.9, 1.1) for _ in range(3))
+    return replace(rec, compass=replace(rec.compass, hard_iron_ut=hard, soft_iron_gain=gains))
+
+
+def _handheld_stalls(rng, scale):
+    """A board turned by hand through 90–720 deg at 20–90 deg/s between pauses of 1–10 s while
+    it warms up by 2–8 degC, logged at 200–400 Hz through a link that stalls (:func:`_stalled`:
+    50–250 ms of rows lost after every 0.2–1.5 s, in the turns too); a heading at 10 Hz."""
+    duration = _u(rng, 120.0, 600.0) * scale
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 1.0, 10.0), duration - 5.0, (90.0, 720.0), (20.0, 90.0),
+                                  (1.0, 10.0), after=lambda a, p: abs(a) / p + 1.0))
+    return _Recipe(duration, float(rng.choice([200.0, 400.0])), _device(rng), _compass(rng, noise=(0.5, 3.0)),
+                   _warmup(rng, rise=(2.0, 8.0)), rate=rate, heading0_deg=_u(rng, 0, 360), stalls=True)
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -480,6 +504,8 @@ _BUILDERS: dict[str, Callable] = {
     "no-temp-robot": _no_temp_robot,
     "day-parked": _day_parked,
     "held-compass": _held_compass,
+    "rawmag-uncalibrated": _rawmag_uncalibrated,
+    "handheld-stalls": _handheld_stalls,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -515,7 +541,21 @@ def _logged_rows(rec: _Recipe, t: np.ndarray, rng: np.random.Generator) -> np.nd
         keep[::step] = True
     if rec.records:
         keep &= in_records(t, rec.records)
+    if rec.stalls:
+        keep &= ~_stalled(t, rng)
     return np.flatnonzero(keep)
+
+
+def _stalled(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The rows a logger that stalls loses (a serial link's buffer full, a card's write): 50–250
+    ms of rows after every 0.2–1.5 s of rows."""
+    lost = np.zeros(t.size, dtype=bool)
+    at = _u(rng, 0.2, 1.5)
+    while at < t[-1]:
+        stall = _u(rng, 0.05, 0.25)
+        lost[np.searchsorted(t, at):np.searchsorted(t, at + stall)] = True
+        at += stall + _u(rng, 0.2, 1.5)
+    return lost
 
 
 def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:

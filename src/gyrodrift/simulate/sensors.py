@@ -69,11 +69,20 @@ class CompassModel:
     field_ut: float = 50.0
     dip_deg: float = 60.0
     kinematic_tilt: bool = True
+    hard_iron_ut: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    soft_iron_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     def __post_init__(self):
         for f in fields(self):
-            if f.name not in ("interference", "kinematic_tilt"):
+            if f.name not in ("interference", "kinematic_tilt", "hard_iron_ut", "soft_iron_gain"):
                 finite(f.name, getattr(self, f.name), "CompassModel")
+        for name in ("hard_iron_ut", "soft_iron_gain"):
+            value = getattr(self, name)
+            if not (isinstance(value, tuple) and len(value) == 3):
+                raise ConfigError(f"CompassModel.{name} must be a tuple of three numbers (x, y, z), got {value!r}")
+            object.__setattr__(self, name, tuple(finite(f"{name}[{k}]", v, "CompassModel") for k, v in enumerate(value)))
+        for k, gain in enumerate(self.soft_iron_gain):
+            positive(f"soft_iron_gain[{k}]", gain, "CompassModel")
         nonneg("noise_deg", self.noise_deg, "CompassModel")
         positive("rate_hz", self.rate_hz, "CompassModel")
         positive("interference_ramp_s", self.interference_ramp_s, "CompassModel")
@@ -186,6 +195,8 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
     apparent = psi + compass.deviation(psi) + offset + noise
     mag = np.full((n, 3), np.nan)
     mag[idx] = _body_from_level(_apparent_field_level(apparent, offset, compass), motion.roll_deg, motion.pitch_deg)
+    if compass.hard_iron_ut != (0.0, 0.0, 0.0) or compass.soft_iron_gain != (1.0, 1.0, 1.0):  # not calibrated
+        mag[idx] = mag[idx] * np.array(compass.soft_iron_gain) + np.array(compass.hard_iron_ut)
 
     heading = np.full(n, np.nan)
     heading[idx] = wrap_360(tilt_compensated_heading(*mag[idx].T, *acc[idx].T))
