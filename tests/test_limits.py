@@ -364,3 +364,26 @@ def test_bias_sd_grows_with_the_time_a_gap_lasts():
     prior = float(np.sqrt(h @ Compensator().estimator.cov @ h))
     walk = AdaptiveConfig().drift_walk * np.sqrt(30 * 86400.0)
     assert np.hypot(walk, sd[60.0]) <= sd[30 * 86400.0] <= prior
+
+
+def test_push_takes_a_triple_in_any_form_of_three_numbers_alike():
+    """``mag`` and ``acc`` as tuples of floats (taken as they are), lists, numpy float64 scalars,
+    whole numbers or a numpy array (checked one by one) give the same rows, NaN in a component
+    included."""
+    rng = np.random.default_rng(3)
+    n = 400  # 40 s at 10 Hz: past the 30-s init window
+    mag = np.column_stack([np.full(n, 20.0), np.full(n, 5.0), np.full(n, 40.0)]) + rng.integers(-3, 4, (n, 3))
+    mag[7, 1] = math.nan
+    acc = np.tile([0.0, 0.0, -1.0], (n, 1))
+
+    def run(form):
+        comp = Compensator(provisional=False)
+        rows = []
+        for i in range(n):
+            rows += comp.push(0.1 * i, 0.2, 25.0 + 0.01 * i, mag=form(mag[i]), acc=form(acc[i]))
+        return np.array([(r.t, r.heading, r.compass_heading, r.bias_z) for r in rows + comp.flush()])
+
+    plain = run(lambda v: tuple(float(x) for x in v))
+    assert plain.shape == (n, 4) and np.isfinite(plain[:, 2]).sum() == n - 1
+    for form in (list, tuple, np.asarray, lambda v: [x if math.isnan(x) else int(x) for x in v.tolist()]):
+        assert np.array_equal(run(form), plain, equal_nan=True)
