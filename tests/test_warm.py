@@ -5,6 +5,7 @@ import json
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 from gyrodrift.kernels import warm
 
@@ -67,3 +68,31 @@ def test_the_commands_compile_nothing_outside_the_list(tmp_path):
     # literal and omitted-argument types are its callers' (compiled within them)
     missing = {k: [s for s in v if "Literal" not in s and "omitted" not in s] for k, v in missing.items()}
     assert not {k: v for k, v in missing.items() if v}, missing
+
+
+_IMPORTS_WITHOUT_PANDAS = textwrap.dedent("""
+    import importlib.abc, sys
+
+    class NoPandas(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path, target=None):
+            if name == "pandas" or name.startswith("pandas."):
+                raise ImportError("pandas is not installed where the wheel is built")
+
+    sys.meta_path.insert(0, NoPandas())
+    from gyrodrift.kernels import warm  # loaded as the build loads it, without the package's __init__
+    for name in warm.SIGNATURES:
+        warm.dispatcher(name)
+    print("ok", len(warm.SIGNATURES))
+""")
+
+
+def test_every_listed_function_imports_where_the_wheel_is_built():
+    """``pip install .`` compiles the list in an environment with numba, numpy and scipy only
+    (setup.py): every module it names must import without pandas, or the build compiles nothing
+    after it and the first command compiles instead."""
+    src = str(Path(warm.__file__).resolve().parents[2])
+    code = ("import os, sys, types; pkg = types.ModuleType('gyrodrift'); "
+            f"pkg.__path__ = [os.path.join({src!r}, 'gyrodrift')]; sys.modules['gyrodrift'] = pkg; "
+            f"exec({_IMPORTS_WITHOUT_PANDAS!r})")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and out.stdout.startswith("ok"), out.stderr[-2000:]

@@ -8,7 +8,6 @@ columns (pandas copies its column index, and warns, at every insertion).
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from gyrodrift.conventions import HEADING, T
 
@@ -30,6 +29,8 @@ def join_input_columns(out: pd.DataFrame, log: pd.DataFrame) -> pd.DataFrame:
     no column is ever replaced). The columns are taken row for row, by position, keeping
     their types (a text column of empty cells stays text).
     """
+    import pandas as pd  # here: the kernels' build imports this module (for attitude) without pandas
+
     taken = set(out.columns)
     positions, names = [], []
     for position, col in enumerate(log.columns):
