@@ -7,9 +7,14 @@ columns (pandas copies its column index, and warns, at every insertion).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from gyrodrift.conventions import HEADING, T
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["join_input_columns", "read_only_floats"]
 
