@@ -421,6 +421,45 @@ sys.exit(main(["batch", sys.argv[1], "-o", sys.argv[2], "--workers", "2"]))
 """
 
 
+_WORKER = """
+import sys, time
+from gyrodrift import _pool
+from gyrodrift._atomic import atomic_output
+
+def job(path):
+    with atomic_output(path) as fh:
+        fh.write(b"partial")
+        print("ready", flush=True)
+        time.sleep(60)
+
+_pool._worker_start()
+if sys.argv[1] == "idle":
+    print("ready", flush=True)
+    time.sleep(60)
+else:
+    _pool._run(job, sys.argv[1])
+print("not stopped", flush=True)
+"""
+
+
+def test_a_worker_stopped_between_jobs_exits_without_a_traceback():
+    # SIGTERM while the worker waits for (or unpickles) its next item: status 143 and silence
+    proc = _child(_WORKER, "idle")
+    proc.send_signal(signal.SIGINT)  # Ctrl-C reaches the whole group: the parent decides, not the worker
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert (proc.returncode, stdout, stderr) == (143, "", "")
+
+
+def test_a_worker_stopped_in_a_job_removes_its_partial_output_and_takes_no_other(tmp_path):
+    proc = _child(_WORKER, str(tmp_path / "out.csv"))
+    assert len(_hidden(tmp_path)) == 1
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert (proc.returncode, stdout, stderr) == (143, "", "")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_sigterm_cancels_the_queued_logs_of_batch(tmp_path):
     import shutil
     import time

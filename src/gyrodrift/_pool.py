@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 import signal
 
 __all__ = ["map_processes"]
@@ -10,11 +11,40 @@ __all__ = ["map_processes"]
 #: Seconds a worker is given to stop (and remove its temporary files) once terminated.
 STOP_WAIT_S = 10.0
 
+#: Exit status of a worker stopped by SIGTERM (128 + the signal's number, as a shell says it).
+TERMINATED_STATUS = 128 + signal.SIGTERM
+
+#: In a worker process: whether a job is running (set by :func:`_run`, read by the signal handler).
+_in_job = False
+
+
+def _on_sigterm(signum, frame) -> None:
+    """A worker's SIGTERM: inside a job, :class:`KeyboardInterrupt` (its clean-up runs); between
+    jobs (waiting for or unpickling the next item) there is nothing to clean, and the worker exits
+    at once, without the traceback multiprocessing would print."""
+    if _in_job:
+        raise KeyboardInterrupt
+    os._exit(TERMINATED_STATUS)
+
 
 def _worker_start() -> None:
-    """In each worker: SIGTERM raises :class:`KeyboardInterrupt`, so that a job stopped by
-    :func:`map_processes` runs its clean-up (a partial output is removed, :mod:`gyrodrift._atomic`)."""
-    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    """In each worker: SIGTERM stops it (:func:`_on_sigterm`); SIGINT is ignored, because Ctrl-C
+    reaches the whole process group and the parent then stops its workers with SIGTERM."""
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _run(job, item):
+    """``job(item)`` in a worker; a job stopped by SIGTERM ends the worker once its clean-up ran
+    (a partial output is removed, :mod:`gyrodrift._atomic`), so that it takes no queued item."""
+    global _in_job
+    _in_job = True
+    try:
+        return job(item)
+    except KeyboardInterrupt:
+        os._exit(TERMINATED_STATUS)
+    finally:
+        _in_job = False
 
 
 def _stop(pool) -> None:
@@ -48,7 +78,7 @@ def map_processes(job, items, workers: int, progress=None, on_error=None) -> lis
     ctx = multiprocessing.get_context("spawn")  # no fork of a process that may hold threads
     pool = ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=ctx, initializer=_worker_start)
     try:
-        futures = {pool.submit(job, item): i for i, item in enumerate(items)}
+        futures = {pool.submit(_run, job, item): i for i, item in enumerate(items)}
         done = as_completed(futures)
         if progress is not None:
             done = progress(done, len(futures))
