@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration", "MagSamples", "fit",
-    "uncalibrated_note",
+    "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MAX_SCALE_RATIO", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration",
+    "MagSamples", "fit", "uncalibrated_note",
 ]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
@@ -24,6 +24,10 @@ MAX_RESIDUAL = 0.05
 #: Below this spread of the down vector (largest angle from its mean, deg) the log is taken
 #: as level: o_z and s_z are not fitted (kept 0 and 1).
 MIN_TILT_SPREAD_DEG = 15.0
+#: Largest plausible ratio of two axes' scales (y or z against x, either way): a magnetometer's
+#: axes and the soft iron around it do not make them differ by more. A fit beyond it has taken
+#: something else for a scale (a vehicle's acceleration for tilt, :func:`fit`).
+MAX_SCALE_RATIO = 4.0 / 3.0
 #: Samples :class:`MagSamples` keeps at most.
 CAPACITY = 8192
 #: A magnetometer whose fit from the log moves its heading by more than this (RMS over the kept
@@ -101,11 +105,42 @@ def _coverage_deg(mag_cal: np.ndarray, down: np.ndarray) -> float:
     return 10.0 * sectors.size
 
 
-def fit(mag, down) -> MagCalibration:
-    """Fit ``m_cal = s ⊙ (m - o)``, ``|m_cal| = F``, ``m_cal · d = V`` to the raw fields ``mag``
-    (n, 3; any unit) and down unit vectors ``down`` (n, 3; body FRD) of the same rows."""
+def _solve(mag, down, start, free, F0) -> tuple[np.ndarray, bool]:
+    """Least squares of :func:`fit`'s residuals over the parameters ``free`` (of o, s_y, s_z, F,
+    V), the others at ``start``: the seven parameters and whether the solver converged."""
     from scipy.optimize import least_squares  # here: scipy costs 0.4 s at start-up
 
+    def full(q):
+        p = start.copy()
+        p[free] = q
+        return p
+
+    def residuals(q):
+        p = full(q)
+        mc = (mag - p[0:3]) * np.array([1.0, p[3], p[4]])
+        return np.concatenate([np.linalg.norm(mc, axis=1) - p[5], np.sum(mc * down, axis=1) - p[6]]) / F0
+
+    sol = least_squares(residuals, start[free], method="lm")
+    return full(sol.x), bool(sol.success)
+
+
+def _converged(x, success: bool) -> bool:
+    return success and bool(np.all(np.isfinite(x)))
+
+
+def _plausible_scales(x) -> bool:
+    """The y and z scales within :data:`MAX_SCALE_RATIO` of x's, either way."""
+    return bool(np.all((x[3:5] >= 1.0 / MAX_SCALE_RATIO) & (x[3:5] <= MAX_SCALE_RATIO)))
+
+
+def fit(mag, down) -> MagCalibration:
+    """Fit ``m_cal = s ⊙ (m - o)``, ``|m_cal| = F``, ``m_cal · d = V`` to the raw fields ``mag``
+    (n, 3; any unit) and down unit vectors ``down`` (n, 3; body FRD) of the same rows.
+
+    o_z and s_z are fitted when the down vector turns by :data:`MIN_TILT_SPREAD_DEG` or more. Where
+    that fit does not converge or gives a scale beyond :data:`MAX_SCALE_RATIO`, it is solved again
+    with s_z at 1: on a car the accelerometer's down vector turns by tens of degrees with braking
+    and cornering while the car stays level, and s_z is what takes that tilt."""
     mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)
     if mag.shape[0] < 100:
         return MagCalibration(False, why=f"{mag.shape[0]} magnetometer samples, fewer than 100")
@@ -119,20 +154,11 @@ def fit(mag, down) -> MagCalibration:
     if spread < MIN_TILT_SPREAD_DEG:  # o_z and s_z undetermined: kept at 0 and 1
         free[[2, 4]] = False
     start = np.array([*o0, 1.0, 1.0, F0, V0])
-
-    def full(q):
-        p = start.copy()
-        p[free] = q
-        return p
-
-    def residuals(q):
-        p = full(q)
-        mc = (mag - p[0:3]) * np.array([1.0, p[3], p[4]])
-        return np.concatenate([np.linalg.norm(mc, axis=1) - p[5], np.sum(mc * down, axis=1) - p[6]]) / F0
-
-    sol = least_squares(residuals, start[free], method="lm")
-    sol.x = full(sol.x)
-    o, s, F = sol.x[0:3], np.array([1.0, sol.x[3], sol.x[4]]), sol.x[5]
+    x, success = _solve(mag, down, start, free, F0)
+    if free[4] and not (_converged(x, success) and _plausible_scales(x)):
+        free[4] = False
+        x, success = _solve(mag, down, start, free, F0)
+    o, s, F = x[0:3], np.array([1.0, x[3], x[4]]), x[5]
     mc = (mag - o) * s
     resid = float(np.sqrt(np.mean((np.linalg.norm(mc, axis=1) - F) ** 2)) / abs(F))
     cover = _coverage_deg(mc, down)
@@ -141,8 +167,12 @@ def fit(mag, down) -> MagCalibration:
     if cover <= MIN_COVERAGE_DEG:
         return MagCalibration(False, **result, why=f"the log turns through {cover:.0f} deg of heading, "
                                                      f"not more than {MIN_COVERAGE_DEG:.0f}")
-    if not sol.success or not np.all(np.isfinite(sol.x)) or np.any(s <= 0.2) or np.any(s >= 5.0):
+    if not _converged(x, success):
         return MagCalibration(False, **result, why="the fit did not converge")
+    if not _plausible_scales(x):
+        scales = ", ".join(f"{v:.3g}" for v in s)
+        return MagCalibration(False, **result, why=f"the fit's axis scales ({scales}) differ by more than a factor "
+                                                     f"{MAX_SCALE_RATIO:.3g}, more than a magnetometer's do")
     if resid > MAX_RESIDUAL:
         return MagCalibration(False, **result, why=f"the fit leaves {100 * resid:.1f} % of the field, more than "
                                                      f"{100 * MAX_RESIDUAL:.0f} %")
