@@ -269,28 +269,39 @@ def _level_raw_log(offset_ut) -> pd.DataFrame:
     return log.drop(columns=["heading"])
 
 
-def test_a_magnetometer_that_needs_calibrating_is_said_to_by_every_entry_point(tmp_path):
+def test_a_magnetometer_that_needs_calibrating_is_calibrated_or_said_to_by_every_entry_point(tmp_path):
     """A hard-iron offset of about a fifth of the field (whose strength then scatters with the
-    heading): batch, chunked file and stream give the same note naming ``mag_calibration``;
-    the calibrated field and a log compensated with the calibration give none."""
+    heading). By default (``mag_calibration = "auto"``) the batch and the chunked file calibrate it
+    from the log and say why, with the same note and the same numbers; a stream, which cannot,
+    says it looks uncalibrated and how to calibrate it; with the setting off the batch says so and
+    names the setting. A calibrated field gets neither, and ``true`` calibrates it without the why."""
     from gyrodrift.pipeline import compensate_file
 
     clean = gyrodrift.compensate(_level_raw_log((0.0, 0.0, 0.0)))
-    assert not any("looks uncalibrated" in n for n in clean.attrs["notes"])
+    assert not any("uncalibrated" in n or "calibrated from" in n for n in clean.attrs["notes"])
     log = _level_raw_log((8.0, -5.0, 0.0))
     cols = [c for c in log.columns if not c.startswith("true_bias_")]
     log[cols].to_csv(tmp_path / "in.csv", index=False)
     batch = gyrodrift.compensate(log)
-    said = [n for n in batch.attrs["notes"] if "looks uncalibrated" in n]
-    assert len(said) == 1 and "mag_calibration = true" in said[0]
+    said = [n for n in batch.attrs["notes"] if "calibrated from the log" in n]
+    assert len(said) == 1 and "it looked uncalibrated: its field strength scatters by" in said[0], batch.attrs["notes"]
+    truth = log["ref_heading"].to_numpy()
+    error = np.sqrt(np.nanmean(wrap_180(batch["compass_heading"].to_numpy(float) - truth) ** 2))
+    assert error < 0.5
     parts = compensate_file(tmp_path / "in.csv", tmp_path / "parts.csv", CompensatorConfig(), chunked=True,
                             chunk_rows=500)
-    assert [n for n in parts.notes if "looks uncalibrated" in n] == [said[0].replace("log:", f"{tmp_path / 'in.csv'}:")]
+    assert [n for n in parts.notes if "calibrated from the log" in n] == [said[0].replace("log:", f"{tmp_path / 'in.csv'}:")]
+    assert pd.read_csv(tmp_path / "parts.csv")["heading"].to_numpy() == pytest.approx(batch["heading"].to_numpy())
     comp = gyrodrift.Compensator(source="log")
     for r in log.itertuples(index=False):
         comp.push(r.t, r.gyro_z, r.temp, mag=(r.mag_x, r.mag_y, r.mag_z), acc=(r.acc_x, r.acc_y, r.acc_z))
     comp.flush()
-    assert [n for n in comp.notes if "looks uncalibrated" in n] == said
-    calibrated = gyrodrift.compensate(log, CompensatorConfig(mag_calibration=True))
-    assert not any("looks uncalibrated" in n for n in calibrated.attrs["notes"])
-    assert any("magnetometer calibrated from the log" in n for n in calibrated.attrs["notes"])
+    (streamed,) = [n for n in comp.notes if "looks uncalibrated" in n]
+    assert "a stream cannot calibrate it" in streamed and "compensate the whole log" in streamed
+    off = gyrodrift.compensate(log, CompensatorConfig(mag_calibration=False))
+    (said_off,) = [n for n in off.attrs["notes"] if "looks uncalibrated" in n]
+    assert 'set mag_calibration = "auto"' in said_off and streamed.split("; ")[0] == said_off.split("; ")[0]
+    forced = gyrodrift.compensate(log, CompensatorConfig(mag_calibration=True))
+    (said_forced,) = [n for n in forced.attrs["notes"] if "calibrated from the log" in n]
+    assert "looked uncalibrated" not in said_forced and not any("looks uncalibrated" in n for n in forced.attrs["notes"])
+    assert forced["heading"].to_numpy() == pytest.approx(batch["heading"].to_numpy())

@@ -7,6 +7,7 @@ acceptance: ``docs/heading_and_axes.md`` (magnetometer calibration).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -14,7 +15,8 @@ import numpy as np
 
 __all__ = [
     "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MAX_SCALE_RATIO", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration",
-    "MagSamples", "fit", "uncalibrated_note",
+    "MagSamples", "Uncalibrated", "fit", "looks_uncalibrated", "uncalibrated_note", "auto_calibration", "ADVICE",
+    "LOOKS_CALIBRATED",
 ]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
@@ -31,14 +33,17 @@ MAX_SCALE_RATIO = 4.0 / 3.0
 #: Samples :class:`MagSamples` keeps at most.
 CAPACITY = 8192
 #: A magnetometer whose fit from the log moves its heading by more than this (RMS over the kept
-#: samples, deg) is said to need calibrating (:func:`uncalibrated_note`).
+#: samples, deg) is said to need calibrating (:func:`looks_uncalibrated`).
 UNCALIBRATED_DEG = 3.0
+#: ``why`` of the calibration ``"auto"`` does not apply: the magnetometer looks calibrated.
+LOOKS_CALIBRATED = "it looks calibrated"
 
 
 @dataclass(frozen=True)
 class MagCalibration:
     """The outcome of :func:`fit`: ``ok`` with ``offset`` (input unit), ``scale`` (x, y, z),
-    ``residual`` (relative RMS of eq. 2), ``coverage_deg``; or not ``ok`` and ``why``."""
+    ``residual`` (relative RMS of eq. 2), ``coverage_deg`` and, where it was applied because the
+    magnetometer looked uncalibrated, ``said`` (why); or not ``ok`` and ``why``."""
 
     ok: bool
     offset: tuple = (0.0, 0.0, 0.0)
@@ -46,6 +51,7 @@ class MagCalibration:
     residual: float = math.nan
     coverage_deg: float = 0.0
     why: str = ""
+    said: str = ""
 
     def apply(self, mag) -> np.ndarray:
         """Eq. (1) on (n, 3) raw samples (unchanged when not ``ok``)."""
@@ -59,8 +65,9 @@ class MagCalibration:
         if self.ok:
             o = ", ".join(f"{v:.3g}" for v in self.offset)
             s = ", ".join(f"{v:.4f}" for v in self.scale)
+            why = f"; {self.said}" if self.said else ""
             return (f"{source}: magnetometer calibrated from the log (hard iron ({o}), scales ({s}); fit residual "
-                    f"{100 * self.residual:.2f} % of the field, heading coverage {self.coverage_deg:.0f} deg)")
+                    f"{100 * self.residual:.2f} % of the field, heading coverage {self.coverage_deg:.0f} deg){why}")
         return f"{source}: magnetometer not calibrated: {self.why}"
 
 
@@ -179,18 +186,37 @@ def fit(mag, down) -> MagCalibration:
     return MagCalibration(True, **result)
 
 
-def uncalibrated_note(samples: MagSamples, source: str) -> str | None:
-    """A note for a log compensated without the calibration when its magnetometer looks
-    uncalibrated; None otherwise. It does when the raw field's strength scatters by more than
-    :data:`MAX_RESIDUAL` (relative RMS about its median: a calibrated field's is constant), the
-    fit from the log itself (:func:`fit`, when it holds) explains that scatter (leaves less than
-    a third of it), and the fit moves the tilt-compensated heading of the kept samples by more
-    than :data:`UNCALIBRATED_DEG` RMS. The compass then errs with the heading by that much, and
-    the default model can take that for drift or for a disturbance."""
+@dataclass(frozen=True)
+class Uncalibrated:
+    """The evidence that a magnetometer needs calibrating (:func:`looks_uncalibrated`): the raw
+    field strength's relative RMS scatter, the fit from the log that explains it, and how far
+    that fit moves the tilt-compensated heading (RMS and largest, deg)."""
+
+    scatter: float
+    cal: MagCalibration
+    moved_rms_deg: float
+    moved_max_deg: float
+
+    def said(self) -> str:
+        """The evidence in words."""
+        o = ", ".join(f"{v:.3g}" for v in self.cal.offset)
+        return (f"its field strength scatters by {100 * self.scatter:.1f} % (RMS), and a fit from this log (hard iron "
+                f"({o})) leaves {100 * self.cal.residual:.2f} % and moves its heading by {self.moved_rms_deg:.0f} deg "
+                f"RMS, up to {self.moved_max_deg:.0f} deg")
+
+
+def looks_uncalibrated(mag, down) -> Uncalibrated | None:
+    """Whether the raw fields ``mag`` (n, 3) with their down vectors ``down`` look uncalibrated:
+    their strength scatters by more than :data:`MAX_RESIDUAL` (relative RMS about its median: a
+    calibrated field's is constant), the fit from the log itself (:func:`fit`, when it holds)
+    explains that scatter (leaves less than a third of it), and the fit moves the
+    tilt-compensated heading by more than :data:`UNCALIBRATED_DEG` RMS. The compass then errs
+    with the heading by that much, and the default model can take that for drift or for a
+    disturbance. None when not (a field disturbed in places scatters too, but no fit explains it)."""
     from gyrodrift.compass import tilt_compensated_heading
     from gyrodrift.conventions import wrap_180
 
-    mag, down = samples.arrays()
+    mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)
     strength = np.linalg.norm(mag, axis=1)
     if strength.size == 0:
         return None
@@ -207,9 +233,35 @@ def uncalibrated_note(samples: MagSamples, source: str) -> str | None:
     rms = float(np.sqrt(np.mean(moved**2))) if moved.size else 0.0
     if not rms > UNCALIBRATED_DEG:
         return None
-    o = ", ".join(f"{v:.3g}" for v in cal.offset)
-    return (f"{source}: the magnetometer looks uncalibrated: its field strength scatters by {100 * scatter:.1f} % "
-            f"(RMS), and a fit from this log (hard iron ({o})) leaves {100 * cal.residual:.2f} % and moves its heading "
-            f"by {rms:.0f} deg RMS, up to "
-            f"{moved.max():.0f} deg, an error the drift estimate can absorb; set mag_calibration = true "
-            "(--config) to calibrate it from the log, or calibrate the magnetometer")
+    return Uncalibrated(scatter, cal, rms, float(moved.max()))
+
+
+#: What a note of a magnetometer that looks uncalibrated advises, by ``mag_calibration``: off
+#: (False), or ``"auto"`` in a stream, which cannot calibrate.
+ADVICE = {
+    False: "set mag_calibration = \"auto\" (the default) or true (--config) to calibrate it from the log, or "
+           "calibrate the magnetometer",
+    "auto": "a stream cannot calibrate it (the fit needs the whole log): compensate the whole log, which does "
+            "(mag_calibration = \"auto\"), or calibrate the magnetometer",
+}
+
+
+def uncalibrated_note(samples: MagSamples, source: str, mode=False) -> str | None:
+    """A note for a log compensated without the calibration when its magnetometer looks
+    uncalibrated (:func:`looks_uncalibrated` on the kept ``samples``), with the advice for the
+    ``mag_calibration`` in force (``mode``: False or ``"auto"``, :data:`ADVICE`); None otherwise."""
+    found = looks_uncalibrated(*samples.arrays())
+    if found is None:
+        return None
+    return (f"{source}: the magnetometer looks uncalibrated: {found.said()}, an error the drift estimate can absorb; "
+            f"{ADVICE[mode]}")
+
+
+def auto_calibration(samples: MagSamples) -> MagCalibration:
+    """The calibration ``mag_calibration = "auto"`` applies: the fit from the log when the
+    magnetometer looks uncalibrated (:func:`looks_uncalibrated`), its note saying why; else
+    none (not ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note)."""
+    found = looks_uncalibrated(*samples.arrays())
+    if found is None:
+        return MagCalibration(False, why=LOOKS_CALIBRATED)
+    return dataclasses.replace(found.cal, said=f"it looked uncalibrated: {found.said()}")

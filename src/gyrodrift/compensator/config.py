@@ -48,8 +48,11 @@ class CompensatorConfig:
         Magnetic declination, deg east, added to every compass heading (0: magnetic north).
     tilt : str
         The tilt of a raw compass: ``"accel"`` (default) or ``"gyro"`` (:mod:`gyrodrift.attitude`).
-    mag_calibration : bool
-        Calibrate a raw magnetometer over the whole log first (:mod:`gyrodrift.magcal`; not causal).
+    mag_calibration : bool or "auto"
+        Calibrate a raw magnetometer over the whole log first (:mod:`gyrodrift.magcal`; not
+        causal): ``"auto"`` (default) where it looks uncalibrated
+        (:func:`gyrodrift.magcal.looks_uncalibrated`), True wherever the fit holds, False never. A
+        stream, which does not see the whole log, does not calibrate.
     temperature : str
         What ``T`` of the drift model is: ``"auto"`` (default), ``"measured"`` or ``"clock"``.
     """
@@ -72,7 +75,7 @@ class CompensatorConfig:
                                      "that compass_heading, heading and heading_fused are in true north like "
                                      "ref_heading (0: magnetic north)")
     tilt: str = setting("accel", choices=("gyro", "accel"))
-    mag_calibration: bool = False
+    mag_calibration: bool | str = setting("auto", choices=("auto",))
     temperature: str = setting("auto", choices=TEMPERATURE_MODES, flag="--temperature",
                                help="what T of the drift model is: auto, the temperature column, or the "
                                "elapsed time when that never changes over the log; measured: always the column; "

@@ -79,10 +79,15 @@ class MagFit:
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
 
     def fit(self):
-        """The :class:`gyrodrift.magcal.MagCalibration`, or None when no row was added."""
+        """The :class:`gyrodrift.magcal.MagCalibration` to apply (with ``mag_calibration =
+        "auto"``, one only where the magnetometer looks uncalibrated), or None when no row was added."""
         from gyrodrift import magcal
 
-        return None if self.tilt is None else magcal.fit(*self.samples.arrays())
+        if self.tilt is None:
+            return None
+        if self.config.mag_calibration == "auto":
+            return magcal.auto_calibration(self.samples)
+        return magcal.fit(*self.samples.arrays())
 
 
 def _gravity(tilt: RawTilt | None, config, source: str, t, g, acc, gyro_xy) -> tuple[RawTilt, np.ndarray | None]:
@@ -155,7 +160,8 @@ class Intake:
         self._raw_seen = False  # a raw compass sample came: the tilt note (and the stream's calibration note)
         self._dead = DeadField()
         # a raw compass's samples, for the note of a magnetometer that needs calibrating
-        self._survey = None if config.mag_calibration else MagSamples()
+        # (none where the whole log's fit decided: mag_calibration true, or "auto" in a batch run)
+        self._survey = None if config.mag_calibration is True or self._cal is not None else MagSamples()
         self._survey_rows: list[tuple] = []  # rows taken one by one, not yet in the survey
         self._survey_note: tuple[int, str | None] | None = None  # (samples seen, note) once judged
         self._heading_seen = False  # a heading with a value: a compass even when the magnetometer is dead
@@ -192,10 +198,13 @@ class Intake:
         raw = []
         if self._raw_seen:
             raw.append(self._tilt.note())
-            if self.config.mag_calibration:  # no calibration without the whole log: a stream has none
+            mode = self.config.mag_calibration
+            if mode is True:  # no calibration without the whole log: a stream has none
                 raw.append(self._cal.note(self.source) if self._cal is not None else f"{self.source}: magnetometer "
                            "not calibrated: a stream does not see the whole log the fit needs (mag_calibration)")
-            else:
+            elif self._cal is not None:  # "auto" over the whole log: a note where it calibrated
+                raw.append(self._cal.note(self.source) if self._cal.ok else None)
+            else:  # off, or "auto" in a stream
                 raw.append(self._uncalibrated())
         self._check_unit_rows()
         return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen)]), *filter(None, raw),
@@ -337,7 +346,8 @@ class Intake:
         judged again only when more samples came."""
         self._survey_flush()
         if self._survey_note is None or self._survey_note[0] != self._survey.seen:
-            self._survey_note = (self._survey.seen, uncalibrated_note(self._survey, self.source))
+            mode = "auto" if self.config.mag_calibration == "auto" else False
+            self._survey_note = (self._survey.seen, uncalibrated_note(self._survey, self.source, mode))
         return self._survey_note[1]
 
     def _row_compass(self, t, g, heading, mag, acc, gx, gy) -> tuple[float, float, float]:
