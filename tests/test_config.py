@@ -66,11 +66,17 @@ def test_toml_adaptive_table_is_checked_against_the_model_settings(tmp_path, tex
         ({"gate": {"turn_rate_dps": -1}}, r"\[gate\].*turn_rate_dps"),
         ({"temp_rate": {"bin_s": 0}}, r"\[temp_rate\].*bin_s"),
         ({"kalman": 3}, "must be a table"),
+        ({"mag_calibration": "yes"}, r'mag_calibration = "yes" must be one of true, false, "auto"'),
     ],
 )
 def test_bad_settings_name_the_setting(values, match):
     with pytest.raises(ConfigError, match=match):
         config_from_dict(values)
+
+
+@pytest.mark.parametrize("value", [True, False, "auto"])
+def test_mag_calibration_takes_true_false_or_auto(value):
+    assert config_from_dict({"mag_calibration": value}).mag_calibration == value
 
 
 def test_bad_toml_file_names_the_file(tmp_path, capsys):

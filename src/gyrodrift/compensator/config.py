@@ -75,7 +75,7 @@ class CompensatorConfig:
                                      "that compass_heading, heading and heading_fused are in true north like "
                                      "ref_heading (0: magnetic north)")
     tilt: str = setting("accel", choices=("gyro", "accel"))
-    mag_calibration: bool | str = setting("auto", choices=("auto",))
+    mag_calibration: bool | str = setting("auto", choices=(True, False, "auto"))
     temperature: str = setting("auto", choices=TEMPERATURE_MODES, flag="--temperature",
                                help="what T of the drift model is: auto, the temperature column, or the "
                                "elapsed time when that never changes over the log; measured: always the column; "
