@@ -284,7 +284,7 @@ def test_a_magnetometer_that_needs_calibrating_is_calibrated_or_said_to_by_every
     log[cols].to_csv(tmp_path / "in.csv", index=False)
     batch = gyrodrift.compensate(log)
     said = [n for n in batch.attrs["notes"] if "calibrated from the log" in n]
-    assert len(said) == 1 and "it looked uncalibrated: its field strength scatters by" in said[0], batch.attrs["notes"]
+    assert len(said) == 1 and "it looked uncalibrated: its field strength scattered by" in said[0], batch.attrs["notes"]
     truth = log["ref_heading"].to_numpy()
     error = np.sqrt(np.nanmean(wrap_180(batch["compass_heading"].to_numpy(float) - truth) ** 2))
     assert error < 0.5

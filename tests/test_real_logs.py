@@ -61,7 +61,7 @@ def test_two_turns_in_24_s_with_the_default_settings(shared_data):
     assert _two_turns(shared_data, "adaptive") == pytest.approx(-720.0, abs=15.0)
     raw = compensate(read_log(shared_data / "mpu6050_rotate_z" / "contract.csv"))
     said = [n for n in raw.attrs["notes"] if "calibrated from the log" in n]
-    assert len(said) == 1 and "it looked uncalibrated: its field strength scatters by 9." in said[0], raw.attrs["notes"]
+    assert len(said) == 1 and "it looked uncalibrated: its field strength scattered by 9." in said[0], raw.attrs["notes"]
 
 
 def test_without_the_calibration_its_magnetometer_is_said_to_be_uncalibrated(shared_data):

@@ -264,4 +264,6 @@ def auto_calibration(samples: MagSamples) -> MagCalibration:
     found = looks_uncalibrated(*samples.arrays())
     if found is None:
         return MagCalibration(False, why=LOOKS_CALIBRATED)
-    return dataclasses.replace(found.cal, said=f"it looked uncalibrated: {found.said()}")
+    return dataclasses.replace(found.cal, said=(
+        f"it looked uncalibrated: its field strength scattered by {100 * found.scatter:.1f} % (RMS), and the fit "
+        f"moves its heading by {found.moved_rms_deg:.0f} deg RMS, up to {found.moved_max_deg:.0f} deg"))
