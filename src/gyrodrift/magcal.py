@@ -1,8 +1,9 @@
 """Hard- and soft-iron calibration of a raw magnetometer from the log itself, when it turns enough.
 
 ``m_cal = s ⊙ (m - o)`` fitted so that ``|m_cal|`` and its vertical part are constant; used only
-when the headings cover enough and the fit is good. Not causal. The model and the
-acceptance: ``docs/heading_and_axes.md`` (magnetometer calibration).
+when the headings cover enough and the fit is good, and by default (``mag_calibration =
+"auto"``) only where the magnetometer looks uncalibrated (:func:`looks_uncalibrated`). Not
+causal. The model and the acceptance: ``docs/heading_and_axes.md`` (magnetometer calibration).
 """
 
 from __future__ import annotations
