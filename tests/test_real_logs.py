@@ -75,6 +75,20 @@ def test_without_the_calibration_its_magnetometer_is_said_to_be_uncalibrated(sha
     assert not any("uncalibrated" in n for n in column.attrs["notes"])
 
 
+@pytest.mark.parametrize("name, reader", [("actigraph_gt9x_cooling/contract.csv", None),
+                                          ("px4/sample_px4_events.ulg", "pyulog")])
+def test_a_magnetometer_that_does_not_look_uncalibrated_is_left_as_it_is(shared_data, name, reader):
+    """Real raw magnetometers that do not look uncalibrated (a still board; a flight that turns
+    too little for the fit): the default calibration (``"auto"``) changes nothing and says nothing."""
+    if reader:
+        pytest.importorskip(reader)
+    log = read_log(shared_data / name)
+    default = compensate(log)
+    off = compensate(log, CompensatorConfig(mag_calibration=False))
+    assert not any("calibrated" in n for n in default.attrs["notes"]), default.attrs["notes"]
+    np.testing.assert_array_equal(default["heading"].to_numpy(float), off["heading"].to_numpy(float))
+
+
 def test_two_turns_in_24_s_from_the_heading_column(shared_data):
     """The same log with its compass as a heading column, which follows the gyro through the
     turns within 6.6 deg RMS (the raw magnetometer's heading: 36 deg). The log is bursty (102
