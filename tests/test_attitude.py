@@ -192,6 +192,18 @@ def test_hard_iron_offset_and_scales_are_recovered_from_a_turning_log_in_any_chu
     assert np.sqrt(np.mean(wrap_180(h_cal - h_true) ** 2)) < 1.0
 
 
+def test_no_calibration_with_axis_scales_no_magnetometer_has():
+    """A y axis twice as sensitive as x: a fit that needs such a scale has taken something else
+    for it, and is refused, saying so."""
+    from gyrodrift.magcal import MAX_SCALE_RATIO, fit
+
+    mag, down, _ = _hand_turned(scale=(1.0, 1.0 / (1.5 * MAX_SCALE_RATIO), 1.0))
+    cal = fit(mag, down)
+    assert not cal.ok and "differ by more than a factor 1.33" in cal.why, cal
+    assert cal.scale[1] == pytest.approx(1.0 / (1.5 * MAX_SCALE_RATIO), rel=0.01)
+    np.testing.assert_array_equal(cal.apply(mag), mag)
+
+
 def test_no_calibration_when_the_log_turns_too_little():
     from gyrodrift.magcal import fit
 
