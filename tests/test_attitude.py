@@ -220,7 +220,7 @@ def test_a_car_s_acceleration_is_not_taken_for_a_z_scale(cls, raw_deg, fitted_de
     magnetometer's (0.28 on the first; on the second the fit does not converge); kept at 1, the
     fit holds and the tilt-compensated compass errs less than the raw one (RMS against the
     truth, deg)."""
-    from gyrodrift.magcal import MAX_SCALE_RATIO, MagSamples, _converged, _solve, fit
+    from gyrodrift.magcal import MAX_SCALE_RATIO, MagSamples, _converged, _solve, _start, fit
     from gyrodrift.simulate.generator import generate
 
     log = generate(cls, 0).log
@@ -241,11 +241,7 @@ def test_a_car_s_acceleration_is_not_taken_for_a_z_scale(cls, raw_deg, fitted_de
     assert error_deg(mag) == pytest.approx(raw_deg, abs=0.1)
     assert error_deg(cal.apply(mag)) < fitted_deg
     kept, kept_down = samples.arrays()
-    o0 = 0.5 * (kept.max(axis=0) + kept.min(axis=0))
-    o0[2] = 0.0
-    F0 = float(np.median(np.linalg.norm(kept - o0, axis=1)))  # fit()'s start
-    V0 = float(np.median(np.sum((kept - o0) * kept_down, axis=1)))
-    x, ok = _solve(kept, kept_down, np.array([*o0, 1.0, 1.0, F0, V0]), np.ones(7, dtype=bool), F0)
+    x, ok = _solve(kept, kept_down, _start(kept, kept_down), np.ones(7, dtype=bool))
     assert not (_converged(x, ok) and 1.0 / MAX_SCALE_RATIO <= x[4] <= MAX_SCALE_RATIO), x
 
 

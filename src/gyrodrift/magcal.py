@@ -113,10 +113,23 @@ def _coverage_deg(mag_cal: np.ndarray, down: np.ndarray) -> float:
     return 10.0 * sectors.size
 
 
-def _solve(mag, down, start, free, F0) -> tuple[np.ndarray, bool]:
-    """Least squares of :func:`fit`'s residuals over the parameters ``free`` (of o, s_y, s_z, F,
-    V), the others at ``start``: the seven parameters and whether the solver converged."""
+def _start(mag, down) -> np.ndarray:
+    """:func:`fit`'s starting point [o, s_y, s_z, F, V]: the midpoint of the field's range with
+    o_z 0, unit scales, and the median strength and vertical part about that offset."""
+    o0 = 0.5 * (mag.max(axis=0) + mag.min(axis=0))
+    o0[2] = 0.0
+    F0 = float(np.median(np.linalg.norm(mag - o0, axis=1)))
+    V0 = float(np.median(np.sum((mag - o0) * down, axis=1)))
+    return np.array([*o0, 1.0, 1.0, F0, V0])
+
+
+def _solve(mag, down, start, free) -> tuple[np.ndarray, bool]:
+    """Least squares of :func:`fit`'s residuals (relative to the starting strength) over the
+    parameters ``free`` (of o, s_y, s_z, F, V), the others at ``start``: the seven parameters
+    and whether the solver converged."""
     from scipy.optimize import least_squares  # here: scipy costs 0.4 s at start-up
+
+    F0 = start[5]
 
     def full(q):
         p = start.copy()
@@ -133,6 +146,7 @@ def _solve(mag, down, start, free, F0) -> tuple[np.ndarray, bool]:
 
 
 def _converged(x, success: bool) -> bool:
+    """The solver converged to finite parameters."""
     return success and bool(np.all(np.isfinite(x)))
 
 
@@ -152,20 +166,16 @@ def fit(mag, down) -> MagCalibration:
     mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)
     if mag.shape[0] < 100:
         return MagCalibration(False, why=f"{mag.shape[0]} magnetometer samples, fewer than 100")
-    o0 = 0.5 * (mag.max(axis=0) + mag.min(axis=0))
-    o0[2] = 0.0
-    F0 = float(np.median(np.linalg.norm(mag - o0, axis=1)))
-    V0 = float(np.median(np.sum((mag - o0) * down, axis=1)))
     mean_down = down.mean(axis=0) / np.linalg.norm(down.mean(axis=0))
     spread = float(np.degrees(np.arccos(np.clip(down @ mean_down, -1.0, 1.0))).max())
     free = np.ones(7, dtype=bool)
     if spread < MIN_TILT_SPREAD_DEG:  # o_z and s_z undetermined: kept at 0 and 1
         free[[2, 4]] = False
-    start = np.array([*o0, 1.0, 1.0, F0, V0])
-    x, success = _solve(mag, down, start, free, F0)
+    start = _start(mag, down)
+    x, success = _solve(mag, down, start, free)
     if free[4] and not (_converged(x, success) and _plausible_scales(x)):
         free[4] = False
-        x, success = _solve(mag, down, start, free, F0)
+        x, success = _solve(mag, down, start, free)
     o, s, F = x[0:3], np.array([1.0, x[3], x[4]]), x[5]
     mc = (mag - o) * s
     resid = float(np.sqrt(np.mean((np.linalg.norm(mc, axis=1) - F) ** 2)) / abs(F))
