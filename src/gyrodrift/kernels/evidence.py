@@ -26,8 +26,17 @@ __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_headi
 
 #: Modes (rows of the filter bank) and states.
 NM, NX = 6, 8
+#: Branches of an epoch: two starting points of each mode (:func:`_branches`).
+NB = 2 * NM
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
 N_RATE = 4
+#: Floats of an epoch's scratch (one array, carved by :func:`_take` in :func:`epoch`): the mode
+#: changes; the branches (states, covariances, weights, likelihoods, excesses, jumps); the three
+#: measurement rows; a branch's alternative (state, covariance); the modes' likelihoods, a
+#: mixture's weights and the moving modes' state; four vectors of the helpers; seven of the
+#: rate predictors.
+N_WORK = (NM * NM + NB * NX * (1 + NX) + 4 * NB + 3 * NX + NX * (1 + NX) + 2 * NM + 5 * NX
+          + 7 * (N_RATE + 1))
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
@@ -160,6 +169,15 @@ def _loggauss(nu, S):
     return -0.5 * (_LOG_2PI + math.log(S) + nu * nu / S)
 
 
+@jit(inline=True)
+def _dot(a, b):
+    """``a · b`` of two short vectors, summed in index order (no BLAS call)."""
+    acc = 0.0
+    for k in range(a.size):
+        acc += a[k] * b[k]
+    return acc
+
+
 @jit
 def init_state(mf, mc, x0, P0, t_ref):
     """Start the bank: every mode at the prior ``x0`` (NX,), ``P0`` (NX, NX) (drift states centred
@@ -208,11 +226,11 @@ def seed_heading(mf, delta):
 
 
 @jit(inline=True)
-def _moments(X, P, w, ref_delta, ref_e, clean, step_var, x, Pm):
+def _moments(X, P, w, ref_delta, ref_e, clean, step_var, x, Pm, dx):
     """Add the moments of the bank ``X``, ``P`` with weights ``w`` to ``x``, ``Pm`` (zeros): δ
     and e averaged as angles about ``ref_delta`` and ``ref_e``; ``clean``: for a clean mode,
     without a disturbance e, and ``step_var`` added to e's variance for each clean mode mixed
-    into a disturbed one."""
+    into a disturbed one. ``dx``: scratch (NX)."""
     for i in range(NM):
         for k in range(NX):
             v = X[i, k]
@@ -222,7 +240,6 @@ def _moments(X, P, w, ref_delta, ref_e, clean, step_var, x, Pm):
             elif k == X_E:
                 v = 0.0 if clean else ref_e + wrap180(v - ref_e)  # a clean compass has no disturbance
             x[k] += w[i] * v
-    dx = np.empty(NX)
     for i in range(NM):
         if w[i] == 0.0:
             continue
@@ -268,16 +285,22 @@ def _set_labels(mf):
 @jit
 def combine(mf):
     """The moment-matched mixture of the bank into MF_XC, MF_PC (δ and e averaged as angles)."""
+    _combine(mf, np.empty(NX))
+
+
+@jit(inline=True)
+def _combine(mf, dx):
+    """:func:`combine` with its scratch ``dx`` (NX)."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    xc = np.zeros(NX)
-    Pc = np.zeros((NX, NX))
+    xc = mf[MF_XC:MF_XC + NX]
+    Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
+    xc[:] = 0.0
+    Pc[:, :] = 0.0
     # angles about the likeliest mode's δ and the likeliest disturbed mode's e (a refuted mode's
     # δ may be half a turn away, and the likely modes must not fall on both sides of its wrap)
     mu = mf[MF_MU:MF_MU + NM]
-    _moments(X, P, mu, X[np.argmax(mu), X_DELTA], _likeliest_e(X, mu, 0.0), False, 0.0, xc, Pc)
-    mf[MF_XC:MF_XC + NX] = xc
-    mf[MF_PC:MF_PC + NX * NX] = Pc.ravel()
+    _moments(X, P, mu, X[np.argmax(mu), X_DELTA], _likeliest_e(X, mu, 0.0), False, 0.0, xc, Pc, dx)
 
 
 @jit(inline=True)
@@ -301,11 +324,11 @@ def _quad(P, H):
 
 
 @jit
-def _update(x, P, H, z, R, wrap, only=-1):
+def _update(x, P, H, z, R, wrap, only, PH):
     """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
     (``wrap``: the innovation is an angle, wrapped to ±180). ``only`` >= 0: the measurement
-    corrects that state alone (the others are considered, not corrected: a Schmidt update)."""
-    PH = np.empty(NX)
+    corrects that state alone (the others are considered, not corrected: a Schmidt update).
+    ``PH``: scratch (NX)."""
     S = R
     nu = z
     for r in range(NX):
@@ -371,17 +394,16 @@ def _transition(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
 
 
 @jit
-def _branches(mf, Pi, step_var, XB, PB, wb):
+def _branches(mf, Pi, step_var, XB, PB, wb, w, dx):
     """The two starting points of each mode ``j`` over an epoch: row ``j`` of the banks ``XB``,
     ``PB`` the switched-in branch (the IMM mixture of the other modes, weighted by the chances
     of having come from each) and row ``NM + j`` the mode's own state carried on; ``wb`` their
     prior probabilities. Each is updated by the epoch's data before the two are merged, so a
     mode of small weight keeps its own history where the data prefer it (docs/model.md,
-    "Hypotheses")."""
+    "Hypotheses"). ``w`` (NM), ``dx`` (NX): scratch."""
     X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
     mu = mf[MF_MU:MF_MU + NM]
-    w = np.empty(NM)
     for j in range(NM):
         c = 0.0
         for i in range(NM):
@@ -398,23 +420,21 @@ def _branches(mf, Pi, step_var, XB, PB, wb):
             PB[j, :, :] = 0.0
             # angles about the likeliest source's (mode j's own may be half a turn away)
             _moments(X, P, w, X[np.argmax(w), X_DELTA], _likeliest_e(X, w, X[j, X_E]), _is_clean(j), step_var,
-                     XB[j], PB[j])
+                     XB[j], PB[j], dx)
         else:
             XB[j, :] = X[j]
             PB[j, :, :] = P[j]
 
 
 @jit
-def _merge(xa, Pa, qa, xb, Pb, qb, x, P):
+def _merge(xa, Pa, qa, xb, Pb, qb, x, P, da, db):
     """The moments of two branches of one mode (weights ``qa + qb = 1``) into ``x``, ``P``: δ
-    and e averaged as angles about branch b's."""
+    and e averaged as angles about branch b's. ``da``, ``db``: scratch (NX)."""
     for k in range(NX):
         va = xa[k]
         if k == X_DELTA or k == X_E:
             va = xb[k] + wrap180(xa[k] - xb[k])
         x[k] = qa * va + qb * xb[k]
-    da = np.empty(NX)
-    db = np.empty(NX)
     for k in range(NX):
         da[k] = xa[k] - x[k]
         db[k] = xb[k] - x[k]
@@ -428,29 +448,44 @@ def _merge(xa, Pa, qa, xb, Pb, qb, x, P):
 
 
 @jit(inline=True)
+def _normalise(v):
+    """``v`` divided by its sum (summed in index order), in place."""
+    tot = 0.0
+    for i in range(v.size):
+        tot += v[i]
+    for i in range(v.size):
+        v[i] /= tot
+
+
+@jit(inline=True)
+def _take(work, at, n):
+    """The ``n`` floats of ``work`` from ``at``, and the offset after them."""
+    return work[at:at + n], at + n
+
+
+@jit(inline=True)
 def _switch(dt, tau):
     return 1.0 - math.exp(-dt / tau) if tau > 0.0 else 0.0
 
 
 @jit
-def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll):
+def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll, PH, lk):
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
     when still; drift plus a true rate when moving, the rate from the random-walk predictors
     or any rate), its serial structure, the compass (with the disturbance e in a disturbed
     mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
     predicted variance (NaN: none, or the heading not known to a few degrees), and the compass
-    innovation and its variance (NaN: no compass)."""
+    innovation and its variance (NaN: no compass). ``PH`` (NX), ``lk`` (N_RATE + 1): scratch."""
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
-    turn = 0.0 if still else mc[MC_K_TURN] * (dG - np.dot(Hg, x)) / dt
+    turn = 0.0 if still else mc[MC_K_TURN] * (dG - _dot(Hg, x)) / dt
     if not gap:
         if still:
-            ll += _update(x, P, Hg, dG, arw, False)
+            ll += _update(x, P, Hg, dG, arw, False, -1, PH)
         else:
-            mean = np.dot(Hg, x)
+            mean = _dot(Hg, x)
             base = _quad(P, Hg) + arw
-            lk = np.empty(N_RATE + 1)
             rest = 1.0
             for k in range(N_RATE):
                 Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
@@ -458,7 +493,10 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
                 rest -= mc[MC_SHARE + k]
             lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
             m = np.max(lk)
-            ll += m + math.log(np.sum(np.exp(lk - m)))
+            tot = 0.0
+            for k in range(N_RATE + 1):
+                tot += math.exp(lk[k] - m)
+            ll += m + math.log(tot)
         ll += l_white if still else l_any
     excess = nu = S = math.nan
     if n_c > 0.0:
@@ -467,12 +505,12 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         only = -1 if _is_clean(j) or _is_steady(j) or P[X_DELTA, X_DELTA] > mc[MC_SIG_STEP] ** 2 else X_E
         H = Hs if still else Hm
         z = D - h_still if still else D
-        nu = wrap180(z - np.dot(H, x))
+        nu = wrap180(z - _dot(H, x))
         S = _quad(P, H) + Rc + turn * turn
         s_pred = S - mf[MF_RX]
         if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
             excess = nu * nu - s_pred
-        ll += _update(x, P, H, z, Rc + turn * turn, True, only)
+        ll += _update(x, P, H, z, Rc + turn * turn, True, only, PH)
         if _is_clean(j):
             ll += field_ll
     return ll, excess, nu, S
@@ -515,7 +553,37 @@ def epoch(mf, mc, t_end, temp_end):
     # Markov chain of mode changes over dt
     pcd, pdc = _switch(dt, mc[MC_TAU_CLEAN]), _switch(dt, mc[MC_TAU_DIST])
     psm, pms = _switch(dt, mc[MC_TAU_STILL]), _switch(dt, mc[MC_TAU_MOVE])
-    Pi = np.empty((NM, NM))
+    work = np.empty(N_WORK)
+    Pi, at = _take(work, 0, NM * NM)
+    Pi = Pi.reshape((NM, NM))
+    X, at = _take(work, at, NB * NX)
+    X = X.reshape((NB, NX))
+    P, at = _take(work, at, NB * NX * NX)
+    P = P.reshape((NB, NX, NX))
+    wb, at = _take(work, at, NB)
+    ll, at = _take(work, at, NB)
+    excess, at = _take(work, at, NB)
+    jumped, at = _take(work, at, NB)
+    Hg, at = _take(work, at, NX)
+    Hs, at = _take(work, at, NX)
+    Hm, at = _take(work, at, NX)
+    xb, at = _take(work, at, NX)
+    Pb, at = _take(work, at, NX * NX)
+    Pb = Pb.reshape((NX, NX))
+    lm, at = _take(work, at, NM)
+    wmix, at = _take(work, at, NM)
+    xm, at = _take(work, at, NX)
+    PH, at = _take(work, at, NX)
+    dx, at = _take(work, at, NX)
+    da, at = _take(work, at, NX)
+    db, at = _take(work, at, NX)
+    lk, at = _take(work, at, N_RATE + 1)
+    lw, at = _take(work, at, N_RATE + 1)
+    ws, at = _take(work, at, N_RATE + 1)
+    Ps, at = _take(work, at, N_RATE + 1)
+    pw, at = _take(work, at, N_RATE + 1)
+    wk, at = _take(work, at, N_RATE + 1)
+    tmp, at = _take(work, at, N_RATE + 1)
     for i in range(NM):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
@@ -528,11 +596,7 @@ def epoch(mf, mc, t_end, temp_end):
                 pc = (1.0 - pdc) * (1.0 - pdc if _is_steady(i) == _is_steady(j) else pdc)
             ps = (1.0 - psm if sj else psm) if si else (pms if sj else 1.0 - pms)
             Pi[i, j] = pc * ps
-    NB = 2 * NM
-    X = np.empty((NB, NX))
-    P = np.empty((NB, NX, NX))
-    wb = np.empty(NB)
-    _branches(mf, Pi, mc[MC_SIG_STEP] ** 2, X, P, wb)
+    _branches(mf, Pi, mc[MC_SIG_STEP] ** 2, X, P, wb, wmix, dx)
     # process noise of the drift, shared by every mode
     phi_r = math.exp(-dt / mc[MC_TAU_R])
     gain_r = mc[MC_TAU_R] * (1.0 - phi_r)  # the drift's change per unit of its rate over dt
@@ -547,7 +611,6 @@ def epoch(mf, mc, t_end, temp_end):
     moving_q = arw + (mf[MF_WQ2] * mf[MF_E_H3] + mf[MF_WANY] * mc[MC_SIG_ACC] ** 2 * mf[MF_E_H4]) / 12.0
     if gap:  # the heading of a moving platform across a gap: the gap's own uncertainty too
         moving_q = min(moving_q + (mc[MC_OMEGA_GAP] * dt) ** 2 + mc[MC_SIG_ACC] ** 2 * dt**4 / 12.0, GAP_VAR_MAX)
-    ll = np.zeros(NB)
     for r in range(NB):
         j = r % NM
         x = X[r]
@@ -586,7 +649,7 @@ def epoch(mf, mc, t_end, temp_end):
         if not _is_clean(j):
             Pj[X_E, X_E] += q_e
     # the epoch's data, shared by every mode: the gyro's integral and its serial structure
-    Hg = np.zeros(NX)  # the drift's integral over the epoch (c' and its rate at the epoch end)
+    Hg[:] = 0.0  # the drift's integral over the epoch (c' and its rate at the epoch end)
     Hg[X_A] = dTc
     Hg[X_A2] = dTc2
     Hg[X_B] = dTp
@@ -612,8 +675,8 @@ def epoch(mf, mc, t_end, temp_end):
     n_c = mf[MF_E_NC]
     D = Rc = h_still = 0.0
     field_ll = 0.0
-    Hs = np.zeros(NX)
-    Hm = np.zeros(NX)
+    Hs[:] = 0.0
+    Hm[:] = 0.0
     if n_c > 0.0:
         D = mf[MF_E_DREF] + mf[MF_E_SD] / n_c
         h_still = dG - mf[MF_E_SG] / n_c  # ∫gyro from the mean sample to the epoch end
@@ -634,8 +697,8 @@ def epoch(mf, mc, t_end, temp_end):
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
-    excess = np.zeros(NB)
-    jumped = np.zeros(NB)
+    excess[:] = 0.0
+    jumped[:] = 0.0
     for r in range(NB):
         j = r % NM
         if wb[r] == 0.0:
@@ -651,17 +714,18 @@ def epoch(mf, mc, t_end, temp_end):
             k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
         if k < 0:
             ll[r], excess[r], _, _ = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
-                                              h_still, Hs, Hm, field_ll)
+                                              h_still, Hs, Hm, field_ll, PH, lk)
             continue
-        xb, Pb = X[r].copy(), P[r].copy()
+        xb[:] = X[r]
+        Pb[:, :] = P[r]
         Pb[k, k] += var
         lla, exa, nu, S = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                   Hm, field_ll)
+                                   Hm, field_ll, PH, lk)
         if k == X_E:  # e is in the compass alone: the step changes its innovation's variance only
             llb = lla - _loggauss(nu, S) + _loggauss(nu, S + var)
         else:
             llb, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                      Hm, field_ll)
+                                      Hm, field_ll, PH, lk)
         la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
         top = max(la, lb)
         ll[r] = top + math.log(math.exp(la - top) + math.exp(lb - top))
@@ -671,7 +735,7 @@ def epoch(mf, mc, t_end, temp_end):
         if lb > la:
             if k == X_E:
                 _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
-                                        Hs, Hm, field_ll)
+                                        Hs, Hm, field_ll, PH, lk)
             X[r, :] = xb
             P[r, :, :] = Pb
             excess[r] = exb
@@ -680,7 +744,6 @@ def epoch(mf, mc, t_end, temp_end):
     # each mode: its two branches merged, weighted by prior and likelihood; mode probabilities
     Xm = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
     Pm = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
-    lm = np.empty(NM)
     top = -math.inf
     for j in range(NM):
         la = math.log(max(wb[j], 1e-300)) + ll[j]
@@ -689,7 +752,7 @@ def epoch(mf, mc, t_end, temp_end):
         qa, qb = math.exp(la - t2), math.exp(lb - t2)
         lm[j] = t2 + math.log(qa + qb)
         qa, qb = qa / (qa + qb), qb / (qa + qb)
-        _merge(X[j], P[j], qa, X[NM + j], P[NM + j], qb, Xm[j], Pm[j])
+        _merge(X[j], P[j], qa, X[NM + j], P[NM + j], qb, Xm[j], Pm[j], da, db)
         ea, eb = excess[j], excess[NM + j]
         excess[j] = ea if not math.isfinite(eb) else (eb if not math.isfinite(ea) else qa * ea + qb * eb)
         jumped[j] = qa * jumped[j] + qb * jumped[NM + j]
@@ -700,7 +763,7 @@ def epoch(mf, mc, t_end, temp_end):
         tot += lm[j]
     for j in range(NM):
         mf[MF_MU + j] = max(lm[j] / tot, MU_MIN)
-    combine(mf)
+    _combine(mf, dx)
     mu = mf[MF_MU:MF_MU + NM]
     p_clean = mu[CLEAN_STILL] + mu[CLEAN_MOVING]
     ex = (mu[CLEAN_STILL] * excess[CLEAN_STILL] + mu[CLEAN_MOVING] * excess[CLEAN_MOVING]) / p_clean
@@ -710,7 +773,7 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
     _set_labels(mf)
-    mf[MF_JUMP] = np.dot(mu, jumped[:NM])
+    mf[MF_JUMP] = _dot(mu, jumped[:NM])
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
     if math.isfinite(u) and mf[MF_PSTILL] > 0.0:
         # the colour learned from the epoch as far as it is still: variance var_u / P(still)
@@ -723,18 +786,17 @@ def epoch(mf, mc, t_end, temp_end):
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     if not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
-        xm = np.zeros(NX)
+        xm[:] = 0.0
         p_moving = 0.0
         for j in range(NM):
             if not _is_still(j):
-                xm += mu[j] * Xm[j]
+                for k in range(NX):
+                    xm[k] += mu[j] * Xm[j, k]
                 p_moving += mu[j]
-        xm /= p_moving
+        for k in range(NX):
+            xm[k] /= p_moving
         r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp, dTc2) * dt * dt) / (dt * dt)
-        lw = np.empty(N_RATE + 1)
-        ws = np.empty(N_RATE + 1)
-        Ps = np.empty(N_RATE + 1)
         rest = 1.0
         for k in range(N_RATE):
             w = mf[MF_W + 2 * k]
@@ -747,18 +809,21 @@ def epoch(mf, mc, t_end, temp_end):
         lw[N_RATE] = math.log(rest) + _loggauss(r, mc[MC_RATE_ANY] ** 2 + Rr)
         ws[N_RATE] = r
         Ps[N_RATE] = Rr
-        pw = np.exp(lw - np.max(lw))
-        pw /= np.sum(pw)
+        top = np.max(lw)
+        for i in range(N_RATE + 1):
+            pw[i] = math.exp(lw[i] - top)
+        _normalise(pw)
         _set_agility(mf, mc, pw)
         switch = _switch(dt, RATE_SWITCH_S)
-        wk = np.empty(N_RATE + 1)
         for k in range(N_RATE):
             for i in range(N_RATE + 1):
                 wk[i] = pw[i] * ((1.0 - switch) if i == k else switch / N_RATE)
-            wk /= np.sum(wk)
-            m = np.dot(wk, ws)
+            _normalise(wk)
+            m = _dot(wk, ws)
             mf[MF_W + 2 * k] = m
-            mf[MF_W + 2 * k + 1] = np.dot(wk, Ps + (ws - m) ** 2)
+            for i in range(N_RATE + 1):
+                tmp[i] = Ps[i] + (ws[i] - m) ** 2
+            mf[MF_W + 2 * k + 1] = _dot(wk, tmp)
     else:
         for k in range(N_RATE):
             mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt
