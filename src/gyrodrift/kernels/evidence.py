@@ -323,7 +323,7 @@ def _quad(P, H):
     return acc
 
 
-@jit
+@jit(inline=True)
 def _update(x, P, H, z, R, wrap, only, PH):
     """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
     (``wrap``: the innovation is an angle, wrapped to ±180). ``only`` >= 0: the measurement
@@ -426,7 +426,7 @@ def _branches(mf, Pi, step_var, XB, PB, wb, w, dx):
             PB[j, :, :] = P[j]
 
 
-@jit
+@jit(inline=True)
 def _merge(xa, Pa, qa, xb, Pb, qb, x, P, da, db):
     """The moments of two branches of one mode (weights ``qa + qb = 1``) into ``x``, ``P``: δ
     and e averaged as angles about branch b's. ``da``, ``db``: scratch (NX)."""
