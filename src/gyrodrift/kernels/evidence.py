@@ -361,8 +361,9 @@ def _update(x, P, H, z, R, wrap, only, PH):
         for r in range(NX):
             x[r] += PH[r] / S * nu
         for r in range(NX):
+            k = PH[r] / S
             for c in range(NX):
-                P[r, c] -= PH[r] / S * PH[c]
+                P[r, c] -= k * PH[c]
     for r in range(NX):  # symmetric, non-negative diagonal
         for c in range(r + 1, NX):
             m = 0.5 * (P[r, c] + P[c, r])
