@@ -66,7 +66,7 @@ def test_a_scalar_update_is_the_kalman_formula():
     P_hand = P - np.outer(K, H @ P)
     ll_hand = -0.5 * (np.log(2 * np.pi * S) + (z - H @ x) ** 2 / S)
     x_k, P_k = x.copy(), P.copy()
-    ll = ev._update(x_k, P_k, H, z, R, False)
+    ll = ev._update(x_k, P_k, H, z, R, False, -1, np.empty(ev.NX))
     assert x_k == pytest.approx(x_hand, rel=1e-12)
     assert P_k == pytest.approx(0.5 * (P_hand + P_hand.T), rel=1e-10, abs=1e-12)
     assert ll == pytest.approx(ll_hand, rel=1e-12)
@@ -80,7 +80,7 @@ def test_a_schmidt_update_corrects_one_state_and_keeps_the_others():
     H = np.zeros(ev.NX)
     H[ev.X_DELTA] = H[ev.X_E] = 1.0
     x_k, P_k = x.copy(), P.copy()
-    ev._update(x_k, P_k, H, 5.0, 0.1, False, ev.X_E)
+    ev._update(x_k, P_k, H, 5.0, 0.1, False, ev.X_E, np.empty(ev.NX))
     others = [k for k in range(ev.NX) if k != ev.X_E]
     assert x_k[others] == pytest.approx(x[others], abs=0.0)
     assert P_k[np.ix_(others, others)] == pytest.approx(P[np.ix_(others, others)], abs=1e-12)
@@ -110,7 +110,7 @@ def test_the_compass_errs_with_the_turn_rate_across_a_time_gap_too(gap):
         P = np.eye(ev.NX)
         H = Hs if j == ev.CLEAN_STILL else Hm
         _, _, nu, S = ev._measure(x.copy(), P.copy(), j, mf, mc, gap, dt, dG, 1e-4, Hg, 0.0, 0.0, 1.0, 3.0, Rc, 0.0,
-                                  Hs, Hm, 0.0)
+                                  Hs, Hm, 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1))
         assert S == pytest.approx(H @ P @ H + Rc + turn**2, rel=1e-12)
     assert mc[ev.MC_K_TURN] * 49.0 == pytest.approx(24.5)  # the turn term above is not zero
 
@@ -130,7 +130,7 @@ def test_without_mode_changes_each_mode_starts_from_its_own_state():
     mu = np.arange(1.0, ev.NM + 1.0) / np.sum(np.arange(1.0, ev.NM + 1.0))
     mf[ev.MF_MU:ev.MF_MU + ev.NM] = mu
     XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
-    ev._branches(mf, np.eye(ev.NM), mc[ev.MC_SIG_STEP] ** 2, XB, PB, wb)
+    ev._branches(mf, np.eye(ev.NM), mc[ev.MC_SIG_STEP] ** 2, XB, PB, wb, np.empty(ev.NM), np.empty(ev.NX))
     assert wb[:ev.NM] == pytest.approx(np.zeros(ev.NM))
     assert wb[ev.NM:] == pytest.approx(mu)
     assert XB[ev.NM:] == pytest.approx(X, abs=1e-12)
@@ -157,7 +157,7 @@ def _switched_in(mf):
     Pi = np.full((ev.NM, ev.NM), 0.1 / (ev.NM - 1))
     np.fill_diagonal(Pi, 0.9)
     XB, PB, wb = np.empty((2 * ev.NM, ev.NX)), np.empty((2 * ev.NM, ev.NX, ev.NX)), np.empty(2 * ev.NM)
-    ev._branches(mf, Pi, 0.0, XB, PB, wb)
+    ev._branches(mf, Pi, 0.0, XB, PB, wb, np.empty(ev.NM), np.empty(ev.NX))
     return XB, PB, wb
 
 
