@@ -144,6 +144,9 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     o_bias, o_rate, o_heading = O_BIAS * cap, O_RATE * cap, O_HEADING * cap
     stop = t.size
     recording = hist.shape[1] == N_HIST
+    # the step's log and its weight in the averaged rate, kept while the step repeats (to the bit)
+    h_known = math.nan
+    log_h = weight_h = 0.0
     for i in range(i0, t.size):
         if recording and rf[RF_HIST_N] + 2 > hist.shape[0]:
             stop = i
@@ -161,12 +164,15 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         gap = False
         reason_gap = False
         if not first:
+            if h != h_known:
+                h_known = h
+                log_h = math.log(h)
+                weight_h = 1.0 - math.exp(-h / tau_turn)
             lh = mf[MF_LOG_H]
             if math.isnan(lh):  # the first step: the typical spacing, the gyro noise per sample
-                mf[MF_LOG_H] = math.log(h)
+                mf[MF_LOG_H] = log_h
                 ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / h)
             else:
-                log_h = math.log(h)
                 gap = log_h > log_gap_factor + lh
                 mf[MF_LOG_H] = lh + 0.05 * min(max(log_h - lh, -0.5), 0.5)
             gap = gap or held[i]
@@ -207,7 +213,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             mf[MF_E_TC] += 0.5 * (Ti + c_T - 2.0 * tref) * h
             mf[ev.MF_E_TC2] += 0.5 * ((Ti - tref) ** 2 + (c_T - tref) ** 2) * h
             mf[MF_E_TP] += 0.5 * (Tpi + c_Tp) * h
-            rf[RF_MEAN_RATE] += max(1.0 - math.exp(-h / tau_turn), w_noise) * (rate - rf[RF_MEAN_RATE])
+            rf[RF_MEAN_RATE] += max(weight_h, w_noise) * (rate - rf[RF_MEAN_RATE])
         c_t, c_g, c_T, c_Tp, c_bias, c_rate = ti, gi, Ti, Tpi, bias, rate
         if not math.isnan(hi):  # a compass sample: D = compass - ∫gyro
             D = hi - I_raw
