@@ -31,12 +31,10 @@ NB = 2 * NM
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
 N_RATE = 4
 #: Floats of an epoch's scratch (one array, carved by :func:`_take` in :func:`epoch`): the mode
-#: changes; the branches (states, covariances, weights, likelihoods, excesses, jumps); the three
-#: measurement rows; a branch's alternative (state, covariance); the modes' likelihoods, a
-#: mixture's weights and the moving modes' state; four vectors of the helpers; seven of the
-#: rate predictors.
-N_WORK = (NM * NM + NB * NX * (1 + NX) + 4 * NB + 3 * NX + NX * (1 + NX) + 2 * NM + 5 * NX
-          + 7 * (N_RATE + 1))
+#: changes; the branches' states and covariances; an alternative's covariance; four numbers per
+#: branch, two per mode; nine vectors of states (the three measurement rows, an alternative's
+#: state, the moving modes' state, four for the helpers); seven of the rate predictors.
+N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 7 * (N_RATE + 1)
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
@@ -561,30 +559,20 @@ def epoch(mf, mc, t_end, temp_end):
     X = X.reshape((NB, NX))
     P, at = _take(work, at, NB * NX * NX)
     P = P.reshape((NB, NX, NX))
-    wb, at = _take(work, at, NB)
-    ll, at = _take(work, at, NB)
-    excess, at = _take(work, at, NB)
-    jumped, at = _take(work, at, NB)
-    Hg, at = _take(work, at, NX)
-    Hs, at = _take(work, at, NX)
-    Hm, at = _take(work, at, NX)
-    xb, at = _take(work, at, NX)
     Pb, at = _take(work, at, NX * NX)
     Pb = Pb.reshape((NX, NX))
-    lm, at = _take(work, at, NM)
-    wmix, at = _take(work, at, NM)
-    xm, at = _take(work, at, NX)
-    PH, at = _take(work, at, NX)
-    dx, at = _take(work, at, NX)
-    da, at = _take(work, at, NX)
-    db, at = _take(work, at, NX)
-    lk, at = _take(work, at, N_RATE + 1)
-    lw, at = _take(work, at, N_RATE + 1)
-    ws, at = _take(work, at, N_RATE + 1)
-    Ps, at = _take(work, at, N_RATE + 1)
-    pw, at = _take(work, at, N_RATE + 1)
-    wk, at = _take(work, at, N_RATE + 1)
-    tmp, at = _take(work, at, N_RATE + 1)
+    v, at = _take(work, at, 4 * NB)  # the branches' weights, likelihoods, excesses, jumps
+    v = v.reshape((4, NB))
+    wb, ll, excess, jumped = v[0], v[1], v[2], v[3]
+    v, at = _take(work, at, 2 * NM)
+    v = v.reshape((2, NM))
+    lm, wmix = v[0], v[1]
+    v, at = _take(work, at, 9 * NX)
+    v = v.reshape((9, NX))
+    Hg, Hs, Hm, xb, xm, PH, dx, da, db = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]
+    v, at = _take(work, at, 7 * (N_RATE + 1))
+    v = v.reshape((7, N_RATE + 1))
+    lk, lw, ws, Ps, pw, wk, tmp = v[0], v[1], v[2], v[3], v[4], v[5], v[6]
     for i in range(NM):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
