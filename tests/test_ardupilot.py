@@ -290,11 +290,19 @@ def test_cli_compensate_bin_equals_compensating_the_simulated_csv(sim, flight, t
     np.testing.assert_allclose(a["t"], b["t"], rtol=0, atol=1e-12)  # TimeUS * 1e-6 against t + 5.0
     # float32 rates and accelerations and whole milligauss in the log: the magnetometer's rounding
     # (up to 0.5 mG of ~250 mG horizontal) moves the compass heading by about 0.05 deg (median;
-    # 0.2 at most here). What the model learns from the two may differ by more: its hypotheses'
-    # weighing can tip either way on such a difference (docs/results.md, "A drive's rounding").
-    moved = np.abs((a["compass_heading"] - b["compass_heading"] + 180.0) % 360.0 - 180.0)
-    assert np.nanmedian(moved) < 0.1 and np.nanmax(moved) < 0.3
+    # 0.2 at most here)
+    turned = np.abs((a["compass_heading"] - b["compass_heading"] + 180.0) % 360.0 - 180.0)
+    assert np.nanmedian(turned) < 0.1 and np.nanmax(turned) < 0.3
     np.testing.assert_allclose(a["gyro_z"], b["gyro_z"], rtol=0, atol=1e-5)  # float32 rates, deg/s
+    # and the drift the model learns on this 2-min drive (about 0.5 deg/s RMS from the truth) moves
+    # by a fiftieth of that on 95 % of the rows, and where the rounding tips the weighing of the
+    # hypotheses for a few epochs (at 43 s) by an eighth of it (a model that believes the compass's
+    # slow error smaller can tip for good there: docs/results.md, "A drive's rounding")
+    err = float(np.sqrt(np.mean((b["bias_z"] - sim["true_bias_z"].to_numpy()) ** 2)))
+    moved = np.abs(a["bias_z"] - b["bias_z"])
+    assert np.quantile(moved, 0.95) < 0.02 * err and moved.max() < 0.2 * err
+    assert np.abs((a["heading"] - b["heading"] + 180.0) % 360.0 - 180.0).max() < 0.3  # start and drift
+    assert (a["gate_reason"].fillna("") == b["gate_reason"].fillna("")).mean() > 0.9  # 93.5 % with the gyro-aided tilt
     # --instance reaches the reader
     out1 = tmp_path / "instance1.csv"
     assert cli.main(["compensate", str(flight), "-o", str(out1), "-q", "--instance", "1"]) == 0
