@@ -139,6 +139,21 @@ def test_file_path_in_chunks_gives_the_batch_numbers(tmp_path):
         np.testing.assert_array_equal(chunked[col].to_numpy(), whole[col].to_numpy(), err_msg=col)
 
 
+
+@pytest.mark.parametrize("chunked", [False, True])
+def test_the_summary_gives_a_drift_in_time_not_per_degc(tmp_path, chunked):
+    """On the clock the model's a and b are per unit of time: the printed summary gives the
+    drift at the last row, in deg/s, and no a, b per degC (as the fleet summary does)."""
+    path = tmp_path / "warm.csv"
+    warming_log(1).to_csv(path, index=False)
+    out_path = tmp_path / "out.csv"
+    stats = compensate_file(path, out_path, chunk_rows=5000, chunked=chunked)
+    line = next(s for s in stats.result_lines() if s.startswith("final drift"))
+    assert "deg/s/degC" not in line, line
+    last = pd.read_csv(out_path)["bias_z"].iloc[-1]
+    assert f"{last:.6g} deg/s" in line, (line, last)
+    assert "a = " not in line
+
 def test_file_whose_first_chunk_is_flat_but_not_the_rest_keeps_the_temperature(tmp_path):
     log = warming_log(2)
     log.loc[log.index[-100:], "temp"] = 0.5  # the temperature moves at the end only

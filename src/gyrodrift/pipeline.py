@@ -133,17 +133,24 @@ class RunStats:
         return _read_text(self.source, self.rows, self.t_first_s, self.t_last_s, self.temp_min_c, self.temp_max_c,
                           self.compass)
 
+    def _model_line(self) -> str:
+        """The final drift model; on the clock (no temperature, or one that never changes) the
+        drift at the last row, as the model's a and b are then per unit of time, not per degC."""
+        if self.regressor == "clock":
+            return f"final drift (a drift model in time, no temperature): {self.last_bias_dps:.6g} deg/s"
+        a, b, c = (float(v) for v in self.final_params)
+        return f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s"
+
     def result_lines(self) -> list[str]:
         shares = ", ".join(
             f"{name} {100 * n / self.rows:.1f} %"
             for name, n in sorted(zip(gating.REASONS, self.refused), key=lambda kv: -kv[1])
             if name and n
         ) or "never"
-        a, b, c = (float(v) for v in self.final_params)
         lines = [
             *(f"note: {n}" for n in self.notes),
             f"{self.updates} filter updates; compass aiding refused: {shares} of rows",
-            f"final drift model: a = {a:.6g} deg/s/degC, b = {b:.6g} deg/degC, c = {c:.6g} deg/s",
+            self._model_line(),
         ]
         for axis, (raw_ss, ss, n) in {"z": self._bias, **self._bias_xy}.items():
             if n:  # the heading axis's line names no axis
