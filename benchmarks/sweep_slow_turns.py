@@ -7,7 +7,8 @@ still for a minute, then a steady turn, 10 min at 10 Hz; compass noise 0.3-3 deg
 temperature and on a unit warming 10 degC, and counts the draws whose ``heading_fused`` is worse
 than the compass alone (RMS against the truth after 30 s):
 
-    PYTHONPATH=src python benchmarks/sweep_slow_turns.py [N]     # 6 draws a cell by default
+    PYTHONPATH=src python benchmarks/sweep_slow_turns.py [N] [--set steady_walk=0.03 ...]
+    # 6 draws a cell by default; --set: AdaptiveConfig settings, as tune_adaptive.py takes them
 
 About 5 s on the 2-core machine once compiled.
 """
@@ -25,6 +26,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from test_invariants import fused_and_compass_rms
 
+from gyrodrift.compensator import CompensatorConfig
+from gyrodrift.estimators import AdaptiveConfig
+
 RATES_DPS = (0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.5)
 RISES_DEGC = (0.0, 10.0)
 
@@ -38,19 +42,32 @@ def draw(draw_seed: int, rate_dps: float, rise_degc: float) -> dict:
             "compass_noise": rng.uniform(0.3, 3.0), "seed": draw_seed}
 
 
-def main(n: int = 6) -> None:
+def config_of(settings: list[str]) -> CompensatorConfig:
+    """The default configuration with ``name=value`` settings of :class:`AdaptiveConfig`."""
+    values = {}
+    for item in settings:
+        name, _, value = item.partition("=")
+        values[name] = float(value)
+    return CompensatorConfig(adaptive=AdaptiveConfig(**values))
+
+
+def main(n: int = 6, settings: list[str] | None = None) -> None:
     warnings.simplefilter("ignore")
+    config = config_of(settings or [])
     print("| temperature rise (degC) | turn rate (deg/s) | fused worse than the compass | median fused / compass RMS |")
     print("|---|---|---|---|")
     for rise in RISES_DEGC:
         for rate in RATES_DPS:
             ratios = []
             for k in range(n):
-                fused, compass = fused_and_compass_rms(draw(k, rate, rise))
+                fused, compass = fused_and_compass_rms(draw(k, rate, rise), config)
                 ratios.append(fused / compass)
             worse = sum(r > 1.0 for r in ratios)
             print(f"| {rise:g} | {rate:g} | {worse} of {n} | {np.median(ratios):.2f} |", flush=True)
 
 
 if __name__ == "__main__":
-    main(*(int(a) for a in sys.argv[1:2]))
+    args = sys.argv[1:]
+    sets = [args[i + 1] for i, a in enumerate(args) if a == "--set"]
+    rest = [a for i, a in enumerate(args) if a != "--set" and (i == 0 or args[i - 1] != "--set")]
+    main(*(int(a) for a in rest[:1]), settings=sets)

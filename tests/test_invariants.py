@@ -104,11 +104,12 @@ def _rms(err, rows) -> float:
     return float(np.sqrt(np.mean(e**2)))
 
 
-def fused_and_compass_rms(p) -> tuple[float, float]:
+def fused_and_compass_rms(p, config: CompensatorConfig | None = None) -> tuple[float, float]:
     """RMS (deg) against the truth, after 30 s, of ``heading_fused`` and of the compass on a
-    scenario (or on ``synthetic_log(**p)``); also used by ``benchmarks/probe_clean_compass.py``."""
+    scenario (or on ``synthetic_log(**p)``), compensated with ``config`` (default settings);
+    also used by ``benchmarks/probe_clean_compass.py`` and ``benchmarks/sweep_slow_turns.py``."""
     log = scenario_log(p) if isinstance(p, dict) and "kind" in p else synthetic_log(**p)
-    out = compensate(log)
+    out = compensate(log, config)
     truth = log["ref_heading"]
     rows = (out["t"] > 30.0).to_numpy() & out["compass_heading"].notna().to_numpy()
     return _rms(wrap_180(out["heading_fused"] - truth), rows), _rms(wrap_180(out["compass_heading"] - truth), rows)
