@@ -43,11 +43,13 @@ def draw(draw_seed: int, rate_dps: float, rise_degc: float) -> dict:
 
 
 def config_of(settings: list[str]) -> CompensatorConfig:
-    """The default configuration with ``name=value`` settings of :class:`AdaptiveConfig`."""
+    """The default configuration with ``name=value`` settings of :class:`AdaptiveConfig` (a
+    tuple as ``name=v1,v2,...``)."""
     values = {}
     for item in settings:
         name, _, value = item.partition("=")
-        values[name] = float(value)
+        numbers = tuple(float(v) for v in value.split(","))
+        values[name] = numbers if len(numbers) > 1 else numbers[0]
     return CompensatorConfig(adaptive=AdaptiveConfig(**values))
 
 
