@@ -3,6 +3,7 @@ diagnosis aid: the kind of trace docs/results.md quotes).
 
     python benchmarks/trace_hypotheses.py multicopter 1000000 --from 300 --to 330
     python benchmarks/trace_hypotheses.py path/to/log.csv --from 30 --to 60 --every 5
+    python benchmarks/trace_hypotheses.py vessel 3 --to 600 --every 30 --set steady_walk=0.03
 
 Runs with numba's compilation off (``NUMBA_DISABLE_JIT=1``, set here before gyrodrift is
 imported), so the kernels' Python functions can be wrapped: about a minute for 1,000 s of a
@@ -33,13 +34,25 @@ def main(argv=None) -> int:
     p.add_argument("--to", dest="t1", type=float, required=True, help="last epoch end to print, s")
     p.add_argument("--every", type=float, default=1.0, help="print an epoch at most this often, s")
     p.add_argument("--modes", default="0,1,2,3,4,5", help="hypotheses to print, comma-separated")
+    p.add_argument("--set", dest="settings", action="append", default=[], metavar="NAME=VALUE",
+                   help="an AdaptiveConfig setting (a tuple as NAME=v1,v2,...); repeatable")
+    p.add_argument("--temperature", choices=("auto", "measured", "clock"), default="auto",
+                   help="what the drift model's T is (CompensatorConfig.temperature)")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
 
     import numpy as np
 
-    from gyrodrift.compensator import compensate
+    from gyrodrift.compensator import CompensatorConfig, compensate
+    from gyrodrift.estimators import AdaptiveConfig
     from gyrodrift.kernels import evidence as ev
+
+    values = {}
+    for item in args.settings:
+        name, _, value = item.partition("=")
+        numbers = tuple(float(v) for v in value.split(","))
+        values[name] = numbers if len(numbers) > 1 else numbers[0]
+    config = CompensatorConfig(adaptive=AdaptiveConfig(**values), temperature=args.temperature)
 
     truth = args.seed is not None  # a generated case carries its truth columns
     if truth:
@@ -92,7 +105,7 @@ def main(argv=None) -> int:
 
     ev._measure = traced_measure
     ev.epoch = traced_epoch
-    compensate(log[log["t"] <= args.t1 + 1.0])
+    compensate(log[log["t"] <= args.t1 + 1.0], config)
     return 0
 
 

@@ -62,3 +62,16 @@ def test_the_bursty_probe_draws_time_gaps_inside_turns():
     turned = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * steps)])
     err = (log["ref_heading"].to_numpy() - log["ref_heading"].iloc[0] - turned + 180.0) % 360.0 - 180.0
     assert np.abs(err).max() < 1.0  # the gyro's noise and the stalls' trapezoids only (0.33 deg here)
+
+
+def test_the_trace_runs_with_the_settings_given():
+    """``--set`` reaches the model: a stillness far likelier a priori changes the first epochs' weights."""
+    def first_epoch(*extra):
+        out = subprocess.run([sys.executable, str(BENCH / "trace_hypotheses.py"), "no-temp-robot", "0", "--from", "0",
+                              "--to", "2", "--modes", "0", *extra], capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr
+        return [float(ln.split()[2]) for ln in out.stdout.splitlines() if not ln.startswith("t ")]
+
+    default, set_ = first_epoch(), first_epoch("--set", "p_still0=0.99", "--set", "turn_shares=0.2,0.2,0.2,0.2")
+    assert len(default) == len(set_) > 0
+    assert set_[0] > default[0]
