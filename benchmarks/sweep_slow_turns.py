@@ -15,6 +15,7 @@ About 5 s on the 2-core machine once compiled.
 
 from __future__ import annotations
 
+import ast
 import sys
 import warnings
 from pathlib import Path
@@ -43,14 +44,10 @@ def draw(draw_seed: int, rate_dps: float, rise_degc: float) -> dict:
 
 
 def config_of(settings: list[str]) -> CompensatorConfig:
-    """The default configuration with ``name=value`` settings of :class:`AdaptiveConfig` (a
-    tuple as ``name=v1,v2,...``)."""
-    values = {}
-    for item in settings:
-        name, _, value = item.partition("=")
-        numbers = tuple(float(v) for v in value.split(","))
-        values[name] = numbers if len(numbers) > 1 else numbers[0]
-    return CompensatorConfig(adaptive=AdaptiveConfig(**values))
+    """The default configuration with ``name=value`` settings of :class:`AdaptiveConfig`, each
+    value a Python literal (a tuple as ``name=v1,v2,...``), as ``tune_adaptive.py`` takes them."""
+    return CompensatorConfig(adaptive=AdaptiveConfig(**{k: ast.literal_eval(v) for k, v in
+                                                        (s.split("=", 1) for s in settings)}))
 
 
 def main(n: int = 6, settings: list[str] | None = None) -> None:

@@ -20,6 +20,7 @@ the truth at the epoch end: rate, drift, compass offset.
 from __future__ import annotations
 
 import argparse
+import ast
 import os
 import warnings
 
@@ -47,12 +48,8 @@ def main(argv=None) -> int:
     from gyrodrift.estimators import AdaptiveConfig
     from gyrodrift.kernels import evidence as ev
 
-    values = {}
-    for item in args.settings:
-        name, _, value = item.partition("=")
-        numbers = tuple(float(v) for v in value.split(","))
-        values[name] = numbers if len(numbers) > 1 else numbers[0]
-    config = CompensatorConfig(adaptive=AdaptiveConfig(**values), temperature=args.temperature)
+    settings = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.settings)}
+    config = CompensatorConfig(adaptive=AdaptiveConfig(**settings), temperature=args.temperature)
 
     truth = args.seed is not None  # a generated case carries its truth columns
     if truth:

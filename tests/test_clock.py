@@ -139,7 +139,6 @@ def test_file_path_in_chunks_gives_the_batch_numbers(tmp_path):
         np.testing.assert_array_equal(chunked[col].to_numpy(), whole[col].to_numpy(), err_msg=col)
 
 
-
 @pytest.mark.parametrize("chunked", [False, True])
 def test_the_summary_gives_a_drift_in_time_not_per_degc(tmp_path, chunked):
     """On the clock the model's a and b are per unit of time: the printed summary gives the
@@ -153,6 +152,7 @@ def test_the_summary_gives_a_drift_in_time_not_per_degc(tmp_path, chunked):
     last = pd.read_csv(out_path)["bias_z"].iloc[-1]
     assert f"{last:.6g} deg/s" in line, (line, last)
     assert "a = " not in line
+
 
 def test_file_whose_first_chunk_is_flat_but_not_the_rest_keeps_the_temperature(tmp_path):
     log = warming_log(2)
