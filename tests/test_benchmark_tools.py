@@ -75,3 +75,15 @@ def test_the_trace_runs_with_the_settings_given():
     default, set_ = first_epoch(), first_epoch("--set", "p_still0=0.99", "--set", "turn_shares=0.2,0.2,0.2,0.2")
     assert len(default) == len(set_) > 0
     assert set_[0] > default[0]
+
+
+def test_the_slow_turn_sweep_counts_per_rate_and_temperature():
+    """One draw a cell: 14 rows (two temperatures, seven rates); a 0.5 deg/s turn on a flat
+    temperature is followed (docs/results.md, "Where slow turns end and compass ramps begin")."""
+    out = subprocess.run([sys.executable, str(BENCH / "sweep_slow_turns.py"), "1"], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    rows = [ln.split("|")[1:-1] for ln in out.stdout.splitlines() if ln.startswith("| ") and "of" in ln]
+    assert len(rows) == 14
+    cells = {(float(r[0]), float(r[1])): r[2].strip() for r in rows}
+    assert cells[(0.0, 0.5)] == "0 of 1" and float(rows[6][3]) < 1.0
