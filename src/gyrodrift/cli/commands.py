@@ -317,8 +317,9 @@ def _cmd_montecarlo(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     p = SuggestingParser(  # "did you mean" for mistyped options and subcommands
         prog="gyrodrift",
-        description="Remove the temperature drift of a MEMS gyroscope with compass aiding "
-        "(strong tracking Kalman filter of Feng, Li, Zhang, Sensors 2015).",
+        description="Remove the temperature drift of a MEMS gyroscope with compass aiding, after Feng, Li, "
+        "Zhang, Sensors 2015 (the default: one model of gyro, compass and platform judged by evidence; the "
+        "paper's strong tracking Kalman filter: --estimator stkf).",
         epilog=CONVENTIONS,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -326,7 +327,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
 
     c = sub.add_parser(
-        "compensate", help="compensate a log (CSV or Parquet)", epilog=CONVENTIONS,
+        "compensate", help="compensate a log (CSV, Parquet, ULog, DataFlash .bin, .tlog, ROS bag)",
+        epilog=CONVENTIONS,
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Compensate the heading-axis gyro of a log; write the output table atomically.",
     )
