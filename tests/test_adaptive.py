@@ -110,7 +110,7 @@ def test_the_compass_errs_with_the_turn_rate_across_a_time_gap_too(gap):
         P = np.eye(ev.NX)
         H = Hs if j == ev.CLEAN_STILL else Hm
         _, _, nu, S = ev._measure(x.copy(), P.copy(), j, mf, mc, gap, dt, dG, 1e-4, Hg, 0.0, 0.0, 1.0, 3.0, Rc, 0.0,
-                                  Hs, Hm, 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1))
+                                  Hs, Hm, 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1), np.full(ev.N_RATE + 1, 0.2))
         assert S == pytest.approx(H @ P @ H + Rc + turn**2, rel=1e-12)
     assert mc[ev.MC_K_TURN] * 49.0 == pytest.approx(24.5)  # the turn term above is not zero
 

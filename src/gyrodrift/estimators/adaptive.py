@@ -71,6 +71,14 @@ class AdaptiveConfig:
         Prior shares of the motion models in a moving epoch (sum below 1; the rest is any rate).
     rate_any_dps : float
         Standard deviation of a rate no motion model predicts, deg/s.
+    motion_memory_s : float
+        Mean time a motion keeps its character (which motion model explains it, and whether its
+        gyro is smooth), s; 0 (the default) judges every epoch afresh, which charges a long smooth
+        motion every epoch and so takes a white gyro for rest unless the compass insists. Above 0
+        the motion models predict the gyro's own rate (docs/model.md, "Motion"): for a platform
+        that turns smoothly and slowly for long (a turntable, a motor-driven mount), at the cost
+        of taking a still unit's drifting compass for a slow turn (docs/results.md, "Where slow
+        turns end and compass ramps begin").
     angular_accel_dps2 : float
         Angular acceleration of a platform at any rate (no motion model), deg/s²: the trapezoid
         integral's error between its samples.
@@ -118,6 +126,7 @@ class AdaptiveConfig:
     turn_walks: tuple[float, ...] = setting((0.003, 0.03, 0.3, 3.0), "deg/s per √s", gt=0.0, size=ev.N_RATE)
     turn_shares: tuple[float, ...] = setting((0.3, 0.3, 0.2, 0.15), gt=0.0, size=ev.N_RATE)
     rate_any_dps: float = setting(100.0, "deg/s", ge=0.0)
+    motion_memory_s: float = setting(0.0, "s", ge=0.0, most=3600.0)
     angular_accel_dps2: float = setting(10.0, "deg/s²", ge=0.0)
     gap_turn_dps: float = setting(1.0, "deg/s", ge=0.0)
     still_walk: float = setting(0.001, "deg per √s", ge=0.0, most=360.0)
@@ -149,6 +158,7 @@ class AdaptiveConfig:
         mc[ev.MC_L_DEV] = self.deviation_span_deg
         mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
         mc[ev.MC_T_R], mc[ev.MC_SIG_RT] = self.drift_rate_degc, self.drift_rate_time_dps2
+        mc[ev.MC_MOTION_MEMORY] = self.motion_memory_s
         mc[ev.MC_SIG_JUMP], mc[ev.MC_TAU_JUMP] = self.drift_jump_dps, self.drift_jump_s
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s

@@ -33,8 +33,8 @@ N_RATE = 4
 #: Floats of an epoch's scratch (one array, carved by :func:`_take` in :func:`epoch`): the mode
 #: changes; the branches' states and covariances; an alternative's covariance; four numbers per
 #: branch, two per mode; nine vectors of states (the three measurement rows, an alternative's
-#: state, the moving modes' state, four for the helpers); seven of the rate predictors.
-N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 7 * (N_RATE + 1)
+#: state, the moving modes' state, four for the helpers); eight of the rate predictors.
+N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 * (N_RATE + 1)
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
@@ -93,7 +93,12 @@ MF_E_TC2, MF_E_STC2 = MF_COLOUR_V + 1, MF_COLOUR_V + 2
 #: The epoch's Σ h³ of the steps (s³), and the motion's agility believed after the last moving epoch:
 #: the rate predictors' mean walk variance ((deg/s)²/s) and the weight of any rate.
 MF_E_H3, MF_WQ2, MF_WANY = MF_E_STC2 + 1, MF_E_STC2 + 2, MF_E_STC2 + 3
-N_MF = MF_WANY + 1
+#: The motion's character carried with ``motion_memory_s`` (docs/model.md, "Motion"): the weights of
+#: the rate predictors and of any rate that explained the last moving epoch (N_RATE + 1), and the
+#: belief that the motion is smooth (its gyro white about the epoch's mean).
+MF_PW = MF_WANY + 1
+MF_SMOOTH = MF_PW + N_RATE + 1
+N_MF = MF_SMOOTH + 1
 
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
@@ -125,10 +130,10 @@ NOISE_PRIOR_STEPS = 20.0
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
  MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_SD,
- MC_T_R, MC_SIG_RT) = range(38)
+ MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY) = range(39)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 38
+MC_Q_W = 39
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -193,19 +198,23 @@ def init_state(mf, mc, x0, P0, t_ref):
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps) * _share(j)
     shares = np.empty(N_RATE + 1)
     shares[N_RATE] = 1.0
+    steady = mc[MC_MOTION_MEMORY] > 0.0
     for k in range(N_RATE):
-        mf[MF_W + 2 * k] = 0.0
-        mf[MF_W + 2 * k + 1] = 1.0
+        # at rest within 1 deg/s; predicting the gyro's own rate, the drift's prior too
+        mf[MF_W + 2 * k] = x0[X_C] if steady else 0.0
+        mf[MF_W + 2 * k + 1] = 1.0 + P0[X_C, X_C] if steady else 1.0
         shares[k] = mc[MC_SHARE + k]
         shares[N_RATE] -= shares[k]
     _set_agility(mf, mc, shares)
+    mf[MF_SMOOTH] = VN_MOTION
     combine(mf)
 
 
 @jit(inline=True)
 def _set_agility(mf, mc, w):
     """The motion's agility from the weights ``w`` (N_RATE + 1) of the rate predictors and of
-    any rate: their mean walk variance ((deg/s)²/s) and the weight of any rate."""
+    any rate: their mean walk variance ((deg/s)²/s) and the weight of any rate; ``w`` kept."""
+    mf[MF_PW:MF_PW + N_RATE + 1] = w
     mf[MF_WQ2] = 0.0
     for k in range(N_RATE):
         mf[MF_WQ2] += w[k] * mc[MC_Q_W + k] ** 2
@@ -447,6 +456,26 @@ def _merge(xa, Pa, qa, xb, Pb, qb, x, P, da, db):
 
 
 @jit(inline=True)
+def _motion_prior(mf, mc, dt, out):
+    """The weights of the rate predictors and of any rate for the next ``dt`` s (N_RATE + 1,
+    into ``out``) and the chance that a motion is smooth: the prior shares and ``VN_MOTION``,
+    or with ``motion_memory_s`` the last moving epoch's, drawn afresh with the chance of a change
+    over ``dt``."""
+    rest = 1.0
+    for k in range(N_RATE):
+        out[k] = mc[MC_SHARE + k]
+        rest -= mc[MC_SHARE + k]
+    out[N_RATE] = rest
+    tau = mc[MC_MOTION_MEMORY]
+    if not tau > 0.0:
+        return VN_MOTION
+    keep = math.exp(-dt / tau)
+    for k in range(N_RATE + 1):
+        out[k] = keep * mf[MF_PW + k] + (1.0 - keep) * out[k]
+    return VN_MOTION + (mf[MF_SMOOTH] - VN_MOTION) * keep
+
+
+@jit(inline=True)
 def _normalise(v):
     """``v`` divided by its sum (summed in index order), in place."""
     tot = 0.0
@@ -468,13 +497,15 @@ def _switch(dt, tau):
 
 
 @jit
-def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll, PH, lk):
+def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll, PH, lk,
+             shares):
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
     when still; drift plus a true rate when moving, the rate from the random-walk predictors
     or any rate), its serial structure, the compass (with the disturbance e in a disturbed
     mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
     predicted variance (NaN: none, or the heading not known to a few degrees), and the compass
-    innovation and its variance (NaN: no compass). ``PH`` (NX), ``lk`` (N_RATE + 1): scratch."""
+    innovation and its variance (NaN: no compass). ``shares``: the rate models' weights for the
+    epoch (:func:`_motion_prior`). ``PH`` (NX), ``lk`` (N_RATE + 1): scratch."""
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
@@ -485,12 +516,15 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         else:
             mean = _dot(Hg, x)
             base = _quad(P, Hg) + arw
-            rest = 1.0
+            # the predictors follow the compensated rate, or with motion_memory_s the gyro's own
+            # (the drift this mode believes then adds nothing to their prediction)
+            steady = mc[MC_MOTION_MEMORY] > 0.0
+            m0 = 0.0 if steady else mean
+            b0 = arw if steady else base
             for k in range(N_RATE):
                 Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
-                lk[k] = math.log(mc[MC_SHARE + k]) + _loggauss(dG - mean - mf[MF_W + 2 * k] * dt, base + Pk * dt * dt)
-                rest -= mc[MC_SHARE + k]
-            lk[N_RATE] = math.log(rest) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
+                lk[k] = math.log(shares[k]) + _loggauss(dG - m0 - mf[MF_W + 2 * k] * dt, b0 + Pk * dt * dt)
+            lk[N_RATE] = math.log(shares[N_RATE]) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
             m = np.max(lk)
             tot = 0.0
             for k in range(N_RATE + 1):
@@ -570,9 +604,9 @@ def epoch(mf, mc, t_end, temp_end):
     v, at = _take(work, at, 9 * NX)
     v = v.reshape((9, NX))
     Hg, Hs, Hm, xb, xm, PH, dx, da, db = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]
-    v, at = _take(work, at, 7 * (N_RATE + 1))
-    v = v.reshape((7, N_RATE + 1))
-    lk, lw, ws, Ps, pw, wk, tmp = v[0], v[1], v[2], v[3], v[4], v[5], v[6]
+    v, at = _take(work, at, 8 * (N_RATE + 1))
+    v = v.reshape((8, N_RATE + 1))
+    lk, lw, ws, Ps, pw, wk, tmp, pred = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
     for i in range(NM):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
@@ -647,6 +681,8 @@ def epoch(mf, mc, t_end, temp_end):
     l_white = l_any = 0.0
     ng = mf[MF_E_NG]
     u = var_u = math.nan
+    smooth = _motion_prior(mf, mc, dt, pred)  # the motion's character for this epoch
+    l_rough = math.nan
     if not gap and ng >= VN_MIN_SAMPLES:
         # the von Neumann ratio over its white value (mean 2, variance 4 (n - 2) / ((n - 1)(n + 1))):
         # near the believed colour when still (docs/model.md, "Stillness")
@@ -658,8 +694,9 @@ def epoch(mf, mc, t_end, temp_end):
             var_u = var0 / (mean0 * mean0)
             spread = var_u + mf[MF_COLOUR_V]
             l_white = _loggauss(u - mf[MF_COLOUR], spread)
-            l_any = math.log(VN_MOTION * math.exp(min(l_white, 50.0))
-                             + (1.0 - VN_MOTION) / (mf[MF_COLOUR] + 3.0 * math.sqrt(spread)))
+            rough = mf[MF_COLOUR] + 3.0 * math.sqrt(spread)  # a structured ratio: anywhere up to this
+            l_any = math.log(smooth * math.exp(min(l_white, 50.0)) + (1.0 - smooth) / rough)
+            l_rough = -math.log(rough)
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
     D = Rc = h_still = 0.0
@@ -703,18 +740,18 @@ def epoch(mf, mc, t_end, temp_end):
             k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
         if k < 0:
             ll[r], excess[r], _, _ = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
-                                              h_still, Hs, Hm, field_ll, PH, lk)
+                                              h_still, Hs, Hm, field_ll, PH, lk, pred)
             continue
         xb[:] = X[r]
         Pb[:, :] = P[r]
         Pb[k, k] += var
         lla, exa, nu, S = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                   Hm, field_ll, PH, lk)
+                                   Hm, field_ll, PH, lk, pred)
         if k == X_E:  # e is in the compass alone: the step changes its innovation's variance only
             llb = lla - _loggauss(nu, S) + _loggauss(nu, S + var)
         else:
             llb, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                      Hm, field_ll, PH, lk)
+                                      Hm, field_ll, PH, lk, pred)
         la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
         top = max(la, lb)
         ll[r] = top + math.log(math.exp(la - top) + math.exp(lb - top))
@@ -724,7 +761,7 @@ def epoch(mf, mc, t_end, temp_end):
         if lb > la:
             if k == X_E:
                 _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
-                                        Hs, Hm, field_ll, PH, lk)
+                                        Hs, Hm, field_ll, PH, lk, pred)
             X[r, :] = xb
             P[r, :, :] = Pb
             excess[r] = exb
@@ -771,9 +808,21 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_COLOUR_V] *= 1.0 - k
     mf[MF_FIELD_DOM] = 1.0 if field_ll < FIELD_SAYS_DISTURBED else 0.0
     mf[MF_UPDATED] = 1.0 if (n_c > 0.0 and mf[MF_PDIST] < 0.5) or (not gap and mf[MF_PSTILL] >= 0.5) else 0.0
-    # the rate filters follow the compensated mean rate and interact (docs/model.md, "Motion")
+    # the smoothness learned from the epoch as far as it is moving (with motion_memory_s)
+    if mc[MC_MOTION_MEMORY] > 0.0 and math.isfinite(l_rough):
+        sw = smooth * math.exp(min(l_white, 50.0))
+        post = sw / (sw + (1.0 - smooth) * math.exp(l_rough))
+        mf[MF_SMOOTH] = smooth + (1.0 - mf[MF_PSTILL]) * (post - smooth)
+    else:
+        mf[MF_SMOOTH] = smooth
+    # the rate filters follow the compensated mean rate, or with motion_memory_s the gyro's own,
+    # and interact (docs/model.md, "Motion")
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
-    if not gap:
+    r = Rr = 0.0
+    if not gap and mc[MC_MOTION_MEMORY] > 0.0:
+        r = dG / dt
+        Rr = arw / (dt * dt)
+    elif not gap:
         # the rate a moving platform had: the gyro less the moving hypotheses' drift
         xm[:] = 0.0
         p_moving = 0.0
@@ -786,16 +835,15 @@ def epoch(mf, mc, t_end, temp_end):
             xm[k] /= p_moving
         r = (dG - (xm[X_A] * dTc + xm[X_B] * dTp + xm[X_C] * dt + xm[X_A2] * dTc2)) / dt
         Rr = (arw + bias_var(Pc, dTc, dTp, dTc2) * dt * dt) / (dt * dt)
-        rest = 1.0
+    if not gap:
         for k in range(N_RATE):
             w = mf[MF_W + 2 * k]
             Pp = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
-            lw[k] = math.log(mc[MC_SHARE + k]) + _loggauss(r - w, Pp + Rr)
+            lw[k] = math.log(pred[k]) + _loggauss(r - w, Pp + Rr)
             K = Pp / (Pp + Rr)
             ws[k] = w + K * (r - w)
             Ps[k] = (1.0 - K) * Pp
-            rest -= mc[MC_SHARE + k]
-        lw[N_RATE] = math.log(rest) + _loggauss(r, mc[MC_RATE_ANY] ** 2 + Rr)
+        lw[N_RATE] = math.log(pred[N_RATE]) + _loggauss(r, mc[MC_RATE_ANY] ** 2 + Rr)
         ws[N_RATE] = r
         Ps[N_RATE] = Rr
         top = np.max(lw)
@@ -816,6 +864,7 @@ def epoch(mf, mc, t_end, temp_end):
     else:
         for k in range(N_RATE):
             mf[MF_W + 2 * k + 1] += mc[MC_Q_W + k] ** 2 * dt
+        mf[MF_PW:MF_PW + N_RATE + 1] = pred
     # the measured noise (gyro while still, compass always), sums forgotten over ``noise_memory_s``
     keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
     if mf[MF_E_NDG] >= 1.0 and mf[MF_PSTILL] >= 0.5:
