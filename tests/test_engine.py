@@ -46,6 +46,7 @@ VARIANTS = {
     "long-epoch": AdaptiveConfig(epoch_s=5.0),
     "eager-gap": AdaptiveConfig(gap_factor=2.0),
     "rarely-still": AdaptiveConfig(p_still0=0.01, moving_s=1e6, still_s=1.0),
+    "motion-memory": AdaptiveConfig(motion_memory_s=120.0),
 }
 
 
