@@ -5,7 +5,8 @@ The property test stops at its first counterexample; this probe draws ``N`` scen
 same kind from one seed (numpy, not hypothesis) and counts those where ``heading_fused`` is worse
 than the compass alone (RMS against the truth after 30 s), listing the worst:
 
-    PYTHONPATH=src python benchmarks/probe_clean_compass.py [N] [SEED]     # 90 and 7 by default
+    PYTHONPATH=src python benchmarks/probe_clean_compass.py [N] [SEED] [--set motion_memory_s=120 ...]
+    # 90 draws and seed 7 by default; --set: AdaptiveConfig settings, as tune_adaptive.py takes them
 
 About 3 s for 90 draws on the 2-core machine.
 """
@@ -21,6 +22,7 @@ import numpy as np
 # the property's own scenarios and measure
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from sweep_slow_turns import config_of
 from test_invariants import fused_and_compass_rms
 
 KINDS = ("still", "sway", "turn")
@@ -36,16 +38,21 @@ def draw(rng: np.random.Generator, k: int) -> dict:
             "compass_noise": rng.uniform(0.3, 3.0), "seed": int(rng.integers(0, 10_000))}
 
 
-def main(n: int = 90, seed: int = 7) -> None:
+def main(n: int = 90, seed: int = 7, settings: list[str] | None = None) -> None:
     warnings.simplefilter("ignore")
+    config = config_of(settings or [])
     rng = np.random.default_rng(seed)
     fails = []
+    ratios: dict[str, list[float]] = {kind: [] for kind in KINDS}
     for k in range(n):
         p = draw(rng, k)
-        fused, compass = fused_and_compass_rms(p)
+        fused, compass = fused_and_compass_rms(p, config)
+        ratios[p["kind"]].append(fused / compass)
         if fused > compass:
             fails.append((fused, compass, p))
     print(f"{len(fails)} of {n} draws: heading_fused worse than the clean compass")
+    print("geometric mean of fused / compass RMS: " + ", ".join(
+        f"{kind} {np.exp(np.mean(np.log(r))):.3f} ({len(r)})" for kind, r in ratios.items() if r))
     for fused, compass, p in sorted(fails, key=lambda f: -f[0])[:8]:
         motion = f"rate {p['rate']:+.3f} deg/s" if p["kind"] == "turn" else f"{p['amp']:.1f} deg, {p['period']:.0f} s"
         print(f"  fused {fused:6.2f} deg, compass {compass:5.2f} deg: {p['kind']:5s} {motion}, "
@@ -54,4 +61,7 @@ def main(n: int = 90, seed: int = 7) -> None:
 
 
 if __name__ == "__main__":
-    main(*(int(a) for a in sys.argv[1:3]))
+    args = sys.argv[1:]
+    sets = [args[i + 1] for i, a in enumerate(args) if a == "--set"]
+    rest = [a for i, a in enumerate(args) if a != "--set" and (i == 0 or args[i - 1] != "--set")]
+    main(*(int(a) for a in rest[:2]), settings=sets)
