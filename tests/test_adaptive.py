@@ -443,3 +443,49 @@ def test_params_and_cov_are_the_papers_absolute_drift():
     Pc = est.mf[ev.MF_PC:ev.MF_PC + ev.NX * ev.NX].reshape(ev.NX, ev.NX)
     J = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-30.0, 0.0, 1.0]])
     assert est.cov == pytest.approx(J @ Pc[1:4, 1:4] @ J.T)
+
+
+def _still_with_held_compass(seed: int = 0) -> pd.DataFrame:
+    """A still unit logged at 100 Hz whose heading is written on every row: a 10-Hz magnetometer
+    with 1.5 deg of noise, each sample held until the next, plus 0.2 deg of jitter per row."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 900.0, 0.01)
+    temp = 25.0 + 8.0 * (1.0 - np.exp(-t / 300.0))
+    drift = 0.3 + 0.02 * (temp - 25.0)
+    samples = 100.0 + rng.normal(0.0, 1.5, t.size // 10 + 1)
+    compass = samples[np.arange(t.size) // 10] + rng.normal(0.0, 0.2, t.size)
+    gyro = drift + rng.normal(0.0, 0.05, t.size)
+    return pd.DataFrame({"t": t, "gyro_z": gyro, "temp": temp, "heading": compass % 360.0,
+                         "ref_heading": np.full(t.size, 100.0)})
+
+
+def test_a_compass_held_between_samples_is_not_taken_for_a_disturbed_one():
+    """Successive rows of a held heading differ by the jitter only; measured so, an epoch's mean
+    would be believed ten times too precise and the clean compass refused as interference. The
+    noise's correlation (κ, from the halves of still epochs) keeps it clean."""
+    log = _still_with_held_compass()
+    out = compensate(log, CompensatorConfig(temperature="measured"))
+    late = out["t"].to_numpy() > 60.0
+    reason = out["gate_reason"].astype(str).to_numpy()
+    assert (reason[late] == "interference").mean() < 0.05
+    err = (out["heading_fused"].to_numpy() - 100.0 + 180.0) % 360.0 - 180.0
+    assert np.sqrt(np.mean(err[late] ** 2)) < 1.0
+
+
+def test_interference_labels_rows_whose_compass_a_disturbance_moves():
+    """`interference` says a disturbance moves the compass by more than 2 deg (the generator's
+    truth counts the same 2 deg). On a generated drive, a disturbed hypothesis whose e has gone
+    back to about 0 keeps its weight for about a disturbance's length; its rows are no longer
+    labelled. Drive tuning seed 1: 8,275 rows labelled, 1,587 of them truly disturbed, when the
+    disturbed hypotheses' weight alone labelled."""
+    from gyrodrift.evaluate.heldout import run_method
+    from gyrodrift.simulate.generator import generate, truth_labels
+
+    log = generate("drive", 1).log
+    cfg = CompensatorConfig()
+    out = run_method(cfg.estimator, log, cfg)
+    compass = np.isfinite(out["compass_heading"].to_numpy(float))
+    said = (out["gate_reason"].astype(str).to_numpy() == "interference") & compass
+    true = truth_labels(log)["disturbed"].to_numpy() & compass
+    assert np.sum(said & true) / np.sum(said) > 0.4
+    assert np.sum(said & true) / np.sum(true) > 0.85

@@ -98,8 +98,16 @@ MF_E_H3, MF_WQ2, MF_WANY = MF_E_STC2 + 1, MF_E_STC2 + 2, MF_E_STC2 + 3
 #: belief that the motion is smooth (its gyro white about the epoch's mean).
 MF_PW = MF_WANY + 1
 MF_SMOOTH = MF_PW + N_RATE + 1
-N_MF = MF_SMOOTH + 1
+MF_PLABEL = MF_SMOOTH + 1      # P(a disturbance moves the compass by more than LABEL_DEG), last epoch
+# the compass noise's correlation: the epoch's halves (Σ of D + bias·(t - t0) over all samples and
+# the first half's, the first half's count), and the forgotten sums of the inflation κ and its weight
+MF_E_SB, MF_E_SB1, MF_E_NC1 = MF_PLABEL + 1, MF_PLABEL + 2, MF_PLABEL + 3
+MF_KAPPA, MF_K_S, MF_K_W = MF_E_NC1 + 1, MF_E_NC1 + 2, MF_E_NC1 + 3
+N_MF = MF_K_W + 1
 
+#: A row is labelled ``interference`` where a disturbance moves the compass by more than this
+#: (deg) with probability 0.5 or more.
+LABEL_DEG = 2.0
 #: The von Neumann test of stillness needs this many gyro samples in an epoch.
 VN_MIN_SAMPLES = 8.0
 #: Probability that a moving epoch's gyro is white about its mean (a steady turn).
@@ -119,6 +127,9 @@ RX_S_MAX = 25.0
 RATE_SWITCH_S = 10.0
 #: Weight of the settings' noise values in the measured noise, in steps of data.
 NOISE_PRIOR_STEPS = 20.0
+#: A still epoch's halves differing by more than this many times their expected square (4 sd)
+#: hold a disturbance's step, not the noise's correlation.
+KAPPA_CLIP = 16.0
 
 # ------------------------------------------------------------------ settings
 (MC_EPOCH, MC_TAU_CLEAN, MC_TAU_DIST, MC_TAU_STILL, MC_TAU_MOVE,
@@ -207,6 +218,7 @@ def init_state(mf, mc, x0, P0, t_ref):
         shares[N_RATE] -= shares[k]
     _set_agility(mf, mc, shares)
     mf[MF_SMOOTH] = VN_MOTION
+    mf[MF_KAPPA] = 1.0
     combine(mf)
 
 
@@ -287,6 +299,18 @@ def _set_labels(mf):
             p_still += mf[MF_MU + j]
     mf[MF_PDIST] = p_dist
     mf[MF_PSTILL] = p_still
+    X = mf[MF_X:MF_X + NM * NX].reshape((NM, NX))
+    P = mf[MF_P:MF_P + NM * NX * NX].reshape((NM, NX, NX))
+    p_label = 0.0
+    for j in range(NM):
+        if not _is_clean(j):
+            m, s2 = X[j, X_E], P[j, X_E, X_E]
+            if s2 > 0.0:
+                z = math.sqrt(2.0 * s2)
+                p_label += mf[MF_MU + j] * 0.5 * (math.erfc((LABEL_DEG - m) / z) + math.erfc((LABEL_DEG + m) / z))
+            elif abs(m) > LABEL_DEG:
+                p_label += mf[MF_MU + j]
+    mf[MF_PLABEL] = p_label
 
 
 @jit
@@ -719,7 +743,7 @@ def epoch(mf, mc, t_end, temp_end):
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        Rc = mf[MF_SIG_W2] / n_c + mf[MF_RX]  # white noise and the epoch-level error
+        Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX]  # the noise, correlated, and the epoch-level error
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
@@ -875,6 +899,16 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_NW_S] = keep * mf[MF_NW_S] + 0.5 * mf[MF_E_DD2]
         mf[MF_NW_W] = keep * mf[MF_NW_W] + mf[MF_E_NDD]
         mf[MF_SIG_W2] = max(mf[MF_NW_S] / mf[MF_NW_W], 0.01 * mc[MC_COMPASS_SD] ** 2)
+    # how much the noise's correlation inflates an epoch mean's variance (κ, 1 for white noise),
+    # from the two halves of a still epoch: their means differ by the noise alone
+    n1 = mf[MF_E_NC1]
+    n2 = mf[MF_E_NC] - n1
+    if n1 >= 1.0 and n2 >= 1.0 and mf[MF_PSTILL] >= 0.5:
+        diff = (mf[MF_E_SB] - mf[MF_E_SB1]) / n2 - mf[MF_E_SB1] / n1
+        z2 = diff * diff / (mf[MF_SIG_W2] * (1.0 / n1 + 1.0 / n2))
+        mf[MF_K_S] = keep * mf[MF_K_S] + min(z2, KAPPA_CLIP * mf[MF_KAPPA])  # a step within is no noise
+        mf[MF_K_W] = keep * mf[MF_K_W] + 1.0
+        mf[MF_KAPPA] = max(mf[MF_K_S] / mf[MF_K_W], 1.0)
 
 
 @jit
@@ -887,6 +921,9 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_SIG_W2] = mc[MC_COMPASS_SD] ** 2
     mf[MF_NW_S] = NOISE_PRIOR_STEPS * mf[MF_SIG_W2]
     mf[MF_NW_W] = NOISE_PRIOR_STEPS
+    mf[MF_KAPPA] = 1.0
+    mf[MF_K_S] = NOISE_PRIOR_STEPS
+    mf[MF_K_W] = NOISE_PRIOR_STEPS
     mf[MF_RX] = 0.0
     mf[MF_RX_S] = 0.0
     mf[MF_RX_W] = NOISE_PRIOR_STEPS

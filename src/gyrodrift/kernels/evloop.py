@@ -76,7 +76,7 @@ def _open(mf, t, temp):
     mf[MF_E_T_START] = temp
     for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
               MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
-              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2, ev.MF_E_H3):
+              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2, ev.MF_E_H3, ev.MF_E_SB, ev.MF_E_SB1, ev.MF_E_NC1):
         mf[k] = 0.0
 
 
@@ -220,6 +220,11 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             if mf[MF_E_NC] == 0.0:
                 mf[MF_E_DREF] = D
             mf[MF_E_SD] += wrap180(D - mf[MF_E_DREF])
+            db = wrap180(D - mf[MF_E_DREF]) + bias * (ti - mf[MF_E_T0])  # D less the drift's part
+            mf[ev.MF_E_SB] += db
+            if ti - mf[MF_E_T0] < 0.5 * epoch_s:
+                mf[ev.MF_E_SB1] += db
+                mf[ev.MF_E_NC1] += 1.0
             mf[MF_E_STC] += mf[MF_E_TC]
             mf[ev.MF_E_STC2] += mf[ev.MF_E_TC2]
             mf[MF_E_STP] += mf[MF_E_TP]
@@ -290,8 +295,10 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             reason = R_NO_COMPASS
         elif abs(rf[RF_MEAN_RATE]) > rc[RC_TURN_RATE] + bsd:  # beyond what the drift leaves unknown
             reason = R_TURNING
-        elif mf[MF_PDIST] >= 0.5:
-            reason = R_FIELD if mf[MF_FIELD_DOM] == 1.0 else R_INTERFERENCE
+        elif mf[MF_PDIST] >= 0.5 and mf[MF_FIELD_DOM] == 1.0:  # the field's own verdict
+            reason = R_FIELD
+        elif mf[ev.MF_PLABEL] >= 0.5:  # a disturbance moves the heading by more than LABEL_DEG
+            reason = R_INTERFERENCE
         else:
             reason = R_NONE
         codes[OC_UPDATE * cap + ix] = updated
