@@ -136,6 +136,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     c_t, c_g, c_T, c_Tp, c_bias, c_rate = rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE]
     I_raw, I_rate, I_bias = rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS]
     epoch_s = mc[MC_EPOCH]
+    half_epoch = 0.5 * epoch_s
     log_gap_factor = math.log(mc[MC_GAP_FACTOR])
     tau_turn = 0.5 * rc[RC_TURN_WIN]
     w_noise = turn_weight(mf, rf, rc[RC_TURN_RATE])
@@ -219,10 +220,12 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             D = hi - I_raw
             if mf[MF_E_NC] == 0.0:
                 mf[MF_E_DREF] = D
-            mf[MF_E_SD] += wrap180(D - mf[MF_E_DREF])
-            db = wrap180(D - mf[MF_E_DREF]) + bias * (ti - mf[MF_E_T0])  # D less the drift's part
+            dD_ref = wrap180(D - mf[MF_E_DREF])
+            mf[MF_E_SD] += dD_ref
+            t_in = ti - mf[MF_E_T0]
+            db = dD_ref + bias * t_in  # D less the drift's part, for the halves
             mf[ev.MF_E_SB] += db
-            if ti - mf[MF_E_T0] < 0.5 * epoch_s:
+            if t_in < half_epoch:
                 mf[ev.MF_E_SB1] += db
                 mf[ev.MF_E_NC1] += 1.0
             mf[MF_E_STC] += mf[MF_E_TC]
