@@ -1,10 +1,12 @@
 """Run the default (adaptive) model on generator seeds and compare with stored baselines (a tuning aid).
 
     python benchmarks/tune_adaptive.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
+        [--temp-rate-window-s S]
 
 ``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
-only ``default`` is recomputed here (with the settings given), so a setting can be tried in
-a minute. Prints per class the default's median heading, bias and fused RMS beside the best
+only ``default`` is recomputed here (with the settings given, and ``--temp-rate-window-s`` the
+T' window of the front end, which the baselines of the file were run with at its default), so a
+setting can be tried in a minute. Prints per class the default's median heading, bias and fused RMS beside the best
 causal baseline's and Fusion's AHRS, and the honesty columns.
 """
 
@@ -12,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import warnings
+from dataclasses import replace
 
 import pandas as pd
 
@@ -28,12 +31,15 @@ def main(argv=None) -> int:
     p.add_argument("--classes", nargs="+")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--set", nargs="*", default=[], help="AdaptiveConfig field=value")
+    p.add_argument("--temp-rate-window-s", type=float, help="the T' window (TempRateConfig.window_s), s")
     p.add_argument("-o", "--output")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
     import ast
     ev = AdaptiveConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=") for s in args.set)})
     cfg = CompensatorConfig(adaptive=ev)
+    if args.temp_rate_window_s is not None:
+        cfg = replace(cfg, temp_rate=replace(cfg.temp_rate, window_s=args.temp_rate_window_s))
     df = heldout.run_generated(args.classes, [args.split], args.seeds, ["default"], config=cfg, workers=args.workers)
     if args.output:
         df.to_csv(args.output, index=False)
