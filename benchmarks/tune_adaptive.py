@@ -1,7 +1,7 @@
 """Run the default (adaptive) model on generator seeds and compare with stored baselines (a tuning aid).
 
     python benchmarks/tune_adaptive.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
-        [--temp-rate-window-s S]
+        [--temp-rate-window-s S] [--temp-rate-short-s S]
 
 ``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
 only ``default`` is recomputed here (with the settings given, and ``--temp-rate-window-s`` the
@@ -32,6 +32,7 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--set", nargs="*", default=[], help="AdaptiveConfig field=value")
     p.add_argument("--temp-rate-window-s", type=float, help="the T' window (TempRateConfig.window_s), s")
+    p.add_argument("--temp-rate-short-s", type=float, help="the T' short window (TempRateConfig.short_s), s")
     p.add_argument("-o", "--output")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
@@ -40,6 +41,8 @@ def main(argv=None) -> int:
     cfg = CompensatorConfig(adaptive=ev)
     if args.temp_rate_window_s is not None:
         cfg = replace(cfg, temp_rate=replace(cfg.temp_rate, window_s=args.temp_rate_window_s))
+    if args.temp_rate_short_s is not None:
+        cfg = replace(cfg, temp_rate=replace(cfg.temp_rate, short_s=args.temp_rate_short_s))
     df = heldout.run_generated(args.classes, [args.split], args.seeds, ["default"], config=cfg, workers=args.workers)
     if args.output:
         df.to_csv(args.output, index=False)

@@ -18,18 +18,73 @@ def test_matches_bin_means_and_a_least_squares_line_written_out():
     rng = np.random.default_rng(3)
     t = np.cumsum(rng.uniform(0.005, 0.05, 6000))
     temp = np.round((30 + 5 * np.sin(t / 100) + rng.normal(0, 0.02, t.size)) / 0.0625) * 0.0625
-    cfg = TempRateConfig(window_s=30.0, bin_s=0.5)
+    cfg = TempRateConfig(window_s=30.0, bin_s=0.5, short_s=0.0)
     got = temp_rate(t, temp, cfg)
+    np.testing.assert_allclose(got, _written_out(t, temp, cfg), rtol=1e-7, atol=1e-12)
+
+
+def _written_out(t, temp, cfg):
+    """T' by np.polyfit through the closed bins' means; with ``short_s``, moved towards the
+    short window's slope by 1 - v/d² of their difference d where d² > v, v the short slope's
+    variance: at least the square of the slope that a step by the temperature's resolution (its
+    smallest step between rows so far) gives at the worst place in the short window."""
     k = np.floor((t - t[0]) / cfg.bin_s)
     expected = np.zeros(t.size)
+    steps = np.abs(np.diff(temp, prepend=temp[0]))
     for i in range(t.size):
         closed = np.unique(k[k < k[i]])
         closed = closed[closed >= k[i] - 1 - cfg.window_bins]  # the newest closed bin and window_bins before it
-        if closed.size >= 2:
-            bt = np.array([t[k == b].mean() for b in closed])
-            bT = np.array([temp[k == b].mean() for b in closed])
-            expected[i] = np.polyfit(bt, bT, 1)[0]
-    np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-12)
+        if closed.size < 2:
+            continue
+        bt = np.array([t[k == b].mean() for b in closed])
+        bT = np.array([temp[k == b].mean() for b in closed])
+        expected[i] = np.polyfit(bt, bT, 1)[0]
+        if cfg.short_bins == 0:
+            continue
+        short = closed >= closed[-1] - cfg.short_bins
+        if short.sum() < 3:
+            continue
+        (slope, icpt), res, *_ = np.polyfit(bt[short], bT[short], 1, full=True)
+        ss = float(res[0]) if res.size else 0.0
+        done = k < closed[-1] + 1  # the rows of the closed bins
+        pos = steps[1:][done[1:]]
+        resolution = pos[pos > 0].min() if np.any(pos > 0) else 0.0
+        ts = bt[short]
+        sxx = np.sum((ts - ts.mean()) ** 2)
+        steps_at = [np.polyfit(ts, (np.arange(ts.size) >= j).astype(float), 1)[0] for j in range(1, ts.size)]
+        v = max(ss / (short.sum() - 2) / sxx, (resolution * max(steps_at)) ** 2)
+        d = slope - expected[i]
+        if d * d > v:
+            expected[i] += (1.0 - v / (d * d)) * d
+    return expected
+
+
+def test_the_short_window_is_the_rule_written_out():
+    """A temperature with a shock (−0.4 degC/s for 30 s) on a noisy, quantised sinusoid,
+    irregularly sampled: each sample's T' is the window's slope moved towards the short
+    window's as far as they differ beyond the short one's noise."""
+    rng = np.random.default_rng(4)
+    t = np.cumsum(rng.uniform(0.02, 0.1, 3000))
+    shock = -0.4 * np.clip(t - 120.0, 0.0, 30.0)
+    temp = np.round((30 + 5 * np.sin(t / 100) + shock + rng.normal(0, 0.02, t.size)) / 0.0625) * 0.0625
+    cfg = TempRateConfig(window_s=30.0, bin_s=0.5, short_s=5.0)
+    got = temp_rate(t, temp, cfg)
+    np.testing.assert_allclose(got, _written_out(t, temp, cfg), rtol=1e-7, atol=1e-12)
+    assert np.any(got != temp_rate(t, temp, TempRateConfig(window_s=30.0, bin_s=0.5, short_s=0.0)))
+
+
+@pytest.mark.parametrize("quantum_c", [0.0, 0.0625])
+def test_a_shock_is_followed_within_the_short_window(quantum_c):
+    """A temperature that falls at 0.5 degC/s from 150 s: T' is the shock's within about
+    ``short_s`` (the 60-s window alone is still at a quarter of it 20 s in). A reading in whole
+    degrees moves less far: a 1-degC step within 10 s is a slope of 0.11 degC/s of noise."""
+    t = np.arange(0.0, 200.0, 0.1)
+    temp = 30.0 - 0.5 * np.clip(t - 150.0, 0.0, None)
+    if quantum_c:
+        temp = np.round(temp / quantum_c) * quantum_c
+    late = (t > 163.0) & (t < 200.0)
+    np.testing.assert_allclose(temp_rate(t, temp)[late], -0.5, atol=0.03)
+    assert np.all(temp_rate(t, temp, TempRateConfig(short_s=0.0))[t < 170.0] > -0.2)
 
 
 @pytest.mark.parametrize("quantum_c", [0.0625, 1.0])
@@ -53,6 +108,10 @@ def test_config_validation():
         TempRateConfig(bin_s=0.0)
     with pytest.raises(ValueError, match="window_s"):
         TempRateConfig(window_s=1.0, bin_s=1.0)
+    with pytest.raises(ValueError, match="short_s"):
+        TempRateConfig(window_s=10.0, short_s=10.0)
+    with pytest.raises(ValueError, match="short_s"):
+        TempRateConfig(short_s=1.0)
 
 
 def test_drift_and_regressors():

@@ -34,15 +34,24 @@ class TempRateConfig:
         Length of the trailing least-squares window, s.
     bin_s : float
         Temperature averaging bin, s.
+    short_s : float
+        Length of the short window whose slope replaces the window's where they differ beyond
+        the short one's noise (a fast change), s; 0: the window alone.
     """
 
     window_s: float = setting(60.0, "s", gt=0.0)
     bin_s: float = setting(1.0, "s", gt=0.0)
+    short_s: float = setting(10.0, "s", ge=0.0)
 
     @property
     def window_bins(self) -> int:
         """How many bins before the newest one the window reaches back."""
         return int(round(self.window_s / self.bin_s))
+
+    @property
+    def short_bins(self) -> int:
+        """How many bins before the newest one the short window reaches back (0: none)."""
+        return int(round(self.short_s / self.bin_s))
 
     def __post_init__(self):
         check(self)
@@ -53,6 +62,9 @@ class TempRateConfig:
         if self.window_s / self.bin_s > MAX_TEMP_RATE_BINS:
             raise SettingError(f"window_s / bin_s = {self.window_s / self.bin_s:.3g} bins is beyond "
                                f"{MAX_TEMP_RATE_BINS:,}; lengthen bin_s or shorten window_s")
+        if self.short_s > 0.0 and not 2 <= self.short_bins < self.window_bins:
+            raise SettingError(f"short_s = {self.short_s!r} must be 0 (off) or at least two bins ({2 * self.bin_s:g} s) "
+                               f"and shorter than window_s ({self.window_s:g} s)")
 
 
 def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndarray:
@@ -89,7 +101,7 @@ def temp_rate(t_s, temp_c, config: TempRateConfig = TempRateConfig()) -> np.ndar
     fs = np.zeros(layout.N_FSTATE)
     ist = np.zeros(layout.N_ISTATE, dtype=np.int64)
     bins = np.zeros((config.window_bins + 3, 3))
-    temp_rate_chunk(t_s, temp_c, config.window_bins, float(config.bin_s), fs, ist, bins, out)
+    temp_rate_chunk(t_s, temp_c, config.window_bins, config.short_bins, float(config.bin_s), fs, ist, bins, out)
     return out
 
 

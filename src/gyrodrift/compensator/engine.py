@@ -81,6 +81,7 @@ def settings_arrays(config, estimator) -> tuple[np.ndarray, np.ndarray]:
     icfg[L.K_RELOCK] = gate.relock_intervals
     icfg[L.K_DEPTH] = config.stack_depth
     icfg[L.K_TP_WINDOW_BINS] = config.temp_rate.window_bins
+    icfg[L.K_TP_SHORT_BINS] = config.temp_rate.short_bins
     icfg[L.K_FUSE_INTERFERENCE] = int(bool(fusion.magnetic_gates))
     arrays = compiled_arrays(estimator)
     icfg[L.K_MODE] = L.MODE_EXTERNAL if arrays is None else int(arrays[1][L.EI_MODE])

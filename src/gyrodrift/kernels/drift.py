@@ -10,7 +10,8 @@ import math
 
 from gyrodrift.kernels import jit
 from gyrodrift.kernels.layout import (
-    F_TP_RATE, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_T0, I_TP_BIN, I_TP_HEAD, I_TP_LEN, I_TP_N, I_TP_STARTED,
+    F_TP_PREV, F_TP_RATE, F_TP_RES, F_TP_SUM_T, F_TP_SUM_TEMP, F_TP_T0, I_TP_BIN, I_TP_HEAD, I_TP_LEN, I_TP_N,
+    I_TP_STARTED,
 )
 from gyrodrift.kernels.numeric import near_boundary
 
@@ -34,23 +35,32 @@ def bias_sd(C00, C01, C02, C10, C11, C12, C20, C21, C22, temp_c, temp_rate_cps):
 
 
 @jit
-def temp_rate_chunk(t, temp, window_bins, bin_s, fs, ist, bins, out):
+def temp_rate_chunk(t, temp, window_bins, short_bins, bin_s, fs, ist, bins, out):
     """T' (degC/s) of every sample of a chunk into ``out``, resumable across chunks.
 
-    Until two bins have closed T' is 0. The tracker's state lives in locals during the
+    Until two bins have closed T' is 0. With ``short_bins`` > 0, the window's slope moves
+    towards the slope over the last ``short_bins`` bins as far as the two differ beyond the
+    short one's noise (:func:`_short_slope`). The tracker's state lives in locals during the
     loop and goes back to ``fs``/``ist`` at the end.
     """
     cap = bins.shape[0]
     if t.size and ist[I_TP_STARTED] == 0:
         fs[F_TP_T0] = t[0]
+        fs[F_TP_PREV] = temp[0]
         ist[I_TP_STARTED] = 1
         ist[I_TP_BIN] = math.floor((t[0] - fs[F_TP_T0]) / bin_s)
     t0 = fs[F_TP_T0]
     sum_t, sum_T, rate = fs[F_TP_SUM_T], fs[F_TP_SUM_TEMP], fs[F_TP_RATE]
+    res, prev = fs[F_TP_RES], fs[F_TP_PREV]
     cur, count, head, length = ist[I_TP_BIN], ist[I_TP_N], ist[I_TP_HEAD], ist[I_TP_LEN]
     t_near = near_boundary(t0, float(cur), bin_s)
     for i in range(t.size):
         ti = t[i]
+        if short_bins > 0:  # the temperature's resolution: its smallest step between rows
+            step = abs(temp[i] - prev)
+            if step > 0.0 and (res == 0.0 or step < res):
+                res = step
+            prev = temp[i]
         b = cur
         if ti >= t_near:
             b = math.floor((ti - t0) / bin_s)
@@ -65,6 +75,8 @@ def temp_rate_chunk(t, temp, window_bins, bin_s, fs, ist, bins, out):
                 head = (head + 1) % cap
                 length -= 1
             rate = _ring_slope(bins, head, length)
+            if short_bins > 0:
+                rate = _short_slope(bins, head, length, cur - short_bins, rate, res)
             sum_t = 0.0
             sum_T = 0.0
             count = 0
@@ -76,6 +88,7 @@ def temp_rate_chunk(t, temp, window_bins, bin_s, fs, ist, bins, out):
         count += 1
         out[i] = rate
     fs[F_TP_SUM_T], fs[F_TP_SUM_TEMP], fs[F_TP_RATE] = sum_t, sum_T, rate
+    fs[F_TP_RES], fs[F_TP_PREV] = res, prev
     ist[I_TP_BIN], ist[I_TP_N], ist[I_TP_HEAD], ist[I_TP_LEN] = cur, count, head, length
 
 
@@ -109,3 +122,59 @@ def _ring_slope(bins, head, n):
     if sxx <= 0.0:
         return 0.0
     return sxy / sxx
+
+
+
+@jit
+def _short_slope(bins, head, n, first_bin, rate, res):
+    """The window's slope ``rate`` moved towards the slope over the ring rows from bin number
+    ``first_bin`` on, as far as their difference is beyond the short slope's noise.
+
+    With d the difference and v the short slope's variance (a least-squares slope's from the
+    short rows' residuals, and at least the square of the slope one step of the reading by its
+    resolution ``res`` gives at the worst place in the short window: one step is no change of
+    T'), the result is ``rate + (1 - v/d²) d`` where d² > v, else ``rate``: the window's lag
+    taken as d² - v, the two slopes weighed by it and by v (the minimum-variance blend of a
+    lagging and a noisy estimate).
+    """
+    cap = bins.shape[0]
+    r = (head + n - 1) % cap  # the newest row, then back while in the short window
+    m = 0
+    st = 0.0
+    sT = 0.0
+    while m < n and bins[r, 0] >= first_bin:
+        st += bins[r, 1]
+        sT += bins[r, 2]
+        m += 1
+        r = (r - 1) % cap
+    if m < 3:
+        return rate
+    mt = st / m
+    mT = sT / m
+    sxx = 0.0
+    sxy = 0.0
+    r = (head + n - 1) % cap
+    for _ in range(m):
+        dt = bins[r, 1] - mt
+        sxx += dt * dt
+        sxy += dt * (bins[r, 2] - mT)
+        r = (r - 1) % cap
+    if sxx <= 0.0:
+        return rate
+    slope = sxy / sxx
+    ss = 0.0
+    after = 0.0  # Σ (t - mean t) over the newest rows: a unit step before them moves the slope by after/sxx
+    step_slope = 0.0
+    r = (head + n - 1) % cap
+    for _ in range(m):
+        dt = bins[r, 1] - mt
+        e = bins[r, 2] - mT - slope * dt
+        ss += e * e
+        after += dt
+        step_slope = max(step_slope, after / sxx)
+        r = (r - 1) % cap
+    var = max(ss / (m - 2) / sxx, (res * step_slope) ** 2)  # the short slope's variance
+    diff2 = (slope - rate) ** 2
+    if diff2 <= var:
+        return rate
+    return rate + (1.0 - var / diff2) * (slope - rate)

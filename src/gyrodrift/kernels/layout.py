@@ -50,7 +50,10 @@ F_FIELD_NORM, F_FIELD_DIP = 54, 55  # reference field of the init window (NaN: n
 #: The fused heading's refused compass run: the innovation its consistency is counted from,
 #: and since when (:func:`gyrodrift.kernels.fusion.step`).
 F_FZ_NU0, F_FZ_CONS_T = 56, 57
-N_FSTATE = 58
+#: The T' tracker's temperature resolution (smallest non-zero step between rows, 0: none yet)
+#: and the previous row's temperature.
+F_TP_RES, F_TP_PREV = 58, 59
+N_FSTATE = 60
 
 #: Fused-heading state, from F_FUSION.
 FZ_PSI, FZ_P, FZ_TPREV, FZ_RPREV, FZ_STARTED, FZ_T0, FZ_ISD, FZ_SDPREV, FZ_REJ_T = range(9)
@@ -80,7 +83,8 @@ N_CFG = 21
 # --------------------------------------------------------- integer settings
 
 K_RELOCK, K_MODE, K_DEPTH, K_TP_WINDOW_BINS, K_FUSE_INTERFERENCE = 0, 1, 2, 3, 4
-N_KCFG = 5
+K_TP_SHORT_BINS = 5  # T''s short window, bins (0: the window alone)
+N_KCFG = 6
 
 # ----------------------------------------------------------------- estimator
 

@@ -22,7 +22,7 @@ from gyrodrift.kernels.layout import (
     F_LAST_TEMP, F_PA, F_PB, F_PC, F_RATE, F_S0, F_S1, F_T, F_TEMP, F_TP, F_TSTART, FZ_ISD, FZ_P, FZ_PSI, FZ_REJ_T,
     FZ_RPREV, FZ_SDPREV, FZ_STARTED, FZ_T0, FZ_TPREV, I_AFTER_INT, I_ANCHOR_ROW, I_INIT_END, I_INIT_UPDATED, I_LB_HEAD,
     I_LB_N, I_N_ACC, I_PENDING, I_ROWS, I_S0_OK, I_S1_OK, I_STICKY, I_UNOBS, K_FUSE_INTERFERENCE, K_MODE,
-    K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY, O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING,
+    K_TP_SHORT_BINS, K_TP_WINDOW_BINS, MODE_EXTERNAL, NO_STICKY, O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING,
     O_HEADING_SD, O_RATE, OC_REASON, OC_UNOBS, OC_UPDATE, PENDING_NONE, R_FIELD, R_GAP, R_INIT, R_INTERFERENCE, R_NONE,
 )
 from gyrodrift.kernels.numeric import near_boundary, wrap180, wrap360
@@ -71,7 +71,7 @@ def prepare(t, g, T, heading, fs, ist, cfg, icfg, bins, g_held, T_held, h_wrappe
             h = heading[i]
             h_wrapped[i] = wrap360(h) if math.isfinite(h) else math.nan
     temps = T_held if fix & 2 else T
-    drift.temp_rate_chunk(t, temps, icfg[K_TP_WINDOW_BINS], cfg[C_TP_BIN_S], fs, ist, bins, Tp)
+    drift.temp_rate_chunk(t, temps, icfg[K_TP_WINDOW_BINS], icfg[K_TP_SHORT_BINS], cfg[C_TP_BIN_S], fs, ist, bins, Tp)
     n = t.size
     if n:
         fs[F_LAST_T] = t[n - 1]
