@@ -350,7 +350,8 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     out = compensate(log)
     assert (out["gate_reason"] == "interference").mean() < 0.2
     lagged = compensate(log, CompensatorConfig(temp_rate=TempRateConfig(short_s=0.0)))
-    rms_lagged = lambda col: float(np.sqrt(np.nanmean(np.asarray(wrap_180(lagged[col] - log["ref_heading"])) ** 2)))  # noqa: E731
+    rms_lagged = lambda col: float(np.sqrt(np.nanmean(  # noqa: E731
+        np.asarray(wrap_180(lagged[col] - log["ref_heading"])) ** 2)))
     assert rms("heading") < 0.1 * rms_lagged("heading")
     assert rms("heading_fused") < 0.5 * rms_lagged("heading_fused")
     assert rms("heading_fused") < 1.5 * rms("compass_heading")

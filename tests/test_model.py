@@ -108,10 +108,13 @@ def test_config_validation():
         TempRateConfig(bin_s=0.0)
     with pytest.raises(ValueError, match="window_s"):
         TempRateConfig(window_s=1.0, bin_s=1.0)
+    # a short window that does not fit is off, not an error (a user who shortens window_s alone)
+    assert TempRateConfig(window_s=10.0).short_bins == 0
+    assert TempRateConfig(short_s=1.0).short_bins == 0
+    assert TempRateConfig(bin_s=10.0, window_s=600.0).short_bins == 0
+    assert TempRateConfig().short_bins == 10
     with pytest.raises(ValueError, match="short_s"):
-        TempRateConfig(window_s=10.0, short_s=10.0)
-    with pytest.raises(ValueError, match="short_s"):
-        TempRateConfig(short_s=1.0)
+        TempRateConfig(short_s=-1.0)
 
 
 def test_drift_and_regressors():

@@ -124,7 +124,6 @@ def _ring_slope(bins, head, n):
     return sxy / sxx
 
 
-
 @jit
 def _short_slope(bins, head, n, first_bin, rate, res):
     """The window's slope ``rate`` moved towards the slope over the ring rows from bin number
