@@ -4,10 +4,10 @@
         [--temp-rate-window-s S] [--temp-rate-short-s S]
 
 ``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
-only ``default`` is recomputed here (with the settings given, and ``--temp-rate-window-s`` the
-T' window of the front end, which the baselines of the file were run with at its default), so a
-setting can be tried in a minute. Prints per class the default's median heading, bias and fused RMS beside the best
-causal baseline's and Fusion's AHRS, and the honesty columns.
+only ``default`` is recomputed here (with the settings given; ``--temp-rate-window-s`` and
+``--temp-rate-short-s`` set the front end's T', which the file's baselines keep as they were run),
+so a setting can be tried in a minute. Prints per class the default's median heading, bias and
+fused RMS beside the best causal baseline's and Fusion's AHRS, and the honesty columns.
 """
 
 from __future__ import annotations
