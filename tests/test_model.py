@@ -73,6 +73,16 @@ def test_the_short_window_is_the_rule_written_out():
     assert np.any(got != temp_rate(t, temp, TempRateConfig(window_s=30.0, bin_s=0.5, short_s=0.0)))
 
 
+@pytest.mark.parametrize("quantum_c", [0.0625, 1.0])
+@pytest.mark.parametrize("slope_cps", [0.01, 0.05, 0.1])
+def test_a_quantised_ramp_keeps_the_window_s_rate_to_the_bit(quantum_c, slope_cps):
+    """One step of the reading inside the short window is no change of T': on a quantised ramp
+    the short window never moves the window's slope."""
+    t = np.arange(0.0, 3000.0, 0.1)
+    temp = np.floor((20.0 + slope_cps * t) / quantum_c) * quantum_c
+    assert np.array_equal(temp_rate(t, temp), temp_rate(t, temp, TempRateConfig(short_s=0.0)))
+
+
 @pytest.mark.parametrize("quantum_c", [0.0, 0.0625])
 def test_a_shock_is_followed_within_the_short_window(quantum_c):
     """A temperature that falls at 0.5 degC/s from 150 s: T' is the shock's within about
