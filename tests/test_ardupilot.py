@@ -294,17 +294,19 @@ def test_cli_compensate_bin_equals_compensating_the_simulated_csv(sim, flight, t
     turned = np.abs((a["compass_heading"] - b["compass_heading"] + 180.0) % 360.0 - 180.0)
     assert np.nanmedian(turned) < 0.1 and np.nanmax(turned) < 0.3
     np.testing.assert_allclose(a["gyro_z"], b["gyro_z"], rtol=0, atol=1e-5)  # float32 rates, deg/s
-    # and the drift the model learns on this 2-min drive (0.45 deg/s RMS from the truth) moves by
-    # a sixteenth of that on 95 % of the rows, and where the rounding tips the weighing of the
-    # hypotheses for a few epochs (25-45 s) by a third of it (a model that believes the compass's
-    # slow error smaller can tip for good there: docs/results.md, "A drive's rounding"). With
-    # T' from the 60-s window alone, which lags this warm-up's 0.1-0.25 degC/s, the drift was
-    # 0.53 deg/s from the truth and moved by a hundredth and a sixth: b's share of the drift,
-    # which the weighing moves, was smaller.
+    # and the drift the model learns on this 2-min drive (0.44 deg/s RMS from the truth) moves by
+    # under a sixth of that on 90 % of the rows; where the rounding tips the weighing of the
+    # hypotheses (45-60 s, while b is learned: -1.4 against 0.1 deg/s per degC/s, then 5.8
+    # against 7.8, the device's 5.0) by up to 0.6 of it, and the gyro heading by up to 2 deg (a
+    # model that believes the compass's slow error smaller can tip for good there:
+    # docs/results.md, "A drive's rounding"). The T' of this warm-up (0.04-0.17 degC/s), which
+    # follows its bends (docs/conventions.md, "How T' is computed"), gives b the larger share
+    # of the drift, which is what the weighing moves: with the 60-s window alone the drift was
+    # 0.53 deg/s from the truth and moved by a hundredth on 95 % of the rows and a sixth at most.
     err = float(np.sqrt(np.mean((b["bias_z"] - sim["true_bias_z"].to_numpy()) ** 2)))
     moved = np.abs(a["bias_z"] - b["bias_z"])
-    assert np.quantile(moved, 0.95) < err / 16 and moved.max() < err / 2.5
-    assert np.abs((a["heading"] - b["heading"] + 180.0) % 360.0 - 180.0).max() < 0.6  # start and drift (0.5)
+    assert np.quantile(moved, 0.9) < err / 6 and moved.max() < err / 1.5
+    assert np.abs((a["heading"] - b["heading"] + 180.0) % 360.0 - 180.0).max() < 2.5
     assert (a["gate_reason"].fillna("") == b["gate_reason"].fillna("")).mean() > 0.9  # 93.5 % with the gyro-aided tilt
     # --instance reaches the reader
     out1 = tmp_path / "instance1.csv"

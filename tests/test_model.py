@@ -27,7 +27,8 @@ def _written_out(t, temp, cfg):
     """T' by np.polyfit through the closed bins' means; with ``short_s``, moved towards the
     short window's slope by 1 - v/d² of their difference d where d² > v, v the short slope's
     variance: at least the square of the slope that a step by the temperature's resolution (its
-    smallest step between rows so far) gives at the worst place in the short window."""
+    smallest step between rows so far) gives at the worst place in the short window; then, the
+    same way, towards the slope at the newest bin of a quadratic through the short window."""
     k = np.floor((t - t[0]) / cfg.bin_s)
     expected = np.zeros(t.size)
     steps = np.abs(np.diff(temp, prepend=temp[0]))
@@ -56,6 +57,19 @@ def _written_out(t, temp, cfg):
         d = slope - expected[i]
         if d * d > v:
             expected[i] += (1.0 - v / (d * d)) * d
+        if short.sum() < 5:
+            continue
+        # then towards the slope at the newest bin of a quadratic through the short window's bins
+        u = ts - ts[-1]
+        coef, res2, *_ = np.polyfit(u, bT[short], 2, full=True)
+        X = np.vander(u, 3)
+        cov = np.linalg.inv(X.T @ X)[1, 1]  # of the linear coefficient, the slope at u = 0
+        ss2 = float(res2[0]) if res2.size else 0.0
+        steps_at = [np.polyfit(u, (np.arange(u.size) >= j).astype(float), 2)[1] for j in range(1, u.size)]
+        v2 = max(ss2 / (u.size - 3) * cov, (resolution * max(np.abs(steps_at))) ** 2)
+        d2 = coef[1] - expected[i]
+        if d2 * d2 > v2:
+            expected[i] += (1.0 - v2 / (d2 * d2)) * d2
     return expected
 
 

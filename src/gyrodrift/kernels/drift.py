@@ -174,6 +174,58 @@ def _short_slope(bins, head, n, first_bin, rate, res):
         r = (r - 1) % cap
     var = max(ss / (m - 2) / sxx, (res * step_slope) ** 2)  # the short slope's variance
     diff2 = (slope - rate) ** 2
-    if diff2 <= var:
+    if diff2 > var:
+        rate = rate + (1.0 - var / diff2) * (slope - rate)
+    return _end_slope(bins, head, n, m, rate, res)
+
+
+@jit
+def _end_slope(bins, head, n, m, rate, res):
+    """``rate`` moved towards the slope at the newest of the last ``m`` ring rows of a
+    least-squares quadratic through them, as far as the two differ beyond that slope's noise
+    (its variance from the residuals, and at least that of one step of the reading by ``res``
+    at the worst place): the short window's own lag where the temperature bends."""
+    if m < 5:
         return rate
-    return rate + (1.0 - var / diff2) * (slope - rate)
+    cap = bins.shape[0]
+    newest = bins[(head + n - 1) % cap, 1]
+    y_new = bins[(head + n - 1) % cap, 2]  # temperatures from the newest: a flat one fits exactly
+    s0 = s1 = s2 = s3 = s4 = y0 = y1 = y2 = 0.0
+    r = (head + n - 1) % cap
+    for _ in range(m):
+        u = bins[r, 1] - newest
+        y = bins[r, 2] - y_new
+        s0 += 1.0
+        s1 += u
+        s2 += u * u
+        s3 += u * u * u
+        s4 += u * u * u * u
+        y0 += y
+        y1 += u * y
+        y2 += u * u * y
+        r = (r - 1) % cap
+    # the inverse of the normal equations' matrix (symmetric, by its adjugate)
+    i00, i01, i02 = s2 * s4 - s3 * s3, s2 * s3 - s1 * s4, s1 * s3 - s2 * s2
+    i11, i12, i22 = s0 * s4 - s2 * s2, s1 * s2 - s0 * s3, s0 * s2 - s1 * s1
+    det = s0 * i00 + s1 * i01 + s2 * i02
+    if not abs(det) > 0.0:
+        return rate
+    c0 = (i00 * y0 + i01 * y1 + i02 * y2) / det
+    c1 = (i01 * y0 + i11 * y1 + i12 * y2) / det
+    c2 = (i02 * y0 + i12 * y1 + i22 * y2) / det
+    ss = 0.0
+    after = 0.0  # Σ of c1's weights over the newest rows: a unit step before them moves c1 by it
+    step = 0.0
+    r = (head + n - 1) % cap
+    for _ in range(m):
+        u = bins[r, 1] - newest
+        e = bins[r, 2] - y_new - (c0 + (c1 + c2 * u) * u)
+        ss += e * e
+        after += (i01 + (i11 + i12 * u) * u) / det
+        step = max(step, abs(after))
+        r = (r - 1) % cap
+    var = max(ss / (m - 3) * i11 / det, (res * step) ** 2)
+    d = c1 - rate
+    if d * d <= var:
+        return rate
+    return rate + (1.0 - var / (d * d)) * d
