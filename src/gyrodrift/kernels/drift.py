@@ -40,7 +40,8 @@ def temp_rate_chunk(t, temp, window_bins, short_bins, bin_s, fs, ist, bins, out)
 
     Until two bins have closed T' is 0. With ``short_bins`` > 0, the window's slope moves
     towards the slope over the last ``short_bins`` bins as far as the two differ beyond the
-    short one's noise (:func:`_short_slope`). The tracker's state lives in locals during the
+    short one's noise (:func:`_short_slope`), and then towards a quadratic's slope at the
+    newest of them (:func:`_end_slope`). The tracker's state lives in locals during the
     loop and goes back to ``fs``/``ist`` at the end.
     """
     cap = bins.shape[0]
@@ -134,7 +135,8 @@ def _short_slope(bins, head, n, first_bin, rate, res):
     resolution ``res`` gives at the worst place in the short window: one step is no change of
     T'), the result is ``rate + (1 - v/d²) d`` where d² > v, else ``rate``: the window's lag
     taken as d² - v, the two slopes weighed by it and by v (the minimum-variance blend of a
-    lagging and a noisy estimate).
+    lagging and a noisy estimate). That result then goes through :func:`_end_slope` over the
+    same rows.
     """
     cap = bins.shape[0]
     r = (head + n - 1) % cap  # the newest row, then back while in the short window
