@@ -44,6 +44,7 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.drift.temp_rate_chunk": ["F1 F1 i i f F1 I1 F2 F1", "F1r F1r i i f F1 I1 F2 F1"],
     "kernels.drift._ring_slope": ["F2 i i"],
     "kernels.drift._short_slope": ["F2 i i i f f"],
+    "kernels.drift._end_slope": ["F2 i i i f f"],
     "kernels.drift.bias": ["f f f f f"],
     "kernels.drift.bias_sd": ["f f f f f f f f f f f"],
     "kernels.numeric.wrap360": ["f"],
