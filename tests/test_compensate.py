@@ -344,9 +344,9 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     assert_same(out, stream(log, jumps))
     # without jumps aiding still resumes. The drift falls from 1.1 to 0 deg/s within a minute,
     # at 660 s, as heating turns to cooling: T' from the 60-s window alone follows it 30 s late,
-    # which cost the gyro heading 100 deg (67 deg RMS) and the fused heading 10 deg RMS; T'
-    # moved towards the 10-s window's slope follows it (docs/conventions.md, "How T' is
-    # computed"): a few degrees each
+    # which costs the gyro heading 120 deg (77 deg RMS) and the fused heading 11 deg RMS; the
+    # default T', moved towards the 10-s window's slope and a quadratic's at its newest bin,
+    # follows it (docs/conventions.md, "How T' is computed"): 3.7 and 2.2 deg RMS
     out = compensate(log)
     assert (out["gate_reason"] == "interference").mean() < 0.2
     lagged = compensate(log, CompensatorConfig(temp_rate=TempRateConfig(short_s=0.0)))
