@@ -59,8 +59,9 @@ class AdaptiveConfig:
         disturbance) and decay time (s).
     steady_walk : float
         Random walk of a steady disturbance, deg/√s (docs/model.md, "Hypotheses").
-    scale_factor_sd : float
-        The gyro's scale-factor uncertainty, as a fraction of the angle turned (docs/model.md, "Motion").
+    scale_factor_sd, scale_factor_walk : float
+        The gyro's scale-factor error σ, a share of the angle turned: its prior standard deviation
+        and its random walk per √degC of temperature change (docs/model.md, "Scale factor").
     turn_error_s : float
         Compass error while turning per deg/s of turn rate, s.
     deviation_span_deg : float
@@ -119,7 +120,8 @@ class AdaptiveConfig:
     disturbance_step_deg: float = setting(30.0, "deg", gt=0.0, most=360.0)
     disturbance_walk: float = setting(1.0, "deg per √s", ge=0.0, most=360.0)
     steady_walk: float = setting(0.1, "deg per √s", ge=0.0, most=360.0)
-    scale_factor_sd: float = setting(0.01, ge=0.0, most=1.0)
+    scale_factor_sd: float = setting(0.01, ge=0.0, most=0.5)
+    scale_factor_walk: float = setting(5e-4, "per √degC", ge=0.0, most=0.5)
     disturbance_s: float = setting(1800.0, "s", gt=0.0)
     turn_error_s: float = setting(0.5, "s", ge=0.0)
     deviation_span_deg: float = setting(90.0, "deg", gt=0.0)
@@ -163,7 +165,7 @@ class AdaptiveConfig:
         mc[ev.MC_SIG_STEP], mc[ev.MC_Q_E] = self.disturbance_step_deg, self.disturbance_walk
         mc[ev.MC_TAU_E] = self.disturbance_s
         mc[ev.MC_Q_E_STEADY] = self.steady_walk
-        mc[ev.MC_SF_SD] = self.scale_factor_sd
+        mc[ev.MC_SF_WALK] = self.scale_factor_walk
         mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks
         mc[ev.MC_SHARE:ev.MC_SHARE + ev.N_RATE] = self.turn_shares
         mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps
@@ -222,6 +224,7 @@ class AdaptiveModel(LinearDrift):
         P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
         P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
         P0[ev.X_A2, ev.X_A2] = self.settings.curvature_sd ** 2
+        P0[ev.X_S, ev.X_S] = self.settings.scale_factor_sd ** 2
 
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)

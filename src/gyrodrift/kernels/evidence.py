@@ -1,8 +1,9 @@
 """The default estimator's model: heading, drift and compass error, judged by evidence.
 
-Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2]`` (δ = heading − ∫gyro; a,
+Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2, σ]`` (δ = heading − ∫gyro; a,
 b, c' the drift of eq. 2 centred on ``T_ref``; d the compass's slow error; r the drift's rate of
-departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in temperature), one per
+departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in temperature; σ the
+share of a turn the gyro's scale factor adds, ``rate = (gyro - drift) (1 - σ)``), one per
 hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
 moving), stepped once per epoch (:func:`epoch`: δ moves by
 minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
@@ -25,7 +26,7 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 6, 8
+NM, NX = 6, 9
 #: Branches of an epoch: two starting points of each mode (:func:`_branches`).
 NB = 2 * NM
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
@@ -38,7 +39,7 @@ N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 *
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
-X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2 = 0, 1, 2, 3, 4, 5, 6, 7
+X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2, X_S = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
 # ------------------------------------------------------------------ float state
 MF_X = 0                      # (NM, NX) states per mode
@@ -140,7 +141,7 @@ KAPPA_CLIP = 16.0
  MC_SIG_ACC, MC_OMEGA_GAP, MC_Q_STILL,
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
- MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_SD,
+ MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_WALK,
  MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY) = range(39)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
@@ -406,11 +407,12 @@ def _update(x, P, H, z, R, wrap, only, PH):
 
 
 @jit(inline=True)
-def _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
-    """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05, f07: its a,
-    b, c', r, a2 entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
+def _rows(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe):
+    """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05, f07, f08: its
+    a, b, c', r, a2, σ entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
     for k in range(NX):
-        P[X_DELTA, k] += f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k] + f07 * P[X_A2, k]
+        P[X_DELTA, k] += (f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k] + f07 * P[X_A2, k]
+                          + f08 * P[X_S, k])
         P[X_C, k] += g * P[X_R, k]
         P[X_D, k] *= pd
         P[X_R, k] *= pr
@@ -418,11 +420,11 @@ def _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
 
 
 @jit(inline=True)
-def _transition(P, f01, f02, f03, f05, f07, g, pd, pr, pe):
+def _transition(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe):
     """``P`` ← F P Fᵀ in place, no temporary (F as :func:`_rows` has it): rows, then columns."""
-    _rows(P, f01, f02, f03, f05, f07, g, pd, pr, pe)
+    _rows(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe)
     Pt = P.T
-    _rows(Pt, f01, f02, f03, f05, f07, g, pd, pr, pe)
+    _rows(Pt, f01, f02, f03, f05, f07, f08, g, pd, pr, pe)
 
 
 @jit
@@ -651,6 +653,7 @@ def epoch(mf, mc, t_end, temp_end):
     q_a = mc[MC_Q_A] ** 2 * dtemp
     q_b = mc[MC_Q_B] ** 2 * dt
     q_c = mc[MC_Q_C] ** 2 * dt + mc[MC_Q_CT] ** 2 * dtemp
+    q_s = mc[MC_SF_WALK] ** 2 * dtemp  # the scale factor walks with the temperature
     sig_s2 = long_run(mf, mf[MF_SIG_S2])
     arw = sig_s2 * mf[MF_E_H2]  # variance of the gyro integral's white noise over the epoch
     # the trapezoid's error within each step under the motion believed: the rate's walk over the
@@ -664,12 +667,14 @@ def epoch(mf, mc, t_end, temp_end):
         Pj = P[r]
         still = _is_still(j)
         drift_int = x[X_A] * dTc + x[X_B] * dTp + x[X_C] * dt + 0.5 * x[X_R] * dt * dt + x[X_A2] * dTc2
+        # the turn the gyro saw beyond its drift: the scale factor's share σ of it is no turn
+        seen = dG - drift_int
         if still:  # the heading holds: δ moves with the gyro integral
             x[X_DELTA] -= dG
-        else:  # δ moves by minus the drift integral (eq. 5)
-            x[X_DELTA] -= drift_int
+        else:  # δ moves by minus the drift integral (eq. 5) and the scale factor's part of the turn
+            x[X_DELTA] -= drift_int + x[X_S] * seen
         # d and e decorrelate in time and with the heading this mode turned (none when still)
-        turned = 0.0 if still or gap else abs(dG - drift_int)
+        turned = 0.0 if still or gap else abs(seen)
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
         # a steady disturbance is fixed in the world: it does not change as the platform turns
         te = 0.0 if _is_steady(j) else turned / mc[MC_L_DEV]
@@ -683,11 +688,11 @@ def epoch(mf, mc, t_end, temp_end):
         x[X_D] = wrap180(x[X_D]) * phi_d
         x[X_E] = wrap180(x[X_E]) * phi_e
         if still:
-            _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
+            _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
         else:
-            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, gain_r, phi_d, phi_r, phi_e)
-        # a moving heading also errs with the gyro's scale factor, by a fraction of the angle turned
-        Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q + (mc[MC_SF_SD] * turned) ** 2
+            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, -seen, gain_r, phi_d, phi_r, phi_e)
+        Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
+        Pj[X_S, X_S] += q_s
         Pj[X_A, X_A] += q_a
         Pj[X_B, X_B] += q_b
         Pj[X_C, X_C] += q_c
@@ -738,6 +743,7 @@ def epoch(mf, mc, t_end, temp_end):
         Hm[X_A2] = dTc2 - mf[MF_E_STC2] / n_c
         Hm[X_B] = dTp - mf[MF_E_STP] / n_c
         Hm[X_C] = dt - mf[MF_E_ST] / n_c
+        Hm[X_S] = h_still  # the scale factor's share of the turn from the mean sample to the end
         if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
             ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]

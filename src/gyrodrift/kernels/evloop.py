@@ -160,7 +160,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             _open(mf, ti, Ti)
         a, b, c, a2 = xc[X_A], xc[X_B], xc[X_C], xc[ev.X_A2]
         bias = a * (Ti - tref) + b * Tpi + c + a2 * (Ti - tref) ** 2
-        rate = gi - bias
+        rate = (gi - bias) * (1.0 - xc[ev.X_S])  # less the scale factor's share of the turn
         h = ti - c_t
         gap = False
         reason_gap = False
@@ -281,7 +281,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         out[o_heading + ix] = I_rate if rf[RF_INIT_RAW] == 1.0 else wrap360(rf[RF_ANCHOR] + I_rate)
         sig_w = mc[MC_COMPASS_SD]
         if rf[RF_FUSED_ON] == 1.0:
-            out[O_FUSED * cap + ix] = wrap360(I_raw + xc[X_DELTA] - (I_bias - rf[RF_IBIAS_E]))
+            turn = I_raw - rf[RF_IRAW_E] - (I_bias - rf[RF_IBIAS_E])  # since the epoch end, less the drift
+            out[O_FUSED * cap + ix] = wrap360(rf[RF_IRAW_E] + xc[X_DELTA] + (1.0 - xc[ev.X_S]) * turn)
             out[O_FUSED_SD * cap + ix] = math.sqrt(max(Pc[X_DELTA, X_DELTA], 0.0))
         else:
             out[O_FUSED * cap + ix] = math.nan

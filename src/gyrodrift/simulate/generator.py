@@ -518,7 +518,7 @@ CLASSES: Mapping[str, str] = MappingProxyType(
 
 
 #: The random streams of a case, one per random source (:func:`seeded_streams`).
-_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log")
+_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log", "scale")
 
 
 def _telemetry_times(duration: float, rng: np.random.Generator) -> np.ndarray:
@@ -571,6 +571,19 @@ def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:
     return out
 
 
+#: The gyro's scale-factor error: standard deviation at 25 degC and bound (fractions), and the
+#: standard deviation of its temperature coefficient (per degC).
+SF_SD, SF_MAX, SF_TC_SD = 0.008, 0.025, 1e-4
+
+
+def _scale_factor_error(temp_c: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The gyro's scale-factor error at each temperature (a fraction: the gyro reads
+    ``(1 + error)`` times the rate): a MEMS gyro's sensitivity tolerance at 25 degC, plus a
+    linear temperature coefficient (``docs/simulator.md``)."""
+    sf0 = float(np.clip(SF_SD * rng.standard_normal(), -SF_MAX, SF_MAX))
+    return sf0 + SF_TC_SD * rng.standard_normal() * (np.asarray(temp_c, float) - 25.0)
+
+
 def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCase:
     """Generate the log of one case.
 
@@ -605,7 +618,8 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     tl = t[rows]
     sigma = dev.white_sigma_dps(fs) * (rec.vibration(tl) if rec.vibration is not None else 1.0)
     body = math.cos(math.radians(rec.roll_deg)) * math.cos(math.radians(rec.pitch_deg))
-    gyro = body * rate[rows] + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
+    sf = _scale_factor_error(temp_true[rows], rng["scale"])
+    gyro = body * (1.0 + sf) * rate[rows] + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
     temp = temperature_reading(temp_true, dev, rng["temp"])[rows]
     if rec.temp_channel_c is not None:
         temp = np.full(rows.size, float(rec.temp_channel_c))
