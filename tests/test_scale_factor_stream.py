@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from gyrodrift.compensator import compensate
+from gyrodrift.compensator import CompensatorConfig, compensate
 from gyrodrift.conventions import wrap_360
 from gyrodrift.errors import ConfigError, GyroDriftError, LogFormatError
 from gyrodrift.scale_factor import (
@@ -168,7 +168,7 @@ HARD = ScaleFactorConfig(max_turn_s=60.0)
 
 @pytest.fixture(scope="module")
 def sim_out():
-    return compensate(simulate("scale-factor", seed=0, duration_s=3600.0, fs_hz=10.0))
+    return compensate(simulate("scale-factor", seed=0, duration_s=3600.0, fs_hz=10.0), CompensatorConfig().without_scale_factor())
 
 
 @pytest.mark.parametrize("chunks", [None, 3, 400])
@@ -338,13 +338,13 @@ def test_batch_pass_rejects_time_going_back():
 def test_compensator_scale_factor_equals_batch():
     from dataclasses import asdict
 
-    from gyrodrift.compensator import CompensatorConfig, Compensator
+    from gyrodrift.compensator import Compensator
 
     log = simulate("scale-factor", seed=1, duration_s=1500.0, fs_hz=10.0)
     log.loc[log["t"].between(1074.0, 1074.3), "temp"] = np.nan  # held; a gap refusal before a turn
     log.loc[log["t"].between(362.0, 365.0), "heading"] = np.nan  # a turn without compass
     cfg, sf_cfg = CompensatorConfig(), ScaleFactorConfig()
-    batch = compensate(log, cfg)
+    batch = compensate(log, cfg.without_scale_factor())  # as the Compensator does with a scale factor
     sf = estimate_scale_factor(batch, sf_cfg, causal=True)
 
     comp = Compensator(cfg, scale_factor=sf_cfg, provisional=False)

@@ -279,6 +279,8 @@ def compensate_file(
         log = opts.read(input_path)
         if prior is not None:
             cfg = _with_prior(prior, cfg, log, input_path)
+        if scale_factor:  # the paper's scale-factor stage estimates the whole scale factor
+            cfg = cfg.without_scale_factor()
         out = compensate(log, cfg, source=str(input_path), progress=progress)
         if smooth:
             from gyrodrift.smooth import smooth_output

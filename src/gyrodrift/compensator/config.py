@@ -91,6 +91,12 @@ class CompensatorConfig:
             return self.fusion
         return FusionConfig.tolerant()
 
+    def without_scale_factor(self) -> "CompensatorConfig":
+        """These settings with the default model's scale factor held exact (its ``σ`` at 0): the
+        drift stage of the paper's Sec. 4.3, after which :mod:`gyrodrift.scale_factor`
+        estimates the whole scale factor from ``rate_z`` (``docs/scale_factor.md``)."""
+        return replace(self, adaptive=replace(self.adaptive, scale_factor_sd=0.0, scale_factor_walk=0.0))
+
     def __post_init__(self):
         check(self)
 

@@ -39,7 +39,8 @@ class Compensator:
 
     The first sample decides the x and y axes (``gyro_x_dps``, ``gyro_y_dps`` and ``acc``);
     ``scale_factor`` (a :class:`gyrodrift.scale_factor.ScaleFactorConfig`) adds the online scale
-    factor (``sf``, ``sf_sd``, ``rate_sf``, ``heading_sf``; NaN without it). ``gyro_max_dps``
+    factor (``sf``, ``sf_sd``, ``rate_sf``, ``heading_sf``; NaN without it), the default model's
+    own scale factor then held exact (:meth:`CompensatorConfig.without_scale_factor`). ``gyro_max_dps``
     (deg/s) bounds the gyro as a log's rows are bounded; ``gyro_unit`` is the unit the rates
     were read in (for the gyro-unit note), ``time_unit`` that of the times pushed (``"s"``,
     ``"ms"``, ``"us"``, ``"ns"``). What each does, and what the front end of a stream leaves
@@ -66,6 +67,8 @@ class Compensator:
                  scale_factor=None, gyro_max_dps: float = GYRO_MAX_DPS, provisional: bool = True,
                  time_unit: str | None = None, gyro_unit: str | None = None):
         self.config = check_config(config)
+        if scale_factor is not None:  # the tracker estimates the whole scale factor
+            self.config = self.config.without_scale_factor()
         check_estimator(estimator)
         self.source = source = check_source(source)
         self._gyro_max_dps = check_gyro_max_dps(gyro_max_dps)

@@ -427,7 +427,12 @@ def scale_factor_experiment(
     log = simulate(
         "scale-factor", seed=seed, duration_s=duration_s, fs_hz=fs_hz, device=device, compass=compass
     )
-    out = compensate(log, compensator_config)
+    model_config = compensator_config or CompensatorConfig()
+    # the paper's drift stage: the drift alone, the default model's own scale factor held at 1
+    # (its share of the turns would otherwise leave the stage after it little to estimate)
+    drift_config = model_config.without_scale_factor()
+    out = compensate(log, drift_config)
+    model_heading = compensate(log, model_config)["heading"].to_numpy(float)
     sf = estimate_scale_factor(out, config, causal=causal)
     turns = sf.attrs["turns"]
 
@@ -448,11 +453,12 @@ def scale_factor_experiment(
         "none": out["heading"].to_numpy(float),
         "fixed": sf["heading_sf_fixed"].to_numpy(),
         "adaptive": sf["heading_sf"].to_numpy(),
+        "model": model_heading,  # the default model, its scale factor learned with the drift
     }
     errors = {k: heading_error(h, ref) for k, h in headings.items()}
     errors["ideal"] = heading_error(heading_ideal, ref)
     sf_part = {k: heading_error(h, heading_ideal) for k, h in headings.items()}
-    fig11 = pd.DataFrame({"t": t, **{f"err_{k}": v for k, v in errors.items()}})
+    fig11 = pd.DataFrame({"t": t, **{f"err_{k}": v for k, v in errors.items() if k != "model"}})  # the paper's lines
 
     ups = np.flatnonzero(sf["sf_update"].to_numpy())
     after = slice(int(ups[0]) + 1 if ups.size else t.size, t.size)
