@@ -66,7 +66,7 @@ def test_a_scalar_update_is_the_kalman_formula():
     P_hand = P - np.outer(K, H @ P)
     ll_hand = -0.5 * (np.log(2 * np.pi * S) + (z - H @ x) ** 2 / S)
     x_k, P_k = x.copy(), P.copy()
-    ll = ev._update(x_k, P_k, H, z, R, False, -1, np.empty(ev.NX))
+    ll = ev._update(x_k, P_k, H, z, R, False, -1, -1, np.empty(ev.NX))
     assert x_k == pytest.approx(x_hand, rel=1e-12)
     assert P_k == pytest.approx(0.5 * (P_hand + P_hand.T), rel=1e-10, abs=1e-12)
     assert ll == pytest.approx(ll_hand, rel=1e-12)
@@ -80,7 +80,7 @@ def test_a_schmidt_update_corrects_one_state_and_keeps_the_others():
     H = np.zeros(ev.NX)
     H[ev.X_DELTA] = H[ev.X_E] = 1.0
     x_k, P_k = x.copy(), P.copy()
-    ev._update(x_k, P_k, H, 5.0, 0.1, False, ev.X_E, np.empty(ev.NX))
+    ev._update(x_k, P_k, H, 5.0, 0.1, False, ev.X_E, -1, np.empty(ev.NX))
     others = [k for k in range(ev.NX) if k != ev.X_E]
     assert x_k[others] == pytest.approx(x[others], abs=0.0)
     assert P_k[np.ix_(others, others)] == pytest.approx(P[np.ix_(others, others)], abs=1e-12)

@@ -356,11 +356,13 @@ def _quad(P, H):
 
 
 @jit(inline=True)
-def _update(x, P, H, z, R, wrap, only, PH):
+def _update(x, P, H, z, R, wrap, only, keep, PH):
     """Scalar measurement ``z = H x + v``, var R: x, P in place; returns the log-likelihood
     (``wrap``: the innovation is an angle, wrapped to ±180). ``only`` >= 0: the measurement
     corrects that state alone (the others are considered, not corrected: a Schmidt update).
-    ``PH``: scratch (NX)."""
+    Else ``keep`` >= 0: it corrects every state but that one (its gain 0; in the Joseph form
+    only its own variance then differs from the optimal update's: it is kept). ``PH``:
+    scratch (NX)."""
     S = R
     nu = z
     for r in range(NX):
@@ -390,12 +392,16 @@ def _update(x, P, H, z, R, wrap, only, PH):
             P[c, only] = PH[c]
         P[only, only] = corner
     else:
+        kept = P[keep, keep] if keep >= 0 else 0.0
         for r in range(NX):
-            x[r] += PH[r] / S * nu
+            if r != keep:
+                x[r] += PH[r] / S * nu
         for r in range(NX):
             k = PH[r] / S
             for c in range(NX):
                 P[r, c] -= k * PH[c]
+        if keep >= 0:
+            P[keep, keep] = kept
     for r in range(NX):  # symmetric, non-negative diagonal
         for c in range(r + 1, NX):
             m = 0.5 * (P[r, c] + P[c, r])
@@ -538,7 +544,7 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     turn = 0.0 if still else mc[MC_K_TURN] * (dG - _dot(Hg, x)) / dt
     if not gap:
         if still:
-            ll += _update(x, P, Hg, dG, arw, False, -1, PH)
+            ll += _update(x, P, Hg, dG, arw, False, -1, -1, PH)
         else:
             mean = _dot(Hg, x)
             base = _quad(P, Hg) + arw
@@ -569,7 +575,10 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
         s_pred = S - mf[MF_RX]
         if s_pred < RX_S_MAX:  # the excess says something of the compass once the heading is known
             excess = nu * nu - s_pred
-        ll += _update(x, P, H, z, Rc + turn * turn, True, only, PH)
+        # the scale factor is learned from a clean compass alone: a disturbance that changes
+        # as the platform turns (or a steady one with a heading-dependent deviation) must not
+        # teach it (σ considered, not corrected)
+        ll += _update(x, P, H, z, Rc + turn * turn, True, only, -1 if _is_clean(j) else X_S, PH)
         if _is_clean(j):
             ll += field_ll
     return ll, excess, nu, S
