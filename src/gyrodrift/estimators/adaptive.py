@@ -19,6 +19,10 @@ from gyrodrift.settings import SettingError, check, setting, show
 
 __all__ = ["AdaptiveConfig", "AdaptiveModel"]
 
+#: The scale-factor error σ is held within this many of its prior standard deviations (a MEMS
+#: gyro's sensitivity is within its datasheet's tolerance; docs/model.md, "The gyro's scale factor").
+SF_MAX_SDS = 3.0
+
 
 @dataclass(frozen=True, kw_only=True)
 class AdaptiveConfig:
@@ -166,6 +170,7 @@ class AdaptiveConfig:
         mc[ev.MC_TAU_E] = self.disturbance_s
         mc[ev.MC_Q_E_STEADY] = self.steady_walk
         mc[ev.MC_SF_WALK] = self.scale_factor_walk
+        mc[ev.MC_SF_MAX] = SF_MAX_SDS * self.scale_factor_sd
         mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] = self.turn_walks
         mc[ev.MC_SHARE:ev.MC_SHARE + ev.N_RATE] = self.turn_shares
         mc[ev.MC_SIG_ACC], mc[ev.MC_OMEGA_GAP] = self.angular_accel_dps2, self.gap_turn_dps

@@ -142,10 +142,10 @@ KAPPA_CLIP = 16.0
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
  MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_WALK,
- MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY) = range(39)
+ MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY, MC_SF_MAX) = range(40)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 39
+MC_Q_W = 40
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -818,6 +818,9 @@ def epoch(mf, mc, t_end, temp_end):
         lm[j] = t2 + math.log(qa + qb)
         qa, qb = qa / (qa + qb), qb / (qa + qb)
         _merge(X[j], P[j], qa, X[NM + j], P[NM + j], qb, Xm[j], Pm[j], da, db)
+        # a gyro's scale factor is within its datasheet's tolerance: a compass whose error the
+        # model does not know (a deviation beyond d's) must not carry σ past it
+        Xm[j, X_S] = min(max(Xm[j, X_S], -mc[MC_SF_MAX]), mc[MC_SF_MAX])
         ea, eb = excess[j], excess[NM + j]
         excess[j] = ea if not math.isfinite(eb) else (eb if not math.isfinite(ea) else qa * ea + qb * eb)
         jumped[j] = qa * jumped[j] + qb * jumped[NM + j]
