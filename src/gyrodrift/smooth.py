@@ -145,6 +145,8 @@ def smooth_output(out: pd.DataFrame, config=None) -> pd.DataFrame:
     a_tangent = a + 2.0 * a2 * (T - tref)  # eq. (2)'s a: the slope at T
     res["a"], res["b"], res["c"] = a_tangent, b, bias - a_tangent * T - b * Tp
     res["bias_z"] = bias
+    # the drift's change at full weight: the model's scale factor (σ, causal, within 3 %) would
+    # take its share of it, which is far below the drift's own uncertainty
     res["rate_z"] = out["rate_z"].to_numpy(float) + (old_bias - bias)
     res["heading"] = wrap_360(out["heading"].to_numpy(float) + trapezoid(t, old_bias - bias, hold))
     h = np.stack([T - tref, Tp, np.ones(t.size), np.zeros(t.size), (T - tref) ** 2], axis=1)
