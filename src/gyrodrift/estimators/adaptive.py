@@ -65,7 +65,7 @@ class AdaptiveConfig:
         Random walk of a steady disturbance, deg/√s (docs/model.md, "Hypotheses").
     scale_factor_sd, scale_factor_walk : float
         The gyro's scale-factor error σ, a share of the angle turned: its prior standard deviation
-        and its random walk per √degC of temperature change (docs/model.md, "Scale factor").
+        and its random walk per √degC of temperature change (docs/model.md, "The gyro's scale factor").
     turn_error_s : float
         Compass error while turning per deg/s of turn rate, s.
     deviation_span_deg : float
