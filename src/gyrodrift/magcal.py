@@ -17,7 +17,7 @@ import numpy as np
 __all__ = [
     "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MAX_SCALE_RATIO", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration",
     "MagSamples", "Uncalibrated", "fit", "looks_uncalibrated", "uncalibrated_note", "auto_calibration", "ADVICE",
-    "LOOKS_CALIBRATED",
+    "LOOKS_CALIBRATED", "AGREE_WINDOW_S", "AGREE_RATIO", "turn_error_deg", "agrees_better",
 ]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
@@ -73,8 +73,9 @@ class MagCalibration:
 
 
 class MagSamples:
-    """A bounded, evenly thinned set of (mag, down) samples in row order; the same rows however
-    the log is cut into chunks (every ``stride``-th finite sample, the stride doubling when full)."""
+    """A bounded, evenly thinned set of (mag, down) samples in row order, with their times and
+    the raw gyro's integral to them where given (NaN otherwise); the same rows however the log is
+    cut into chunks (every ``stride``-th finite sample, the stride doubling when full)."""
 
     def __init__(self, capacity: int = CAPACITY):
         self.capacity = int(capacity)
@@ -83,10 +84,15 @@ class MagSamples:
         self.rows: list[np.ndarray] = []
         self.n = 0
 
-    def add(self, mag, down) -> None:
-        """Take the rows of a chunk with a finite field and down vector."""
-        both = np.hstack([np.asarray(mag, dtype=float).reshape(-1, 3), np.asarray(down, dtype=float).reshape(-1, 3)])
-        both = both[np.isfinite(both).all(axis=1)]
+    def add(self, mag, down, t=None, turned=None) -> None:
+        """Take the rows of a chunk with a finite field and down vector (``t``, s, and
+        ``turned``, the raw gyro's integral to each row, deg, where given)."""
+        mag = np.asarray(mag, dtype=float).reshape(-1, 3)
+        extra = np.full((mag.shape[0], 2), np.nan)
+        if t is not None and turned is not None:
+            extra[:, 0], extra[:, 1] = t, turned
+        both = np.hstack([mag, np.asarray(down, dtype=float).reshape(-1, 3), extra])
+        both = both[np.isfinite(both[:, :6]).all(axis=1)]
         index = self.seen + np.arange(both.shape[0])
         self.seen += both.shape[0]
         keep = both[index % self.stride == 0]
@@ -100,8 +106,16 @@ class MagSamples:
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The kept (n, 3) fields and down vectors."""
-        allrows = np.concatenate(self.rows) if self.rows else np.zeros((0, 6))
-        return allrows[:, :3], allrows[:, 3:]
+        allrows = self._all()
+        return allrows[:, :3], allrows[:, 3:6]
+
+    def turns(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kept samples' times (s) and the raw gyro's integral to them (deg; NaN: not given)."""
+        allrows = self._all()
+        return allrows[:, 6], allrows[:, 7]
+
+    def _all(self) -> np.ndarray:
+        return np.concatenate(self.rows) if self.rows else np.zeros((0, 8))
 
 
 def _coverage_deg(mag_cal: np.ndarray, down: np.ndarray) -> float:
@@ -247,6 +261,59 @@ def looks_uncalibrated(mag, down) -> Uncalibrated | None:
     return Uncalibrated(scatter, cal, rms, float(moved.max()))
 
 
+#: Window over which the compass less the gyro's integral is taken as a straight line (the
+#: drift), s; what is left is the compass's error that changes as the platform turns, and noise.
+AGREE_WINDOW_S = 30.0
+#: A fit from the log is applied where it leaves at most this share of that error (RMS).
+AGREE_RATIO = 0.5
+
+
+def turn_error_deg(t, turned, heading) -> float:
+    """RMS (deg) of ``heading - turned`` (the compass less the raw gyro's integral, unwrapped)
+    about a least-squares line in each :data:`AGREE_WINDOW_S` window of at least 10 samples:
+    the compass's error that changes within a window (with the platform's heading, for a
+    deviation) and its noise; the gyro's drift is a line. NaN without such a window."""
+    from gyrodrift.conventions import wrap_180
+
+    t, turned, heading = (np.asarray(v, dtype=float) for v in (t, turned, heading))
+    ok = np.isfinite(t) & np.isfinite(turned) & np.isfinite(heading)
+    t, d = t[ok], np.asarray(wrap_180(heading[ok] - turned[ok]), dtype=float)
+    if t.size < 10:
+        return math.nan
+    d = np.degrees(np.unwrap(np.radians(d)))
+    k = np.floor((t - t[0]) / AGREE_WINDOW_S).astype(np.int64)
+    ss, n = 0.0, 0
+    for w in np.unique(k):
+        m = k == w
+        if m.sum() < 10:
+            continue
+        u = t[m] - t[m].mean()
+        y = d[m] - d[m].mean()
+        suu = float(u @ u)
+        r = y - (float(u @ y) / suu) * u if suu > 0.0 else y
+        ss += float(r @ r)
+        n += int(m.sum())
+    return math.sqrt(ss / n) if n else math.nan
+
+
+def agrees_better(samples: "MagSamples", cal: MagCalibration) -> tuple[float, float] | None:
+    """The compass's turn error (:func:`turn_error_deg`) raw and with ``cal`` applied, where the
+    fit leaves at most :data:`AGREE_RATIO` of it and moves the heading by more than
+    :data:`UNCALIBRATED_DEG` RMS; None otherwise (or without the gyro's integral)."""
+    from gyrodrift.compass import tilt_compensated_heading
+
+    if not cal.ok:
+        return None
+    mag, down = samples.arrays()
+    t, turned = samples.turns()
+    before = tilt_compensated_heading(*mag.T, *(-down).T)
+    after = tilt_compensated_heading(*cal.apply(mag).T, *(-down).T)
+    raw, fitted = turn_error_deg(t, turned, before), turn_error_deg(t, turned, after)
+    if not (fitted <= AGREE_RATIO * raw and raw > UNCALIBRATED_DEG):
+        return None
+    return raw, fitted
+
+
 #: What a note of a magnetometer that looks uncalibrated advises, by ``mag_calibration``: off
 #: (False), or ``"auto"`` in a stream, which cannot calibrate.
 ADVICE = {
@@ -270,11 +337,19 @@ def uncalibrated_note(samples: MagSamples, source: str, mode=False) -> str | Non
 
 def auto_calibration(samples: MagSamples) -> MagCalibration:
     """The calibration ``mag_calibration = "auto"`` applies: the fit from the log when the
-    magnetometer looks uncalibrated (:func:`looks_uncalibrated`), its note saying why; else
-    none (not ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note)."""
+    magnetometer looks uncalibrated (:func:`looks_uncalibrated`), or when the fit makes its
+    heading agree with the gyro's turns (:func:`agrees_better`: a deviation with the heading shows
+    there even where the field's strength hardly scatters), its note saying why; else none (not
+    ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note)."""
     found = looks_uncalibrated(*samples.arrays())
     if found is None:
-        return MagCalibration(False, why=LOOKS_CALIBRATED)
+        cal = fit(*samples.arrays())
+        agree = agrees_better(samples, cal)
+        if agree is None:
+            return MagCalibration(False, why=LOOKS_CALIBRATED)
+        return dataclasses.replace(cal, said=(
+            f"its heading agreed with the gyro's turns to {agree[0]:.1f} deg RMS within {AGREE_WINDOW_S:.0f} s, "
+            f"and to {agree[1]:.1f} deg with the fit"))
     return dataclasses.replace(found.cal, said=(
         f"it looked uncalibrated: its field strength scattered by {100 * found.scatter:.1f} % (RMS), and the fit "
         f"moves its heading by {found.moved_rms_deg:.0f} deg RMS, up to {found.moved_max_deg:.0f} deg"))

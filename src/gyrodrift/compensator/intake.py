@@ -72,11 +72,29 @@ class MagFit:
         self.config, self.source = config, source
         self.samples = magcal.MagSamples()
         self.tilt: RawTilt | None = None
+        self._last: tuple[float, float, float] | None = None  # time, gyro and its integral at the last row
 
     def add(self, t, g, mag, acc, gyro_xy=None) -> None:
-        """Rows with a raw compass, in order."""
+        """Rows with a raw compass, in order (with the raw gyro's trapezoid integral to each,
+        carried across chunks; an empty gyro cell holds the last value)."""
         self.tilt, down = _gravity(self.tilt, self.config, self.source, t, g, acc, gyro_xy)
-        self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down)
+        t, g = np.asarray(t, dtype=float), np.asarray(g, dtype=float).copy()
+        if t.size:
+            bad = ~np.isfinite(g)
+            if bad.any():  # held from the last finite value (the last chunk's, or 0 before any)
+                idx = np.maximum.accumulate(np.where(bad, -1, np.arange(g.size)))
+                fill = self._last[1] if self._last is not None else 0.0
+                g = np.where(idx >= 0, g[np.maximum(idx, 0)], fill)
+            if self._last is None:
+                tt, gg, start = t, g, np.zeros(1)
+            else:
+                tt, gg, start = np.r_[self._last[0], t], np.r_[self._last[1], g], np.array([self._last[2]])
+            steps = 0.5 * (gg[1:] + gg[:-1]) * np.diff(tt)
+            turned = (np.r_[start, start[0] + np.cumsum(steps)])[-t.size:]
+            self._last = (float(t[-1]), float(g[-1]), float(turned[-1]))
+        else:
+            turned = np.zeros(0)
+        self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down, t, turned)
 
     def fit(self):
         """The :class:`gyrodrift.magcal.MagCalibration` to apply (with ``mag_calibration =
