@@ -51,7 +51,9 @@ class CompensatorConfig:
     mag_calibration : bool or "auto"
         Calibrate a raw magnetometer over the whole log first (:mod:`gyrodrift.magcal`; not
         causal): ``"auto"`` (default) where it looks uncalibrated
-        (:func:`gyrodrift.magcal.looks_uncalibrated`), True wherever the fit holds, False never. A
+        (:func:`gyrodrift.magcal.looks_uncalibrated`) or where the fit makes its heading agree
+        with the gyro's turns (:func:`gyrodrift.magcal.agrees_better`), True wherever the fit
+        holds, False never. A
         stream, which does not see the whole log, does not calibrate.
     temperature : str
         What ``T`` of the drift model is: ``"auto"`` (default), ``"measured"`` or ``"clock"``.
