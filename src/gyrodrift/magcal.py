@@ -298,8 +298,10 @@ def turn_error_deg(t, turned, heading) -> float:
 
 def agrees_better(samples: "MagSamples", cal: MagCalibration) -> tuple[float, float] | None:
     """The compass's turn error (:func:`turn_error_deg`) raw and with ``cal`` applied, where the
-    fit leaves at most :data:`AGREE_RATIO` of it and moves the heading by more than
-    :data:`UNCALIBRATED_DEG` RMS; None otherwise (or without the gyro's integral)."""
+    raw one is above :data:`UNCALIBRATED_DEG` and the fit leaves at most :data:`AGREE_RATIO` of
+    it; None otherwise, or where it cannot be judged: without the gyro's integral, or with fewer
+    than 10 kept samples in every window (a log longer than about 7 h once :class:`MagSamples`
+    has thinned its samples to its capacity)."""
     from gyrodrift.compass import tilt_compensated_heading
 
     if not cal.ok:
