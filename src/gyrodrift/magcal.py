@@ -230,15 +230,23 @@ class Uncalibrated:
                 f"RMS, up to {self.moved_max_deg:.0f} deg")
 
 
-def looks_uncalibrated(mag, down) -> Uncalibrated | None:
+def _headings(mag, down, cal: MagCalibration) -> tuple[np.ndarray, np.ndarray]:
+    """The tilt-compensated headings (deg) of the raw fields ``mag`` and of them calibrated by ``cal``."""
+    from gyrodrift.compass import tilt_compensated_heading
+
+    return (tilt_compensated_heading(*mag.T, *(-down).T),
+            tilt_compensated_heading(*cal.apply(mag).T, *(-down).T))
+
+
+def looks_uncalibrated(mag, down, cal: MagCalibration | None = None) -> Uncalibrated | None:
     """Whether the raw fields ``mag`` (n, 3) with their down vectors ``down`` look uncalibrated:
     their strength scatters by more than :data:`MAX_RESIDUAL` (relative RMS about its median: a
     calibrated field's is constant), the fit from the log itself (:func:`fit`, when it holds)
     explains that scatter (leaves less than a third of it), and the fit moves the
     tilt-compensated heading by more than :data:`UNCALIBRATED_DEG` RMS. The compass then errs
     with the heading by that much, and the default model can take that for drift or for a
-    disturbance. None when not (a field disturbed in places scatters too, but no fit explains it)."""
-    from gyrodrift.compass import tilt_compensated_heading
+    disturbance. None when not (a field disturbed in places scatters too, but no fit explains it).
+    ``cal``: that fit, where it is already made."""
     from gyrodrift.conventions import wrap_180
 
     mag, down = np.asarray(mag, dtype=float), np.asarray(down, dtype=float)
@@ -248,11 +256,10 @@ def looks_uncalibrated(mag, down) -> Uncalibrated | None:
     scatter = float(np.sqrt(np.mean((strength / np.median(strength) - 1.0) ** 2)))
     if not scatter > MAX_RESIDUAL:
         return None
-    cal = fit(mag, down)
+    cal = fit(mag, down) if cal is None else cal
     if not cal.ok or not cal.residual < scatter / 3.0:
         return None
-    before = tilt_compensated_heading(*mag.T, *(-down).T)
-    after = tilt_compensated_heading(*cal.apply(mag).T, *(-down).T)
+    before, after = _headings(mag, down, cal)
     moved = np.abs(np.asarray(wrap_180(after - before), dtype=float))
     moved = moved[np.isfinite(moved)]
     rms = float(np.sqrt(np.mean(moved**2))) if moved.size else 0.0
@@ -300,16 +307,13 @@ def agrees_better(samples: "MagSamples", cal: MagCalibration) -> tuple[float, fl
     """The compass's turn error (:func:`turn_error_deg`) raw and with ``cal`` applied, where the
     raw one is above :data:`UNCALIBRATED_DEG` and the fit leaves at most :data:`AGREE_RATIO` of
     it; None otherwise, or where it cannot be judged: without the gyro's integral, or with fewer
-    than 10 kept samples in every window (a log longer than about 7 h once :class:`MagSamples`
-    has thinned its samples to its capacity)."""
-    from gyrodrift.compass import tilt_compensated_heading
-
+    than 10 kept samples in every window (a compass slower than 1/3 Hz, or a log longer than
+    3.4–6.8 h, whose samples :class:`MagSamples` has thinned to between half its capacity and
+    all of it)."""
     if not cal.ok:
         return None
-    mag, down = samples.arrays()
     t, turned = samples.turns()
-    before = tilt_compensated_heading(*mag.T, *(-down).T)
-    after = tilt_compensated_heading(*cal.apply(mag).T, *(-down).T)
+    before, after = _headings(*samples.arrays(), cal)
     raw, fitted = turn_error_deg(t, turned, before), turn_error_deg(t, turned, after)
     if not (fitted <= AGREE_RATIO * raw and raw > UNCALIBRATED_DEG):
         return None
@@ -343,9 +347,9 @@ def auto_calibration(samples: MagSamples) -> MagCalibration:
     heading agree with the gyro's turns (:func:`agrees_better`: a deviation with the heading shows
     there even where the field's strength hardly scatters), its note saying why; else none (not
     ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note)."""
-    found = looks_uncalibrated(*samples.arrays())
+    cal = fit(*samples.arrays())
+    found = looks_uncalibrated(*samples.arrays(), cal)
     if found is None:
-        cal = fit(*samples.arrays())
         agree = agrees_better(samples, cal)
         if agree is None:
             return MagCalibration(False, why=LOOKS_CALIBRATED)

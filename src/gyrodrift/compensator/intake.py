@@ -11,6 +11,7 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from gyrodrift.attitude import RawTilt, accel_down
 from gyrodrift.compass import DeadField, compass_columns
@@ -21,6 +22,7 @@ from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
 from gyrodrift.kernels.compass import row as compass_row
+from gyrodrift.kernels.integrate import trapezoid
 from gyrodrift.magcal import MagSamples, uncalibrated_note
 from gyrodrift.triad import TRIAD_COLUMNS
 
@@ -78,22 +80,16 @@ class MagFit:
         """Rows with a raw compass, in order (with the raw gyro's trapezoid integral to each,
         carried across chunks; an empty gyro cell holds the last value)."""
         self.tilt, down = _gravity(self.tilt, self.config, self.source, t, g, acc, gyro_xy)
-        t, g = np.asarray(t, dtype=float), np.asarray(g, dtype=float).copy()
-        if t.size:
-            bad = ~np.isfinite(g)
-            if bad.any():  # held from the last finite value (the last chunk's, or 0 before any)
-                idx = np.maximum.accumulate(np.where(bad, -1, np.arange(g.size)))
-                fill = self._last[1] if self._last is not None else 0.0
-                g = np.where(idx >= 0, g[np.maximum(idx, 0)], fill)
+        t = np.asarray(t, dtype=float)
+        turned = np.zeros(0)
+        if t.size:  # empty cells held from the last finite value (the last chunk's, or 0 before any)
+            g = pd.Series(np.asarray(g, dtype=float)).ffill().fillna(0.0 if self._last is None else self._last[1])
+            g = g.to_numpy()
             if self._last is None:
-                tt, gg, start = t, g, np.zeros(1)
+                turned = trapezoid(t, g)
             else:
-                tt, gg, start = np.r_[self._last[0], t], np.r_[self._last[1], g], np.array([self._last[2]])
-            steps = 0.5 * (gg[1:] + gg[:-1]) * np.diff(tt)
-            turned = (np.r_[start, start[0] + np.cumsum(steps)])[-t.size:]
+                turned = self._last[2] + trapezoid(np.r_[self._last[0], t], np.r_[self._last[1], g])[1:]
             self._last = (float(t[-1]), float(g[-1]), float(turned[-1]))
-        else:
-            turned = np.zeros(0)
         self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down, t, turned)
 
     def fit(self):
