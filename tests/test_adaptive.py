@@ -508,7 +508,7 @@ def test_a_transition_is_f_p_f_transposed_with_the_scale_factor_column():
     F[ev.X_D, ev.X_D], F[ev.X_R, ev.X_R], F[ev.X_E, ev.X_E] = f["pd"], f["pr"], f["pe"]
     expected = F @ P @ F.T
     got = P.copy()
-    ev._transition.py_func(got, *f.values()) if hasattr(ev._transition, "py_func") else ev._transition(got, *f.values())
+    ev._transition(got, *f.values())
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-9)
 
 
