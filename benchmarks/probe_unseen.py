@@ -92,7 +92,54 @@ def _cooling(rng, scale):
                      log_fs_hz=1.0)
 
 
-NEW = {"loiter": _loiter, "mower": _mower, "cooling-still": _cooling}
+def _pedestrian(rng, scale):
+    duration = G._u(rng, 600, 1800) * scale
+    rate_turns = G._turns_rate(G._turn_plan(rng, G._u(rng, 10, 60), duration - 10, (30.0, 180.0), (30.0, 90.0),
+                                            (5.0, 30.0), after=lambda a, p: abs(a) / p + 1.0))
+    step_hz, step_amp = G._u(rng, 1.6, 2.2), G._u(rng, 3.0, 12.0)
+    walking = G._u(rng, 5, 30)
+    episodes = G._disturbances(rng, duration, (4, 10), (5.0, 40.0), (10.0, 120.0), ("wander", "step", "ramp"))
+    return G._Recipe(duration, 100.0, G._device(rng), G._compass(rng, noise=(1.0, 3.0), rate_hz=float(rng.choice([10.0, 50.0]))),
+                     G._warmup(rng, start=(15.0, 25.0), rise=(3.0, 10.0), tau=(300.0, 900.0)),
+                     rate=lambda t: rate_turns(t) + step_amp * np.sin(2 * np.pi * step_hz * t) * (t > walking),
+                     offset=G._offset_fn(episodes), heading0_deg=G._u(rng, 0, 360))
+
+
+def _garage(rng, scale):
+    duration = G._u(rng, 7200, 14400) * scale
+    t_in = G._u(rng, 0.05, 0.3) * duration
+    t_out = t_in + G._u(rng, 0.4, 0.65) * duration
+    k = G._sign(rng) * G._u(rng, 5.0, 30.0)
+    return G._Recipe(duration, 10.0, G._device(rng), G._compass(rng, rate_hz=2.0), G._day_cycle(rng, duration),
+                     offset=lambda t: k * G._pulse(t, t_in, t_out, 5.0), heading0_deg=G._u(rng, 0, 360),
+                     log_fs_hz=float(rng.choice([1.0, 5.0])))
+
+
+def _cycling(rng, scale):
+    duration = G._u(rng, 3600, 10800) * scale
+    mean, amp, period = G._u(rng, 15, 35), G._u(rng, 5, 15), G._u(rng, 600, 2400)
+    return G._Recipe(duration, 20.0, G._device(rng, memory=rng.random() < 0.5), G._compass(rng),
+                     lambda t: mean + amp * np.sin(2 * np.pi * t / period), heading0_deg=G._u(rng, 0, 360),
+                     log_fs_hz=float(rng.choice([10.0, 20.0])))
+
+
+def _spin(rng, scale):
+    duration = G._u(rng, 1200, 3600) * scale
+    knots_t = np.sort(np.concatenate([[0.0, duration], rng.uniform(0, duration, int(rng.integers(2, 6)))]))
+    way = G._sign(rng)
+    speeds = way * rng.uniform(5.0, 60.0, knots_t.size) * (rng.random(knots_t.size) < 0.8)
+    start = G._u(rng, 30, 120)
+
+    def rate(t):
+        return np.interp(t, knots_t, speeds) * G._pulse(t, start, duration - 30, 5.0)
+
+    return G._Recipe(duration, 100.0, G._device(rng), G._compass(rng, rate_hz=20.0),
+                     G._warmup(rng, rise=(5.0, 20.0), tau=(300.0, 1200.0)), rate=rate,
+                     heading0_deg=G._u(rng, 0, 360), log_fs_hz=50.0)
+
+
+NEW = {"loiter": _loiter, "mower": _mower, "cooling-still": _cooling, "pedestrian": _pedestrian,
+       "garage": _garage, "cycling": _cycling, "spin": _spin}
 WITH_SF = {"turntable-sf": "turntable", "handheld-sf": "handheld-stalls", "drive-sf": "drive", "loiter-sf": "loiter"}
 _generate = G.generate
 

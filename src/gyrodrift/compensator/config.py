@@ -14,6 +14,10 @@ __all__ = ["CompensatorConfig", "build_estimator", "uses_clock", "clock_config",
 
 #: Values of :attr:`CompensatorConfig.temperature`.
 TEMPERATURE_MODES = ("auto", "measured", "clock")
+#: The compass deviation's span (deg of heading) and standard deviation (deg) where the model's
+#: scale factor is held exact (:meth:`CompensatorConfig.without_scale_factor`): a quarter turn
+#: renews it, as the model had it before its scale factor and deviation were states.
+TURN_DEVIATION_SPAN_DEG, TURN_DEVIATION_SD_DEG = 90.0, 2.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -96,8 +100,13 @@ class CompensatorConfig:
     def without_scale_factor(self) -> "CompensatorConfig":
         """These settings with the default model's scale factor held exact (its ``σ`` at 0): the
         drift stage of the paper's Sec. 4.3, after which :mod:`gyrodrift.scale_factor`
-        estimates the whole scale factor from ``rate_z`` (``docs/scale_factor.md``)."""
-        return replace(self, adaptive=replace(self.adaptive, scale_factor_sd=0.0, scale_factor_walk=0.0))
+        estimates the whole scale factor from ``rate_z`` (``docs/scale_factor.md``). A turn's
+        scale-factor error, which σ then no longer takes, shows in the compass's error through the
+        turn; the compass's deviation is renewed within :data:`TURN_DEVIATION_SPAN_DEG` of heading
+        (at :data:`TURN_DEVIATION_SD_DEG`) so that it takes it, not the drift."""
+        return replace(self, adaptive=replace(self.adaptive, scale_factor_sd=0.0, scale_factor_walk=0.0,
+                                              deviation_span_deg=TURN_DEVIATION_SPAN_DEG,
+                                              compass_error_deg=TURN_DEVIATION_SD_DEG))
 
     def __post_init__(self):
         check(self)

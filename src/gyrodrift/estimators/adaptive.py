@@ -69,7 +69,10 @@ class AdaptiveConfig:
     turn_error_s : float
         Compass error while turning per deg/s of turn rate, s.
     deviation_span_deg : float
-        Heading change over which the compass's slow error decorrelates, deg.
+        Heading change over which the compass's deviation decorrelates beyond its first
+        harmonic, which turns with the heading (docs/model.md, "The compass's deviation"), deg.
+    disturbance_span_deg : float
+        Heading change over which a wandering disturbance decorrelates, deg.
     turn_walks : tuple of 4 floats
         Random walks of the true rate under the motion models, slow to agile, deg/s/√s.
     turn_shares : tuple of 4 floats
@@ -119,7 +122,7 @@ class AdaptiveConfig:
     drift_rate_time_dps2: float = setting(5e-5, "deg/s²", ge=0.0, most=50.0)
     drift_jump_dps: float = setting(0.0, "deg/s", ge=0.0, most=50.0)
     drift_jump_s: float = setting(600.0, "s", gt=0.0)
-    compass_error_deg: float = setting(2.0, "deg", ge=0.0, most=360.0)
+    compass_error_deg: float = setting(1.5, "deg", ge=0.0, most=360.0)
     compass_error_s: float = setting(3600.0, "s", gt=0.0)
     disturbance_step_deg: float = setting(30.0, "deg", gt=0.0, most=360.0)
     disturbance_walk: float = setting(1.0, "deg per √s", ge=0.0, most=360.0)
@@ -128,7 +131,8 @@ class AdaptiveConfig:
     scale_factor_walk: float = setting(5e-4, "per √degC", ge=0.0, most=0.5)
     disturbance_s: float = setting(1800.0, "s", gt=0.0)
     turn_error_s: float = setting(0.5, "s", ge=0.0)
-    deviation_span_deg: float = setting(90.0, "deg", gt=0.0)
+    deviation_span_deg: float = setting(720.0, "deg", gt=0.0)
+    disturbance_span_deg: float = setting(90.0, "deg", gt=0.0)
     turn_walks: tuple[float, ...] = setting((0.003, 0.03, 0.3, 3.0), "deg/s per √s", gt=0.0, size=ev.N_RATE)
     turn_shares: tuple[float, ...] = setting((0.3, 0.3, 0.2, 0.15), gt=0.0, size=ev.N_RATE)
     rate_any_dps: float = setting(100.0, "deg/s", ge=0.0)
@@ -162,6 +166,7 @@ class AdaptiveConfig:
         mc[ev.MC_SIG_D], mc[ev.MC_TAU_D] = self.compass_error_deg, self.compass_error_s
         mc[ev.MC_K_TURN] = self.turn_error_s
         mc[ev.MC_L_DEV] = self.deviation_span_deg
+        mc[ev.MC_L_DIST] = self.disturbance_span_deg
         mc[ev.MC_SIG_R], mc[ev.MC_TAU_R] = self.drift_rate_dps2, self.drift_rate_s
         mc[ev.MC_T_R], mc[ev.MC_SIG_RT] = self.drift_rate_degc, self.drift_rate_time_dps2
         mc[ev.MC_MOTION_MEMORY] = self.motion_memory_s
@@ -226,7 +231,7 @@ class AdaptiveModel(LinearDrift):
         P0 = np.zeros((ev.NX, ev.NX))
         P0[ev.X_A:ev.X_C + 1, ev.X_A:ev.X_C + 1] = J @ self._P0 @ J.T
         P0[ev.X_DELTA, ev.X_DELTA] = self.settings.heading_sd0 ** 2
-        P0[ev.X_D, ev.X_D] = self.settings.compass_error_deg ** 2
+        P0[ev.X_D, ev.X_D] = P0[ev.X_DQ, ev.X_DQ] = self.settings.compass_error_deg ** 2
         P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
         P0[ev.X_A2, ev.X_A2] = self.settings.curvature_sd ** 2
         P0[ev.X_S, ev.X_S] = self.settings.scale_factor_sd ** 2

@@ -26,7 +26,7 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 6, 9
+NM, NX = 6, 10
 #: Branches of an epoch: two starting points of each mode (:func:`_branches`).
 NB = 2 * NM
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
@@ -39,7 +39,7 @@ N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 *
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
-X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2, X_S = 0, 1, 2, 3, 4, 5, 6, 7, 8
+X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2, X_S, X_DQ = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
 
 # ------------------------------------------------------------------ float state
 MF_X = 0                      # (NM, NX) states per mode
@@ -142,10 +142,10 @@ KAPPA_CLIP = 16.0
  MC_GAP_FACTOR, MC_COMPASS_SD, MC_GYRO_NOISE, MC_SIG_NORM, MC_SIG_DIP,
  MC_NOISE_MEMORY, MC_P_CLEAN0, MC_P_STILL0, MC_DELTA_SD0,
  MC_RATE_ANY, MC_CLOCK, MC_L_DEV, MC_SIG_JUMP, MC_TAU_JUMP, MC_Q_E_STEADY, MC_SF_WALK,
- MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY, MC_SF_MAX) = range(40)
+ MC_T_R, MC_SIG_RT, MC_MOTION_MEMORY, MC_SF_MAX, MC_L_DIST) = range(41)
 #: The rate predictors' random walks (deg/s/√s) and their prior shares of a moving epoch
 #: (the rest: any rate within ``MC_RATE_ANY``), N_RATE each.
-MC_Q_W = 40
+MC_Q_W = 41
 MC_SHARE = MC_Q_W + N_RATE
 N_MC = MC_SHARE + N_RATE
 
@@ -413,24 +413,28 @@ def _update(x, P, H, z, R, wrap, only, keep, PH):
 
 
 @jit(inline=True)
-def _rows(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe):
+def _rows(P, f01, f02, f03, f05, f07, f08, g, pd, cr, sr, pr, pe):
     """``P`` ← F P in place, F the identity but for the δ row (f01, f02, f03, f05, f07, f08: its
-    a, b, c', r, a2, σ entries), c' from r (g), and the decays of d, r, e (pd, pr, pe)."""
+    a, b, c', r, a2, σ entries), c' from r (g), the deviation's pair (d, d_q) turned by the
+    angle whose cosine and sine are ``cr``, ``sr`` and decayed by ``pd``, and the decays of r, e
+    (pr, pe)."""
     for k in range(NX):
         P[X_DELTA, k] += (f01 * P[X_A, k] + f02 * P[X_B, k] + f03 * P[X_C, k] + f05 * P[X_R, k] + f07 * P[X_A2, k]
                           + f08 * P[X_S, k])
         P[X_C, k] += g * P[X_R, k]
-        P[X_D, k] *= pd
+        d, q = P[X_D, k], P[X_DQ, k]
+        P[X_D, k] = pd * (cr * d + sr * q)
+        P[X_DQ, k] = pd * (cr * q - sr * d)
         P[X_R, k] *= pr
         P[X_E, k] *= pe
 
 
 @jit(inline=True)
-def _transition(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe):
+def _transition(P, f01, f02, f03, f05, f07, f08, g, pd, cr, sr, pr, pe):
     """``P`` ← F P Fᵀ in place, no temporary (F as :func:`_rows` has it): rows, then columns."""
-    _rows(P, f01, f02, f03, f05, f07, f08, g, pd, pr, pe)
+    _rows(P, f01, f02, f03, f05, f07, f08, g, pd, cr, sr, pr, pe)
     Pt = P.T
-    _rows(Pt, f01, f02, f03, f05, f07, f08, g, pd, pr, pe)
+    _rows(Pt, f01, f02, f03, f05, f07, f08, g, pd, cr, sr, pr, pe)
 
 
 @jit
@@ -682,11 +686,14 @@ def epoch(mf, mc, t_end, temp_end):
             x[X_DELTA] -= dG
         else:  # δ moves by minus the drift integral (eq. 5) and the scale factor's part of the turn
             x[X_DELTA] -= drift_int + x[X_S] * seen
-        # d and e decorrelate in time and with the heading this mode turned (none when still)
-        turned = 0.0 if still or gap else abs(seen)
+        # the deviation d is a harmonic of the heading: (d, d_q) turn with the heading this mode
+        # turned (none when still); it and e decorrelate in time and with the heading turned
+        turn_rad = 0.0 if still or gap else math.radians(seen * (1.0 - x[X_S]))
+        turned = abs(math.degrees(turn_rad))
+        cr, sr = math.cos(turn_rad), math.sin(turn_rad)
         phi_d = math.exp(-dt / mc[MC_TAU_D] - turned / mc[MC_L_DEV])
         # a steady disturbance is fixed in the world: it does not change as the platform turns
-        te = 0.0 if _is_steady(j) else turned / mc[MC_L_DEV]
+        te = 0.0 if _is_steady(j) else turned / mc[MC_L_DIST]
         phi_e = math.exp(-dt / mc[MC_TAU_E] - te)
         q_d = mc[MC_SIG_D] ** 2 * (1.0 - phi_d * phi_d)
         walk_e = mc[MC_Q_E_STEADY] if _is_steady(j) else mc[MC_Q_E]
@@ -694,18 +701,21 @@ def epoch(mf, mc, t_end, temp_end):
         x[X_C] += x[X_R] * gain_r
         x[X_R] *= phi_r
         # the compass's errors are angles: they decay towards 0 from within ±180 deg
-        x[X_D] = wrap180(x[X_D]) * phi_d
+        d = wrap180(x[X_D])
+        x[X_D] = phi_d * (cr * d + sr * x[X_DQ])
+        x[X_DQ] = phi_d * (cr * x[X_DQ] - sr * d)
         x[X_E] = wrap180(x[X_E]) * phi_e
         if still:
-            _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, phi_r, phi_e)
+            _transition(Pj, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, gain_r, phi_d, 1.0, 0.0, phi_r, phi_e)
         else:
-            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, -seen, gain_r, phi_d, phi_r, phi_e)
+            _transition(Pj, -dTc, -dTp, -dt, -0.5 * dt * dt, -dTc2, -seen, gain_r, phi_d, cr, sr, phi_r, phi_e)
         Pj[X_DELTA, X_DELTA] += mc[MC_Q_STILL] ** 2 * dt if still else moving_q
         Pj[X_S, X_S] += q_s
         Pj[X_A, X_A] += q_a
         Pj[X_B, X_B] += q_b
         Pj[X_C, X_C] += q_c
         Pj[X_D, X_D] += q_d
+        Pj[X_DQ, X_DQ] += q_d
         Pj[X_R, X_R] += q_r
         if not _is_clean(j):
             Pj[X_E, X_E] += q_e
