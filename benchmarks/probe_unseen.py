@@ -3,12 +3,19 @@ generalises (docs/results.md, "The gyro's scale factor").
 
     PYTHONPATH=src python benchmarks/probe_unseen.py CLASSES N OUT.csv [METHODS]
     # e.g. loiter,mower,cooling-still,turntable-sf,handheld-sf,drive-sf,loiter-sf 10 probe.csv
+    #      pedestrian,garage,cycling,spin 10 probe2.csv
 
 The classes are composed from the generator's own pieces (its private helpers, registered for
 this run only): ``loiter``, a fixed-wing circling 2–8 deg/s for 1–10 min between legs after a
 cold start, a steady 1–6-deg compass offset in flight; ``mower``, 180-deg turns at 20–40 deg/s
 every 20–60 s with a 3–15-deg motor-correlated compass offset while moving; ``cooling-still``,
-a still unit cooling from 35–45 degC for 4–8 h, logged at 1 Hz with a 1-Hz compass. A class
+a still unit cooling from 35–45 degC for 4–8 h, logged at 1 Hz with a 1-Hz compass;
+``pedestrian``, a unit carried indoors: turns of 30–180 deg every 5–30 s, a 1.6–2.2-Hz yaw
+swing of 3–12 deg/s from the steps, a noisy compass (1–3 deg) disturbed 4–10 times for 10–120 s;
+``garage``, a vehicle parked for 2–4 h whose compass is offset by 5–30 deg for 40–65 % of it
+(steel nearby), logged at 1–5 Hz; ``cycling``, a still unit through a 5–15-degC temperature
+cycle of 10–40 min, half of them with thermal lag and backlash; ``spin``, a platform turning
+one way at 5–60 deg/s, its speed changing between random knots, for 20–60 min. A class
 ending in ``-sf`` is an existing one whose gyro reads a further 0.3–2 % scale-factor error (a
 seeded sign and size). N held-out seeds each, every method by default (``heldout.METHODS``);
 prints the acceptance table of ``gyrodrift.evaluate.heldout``. About a minute for 7 classes ×
