@@ -554,8 +554,7 @@ def test_a_deviation_seen_at_a_heading_is_known_again_when_the_heading_comes_bac
     seen every heading, its pair (d, d_q) carries the deviation round with the turn, so the
     fused heading is within a tenth of the deviation of the truth and the drift within 0.002
     deg/s of it; a model whose deviation is redrawn at every epoch (a span of 0.001 deg) leaves
-    three times that heading error and twice that drift error (0.06 deg against 0.28, 0.0006
-    deg/s against 0.004 when measured)."""
+    three times that heading error and twice that drift error."""
     def heading(t):
         return 20.0 + 6.0 * t
 

@@ -1,9 +1,11 @@
 """The default estimator's model: heading, drift and compass error, judged by evidence.
 
-Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2, σ]`` (δ = heading − ∫gyro; a,
-b, c' the drift of eq. 2 centred on ``T_ref``; d the compass's slow error; r the drift's rate of
-departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in temperature; σ the
-share of a turn the gyro's scale factor adds, ``rate = (gyro - drift) (1 - σ)``), one per
+Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2, σ, d_q]`` (δ = heading −
+∫gyro; a, b, c' the drift of eq. 2 centred on ``T_ref``; d the compass's deviation at the present
+heading and d_q its quadrature, the deviation's first harmonic, which a turn rotates; r the
+drift's rate of departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in
+temperature; σ the share of a turn the gyro's scale factor adds, ``rate = (gyro - drift) (1 -
+σ)``), one per
 hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
 moving), stepped once per epoch (:func:`epoch`: δ moves by
 minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
