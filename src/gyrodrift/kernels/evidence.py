@@ -28,7 +28,7 @@ from gyrodrift.kernels.numeric import wrap180
 __all__ = ["NM", "NX", "epoch", "combine", "bias_var", "init_state", "seed_heading", "seed_noise"]
 
 #: Modes (rows of the filter bank) and states.
-NM, NX = 6, 10
+NM, NX = 6, 11
 #: Branches of an epoch: two starting points of each mode (:func:`_branches`).
 NB = 2 * NM
 #: Predictors of a moving platform's true rate (random walks, slow to agile).
@@ -41,7 +41,7 @@ N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 *
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
-X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2, X_S, X_DQ = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+X_DELTA, X_A, X_B, X_C, X_D, X_R, X_E, X_A2, X_S, X_DQ, X_W = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10
 
 # ------------------------------------------------------------------ float state
 MF_X = 0                      # (NM, NX) states per mode
@@ -195,6 +195,15 @@ def _dot(a, b):
     return acc
 
 
+@jit(inline=True)
+def _no_rate(x, P):
+    """A still platform's state: its true rate ω is 0, known exactly."""
+    x[X_W] = 0.0
+    for k in range(NX):
+        P[X_W, k] = 0.0
+        P[k, X_W] = 0.0
+
+
 @jit
 def init_state(mf, mc, x0, P0, t_ref):
     """Start the bank: every mode at the prior ``x0`` (NX,), ``P0`` (NX, NX) (drift states centred
@@ -209,6 +218,8 @@ def init_state(mf, mc, x0, P0, t_ref):
         # e of the disturbed filters starts at the compass's error scale (docs/model.md, "The start")
         if not _is_clean(j):
             P[j, X_E, X_E] = mc[MC_SIG_D] ** 2
+        if _is_still(j):
+            _no_rate(X[j], P[j])
         mf[MF_MU + j] = (pc if _is_clean(j) else 1.0 - pc) * (ps if _is_still(j) else 1.0 - ps) * _share(j)
     shares = np.empty(N_RATE + 1)
     shares[N_RATE] = 1.0
@@ -467,6 +478,8 @@ def _branches(mf, Pi, step_var, XB, PB, wb, w, dx):
             # angles about the likeliest source's (mode j's own may be half a turn away)
             _moments(X, P, w, X[np.argmax(w), X_DELTA], _likeliest_e(X, w, X[j, X_E]), _is_clean(j), step_var,
                      XB[j], PB[j], dx)
+            if _is_still(j):
+                _no_rate(XB[j], PB[j])
         else:
             XB[j, :] = X[j]
             PB[j, :, :] = P[j]
@@ -547,28 +560,33 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
-    turn = 0.0 if still else mc[MC_K_TURN] * (dG - _dot(Hg, x)) / dt
+    turn = 0.0 if still else mc[MC_K_TURN] * (dG - _dot(Hg, x) + x[X_W] * dt) / dt
     if not gap:
         if still:
             ll += _update(x, P, Hg, dG, arw, False, -1, -1, PH)
         else:
-            mean = _dot(Hg, x)
+            # the gyro measures the true rate ω plus the drift; ω walks as one of the rate models
+            # has it (or is any rate), weighed by how well each predicts the epoch's gyro
+            nu = dG - _dot(Hg, x)
             base = _quad(P, Hg) + arw
-            # the predictors follow the compensated rate, or with motion_memory_s the gyro's own
-            # (the drift this mode believes then adds nothing to their prediction)
-            steady = mc[MC_MOTION_MEMORY] > 0.0
-            m0 = 0.0 if steady else mean
-            b0 = arw if steady else base
             for k in range(N_RATE):
-                Pk = mf[MF_W + 2 * k + 1] + mc[MC_Q_W + k] ** 2 * dt
-                lk[k] = math.log(shares[k]) + _loggauss(dG - m0 - mf[MF_W + 2 * k] * dt, b0 + Pk * dt * dt)
-            lk[N_RATE] = math.log(shares[N_RATE]) + _loggauss(dG - mean, base + (mc[MC_RATE_ANY] * dt) ** 2)
+                lk[k] = math.log(shares[k]) + _loggauss(nu, base + mc[MC_Q_W + k] ** 2 * dt * dt * dt)
+            lk[N_RATE] = math.log(shares[N_RATE]) + _loggauss(nu, base + (mc[MC_RATE_ANY] * dt) ** 2)
             m = np.max(lk)
             tot = 0.0
             for k in range(N_RATE + 1):
                 tot += math.exp(lk[k] - m)
             ll += m + math.log(tot)
+            # ω's walk over the epoch: the rate models' variances, weighted as they explained it
+            q_w = 0.0
+            for k in range(N_RATE):
+                q_w += math.exp(lk[k] - m) / tot * mc[MC_Q_W + k] ** 2 * dt
+            q_w += math.exp(lk[N_RATE] - m) / tot * mc[MC_RATE_ANY] ** 2
+            P[X_W, X_W] += q_w
+            _update(x, P, Hg, dG, arw, False, -1, -1, PH)
         ll += l_white if still else l_any
+    elif not still:  # across a time gap the rate walks as the motion believed has it
+        P[X_W, X_W] += mf[MF_WQ2] * dt + mf[MF_WANY] * mc[MC_RATE_ANY] ** 2
     excess = nu = S = math.nan
     if n_c > 0.0:
         # a wandering disturbance's compass corrects e alone, unless the heading is known worse
@@ -728,6 +746,7 @@ def epoch(mf, mc, t_end, temp_end):
     Hg[X_B] = dTp
     Hg[X_C] = dt
     Hg[X_R] = -0.5 * dt * dt
+    Hg[X_W] = dt  # the true rate (0 in a still mode)
     l_white = l_any = 0.0
     ng = mf[MF_E_NG]
     u = var_u = math.nan
