@@ -37,7 +37,7 @@ N_RATE = 4
 #: changes; the branches' states and covariances; an alternative's covariance; four numbers per
 #: branch, two per mode; nine vectors of states (the three measurement rows, an alternative's
 #: state, the moving modes' state, four for the helpers); eight of the rate predictors.
-N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 * (N_RATE + 1)
+N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 * (N_RATE + 1) + NX * (NX + 3)
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
 STEADY_SHARE = 0.5
@@ -118,6 +118,8 @@ VN_MOTION = 0.5
 #: The smallest mode probability: a numerical guard only, far below any weight that competes
 #: (a higher floor keeps a refuted mode's own branch weighted enough to re-fit the data).
 MU_MIN = 1e-150
+#: A moving mode's chance of a redrawn rate below which its posterior is the walked rate's alone.
+ANY_MIN = 1e-9
 #: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
 #: Bounds of the colour where it sets the long-run noise (an AR(1) sequence's).
@@ -202,6 +204,21 @@ def _no_rate(x, P):
     for k in range(NX):
         P[X_W, k] = 0.0
         P[k, X_W] = 0.0
+
+
+@jit(inline=True)
+def _mix_in(x, P, xa, Pa, qa, da, db):
+    """``x``, ``P`` ← the moments of the mixture of themselves (weight ``1 - qa``) and ``xa``,
+    ``Pa`` (weight ``qa``), in place; δ and e as angles about ``x``'s. ``da``, ``db``: scratch (NX)."""
+    for k in range(NX):
+        d = wrap180(xa[k] - x[k]) if k == X_DELTA or k == X_E else xa[k] - x[k]
+        da[k] = (1.0 - qa) * d  # xa less the mixture's mean
+        db[k] = -qa * d         # x less the mixture's mean
+    for k in range(NX):
+        x[k] -= db[k]
+    for r in range(NX):
+        for c in range(NX):
+            P[r, c] = (1.0 - qa) * (P[r, c] + db[r] * db[c]) + qa * (Pa[r, c] + da[r] * da[c])
 
 
 @jit
@@ -549,7 +566,7 @@ def _switch(dt, tau):
 
 @jit
 def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll, PH, lk,
-             shares):
+             shares, sw):
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
     when still; drift plus a true rate when moving, the rate from the random-walk predictors
     or any rate), its serial structure, the compass (with the disturbance e in a disturbed
@@ -577,13 +594,24 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
             for k in range(N_RATE + 1):
                 tot += math.exp(lk[k] - m)
             ll += m + math.log(tot)
-            # ω's walk over the epoch: the rate models' variances, weighted as they explained it
+            # the posterior is a mixture of two: ω walked (the rate models' variances, weighted as
+            # they explained the epoch) or ω was redrawn (any rate), moment-matched
+            p_any = math.exp(lk[N_RATE] - m) / tot
             q_w = 0.0
             for k in range(N_RATE):
                 q_w += math.exp(lk[k] - m) / tot * mc[MC_Q_W + k] ** 2 * dt
-            q_w += math.exp(lk[N_RATE] - m) / tot * mc[MC_RATE_ANY] ** 2
-            P[X_W, X_W] += q_w
+            if p_any > ANY_MIN:
+                xa = sw[:NX]
+                Pa = sw[NX:NX * (NX + 1)].reshape((NX, NX))
+                xa[:] = x
+                Pa[:, :] = P
+                _no_rate(xa, Pa)
+                Pa[X_W, X_W] = mc[MC_RATE_ANY] ** 2
+                _update(xa, Pa, Hg, dG, arw, False, -1, -1, PH)
+            P[X_W, X_W] += q_w / max(1.0 - p_any, 1e-300)
             _update(x, P, Hg, dG, arw, False, -1, -1, PH)
+            if p_any > ANY_MIN:
+                _mix_in(x, P, xa, Pa, p_any, sw[NX * (NX + 1):NX * (NX + 2)], sw[NX * (NX + 2):])
         ll += l_white if still else l_any
     elif not still:  # across a time gap the rate walks as the motion believed has it
         P[X_W, X_W] += mf[MF_WQ2] * dt + mf[MF_WANY] * mc[MC_RATE_ANY] ** 2
@@ -666,6 +694,7 @@ def epoch(mf, mc, t_end, temp_end):
     v, at = _take(work, at, 8 * (N_RATE + 1))
     v = v.reshape((8, N_RATE + 1))
     lk, lw, ws, Ps, pw, wk, tmp, pred = v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    sw, at = _take(work, at, NX * (NX + 3))  # a moving mode's rate redrawn (:func:`_measure`)
     for i in range(NM):
         for j in range(NM):
             ci, cj = _is_clean(i), _is_clean(j)
@@ -810,18 +839,18 @@ def epoch(mf, mc, t_end, temp_end):
             k, var, p = X_E, mc[MC_SIG_STEP] ** 2, p_step
         if k < 0:
             ll[r], excess[r], _, _ = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc,
-                                              h_still, Hs, Hm, field_ll, PH, lk, pred)
+                                              h_still, Hs, Hm, field_ll, PH, lk, pred, sw)
             continue
         xb[:] = X[r]
         Pb[:, :] = P[r]
         Pb[k, k] += var
         lla, exa, nu, S = _measure(X[r], P[r], j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                   Hm, field_ll, PH, lk, pred)
+                                   Hm, field_ll, PH, lk, pred, sw)
         if k == X_E:  # e is in the compass alone: the step changes its innovation's variance only
             llb = lla - _loggauss(nu, S) + _loggauss(nu, S + var)
         else:
             llb, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs,
-                                      Hm, field_ll, PH, lk, pred)
+                                      Hm, field_ll, PH, lk, pred, sw)
         la, lb = math.log(1.0 - p) + lla, math.log(p) + llb
         top = max(la, lb)
         ll[r] = top + math.log(math.exp(la - top) + math.exp(lb - top))
@@ -831,7 +860,7 @@ def epoch(mf, mc, t_end, temp_end):
         if lb > la:
             if k == X_E:
                 _, exb, _, _ = _measure(xb, Pb, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still,
-                                        Hs, Hm, field_ll, PH, lk, pred)
+                                        Hs, Hm, field_ll, PH, lk, pred, sw)
             X[r, :] = xb
             P[r, :, :] = Pb
             excess[r] = exb
