@@ -110,9 +110,68 @@ def test_the_compass_errs_with_the_turn_rate_across_a_time_gap_too(gap):
         P = np.eye(ev.NX)
         H = Hs if j == ev.CLEAN_STILL else Hm
         _, _, nu, S = ev._measure(x.copy(), P.copy(), j, mf, mc, gap, dt, dG, 1e-4, Hg, 0.0, 0.0, 1.0, 3.0, Rc, 0.0,
-                                  Hs, Hm, 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1), np.full(ev.N_RATE + 1, 0.2))
+                                  Hs, Hm, 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1), np.full(ev.N_RATE + 1, 0.2),
+                                  np.empty(ev.NX * (ev.NX + 3)))
         assert S == pytest.approx(H @ P @ H + Rc + turn**2, rel=1e-12)
     assert mc[ev.MC_K_TURN] * 49.0 == pytest.approx(24.5)  # the turn term above is not zero
+
+
+def _kalman(x, P, H, z, R):
+    """The textbook scalar update (numpy): posterior state, covariance and log-likelihood."""
+    S = H @ P @ H + R
+    K = P @ H / S
+    nu = z - H @ x
+    return x + K * nu, P - np.outer(K, P @ H), -0.5 * (np.log(2 * np.pi * S) + nu * nu / S)
+
+
+def test_a_moving_mode_weighs_a_walked_and_a_redrawn_rate():
+    """A moving mode's gyro update by hand: the gyro measures ``ω dt + drift``; ω has walked
+    as one of the rate models has it (their variances ``q_k² dt``, prior shares) or is any
+    rate (``N(0, rate_any²)``), so the likelihood is the shares' mixture of the predictions,
+    and the posterior the two updates (the walk with its models' variance as they explained
+    the epoch) moment-matched. A still mode's ω is 0, untouched."""
+    est = AdaptiveModel()
+    mc = est.start(25.0, 0.5, 0.04)
+    mf = est.mf
+    dt, dG, arw = 1.0, 3.5, 1e-4
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(ev.NX, ev.NX)) * 0.1
+    P = A @ A.T + np.diag(np.full(ev.NX, 0.05))
+    x = rng.normal(size=ev.NX) * 0.1
+    x[ev.X_W], x[ev.X_C] = 2.0, 0.5
+    Hg = np.zeros(ev.NX)
+    Hg[ev.X_C], Hg[ev.X_B], Hg[ev.X_W] = dt, 0.01, dt
+    shares = np.array([0.3, 0.3, 0.2, 0.15, 0.05])
+    q = mc[ev.MC_Q_W:ev.MC_Q_W + ev.N_RATE] ** 2 * dt
+    base = Hg @ P @ Hg + arw
+    nu = dG - Hg @ x
+    lk = np.log(shares) - 0.5 * (np.log(2 * np.pi * np.append(base + q * dt * dt, base + (mc[ev.MC_RATE_ANY] * dt) ** 2))
+                                 + nu**2 / np.append(base + q * dt * dt, base + (mc[ev.MC_RATE_ANY] * dt) ** 2))
+    post = np.exp(lk - lk.max()) / np.exp(lk - lk.max()).sum()
+    Pw = P.copy()
+    Pw[ev.X_W, ev.X_W] += post[:-1] @ q / (1.0 - post[-1])
+    xw, Pw, _ = _kalman(x, Pw, Hg, dG, arw)
+    Pa, xa = P.copy(), x.copy()
+    Pa[ev.X_W, :] = Pa[:, ev.X_W] = 0.0
+    Pa[ev.X_W, ev.X_W], xa[ev.X_W] = mc[ev.MC_RATE_ANY] ** 2, 0.0
+    xa, Pa, _ = _kalman(xa, Pa, Hg, dG, arw)
+    p = post[-1]
+    mean = (1 - p) * xw + p * xa
+    cov = (1 - p) * (Pw + np.outer(xw - mean, xw - mean)) + p * (Pa + np.outer(xa - mean, xa - mean))
+    x_k, P_k = x.copy(), P.copy()
+    ll, _, _, _ = ev._measure(x_k, P_k, ev.CLEAN_MOVING, mf, mc, False, dt, dG, arw, Hg, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                              np.zeros(ev.NX), np.zeros(ev.NX), 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1), shares,
+                              np.empty(ev.NX * (ev.NX + 3)))
+    assert 1e-6 < p < 0.5  # both kinds of motion weigh in this example
+    assert ll == pytest.approx(lk.max() + np.log(np.exp(lk - lk.max()).sum()), rel=1e-12)
+    np.testing.assert_allclose(x_k, mean, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(P_k, cov, rtol=1e-9, atol=1e-12)
+    x_s, P_s = x.copy(), P.copy()
+    ev._no_rate(x_s, P_s)
+    ev._measure(x_s, P_s, ev.CLEAN_STILL, mf, mc, False, dt, dG, arw, Hg, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                np.zeros(ev.NX), np.zeros(ev.NX), 0.0, np.empty(ev.NX), np.empty(ev.N_RATE + 1), shares,
+                np.empty(ev.NX * (ev.NX + 3)))
+    assert x_s[ev.X_W] == 0.0 and not P_s[ev.X_W].any() and not P_s[:, ev.X_W].any()
 
 
 def test_without_mode_changes_each_mode_starts_from_its_own_state():

@@ -344,15 +344,15 @@ def test_lock_out_recovery_on_a_fast_heating_run():
     assert_same(out, stream(log, jumps))
     # without jumps aiding still resumes. The drift falls from 1.1 to 0 deg/s within a minute,
     # at 660 s, as heating turns to cooling: T' from the 60-s window alone follows it 30 s late,
-    # which costs the gyro heading 120 deg (77 deg RMS) and the fused heading 11 deg RMS; the
+    # which costs the gyro heading 16 deg RMS (26 at most) and the fused heading 14 deg RMS; the
     # default T', moved towards the 10-s window's slope and a quadratic's at its newest bin,
-    # follows it (docs/conventions.md, "How T' is computed"): 3.7 and 2.2 deg RMS
+    # follows it (docs/conventions.md, "How T' is computed"): 2.1 and 2.2 deg RMS
     out = compensate(log)
     assert (out["gate_reason"] == "interference").mean() < 0.2
     lagged = compensate(log, CompensatorConfig(temp_rate=TempRateConfig(short_s=0.0)))
     rms_lagged = lambda col: float(np.sqrt(np.nanmean(  # noqa: E731
         np.asarray(wrap_180(lagged[col] - log["ref_heading"])) ** 2)))
-    assert rms("heading") < 0.1 * rms_lagged("heading")
+    assert rms("heading") < 0.2 * rms_lagged("heading")
     assert rms("heading_fused") < 0.5 * rms_lagged("heading_fused")
     assert rms("heading_fused") < 1.5 * rms("compass_heading")
 
@@ -425,10 +425,11 @@ def test_the_turning_label_follows_a_quiet_gyro_and_averages_a_noisy_one():
 
 
 def test_a_still_unit_is_not_called_turning_before_its_drift_is_known():
-    """A still unit with a 3 deg/s drift: in its first second the drift is the prior's (sd about
-    4 deg/s), so its compensated rate cannot say it turns."""
+    """A still unit with a 3 deg/s drift: in its first second the drift is known to about 1 deg/s
+    only (a still unit's gyro reading, or a moving one's rate), so its compensated rate cannot
+    say it turns."""
     log = synthetic_log(duration_s=120.0, fs_hz=10.0, compass_hz=10.0, drift_dps=lambda t, T: np.full_like(t, 3.0),
                         gyro_noise_dps=0.02, compass_noise_deg=0.3, seed=1)
     out = compensate(log)
-    assert out["bias_sd"].iloc[0] > 2.0  # the drift is unknown at first
+    assert out["bias_sd"].iloc[0] > 1.0  # the drift is not known at first
     assert not (out["gate_reason"] == "turning").any()

@@ -55,12 +55,11 @@ class Compensator:
     >>> round(out[-1].bias_z, 3), round(out[-1].heading_fused, 3)
     (0.2, 90.0)
 
-    A noiseless gyro cannot tell stillness from a steady turn by its noise, so the drift is
-    learned from the compass over the first seconds: the gyro-alone heading keeps what they
-    cost it.
+    A noiseless gyro cannot tell stillness from a steady turn by its noise; the still compass
+    tells them apart, and the gyro-alone heading holds:
 
     >>> round(out[-1].heading, 1)
-    90.2
+    90.0
     """
 
     def __init__(self, config: CompensatorConfig | None = None, *, estimator=None, source: str = "stream",

@@ -235,7 +235,7 @@ class AdaptiveModel(LinearDrift):
         P0[ev.X_R, ev.X_R] = self.settings.drift_rate_dps2 ** 2
         P0[ev.X_A2, ev.X_A2] = self.settings.curvature_sd ** 2
         P0[ev.X_S, ev.X_S] = self.settings.scale_factor_sd ** 2
-        P0[ev.X_W, ev.X_W] = 0.1  # a moving platform's rate at the start: at rest within 0.3 deg/s (a still one's: 0)
+        P0[ev.X_W, ev.X_W] = self.settings.rate_any_dps ** 2  # a moving platform's rate at the start: any rate
 
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)

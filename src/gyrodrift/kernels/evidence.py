@@ -1,12 +1,12 @@
 """The default estimator's model: heading, drift and compass error, judged by evidence.
 
-Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2, σ, d_q]`` (δ = heading −
+Six linear-Gaussian filters over ``x = [δ, a, b, c', d, r, e, a2, σ, d_q, ω]`` (δ = heading −
 ∫gyro; a, b, c' the drift of eq. 2 centred on ``T_ref``; d the compass's deviation at the present
 heading and d_q its quadrature, the deviation's first harmonic, which a turn rotates; r the
 drift's rate of departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in
 temperature; σ the share of a turn the gyro's scale factor adds, ``rate = (gyro - drift) (1 -
-σ)``), one per
-hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
+σ)``; ω the platform's true rate over the epoch, which the gyro measures with the drift, 0 when
+still), one per hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
 moving), stepped once per epoch (:func:`epoch`: δ moves by
 minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
 interacting multiple model in which each mode also carries its own state (:func:`_branches`,
@@ -568,12 +568,12 @@ def _switch(dt, tau):
 def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, h_still, Hs, Hm, field_ll, PH, lk,
              shares, sw):
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
-    when still; drift plus a true rate when moving, the rate from the random-walk predictors
-    or any rate), its serial structure, the compass (with the disturbance e in a disturbed
-    mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
+    when still; the true rate ω plus the drift when moving, ω having walked as one of the rate
+    models has it or been redrawn, any rate: the two posteriors moment-matched), its serial
+    structure, the compass (with the disturbance e in a disturbed mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
     predicted variance (NaN: none, or the heading not known to a few degrees), and the compass
     innovation and its variance (NaN: no compass). ``shares``: the rate models' weights for the
-    epoch (:func:`_motion_prior`). ``PH`` (NX), ``lk`` (N_RATE + 1): scratch."""
+    epoch (:func:`_motion_prior`). ``PH`` (NX), ``lk`` (N_RATE + 1), ``sw`` (NX (NX + 3)): scratch."""
     ll = 0.0
     still = _is_still(j)
     # the compass's error while turning: none when still; else with the rate this mode's drift leaves
@@ -917,8 +917,9 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_SMOOTH] = smooth + (1.0 - mf[MF_PSTILL]) * (post - smooth)
     else:
         mf[MF_SMOOTH] = smooth
-    # the rate filters follow the compensated mean rate, or with motion_memory_s the gyro's own,
-    # and interact (docs/model.md, "Motion")
+    # the rate filters, which weigh the motion's agility (the trapezoid's error, a gap), follow
+    # the compensated mean rate, or with motion_memory_s the gyro's own, and interact
+    # (docs/model.md, "Motion")
     Pc = mf[MF_PC:MF_PC + NX * NX].reshape((NX, NX))
     r = Rr = 0.0
     if not gap and mc[MC_MOTION_MEMORY] > 0.0:
