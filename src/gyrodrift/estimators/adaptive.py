@@ -135,7 +135,7 @@ class AdaptiveConfig:
     disturbance_span_deg: float = setting(90.0, "deg", gt=0.0)
     turn_walks: tuple[float, ...] = setting((0.003, 0.03, 0.3, 3.0), "deg/s per √s", gt=0.0, size=ev.N_RATE)
     turn_shares: tuple[float, ...] = setting((0.3, 0.3, 0.2, 0.15), gt=0.0, size=ev.N_RATE)
-    rate_any_dps: float = setting(100.0, "deg/s", ge=0.0)
+    rate_any_dps: float = setting(100.0, "deg/s", ge=0.0, most=10000.0)  # gyro full scales: a few 1,000 deg/s
     motion_memory_s: float = setting(0.0, "s", ge=0.0, most=3600.0)
     angular_accel_dps2: float = setting(10.0, "deg/s²", ge=0.0)
     gap_turn_dps: float = setting(1.0, "deg/s", ge=0.0)
