@@ -6,9 +6,9 @@ heading and d_q its quadrature, the deviation's first harmonic, which a turn rot
 drift's rate of departure from eq. 2; e a magnetic disturbance; a2 the drift's curvature in
 temperature; σ the share of a turn the gyro's scale factor adds, ``rate = (gyro - drift) (1 -
 σ)``; ω the platform's true rate over the epoch, which the gyro measures with the drift, 0 when
-still), one per hypothesis (compass clean, disturbed by a wandering or by a steady error × platform still or
-moving), stepped once per epoch (:func:`epoch`: δ moves by
-minus the drift integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
+still), one per hypothesis (compass clean, disturbed by a wandering or by a steady error ×
+platform still or moving), stepped once per epoch (:func:`epoch`: δ moves by minus the drift
+integral, eq. 5; the compass measures δ, eqs. 4–6) and mixed as an
 interacting multiple model in which each mode also carries its own state (:func:`_branches`,
 :func:`combine`). The model and every term: ``docs/model.md``.
 
@@ -36,7 +36,8 @@ N_RATE = 4
 #: Floats of an epoch's scratch (one array, carved by :func:`_take` in :func:`epoch`): the mode
 #: changes; the branches' states and covariances; an alternative's covariance; four numbers per
 #: branch, two per mode; nine vectors of states (the three measurement rows, an alternative's
-#: state, the moving modes' state, four for the helpers); eight of the rate predictors.
+#: state, the moving modes' state, four for the helpers); eight of the rate predictors; a moving
+#: mode's redrawn rate (a state, its covariance, two helpers).
 N_WORK = NM * NM + NB * NX * (1 + NX) + NX * NX + 4 * NB + 2 * NM + 9 * NX + 8 * (N_RATE + 1) + NX * (NX + 3)
 CLEAN_STILL, CLEAN_MOVING, DIST_STILL, DIST_MOVING, STEADY_STILL, STEADY_MOVING = 0, 1, 2, 3, 4, 5
 #: Prior share of a new disturbance that is steady (walks slowly) rather than wandering.
@@ -570,9 +571,10 @@ def _measure(x, P, j, mf, mc, gap, dt, dG, arw, Hg, l_white, l_any, n_c, D, Rc, 
     """Mode ``j``'s update by the epoch's data (x, P in place): the gyro (a drift measurement
     when still; the true rate ω plus the drift when moving, ω having walked as one of the rate
     models has it or been redrawn, any rate: the two posteriors moment-matched), its serial
-    structure, the compass (with the disturbance e in a disturbed mode) and the field. Returns the log-likelihood, the compass innovation's excess over its
-    predicted variance (NaN: none, or the heading not known to a few degrees), and the compass
-    innovation and its variance (NaN: no compass). ``shares``: the rate models' weights for the
+    structure, the compass (with the disturbance e in a disturbed mode) and the field. Returns
+    the log-likelihood, the compass innovation's excess over its predicted variance (NaN: none,
+    or the heading not known to a few degrees), and the compass innovation and its variance
+    (NaN: no compass). ``shares``: the rate models' weights for the
     epoch (:func:`_motion_prior`). ``PH`` (NX), ``lk`` (N_RATE + 1), ``sw`` (NX (NX + 3)): scratch."""
     ll = 0.0
     still = _is_still(j)
