@@ -119,8 +119,9 @@ VN_MOTION = 0.5
 #: The smallest mode probability: a numerical guard only, far below any weight that competes
 #: (a higher floor keeps a refuted mode's own branch weighted enough to re-fit the data).
 MU_MIN = 1e-150
-#: A moving mode's chance of a redrawn rate below which its posterior is the walked rate's alone.
-ANY_MIN = 1e-9
+#: A moving mode's chance of a redrawn rate below which its posterior is the walked rate's alone
+#: (its share of the moments would be below 1e-4; the second update costs the epoch about a tenth).
+ANY_MIN = 1e-4
 #: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
 #: Bounds of the colour where it sets the long-run noise (an AR(1) sequence's).
