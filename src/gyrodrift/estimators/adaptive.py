@@ -78,7 +78,8 @@ class AdaptiveConfig:
     turn_shares : tuple of 4 floats
         Prior shares of the motion models in a moving epoch (sum below 1; the rest is any rate).
     rate_any_dps : float
-        Standard deviation of a rate no motion model predicts, deg/s.
+        Standard deviation of a rate no motion model predicts, and of a moving platform's rate at
+        the start, deg/s.
     motion_memory_s : float
         Mean time a motion keeps its character (which motion model explains it, and whether its
         gyro is smooth), s; 0 (the default) judges every epoch afresh, which charges a long smooth

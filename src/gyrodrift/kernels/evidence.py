@@ -120,7 +120,7 @@ VN_MOTION = 0.5
 #: (a higher floor keeps a refuted mode's own branch weighted enough to re-fit the data).
 MU_MIN = 1e-150
 #: A moving mode's chance of a redrawn rate below which its posterior is the walked rate's alone
-#: (its share of the moments would be below 1e-4; the second update costs the epoch about a tenth).
+#: (the second update is then skipped; its share of the moments would be below 1e-4).
 ANY_MIN = 1e-4
 #: Prior standard deviation of the noise colour about white (1), and its random walk per √s.
 COLOUR_SD0, COLOUR_WALK = 0.25, 0.001
@@ -505,27 +505,6 @@ def _branches(mf, Pi, step_var, XB, PB, wb, w, dx):
 
 
 @jit(inline=True)
-def _merge(xa, Pa, qa, xb, Pb, qb, x, P, da, db):
-    """The moments of two branches of one mode (weights ``qa + qb = 1``) into ``x``, ``P``: δ
-    and e averaged as angles about branch b's. ``da``, ``db``: scratch (NX)."""
-    for k in range(NX):
-        va = xa[k]
-        if k == X_DELTA or k == X_E:
-            va = xb[k] + wrap180(xa[k] - xb[k])
-        x[k] = qa * va + qb * xb[k]
-    for k in range(NX):
-        da[k] = xa[k] - x[k]
-        db[k] = xb[k] - x[k]
-    da[X_DELTA] = wrap180(xa[X_DELTA] - x[X_DELTA])
-    db[X_DELTA] = wrap180(xb[X_DELTA] - x[X_DELTA])
-    da[X_E] = wrap180(xa[X_E] - x[X_E])
-    db[X_E] = wrap180(xb[X_E] - x[X_E])
-    for r in range(NX):
-        for c in range(NX):
-            P[r, c] = qa * (Pa[r, c] + da[r] * da[c]) + qb * (Pb[r, c] + db[r] * db[c])
-
-
-@jit(inline=True)
 def _motion_prior(mf, mc, dt, out):
     """The weights of the rate predictors and of any rate for the next ``dt`` s (N_RATE + 1,
     into ``out``) and the chance that a motion is smooth: the prior shares and ``VN_MOTION``,
@@ -880,7 +859,9 @@ def epoch(mf, mc, t_end, temp_end):
         qa, qb = math.exp(la - t2), math.exp(lb - t2)
         lm[j] = t2 + math.log(qa + qb)
         qa, qb = qa / (qa + qb), qb / (qa + qb)
-        _merge(X[j], P[j], qa, X[NM + j], P[NM + j], qb, Xm[j], Pm[j], da, db)
+        Xm[j, :] = X[NM + j]  # the own branch, the switched-in one mixed in (angles about the own's)
+        Pm[j, :, :] = P[NM + j]
+        _mix_in(Xm[j], Pm[j], X[j], P[j], qa, da, db)
         # a gyro's scale factor is within its datasheet's tolerance: a compass whose error the
         # model does not know (a deviation beyond d's) must not carry σ past it
         Xm[j, X_S] = min(max(Xm[j, X_S], -mc[MC_SF_MAX]), mc[MC_SF_MAX])

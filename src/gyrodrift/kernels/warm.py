@@ -35,7 +35,6 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.evidence.seed_noise": ["F1 F1 f"],
     "kernels.evidence._measure": ["F1 F2 i F1 F1 b f f f F1 f f f f f f F1 F1 f F1 F1 F1 F1"],
     "kernels.evidence._branches": ["F1 F2 f F2 F3 F1 F1 F1"],
-    "kernels.evidence._merge": ["F1 F2 f F1 F2 f F1 F2 F1 F1"],
     "kernels.evidence._update": ["F1 F2 F1 f f b i i F1"],
     # the front of every engine: input checks, held cells, T'
     "kernels.loop.prepare": ["F1r F1r F1r F1r F1 I1 F1 I1 F2 F1 F1 F1 F1 B1",
