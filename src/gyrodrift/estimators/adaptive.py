@@ -96,7 +96,8 @@ class AdaptiveConfig:
     still_walk : float
         Heading random walk of a still platform, deg/√s.
     gap_factor : float
-        A time step longer than this many typical steps is a time gap.
+        A time step longer than this many mean steps (the log's own spacing over about the
+        last minute: ``kernels.evloop.SPACING_MEMORY_S``) is a time gap.
     field_norm_sd, field_dip_deg : float
         Scatter of a clean raw field's strength (fraction of the reference) and dip (deg).
     noise_memory_s : float
@@ -241,7 +242,7 @@ class AdaptiveModel(LinearDrift):
         ev.init_state(self.mf, mc, x0, P0, float(t_ref_c))
         self.mf[ev.MF_SIG_S2] = math.nan  # set from the first time step (kernels.evidence.seed_noise)
         self.mf[ev.MF_NORM_REF] = self.mf[ev.MF_DIP_REF] = math.nan
-        self.mf[ev.MF_LOG_H] = math.nan
+        self.mf[ev.MF_H_S] = math.nan
         self.mf[ev.MF_LAST_D] = math.nan
         self._started = True
         return mc

@@ -55,9 +55,9 @@ MF_TREF = MF_PC + NX * NX     # reference temperature (degC)
 MF_SIG_S2 = MF_TREF + 1       # per-sample gyro noise variance ((deg/s)^2), measured
 MF_SIG_W2 = MF_SIG_S2 + 1     # compass white noise variance (deg^2), measured
 MF_NORM_REF, MF_DIP_REF = MF_SIG_W2 + 1, MF_SIG_W2 + 2   # field reference (NaN: none yet)
-MF_LOG_H = MF_DIP_REF + 1     # log of the typical time step (s)
+MF_H_S = MF_DIP_REF + 1       # the log's spacing: forgotten sum of its time steps (s; NaN before the first)
 # epoch accumulators: duration is t_end - t0
-MF_E_T0 = MF_LOG_H + 1        # epoch start time (s)
+MF_E_T0 = MF_H_S + 1          # epoch start time (s)
 MF_E_G = MF_E_T0 + 1          # ∫gyro over the epoch (deg)
 MF_E_TC = MF_E_G + 1          # ∫(T - T_ref) dt (degC s)
 MF_E_TP = MF_E_TC + 1         # ∫T' dt (degC)
@@ -107,7 +107,8 @@ MF_PLABEL = MF_SMOOTH + 1      # P(a disturbance moves the compass by more than 
 # the first half's, the first half's count), and the forgotten sums of the inflation κ and its weight
 MF_E_SB, MF_E_SB1, MF_E_NC1 = MF_PLABEL + 1, MF_PLABEL + 2, MF_PLABEL + 3
 MF_KAPPA, MF_K_S, MF_K_W = MF_E_NC1 + 1, MF_E_NC1 + 2, MF_E_NC1 + 3
-N_MF = MF_K_W + 1
+MF_H_N = MF_K_W + 1           # the log's spacing: the forgotten count of its time steps (MF_H_S's weight)
+N_MF = MF_H_N + 1
 
 #: A row is labelled ``interference`` where a disturbance moves the compass by more than this
 #: (deg) with probability 0.5 or more.

@@ -18,8 +18,8 @@ from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels.evidence import (
     MF_DIP_REF, MF_E_DD2, MF_E_DG2, MF_E_DIP, MF_E_DREF, MF_E_G, MF_E_GAP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_NDD,
     MF_E_NDG, MF_E_NF, MF_E_NORM, MF_E_SD, MF_E_SG, MF_E_ST, MF_E_STC, MF_E_STP, MF_E_T0, MF_E_T_START, MF_E_TC,
-    MF_E_TP, MF_FIELD_DOM, MF_LAST_D, MF_LAST_D_T, MF_LOG_H, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2, MF_SIG_W2,
-    MF_TREF, MF_UPDATED, MF_XC, MC_COMPASS_SD, MC_EPOCH, MC_GAP_FACTOR, MC_GYRO_NOISE, NX, X_A, X_B, X_C, X_DELTA,
+    MF_E_TP, MF_FIELD_DOM, MF_H_N, MF_H_S, MF_LAST_D, MF_LAST_D_T, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2,
+    MF_SIG_W2, MF_TREF, MF_UPDATED, MF_XC, MC_COMPASS_SD, MC_EPOCH, MC_GAP_FACTOR, MC_GYRO_NOISE, NX, X_A, X_B, X_C, X_DELTA,
 )
 from gyrodrift.kernels.layout import (
     O_A, O_B, O_BIAS, O_BIAS_SD, O_C, O_FUSED, O_FUSED_SD, O_HEADING, O_HEADING_SD, O_RATE, OC_REASON, OC_UNOBS,
@@ -29,6 +29,12 @@ from gyrodrift.kernels.layout import (
 from gyrodrift.kernels.numeric import wrap180, wrap360
 
 __all__ = ["run", "settle", "RF_N", "RC_N", "N_HIST"]
+
+#: The log's own spacing is its mean time step over about this long (s): the forgotten sum of
+#: its steps over their forgotten count. A mean per sample, not per second, so a logger that
+#: timestamps its samples as they arrive in clusters (a serial link's buffer, a FIFO) keeps the
+#: spacing of its sample rate, and the pauses between the clusters are no gaps.
+SPACING_MEMORY_S = 60.0
 
 # ------------------------------------------------------------------ row state
 RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
@@ -137,7 +143,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     I_raw, I_rate, I_bias = rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS]
     epoch_s = mc[MC_EPOCH]
     half_epoch = 0.5 * epoch_s
-    log_gap_factor = math.log(mc[MC_GAP_FACTOR])
+    gap_factor = mc[MC_GAP_FACTOR]
     tau_turn = 0.5 * rc[RC_TURN_WIN]
     w_noise = turn_weight(mf, rf, rc[RC_TURN_RATE])
     xc = mf[MF_XC:MF_XC + NX]
@@ -145,9 +151,9 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     o_bias, o_rate, o_heading = O_BIAS * cap, O_RATE * cap, O_HEADING * cap
     stop = t.size
     recording = hist.shape[1] == N_HIST
-    # the step's log and its weight in the averaged rate, kept while the step repeats (to the bit)
+    # the step's weight in the averaged rate and in the spacing, kept while the step repeats (to the bit)
     h_known = math.nan
-    log_h = weight_h = 0.0
+    weight_h = forget_h = 0.0
     for i in range(i0, t.size):
         if recording and rf[RF_HIST_N] + 2 > hist.shape[0]:
             stop = i
@@ -167,15 +173,17 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         if not first:
             if h != h_known:
                 h_known = h
-                log_h = math.log(h)
                 weight_h = 1.0 - math.exp(-h / tau_turn)
-            lh = mf[MF_LOG_H]
-            if math.isnan(lh):  # the first step: the typical spacing, the gyro noise per sample
-                mf[MF_LOG_H] = log_h
+                forget_h = math.exp(-h / SPACING_MEMORY_S)
+            if math.isnan(mf[MF_H_S]):  # the first step: the spacing, the gyro noise per sample
+                mf[MF_H_S] = h
+                mf[MF_H_N] = 1.0
                 ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / h)
-            else:
-                gap = log_h > log_gap_factor + lh
-                mf[MF_LOG_H] = lh + 0.05 * min(max(log_h - lh, -0.5), 0.5)
+            else:  # a gap counts as gap_factor mean steps in the spacing
+                longest = gap_factor * mf[MF_H_S] / mf[MF_H_N]
+                gap = h > longest
+                mf[MF_H_S] = forget_h * mf[MF_H_S] + min(h, longest)
+                mf[MF_H_N] = forget_h * mf[MF_H_N] + 1.0
             gap = gap or held[i]
             reason_gap = gap
             if gap:
@@ -289,8 +297,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             out[O_FUSED_SD * cap + ix] = math.nan
         if rf[RF_SEEN] == 1.0:
             since = ti - rf[RF_T_ANCHOR]
-            out[O_HEADING_SD * cap + ix] = math.sqrt(sig_w * sig_w + mf[MF_SIG_S2] * math.exp(mf[MF_LOG_H]) * since
-                                                     + rf[RF_ISD] ** 2) if math.isfinite(mf[MF_LOG_H]) else sig_w
+            out[O_HEADING_SD * cap + ix] = math.sqrt(sig_w * sig_w + mf[MF_SIG_S2] * mf[MF_H_S] / mf[MF_H_N] * since
+                                                     + rf[RF_ISD] ** 2) if math.isfinite(mf[MF_H_S]) else sig_w
         else:
             out[O_HEADING_SD * cap + ix] = math.nan
         if reason_gap:
