@@ -1,7 +1,10 @@
-"""Real recorded logs nobody here designed (shared/data): compensated, never refused.
+"""Real recorded logs nobody here designed (shared/data, and one excerpt in tests/data):
+compensated, never refused.
 
-Each test skips with a reason when ``../shared/data`` is not beside the repository.
+Each test of shared/data skips with a reason when ``../shared/data`` is not beside the repository.
 """
+
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -162,3 +165,25 @@ def test_a_still_board_with_a_repeating_compass_keeps_it(shared_data):
     compass = np.nanmean(log["heading"].to_numpy()[still])
     fused = np.asarray(out["heading_fused"], dtype=float)[still]
     assert np.abs(wrap_180(fused - compass)).max() < 2.0
+
+
+#: 120 s of a still MPU6050 + HMC5883L board (tests/data/README.md), its rows stamped in clusters.
+STILL_MPU6050 = Path(__file__).parent / "data" / "mpu6050_still_120s.csv.gz"
+
+
+def test_a_real_still_board_stamped_in_clusters_has_no_time_gaps():
+    """The same rig as ``mpu6050_rotate_z``, unmoved: its rows arrive in clusters (median step
+    2 ms, mean 10 ms). After its first second (its first clusters show the spacing) no row is a
+    time gap, none is labelled turning or disturbed, the gyro heading holds within 0.5 deg, and
+    after the first minute the drift is the still gyro's own mean within 0.01 deg/s."""
+    log = read_log(STILL_MPU6050)
+    steps = np.diff(log["t"].to_numpy())
+    assert np.median(steps) < 0.003 < 0.008 < steps.mean()  # the premise: clusters
+    out = compensate(log)
+    labels = set(out["gate_reason"].astype(str)[log["t"].to_numpy() > 1.0])
+    assert labels <= {"", "init"}, labels
+    heading = out["heading"].to_numpy(float)
+    assert np.abs(wrap_180(heading - heading[0])).max() < 0.5
+    late = log["t"].to_numpy() > 60.0
+    own = float(log["gyro_z"].to_numpy()[late].mean())
+    assert np.abs(out["bias_z"].to_numpy()[late] - own).max() < 0.01, own
