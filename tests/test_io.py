@@ -357,6 +357,9 @@ def test_time_not_increasing(tmp_path, t_bad):
     msg = _raises(LogFormatError, read_log, _write(tmp_path, text, "ti.csv"))
     assert "ti.csv" in msg and "line 4" in msg and "strictly increasing" in msg
     assert f"t={float(t_bad)!r}" in msg and "t=0.1" in msg and "line 3" in msg
+    # a repeated time may be a coarse clock's (say how to keep both samples), one that goes back is not
+    repeated = "give each its own time" in msg
+    assert repeated == (t_bad == "0.1") and ("sort the log by time" in msg) == (t_bad == "0.05")
 
 
 def test_time_empty(tmp_path):

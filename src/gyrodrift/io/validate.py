@@ -373,11 +373,14 @@ def _check_time(frame: pd.DataFrame, src: Source, prev_t_s: float | None = None)
     bad = np.flatnonzero(~(np.diff(t_all) > 0.0))
     if bad.size:
         pos = int(bad[0]) + 1 - before  # row in the frame; pos - 1 may be the row before it
+        repeated = t_all[pos + before] == t_all[pos - 1 + before]
         raise format_error(
             src,
             f"time is not strictly increasing: t={float(t[pos])!r} follows t={float(t_all[pos - 1 + before])!r}"
             f" on {row_label(src, pos - 1)}",
-            "sort the log by time and remove duplicate samples",
+            ("remove the row if it repeats a sample; if the two are distinct samples stamped by a clock "
+             "coarser than the sample rate, give each its own time (spread a run of equal times evenly up to "
+             "the next)") if repeated else "sort the log by time",
             where=cell_label(src, pos, T),
         )
 
