@@ -88,10 +88,10 @@ def draw(rng: np.random.Generator, arrival: str = "stalls") -> pd.DataFrame:
                        np.mod(heading + rng.normal(0.0, rng.uniform(1.0, 4.0), t.size), 360.0), np.nan)
     log = pd.DataFrame({"t": t, "gyro_z": gyro, "temp": temp, "heading": compass,
                         "ref_heading": np.mod(heading, 360.0), "true_bias_z": drift})
-    stamps = np.random.default_rng(int(rng.integers(2**32)))  # the same draws, clustered or not
-    if arrival == "clusters":
-        log["t"] = _clustered(stamps, t)
-    if arrival != "stalls":
+    if arrival != "stalls":  # the same draws, clustered or not (the stalls' draws as they always were)
+        stamps = np.random.default_rng(int(rng.integers(2**32)))
+        if arrival == "clusters":
+            log["t"] = _clustered(stamps, t)
         return log
     return log[_kept(rng, t)].reset_index(drop=True)
 

@@ -130,23 +130,25 @@ def _arriving_in_clusters(log: pd.DataFrame, per_cluster: int, spacing_s: float)
 def test_samples_arriving_in_clusters_are_no_time_gaps():
     """A 100-Hz gyro and 10-Hz compass logged as they arrive from a buffer, 8 samples 1 ms apart
     every 80 ms (as the real ``mpu6050_rotate_z`` log is stamped): the log's spacing is its mean
-    step, 10 ms, and the 73-ms pauses between clusters are no time gaps once the first clusters
-    have shown it (a spacing taken from the typical step of the clusters, 1-3 ms, would make
-    them all gaps); the drift and the heading are those of the same samples evenly stamped."""
+    step, 10 ms, and the 73-ms pauses between clusters are no time gaps (a spacing taken from the
+    typical step of the clusters, 1-3 ms, would make them all gaps); the model times the rows by
+    a sample clock at that step, and its drift and heading are within 30 % and 0.1 deg of those
+    of the same samples evenly stamped (on the stamps themselves the drift errs by 40 % more)."""
     log = synthetic_log(duration_s=600.0, fs_hz=100.0, compass_hz=10.0, temp_c=lambda t: 30.0 + 0.01 * t,
                         drift_dps=lambda t, T: 0.05 * (T - 30.0) - 0.4, gyro_noise_dps=0.05, compass_noise_deg=1.0,
                         heading_deg=lambda t: 100.0 + 90.0 * np.sin(2 * np.pi * t / 60.0))
     even = compensate(log)
     clustered = compensate(_arriving_in_clusters(log, 8, 0.001))
-    gaps = clustered["t"].to_numpy()[clustered["gate_reason"].astype(str).to_numpy() == "gap"]
-    assert gaps.size <= 2 and np.all(gaps < 0.5), gaps  # the first clusters, before a mean is known
+    assert not (clustered["gate_reason"].astype(str) == "gap").any()
     late = log["t"].to_numpy() > 120.0
     truth = log["true_bias_z"].to_numpy()[late]
-    rms = {name: float(np.sqrt(np.mean((out["bias_z"].to_numpy()[late] - truth) ** 2)))
-           for name, out in (("even", even), ("clustered", clustered))}
-    assert rms["clustered"] < max(2.0 * rms["even"], 0.01), rms
-    fused = np.asarray(clustered["heading_fused"] - log["ref_heading"], dtype=float)[late]
-    assert np.sqrt(np.mean(((fused + 180.0) % 360.0 - 180.0) ** 2)) < 1.0
+    rms, fused = {}, {}
+    for name, out in (("even", even), ("clustered", clustered)):
+        rms[name] = float(np.sqrt(np.mean((out["bias_z"].to_numpy()[late] - truth) ** 2)))
+        err = np.asarray(out["heading_fused"] - log["ref_heading"], dtype=float)[late]
+        fused[name] = float(np.sqrt(np.mean(((err + 180.0) % 360.0 - 180.0) ** 2)))
+    assert rms["clustered"] < 1.3 * rms["even"], rms
+    assert fused["clustered"] < fused["even"] + 0.1, fused
 
 
 def _kalman(x, P, H, z, R):

@@ -42,6 +42,23 @@ def test_a_stalling_logger_loses_rows_inside_the_turns():
     assert 9.0 < np.isfinite(log["heading"]).sum() / (t[-1] - t[0]) < 11.0
 
 
+def test_a_logger_that_stamps_on_arrival_writes_clusters_and_loses_no_row():
+    """``handheld-clustered``: every row of the 100-Hz run is kept (its mean step is 10 ms), but
+    stamped in clusters of 4-10 rows 1-2.5 ms apart; a stamp is never earlier than its row's true
+    time nor later than the next cluster's, and times still increase."""
+    log = generate("handheld-clustered", seeds("tuning", 1)[0], duration_scale=0.5).log
+    t = log["t"].to_numpy()
+    dt = np.diff(t)
+    assert np.all(dt > 0.0) and abs(dt.mean() - 0.01) < 1e-4
+    within = dt < 0.003
+    assert 0.001 - 1e-9 <= dt[within].min() and dt[within].max() <= 0.0025 + 1e-9
+    starts = np.flatnonzero(np.r_[True, ~within])  # the first row of each cluster
+    sizes = np.diff(np.r_[starts, t.size])
+    assert sizes[:-1].min() >= 4 and sizes[:-1].max() <= 10
+    true_t = np.arange(t.size) / 100.0
+    assert np.all(t >= true_t - 1e-9) and np.all(t[starts] == true_t[starts + sizes - 1])
+
+
 def test_an_uncalibrated_magnetometer_errs_with_the_heading():
     """``rawmag-uncalibrated``: the raw field's strength varies with the heading (hard iron), the
     tilt-compensated heading errs by a function of the heading that a constant cannot remove, and

@@ -18,7 +18,7 @@ from gyrodrift.kernels import evidence as ev
 from gyrodrift.kernels.evidence import (
     MF_DIP_REF, MF_E_DD2, MF_E_DG2, MF_E_DIP, MF_E_DREF, MF_E_G, MF_E_GAP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_NDD,
     MF_E_NDG, MF_E_NF, MF_E_NORM, MF_E_SD, MF_E_SG, MF_E_ST, MF_E_STC, MF_E_STP, MF_E_T0, MF_E_T_START, MF_E_TC,
-    MF_E_TP, MF_FIELD_DOM, MF_H_N, MF_H_S, MF_LAST_D, MF_LAST_D_T, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2,
+    MF_E_TP, MF_FIELD_DOM, MF_H_L, MF_H_N, MF_H_S, MF_LAST_D, MF_LAST_D_T, MF_NORM_REF, MF_PC, MF_PDIST, MF_PSTILL, MF_SIG_S2,
     MF_SIG_W2, MF_TREF, MF_UPDATED, MF_XC, MC_COMPASS_SD, MC_EPOCH, MC_GAP_FACTOR, MC_GYRO_NOISE, NX, X_A, X_B, X_C, X_DELTA,
 )
 from gyrodrift.kernels.layout import (
@@ -35,6 +35,14 @@ __all__ = ["run", "settle", "RF_N", "RC_N", "N_HIST"]
 #: timestamps its samples as they arrive in clusters (a serial link's buffer, a FIFO) keeps the
 #: spacing of its sample rate, and the pauses between the clusters are no gaps.
 SPACING_MEMORY_S = 60.0
+#: A log whose typical step (the geometric mean of its steps) is below this share of its mean
+#: step is stamped as its rows arrive, in clusters: its rows are timed by a sample clock
+#: (:func:`run`; ``docs/model.md``, "Time gaps").
+CLUSTER_RATIO = 0.5
+#: Steps the log's spacing is taken from before a step can be a gap by it (or the rows be
+#: clustered): more than a cluster's rows, so that a pause between the first clusters is seen
+#: against the log's rate and not against its clusters' steps.
+SPACING_MIN_STEPS = 20.0
 
 # ------------------------------------------------------------------ row state
 RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
@@ -55,7 +63,8 @@ RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading co
 #: The gyro's noise as the turning label sees it, moving or not: half the squared successive
 #: differences and their count, forgotten over RATE_SWITCH_S (a motion's character changes)
 RF_TURN_S, RF_TURN_W = RF_INIT_RAW + 1, RF_INIT_RAW + 2
-RF_N = RF_INIT_RAW + 3
+RF_T_STAMP = RF_INIT_RAW + 3  # the previous row's time as the log stamped it (RF_T: as the model timed it)
+RF_N = RF_INIT_RAW + 4
 
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
@@ -144,6 +153,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     epoch_s = mc[MC_EPOCH]
     half_epoch = 0.5 * epoch_s
     gap_factor = mc[MC_GAP_FACTOR]
+    log_gap, log_cluster = math.log(gap_factor), math.log(CLUSTER_RATIO)
     tau_turn = 0.5 * rc[RC_TURN_WIN]
     w_noise = turn_weight(mf, rf, rc[RC_TURN_RATE])
     xc = mf[MF_XC:MF_XC + NX]
@@ -152,8 +162,8 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     stop = t.size
     recording = hist.shape[1] == N_HIST
     # the step's weight in the averaged rate and in the spacing, kept while the step repeats (to the bit)
-    h_known = math.nan
-    weight_h = forget_h = 0.0
+    h_known = stamp_known = math.nan
+    weight_h = forget_h = log_step = 0.0
     for i in range(i0, t.size):
         if recording and rf[RF_HIST_N] + 2 > hist.shape[0]:
             stop = i
@@ -163,27 +173,43 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         if first:
             c_t, c_g, c_T, c_Tp = ti, gi, Ti, Tpi
             rf[RF_STARTED] = 1.0
+            rf[RF_T_STAMP] = ti
             _open(mf, ti, Ti)
         a, b, c, a2 = xc[X_A], xc[X_B], xc[X_C], xc[ev.X_A2]
         bias = a * (Ti - tref) + b * Tpi + c + a2 * (Ti - tref) ** 2
         rate = (gi - bias) * (1.0 - xc[ev.X_S])  # less the scale factor's share of the turn
-        h = ti - c_t
         gap = False
         reason_gap = False
+        if not first:
+            stamp = ti - rf[RF_T_STAMP]  # the step between the log's own stamps
+            rf[RF_T_STAMP] = ti
+            if stamp != stamp_known:
+                stamp_known = stamp
+                forget_h = math.exp(-stamp / SPACING_MEMORY_S)
+                log_step = math.log(stamp)
+            if math.isnan(mf[MF_H_S]):  # the first step: the spacing, the gyro noise per sample
+                mf[MF_H_S] = stamp
+                mf[MF_H_L] = log_step
+                mf[MF_H_N] = 1.0
+                ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / stamp)
+            else:  # a gap counts as gap_factor mean steps in the spacing
+                mean_step = mf[MF_H_S] / mf[MF_H_N]
+                log_mean = math.log(mean_step)
+                longest = gap_factor * mean_step
+                known = mf[MF_H_N] >= SPACING_MIN_STEPS
+                gap = (known and stamp > longest) or held[i]
+                if known and not gap and mf[MF_H_L] / mf[MF_H_N] < log_cluster + log_mean:
+                    # stamped on arrival, in clusters: the sample clock runs at the mean step, never
+                    # later than the row's stamp nor a gap's length earlier
+                    ti = max(min(ti, c_t + mean_step), ti - longest)
+                mf[MF_H_S] = forget_h * mf[MF_H_S] + min(stamp, longest)
+                mf[MF_H_L] = forget_h * mf[MF_H_L] + min(log_step, log_gap + log_mean)
+                mf[MF_H_N] = forget_h * mf[MF_H_N] + 1.0
+        h = ti - c_t
         if not first:
             if h != h_known:
                 h_known = h
                 weight_h = 1.0 - math.exp(-h / tau_turn)
-                forget_h = math.exp(-h / SPACING_MEMORY_S)
-            if math.isnan(mf[MF_H_S]):  # the first step: the spacing, the gyro noise per sample
-                mf[MF_H_S] = h
-                mf[MF_H_N] = 1.0
-                ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / h)
-            else:  # a gap counts as gap_factor mean steps in the spacing
-                longest = gap_factor * mf[MF_H_S] / mf[MF_H_N]
-                gap = h > longest
-                mf[MF_H_S] = forget_h * mf[MF_H_S] + min(h, longest)
-                mf[MF_H_N] = forget_h * mf[MF_H_N] + 1.0
             gap = gap or held[i]
             reason_gap = gap
             if gap:

@@ -115,6 +115,7 @@ class _Recipe:
     temp_channel_c: float | None = None
     held_jitter_deg: float | None = None  # the heading written on every row: held, plus this jitter per row
     stalls: bool = False  # the logger stalls: 50-250 ms of rows lost after every 0.2-1.5 s (_stalled)
+    clusters: bool = False  # rows stamped as they arrive, in clusters (_clustered_stamps)
 
 
 def _u(rng, lo, hi) -> float:
@@ -481,6 +482,17 @@ def _handheld_stalls(rng, scale):
                    _warmup(rng, rise=(2.0, 8.0)), rate=rate, heading0_deg=_u(rng, 0, 360), stalls=True)
 
 
+def _handheld_clustered(rng, scale):
+    """The hand turns of ``handheld-stalls`` at 100 Hz with no row lost, logged through a serial
+    link that stamps the rows as they arrive: in clusters of 4–10 rows 1–2.5 ms apart, each from
+    its last row's true time on (:func:`_clustered_stamps`); a heading at 10 Hz."""
+    duration = _u(rng, 120.0, 600.0) * scale
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 1.0, 10.0), duration - 5.0, (90.0, 720.0), (20.0, 90.0),
+                                  (1.0, 10.0), after=lambda a, p: abs(a) / p + 1.0))
+    return _Recipe(duration, 100.0, _device(rng), _compass(rng, noise=(0.5, 3.0)), _warmup(rng, rise=(2.0, 8.0)),
+                   rate=rate, heading0_deg=_u(rng, 0, 360), clusters=True)
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -506,6 +518,7 @@ _BUILDERS: dict[str, Callable] = {
     "held-compass": _held_compass,
     "rawmag-uncalibrated": _rawmag_uncalibrated,
     "handheld-stalls": _handheld_stalls,
+    "handheld-clustered": _handheld_clustered,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -556,6 +569,20 @@ def _stalled(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         lost[np.searchsorted(t, at):np.searchsorted(t, at + stall)] = True
         at += stall + _u(rng, 0.2, 1.5)
     return lost
+
+
+def _clustered_stamps(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The times a logger writes for rows sampled at ``t`` when it stamps them as they arrive
+    (a serial link's buffer read now and then): clusters of 4–10 rows (the last ones join the
+    last cluster), 1–2.5 ms apart, each cluster stamped from its last row's true time on."""
+    stamped = np.empty_like(t)
+    i = 0
+    while i < t.size:
+        n = int(rng.integers(4, 11))
+        n = t.size - i if t.size - i - n < 4 else n
+        stamped[i:i + n] = t[i + n - 1] + np.arange(n) * _u(rng, 0.001, 0.0025)
+        i += n
+    return stamped
 
 
 def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:
@@ -634,7 +661,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
     if rec.held_jitter_deg is not None:
         heading = _held(tl, heading, mask, rec.dropouts, rec.held_jitter_deg, rng["compass"])
-    cols = {T: tl, GYRO_Z: gyro, TEMP: temp}
+    cols = {T: _clustered_stamps(tl, rng["log"]) if rec.clusters else tl, GYRO_Z: gyro, TEMP: temp}
     if rec.compass_form == "heading":
         cols[HEADING] = heading
     elif rec.compass_form == "raw":
