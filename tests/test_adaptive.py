@@ -140,6 +140,9 @@ def test_samples_arriving_in_clusters_are_no_time_gaps():
     even = compensate(log)
     clustered = compensate(_arriving_in_clusters(log, 8, 0.001))
     assert not (clustered["gate_reason"].astype(str) == "gap").any()
+    said = [n for n in clustered.attrs["notes"] if "sample clock" in n]
+    assert len(said) == 1 and ("mean 9.99 ms" in said[0] or "mean 10 ms" in said[0]), clustered.attrs["notes"]
+    assert not any("sample clock" in n for n in even.attrs["notes"])
     late = log["t"].to_numpy() > 120.0
     truth = log["true_bias_z"].to_numpy()[late]
     rms, fused = {}, {}

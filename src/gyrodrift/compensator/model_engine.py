@@ -39,6 +39,7 @@ class ModelEngine(ChunkEngine):
         self._mc = None
         self._init_last = None  # last row of the init window, until its rows are settled
         self._rf = np.zeros(evloop.RF_N)
+        self._clocked = False  # the sample clock's note is said
         self._hist = np.zeros((256, evloop.N_HIST)) if record else np.zeros((0, 0))
         self._rc = np.zeros(evloop.RC_N)
         gate = config.gate
@@ -70,6 +71,19 @@ class ModelEngine(ChunkEngine):
                 hist = np.zeros((2 * self._hist.shape[0], evloop.N_HIST))
                 hist[:self._hist.shape[0]] = self._hist
                 self._hist = hist
+        self._clock_note()
+
+    def _clock_note(self) -> None:
+        """Say once that the rows are timed by the sample clock (``docs/model.md``, "A sample
+        clock for rows stamped on arrival"), with the steps that showed it."""
+        if self._clocked or self._rf[evloop.RF_CLOCKED] == 0.0:
+            return
+        self._clocked = True
+        mf = self.est.mf
+        typical, mean = math.exp(mf[ev.MF_H_L] / mf[ev.MF_H_N]), mf[ev.MF_H_S] / mf[ev.MF_H_N]
+        self.notes.append(f"{self.source}: its rows look stamped as they arrived, in clusters (typical step "
+                          f"{1e3 * typical:.3g} ms, mean {1e3 * mean:.3g} ms): the model times them by a sample clock "
+                          "at the mean step, and the output's t keeps the stamps")
 
     def epochs(self) -> np.ndarray:
         """The epoch history so far (rows of :data:`gyrodrift.kernels.evloop.N_HIST` columns;
@@ -118,6 +132,8 @@ class ModelEngine(ChunkEngine):
             done = r.run(*args)
         if done < 1:
             self._loop(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, cols)
+        elif not self._clocked and self._rf[evloop.RF_CLOCKED] > 0.0:
+            self._clock_note()
 
     def accepted(self) -> np.ndarray:
         """The model takes no interval measurements: an empty (0, 5) array."""

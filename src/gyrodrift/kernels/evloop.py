@@ -28,7 +28,7 @@ from gyrodrift.kernels.layout import (
 )
 from gyrodrift.kernels.numeric import wrap180, wrap360
 
-__all__ = ["run", "settle", "RF_N", "RC_N", "N_HIST"]
+__all__ = ["run", "settle", "RF_N", "RF_CLOCKED", "RC_N", "N_HIST"]
 
 #: The log's own spacing is its mean time step over about this long (s): the forgotten sum of
 #: its steps over their forgotten count. A mean per sample, not per second, so a logger that
@@ -64,7 +64,8 @@ RF_INIT_RAW = RF_HIST_N + 1  # 1.0 while the init window is held: the heading co
 #: differences and their count, forgotten over RATE_SWITCH_S (a motion's character changes)
 RF_TURN_S, RF_TURN_W = RF_INIT_RAW + 1, RF_INIT_RAW + 2
 RF_T_STAMP = RF_INIT_RAW + 3  # the previous row's time as the log stamped it (RF_T: as the model timed it)
-RF_N = RF_INIT_RAW + 4
+RF_CLOCKED = RF_INIT_RAW + 4  # rows timed by the sample clock (stamped in clusters)
+RF_N = RF_INIT_RAW + 5
 
 # ------------------------------------------------------------------ epoch history
 #: One row per epoch, for the smoother: end time (s), length (s), temperature change (degC), the
@@ -202,6 +203,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                     # stamped on arrival, in clusters: the sample clock runs at the mean step, never
                     # later than the row's stamp nor a gap's length earlier
                     ti = max(min(ti, c_t + mean_step), ti - longest)
+                    rf[RF_CLOCKED] += 1.0
                 mf[MF_H_S] = forget_h * mf[MF_H_S] + min(stamp, longest)
                 mf[MF_H_L] = forget_h * mf[MF_H_L] + min(log_step, log_gap + log_mean)
                 mf[MF_H_N] = forget_h * mf[MF_H_N] + 1.0
