@@ -833,6 +833,33 @@ def test_a_sigterm_in_a_finalizer_is_delivered_again():
             time.sleep(5.0)  # the signal sent again interrupts this
 
 
+_WORKER_FINALIZER = """
+import gc, time
+from gyrodrift import _pool
+
+class Finalised:
+    def __del__(self):
+        raise _pool._Stopped  # as the worker's SIGTERM handler does when it fires in a finalizer
+
+def job(_):
+    Finalised()
+    gc.collect()
+    time.sleep(5.0)  # the signal sent again interrupts this
+    print("not stopped", flush=True)
+
+_pool._worker_start()
+_pool._run(job, None)
+"""
+
+
+def test_a_workers_sigterm_in_a_finalizer_is_delivered_again_without_a_traceback():
+    """A worker's SIGTERM whose exception lands in a finalizer (seen in a batch stopped while a
+    worker's weak references were being collected: Python printed its traceback and the worker
+    ran on) is sent again: the worker stops as from any SIGTERM in a job, silently, status 143."""
+    out = subprocess.run([sys.executable, "-c", _WORKER_FINALIZER], capture_output=True, text=True, timeout=60)
+    assert (out.returncode, out.stdout, out.stderr) == (143, "", "")
+
+
 def test_an_interrupted_batch_removes_what_its_stopped_workers_left(tmp_path, monkeypatch):
     """A worker stopped before it could remove its temporary leaves it behind (its process then
     gone); the interrupted batch removes it before it stops. Other hidden files stay."""

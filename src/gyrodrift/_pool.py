@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
+
+from gyrodrift._signals import redeliver_sigterm
 
 __all__ = ["map_processes"]
 
@@ -18,20 +21,27 @@ TERMINATED_STATUS = 128 + signal.SIGTERM
 _in_job = False
 
 
+class _Stopped(KeyboardInterrupt):
+    """A worker's SIGTERM inside a job (:func:`_on_sigterm`)."""
+
+
 def _on_sigterm(signum, frame) -> None:
-    """A worker's SIGTERM: inside a job, :class:`KeyboardInterrupt` (its clean-up runs); between
-    jobs (waiting for or unpickling the next item) there is nothing to clean, and the worker exits
-    at once, without the traceback multiprocessing would print."""
+    """A worker's SIGTERM: inside a job, :class:`_Stopped` (its clean-up runs); between jobs
+    (waiting for or unpickling the next item) there is nothing to clean, and the worker exits at
+    once, without the traceback multiprocessing would print."""
     if _in_job:
-        raise KeyboardInterrupt
+        raise _Stopped
     os._exit(TERMINATED_STATUS)
 
 
 def _worker_start() -> None:
-    """In each worker: SIGTERM stops it (:func:`_on_sigterm`); SIGINT is ignored, because Ctrl-C
-    reaches the whole process group and the parent then stops its workers with SIGTERM."""
+    """In each worker: SIGTERM stops it (:func:`_on_sigterm`; one raised inside a finalizer,
+    where it cannot propagate, is sent again rather than printed and lost); SIGINT is ignored,
+    because Ctrl-C reaches the whole process group and the parent then stops its workers with
+    SIGTERM."""
     signal.signal(signal.SIGTERM, _on_sigterm)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.unraisablehook = redeliver_sigterm(sys.unraisablehook, _Stopped)
 
 
 def _run(job, item):

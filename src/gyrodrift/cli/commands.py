@@ -13,6 +13,7 @@ from importlib import resources
 from pathlib import Path
 
 from gyrodrift._paths import check_paths
+from gyrodrift._signals import redeliver_sigterm
 from gyrodrift._text import say, warn
 from gyrodrift._version import __version__
 from gyrodrift.cli.batch import add_batch_parser
@@ -461,24 +462,6 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated()
 
 
-#: Delay before a SIGTERM that landed in a finalizer is sent again, s.
-REDELIVER_S = 0.05
-
-
-def _redeliver_terminated(hook):
-    """A ``sys.unraisablehook`` that sends SIGTERM again when :class:`Terminated` cannot propagate, else ``hook``."""
-
-    def unraisable(info) -> None:
-        if isinstance(info.exc_value, Terminated):
-            import threading
-
-            threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signal.SIGTERM)).start()
-            return
-        hook(info)
-
-    return unraisable
-
-
 @contextmanager
 def _sigterm_interrupts():
     """While the block runs, SIGTERM raises :class:`Terminated` in the main thread; the handlers are restored."""
@@ -488,7 +471,7 @@ def _sigterm_interrupts():
         yield
         return
     hook = sys.unraisablehook
-    sys.unraisablehook = _redeliver_terminated(hook)
+    sys.unraisablehook = redeliver_sigterm(hook, Terminated)
     try:
         yield
     finally:
