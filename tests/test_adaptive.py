@@ -154,6 +154,17 @@ def test_samples_arriving_in_clusters_are_no_time_gaps():
     assert fused["clustered"] < fused["even"] + 0.1, fused
 
 
+def test_an_even_log_whose_first_step_is_long_is_not_taken_for_clusters():
+    """A 200-Hz log whose first step is 160 ms (as the real PX4 ``sample_log_small.ulg``'s): its
+    first steps' spacing counts that step as a gap would, so the even rows after it are not taken
+    for clusters (no sample clock, no note) and no later step is a gap."""
+    log = synthetic_log(duration_s=60.0, fs_hz=200.0, compass_hz=10.0, gyro_noise_dps=0.05)
+    log.loc[1:, "t"] += 0.155
+    out = compensate(log)
+    assert not any("sample clock" in n for n in out.attrs["notes"]), out.attrs["notes"]
+    assert not (out["gate_reason"].astype(str).to_numpy()[1:] == "gap").any()
+
+
 def _kalman(x, P, H, z, R):
     """The textbook scalar update (numpy): posterior state, covariance and log-likelihood."""
     S = H @ P @ H + R

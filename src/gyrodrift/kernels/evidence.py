@@ -109,7 +109,11 @@ MF_E_SB, MF_E_SB1, MF_E_NC1 = MF_PLABEL + 1, MF_PLABEL + 2, MF_PLABEL + 3
 MF_KAPPA, MF_K_S, MF_K_W = MF_E_NC1 + 1, MF_E_NC1 + 2, MF_E_NC1 + 3
 MF_H_N = MF_K_W + 1           # the log's spacing: the forgotten count of its time steps (MF_H_S's weight)
 MF_H_L = MF_H_N + 1           # the forgotten sum of the log of its time steps (weight MF_H_N)
-N_MF = MF_H_L + 1
+MF_H_SEEN = MF_H_L + 1        # the log's first steps seen (up to N_FIRST_STEPS)
+MF_H_FIRST = MF_H_SEEN + 1    # the log's first steps (s), N_FIRST_STEPS of them
+#: The log's first steps kept, from which its spacing is first taken (``evloop.SPACING_MIN_STEPS``).
+N_FIRST_STEPS = 20
+N_MF = MF_H_FIRST + N_FIRST_STEPS
 
 #: A row is labelled ``interference`` where a disturbance moves the compass by more than this
 #: (deg) with probability 0.5 or more.

@@ -40,10 +40,11 @@ SPACING_MEMORY_S = 60.0
 #: step is stamped as its rows arrive, in clusters: its rows are timed by a sample clock
 #: (:func:`run`; ``docs/model.md``, "Time gaps").
 CLUSTER_RATIO = 0.5
-#: Steps the log's spacing is taken from before a step can be a gap by it (or the rows be
-#: clustered): more than a cluster's rows, so that a pause between the first clusters is seen
-#: against the log's rate and not against its clusters' steps.
-SPACING_MIN_STEPS = 20.0
+#: Steps the log's spacing is first taken from (each counted at most ``gap_factor`` times the mean
+#: of the others but the longest, so that a pause among them weighs as a gap would) before a step can be a gap by it, or
+#: the rows be judged clustered: more than a cluster's rows, so that a pause between the first
+#: clusters is seen against the log's rate and not against its clusters' steps.
+SPACING_MIN_STEPS = ev.N_FIRST_STEPS
 
 # ------------------------------------------------------------------ row state
 RF_T, RF_G, RF_TEMP, RF_TP, RF_BIAS, RF_RATE = 0, 1, 2, 3, 4, 5  # the previous row
@@ -189,18 +190,19 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 stamp_known = stamp
                 forget_h = math.exp(-stamp / SPACING_MEMORY_S)
                 log_step = math.log(stamp)
-            if math.isnan(mf[MF_H_S]):  # the first step: the spacing, the gyro noise per sample
-                mf[MF_H_S] = stamp
-                mf[MF_H_L] = log_step
-                mf[MF_H_N] = 1.0
-                ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / stamp)
+            seen = mf[ev.MF_H_SEEN]
+            if seen < SPACING_MIN_STEPS:  # the first steps: kept; no gap judged by them yet
+                if seen == 0.0:  # the gyro noise per sample, from the first step
+                    ev.seed_noise(mf, mc, mc[MC_GYRO_NOISE] ** 2 / stamp)
+                mf[ev.MF_H_FIRST + int(seen)] = stamp
+                mf[ev.MF_H_SEEN] = seen + 1.0
+                _first_spacing(mf, int(seen) + 1, gap_factor)
             else:  # a gap counts as gap_factor mean steps in the spacing
                 mean_step = mf[MF_H_S] / mf[MF_H_N]
                 log_mean = math.log(mean_step)
                 longest = gap_factor * mean_step
-                known = mf[MF_H_N] >= SPACING_MIN_STEPS
-                gap = (known and stamp > longest) or held[i]
-                if known and not gap and mf[MF_H_L] / mf[MF_H_N] < log_cluster + log_mean:
+                gap = stamp > longest or held[i]
+                if not gap and mf[MF_H_L] / mf[MF_H_N] < log_cluster + log_mean:
                     # stamped on arrival, in clusters: the sample clock runs at the mean step, never
                     # later than the row's stamp nor a gap's length earlier
                     ti = max(min(ti, c_t + mean_step), ti - longest)
@@ -348,6 +350,24 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
     rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE] = c_t, c_g, c_T, c_Tp, c_bias, c_rate
     rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS] = I_raw, I_rate, I_bias
     return stop
+
+
+@jit(inline=True)
+def _first_spacing(mf, n, gap_factor):
+    """The spacing (``MF_H_S``, ``MF_H_L``, ``MF_H_N``) from the log's first ``n`` steps, each
+    counted at most ``gap_factor`` times the mean of the others but the longest (a median would
+    be a cluster's step where the rows come in clusters)."""
+    first = mf[ev.MF_H_FIRST:ev.MF_H_FIRST + n]
+    longest = first.max()
+    cap = gap_factor * ((first.sum() - longest) / (n - 1) if n > 1 else longest)
+    s = s_log = 0.0
+    for k in range(n):
+        step = min(first[k], cap)
+        s += step
+        s_log += math.log(step)
+    mf[MF_H_S] = s
+    mf[MF_H_L] = s_log
+    mf[MF_H_N] = float(n)
 
 
 @jit(inline=True)
