@@ -132,6 +132,23 @@ def test_chunks_rows_and_whole_log_give_the_same_bits(estimator, raw_mag):
         assert_identical(engine_columns(whole), streamed(log, cfg))
 
 
+def test_rows_stamped_in_clusters_give_the_same_bits_three_ways():
+    """A log stamped in clusters (the model times its rows by its sample clock, whose state is
+    carried across chunks and rows): chunks, rows one by one and the whole log agree bit for bit."""
+    from test_adaptive import _arriving_in_clusters
+    from conftest import synthetic_log
+
+    log = _arriving_in_clusters(synthetic_log(duration_s=120.0, fs_hz=100.0, compass_hz=10.0, gyro_noise_dps=0.05,
+                                              heading_deg=lambda t: 100.0 + 60.0 * np.sin(t / 10.0)), 7, 0.0015)
+    cfg = CompensatorConfig()
+    whole = compensate(log, cfg)
+    assert any("sample clock" in n for n in whole.attrs["notes"])
+    sizes = [1, 3, 29, 500] + list(np.random.default_rng(5).integers(1, 900, size=60)) + [len(log)]
+    parts, _, _ = feed_in_chunks(log, cfg, sizes)
+    assert_identical(engine_columns(whole), parts)
+    assert_identical(engine_columns(whole), streamed(log, cfg))
+
+
 @pytest.mark.parametrize("variant", list(VARIANTS))
 def test_every_adaptive_setting_in_chunks(variant):
     """Settings that change the model's paths on a soak log (sway, ramps, dropouts): chunks = whole."""
