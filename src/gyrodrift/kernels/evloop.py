@@ -184,6 +184,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
         gap = False
         reason_gap = False
         if not first:
+            gap = held[i]
             stamp = ti - rf[RF_T_STAMP]  # the step between the log's own stamps
             rf[RF_T_STAMP] = ti
             if stamp != stamp_known:
@@ -201,7 +202,7 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mean_step = mf[MF_H_S] / mf[MF_H_N]
                 log_mean = math.log(mean_step)
                 longest = gap_factor * mean_step
-                gap = stamp > longest or held[i]
+                gap = gap or stamp > longest
                 if not gap and mf[MF_H_L] / mf[MF_H_N] < log_cluster + log_mean:
                     # stamped on arrival, in clusters: the sample clock runs at the mean step, never
                     # later than the row's stamp nor a gap's length earlier
@@ -215,7 +216,6 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
             if h != h_known:
                 h_known = h
                 weight_h = 1.0 - math.exp(-h / tau_turn)
-            gap = gap or held[i]
             reason_gap = gap
             if gap:
                 if mf[MF_E_NDG] > 0.0 or mf[MF_E_NC] > 0.0:  # close the epoch before the gap
