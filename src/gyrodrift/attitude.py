@@ -3,7 +3,9 @@
 The down vector is propagated with the body rates and corrected towards the accelerometer
 only when it is believable: a complementary filter with an integral term (Mahony, Hamel and
 Pflimlin, IEEE TAC 2008) reduced to the gravity vector. Eq. (1)-(4), the gates and their
-constants: ``docs/heading_and_axes.md`` (gyro-aided tilt).
+constants: ``docs/heading_and_axes.md`` (gyro-aided tilt). With the tilt the filter also gives
+the heading rate of a tilted body (:func:`propagate`; ``docs/heading_and_axes.md``, "The heading
+rate of a tilted body").
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from gyrodrift.kernels import jit
 
 __all__ = [
     "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "STARTUP_S", "MAX_GAP_S",
-    "MAX_BIAS_DPS", "new_state", "propagate", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
+    "MAX_BIAS_DPS", "MIN_COS2_PITCH", "LEARNED_S", "new_state", "propagate", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
 
@@ -29,7 +31,8 @@ STARTUP_S = 20.0
 K_I = 0.25 / TAU_S**2
 #: Tolerance of the specific force's norm about 1 g (fraction of g).
 NORM_TOL = 0.05
-#: Largest gyro rate (norm of the three axes) at which the accelerometer is used, deg/s.
+#: Largest gyro rate (norm of the three axes) at which the accelerometer is used when it
+#: disagrees with the tilt (the start-up phase and the relock), deg/s.
 MAX_RATE_DPS = 10.0
 #: Largest angle between the accelerometer's down and the propagated one that is accepted, deg.
 ANGLE_GATE_DEG = 2.0
@@ -40,6 +43,16 @@ MAX_GAP_S = 1.0
 #: The learned gyro bias is kept within ± this per axis, deg/s.
 MAX_BIAS_DPS = 5.0
 
+#: Floor of cos² of the pitch in the heading rate's denominator: beyond 60° of pitch the
+#: heading (an Euler angle) is near its singularity, and the rate is taken as at 60°.
+MIN_COS2_PITCH = 0.25
+
+#: Time with the accelerometer accepted after which the bias across gravity counts as learned
+#: (the integral term's settling time, 4/ω_n = 8·TAU_S), s: before it, the tilt of a body
+#: whose x/y gyros have an unknown offset is not good enough for the heading rate, which
+#: takes it in by the share of this time passed (:func:`_heading_rate`).
+LEARNED_S = 8.0 * TAU_S
+
 # State array layout.
 _D = 0  # 0..2: down unit vector, body FRD
 _B = 3  # 3..5: gyro bias, rad/s
@@ -49,7 +62,8 @@ _G = 8  # 1 g in the log's accelerometer unit
 _REFUSED = 9  # time the angle gate began refusing (NaN: not refusing)
 _W = 10  # 10..12: the last finite gyro rate, deg/s (NaN cells hold it)
 _T0 = 13  # time of the first row taken, s
-_N_STATE = 14
+_ACCEPTED = 14  # time with the accelerometer accepted, s
+_N_STATE = 15
 
 
 def new_state() -> np.ndarray:
@@ -77,13 +91,43 @@ def _rotate(v0, v1, v2, r0, r1, r2):
 
 
 @jit
-def propagate(t, gx, gy, gz, acc, state, out):
-    """Run the filter over rows; write each row's down unit vector (body FRD) to ``out`` (n, 3).
+def _heading_rate(i, gz, state, out, rate_out):
+    """Row ``i``'s heading rate and z share into ``rate_out[i]``.
+
+    The rate of the heading (the Euler yaw of a ZYX body), deg/s, from the row's z rate
+    ``gz``, the held pitch-axis rate less the y part of the bias across gravity the filter
+    learned, and the row's down vector ``d = (−sin θ, sin φ cos θ, cos φ cos θ)``:
+
+        ψ̇ = (q sin φ + r cos φ) / cos θ = (q d₁ + r d₂) / (d₁² + d₂²)
+
+    (cos² θ floored at :data:`MIN_COS2_PITCH`). Its drift is then ``((b·d) d₁² + b_z d₂) /
+    (d₁² + d₂²)``, which gives the z gyro's ``b_z`` as the z share ``d₂`` times the heading
+    rate's drift (to first order in ``b_z − b·d``). While the bias is learned, the two are
+    blended from ``gz`` and 1 (the level body's) with the weight ``w`` = accepted time /
+    :data:`LEARNED_S` (at most 1), so that the drift the model follows changes smoothly as
+    the tilt becomes known. ``gz`` and 1 where the tilt is not known; NaN where ``gz`` is."""
+    d1, d2 = out[i, 1], out[i, 2]
+    w = min(state[_ACCEPTED] / LEARNED_S, 1.0)
+    if w == 0.0 or not (d1 == d1 and d2 == d2):
+        rate_out[i, 0], rate_out[i, 1] = gz, 1.0
+        return
+    q = state[_W + 1] - math.degrees(state[_B + 1])
+    rate = (q * d1 + gz * d2) / max(d1 * d1 + d2 * d2, MIN_COS2_PITCH)
+    rate_out[i, 0] = gz + w * (rate - gz)
+    rate_out[i, 1] = 1.0 + w * (d2 - 1.0)
+
+
+@jit
+def propagate(t, gx, gy, gz, acc, state, out, rate_out):
+    """Run the filter over rows; write each row's down unit vector (body FRD) to ``out`` (n, 3)
+    and its heading rate (deg/s) and z share to ``rate_out`` (n, 2).
 
     ``t`` (s, increasing, also across calls); raw gyro rates ``gx, gy, gz`` (deg/s, FRD; NaN
     holds the previous value); specific force ``acc`` (n, 3; g or m/s², FRD; NaN: not used);
     ``state`` from :func:`new_state`, updated in place. ``out`` is NaN before the first
-    finite accelerometer row.
+    finite accelerometer row. The heading rate (:func:`_heading_rate`) takes the row's
+    ``gz`` (NaN stays NaN: the engine holds it), the held ``gy`` less the learned y bias and
+    the row's down vector: ``gz`` itself until the bias is learned (:data:`LEARNED_S`).
     """
     kp = 1.0 / TAU_S
     cos_gate = math.cos(math.radians(ANGLE_GATE_DEG))
@@ -111,6 +155,7 @@ def propagate(t, gx, gy, gz, acc, state, out):
             state[_T] = t[i]
             for k in range(3):
                 out[i, k] = state[_D + k]
+            _heading_rate(i, gz[i], state, out, rate_out)
             continue
         state[_T] = t[i]
         d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
@@ -119,13 +164,16 @@ def propagate(t, gx, gy, gz, acc, state, out):
         w2 = math.radians(state[_W + 2]) - state[_B + 2]
         if have_acc:
             m0, m1, m2 = -f0 / fn, -f1 / fn, -f2 / fn
-            quiet = (abs(fn / state[_G] - 1.0) <= NORM_TOL
-                     and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS)
-            agree = d0 * m0 + d1 * m1 + d2 * m2 >= cos_gate or t[i] - state[_T0] < STARTUP_S
+            norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
+            quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
+            within = d0 * m0 + d1 * m1 + d2 * m2 >= cos_gate
+            agree = within or t[i] - state[_T0] < STARTUP_S
             use = False
             if quiet and agree:
                 use = True
                 state[_REFUSED] = math.nan
+            elif norm_ok and within:  # turning fast, yet about 1 g and where the tilt says: no centripetal part
+                use = True
             elif quiet:
                 if math.isnan(state[_REFUSED]):
                     state[_REFUSED] = t[i]
@@ -133,6 +181,7 @@ def propagate(t, gx, gy, gz, acc, state, out):
             else:
                 state[_REFUSED] = math.nan
             if use:
+                state[_ACCEPTED] += dt
                 e0, e1, e2 = d1 * m2 - d2 * m1, d2 * m0 - d0 * m2, d0 * m1 - d1 * m0  # eq. (1)
                 w0, w1, w2 = w0 - kp * e0, w1 - kp * e1, w2 - kp * e2  # eq. (2)
                 state[_B] = min(max(state[_B] + K_I * e0 * dt, -max_b), max_b)  # eq. (4)
@@ -143,6 +192,7 @@ def propagate(t, gx, gy, gz, acc, state, out):
         state[_D], state[_D + 1], state[_D + 2] = d0 / norm, d1 / norm, d2 / norm
         for k in range(3):
             out[i, k] = state[_D + k]
+        _heading_rate(i, gz[i], state, out, rate_out)
 
 
 class GravityFilter:
@@ -153,12 +203,18 @@ class GravityFilter:
 
     def feed(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
         """Down unit vectors (n, 3), body FRD, of these rows (see :func:`propagate`)."""
+        return self.run(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)[0]
+
+    def run(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> tuple[np.ndarray, np.ndarray]:
+        """Down unit vectors (n, 3), body FRD, and the heading rate (deg/s) and z share of
+        these rows (n, 2; see :func:`propagate`)."""
         t = read_only_floats(t)
         acc = read_only_floats(np.asarray(acc, dtype=float).reshape(-1, 3))
         out = np.empty((t.size, 3))
+        rate = np.empty((t.size, 2))
         propagate(t, read_only_floats(gyro_x_dps), read_only_floats(gyro_y_dps), read_only_floats(gyro_z_dps), acc,
-                  self.state, out)
-        return out
+                  self.state, out, rate)
+        return out, rate
 
 
 def gravity_down(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
@@ -178,7 +234,7 @@ TILT_SOURCES = ("gyro", "accel")
 
 
 class RawTilt:
-    """The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``) for one log, chunk by chunk.
+    """The tilt of a raw compass (``mag_x..z`` + ``acc_x..z``) for one log: which one, and its note.
 
     ``tilt`` ``"gyro"``: the gyro-aided gravity of :class:`GravityFilter` when the log has
     ``gyro_x`` and ``gyro_y`` (``gyro_xy``; then ``uses_gyro``); ``"accel"``: the
@@ -189,13 +245,6 @@ class RawTilt:
         self.gyro_xy = bool(gyro_xy)
         self.uses_gyro = tilt == "gyro" and self.gyro_xy
         self.source = source
-        self._filter = GravityFilter() if self.uses_gyro else None
-
-    def down(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray | None:
-        """Down unit vectors (n, 3) of these rows, or None for the accelerometer alone."""
-        if self._filter is None:
-            return None
-        return self._filter.feed(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)
 
     def note(self) -> str:
         """One line for ``attrs["notes"]``: which tilt the raw compass was compensated with."""

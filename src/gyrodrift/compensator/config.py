@@ -52,6 +52,11 @@ class CompensatorConfig:
         Magnetic declination, deg east, added to every compass heading (0: magnetic north).
     tilt : str
         The tilt of a raw compass: ``"accel"`` (default) or ``"gyro"`` (:mod:`gyrodrift.attitude`).
+    heading_rate : str
+        What the drift model integrates as the heading's rate: ``"auto"`` (default) the rate of
+        the heading of a tilted body, from ``gyro_y``, ``gyro_z`` and the gyro-aided tilt, where
+        the log has ``gyro_x``, ``gyro_y`` and the accelerometer, else ``gyro_z``;
+        ``"gyro_z"`` always the z axis alone (a level body). ``docs/heading_and_axes.md``.
     mag_calibration : bool or "auto"
         Calibrate a raw magnetometer over the whole log first (:mod:`gyrodrift.magcal`; not
         causal): ``"auto"`` (default) where it looks uncalibrated
@@ -81,6 +86,7 @@ class CompensatorConfig:
                                      "that compass_heading, heading and heading_fused are in true north like "
                                      "ref_heading (0: magnetic north)")
     tilt: str = setting("accel", choices=("gyro", "accel"))
+    heading_rate: str = setting("auto", choices=("auto", "gyro_z"))
     mag_calibration: bool | str = setting("auto", choices=(True, False, "auto"))
     temperature: str = setting("auto", choices=TEMPERATURE_MODES, flag="--temperature",
                                help="what T of the drift model is: auto, the temperature column, or the "

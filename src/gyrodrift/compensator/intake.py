@@ -1,6 +1,7 @@
 """The front end of every entry point, written once (:class:`Intake`): dead magnetometer samples,
-the tilt and calibration of a raw compass, the compass columns, the engine, the x and y axes, the
-gyro-unit check, the time base of rows that come one by one, and the notes. Its stages and
+the gyro-aided tilt and the heading rate of a tilted body, the tilt and calibration of a raw
+compass, the compass columns, the engine, the x and y axes, the gyro-unit check, the time base of
+rows that come one by one, and the notes. Its stages and
 :class:`WholeLog`: ``docs/engine.md`` ("The front end").
 """
 
@@ -13,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrodrift.attitude import RawTilt, accel_down
+from gyrodrift.attitude import GravityFilter, RawTilt, accel_down
 from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
 from gyrodrift.compensator.model_engine import make_engine
@@ -21,6 +22,7 @@ from gyrodrift.compensator.output import output_frame
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
 from gyrodrift.gyro_units import GyroUnitCheck
 from gyrodrift.io.timebase import TimeBase, TimeBaseWatch
+from gyrodrift.kernels import layout as L
 from gyrodrift.kernels.compass import row as compass_row
 from gyrodrift.kernels.integrate import trapezoid
 from gyrodrift.magcal import MagSamples, uncalibrated_note
@@ -74,12 +76,19 @@ class MagFit:
         self.config, self.source = config, source
         self.samples = magcal.MagSamples()
         self.tilt: RawTilt | None = None
+        self._gravity: GravityFilter | None = None  # the tilt's filter, with tilt "gyro" and gyro_x, gyro_y
         self._last: tuple[float, float, float] | None = None  # time, gyro and its integral at the last row
 
     def add(self, t, g, mag, acc, gyro_xy=None) -> None:
         """Rows with a raw compass, in order (with the raw gyro's trapezoid integral to each,
         carried across chunks; an empty gyro cell holds the last value)."""
-        self.tilt, down = _gravity(self.tilt, self.config, self.source, t, g, acc, gyro_xy)
+        if self.tilt is None:
+            self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
+            self._gravity = GravityFilter() if self.tilt.uses_gyro else None
+        down = None
+        if self._gravity is not None:
+            gxy = np.asarray(gyro_xy, dtype=float)
+            down = self._gravity.feed(t, gxy[:, 0], gxy[:, 1], g, acc)
         t = np.asarray(t, dtype=float)
         turned = np.zeros(0)
         if t.size:  # empty cells held from the last finite value (the last chunk's, or 0 before any)
@@ -102,17 +111,6 @@ class MagFit:
         if self.config.mag_calibration == "auto":
             return magcal.auto_calibration(self.samples)
         return magcal.fit(*self.samples.arrays())
-
-
-def _gravity(tilt: RawTilt | None, config, source: str, t, g, acc, gyro_xy) -> tuple[RawTilt, np.ndarray | None]:
-    """The tilt of a raw compass (made on the first rows: ``config.tilt`` with or without
-    ``gyro_xy``) and the gyro-aided gravity of these rows (None: the accelerometer's)."""
-    if tilt is None:
-        tilt = RawTilt(config.tilt, gyro_xy is not None, source)
-    if not tilt.uses_gyro:
-        return tilt, None
-    gxy = np.asarray(gyro_xy, dtype=float)
-    return tilt, tilt.down(t, gxy[:, 0], gxy[:, 1], g, acc)
 
 
 def survey(chunks, config, source: str) -> WholeLog:
@@ -187,6 +185,11 @@ class Intake:
         self.xy = None
         self._xy_decided = False
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
+        self._gravity: GravityFilter | None = None  # the gyro-aided tilt (first rows with gyro_x, gyro_y)
+        self._rate_from_tilt = False  # the engine takes the heading rate of the tilted body, not gyro_z
+        # what the heading rate added to gyro_z, and its z share, on the rows not yet out of the engine
+        self._added: deque = deque()
+        self._last_added = (0.0, 1.0)  # ... of the last row with a finite gyro_z (NaN rows hold them, as the engine does)
         self._start(uses_clock(config, whole.temp_flat))
 
     def _start(self, clock: bool) -> None:
@@ -226,9 +229,11 @@ class Intake:
                 *filter(None, [self.units.note()])]
 
     # ------------------------------------------------------------------ chunks
-    def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None):
+    def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None, down=None):
         """Heading (deg, NaN = no sample), field strength and dip (None without a raw
-        compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end")."""
+        compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end").
+        ``down``: the gyro-aided gravity of these rows (:meth:`body`), the raw compass's tilt
+        with ``config.tilt`` ``"gyro"``."""
         n = len(t)
         if heading is not None and not self._heading_seen:
             self._heading_seen = bool(np.isfinite(heading).any())
@@ -236,12 +241,39 @@ class Intake:
             return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None
         mag = self._dead.mask(mag)
         self._raw_seen = True
-        self._tilt, down = _gravity(self._tilt, self.config, self.source, t, g, acc, gyro_xy)
+        if self._tilt is None:
+            self._tilt = RawTilt(self.config.tilt, self._gravity is not None, self.source)
+        down = down if self._tilt.uses_gyro else None
         if self._survey is not None:
             self._survey.add(mag, accel_down(acc) if down is None else down)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
         return compass_columns(n, heading, mag, acc, down)
+
+    def body(self, t, g, acc=None, gyro_xy=None) -> tuple[np.ndarray | None, np.ndarray]:
+        """The gyro-aided gravity (n, 3; None without the filter) and the heading rate (deg/s)
+        of these rows: ``g`` itself unless :attr:`config` ``heading_rate`` is ``"auto"`` and the
+        first rows had ``gyro_xy`` and ``acc`` (:func:`gyrodrift.attitude.propagate`). The
+        first rows decide (:meth:`_decide_body`)."""
+        if not self._xy_decided:
+            self._decide_body(gyro_xy is not None, acc is not None)
+        if self._gravity is None:
+            return None, g
+        n = len(t)
+        gxy = np.full((n, 2), np.nan) if gyro_xy is None else np.asarray(gyro_xy, dtype=float)
+        down, body = self._gravity.run(t, gxy[:, 0], gxy[:, 1], g, np.full((n, 3), np.nan) if acc is None else acc)
+        if not self._rate_from_tilt:
+            return down, g
+        rate = body[:, 0]
+        terms = [rate - np.asarray(g, dtype=float), body[:, 1]]
+        held = ~np.isfinite(terms[0])
+        if held.any():  # NaN gyro_z: the engine holds the rate, and the z columns keep the last row's terms
+            terms = [pd.Series(np.where(held, np.nan, v)).ffill().fillna(last).to_numpy()
+                     for v, last in zip(terms, self._last_added)]
+        if n:
+            self._last_added = tuple(float(v[-1]) for v in terms)
+        self._added.append(tuple(terms))
+        return down, rate
 
     def feed(self, t, g, T, heading=None, mag=None, acc=None, gyro_xy=None, buffers=None) -> dict | None:
         """Add rows (a whole log or a chunk); return the output columns of the rows that
@@ -250,47 +282,83 @@ class Intake:
 
         ``t, g, T, heading``: (n,) arrays; ``mag``, ``acc``: (n, 3) raw FRD magnetometer and
         accelerometer (the compass when both are given; ``acc`` the x/y axes' tilt);
-        ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``."""
-        heading, norm, dip = self.compass(t, g, heading, mag, acc, gyro_xy)
-        if not self._xy_decided:
-            self._decide_xy(gyro_xy is not None and acc is not None)
+        ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``. The engine takes the heading rate of
+        :meth:`body`; ``rate_z`` comes out as ``gyro_z - bias_z`` (:meth:`with_xy`)."""
+        down, rate = self.body(t, g, acc, gyro_xy)
+        heading, norm, dip = self.compass(t, g, heading, mag, acc, gyro_xy, down)
         if self.xy is not None:
             gxy = np.asarray(gyro_xy, dtype=float)
             self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
                                 np.asarray(acc, dtype=float)))
-        cols = self.engine.feed(t, g, T, heading, norm, dip, buffers)
-        self.units.add(t, g, heading)  # on times the engine took (finite, increasing)
+        cols = self.engine.feed(t, rate, T, heading, norm, dip, buffers)
+        self.units.add(t, rate, heading)  # on times the engine took (finite, increasing)
         return self.with_xy(cols)
 
     def flush(self) -> dict | None:
         """The rows still held when the log ends inside the init window (:meth:`ChunkEngine.flush`)."""
         return self.with_xy(self.engine.flush())
 
-    def _decide_xy(self, inputs: bool) -> None:
-        """Decided on the first rows: the x/y axes when they have their inputs."""
+    def _decide_body(self, gyro_xy: bool, acc: bool) -> None:
+        """Decided on the first rows: the x/y axes when they have ``gyro_x``, ``gyro_y`` and the
+        accelerometer; the gyro-aided gravity when they have the x/y gyros and the accelerometer
+        or the raw compass's tilt asks for it; the heading rate from it with ``heading_rate``
+        ``"auto"``."""
         self._xy_decided = True
-        if inputs:
+        if gyro_xy and acc:
             from gyrodrift.triad import TriadCompensator
 
             self.xy = TriadCompensator(self.config)
+        if gyro_xy and (acc or self.config.tilt == "gyro"):
+            self._gravity = GravityFilter()
+            self._rate_from_tilt = self.config.heading_rate == "auto"
+
+    def row_body(self, t: float, g: float, acc, gx, gy) -> tuple[tuple | None, float]:
+        """:meth:`body` of one row (floats; ``acc`` a triple or None, ``gx``, ``gy`` floats or
+        None): the gyro-aided gravity (a triple, or None) and the heading rate."""
+        if not self._xy_decided:
+            self._decide_body(gx is not None and gy is not None, acc is not None)
+        if self._gravity is None:
+            return None, g
+        down, body = self._gravity.run((t,), (optional_float(gx),), (optional_float(gy),), (g,),
+                                       np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))
+        if not self._rate_from_tilt:
+            return down[0], g
+        rate = float(body[0, 0])
+        if math.isfinite(rate - g):
+            self._last_added = (rate - g, float(body[0, 1]))
+        self._added.append(tuple(np.array([v]) for v in self._last_added))
+        return down[0], rate
 
     def hold_xy(self, t: float, gx: float, gy: float, T: float, acc) -> None:
         """Keep the x/y inputs of one row until the engine gives it back (:meth:`with_xy`)."""
         self._xy_in.append((np.array([t]), np.array([gx]), np.array([gy]), np.array([T]), np.array([acc], dtype=float)))
 
+    @property
+    def rate_from_tilt(self) -> bool:
+        """The engine takes the heading rate of a tilted body (:meth:`body`), not gyro_z."""
+        return self._rate_from_tilt
+
+    def z_row(self, out: list, held: bool = False) -> None:
+        """:func:`z_columns` on one row's outputs (a list in the order of
+        :mod:`gyrodrift.kernels.layout`, in place): the next row out of the engine, or with
+        ``held`` the last row taken (a provisional row). Nothing unless :attr:`rate_from_tilt`."""
+        if self._rate_from_tilt:
+            terms = self._last_added if held else (float(v[0]) for v in _take(self._added, 1))
+            out[L.O_RATE], out[L.O_BIAS], out[L.O_BIAS_SD] = z_columns(out[L.O_RATE], out[L.O_BIAS], out[L.O_BIAS_SD],
+                                                                     *terms)
+
     def with_xy(self, cols: dict | None) -> dict | None:
-        """``cols`` with the x/y columns of its rows (the inputs held since they came in)."""
-        if cols is None or self.xy is None:
+        """``cols`` with the z axis's columns of the heading rate's (:func:`z_columns`, in place)
+        and the x/y columns of its rows (the inputs held since they came in)."""
+        if cols is None:
             return cols
-        n, parts = len(cols["t"]), []
-        while n:
-            part = self._xy_in.popleft()
-            if len(part[0]) > n:  # the rest of this chunk comes out later
-                self._xy_in.appendleft(tuple(v[n:] for v in part))
-                part = tuple(v[:n] for v in part)
-            parts.append(part)
-            n -= len(part[0])
-        t, gx, gy, T, acc = (np.concatenate(v) if len(parts) > 1 else v[0] for v in zip(*parts))
+        if self._rate_from_tilt:
+            rate, bias, sd = z_columns(cols["rate_z"], cols["bias_z"], cols["bias_sd"],
+                                       *_take(self._added, len(cols["t"])))
+            cols["rate_z"][:], cols["bias_z"][:], cols["bias_sd"][:] = rate, bias, sd
+        if self.xy is None:
+            return cols
+        t, gx, gy, T, acc = _take(self._xy_in, len(cols["t"]))
         return {**cols, **self.xy.feed(t, gx, gy, T, cols["temp_rate"], acc, cols["rate_z"])}
 
     @staticmethod
@@ -324,16 +392,15 @@ class Intake:
             return None
         return found
 
-    def row_compass(self, t: float, g: float, heading: float, mag, acc, gx, gy) -> tuple[float, float, float]:
+    def row_compass(self, t: float, rate: float, heading: float, mag, acc, down) -> tuple[float, float, float]:
         """Heading, field strength and dip of one row (floats; ``mag``, ``acc`` triples or
-        None; ``gx``, ``gy`` floats or None): the stages of :meth:`compass`, without the
-        calibration (a stream does not see the whole log). The first row decides the tilt
-        and the x/y axes (:attr:`xy`). The row goes to the gyro-unit check as :meth:`feed`'s
-        rows do (:data:`UNIT_ROWS` at a time, and the rest before :attr:`notes`): the row must
-        be one the engine takes."""
-        compass = self._row_compass(t, g, heading, mag, acc, gx, gy)
+        None; ``rate`` and ``down`` from :meth:`row_body`, which comes first): the stages of
+        :meth:`compass`, without the calibration (a stream does not see the whole log). The
+        row goes to the gyro-unit check as :meth:`feed`'s rows do (:data:`UNIT_ROWS` at a time,
+        and the rest before :attr:`notes`): the row must be one the engine takes."""
+        compass = self._row_compass(heading, mag, acc, down)
         rows = self._unit_rows
-        rows.append((t, g, compass[0]))
+        rows.append((t, rate, compass[0]))
         if len(rows) >= UNIT_ROWS:
             self._check_unit_rows()
         return compass
@@ -364,14 +431,11 @@ class Intake:
             self._survey_note = (self._survey.seen, uncalibrated_note(self._survey, self.source, mode))
         return self._survey_note[1]
 
-    def _row_compass(self, t, g, heading, mag, acc, gx, gy) -> tuple[float, float, float]:
+    def _row_compass(self, heading, mag, acc, down) -> tuple[float, float, float]:
         if self._tilt is None:
-            self._tilt = RawTilt(self.config.tilt, gx is not None and gy is not None, self.source)
-            self._decide_xy(gx is not None and gy is not None and acc is not None)
-        down = None
-        if self._tilt.uses_gyro:  # every row: the gravity filter runs over all of them
-            down = self._tilt.down((t,), (optional_float(gx),), (optional_float(gy),), (g,),
-                                   np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))[0]
+            self._tilt = RawTilt(self.config.tilt, self._gravity is not None, self.source)
+        if not self._tilt.uses_gyro:
+            down = None
         if mag is not None and acc is not None:
             self._raw_seen = True
         if mag is not None and not self._dead.sample(*mag):
@@ -390,6 +454,28 @@ class Intake:
                 self._survey_flush()
         from_mag, norm, dip = compass_row(float(mx), float(my), float(mz), float(fx), float(fy), float(fz))
         return (heading if math.isfinite(heading) else from_mag), norm, dip
+
+
+def z_columns(rate, bias, bias_sd, added, share):
+    """``rate_z``, ``bias_z`` and ``bias_sd`` of the z gyro from the engine's, which are of the
+    heading rate of a tilted body (:meth:`Intake.body`): the heading rate less its drift
+    ``rate``, its drift ``bias`` and that drift's sd; what the heading rate ``added`` to
+    gyro_z and the z ``share`` (:func:`gyrodrift.attitude.propagate`). Floats or arrays:
+    ``bias_z = share · bias``, ``rate_z = gyro_z − bias_z``."""
+    return rate - added - (share - 1.0) * bias, share * bias, abs(share) * bias_sd
+
+
+def _take(queue: deque, n: int) -> tuple:
+    """The next ``n`` rows of a queue of tuples of arrays (one tuple per chunk), joined."""
+    parts = []
+    while n:
+        part = queue.popleft()
+        if len(part[0]) > n:  # the rest of this chunk comes out later
+            queue.appendleft(tuple(v[n:] for v in part))
+            part = tuple(v[:n] for v in part)
+        parts.append(part)
+        n -= len(part[0])
+    return tuple(np.concatenate(v) if len(parts) > 1 else v[0] for v in zip(*parts))
 
 
 def optional_float(v) -> float:
