@@ -92,35 +92,30 @@ def _rotate(v0, v1, v2, r0, r1, r2):
 
 @jit
 def _heading_rate(i, gz, state, out, rate_out):
-    """Row ``i``'s heading rate and z share into ``rate_out[i]``.
-
-    The rate of the heading (the Euler yaw of a ZYX body), deg/s, from the row's z rate
-    ``gz``, the held pitch-axis rate less the y part of the bias across gravity the filter
-    learned, and the row's down vector ``d = (−sin θ, sin φ cos θ, cos φ cos θ)``:
+    """Row ``i``'s heading rate into ``rate_out[i]``: the rate of the heading (the Euler yaw
+    of a ZYX body), deg/s, from the row's z rate ``gz``, the held pitch-axis rate less the y
+    part of the bias across gravity the filter learned, and the row's down vector
+    ``d = (−sin θ, sin φ cos θ, cos φ cos θ)``:
 
         ψ̇ = (q sin φ + r cos φ) / cos θ = (q d₁ + r d₂) / (d₁² + d₂²)
 
-    (cos² θ floored at :data:`MIN_COS2_PITCH`). Its drift is then ``((b·d) d₁² + b_z d₂) /
-    (d₁² + d₂²)``, which gives the z gyro's ``b_z`` as the z share ``d₂`` times the heading
-    rate's drift (to first order in ``b_z − b·d``). While the bias is learned, the two are
-    blended from ``gz`` and 1 (the level body's) with the weight ``w`` = accepted time /
-    :data:`LEARNED_S` (at most 1), so that the drift the model follows changes smoothly as
-    the tilt becomes known. ``gz`` and 1 where the tilt is not known; NaN where ``gz`` is."""
+    (cos² θ floored at :data:`MIN_COS2_PITCH`). While the bias is learned it is blended from
+    ``gz`` with the weight ``w`` = accepted time / :data:`LEARNED_S` (at most 1), so that the
+    drift the model follows changes smoothly as the tilt becomes known. ``gz`` where the tilt
+    is not known; NaN where ``gz`` is."""
     d1, d2 = out[i, 1], out[i, 2]
     w = min(state[_ACCEPTED] / LEARNED_S, 1.0)
     if w == 0.0 or not (d1 == d1 and d2 == d2):
-        rate_out[i, 0], rate_out[i, 1] = gz, 1.0
+        rate_out[i] = gz
         return
     q = state[_W + 1] - math.degrees(state[_B + 1])
-    rate = (q * d1 + gz * d2) / max(d1 * d1 + d2 * d2, MIN_COS2_PITCH)
-    rate_out[i, 0] = gz + w * (rate - gz)
-    rate_out[i, 1] = 1.0 + w * (d2 - 1.0)
+    rate_out[i] = gz + w * ((q * d1 + gz * d2) / max(d1 * d1 + d2 * d2, MIN_COS2_PITCH) - gz)
 
 
 @jit
 def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     """Run the filter over rows; write each row's down unit vector (body FRD) to ``out`` (n, 3)
-    and its heading rate (deg/s) and z share to ``rate_out`` (n, 2).
+    and its heading rate (deg/s) to ``rate_out`` (n,).
 
     ``t`` (s, increasing, also across calls); raw gyro rates ``gx, gy, gz`` (deg/s, FRD; NaN
     holds the previous value); specific force ``acc`` (n, 3; g or m/s², FRD; NaN: not used);
@@ -206,12 +201,12 @@ class GravityFilter:
         return self.run(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)[0]
 
     def run(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> tuple[np.ndarray, np.ndarray]:
-        """Down unit vectors (n, 3), body FRD, and the heading rate (deg/s) and z share of
-        these rows (n, 2; see :func:`propagate`)."""
+        """Down unit vectors (n, 3), body FRD, and heading rates (n,), deg/s, of these rows
+        (see :func:`propagate`)."""
         t = read_only_floats(t)
         acc = read_only_floats(np.asarray(acc, dtype=float).reshape(-1, 3))
         out = np.empty((t.size, 3))
-        rate = np.empty((t.size, 2))
+        rate = np.empty(t.size)
         propagate(t, read_only_floats(gyro_x_dps), read_only_floats(gyro_y_dps), read_only_floats(gyro_z_dps), acc,
                   self.state, out, rate)
         return out, rate

@@ -187,9 +187,8 @@ class Intake:
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
         self._gravity: GravityFilter | None = None  # the gyro-aided tilt (first rows with gyro_x, gyro_y)
         self._rate_from_tilt = False  # the engine takes the heading rate of the tilted body, not gyro_z
-        # what the heading rate added to gyro_z, and its z share, on the rows not yet out of the engine
-        self._added: deque = deque()
-        self._last_added = (0.0, 1.0)  # ... of the last row with a finite gyro_z (NaN rows hold them, as the engine does)
+        self._added: deque = deque()  # what the heading rate added to gyro_z, rows not yet out of the engine
+        self._last_added = 0.0  # ... on the last row with a finite gyro_z (a NaN row holds it, as the engine does)
         self._start(uses_clock(config, whole.temp_flat))
 
     def _start(self, clock: bool) -> None:
@@ -261,18 +260,16 @@ class Intake:
             return None, g
         n = len(t)
         gxy = np.full((n, 2), np.nan) if gyro_xy is None else np.asarray(gyro_xy, dtype=float)
-        down, body = self._gravity.run(t, gxy[:, 0], gxy[:, 1], g, np.full((n, 3), np.nan) if acc is None else acc)
+        down, rate = self._gravity.run(t, gxy[:, 0], gxy[:, 1], g, np.full((n, 3), np.nan) if acc is None else acc)
         if not self._rate_from_tilt:
             return down, g
-        rate = body[:, 0]
-        terms = [rate - np.asarray(g, dtype=float), body[:, 1]]
-        held = ~np.isfinite(terms[0])
-        if held.any():  # NaN gyro_z: the engine holds the rate, and the z columns keep the last row's terms
-            terms = [pd.Series(np.where(held, np.nan, v)).ffill().fillna(last).to_numpy()
-                     for v, last in zip(terms, self._last_added)]
+        added = rate - np.asarray(g, dtype=float)
+        held = ~np.isfinite(added)
+        if held.any():  # NaN gyro_z: the engine holds the rate, and rate_z keeps the last row's addition
+            added = pd.Series(np.where(held, np.nan, added)).ffill().fillna(self._last_added).to_numpy()
         if n:
-            self._last_added = tuple(float(v[-1]) for v in terms)
-        self._added.append(tuple(terms))
+            self._last_added = float(added[-1])
+        self._added.append((added,))
         return down, rate
 
     def feed(self, t, g, T, heading=None, mag=None, acc=None, gyro_xy=None, buffers=None) -> dict | None:
@@ -319,14 +316,14 @@ class Intake:
             self._decide_body(gx is not None and gy is not None, acc is not None)
         if self._gravity is None:
             return None, g
-        down, body = self._gravity.run((t,), (optional_float(gx),), (optional_float(gy),), (g,),
+        down, rate = self._gravity.run((t,), (optional_float(gx),), (optional_float(gy),), (g,),
                                        np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))
         if not self._rate_from_tilt:
             return down[0], g
-        rate = float(body[0, 0])
+        rate = float(rate[0])
         if math.isfinite(rate - g):
-            self._last_added = (rate - g, float(body[0, 1]))
-        self._added.append(tuple(np.array([v]) for v in self._last_added))
+            self._last_added = rate - g
+        self._added.append((np.array([self._last_added]),))
         return down[0], rate
 
     def hold_xy(self, t: float, gx: float, gy: float, T: float, acc) -> None:
@@ -339,23 +336,20 @@ class Intake:
         return self._rate_from_tilt
 
     def z_row(self, out: list, held: bool = False) -> None:
-        """:func:`z_columns` on one row's outputs (a list in the order of
-        :mod:`gyrodrift.kernels.layout`, in place): the next row out of the engine, or with
-        ``held`` the last row taken (a provisional row). Nothing unless :attr:`rate_from_tilt`."""
+        """``rate_z`` of one row's outputs (a list in the order of :mod:`gyrodrift.kernels.layout`,
+        in place) less what the heading rate added to gyro_z: of the next row out of the
+        engine, or with ``held`` of the last row taken (a provisional row). Nothing unless
+        :attr:`rate_from_tilt`."""
         if self._rate_from_tilt:
-            terms = self._last_added if held else (float(v[0]) for v in _take(self._added, 1))
-            out[L.O_RATE], out[L.O_BIAS], out[L.O_BIAS_SD] = z_columns(out[L.O_RATE], out[L.O_BIAS], out[L.O_BIAS_SD],
-                                                                     *terms)
+            out[L.O_RATE] -= self._last_added if held else float(_take(self._added, 1)[0][0])
 
     def with_xy(self, cols: dict | None) -> dict | None:
-        """``cols`` with the z axis's columns of the heading rate's (:func:`z_columns`, in place)
-        and the x/y columns of its rows (the inputs held since they came in)."""
+        """``cols`` with ``rate_z`` less what the heading rate added to gyro_z (in place:
+        ``gyro_z - bias_z``) and the x/y columns of its rows (the inputs held since they came in)."""
         if cols is None:
             return cols
         if self._rate_from_tilt:
-            rate, bias, sd = z_columns(cols["rate_z"], cols["bias_z"], cols["bias_sd"],
-                                       *_take(self._added, len(cols["t"])))
-            cols["rate_z"][:], cols["bias_z"][:], cols["bias_sd"][:] = rate, bias, sd
+            cols["rate_z"] -= _take(self._added, len(cols["t"]))[0]
         if self.xy is None:
             return cols
         t, gx, gy, T, acc = _take(self._xy_in, len(cols["t"]))
@@ -454,15 +448,6 @@ class Intake:
                 self._survey_flush()
         from_mag, norm, dip = compass_row(float(mx), float(my), float(mz), float(fx), float(fy), float(fz))
         return (heading if math.isfinite(heading) else from_mag), norm, dip
-
-
-def z_columns(rate, bias, bias_sd, added, share):
-    """``rate_z``, ``bias_z`` and ``bias_sd`` of the z gyro from the engine's, which are of the
-    heading rate of a tilted body (:meth:`Intake.body`): the heading rate less its drift
-    ``rate``, its drift ``bias`` and that drift's sd; what the heading rate ``added`` to
-    gyro_z and the z ``share`` (:func:`gyrodrift.attitude.propagate`). Floats or arrays:
-    ``bias_z = share · bias``, ``rate_z = gyro_z − bias_z``."""
-    return rate - added - (share - 1.0) * bias, share * bias, abs(share) * bias_sd
 
 
 def _take(queue: deque, n: int) -> tuple:
