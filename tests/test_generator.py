@@ -80,3 +80,33 @@ def test_an_uncalibrated_magnetometer_errs_with_the_heading():
         errs.append((np.std(err), np.std(norm) / np.mean(norm)))
     (uncal_err, uncal_norm), (cal_err, cal_norm) = errs
     assert uncal_err > 5.0 > cal_err and uncal_norm > 3.0 * cal_norm
+
+
+def test_a_banked_flight_turns_coordinated_with_all_three_gyros():
+    """``banked-flight``: the bank follows the turn (``atan(V psi' / g)``), the accelerometer reads
+    along body z in the turns (a coordinated turn: no lateral part), the z gyro reads the heading
+    rate times cos(roll) cos(pitch), and with the true tilt the heading rate of the three gyros,
+    (q sin(roll) + r cos(roll)) / cos(pitch), has the gain of the true one (the roll from the
+    accelerometer's norm, ``1 / cos(roll)`` g in a level turn)."""
+    log = generate("banked-flight", seeds("tuning", 1)[0], duration_scale=0.5).log
+    assert {"gyro_x", "gyro_y", "mag_x", "acc_x"} <= set(log.columns) and "heading" not in log.columns
+    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy()
+    rate = log["true_rate_z"].to_numpy()
+    turning = np.abs(rate) > 4.0
+    assert turning.mean() > 0.2
+    # no lateral specific force in a coordinated turn (but sin(roll) (1 - cos(pitch)) of the mounting pitch)
+    assert np.abs(acc[turning, 1]).max() < 0.005
+    g = np.linalg.norm(acc[turning], axis=1)
+    roll = np.arccos(np.clip(1.0 / g, -1.0, 1.0)) * np.sign(rate[turning])  # |f| = 1/cos(roll) g
+    assert np.degrees(np.abs(roll)).max() > 15.0
+    q, r = log["gyro_y"].to_numpy()[turning], log["gyro_z"].to_numpy()[turning]
+    pitch = np.arcsin(np.clip(acc[turning, 0] / g, -1.0, 1.0))  # the mounting pitch: f_x = |f| sin(pitch)
+    euler = (q * np.sin(roll) + r * np.cos(roll)) / np.cos(pitch)
+    # within the offsets (under 2 deg/s) and the scale factor (2.5 %) of the gyros
+    rate = rate[turning]
+
+    def gain(y):  # the slope of a line y = k rate + c: the gyro's offset is in c
+        return np.polyfit(rate, y, 1)[0]
+
+    assert abs(gain(euler) - 1.0) < 0.03  # the scale-factor error is at most 2.5 %
+    assert gain(r) < gain(euler) - 0.02  # the z gyro alone: cos(roll) of it

@@ -18,7 +18,7 @@ from gyrodrift._columns import read_only_floats
 from gyrodrift.kernels import jit
 
 __all__ = [
-    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "STARTUP_S", "MAX_GAP_S",
+    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "STARTUP_S", "MAX_GAP_S",
     "MAX_BIAS_DPS", "MIN_COS2_PITCH", "LEARNED_S", "new_state", "propagate", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
@@ -38,6 +38,10 @@ MAX_RATE_DPS = 10.0
 ANGLE_GATE_DEG = 2.0
 #: A disagreement beyond ANGLE_GATE_DEG, with the other gates passed, accepted after this long, s.
 RELOCK_S = 20.0
+#: A body turning at least this fast (deg/s, bias removed) about its tilt's vertical, within
+#: TURN_AXIS_DEG, is in a turn: its disagreement does not count towards RELOCK_S.
+TURN_MIN_DPS = 1.0
+TURN_AXIS_DEG = 10.0
 #: A time step longer than this restarts the filter from the accelerometer, s.
 MAX_GAP_S = 1.0
 #: The learned gyro bias is kept within ± this per axis, deg/s.
@@ -88,6 +92,18 @@ def _rotate(v0, v1, v2, r0, r1, r2):
     x1 = v1 * c + (k2 * v0 - k0 * v2) * s + k1 * kv * (1.0 - c)
     x2 = v2 * c + (k0 * v1 - k1 * v0) * s + k2 * kv * (1.0 - c)
     return x0, x1, x2
+
+
+@jit
+def _about_the_vertical(w0, w1, w2, d0, d1, d2):
+    """Whether the body turns (at least ``TURN_MIN_DPS``, bias removed; rad/s in) about the axis
+    its tilt ``d`` calls vertical, within ``TURN_AXIS_DEG``: a turn, in which the accelerometer
+    reads the turn's centripetal part, not a wrong tilt (a steady turn of a body that keeps
+    its tilt is about the vertical)."""
+    wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if wn < math.radians(TURN_MIN_DPS):
+        return False
+    return abs(w0 * d0 + w1 * d1 + w2 * d2) >= wn * math.cos(math.radians(TURN_AXIS_DEG))
 
 
 @jit
@@ -169,7 +185,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
                 state[_REFUSED] = math.nan
             elif norm_ok and within:  # turning fast, yet about 1 g and where the tilt says: no centripetal part
                 use = True
-            elif quiet:
+            elif quiet and not _about_the_vertical(w0, w1, w2, d0, d1, d2):
                 if math.isnan(state[_REFUSED]):
                     state[_REFUSED] = t[i]
                 use = t[i] - state[_REFUSED] >= RELOCK_S

@@ -86,6 +86,7 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.compass.rows": ["F1 F1 F1 F1 F1 F1 F1 F1 F1"],
     "attitude.propagate": ["F1r F1r F1r F1r F2r F1 F2 F1"],
     "attitude._heading_rate": ["i f F1 F2 F1"],
+    "attitude._about_the_vertical": ["f f f f f f"],
     "attitude._rotate": ["f f f f f f"],
     # the gyro-unit check (gyrodrift.gyro_units)
     "gyro_units._turns": ["F1r F1r F1r F1"],

@@ -24,13 +24,15 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from gyrodrift.conventions import ACC_COLS, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360
+from gyrodrift.conventions import (
+    ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, REF_HEADING, TEMP, TRUE_BIAS_Z, T, wrap_360,
+)
 from gyrodrift.errors import ConfigError
 from gyrodrift.simulate.device import DeviceModel, random_device, seeded_streams, temperature_reading, true_bias
 from gyrodrift.simulate.motion import (
     Motion, add_rotation, in_records, ramp_slice, smooth_pulse, sum_of_step_slopes, sum_of_steps, true_heading,
 )
-from gyrodrift.simulate.sensors import CompassModel, compass_columns, compass_rows, random_compass
+from gyrodrift.simulate.sensors import GRAVITY_MPS2, CompassModel, compass_columns, compass_rows, random_compass
 
 __all__ = [
     "CLASSES", "SPLITS", "TRUE_RATE_Z", "TRUE_COMPASS_OFFSET", "DISTURBED_DEG", "TURNING_DPS", "GeneratedCase",
@@ -116,6 +118,10 @@ class _Recipe:
     held_jitter_deg: float | None = None  # the heading written on every row: held, plus this jitter per row
     stalls: bool = False  # the logger stalls: 50-250 ms of rows lost after every 0.2-1.5 s (_stalled)
     clusters: bool = False  # rows stamped as they arrive, in clusters (_clustered_stamps)
+    # a flying body's airspeed, m/s, as a function of time: its turns are coordinated (the bank
+    # follows the turn rate), and the x/y gyros are logged, their devices and noise from ``triad``
+    airspeed: Callable[[np.ndarray], np.ndarray] | None = None
+    triad: Callable[[], np.random.Generator] | None = None
 
 
 def _u(rng, lo, hi) -> float:
@@ -493,6 +499,30 @@ def _handheld_clustered(rng, scale):
                    rate=rate, heading0_deg=_u(rng, 0, 360), clusters=True)
 
 
+def _banked_flight(rng, scale):
+    """A fixed-wing or quadplane: a warm-up on the ground, a flight of coordinated turns whose
+    bank follows the turn rate and the airspeed (to 20–45 deg), the IMU cooled by the airflow, a
+    landing; the x/y gyros, the raw magnetometer and the accelerometer (level-looking in a turn)
+    logged at 4–50 Hz."""
+    ground = _u(rng, 60.0, 240.0) * scale
+    flight = _u(rng, 300.0, 900.0) * scale
+    duration = ground + flight + _u(rng, 60.0, 180.0) * scale
+    t_land = ground + flight
+    warm = _warmup(rng, rise=(8.0, 20.0), tau=(60.0, 300.0))
+    cool, cool_tau = _u(rng, 3.0, 12.0), _u(rng, 60.0, 300.0)
+    speed = _u(rng, 12.0, 25.0)
+    turning = _turns_rate(_turn_plan(rng, ground + _u(rng, 20.0, 60.0), t_land - 40.0, (45.0, 720.0), (5.0, 20.0),
+                                     (10.0, 60.0), after=lambda a, p: abs(a) / p + 2.0), ramp=2.0)
+
+    def temp(t):
+        return warm(t) - cool * np.clip(1.0 - np.exp(-(t - ground) / cool_tau), 0.0, None) * (t > ground)
+
+    return _Recipe(duration, 100.0, _device(rng), _compass(rng, rate_hz=float(rng.choice([10.0, 25.0, 50.0]))), temp,
+                   rate=turning, airspeed=lambda t: speed * _pulse(t, ground, t_land, 5.0),
+                   heading0_deg=_u(rng, 0, 360), pitch_deg=_u(rng, -3, 5), compass_form="raw",
+                   log_fs_hz=float(rng.choice([4.0, 10.0, 25.0, 50.0])), triad=_child(rng))
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -519,6 +549,7 @@ _BUILDERS: dict[str, Callable] = {
     "rawmag-uncalibrated": _rawmag_uncalibrated,
     "handheld-stalls": _handheld_stalls,
     "handheld-clustered": _handheld_clustered,
+    "banked-flight": _banked_flight,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -611,6 +642,27 @@ def _scale_factor_error(temp_c: np.ndarray, rng: np.random.Generator) -> np.ndar
     return sf0 + SF_TC_SD * rng.standard_normal() * (np.asarray(temp_c, float) - 25.0)
 
 
+def _coordinated(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The roll (deg), lateral acceleration (m/s²) and x/y gyro columns of the logged ``rows`` of a
+    flying body (``rec.airspeed``): in a coordinated turn the bank is ``atan(V ψ̇ / g)``; the body
+    rates are those of ZYX Euler kinematics at the constant pitch (``p = φ̇ − ψ̇ sin θ``,
+    ``q = ψ̇ sin φ cos θ``); each x/y gyro has its own random device and noise (``rec.triad``)."""
+    lat = rec.airspeed(t) * np.radians(rate)
+    roll = np.degrees(np.arctan2(lat, GRAVITY_MPS2))
+    theta = math.radians(rec.pitch_deg)
+    roll_rate = np.gradient(roll, t)[rows]
+    body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
+            GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
+    trng = rec.triad()
+    fs = rec.fs_sim_hz
+    for name in (GYRO_X, GYRO_Y):
+        dev = _device(trng)
+        bias_rng, rrw_rng, white_rng = (np.random.default_rng(int(trng.integers(2**63))) for _ in range(3))
+        bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, bias_rng, rrw_rng)
+        body[name] = body[name] + bias[rows] + dev.white_sigma_dps(fs) * white_rng.standard_normal(rows.size)
+    return roll[rows], lat[rows], body
+
+
 def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCase:
     """Generate the log of one case.
 
@@ -644,7 +696,11 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
         raise ConfigError(f"class {cls!r}, seed {seed}: fewer than 3 logged rows; use a larger duration_scale")
     tl = t[rows]
     sigma = dev.white_sigma_dps(fs) * (rec.vibration(tl) if rec.vibration is not None else 1.0)
-    body = math.cos(math.radians(rec.roll_deg)) * math.cos(math.radians(rec.pitch_deg))
+    roll, accel_lat, xy = rec.roll_deg, rec.accel_lat(tl) if rec.accel_lat is not None else None, {}
+    if rec.airspeed is not None:
+        roll, accel_lat, xy = _coordinated(rec, t, rows, rate, temp_true, temp_rate)
+    body = (np.cos(np.radians(roll)) if np.ndim(roll) else math.cos(math.radians(roll))) \
+        * math.cos(math.radians(rec.pitch_deg))
     sf = _scale_factor_error(temp_true[rows], rng["scale"])
     gyro = body * (1.0 + sf) * rate[rows] + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
     temp = temperature_reading(temp_true, dev, rng["temp"])[rows]
@@ -653,15 +709,15 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     offset = rec.offset(tl) if rec.offset is not None else np.zeros(rows.size)
     zero = np.zeros(rows.size)
     motion = Motion(temp_c=temp_true[rows], temp_rate_cps=temp_rate[rows], heading_rate_dps=rate[rows],
-                    heading0_deg=rec.heading0_deg, roll_deg=rec.roll_deg, pitch_deg=rec.pitch_deg,
+                    heading0_deg=rec.heading0_deg, roll_deg=roll, pitch_deg=rec.pitch_deg,
                     accel_fwd_mps2=rec.accel_fwd(tl) if rec.accel_fwd is not None else zero,
-                    accel_lat_mps2=rec.accel_lat(tl) if rec.accel_lat is not None else zero,
+                    accel_lat_mps2=accel_lat if accel_lat is not None else zero,
                     interference_offset_deg=offset, compass_dropouts=rec.dropouts)
     mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])
     if rec.held_jitter_deg is not None:
         heading = _held(tl, heading, mask, rec.dropouts, rec.held_jitter_deg, rng["compass"])
-    cols = {T: _clustered_stamps(tl, rng["log"]) if rec.clusters else tl, GYRO_Z: gyro, TEMP: temp}
+    cols = {T: _clustered_stamps(tl, rng["log"]) if rec.clusters else tl, GYRO_Z: gyro, TEMP: temp, **xy}
     if rec.compass_form == "heading":
         cols[HEADING] = heading
     elif rec.compass_form == "raw":

@@ -130,8 +130,15 @@ def random_compass(rng: np.random.Generator) -> CompassModel:
     )
 
 
-def _body_from_level(vec_level: np.ndarray, roll_deg: float, pitch_deg: float) -> np.ndarray:
-    """Rotate (N, 3) vectors from the heading-aligned level frame into FRD body axes."""
+def _body_from_level(vec_level: np.ndarray, roll_deg, pitch_deg: float) -> np.ndarray:
+    """Rotate (N, 3) vectors from the heading-aligned level frame into FRD body axes
+    (``roll_deg`` a number, or one per vector)."""
+    if np.ndim(roll_deg):
+        phi, theta = np.radians(np.asarray(roll_deg, dtype=float)), math.radians(pitch_deg)
+        cp, sp, ct, st = np.cos(phi), np.sin(phi), math.cos(theta), math.sin(theta)
+        x, y, z = vec_level[:, 0], vec_level[:, 1], vec_level[:, 2]
+        xp, zp = ct * x - st * z, st * x + ct * z  # Ry(pitch)^T, then Rx(roll)^T row by row
+        return np.column_stack([xp, cp * y + sp * zp, -sp * y + cp * zp])
     phi, theta = math.radians(roll_deg), math.radians(pitch_deg)
     cp, sp, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
     # body = Rx(roll)^T Ry(pitch)^T level (ZYX Euler angles, yaw already removed)
@@ -194,7 +201,8 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
     noise = compass.noise_deg * rng.standard_normal(idx.size) if compass.noise_deg > 0 else 0.0
     apparent = psi + compass.deviation(psi) + offset + noise
     mag = np.full((n, 3), np.nan)
-    mag[idx] = _body_from_level(_apparent_field_level(apparent, offset, compass), motion.roll_deg, motion.pitch_deg)
+    roll = np.asarray(motion.roll_deg)[idx] if np.ndim(motion.roll_deg) else motion.roll_deg
+    mag[idx] = _body_from_level(_apparent_field_level(apparent, offset, compass), roll, motion.pitch_deg)
     if compass.hard_iron_ut != (0.0, 0.0, 0.0) or compass.soft_iron_gain != (1.0, 1.0, 1.0):  # not calibrated
         mag[idx] = mag[idx] * np.array(compass.soft_iron_gain) + np.array(compass.hard_iron_ut)
 
