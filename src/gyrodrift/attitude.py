@@ -18,8 +18,9 @@ from gyrodrift._columns import read_only_floats
 from gyrodrift.kernels import jit
 
 __all__ = [
-    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "STARTUP_S", "MAX_GAP_S",
-    "MAX_BIAS_DPS", "MIN_COS2_PITCH", "LEARNED_S", "new_state", "propagate", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
+    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG",
+    "STARTUP_S", "MAX_GAP_S", "MAX_BIAS_DPS", "MIN_COS2_PITCH", "LEARNED_S", "new_state", "propagate", "gravity_down",
+    "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
 
