@@ -139,7 +139,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     ``state`` from :func:`new_state`, updated in place. ``out`` is NaN before the first
     finite accelerometer row. The heading rate (:func:`_heading_rate`) takes the row's
     ``gz`` (NaN stays NaN: the engine holds it), the held ``gy`` less the learned y bias and
-    the row's down vector: ``gz`` itself until the bias is learned (:data:`LEARNED_S`).
+    the row's down vector, blended in from ``gz`` as the bias is learned (:data:`LEARNED_S`).
     """
     kp = 1.0 / TAU_S
     cos_gate = math.cos(math.radians(ANGLE_GATE_DEG))

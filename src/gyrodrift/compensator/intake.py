@@ -228,7 +228,7 @@ class Intake:
                 *filter(None, [self.units.note()])]
 
     # ------------------------------------------------------------------ chunks
-    def compass(self, t, g, heading=None, mag=None, acc=None, gyro_xy=None, down=None):
+    def compass(self, t, heading=None, mag=None, acc=None, down=None):
         """Heading (deg, NaN = no sample), field strength and dip (None without a raw
         compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end").
         ``down``: the gyro-aided gravity of these rows (:meth:`body`), the raw compass's tilt
@@ -282,7 +282,7 @@ class Intake:
         ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``. The engine takes the heading rate of
         :meth:`body`; ``rate_z`` comes out as ``gyro_z - bias_z`` (:meth:`with_xy`)."""
         down, rate = self.body(t, g, acc, gyro_xy)
-        heading, norm, dip = self.compass(t, g, heading, mag, acc, gyro_xy, down)
+        heading, norm, dip = self.compass(t, heading, mag, acc, down)
         if self.xy is not None:
             gxy = np.asarray(gyro_xy, dtype=float)
             self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
