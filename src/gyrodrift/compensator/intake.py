@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrodrift.attitude import GravityFilter, RawTilt, accel_down
+from gyrodrift.attitude import GravityFilter, RawTilt, accel_down, propagate
 from gyrodrift.compass import DeadField, compass_columns
 from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
+from gyrodrift.compensator.engine import compiled
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
 from gyrodrift.conventions import ACC_COLS, GYRO_X, GYRO_Y, GYRO_Z, HEADING, MAG_COLS, TEMP, T
@@ -186,6 +187,7 @@ class Intake:
         self._xy_decided = False
         self._xy_in: deque = deque()  # x/y inputs of the rows not yet out of the engine
         self._gravity: GravityFilter | None = None  # the gyro-aided tilt (first rows with gyro_x, gyro_y)
+        self._gravity_row = None  # rows taken one by one: the filter's kernel and its one-row arrays
         self._rate_from_tilt = False  # the engine takes the heading rate of the tilted body, not gyro_z
         self._added: deque = deque()  # what the heading rate added to gyro_z, rows not yet out of the engine
         self._last_added = 0.0  # ... on the last row with a finite gyro_z (a NaN row holds it, as the engine does)
@@ -316,15 +318,24 @@ class Intake:
             self._decide_body(gx is not None and gy is not None, acc is not None)
         if self._gravity is None:
             return None, g
-        down, rate = self._gravity.run((t,), (optional_float(gx),), (optional_float(gy),), (g,),
-                                       np.full((1, 3), math.nan) if acc is None else np.array([acc], dtype=float))
+        r = self._gravity_row
+        if r is None:  # one-row arrays; the first row runs through numba's dispatcher
+            r = self._gravity_row = [propagate, (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 3)),
+                                                 self._gravity.state, np.zeros((1, 3)), np.zeros(1))]
+        fn, args = r
+        args[0][0], args[1][0], args[2][0], args[3][0] = t, optional_float(gx), optional_float(gy), g
+        args[4][0] = math.nan if acc is None else acc
+        fn(*args)
+        if fn is propagate:  # then the compiled function for these arrays (engine.compiled)
+            r[0] = compiled(propagate, args)
+        down = args[6][0]
         if not self._rate_from_tilt:
-            return down[0], g
-        rate = float(rate[0])
+            return down, g
+        rate = float(args[7][0])
         if math.isfinite(rate - g):
             self._last_added = rate - g
         self._added.append((np.array([self._last_added]),))
-        return down[0], rate
+        return down, rate
 
     def hold_xy(self, t: float, gx: float, gy: float, T: float, acc) -> None:
         """Keep the x/y inputs of one row until the engine gives it back (:meth:`with_xy`)."""
