@@ -139,6 +139,21 @@ def test_px4_sample_logs_are_compensated_with_a_note(shared_data, name, said):
     assert any(said in n for n in out.attrs["notes"]), out.attrs["notes"]
 
 
+def test_px4s_declination_brings_the_simulated_flight_to_its_attitude(shared_data):
+    """``sample_px4_events.ulg`` (PX4 SITL): its EKF2_MAG_DECL (3.32 deg) is added to the compass by
+    default; the fused heading is then within 0.5 deg RMS of ``vehicle_attitude``'s yaw (3.6 deg in
+    magnetic north)."""
+    pytest.importorskip("pyulog")
+    log = read_log(shared_data / "px4" / "sample_px4_events.ulg")
+    assert log.attrs["onboard"].declination[0] == pytest.approx(3.3231, abs=1e-3)
+
+    def rms(out):
+        err = np.asarray(wrap_180(out["heading_fused"] - log["ref_heading"]), dtype=float)
+        return float(np.sqrt(np.nanmean(err ** 2)))
+
+    assert rms(compensate(log)) < 0.5 < 3.0 < rms(compensate(log, CompensatorConfig(declination_deg=0.0)))
+
+
 @pytest.mark.xfail(strict=True, reason="issue 21 not met: the heading column's samples repeat (an 8-Hz magnetometer on "
                    "100-Hz rows); with the noise's correlation measured (kappa) the still rows keep the compass, "
                    "but the fused heading keeps the first seconds' compass (86.3 deg) while the compass creeps "

@@ -190,3 +190,29 @@ def test_a_real_banked_flight_keeps_its_heading():
     level = compensate(log, CompensatorConfig(heading_rate="gyro_z"))
     assert rms(out, "heading") < 20.0 < 60.0 < rms(level, "heading")
     assert rms(out, "heading_fused") < 0.6 * rms(out, "compass_heading")
+
+
+def test_the_autopilots_declination_turns_the_compass_to_true_north():
+    """The real tlog's parameters hold ArduPilot's declination (COMPASS_DEC = 0.2074 rad, 11.88 deg
+    east): by default it is added to the compass, with a note, so that the headings are in true
+    north like ATTITUDE.yaw; ``declination_deg = 0`` keeps magnetic north, another value wins."""
+    from gyrodrift.compensator import CompensatorConfig, compensate
+    from gyrodrift.conventions import wrap_180
+
+    log = read_log(REAL)
+    dec, where = log.attrs["onboard"].declination
+    assert dec == pytest.approx(11.8814, abs=1e-3) and where.startswith("COMPASS_DEC=0.2073")
+    default = compensate(log)
+    magnetic = compensate(log, CompensatorConfig(declination_deg=0.0))
+    shift = np.asarray(wrap_180(default["compass_heading"] - magnetic["compass_heading"]), dtype=float)
+    np.testing.assert_allclose(shift[np.isfinite(shift)], dec, atol=1e-9)
+    assert any("declination it used, +11.88 deg (COMPASS_DEC" in n for n in default.attrs["notes"])
+    assert not any("declination" in n for n in magnetic.attrs["notes"])
+
+    def rms(out):
+        return float(np.sqrt(np.nanmean(np.asarray(wrap_180(out["heading_fused"] - log["ref_heading"]), float) ** 2)))
+
+    assert rms(default) < rms(magnetic)
+    given = compensate(log, CompensatorConfig(declination_deg=5.0))
+    shift = np.asarray(wrap_180(given["compass_heading"] - magnetic["compass_heading"]), dtype=float)
+    np.testing.assert_allclose(shift[np.isfinite(shift)], 5.0, atol=1e-9)

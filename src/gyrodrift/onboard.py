@@ -152,6 +152,8 @@ class Onboard:
     correction_problem: str = ""  #: why that correction cannot be undone ("" when it can or there is none)
     rotation_problem: str = ""  #: why ``rotation`` is None ("" otherwise)
     system_id: int | None = None  #: the vehicle's MAVLink system id
+    #: the magnetic declination the autopilot used, deg east, and its parameter (None: not in the log)
+    declination: tuple[float, str] | None = None
 
     @property
     def matrix(self) -> np.ndarray | None:
@@ -172,6 +174,16 @@ def _system_id(params: Mapping, name: str) -> int | None:
 
 def _as_tuple(matrix: np.ndarray) -> tuple:
     return tuple(tuple(float(v) for v in row) for row in np.asarray(matrix, dtype=float))
+
+
+def _declination(params: Mapping, name: str, to_deg: float) -> tuple[float, str] | None:
+    """The declination parameter ``name`` in degrees (its value times ``to_deg``) and its
+    name, or None where the log does not have it or it is 0 (not set)."""
+    value = params.get(name)
+    if value is None or not math.isfinite(float(value)) or float(value) == 0.0:
+        return None
+    deg = float(value) * to_deg
+    return (deg, f"{name}={float(value):g}") if abs(deg) <= 180.0 else None
 
 
 def _changed(changed, names) -> list[str]:
@@ -225,7 +237,7 @@ def ardupilot_onboard(params: Mapping, instance: int, *, changed=(), temperature
     correction, problem = _held_correction(lambda: ardupilot_correction(params, instance, where=where), tcal,
                                            temperature, where, f"{p}ENABLE=1", "IMU", "INS_TCAL disabled")
     return Onboard("ardupilot", instance, device, rotation, text, correction, problem, rotation_problem,
-                   _system_id(params, "SYSID_THISMAV"))
+                   _system_id(params, "SYSID_THISMAV"), _declination(params, "COMPASS_DEC", math.degrees(1.0)))
 
 
 def px4_sensor_rotation(params: Mapping, kind: str, device: int | None, *, where: str = "log"
@@ -268,5 +280,5 @@ def px4_onboard(params: Mapping, instance: int, device_id: int | None, rotation:
     moved = sorted(n for n in changed if n.startswith("SENS_BOARD_") or re.fullmatch(r"CAL_GYRO\d_ROT", n))
     rotation_problem = _moved(where, moved[0]) if moved else ""
     return Onboard("px4", instance, device_id, None if moved else _as_tuple(rotation), rotation_text, correction,
-                   problem, rotation_problem, _system_id(params, "MAV_SYS_ID"))
+                   problem, rotation_problem, _system_id(params, "MAV_SYS_ID"), _declination(params, "EKF2_MAG_DECL", 1.0))
 

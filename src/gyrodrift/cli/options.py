@@ -129,12 +129,13 @@ def add_method_options(p) -> None:
     for table, cls, f, spec in _flagged():
         default = getattr(getattr(d, table) if table else d, f.name)
         kind = typing.get_type_hints(cls)[f.name]
+        kind = next((k for k in typing.get_args(kind) if k is not type(None)), kind)  # X | None: X
         choices = spec.choices() if callable(spec.choices) else spec.choices
         unit = f", {spec.unit}" if spec.unit else ""
         g.add_argument(spec.flag, dest=f.name, type=kind if kind in (int, float) else str, choices=choices or None,
                        metavar=None if choices else ("DEG" if spec.unit == "deg" else None),
                        help=f"{spec.help}{unit} (default {default:g})" if isinstance(default, float) else
-                       f"{spec.help} (default {default})")
+                       f"{spec.help}{unit}" if default is None else f"{spec.help} (default {default})")
 
 
 def finish_command(p, func, *, inputs: bool = True, old_format: bool = True) -> None:

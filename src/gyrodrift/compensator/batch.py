@@ -68,6 +68,7 @@ def compensate_arrays(
     gyro_max_dps: float = GYRO_MAX_DPS,
     gyro_xy=None,
     gyro_unit: str | None = None,
+    declination: tuple[float, str] | None = None,
 ) -> pd.DataFrame:
     """Compensate a whole log given as arrays; see :func:`compensate` for the output.
 
@@ -102,6 +103,10 @@ def compensate_arrays(
     gyro_unit : str, optional
         The unit the gyro was read in, for the advice of the unit check's note
         (:mod:`gyrodrift.gyro_units`).
+    declination : (float, str), optional
+        The magnetic declination the log's autopilot used, deg east, and where it is from
+        (e.g. ``(11.88, "COMPASS_DEC=0.2074")``): added to the compass when
+        ``config.declination_deg`` is None.
 
     Raises
     ------
@@ -137,7 +142,8 @@ def compensate_arrays(
     fit = MagFit(cfg, source) if cfg.mag_calibration and mag is not None and acc is not None else None
     if fit is not None:
         fit.add(t, g, mag, acc, gyro_xy)
-    whole = WholeLog(temp_flat=temperature_is_flat(T_in), magcal=None if fit is None else fit.fit())
+    whole = WholeLog(temp_flat=temperature_is_flat(T_in), magcal=None if fit is None else fit.fit(),
+                     declination=declination)
     intake = Intake(cfg, source, estimator=estimator, whole=whole, gyro_unit=gyro_unit)
     step = n if progress is None else PROGRESS_ROWS
     if n <= step:  # one piece, in the buffers when given
@@ -239,6 +245,7 @@ def compensate(
         gyro_max_dps=gyro_max_dps,
         gyro_xy=np.column_stack([numbers[GYRO_X], numbers[GYRO_Y]]) if {GYRO_X, GYRO_Y} <= set(numbers) else None,
         gyro_unit=log.attrs.get("gyro_unit"),
+        declination=getattr(log.attrs.get("onboard"), "declination", None),
     )
     out.attrs["notes"] = [*log.attrs.get("notes", ()), *out.attrs["notes"]]
     return join_input_columns(out, log)  # the input columns at once (a wide log: thousands of them)

@@ -48,8 +48,11 @@ class CompensatorConfig:
         The fused heading of the paper's filters; None: :attr:`fusion_settings`.
     adaptive : AdaptiveConfig
         Settings of the ``adaptive`` estimator's model (``docs/model.md``).
-    declination_deg : float
+    declination_deg : float or None
         Magnetic declination, deg east, added to every compass heading (0: magnetic north).
+        None (default): the declination the log's autopilot used where its parameters have it
+        (ArduPilot's ``COMPASS_DEC``, PX4's ``EKF2_MAG_DECL``; with a note), else 0
+        (:func:`with_declination`).
     tilt : str
         The tilt of a raw compass: ``"accel"`` (default) or ``"gyro"`` (:mod:`gyrodrift.attitude`).
     heading_rate : str
@@ -81,10 +84,11 @@ class CompensatorConfig:
     gate: GateConfig = setting(factory=GateConfig)
     fusion: FusionConfig | None = None
     adaptive: AdaptiveConfig = setting(factory=AdaptiveConfig)
-    declination_deg: float = setting(0.0, "deg", ge=-180.0, le=180.0, flag="--declination",
-                                     help="magnetic declination, east positive: added to the compass heading, so "
-                                     "that compass_heading, heading and heading_fused are in true north like "
-                                     "ref_heading (0: magnetic north)")
+    declination_deg: float | None = setting(None, "deg", ge=-180.0, le=180.0, flag="--declination",
+                                            help="magnetic declination, east positive: added to the compass heading, "
+                                            "so that compass_heading, heading and heading_fused are in true north "
+                                            "like ref_heading (0: magnetic north; default: the autopilot's where "
+                                            "the log's parameters have it, else 0)")
     tilt: str = setting("accel", choices=("gyro", "accel"))
     heading_rate: str = setting("auto", choices=("auto", "gyro_z"))
     mag_calibration: bool | str = setting("auto", choices=(True, False, "auto"))
@@ -125,6 +129,15 @@ class CompensatorConfig:
         except TypeError:
             raise SettingError(f"estimator = {show(self.estimator)} cannot be built from settings alone; pass an "
                                "instance as compensate(..., estimator=...)") from None
+
+
+def with_declination(cfg: CompensatorConfig, found: tuple[float, str] | None) -> CompensatorConfig:
+    """``cfg`` with its declination decided: as given, or with ``declination_deg`` None the one
+    ``found`` in the log (deg east and where from: :attr:`gyrodrift.onboard.Onboard.declination`),
+    else 0."""
+    if cfg.declination_deg is not None:
+        return cfg
+    return replace(cfg, declination_deg=found[0] if found is not None else 0.0)
 
 
 def uses_clock(cfg: CompensatorConfig, temp_c=None) -> bool:

@@ -16,7 +16,7 @@ import pandas as pd
 
 from gyrodrift.attitude import GravityFilter, RawTilt, accel_down, propagate
 from gyrodrift.compass import DeadField, compass_columns
-from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock
+from gyrodrift.compensator.config import build_estimator, clock_config, uses_clock, with_declination
 from gyrodrift.compensator.engine import compiled
 from gyrodrift.compensator.model_engine import make_engine
 from gyrodrift.compensator.output import output_frame
@@ -39,11 +39,13 @@ UNIT_ROWS = 4096
 class WholeLog:
     """What the front end takes from the whole log before its first row: whether its
     temperature never changes (None: not known), its magnetometer calibration (None: not
-    fitted) and its rows (None: not counted)."""
+    fitted), its rows (None: not counted) and the declination its autopilot used (None:
+    not known)."""
 
     temp_flat: bool | None = None
     magcal: object = None
     rows: int | None = None
+    declination: tuple[float, str] | None = None  # the autopilot's, deg east, and its parameter
 
 
 def chunk_arrays(log) -> tuple:
@@ -163,9 +165,12 @@ class Intake:
 
     def __init__(self, config, source: str = "log", *, estimator=None, whole: WholeLog | None = None,
                  gyro_unit: str | None = None, record: bool = True, time_unit: str | None = "s"):
-        self.config = config
-        self.source = source
         whole = whole or WholeLog()
+        self.config = with_declination(config, whole.declination)
+        self._declination_note = None if config.declination_deg is not None or whole.declination is None else (
+            f"{source}: the compass is turned to true north, like the autopilot's heading, by the declination it "
+            f"used, {whole.declination[0]:+.2f} deg ({whole.declination[1]}); --declination 0 keeps magnetic north")
+        self.source = source
         self._cal = whole.magcal
         self._given = estimator
         self._record = record
@@ -225,7 +230,8 @@ class Intake:
             else:  # off, or "auto" in a stream
                 raw.append(self._uncalibrated())
         self._check_unit_rows()
-        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen)]), *filter(None, raw),
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._declination_note]),
+                *filter(None, raw),
                 *self.engine.notes,
                 *filter(None, [self.units.note()])]
 

@@ -84,7 +84,7 @@ SIGNATURES: dict[str, list[str]] = {
     "kernels.tilt.window_step": ["F2 F1 I1 f f f"],
     "kernels.compass.row": ["f f f f f f"],  # a raw compass (gyrodrift.compass and a stream's rows)
     "kernels.compass.rows": ["F1 F1 F1 F1 F1 F1 F1 F1 F1"],
-    "attitude.propagate": ["F1r F1r F1r F1r F2r F1 F2 F1"],
+    "attitude.propagate": ["F1r F1r F1r F1r F2r F1 F2 F1", "F1 F1 F1 F1 F2 F1 F2 F1"],  # chunks; a stream's rows
     "attitude._heading_rate": ["i f F1 F2 F1"],
     "attitude._about_the_vertical": ["f f f f f f"],
     "attitude._rotate": ["f f f f f f"],
