@@ -177,3 +177,17 @@ def test_a_long_slow_coordinated_turn_keeps_its_tilt():
     roll = np.degrees(np.arctan2(down[:, 1], down[:, 2]))
     late = (t > 80.0) & (t < 105.0)
     assert np.abs(roll[late] - 15.0).max() < 2.0
+
+
+def test_the_notes_say_what_the_heading_integrates():
+    """A note says the heading integrates the tilted body's rate, or gyro_z alone when the x/y
+    offsets were never learned (an accelerometer never near 1 g); none with ``"gyro_z"``."""
+    log = banked_turn()
+    assert any("rate of the tilted body's heading" in n for n in compensate(log).attrs["notes"])
+    assert not any("heading integrates" in n for n in
+                   compensate(log, CompensatorConfig(heading_rate="gyro_z")).attrs["notes"])
+    heavy = log.assign(acc_x=0.0, acc_y=0.0, acc_z=-1.3)  # 1.3 g throughout: never accepted
+    out = compensate(heavy)
+    assert any("integrates gyro_z alone: the x/y gyros' offsets were never learned" in n for n in out.attrs["notes"])
+    level = compensate(heavy, CompensatorConfig(heading_rate="gyro_z"))
+    assert np.array_equal(out["heading"], level["heading"], equal_nan=True)

@@ -213,6 +213,11 @@ class GravityFilter:
     def __init__(self):
         self.state = new_state()
 
+    @property
+    def accepted_s(self) -> float:
+        """How long the accelerometer has been accepted so far, s (:data:`LEARNED_S`)."""
+        return float(self.state[_ACCEPTED])
+
     def feed(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
         """Down unit vectors (n, 3), body FRD, of these rows (see :func:`propagate`)."""
         return self.run(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)[0]

@@ -230,10 +230,22 @@ class Intake:
             else:  # off, or "auto" in a stream
                 raw.append(self._uncalibrated())
         self._check_unit_rows()
-        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._declination_note]),
+        return [*filter(None, [self._time_note, self._dead.note(self.source, self._heading_seen), self._declination_note,
+                               self._heading_rate_note()]),
                 *filter(None, raw),
                 *self.engine.notes,
                 *filter(None, [self.units.note()])]
+
+    def _heading_rate_note(self) -> str | None:
+        """What the heading integrates, where the log has the x/y gyros (``heading_rate = "auto"``)."""
+        if not self._rate_from_tilt:
+            return None
+        if self._gravity.accepted_s > 0.0:
+            return (f"{self.source}: the heading integrates the rate of the tilted body's heading (gyro_y, gyro_z and "
+                    "the gyro-aided tilt), taken in as the x/y gyros' offsets were learned; heading_rate = 'gyro_z' "
+                    "integrates gyro_z alone")
+        return (f"{self.source}: the heading integrates gyro_z alone: the x/y gyros' offsets were never learned (the "
+                "accelerometer was never near 1 g and along the tilt), so the tilt is not known well enough")
 
     # ------------------------------------------------------------------ chunks
     def compass(self, t, heading=None, mag=None, acc=None, down=None):
