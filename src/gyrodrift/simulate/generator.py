@@ -282,14 +282,20 @@ def _warmup_telemetry(rng, scale):
                    offset=_offset_fn(episodes), heading0_deg=_u(rng, 0, 360), telemetry=True)
 
 
+def _flight_times(rng, scale, ground_s):
+    """A flight's times (s): the end of the time on the ground (drawn from ``ground_s``), the
+    landing after 5–15 min of flight, the end of the run 1–3 min later; and the IMU's warm-up
+    from power-on (:func:`_warmup`)."""
+    ground = _u(rng, *ground_s) * scale
+    flight = _u(rng, 300.0, 900.0) * scale
+    duration = ground + flight + _u(rng, 60.0, 180.0) * scale
+    return ground, ground + flight, duration, _warmup(rng, rise=(8.0, 20.0), tau=(60.0, 300.0))
+
+
 def _multicopter(rng, scale):
     """Warm-up on the ground, a flight with yaw manoeuvres, vibration on the gyro, an IMU
     heating in flight and a compass error that follows the motor throttle; landing, still."""
-    ground = _u(rng, 120.0, 360.0) * scale
-    flight = _u(rng, 300.0, 900.0) * scale
-    duration = ground + flight + _u(rng, 60.0, 180.0) * scale
-    t_land = ground + flight
-    warm = _warmup(rng, rise=(8.0, 20.0), tau=(60.0, 300.0))
+    ground, t_land, duration, warm = _flight_times(rng, scale, (120.0, 360.0))
     heat, heat_tau = _u(rng, 5.0, 15.0), _u(rng, 120.0, 400.0)
     k_throttle = _sign(rng) * _u(rng, 5.0, 30.0)
     hover = _u(rng, 0.4, 0.6)
@@ -504,11 +510,7 @@ def _banked_flight(rng, scale):
     bank follows the turn rate and the airspeed (to 20–45 deg), the IMU cooled by the airflow, a
     landing; the x/y gyros, the raw magnetometer and the accelerometer (level-looking in a turn)
     logged at 4–50 Hz."""
-    ground = _u(rng, 60.0, 240.0) * scale
-    flight = _u(rng, 300.0, 900.0) * scale
-    duration = ground + flight + _u(rng, 60.0, 180.0) * scale
-    t_land = ground + flight
-    warm = _warmup(rng, rise=(8.0, 20.0), tau=(60.0, 300.0))
+    ground, t_land, duration, warm = _flight_times(rng, scale, (60.0, 240.0))
     cool, cool_tau = _u(rng, 3.0, 12.0), _u(rng, 60.0, 300.0)
     speed = _u(rng, 12.0, 25.0)
     turning = _turns_rate(_turn_plan(rng, ground + _u(rng, 20.0, 60.0), t_land - 40.0, (45.0, 720.0), (5.0, 20.0),
