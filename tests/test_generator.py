@@ -110,3 +110,15 @@ def test_a_banked_flight_turns_coordinated_with_all_three_gyros():
 
     assert abs(gain(euler) - 1.0) < 0.03  # the scale-factor error is at most 2.5 %
     assert gain(r) < gain(euler) - 0.02  # the z gyro alone: cos(roll) of it
+
+
+def test_a_roll_per_row_rotates_as_one_roll_for_all():
+    """The simulator's level-to-body rotation with a roll per vector (a banked flight) gives what
+    the one-roll rotation gives each vector, to rounding."""
+    from gyrodrift.simulate.sensors import _body_from_level
+
+    vectors = np.random.default_rng(0).standard_normal((7, 3))
+    rolls = np.linspace(-40.0, 40.0, 7)
+    per_row = _body_from_level(vectors, rolls, -7.0)
+    for i, roll in enumerate(rolls):
+        np.testing.assert_allclose(per_row[i], _body_from_level(vectors[i:i + 1], float(roll), -7.0)[0], atol=1e-12)
