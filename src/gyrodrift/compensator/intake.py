@@ -364,7 +364,7 @@ class Intake:
         """The engine takes the heading rate of a tilted body (:meth:`body`), not gyro_z."""
         return self._rate_from_tilt
 
-    def z_row(self, out: list, held: bool = False) -> None:
+    def rate_z_row(self, out: list, held: bool = False) -> None:
         """``rate_z`` of one row's outputs (a list in the order of :mod:`gyrodrift.kernels.layout`,
         in place) less what the heading rate added to gyro_z: of the next row out of the
         engine, or with ``held`` of the last row taken (a provisional row). Nothing unless

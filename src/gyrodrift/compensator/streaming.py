@@ -212,7 +212,7 @@ class Compensator:
             self._held_T.append(T)
         if engine._held is None:  # initialised (ChunkEngine.initialised, without the property's call): floats in, floats out
             out, codes, compass = engine.feed_row(t_s, rate, float(temp_c), heading, norm, dip)
-            intake.z_row(out)  # the heading rate of a tilted body went in: the z gyro's columns out
+            intake.rate_z_row(out)  # the heading rate of a tilted body went in: rate_z is gyro_z - bias_z
             row = self._sample(t_s, out, codes, compass)
             if xy is not None:
                 values = xy.feed_row(t_s, optional_float(gyro_x_dps), optional_float(gyro_y_dps), float(temp_c), row.temp_rate, ax,
@@ -228,7 +228,7 @@ class Compensator:
                 return []
             self._n_provisional += 1
             row = engine.provisional()
-            intake.z_row(row[1], held=True)
+            intake.rate_z_row(row[1], held=True)
             return [self._provisional_row(row)]
         return self._released(cols)
 
