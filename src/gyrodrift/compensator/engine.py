@@ -179,7 +179,8 @@ class ChunkEngine:
         return math.nan if self._t0 is None else float(self._fs[L.F_TSTART])
 
     # ----------------------------------------------------------------- feed
-    def feed(self, t, g, T, heading, norm=None, dip=None, buffers: OutputBuffers | None = None) -> dict | None:
+    def feed(self, t, g, T, heading, norm=None, dip=None, tilt_diff=None,
+             buffers: OutputBuffers | None = None) -> dict | None:
         """Add a chunk of rows; return the output columns of the rows that became available.
 
         Parameters
@@ -190,6 +191,10 @@ class ChunkEngine:
             infinite gyro or temperature cell holds the previous value (``gap``).
         norm, dip : (n,) array_like, optional
             Field strength and dip of the raw magnetometer (field-anomaly gate).
+        tilt_diff : (n,) array_like, optional
+            Difference of each compass sample's headings tilted by the accelerometer and by the
+            gyro-aided gravity, deg (NaN: none known): the default estimator's model widens the
+            compass by it (``docs/model.md``, "The compass's tilt").
         buffers : OutputBuffers, optional
             Memory for the output, used when all the rows of this chunk come out of this
             call (a whole log); the returned columns are then views of it.
@@ -212,6 +217,7 @@ class ChunkEngine:
         t, g, T, heading = (read_only_floats(a) for a in (t, g, T, heading))
         norm = _NO_FIELD if norm is None else read_only_floats(norm)
         dip = _NO_FIELD if dip is None else read_only_floats(dip)
+        tilt_diff = _NO_FIELD if tilt_diff is None else read_only_floats(tilt_diff)
         if self._t0 is None:
             self._first_row(float(t[0]), g[0], T[0])
         whole = self._held is None or (not self._held and float(t[-1]) >= self._fs[L.F_TSTART])
@@ -230,7 +236,7 @@ class ChunkEngine:
             if self._clock is not None:
                 cols.column(L.O_TEMP_RATE)[:] = 0.0
             inputs = (t, read_only(cols.g_held) if fix & 1 else g, read_only(cols.T_held) if fix & 2 else T,
-                      read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip)
+                      read_only(cols.h_wrapped) if fix & 4 else heading, norm, dip, tilt_diff)
             if self._held is not None:
                 self._held.append((inputs, cols))
                 if not t[-1] - self._fs[L.F_TSTART] >= 0:
@@ -241,7 +247,7 @@ class ChunkEngine:
             join(helper)
 
     def window_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
-                   dip: float = math.nan) -> dict | None:
+                   dip: float = math.nan, tilt_diff: float = math.nan) -> dict | None:
         """One row while the init window fills, on floats (the streaming path): checked and
         prepared as :meth:`feed` prepares a chunk (the same kernel, the same bits) and held
         with the window's other rows. Returns what :meth:`feed` returns: None until the row
@@ -258,13 +264,13 @@ class ChunkEngine:
         if self._t0 is None:
             self._first_row(t, g, T)
         r = self._row or self._new_row()
-        fix = self._prepare_row(r, t, g, T, heading, norm, dip)
+        fix = self._prepare_row(r, t, g, T, heading, norm, dip, tilt_diff)
         cols = r.cols
         if fix:  # a held gyro or temperature cell, or a compass heading wrapped
             g = float(cols.g_held[0]) if fix & 1 else g
             T = float(cols.T_held[0]) if fix & 2 else T
             heading = float(cols.h_wrapped[0]) if fix & 4 else heading
-        w.rows.append((t, g, T, heading, norm, dip, float(r.Tp[0]), bool(r.gap[0])))
+        w.rows.append((t, g, T, heading, norm, dip, tilt_diff, float(r.Tp[0]), bool(r.gap[0])))
         if not t - self._fs[L.F_TSTART] >= 0:
             return None
         self._hold_window_rows()
@@ -305,7 +311,7 @@ class ChunkEngine:
 
     def _initialise(self, inputs, Tp) -> None:
         """The init window's measurements, the estimator's first update and the field reference."""
-        t, g, T, heading, norm, dip = inputs
+        t, g, T, heading, norm, dip, _ = inputs
         cfg = self.cfg
         e = self._window_end(t, "its still parts")
         span = min(float(cfg.init_s), float(t[e] - t[0]))
@@ -335,7 +341,7 @@ class ChunkEngine:
         self._ist[L.I_UNOBS] = aiding.unobservable_code(C, self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
 
     def _run(self, inputs, cols: Columns) -> dict:
-        t, g, T, heading, norm, dip = inputs
+        t, g, T, heading, norm, dip, _ = inputs  # the paper's filters take no compass tilt error
         Tp = read_only(cols.column(L.O_TEMP_RATE))
         gap = read_only(cols.code(L.OC_GAP).view(np.bool_))
         i = 0
@@ -377,7 +383,7 @@ class ChunkEngine:
             self._acc = np.zeros((2 * self._acc.shape[0], L.N_MEAS))
 
     def feed_row(self, t: float, g: float, T: float, heading: float, norm: float = math.nan,
-                 dip: float = math.nan) -> tuple[list, list, float]:
+                 dip: float = math.nan, tilt_diff: float = math.nan) -> tuple[list, list, float]:
         """One row after initialisation, on floats (the streaming path; the same kernels as
         :meth:`feed`). Returns the N_OUT float outputs and the N_CODES codes of the row, as
         lists in the order of :mod:`gyrodrift.kernels.layout`, and the compass heading used."""
@@ -385,7 +391,7 @@ class ChunkEngine:
         if self._clock is not None:
             T = float(self._clock((t,))[0])
         heading += self.cfg.declination_deg  # magnetic to true north, as in feed
-        fix = self._prepare_row(r, t, g, T, heading, norm, dip)
+        fix = self._prepare_row(r, t, g, T, heading, norm, dip, tilt_diff)
         self._run_row(r, fix)
         cols = r.cols
         return cols.out.tolist(), cols.codes.tolist(), float(cols.h_wrapped[0]) if fix & 4 else heading
@@ -395,12 +401,12 @@ class ChunkEngine:
         return self._row
 
     def _prepare_row(self, r: _RowMemory, t: float, g: float, T: float, heading: float, norm: float,
-                     dip: float) -> int:
+                     dip: float, tilt_diff: float) -> int:
         """One row into the row memory, checked and prepared (:func:`gyrodrift.kernels.loop.prepare`,
         T' 0 with the clock); returns prepare's ``fix`` bits. The arrays are passed as they are,
         writable: numba's dispatcher types a writable array in C and a read-only one in Python
         (about 0.2 µs more per argument); the kernel writes none of its inputs."""
-        r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0] = t, g, T, heading, norm, dip
+        r.t[0], r.g[0], r.T[0], r.heading[0], r.norm[0], r.dip[0], r.tilt_diff[0] = t, g, T, heading, norm, dip, tilt_diff
         cols = r.cols
         args = (r.t, r.g, r.T, r.heading, self._fs, self._ist, self._set, self._iset, self._bins, cols.g_held,
                 cols.T_held, cols.h_wrapped, r.Tp, r.gap)
@@ -436,7 +442,7 @@ class ChunkEngine:
         Returns ``(t, out, codes, compass_heading)`` on Python floats and ints, as :meth:`feed_row`
         gives them (the order of :mod:`gyrodrift.kernels.layout`)."""
         w = self._window
-        ti, gi, Ti, hi, _, _, Tpi, _ = w.rows[-1]
+        ti, gi, Ti, hi, _, _, _, Tpi, _ = w.rows[-1]
         if self._prov_model is None:  # nothing updates the estimator before the window ends
             C = np.asarray(self.est.cov, dtype=float).reshape(9)
             unobs = aiding.unobservable_code(C.reshape(3, 3), self._set[L.C_PRIOR_A], self._set[L.C_PRIOR_B])
@@ -510,7 +516,7 @@ def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
     joined, helper = new_columns(n)
     join(helper)
     inputs = tuple(read_only(np.concatenate([part[0][k] for part in held])) if held[0][0][k].size else held[0][0][k]
-                   for k in range(6))
+                   for k in range(7))
     joined.column(L.O_TEMP_RATE)[:] = np.concatenate([cols.column(L.O_TEMP_RATE) for _, cols in held])
     joined.code(L.OC_GAP)[:] = np.concatenate([cols.code(L.OC_GAP) for _, cols in held])
     return inputs, joined
@@ -520,7 +526,7 @@ class _RowMemory:
     """One-row inputs and outputs, reused by :meth:`ChunkEngine.feed_row`."""
 
     def __init__(self):
-        self.t, self.g, self.T, self.heading, self.norm, self.dip = (np.zeros(1) for _ in range(6))
+        self.t, self.g, self.T, self.heading, self.norm, self.dip, self.tilt_diff = (np.zeros(1) for _ in range(7))
         self.cols = Columns(np.zeros(L.N_OUT), np.zeros(L.N_CODES, dtype=np.int8), np.zeros(1), np.zeros(1),
                             np.zeros(1), 1)
         self.Tp = self.cols.column(L.O_TEMP_RATE)
@@ -528,7 +534,7 @@ class _RowMemory:
         #: the compiled kernels of these arrays and the engine's (:func:`compiled`), once called
         self.prepare = self.run = None
         # the read-only views the kernels take (they see what is written to the arrays above)
-        for name in ("t", "g", "T", "heading", "norm", "dip", "Tp", "gap"):
+        for name in ("t", "g", "T", "heading", "norm", "dip", "tilt_diff", "Tp", "gap"):
             setattr(self, "ro_" + name, read_only(getattr(self, name)))
         for name in ("g_held", "T_held", "h_wrapped"):
             setattr(self, "ro_" + name, read_only(getattr(self.cols, name)))
@@ -540,14 +546,14 @@ class _WindowRows:
     cells filled, the compass wrapped), T' and the gap flag, one tuple a row."""
 
     def __init__(self):
-        self.rows: list[tuple] = []  # (t, g, T, heading, norm, dip, T', gap)
+        self.rows: list[tuple] = []  # (t, g, T, heading, norm, dip, tilts' difference, T', gap)
 
     def chunk(self) -> tuple[tuple, Columns]:
         """The rows as one prepared chunk, as :meth:`ChunkEngine.feed` holds one: inputs and columns."""
-        t, g, T, heading, norm, dip, Tp, gap = zip(*self.rows)
+        t, g, T, heading, norm, dip, tilt_diff, Tp, gap = zip(*self.rows)
         cols, helper = new_columns(len(t))
         join(helper)
         cols.column(L.O_TEMP_RATE)[:] = Tp
         cols.code(L.OC_GAP)[:] = gap
-        inputs = tuple(read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip))
+        inputs = tuple(read_only(np.array(v, dtype=float)) for v in (t, g, T, heading, norm, dip, tilt_diff))
         return inputs, cols

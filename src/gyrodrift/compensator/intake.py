@@ -250,24 +250,32 @@ class Intake:
     # ------------------------------------------------------------------ chunks
     def compass(self, t, heading=None, mag=None, acc=None, down=None):
         """Heading (deg, NaN = no sample), field strength and dip (None without a raw
-        compass) of these rows: the stages before the engine (``docs/engine.md``, "The front end").
-        ``down``: the gyro-aided gravity of these rows (:meth:`body`), the raw compass's tilt
-        with ``config.tilt`` ``"gyro"``."""
+        compass) and the difference of its two tilts' headings (:func:`tilt_difference`;
+        None without the gyro-aided gravity) of these rows: the stages before the engine
+        (``docs/engine.md``, "The front end"). ``down``: the gyro-aided gravity of these
+        rows (:meth:`body`), the raw compass's tilt with ``config.tilt`` ``"gyro"``."""
         n = len(t)
         if heading is not None and not self._heading_seen:
             self._heading_seen = bool(np.isfinite(heading).any())
         if mag is None or acc is None:  # the engine wraps the heading itself
-            return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None
+            return (np.full(n, np.nan) if heading is None else np.asarray(heading, dtype=float)), None, None, None
         mag = self._dead.mask(mag)
         self._raw_seen = True
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, self._gravity is not None, self.source)
+        gravity = down
         down = down if self._tilt.uses_gyro else None
         if self._survey is not None:
             self._survey.add(mag, accel_down(acc) if down is None else down)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
-        return compass_columns(n, heading, mag, acc, down)
+        tilt_diff = None
+        if gravity is not None:
+            tilt_diff = tilt_difference(compass_columns(n, None, mag, acc)[0],
+                                        compass_columns(n, None, mag, acc, gravity)[0])
+            if heading is not None:  # a heading given is the compass there, and its tilt is not known
+                tilt_diff[np.isfinite(heading)] = math.nan
+        return (*compass_columns(n, heading, mag, acc, down), tilt_diff)
 
     def body(self, t, g, acc=None, gyro_xy=None) -> tuple[np.ndarray | None, np.ndarray]:
         """The gyro-aided gravity (n, 3; None without the filter) and the heading rate (deg/s)
@@ -302,12 +310,12 @@ class Intake:
         ``gyro_xy``: (n, 2) raw ``gyro_x``, ``gyro_y``. The engine takes the heading rate of
         :meth:`body`; ``rate_z`` comes out as ``gyro_z - bias_z`` (:meth:`with_xy`)."""
         down, rate = self.body(t, g, acc, gyro_xy)
-        heading, norm, dip = self.compass(t, heading, mag, acc, down)
+        heading, norm, dip, tilt_diff = self.compass(t, heading, mag, acc, down)
         if self.xy is not None:
             gxy = np.asarray(gyro_xy, dtype=float)
             self._xy_in.append((np.asarray(t, dtype=float), gxy[:, 0], gxy[:, 1], np.asarray(T, dtype=float),
                                 np.asarray(acc, dtype=float)))
-        cols = self.engine.feed(t, rate, T, heading, norm, dip, buffers)
+        cols = self.engine.feed(t, rate, T, heading, norm, dip, tilt_diff, buffers)
         self.units.add(t, rate, heading)  # on times the engine took (finite, increasing)
         return self.with_xy(cols)
 
@@ -415,8 +423,8 @@ class Intake:
             return None
         return found
 
-    def row_compass(self, t: float, rate: float, heading: float, mag, acc, down) -> tuple[float, float, float]:
-        """Heading, field strength and dip of one row (floats; ``mag``, ``acc`` triples or
+    def row_compass(self, t: float, rate: float, heading: float, mag, acc, down) -> tuple[float, float, float, float]:
+        """Heading, field strength, dip and the two tilts' difference of one row (floats; ``mag``, ``acc`` triples or
         None; ``rate`` and ``down`` from :meth:`row_body`, which comes first): the stages of
         :meth:`compass`, without the calibration (a stream does not see the whole log). The
         row goes to the gyro-unit check as :meth:`feed`'s rows do (:data:`UNIT_ROWS` at a time,
@@ -454,9 +462,10 @@ class Intake:
             self._survey_note = (self._survey.seen, uncalibrated_note(self._survey, self.source, mode))
         return self._survey_note[1]
 
-    def _row_compass(self, heading, mag, acc, down) -> tuple[float, float, float]:
+    def _row_compass(self, heading, mag, acc, down) -> tuple[float, float, float, float]:
         if self._tilt is None:
             self._tilt = RawTilt(self.config.tilt, self._gravity is not None, self.source)
+        gravity = down
         if not self._tilt.uses_gyro:
             down = None
         if mag is not None and acc is not None:
@@ -465,18 +474,26 @@ class Intake:
             mag = None  # a sample without a field is no compass sample
         self._heading_seen = self._heading_seen or math.isfinite(heading)
         if mag is None or (acc is None and down is None):
-            return heading, math.nan, math.nan
+            return heading, math.nan, math.nan, math.nan
         mx, my, mz = mag
         fx, fy, fz = acc if down is None else (-down[0], -down[1], -down[2])
         if not math.isfinite(mx + my + mz + fx + fy + fz):  # each at most 1e8: a sum overflows only with an inf
-            return heading, math.nan, math.nan
+            return heading, math.nan, math.nan, math.nan
         if self._survey is not None and acc is not None:  # as the chunks' rows (compass() needs acc)
             # the accelerometer's down vector is taken at the flush, over many rows at once
             self._survey_rows.append((mx, my, mz, *(acc if down is None else down), 0.0 if down is None else 1.0))
             if len(self._survey_rows) >= UNIT_ROWS:
                 self._survey_flush()
         from_mag, norm, dip = compass_row(float(mx), float(my), float(mz), float(fx), float(fy), float(fz))
-        return (heading if math.isfinite(heading) else from_mag), norm, dip
+        if math.isfinite(heading):  # a heading given is the compass, and its tilt is not known
+            return heading, norm, dip, math.nan
+        tilt_diff = math.nan
+        if gravity is not None and acc is not None:  # as tilt_difference: the other tilt's heading
+            gx, gy, gz = acc if down is not None else (-gravity[0], -gravity[1], -gravity[2])
+            other = compass_row(float(mx), float(my), float(mz), float(gx), float(gy), float(gz))[0]
+            diff = (from_mag - other if down is None else other - from_mag) + 180.0
+            tilt_diff = diff % 360.0 - 180.0
+        return from_mag, norm, dip, tilt_diff
 
 
 def _take(queue: deque, n: int) -> tuple:
@@ -490,6 +507,18 @@ def _take(queue: deque, n: int) -> tuple:
         parts.append(part)
         n -= len(part[0])
     return tuple(np.concatenate(v) if len(parts) > 1 else v[0] for v in zip(*parts))
+
+
+def tilt_difference(by_acc, by_gravity):
+    """The difference (deg, within ±180) of a raw compass sample's headings (deg) tilted by the
+    accelerometer and by the gyro-aided gravity: the size of its tilt error. Where the two
+    agree the tilt is known; where one of them errs (the specific force of a banked turn, of
+    braking and cornering, or a gravity the gyro has not yet learned) the heading errs by about
+    their difference, and which one is right the pair alone cannot say (``docs/model.md``,
+    "The compass's tilt"). NaN where either is missing."""
+    diff = np.asarray(by_acc, dtype=float) - np.asarray(by_gravity, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return (diff + 180.0) % 360.0 - 180.0
 
 
 def optional_float(v) -> float:

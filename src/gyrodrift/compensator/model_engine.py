@@ -50,7 +50,7 @@ class ModelEngine(ChunkEngine):
         self._rc[evloop.RC_PRIOR_B] = config.kalman.p0_sd[1]
 
     def _initialise(self, inputs, Tp) -> None:
-        t, g, T, heading, norm, dip = inputs
+        t, g, T, heading, norm, dip, _ = inputs
         e = self._window_end(t, "what it holds")
         if not np.isfinite(heading[: e + 1]).any():
             self.notes.append(f"{self.source}: no compass sample in the first {t[e] - t[0]:.1f} s: the heading "
@@ -62,10 +62,10 @@ class ModelEngine(ChunkEngine):
         self._rf[evloop.RF_INIT_RAW] = 1.0
         self._rf[evloop.RF_UNOBS] = evloop.unobservable(self.est.mf, self._rc)
 
-    def _loop(self, t, g, T, Tp, heading, held, norm, dip, cols, i=0) -> None:
+    def _loop(self, t, g, T, Tp, heading, held, norm, dip, tilt_diff, cols, i=0) -> None:
         """Rows ``i..`` of the arrays through the model's row loop (growing the epoch history)."""
         while i < t.size:
-            i = evloop.run(t, g, T, Tp, heading, held, norm, dip, i, self.est.mf, self._mc, self._rf, self._rc,
+            i = evloop.run(t, g, T, Tp, heading, held, norm, dip, tilt_diff, i, self.est.mf, self._mc, self._rf, self._rc,
                            cols.out, cols.codes, cols.n, self._hist)
             if i < t.size:  # the epoch history is full: twice the room
                 hist = np.zeros((2 * self._hist.shape[0], evloop.N_HIST))
@@ -97,7 +97,7 @@ class ModelEngine(ChunkEngine):
         return float(self.est.mf[ev.MF_TREF])
 
     def _run(self, inputs, cols) -> dict:
-        t, g, T, heading, norm, dip = inputs
+        t, g, T, heading, norm, dip, tilt_diff = inputs
         Tp = read_only(cols.column(L.O_TEMP_RATE))
         held = read_only(cols.code(L.OC_GAP).view(np.bool_))
         start = 0
@@ -107,13 +107,13 @@ class ModelEngine(ChunkEngine):
             # last row (the rows are reported after it), not the start-up of the estimate
             cols.column(L.O_TEMP_RATE)[:last] = Tp[last]
             self._loop(t[:last + 1], g[:last + 1], T[:last + 1], Tp[:last + 1], heading[:last + 1], held[:last + 1],
-                       norm[:last + 1] if norm.size else norm, dip[:last + 1] if dip.size else dip, cols)
+                       *(v[:last + 1] if v.size else v for v in (norm, dip, tilt_diff)), cols)
             n_init = last if t[last] >= self._fs[L.F_TSTART] else last + 1  # the rows before the window's end
             evloop.settle(t, g, T, Tp, heading, last, n_init, self.est.mf[ev.MF_TREF], self._rf, cols.out, cols.codes,
                           cols.n)
             self._init_last = None
             start = last + 1
-        self._loop(t, g, T, Tp, heading, held, norm, dip, cols, start)
+        self._loop(t, g, T, Tp, heading, held, norm, dip, tilt_diff, cols, start)
         return output_columns(t, heading, cols)
 
     def _run_row(self, r, fix: int) -> None:
@@ -123,7 +123,7 @@ class ModelEngine(ChunkEngine):
         g = cols.g_held if fix & 1 else r.g
         T = cols.T_held if fix & 2 else r.T
         h = cols.h_wrapped if fix & 4 else r.heading
-        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, 0, self.est.mf, self._mc, self._rf, self._rc, cols.out,
+        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, r.tilt_diff, 0, self.est.mf, self._mc, self._rf, self._rc, cols.out,
                 cols.codes, 1, self._hist)
         if r.run is None:  # the first row: through the dispatcher, then its compiled function
             done = evloop.run(*args)
@@ -131,7 +131,7 @@ class ModelEngine(ChunkEngine):
         else:
             done = r.run(*args)
         if done < 1:
-            self._loop(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, cols)
+            self._loop(r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, r.tilt_diff, cols)
         elif not self._clocked and self._rf[evloop.RF_CLOCKED] > 0.0:
             self._clock_note()
 

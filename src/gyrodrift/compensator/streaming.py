@@ -204,14 +204,14 @@ class Compensator:
             T = self._prev[2]
         self._prev = (t_s, g, T)
         down, rate = intake.row_body(t_s, g, acc, gyro_x_dps, gyro_y_dps)
-        heading, norm, dip = intake.row_compass(t_s, rate, heading_deg, mag, acc, down)
+        heading, norm, dip, tilt_diff = intake.row_compass(t_s, rate, heading_deg, mag, acc, down)
         xy, engine = intake.xy, intake.engine
         if xy is not None:
             ax = (math.nan,) * 3 if acc is None else acc
         if self._sf is not None:
             self._held_T.append(T)
         if engine._held is None:  # initialised (ChunkEngine.initialised, without the property's call): floats in, floats out
-            out, codes, compass = engine.feed_row(t_s, rate, float(temp_c), heading, norm, dip)
+            out, codes, compass = engine.feed_row(t_s, rate, float(temp_c), heading, norm, dip, tilt_diff)
             intake.rate_z_row(out)  # the heading rate of a tilted body went in: rate_z is gyro_z - bias_z
             row = self._sample(t_s, out, codes, compass)
             if xy is not None:
@@ -222,7 +222,7 @@ class Compensator:
             return [row]
         if xy is not None:  # the x/y inputs wait with the row in the engine's init window
             self._intake.hold_xy(t_s, optional_float(gyro_x_dps), optional_float(gyro_y_dps), float(temp_c), ax)
-        cols = engine.window_row(t_s, rate, float(temp_c), heading, norm, dip)
+        cols = engine.window_row(t_s, rate, float(temp_c), heading, norm, dip, tilt_diff)
         if cols is None:
             if not self._provisional:
                 return []

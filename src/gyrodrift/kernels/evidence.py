@@ -113,7 +113,20 @@ MF_H_SEEN = MF_H_L + 1        # the log's first steps seen (up to N_FIRST_STEPS)
 MF_H_FIRST = MF_H_SEEN + 1    # the log's first steps (s), N_FIRST_STEPS of them
 #: The log's first steps kept, from which its spacing is first taken (``evloop.SPACING_MIN_STEPS``).
 N_FIRST_STEPS = 20
-N_MF = MF_H_FIRST + N_FIRST_STEPS
+# the compass's tilt error (docs/model.md, "The compass's tilt"): over the epoch's compass samples,
+# Σ of the difference of their headings tilted by the accelerometer and by the gyro-aided gravity
+# (deg), Σ of its square (deg²) and their count; the last epoch's mean difference (NaN: none), the
+# forgotten sums of successive epochs' products and mean squares, and the inflation they give
+MF_E_TD, MF_E_TV, MF_E_NT = MF_H_FIRST + N_FIRST_STEPS, MF_H_FIRST + N_FIRST_STEPS + 1, MF_H_FIRST + N_FIRST_STEPS + 2
+MF_TD_LAST, MF_TK_S, MF_TK_W, MF_TILT_K = MF_E_NT + 1, MF_E_NT + 2, MF_E_NT + 3, MF_E_NT + 4
+N_MF = MF_TILT_K + 1
+#: The tilt error's correlation from one epoch to the next before it is measured, and its weight
+#: (deg², the sums' units: that of TILT_PRIOR_EPOCHS epochs of a 2-deg difference): a tilt error
+#: lasts as long as the acceleration or the attitude that causes it, seconds to tens of seconds.
+TILT_RHO0 = 0.8
+TILT_PRIOR_EPOCHS = 20.0
+#: The largest correlation taken (an inflation of 39): the compass is never refused outright.
+TILT_RHO_MAX = 0.95
 
 #: A row is labelled ``interference`` where a disturbance moves the compass by more than this
 #: (deg) with probability 0.5 or more.
@@ -258,6 +271,10 @@ def init_state(mf, mc, x0, P0, t_ref):
     _set_agility(mf, mc, shares)
     mf[MF_SMOOTH] = VN_MOTION
     mf[MF_KAPPA] = 1.0
+    mf[MF_TD_LAST] = math.nan
+    mf[MF_TK_W] = TILT_PRIOR_EPOCHS * 4.0
+    mf[MF_TK_S] = TILT_RHO0 * mf[MF_TK_W]
+    mf[MF_TILT_K] = (1.0 + TILT_RHO0) / (1.0 - TILT_RHO0)
     combine(mf)
 
 
@@ -806,7 +823,9 @@ def epoch(mf, mc, t_end, temp_end):
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
                         - LL_ANY_NORM - LL_ANY_DIP)
-        Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX]  # the noise, correlated, and the epoch-level error
+        # the noise, correlated; the epoch-level error; the tilt's error as the samples' two tilts
+        # disagree, as one error over the epoch that persists from epoch to epoch
+        Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX] + mf[MF_TILT_K] * mf[MF_E_TV] / n_c
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
@@ -978,6 +997,19 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_K_S] = keep * mf[MF_K_S] + min(z2, KAPPA_CLIP * mf[MF_KAPPA])  # a step within is no noise
         mf[MF_K_W] = keep * mf[MF_K_W] + 1.0
         mf[MF_KAPPA] = max(mf[MF_K_S] / mf[MF_K_W], 1.0)
+    # the tilt error's persistence: the correlation ρ of successive epochs' mean differences, and
+    # the long-run variance of a first-order autoregressive error, (1 + ρ) / (1 - ρ) times its own
+    if mf[MF_E_NT] > 0.0 and not gap:
+        m = mf[MF_E_TD] / mf[MF_E_NT]
+        last = mf[MF_TD_LAST]
+        if math.isfinite(last):
+            mf[MF_TK_S] = keep * mf[MF_TK_S] + m * last
+            mf[MF_TK_W] = keep * mf[MF_TK_W] + 0.5 * (m * m + last * last)
+            rho = min(max(mf[MF_TK_S] / mf[MF_TK_W], 0.0), TILT_RHO_MAX)
+            mf[MF_TILT_K] = (1.0 + rho) / (1.0 - rho)
+        mf[MF_TD_LAST] = m
+    else:
+        mf[MF_TD_LAST] = math.nan
 
 
 @jit

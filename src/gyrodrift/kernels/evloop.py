@@ -94,7 +94,8 @@ def _open(mf, t, temp):
     mf[MF_E_T_START] = temp
     for k in (MF_E_G, MF_E_TC, MF_E_TP, MF_E_H2, MF_E_H4, MF_E_NC, MF_E_SD, MF_E_STC, MF_E_STP, MF_E_ST, MF_E_SG,
               MF_E_DG2, MF_E_NDG, MF_E_NORM, MF_E_DIP, MF_E_NF, MF_E_DD2, MF_E_NDD, MF_E_GAP, ev.MF_E_S1, ev.MF_E_S2,
-              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2, ev.MF_E_H3, ev.MF_E_SB, ev.MF_E_SB1, ev.MF_E_NC1):
+              ev.MF_E_NG, ev.MF_E_TC2, ev.MF_E_STC2, ev.MF_E_H3, ev.MF_E_SB, ev.MF_E_SB1, ev.MF_E_NC1, ev.MF_E_TD,
+              ev.MF_E_TV, ev.MF_E_NT):
         mf[k] = 0.0
 
 
@@ -139,7 +140,7 @@ def _close(mf, mc, rf, rc, t, temp, I_raw, I_bias, hist):
 
 
 @jit
-def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, cap, hist):
+def run(t, g, T, Tp, heading, held, norm, dip, tilt_diff, i0, mf, mc, rf, rc, out, codes, cap, hist):
     """Compensate rows ``i0..`` of a prepared chunk into ``out``/``codes`` (columns ``cap``
     apart); returns the next row to do: ``t.size``, or earlier when the epoch history
     ``hist`` (N_HIST columns; none: not recorded) has room for fewer than two more epochs
@@ -147,9 +148,11 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
 
     ``held``: rows whose gyro or temperature cell was empty (held from the row before:
     a gap). ``norm``, ``dip``: field strength and dip of a raw magnetometer per row, or
-    empty arrays.
+    empty arrays; ``tilt_diff``: the difference of each compass sample's headings tilted by the
+    accelerometer and by the gyro-aided gravity (deg; NaN: none known), or an empty array.
     """
     has_field = norm.size == t.size
+    has_tilt = tilt_diff.size == t.size
     tref = mf[MF_TREF]
     c_t, c_g, c_T, c_Tp, c_bias, c_rate = rf[RF_T], rf[RF_G], rf[RF_TEMP], rf[RF_TP], rf[RF_BIAS], rf[RF_RATE]
     I_raw, I_rate, I_bias = rf[RF_IRAW], rf[RF_IRATE], rf[RF_IBIAS]
@@ -280,6 +283,10 @@ def run(t, g, T, Tp, heading, held, norm, dip, i0, mf, mc, rf, rc, out, codes, c
                 mf[MF_E_NDD] += 1.0
             mf[MF_LAST_D] = D
             mf[MF_LAST_D_T] = ti
+            if has_tilt and math.isfinite(tilt_diff[i]):  # the compass's tilt error (docs/model.md)
+                mf[ev.MF_E_TD] += tilt_diff[i]
+                mf[ev.MF_E_TV] += tilt_diff[i] * tilt_diff[i]
+                mf[ev.MF_E_NT] += 1.0
             if has_field and math.isfinite(norm[i]) and math.isfinite(dip[i]):
                 mf[MF_E_NORM] += norm[i]
                 mf[MF_E_DIP] += dip[i]

@@ -23,8 +23,8 @@ __all__ = ["SIGNATURES", "GROUPS", "command", "compile_group", "main"]
 #: then the number of dimensions (C order), and ``r`` when read-only.
 SIGNATURES: dict[str, list[str]] = {
     # the default estimator's model (gyrodrift.kernels.evloop and .evidence)
-    "kernels.evloop.run": ["F1r F1r F1r F1r F1r B1r F1r F1r i F1 F1 F1 F1 F1 C1 i F2",
-                           "F1 F1 F1 F1 F1 B1 F1 F1 i F1 F1 F1 F1 F1 C1 i F2"],  # a streamed row
+    "kernels.evloop.run": ["F1r F1r F1r F1r F1r B1r F1r F1r F1r i F1 F1 F1 F1 F1 C1 i F2",
+                           "F1 F1 F1 F1 F1 B1 F1 F1 F1 i F1 F1 F1 F1 F1 C1 i F2"],  # a streamed row
     "kernels.evloop.settle": ["F1r F1r F1r F1r F1r i i f F1 F1 C1 i"],
     "kernels.evloop.unobservable": ["F1 F1"],
     "kernels.evloop._close": ["F1 F1 F1 F1 f f f f F2"],
