@@ -112,6 +112,32 @@ def test_a_banked_flight_turns_coordinated_with_all_three_gyros():
     assert gain(r) < gain(euler) - 0.02  # the z gyro alone: cos(roll) of it
 
 
+def test_a_drive_logged_by_a_whole_imu_reads_its_mounting_tilt_on_the_x_y_gyros():
+    """``imu-drive``: ``rawmag-drive`` with the x/y gyros, which read the body rates of a unit
+    mounted at a constant tilt turning about the vertical: ``p = -psi' sin(pitch)``,
+    ``q = psi' sin(roll) cos(pitch)``, the tilt known from the accelerometer where the car is
+    still (gravity alone). Each axis's gain on the heading rate is that, within its offset's
+    scatter."""
+    log = generate("imu-drive", seeds("held-out", 1)[0], duration_scale=0.3).log
+    assert {"gyro_x", "gyro_y", "mag_x", "acc_x"} <= set(log.columns) and "heading" not in log.columns
+    rate = log["true_rate_z"].to_numpy()
+    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy()
+    still = (np.abs(rate) < 1e-9) & (np.abs(np.linalg.norm(acc, axis=1) - 1.0) < 0.001)  # in g
+    assert still.sum() > 100
+    down = -acc[still].mean(axis=0)
+    down /= np.linalg.norm(down)
+    pitch, roll = -np.arcsin(down[0]), np.arctan2(down[1], down[2])
+    assert 0.2 < abs(np.degrees(roll)) + abs(np.degrees(pitch)) < 10.0
+    assert (np.abs(rate) > 2.0).mean() > 0.05
+    # changes over 1 s: the offsets, which drift with the temperature, drop out
+    k = int(round(1.0 / np.median(np.diff(log["t"]))))
+    turn = rate[k:] - rate[:-k]
+    for column, expected in (("gyro_x", -np.sin(pitch)), ("gyro_y", np.sin(roll) * np.cos(pitch))):
+        reading = log[column].to_numpy()
+        slope = np.polyfit(turn, reading[k:] - reading[:-k], 1)[0]
+        assert abs(slope - expected) < 0.002, (column, slope, expected)
+
+
 def test_a_roll_per_row_rotates_as_one_roll_for_all():
     """The simulator's level-to-body rotation with a roll per vector (a banked flight) gives what
     the one-roll rotation gives each vector, to rounding."""

@@ -119,8 +119,9 @@ class _Recipe:
     stalls: bool = False  # the logger stalls: 50-250 ms of rows lost after every 0.2-1.5 s (_stalled)
     clusters: bool = False  # rows stamped as they arrive, in clusters (_clustered_stamps)
     # a flying body's airspeed, m/s, as a function of time: its turns are coordinated (the bank
-    # follows the turn rate), and the x/y gyros are logged, their devices and noise from ``triad``
+    # follows the turn rate)
     airspeed: Callable[[np.ndarray], np.ndarray] | None = None
+    # the x/y gyros are logged, their devices and noise drawn from ``triad`` (None: not logged)
     triad: Callable[[], np.random.Generator] | None = None
 
 
@@ -424,6 +425,12 @@ def _rawmag_drive(rng, scale):
     return replace(rec, compass_form="raw", roll_deg=_u(rng, -5, 5), pitch_deg=_u(rng, -5, 5))
 
 
+def _imu_drive(rng, scale):
+    """:func:`_rawmag_drive` logged by a whole IMU: the x/y gyros beside the raw magnetometer
+    and the accelerometer, the unit mounted with a small tilt."""
+    return replace(_rawmag_drive(rng, scale), triad=_child(rng))
+
+
 def _bench_interference(rng, scale):
     """A bench unit heated or cooled, turned by hand now and then, with interference steps,
     ramps and wander from things moved around it."""
@@ -552,6 +559,7 @@ _BUILDERS: dict[str, Callable] = {
     "handheld-stalls": _handheld_stalls,
     "handheld-clustered": _handheld_clustered,
     "banked-flight": _banked_flight,
+    "imu-drive": _imu_drive,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -655,6 +663,21 @@ def _coordinated(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.
     roll_rate = np.gradient(roll, t)[rows]
     body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
             GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
+    return roll[rows], lat[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate)
+
+
+def _mounted(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> dict:
+    """The x/y gyro columns of the logged ``rows`` of a ground vehicle whose unit is mounted at the
+    constant roll and pitch of ``rec``, turning about the vertical: ``p = −ψ̇ sin θ``,
+    ``q = ψ̇ sin φ cos θ`` (ZYX Euler kinematics at a constant tilt)."""
+    phi, theta = math.radians(rec.roll_deg), math.radians(rec.pitch_deg)
+    body = {GYRO_X: -rate[rows] * math.sin(theta), GYRO_Y: rate[rows] * math.sin(phi) * math.cos(theta)}
+    return _xy_gyros(rec, t, rows, body, temp_true, temp_rate)
+
+
+def _xy_gyros(rec: _Recipe, t, rows, body: dict, temp_true, temp_rate) -> dict:
+    """The x/y gyros' readings of the body rates ``body`` (deg/s, the logged rows): each its own
+    random device and noise (``rec.triad``)."""
     trng = rec.triad()
     fs = rec.fs_sim_hz
     for name in (GYRO_X, GYRO_Y):
@@ -662,7 +685,7 @@ def _coordinated(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.
         bias_rng, rrw_rng, white_rng = (np.random.default_rng(int(trng.integers(2**63))) for _ in range(3))
         bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, bias_rng, rrw_rng)
         body[name] = body[name] + bias[rows] + dev.white_sigma_dps(fs) * white_rng.standard_normal(rows.size)
-    return roll[rows], lat[rows], body
+    return body
 
 
 def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCase:
@@ -701,6 +724,8 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     roll, accel_lat, xy = rec.roll_deg, rec.accel_lat(tl) if rec.accel_lat is not None else None, {}
     if rec.airspeed is not None:
         roll, accel_lat, xy = _coordinated(rec, t, rows, rate, temp_true, temp_rate)
+    elif rec.triad is not None:
+        xy = _mounted(rec, t, rows, rate, temp_true, temp_rate)
     body = (np.cos(np.radians(roll)) if np.ndim(roll) else math.cos(math.radians(roll))) \
         * math.cos(math.radians(rec.pitch_deg))
     sf = _scale_factor_error(temp_true[rows], rng["scale"])
