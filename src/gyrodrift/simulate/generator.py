@@ -572,7 +572,7 @@ CLASSES: Mapping[str, str] = MappingProxyType(
 
 
 #: The random streams of a case, one per random source (:func:`seeded_streams`).
-_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log", "scale")
+_STREAMS = ("recipe", "white", "bias", "rrw", "temp", "compass", "log", "scale", "acc")
 
 
 def _telemetry_times(duration: float, rng: np.random.Generator) -> np.ndarray:
@@ -642,6 +642,17 @@ def _held(t, heading, mask, dropouts, jitter_deg, rng) -> np.ndarray:
 #: The gyro's scale-factor error: standard deviation at 25 degC and bound (fractions), and the
 #: standard deviation of its temperature coefficient (per degC).
 SF_SD, SF_MAX, SF_TC_SD = 0.008, 0.025, 1e-4
+#: The range of a logged accelerometer's white noise, g per sample (drawn log-uniform per run).
+ACC_NOISE_G = (0.002, 0.03)
+
+
+def _accelerometer_noise(n: int, rng: np.random.Generator) -> np.ndarray:
+    """White noise (n, 3), g, on every axis of a logged accelerometer: its standard deviation drawn
+    log-uniform from ACC_NOISE_G per run, from a quiet MEMS part's few mg at a logging rate's
+    bandwidth to a vehicle's vibration (``docs/simulator.md``)."""
+    lo, hi = ACC_NOISE_G
+    sd = math.exp(rng.uniform(math.log(lo), math.log(hi)))
+    return sd * rng.standard_normal((n, 3))
 
 
 def _scale_factor_error(temp_c: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -749,6 +760,7 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
         cols[HEADING] = heading
     elif rec.compass_form == "raw":
         cols.update({name: mag[:, i] for i, name in enumerate(MAG_COLS)})
+        acc = acc + _accelerometer_noise(rows.size, rng["acc"])
         cols.update({name: acc[:, i] for i, name in enumerate(ACC_COLS)})
     cols.update({REF_HEADING: wrap_360(heading_true[rows]), TRUE_BIAS_Z: bias[rows], TRUE_RATE_Z: rate[rows],
                  TRUE_COMPASS_OFFSET: offset})
