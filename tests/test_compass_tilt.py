@@ -113,3 +113,35 @@ def test_batch_chunked_and_streaming_give_the_same_numbers(tmp_path):
     stream = pd.DataFrame([dataclasses.asdict(r) for r in rows])
     for c in ("heading", "heading_fused", "heading_fused_sd", "bias_z", "bias_sd", "compass_heading"):
         assert np.array_equal(stream[c].to_numpy(float), batch[c].to_numpy(float), equal_nan=True), c
+
+
+def _tilt_inflation(log) -> float:
+    """The model's measured inflation K of the tilt's error after a log (``docs/model.md``)."""
+    from gyrodrift.estimators import AdaptiveModel
+    from gyrodrift.kernels import evidence as ev
+
+    model = AdaptiveModel()
+    compensate(log, CompensatorConfig(mag_calibration=False), estimator=model)
+    return float(model.mf[ev.MF_TILT_K])
+
+
+def test_the_tilts_difference_is_measured_as_persistent_or_not():
+    """A banked turn's difference lasts the turn: its successive epochs correlate and K rises
+    from the prior's 9 to its bound (39). (At a 30-deg bank under a 63-deg dip the level-looking
+    accelerometer's heading errs by up to 130 deg and its difference wraps through ±180 twice in
+    the turn, which the epochs' means do not follow: K 6 there, the widening no smaller for it.)
+    A still, level board whose accelerometer is noisy (0.03 g a sample) has a difference that is
+    noise from epoch to epoch: K falls towards 1."""
+    from gyrodrift.kernels.evidence import TILT_RHO_MAX
+
+    banked, _, _ = raw_banked_turn(bank_deg=15.0, turn_dps=5.0)
+    assert _tilt_inflation(banked) == pytest.approx((1.0 + TILT_RHO_MAX) / (1.0 - TILT_RHO_MAX))
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 1800.0, 0.1)
+    mag = body_field(np.full(t.size, 30.0), np.zeros(t.size)) + 0.002 * rng.standard_normal((t.size, 3))
+    acc = np.array([0.0, 0.0, -1.0]) + 0.03 * rng.standard_normal((t.size, 3))
+    still = pd.DataFrame({"t": t, "gyro_z": 0.2 + 0.05 * rng.standard_normal(t.size), "temp": 25.0,
+                          "gyro_x": 0.05 * rng.standard_normal(t.size), "gyro_y": 0.05 * rng.standard_normal(t.size),
+                          "mag_x": mag[:, 0], "mag_y": mag[:, 1], "mag_z": mag[:, 2],
+                          "acc_x": acc[:, 0], "acc_y": acc[:, 1], "acc_z": acc[:, 2]})
+    assert _tilt_inflation(still) < 3.0
