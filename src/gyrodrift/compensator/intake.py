@@ -269,13 +269,15 @@ class Intake:
             self._survey.add(mag, accel_down(acc) if down is None else down)
         if self.config.mag_calibration and self._cal is not None:
             mag = self._cal.apply(mag)
+        given = None if heading is None else np.isfinite(heading)
+        heading, norm, dip = compass_columns(n, heading, mag, acc, down)
         tilt_diff = None
-        if gravity is not None:
-            tilt_diff = tilt_difference(compass_columns(n, None, mag, acc)[0],
-                                        compass_columns(n, None, mag, acc, gravity)[0])
-            if heading is not None:  # a heading given is the compass there, and its tilt is not known
-                tilt_diff[np.isfinite(heading)] = math.nan
-        return (*compass_columns(n, heading, mag, acc, down), tilt_diff)
+        if gravity is not None:  # the heading by the other tilt; a heading given has no tilt known
+            other = compass_columns(n, None, mag, acc, gravity if down is None else None)[0]
+            tilt_diff = tilt_difference(heading, other) if down is None else tilt_difference(other, heading)
+            if given is not None:
+                tilt_diff[given] = math.nan
+        return heading, norm, dip, tilt_diff
 
     def body(self, t, g, acc=None, gyro_xy=None) -> tuple[np.ndarray | None, np.ndarray]:
         """The gyro-aided gravity (n, 3; None without the filter) and the heading rate (deg/s)
