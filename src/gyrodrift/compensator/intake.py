@@ -425,9 +425,11 @@ class Intake:
             return None
         return found
 
-    def row_compass(self, t: float, rate: float, heading: float, mag, acc, down) -> tuple[float, float, float, float]:
-        """Heading, field strength, dip and the two tilts' difference of one row (floats; ``mag``, ``acc`` triples or
-        None; ``rate`` and ``down`` from :meth:`row_body`, which comes first): the stages of
+    def row_compass(self, t: float, rate: float, heading: float, mag, acc,
+                    down) -> tuple[float, float, float, float]:
+        """Heading, field strength, dip and the two tilts' difference (:func:`tilt_difference`)
+        of one row (floats; ``mag``, ``acc`` triples or None; ``rate`` and ``down`` from
+        :meth:`row_body`, which comes first): the stages of
         :meth:`compass`, without the calibration (a stream does not see the whole log). The
         row goes to the gyro-unit check as :meth:`feed`'s rows do (:data:`UNIT_ROWS` at a time,
         and the rest before :attr:`notes`): the row must be one the engine takes."""

@@ -65,8 +65,8 @@ class ModelEngine(ChunkEngine):
     def _loop(self, t, g, T, Tp, heading, held, norm, dip, tilt_diff, cols, i=0) -> None:
         """Rows ``i..`` of the arrays through the model's row loop (growing the epoch history)."""
         while i < t.size:
-            i = evloop.run(t, g, T, Tp, heading, held, norm, dip, tilt_diff, i, self.est.mf, self._mc, self._rf, self._rc,
-                           cols.out, cols.codes, cols.n, self._hist)
+            i = evloop.run(t, g, T, Tp, heading, held, norm, dip, tilt_diff, i, self.est.mf, self._mc, self._rf,
+                           self._rc, cols.out, cols.codes, cols.n, self._hist)
             if i < t.size:  # the epoch history is full: twice the room
                 hist = np.zeros((2 * self._hist.shape[0], evloop.N_HIST))
                 hist[:self._hist.shape[0]] = self._hist
@@ -123,8 +123,8 @@ class ModelEngine(ChunkEngine):
         g = cols.g_held if fix & 1 else r.g
         T = cols.T_held if fix & 2 else r.T
         h = cols.h_wrapped if fix & 4 else r.heading
-        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, r.tilt_diff, 0, self.est.mf, self._mc, self._rf, self._rc, cols.out,
-                cols.codes, 1, self._hist)
+        args = (r.t, g, T, r.Tp, h, r.gap, r.norm, r.dip, r.tilt_diff, 0, self.est.mf, self._mc, self._rf, self._rc,
+                cols.out, cols.codes, 1, self._hist)
         if r.run is None:  # the first row: through the dispatcher, then its compiled function
             done = evloop.run(*args)
             r.run = compiled(evloop.run, args)
