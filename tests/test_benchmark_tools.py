@@ -87,3 +87,21 @@ def test_the_slow_turn_sweep_counts_per_rate_and_temperature():
     assert len(rows) == 14
     cells = {(float(r[0]), float(r[1])): r[2].strip() for r in rows}
     assert cells[(0.0, 0.5)] == "0 of 1" and float(rows[6][3]) < 1.0
+
+
+def test_the_real_logs_table_measures_against_the_autopilots_heading(capsys):
+    """``real_logs.py`` on the repository's real telemetry flight: a Markdown row with its rows,
+    that it has the x/y gyros and a raw magnetometer, and three RMS cells against its ATTITUDE
+    yaw; settings given as ``name=value`` reach the configuration."""
+    import real_logs
+
+    assert real_logs._setting("heading_rate=gyro_z") == ("heading_rate", "gyro_z")
+    assert real_logs._setting("declination_deg=0") == ("declination_deg", 0.0)
+    assert real_logs._rms([float("nan")]) == "–" and real_logs._rms([3.0, -4.0, float("nan")]) == "3.54"
+    vtol = real_logs.ROOT / "tests" / "data" / "ardupilot_vtol.tlog"
+    assert real_logs.main([], [vtol]) == 0
+    row = [line for line in capsys.readouterr().out.splitlines() if "ardupilot_vtol" in line][0]
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1] == "795" and cells[2] == "True, True"
+    compass, heading, fused = (float(c) for c in cells[5:8])
+    assert fused < heading < compass
