@@ -37,7 +37,8 @@ NORM_TOL = 0.05
 MAX_RATE_DPS = 10.0
 #: Largest angle between the accelerometer's down and the propagated one that is accepted, deg.
 ANGLE_GATE_DEG = 2.0
-#: A disagreement beyond ANGLE_GATE_DEG, with the other gates passed, accepted after this long, s.
+#: Disagreements beyond ANGLE_GATE_DEG, with the other gates passed, that outlast the agreements
+#: by this long, s, mean the tilt is lost: it starts again from the accelerometer.
 RELOCK_S = 20.0
 #: A body turning at least this fast (deg/s, bias removed) about its tilt's vertical, within
 #: TURN_AXIS_DEG, is in a turn: its disagreement does not count towards RELOCK_S.
@@ -64,11 +65,12 @@ _B = 3  # 3..5: gyro bias, rad/s
 _T = 6  # previous row's time, s
 _STARTED = 7  # 1 once the first accelerometer row was taken
 _G = 8  # 1 g in the log's accelerometer unit
-_REFUSED = 9  # time the angle gate began refusing (NaN: not refusing)
+_LOST = 9  # disagreeing time less agreeing time, at least 0, s
 _W = 10  # 10..12: the last finite gyro rate, deg/s (NaN cells hold it)
 _T0 = 13  # time of the first row taken, s
 _ACCEPTED = 14  # time with the accelerometer accepted, s
-_N_STATE = 15
+_RELOCKED = 15  # time of the last restart from a lost tilt, s (NaN: none)
+_N_STATE = 16
 
 
 def new_state() -> np.ndarray:
@@ -76,7 +78,7 @@ def new_state() -> np.ndarray:
     s = np.zeros(_N_STATE)
     s[_D:_D + 3] = math.nan
     s[_T] = math.nan
-    s[_REFUSED] = math.nan
+    s[_RELOCKED] = math.nan
     return s
 
 
@@ -163,7 +165,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
                     state[_T0] = t[i]
                 state[_D], state[_D + 1], state[_D + 2] = -f0 / fn, -f1 / fn, -f2 / fn
                 state[_STARTED] = 1.0
-                state[_REFUSED] = math.nan
+                state[_LOST] = 0.0
             state[_T] = t[i]
             for k in range(3):
                 out[i, k] = state[_D + k]
@@ -179,19 +181,18 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
             quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
             within = d0 * m0 + d1 * m1 + d2 * m2 >= cos_gate
-            agree = within or t[i] - state[_T0] < STARTUP_S
-            use = False
-            if quiet and agree:
-                use = True
-                state[_REFUSED] = math.nan
-            elif norm_ok and within:  # turning fast, yet about 1 g and where the tilt says: no centripetal part
-                use = True
-            elif quiet and not _about_the_vertical(w0, w1, w2, d0, d1, d2):
-                if math.isnan(state[_REFUSED]):
-                    state[_REFUSED] = t[i]
-                use = t[i] - state[_REFUSED] >= RELOCK_S
-            else:
-                state[_REFUSED] = math.nan
+            turning = _about_the_vertical(w0, w1, w2, d0, d1, d2)
+            agree = within or t[i] - state[_T0] < STARTUP_S or (not turning and t[i] - state[_RELOCKED] < STARTUP_S)
+            use = (quiet and agree) or (norm_ok and within)  # or turning fast, yet about 1 g and within: no centripetal part
+            if within:
+                state[_LOST] = max(state[_LOST] - dt, 0.0)
+            elif quiet and not agree and not turning:
+                state[_LOST] += dt
+                if state[_LOST] >= RELOCK_S:  # the tilt is lost: it starts again from the accelerometer
+                    d0, d1, d2 = m0, m1, m2
+                    w0, w1, w2 = 0.0, 0.0, 0.0
+                    state[_LOST] = 0.0
+                    state[_RELOCKED] = t[i]  # and the bias is learned again, as at the start
             if use:
                 state[_ACCEPTED] += dt
                 e0, e1, e2 = d1 * m2 - d2 * m1, d2 * m0 - d0 * m2, d0 * m1 - d1 * m0  # eq. (1)
