@@ -270,6 +270,32 @@ def test_a_car_s_acceleration_is_not_taken_for_a_z_scale(cls, raw_deg, fitted_de
     assert not (_converged(x, ok) and 1.0 / MAX_SCALE_RATIO <= x[4] <= MAX_SCALE_RATIO), x
 
 
+def test_with_x_y_gyros_the_fit_takes_the_tilt_that_keeps_the_field_constant():
+    """A generated drive logged by a whole IMU (`imu-drive` tuning seed 2, its first 30 %): its
+    magnetometer needs no calibration. Fitted with the accelerometer's down, which leans with
+    the car's braking and cornering, the fit takes a z offset of most of the vertical field
+    (45 uT of 43) and is applied; the gyro-aided gravity's down keeps the calibrated field more
+    constant in the world (3 % against 9 % of its strength), so the fit uses it: with ``"auto"`` nothing is applied (the
+    magnetometer looks calibrated), and a fit asked for keeps o_z at 0 (the car stays level)."""
+    from gyrodrift import magcal
+    from gyrodrift.compensator.intake import MagFit, chunk_arrays
+    from gyrodrift.simulate.generator import generate, seeds
+
+    log = generate("imu-drive", seeds("tuning", 20)[2], duration_scale=0.3).log
+    t, g, _, _, mag, acc, gyro_xy = chunk_arrays(log)
+    by_acc = magcal.MagSamples()
+    by_acc.add(mag, -acc / np.linalg.norm(acc, axis=1, keepdims=True))
+    assert magcal.fit(*by_acc.arrays()).offset[2] > 20.0
+    fits = {}
+    for mode in ("auto", True):
+        fits[mode] = MagFit(CompensatorConfig(mag_calibration=mode), "log")
+        fits[mode].add(t, g, mag, acc, gyro_xy)
+    assert magcal.inconsistency(fits[True].by_gravity) < 0.5 * magcal.inconsistency(fits[True].samples)
+    auto, asked = fits["auto"].fit(), fits[True].fit()
+    assert not auto.ok and auto.why == magcal.LOOKS_CALIBRATED
+    assert asked.ok and asked.offset[2] == 0.0 and "gyro-aided gravity" in asked.note("log")
+
+
 def test_calibration_in_batch_equals_chunked(tmp_path):
     from gyrodrift.pipeline import compensate_file
 

@@ -17,7 +17,7 @@ import numpy as np
 __all__ = [
     "MIN_COVERAGE_DEG", "MAX_RESIDUAL", "MAX_SCALE_RATIO", "MIN_TILT_SPREAD_DEG", "UNCALIBRATED_DEG", "MagCalibration",
     "MagSamples", "Uncalibrated", "fit", "looks_uncalibrated", "uncalibrated_note", "auto_calibration", "ADVICE",
-    "LOOKS_CALIBRATED", "AGREE_WINDOW_S", "AGREE_RATIO", "turn_error_deg", "agrees_better",
+    "LOOKS_CALIBRATED", "AGREE_WINDOW_S", "AGREE_RATIO", "turn_error_deg", "agrees_better", "inconsistency",
 ]
 
 #: Least heading coverage of the calibrated field for the fit to be used, deg.
@@ -53,6 +53,7 @@ class MagCalibration:
     coverage_deg: float = 0.0
     why: str = ""
     said: str = ""
+    tilt: str = ""  # the down vectors it was fitted with, where not the compass's own tilt
 
     def apply(self, mag) -> np.ndarray:
         """Eq. (1) on (n, 3) raw samples (unchanged when not ``ok``)."""
@@ -67,8 +68,9 @@ class MagCalibration:
             o = ", ".join(f"{v:.3g}" for v in self.offset)
             s = ", ".join(f"{v:.4f}" for v in self.scale)
             why = f"; {self.said}" if self.said else ""
+            tilt = f", fitted with {self.tilt}" if self.tilt else ""
             return (f"{source}: magnetometer calibrated from the log (hard iron ({o}), scales ({s}); fit residual "
-                    f"{100 * self.residual:.2f} % of the field, heading coverage {self.coverage_deg:.0f} deg){why}")
+                    f"{100 * self.residual:.2f} % of the field, heading coverage {self.coverage_deg:.0f} deg{tilt}){why}")
         return f"{source}: magnetometer not calibrated: {self.why}"
 
 
@@ -209,6 +211,27 @@ def fit(mag, down) -> MagCalibration:
         return MagCalibration(False, **result, why=f"the fit leaves {100 * resid:.1f} % of the field, more than "
                                                      f"{100 * MAX_RESIDUAL:.0f} %")
     return MagCalibration(True, **result)
+
+
+def inconsistency(samples: "MagSamples") -> float:
+    """How far the field of ``samples``, calibrated by its :func:`fit`, is from constant in
+    the world: the relative RMS of both parts the fit makes constant, its strength and its
+    vertical part along the samples' down vectors (``sqrt(norm² + vertical²)``, fractions of the
+    strength; NaN without a fit). A down vector that is the platform's true tilt leaves the
+    vertical part constant; one that leans with the platform's accelerations does not, however
+    the fit moves the offsets (a car's fit with the accelerometer's down takes a z offset of most
+    of the vertical field, which no rotation about the vertical can show, to hide its leaning)."""
+    mag, down = samples.arrays()
+    cal = fit(mag, down)
+    if not np.all(np.isfinite(cal.offset)) or mag.shape[0] < 100:
+        return math.nan
+    mc = (mag - np.asarray(cal.offset)) * np.asarray(cal.scale)
+    strength = np.linalg.norm(mc, axis=1)
+    F = float(np.median(strength))
+    vertical = np.sum(mc * down, axis=1)
+    if not F > 0.0:
+        return math.nan
+    return float(math.hypot(np.std(strength), np.std(vertical)) / F)
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ rows that come one by one, and the notes. Its stages and
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from dataclasses import dataclass
@@ -71,27 +72,37 @@ def needs_survey(config, first) -> bool:
 
 class MagFit:
     """The magnetometer calibration of a whole log (:func:`gyrodrift.magcal.fit`), its rows
-    added in order (:meth:`add`) with the tilt :class:`Intake` uses."""
+    added in order (:meth:`add`) with the tilt :class:`Intake` uses and, where the log has
+    ``gyro_x``, ``gyro_y`` and that tilt is the accelerometer's, also with the gyro-aided
+    gravity: the fit uses the one whose calibrated field is the more constant in the world
+    (:func:`gyrodrift.magcal.inconsistency`; ``docs/heading_and_axes.md``, magnetometer
+    calibration)."""
 
     def __init__(self, config, source: str):
         from gyrodrift import magcal
 
         self.config, self.source = config, source
         self.samples = magcal.MagSamples()
+        self.by_gravity: magcal.MagSamples | None = None  # the same rows with the gyro-aided gravity's down
         self.tilt: RawTilt | None = None
-        self._gravity: GravityFilter | None = None  # the tilt's filter, with tilt "gyro" and gyro_x, gyro_y
+        self._gravity: GravityFilter | None = None  # the gyro-aided gravity, with gyro_x, gyro_y
         self._last: tuple[float, float, float] | None = None  # time, gyro and its integral at the last row
 
     def add(self, t, g, mag, acc, gyro_xy=None) -> None:
         """Rows with a raw compass, in order (with the raw gyro's trapezoid integral to each,
         carried across chunks; an empty gyro cell holds the last value)."""
         if self.tilt is None:
+            from gyrodrift import magcal
+
             self.tilt = RawTilt(self.config.tilt, gyro_xy is not None, self.source)
-            self._gravity = GravityFilter() if self.tilt.uses_gyro else None
-        down = None
+            self._gravity = GravityFilter() if self.tilt.gyro_xy else None
+            if self.tilt.gyro_xy and not self.tilt.uses_gyro:
+                self.by_gravity = magcal.MagSamples()
+        down = gravity = None
         if self._gravity is not None:
             gxy = np.asarray(gyro_xy, dtype=float)
-            down = self._gravity.feed(t, gxy[:, 0], gxy[:, 1], g, acc)
+            gravity = self._gravity.feed(t, gxy[:, 0], gxy[:, 1], g, acc)
+            down = gravity if self.tilt.uses_gyro else None
         t = np.asarray(t, dtype=float)
         turned = np.zeros(0)
         if t.size:  # empty cells held from the last finite value (the last chunk's, or 0 before any)
@@ -102,7 +113,10 @@ class MagFit:
             else:
                 turned = self._last[2] + trapezoid(np.r_[self._last[0], t], np.r_[self._last[1], g])[1:]
             self._last = (float(t[-1]), float(g[-1]), float(turned[-1]))
-        self.samples.add(DeadField().mask(mag), accel_down(acc) if down is None else down, t, turned)
+        mag = DeadField().mask(mag)
+        self.samples.add(mag, accel_down(acc) if down is None else down, t, turned)
+        if self.by_gravity is not None:
+            self.by_gravity.add(mag, gravity, t, turned)
 
     def fit(self):
         """The :class:`gyrodrift.magcal.MagCalibration` to apply (with ``mag_calibration =
@@ -111,9 +125,11 @@ class MagFit:
 
         if self.tilt is None:
             return None
-        if self.config.mag_calibration == "auto":
-            return magcal.auto_calibration(self.samples)
-        return magcal.fit(*self.samples.arrays())
+        samples, tilt = self.samples, None
+        if self.by_gravity is not None and magcal.inconsistency(self.by_gravity) < magcal.inconsistency(self.samples):
+            samples, tilt = self.by_gravity, "the gyro-aided gravity's tilt"
+        cal = magcal.auto_calibration(samples) if self.config.mag_calibration == "auto" else magcal.fit(*samples.arrays())
+        return cal if tilt is None or not cal.ok else dataclasses.replace(cal, tilt=tilt)
 
 
 def survey(chunks, config, source: str) -> WholeLog:
