@@ -222,8 +222,10 @@ def inconsistency(samples: "MagSamples") -> float:
     the fit moves the offsets (a car's fit with the accelerometer's down takes a z offset of most
     of the vertical field, which no rotation about the vertical can show, to hide its leaning)."""
     mag, down = samples.arrays()
+    if mag.shape[0] < 100:
+        return math.nan
     cal = fit(mag, down)
-    if not np.all(np.isfinite(cal.offset)) or mag.shape[0] < 100:
+    if not np.all(np.isfinite(cal.offset)):
         return math.nan
     mc = (mag - np.asarray(cal.offset)) * np.asarray(cal.scale)
     strength = np.linalg.norm(mc, axis=1)
