@@ -117,8 +117,11 @@ def test_a_drive_logged_by_a_whole_imu_reads_its_mounting_tilt_on_the_x_y_gyros(
     """``imu-drive``: ``rawmag-drive`` with the x/y gyros, which read the body rates of a unit
     mounted at a constant tilt turning about the vertical: ``p = -psi' sin(pitch)``,
     ``q = psi' sin(roll) cos(pitch)``, the tilt known from the accelerometer where the car is
-    still (gravity alone). Each axis's gain on the heading rate is that, within its offset's
-    scatter."""
+    still (gravity alone). Each axis's gain on the heading rate is that, times its scale factor,
+    plus its share of the z rate (cross-axis sensitivity, at most ``CROSS_AXIS_MAX``), and the
+    shares are not both nil."""
+    from gyrodrift.simulate.generator import CROSS_AXIS_MAX, SF_MAX
+
     log = generate("imu-drive", seeds("held-out", 1)[0], duration_scale=0.3).log
     assert {"gyro_x", "gyro_y", "mag_x", "acc_x"} <= set(log.columns) and "heading" not in log.columns
     rate = log["true_rate_z"].to_numpy()
@@ -133,10 +136,41 @@ def test_a_drive_logged_by_a_whole_imu_reads_its_mounting_tilt_on_the_x_y_gyros(
     # changes over 1 s: the offsets, which drift with the temperature, drop out
     k = int(round(1.0 / np.median(np.diff(log["t"]))))
     turn = rate[k:] - rate[:-k]
+    shares = []
     for column, expected in (("gyro_x", -np.sin(pitch)), ("gyro_y", np.sin(roll) * np.cos(pitch))):
         reading = log[column].to_numpy()
         slope = np.polyfit(turn, reading[k:] - reading[:-k], 1)[0]
-        assert abs(slope - expected) < 0.002, (column, slope, expected)
+        share = (slope - expected) / (np.cos(roll) * np.cos(pitch))  # of the z rate
+        assert abs(share) < CROSS_AXIS_MAX + SF_MAX * abs(expected) + 0.002, (column, slope, expected)
+        shares.append(share)
+    assert max(abs(v) for v in shares) > 0.002, shares
+
+
+def test_a_hand_held_imu_wobbles_in_roll_and_reads_it_on_the_x_gyro():
+    """``handheld-imu``: hand turns logged by a whole IMU at 100-400 Hz with a raw compass; its
+    roll wobbles (the accelerometer's roll moves by degrees, gravity alone: its norm stays 1 g
+    within its noise), and the x gyro reads the roll's rate (changes over 0.1 s: the offsets drop
+    out) with the gain of its scale factor, within 2.5 % and a cross-axis share of the z rate."""
+    from gyrodrift.simulate.generator import CROSS_AXIS_MAX, SF_MAX
+
+    log = generate("handheld-imu", seeds("tuning", 1)[0], duration_scale=0.3).log
+    assert {"gyro_x", "gyro_y", "mag_x", "acc_x"} <= set(log.columns) and "heading" not in log.columns
+    fs = 1.0 / np.median(np.diff(log["t"]))
+    assert fs >= 100.0
+    k = max(int(round(fs / 10.0)), 1)
+    acc = log[["acc_x", "acc_y", "acc_z"]].rolling(k, center=True, min_periods=1).mean().to_numpy()
+    roll = np.degrees(np.arctan2(-acc[:, 1], -acc[:, 2]))
+    assert np.ptp(roll) > 2.0
+    assert abs(np.median(np.linalg.norm(acc, axis=1)) - 1.0) < 0.01
+    rate = log["true_rate_z"].to_numpy()
+    still = np.abs(rate) < 1e-9  # no yaw: the x gyro reads the roll's rate alone (and sin(pitch) of nothing)
+    t = log["t"].to_numpy()
+    d_roll = (roll[k:] - roll[:-k]) / (t[k:] - t[:-k])
+    d_gx = log["gyro_x"].rolling(k, center=True, min_periods=1).mean().to_numpy()
+    both = still[k:] & still[:-k]
+    assert both.sum() > 1000
+    gain = np.polyfit(d_roll[both], d_gx[k:][both] - 0.0, 1)[0]
+    assert abs(gain - 1.0) < SF_MAX + CROSS_AXIS_MAX + 0.05, gain
 
 
 def test_a_raw_compass_logs_a_noisy_accelerometer():
@@ -146,7 +180,7 @@ def test_a_raw_compass_logs_a_noisy_accelerometer():
     from gyrodrift.simulate.generator import ACC_NOISE_G
 
     lo, hi = ACC_NOISE_G
-    for cls in ("rawmag-drive", "imu-drive", "banked-flight"):
+    for cls in ("rawmag-drive", "imu-drive", "banked-flight", "handheld-imu"):
         log = generate(cls, seeds("tuning", 1)[0], duration_scale=0.3).log
         acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy()
         sd = np.std(np.diff(acc, axis=0), axis=0) / np.sqrt(2.0)

@@ -123,6 +123,9 @@ class _Recipe:
     airspeed: Callable[[np.ndarray], np.ndarray] | None = None
     # the x/y gyros are logged, their devices and noise drawn from ``triad`` (None: not logged)
     triad: Callable[[], np.random.Generator] | None = None
+    # a hand-held body's roll, deg, as a function of time (its tilt wobbles as it is turned;
+    # no centripetal part: turned about itself)
+    wobble: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 def _u(rng, lo, hi) -> float:
@@ -512,6 +515,27 @@ def _handheld_clustered(rng, scale):
                    rate=rate, heading0_deg=_u(rng, 0, 360), clusters=True)
 
 
+def _handheld_imu(rng, scale):
+    """The hand turns of ``handheld-clustered`` logged by a whole IMU at 100–400 Hz: the x/y
+    gyros, a raw magnetometer at 10–100 Hz and the accelerometer; the unit held at a pitch of
+    −10–10 deg and a roll that wobbles about −10–10 deg by two swings of 1–8 deg each, 1.5–12 s
+    long (the hand), turned about itself (no centripetal part)."""
+    duration = _u(rng, 120.0, 600.0) * scale
+    rate = _turns_rate(_turn_plan(rng, _u(rng, 1.0, 10.0), duration - 5.0, (90.0, 720.0), (20.0, 90.0),
+                                  (1.0, 10.0), after=lambda a, p: abs(a) / p + 1.0))
+    roll0 = _u(rng, -10.0, 10.0)
+    swings = [(_u(rng, 1.0, 8.0), _u(rng, 1.5, 12.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(2)]
+
+    def wobble(t):
+        return roll0 + sum(a * np.sin(2.0 * np.pi * t / p + ph) for a, p, ph in swings)
+
+    fs = float(rng.choice([100.0, 200.0, 400.0]))
+    return _Recipe(duration, fs, _device(rng),
+                   _compass(rng, noise=(0.5, 3.0), rate_hz=float(rng.choice([10.0, 25.0, 50.0, 100.0]))),
+                   _warmup(rng, rise=(2.0, 8.0)), rate=rate, heading0_deg=_u(rng, 0, 360),
+                   pitch_deg=_u(rng, -10.0, 10.0), compass_form="raw", triad=_child(rng), wobble=wobble)
+
+
 def _banked_flight(rng, scale):
     """A fixed-wing or quadplane: a warm-up on the ground, a flight of coordinated turns whose
     bank follows the turn rate and the airspeed (to 20–45 deg), the IMU cooled by the airflow, a
@@ -560,6 +584,7 @@ _BUILDERS: dict[str, Callable] = {
     "handheld-clustered": _handheld_clustered,
     "banked-flight": _banked_flight,
     "imu-drive": _imu_drive,
+    "handheld-imu": _handheld_imu,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -674,7 +699,21 @@ def _coordinated(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.
     roll_rate = np.gradient(roll, t)[rows]
     body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
             GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
-    return roll[rows], lat[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate)
+    rate_z = rate[rows] * np.cos(np.radians(roll[rows])) * math.cos(theta)
+    return roll[rows], lat[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate_z)
+
+
+def _wobbling(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.ndarray, dict]:
+    """The roll (deg) and x/y gyro columns of the logged ``rows`` of a hand-held body whose roll
+    is ``rec.wobble`` at the constant pitch: the body rates of ZYX Euler kinematics
+    (``p = φ̇ − ψ̇ sin θ``, ``q = ψ̇ sin φ cos θ``)."""
+    roll = rec.wobble(t)
+    theta = math.radians(rec.pitch_deg)
+    roll_rate = np.gradient(roll, t)[rows]
+    body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
+            GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
+    rate_z = rate[rows] * np.cos(np.radians(roll[rows])) * math.cos(theta)
+    return roll[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate_z)
 
 
 def _mounted(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> dict:
@@ -683,19 +722,31 @@ def _mounted(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> dict:
     ``q = ψ̇ sin φ cos θ`` (ZYX Euler kinematics at a constant tilt)."""
     phi, theta = math.radians(rec.roll_deg), math.radians(rec.pitch_deg)
     body = {GYRO_X: -rate[rows] * math.sin(theta), GYRO_Y: rate[rows] * math.sin(phi) * math.cos(theta)}
-    return _xy_gyros(rec, t, rows, body, temp_true, temp_rate)
+    return _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate[rows] * math.cos(phi) * math.cos(theta))
 
 
-def _xy_gyros(rec: _Recipe, t, rows, body: dict, temp_true, temp_rate) -> dict:
+#: The x/y gyros' cross-axis sensitivity to the z rate: standard deviation and bound (fractions;
+#: MEMS datasheets give up to ±2 %, a mounting misalignment of a degree adds 1.7 %).
+CROSS_AXIS_SD, CROSS_AXIS_MAX = 0.01, 0.03
+
+
+def _xy_gyros(rec: _Recipe, t, rows, body: dict, temp_true, temp_rate, rate_z) -> dict:
     """The x/y gyros' readings of the body rates ``body`` (deg/s, the logged rows): each its own
-    random device and noise (``rec.triad``)."""
+    random device and noise (``rec.triad``), a scale-factor error as the z gyro's
+    (:func:`_scale_factor_error`) and a share of the z rate ``rate_z`` (deg/s, the logged rows:
+    cross-axis sensitivity and misalignment, :data:`CROSS_AXIS_SD`)."""
     trng = rec.triad()
     fs = rec.fs_sim_hz
+    error = {}
     for name in (GYRO_X, GYRO_Y):
         dev = _device(trng)
         bias_rng, rrw_rng, white_rng = (np.random.default_rng(int(trng.integers(2**63))) for _ in range(3))
         bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, bias_rng, rrw_rng)
-        body[name] = body[name] + bias[rows] + dev.white_sigma_dps(fs) * white_rng.standard_normal(rows.size)
+        error[name] = bias[rows] + dev.white_sigma_dps(fs) * white_rng.standard_normal(rows.size)
+    for name in (GYRO_X, GYRO_Y):  # drawn after the devices, which keep their draws
+        sf = _scale_factor_error(temp_true[rows], trng)
+        cross = float(np.clip(CROSS_AXIS_SD * trng.standard_normal(), -CROSS_AXIS_MAX, CROSS_AXIS_MAX))
+        body[name] = (1.0 + sf) * body[name] + cross * rate_z + error[name]
     return body
 
 
@@ -735,6 +786,8 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     roll, accel_lat, xy = rec.roll_deg, rec.accel_lat(tl) if rec.accel_lat is not None else None, {}
     if rec.airspeed is not None:
         roll, accel_lat, xy = _coordinated(rec, t, rows, rate, temp_true, temp_rate)
+    elif rec.wobble is not None:
+        roll, xy = _wobbling(rec, t, rows, rate, temp_true, temp_rate)
     elif rec.triad is not None:
         xy = _mounted(rec, t, rows, rate, temp_true, temp_rate)
     body = (np.cos(np.radians(roll)) if np.ndim(roll) else math.cos(math.radians(roll))) \
