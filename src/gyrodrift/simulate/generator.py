@@ -695,25 +695,26 @@ def _coordinated(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.
     ``q = ψ̇ sin φ cos θ``); each x/y gyro has its own random device and noise (``rec.triad``)."""
     lat = rec.airspeed(t) * np.radians(rate)
     roll = np.degrees(np.arctan2(lat, GRAVITY_MPS2))
+    return roll[rows], lat[rows], _rolling(rec, t, rows, rate, roll, temp_true, temp_rate)
+
+
+def _rolling(rec: _Recipe, t, rows, rate, roll, temp_true, temp_rate) -> dict:
+    """The x/y gyro columns of the logged ``rows`` of a body turning at ``rate`` whose roll
+    (deg, every grid row) changes, at the constant pitch: ZYX Euler kinematics, ``p = φ̇ − ψ̇ sin θ``,
+    ``q = ψ̇ sin φ cos θ``, and the z rate ``ψ̇ cos φ cos θ`` their cross-axis share comes from."""
     theta = math.radians(rec.pitch_deg)
     roll_rate = np.gradient(roll, t)[rows]
     body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
             GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
     rate_z = rate[rows] * np.cos(np.radians(roll[rows])) * math.cos(theta)
-    return roll[rows], lat[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate_z)
+    return _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate_z)
 
 
 def _wobbling(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.ndarray, dict]:
     """The roll (deg) and x/y gyro columns of the logged ``rows`` of a hand-held body whose roll
-    is ``rec.wobble`` at the constant pitch: the body rates of ZYX Euler kinematics
-    (``p = φ̇ − ψ̇ sin θ``, ``q = ψ̇ sin φ cos θ``)."""
+    is ``rec.wobble`` at the constant pitch (:func:`_rolling`)."""
     roll = rec.wobble(t)
-    theta = math.radians(rec.pitch_deg)
-    roll_rate = np.gradient(roll, t)[rows]
-    body = {GYRO_X: roll_rate - rate[rows] * math.sin(theta),
-            GYRO_Y: rate[rows] * np.sin(np.radians(roll[rows])) * math.cos(theta)}
-    rate_z = rate[rows] * np.cos(np.radians(roll[rows])) * math.cos(theta)
-    return roll[rows], _xy_gyros(rec, t, rows, body, temp_true, temp_rate, rate_z)
+    return roll[rows], _rolling(rec, t, rows, rate, roll, temp_true, temp_rate)
 
 
 def _mounted(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> dict:
