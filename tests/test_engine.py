@@ -272,6 +272,24 @@ def test_the_source_without_the_compiler_gives_the_same_numbers(tmp_path, estima
 # ------------------------------------------------------------------ errors
 
 
+def test_a_time_step_beyond_any_log_is_refused_in_every_path():
+    """A step of 7.7e76 s (hypothesis found it: the drift's variance overflowed and bias_sd was
+    NaN) is no sample spacing: the batch call refuses it naming the row, and the stream refuses
+    such a time; a step of 1e9 s, the most there is, is compensated with finite numbers."""
+    import gyrodrift
+    from gyrodrift import compensate_arrays
+
+    zeros = np.zeros(2)
+    with pytest.raises(LogFormatError, match=r"arrays: row 1: time must be finite and strictly increasing, by at most"):
+        compensate_arrays(t_s=np.array([-7.74348371e76, 0.0]), gyro_z_dps=zeros, temp_c=zeros, heading_deg=zeros)
+    comp = gyrodrift.Compensator(provisional=False)
+    with pytest.raises(LogFormatError, match=r"^stream: "):  # at -7.7e76 s its 30-s init window ends at once
+        comp.push(-7.74348371e76, 0.0, 0.0, 0.0)
+        comp.push(0.0, 0.0, 0.0, 0.0)
+    out = compensate_arrays(t_s=np.array([-1e9, 0.0]), gyro_z_dps=zeros, temp_c=zeros, heading_deg=zeros)
+    assert np.isfinite(out[["rate_z", "bias_z", "heading", "bias_sd"]].to_numpy()).all()
+
+
 def test_chunked_errors_name_the_row():
     log = synthetic_log(duration_s=120.0)
     t = log["t"].to_numpy(float).copy()

@@ -31,12 +31,17 @@ from gyrodrift.kernels.numeric import near_boundary, wrap180, wrap360
 __all__ = ["prepare", "run_chunk"]
 
 
+#: Longest time step a log may take, s (about 32 years): a longer one is no sample spacing but a
+#: broken time column, and its variances would overflow.
+MAX_STEP_S = 1e9
+
+
 @jit
 def prepare(t, g, T, heading, fs, ist, cfg, icfg, bins, g_held, T_held, h_wrapped, Tp, gap):
     """Check a chunk and derive its inputs; returns ``(bad, fix)``.
 
-    ``bad`` is -1, or the first row whose time is not finite or does not increase (then
-    nothing else is done). Writes ``gap`` (time step above ``max_gap_s``, or a held
+    ``bad`` is -1, or the first row whose time is not finite or does not increase, or
+    increases by more than :data:`MAX_STEP_S` (then nothing else is done). Writes ``gap`` (time step above ``max_gap_s``, or a held
     cell) and ``Tp`` (T', degC/s). ``fix`` has bit 1 when a gyro cell is not finite, 2 for
     temperature: those hold the previous value, written to ``g_held``/``T_held``; bit 4
     when a compass heading is infinite or outside [0, 360): ``h_wrapped`` has them
@@ -52,7 +57,7 @@ def prepare(t, g, T, heading, fs, ist, cfg, icfg, bins, g_held, T_held, h_wrappe
         step = 0.0
         if i > 0 or not first:
             step = ti - prev
-            if not step > 0.0:
+            if not 0.0 < step <= MAX_STEP_S:
                 return i, fix
         prev = ti
         gap[i] = step > cfg[C_MAX_GAP]
