@@ -232,7 +232,7 @@ class ChunkEngine:
                                     cols.g_held, cols.T_held, cols.h_wrapped, cols.column(L.O_TEMP_RATE),
                                     cols.code(L.OC_GAP).view(np.bool_))
             if bad >= 0:
-                raise LogFormatError(f"{self.source}: row {rows_before + bad}: time must be finite and strictly increasing, by at most 1e9 s a step")
+                raise _bad_time(self.source, rows_before + bad)
             if self._clock is not None:
                 cols.column(L.O_TEMP_RATE)[:] = 0.0
             inputs = (t, read_only(cols.g_held) if fix & 1 else g, read_only(cols.T_held) if fix & 2 else T,
@@ -417,7 +417,7 @@ class ChunkEngine:
         else:
             bad, fix = r.prepare(*args)
         if bad >= 0:  # nothing was taken: the rows so far are those before this one
-            raise LogFormatError(f"{self.source}: row {self.rows_in + bad}: time must be finite and strictly increasing, by at most 1e9 s a step")
+            raise _bad_time(self.source, self.rows_in + bad)
         if self._clock is not None:
             r.Tp[0] = 0.0
         return fix
@@ -509,6 +509,12 @@ def output_columns(t: np.ndarray, heading: np.ndarray, cols: Columns) -> dict:
     ``t`` whose compass heading was ``heading``."""
     return {"t": t, **{name: cols.column(k) for k, name in enumerate(FLOAT_COLUMNS)}, "compass_heading": heading,
             **{name: cols.code(k) for k, name in enumerate(CODE_COLUMNS)}}
+
+
+def _bad_time(source: str, row: int) -> LogFormatError:
+    """The error of a row whose time :func:`gyrodrift.kernels.loop.prepare` refuses."""
+    return LogFormatError(f"{source}: row {row}: time must be finite and strictly increasing, by at most "
+                          f"{loop.MAX_STEP_S:.0e} s a step")
 
 
 def _joined(held: list[tuple]) -> tuple[tuple, Columns]:
