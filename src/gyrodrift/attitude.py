@@ -1,11 +1,13 @@
 """Gravity direction from the gyro, aided by the accelerometer: the tilt of the raw compass.
 
-The down vector is propagated with the body rates and corrected towards the accelerometer
-only when it is believable: a complementary filter with an integral term (Mahony, Hamel and
-Pflimlin, IEEE TAC 2008) reduced to the gravity vector. Eq. (1)-(4), the gates and their
-constants: ``docs/heading_and_axes.md`` (gyro-aided tilt). With the tilt the filter also gives
-the heading rate of a tilted body (:func:`propagate`; ``docs/heading_and_axes.md``, "The heading
-rate of a tilted body").
+A Kalman filter whose state is the down unit vector (body FRD), the three gyro offsets and the
+platform's forward speed: the down vector is propagated with the body rates, its covariance
+grown by the gyro's noise, its scale and cross-axis errors (with the angle turned) and the
+offsets' uncertainty; the accelerometer's down measures it, less the centripetal part of a body
+moving forward while it turns about the vertical, and is taken when its innovation is believable
+against the covariance. Eq. (1)-(6), the constants and the reasons: ``docs/heading_and_axes.md``
+(gyro-aided tilt). With the tilt the filter also gives the heading rate of a tilted body
+(:func:`propagate`; ``docs/heading_and_axes.md``, "The heading rate of a tilted body").
 """
 
 from __future__ import annotations
@@ -18,59 +20,82 @@ from gyrodrift._columns import read_only_floats
 from gyrodrift.kernels import jit
 
 __all__ = [
-    "TAU_S", "K_I", "NORM_TOL", "MAX_RATE_DPS", "ANGLE_GATE_DEG", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG",
-    "STARTUP_S", "MAX_GAP_S", "MAX_BIAS_DPS", "MIN_COS2_PITCH", "LEARNED_S", "new_state", "propagate", "gravity_down",
-    "GravityFilter", "RawTilt", "accel_down",
+    "NORM_TOL", "MAX_RATE_DPS", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "MAX_GAP_S", "MAX_BIAS_DPS",
+    "MIN_COS2_PITCH", "LEARNED_S", "ACC_NOISE0_DEG", "NOISE_TAU_S", "MOTION_SD_DEG", "MOTION_TAU_S", "ARW_DEG",
+    "ROTATION_SD", "BIAS_SD0_DPS", "BIAS_RW_DPS", "SPEED_SD0_MPS", "SPEED_RW_MPS", "TILT_SD0_DEG", "GATE_NIS",
+    "new_state", "propagate", "tilt_sd_deg", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
 
-#: Time constant of the accelerometer correction, s (k_P = 1/TAU_S, eq. 2).
-TAU_S = 2.0
-#: After the first row, the angle gate is open this long, s (while the bias is learned).
-STARTUP_S = 20.0
-#: Integral gain of eq. (4), 1/s²: k_P²/4 (critically damped).
-K_I = 0.25 / TAU_S**2
-#: Tolerance of the specific force's norm about 1 g (fraction of g).
+#: Tolerance of the specific force's norm about 1 g (fraction of g): beyond it the body
+#: accelerates and the accelerometer is not taken.
 NORM_TOL = 0.05
-#: Largest gyro rate (norm of the three axes) at which the accelerometer is used when it
-#: disagrees with the tilt (the start-up phase and the relock), deg/s.
+#: Largest gyro rate (norm of the three axes) at which a refused accelerometer counts towards
+#: RELOCK_S, deg/s.
 MAX_RATE_DPS = 10.0
-#: Largest angle between the accelerometer's down and the propagated one that is accepted, deg.
-ANGLE_GATE_DEG = 2.0
-#: Disagreements beyond ANGLE_GATE_DEG, with the other gates passed, that outlast the agreements
-#: by this long, s, mean the tilt is lost: it starts again from the accelerometer.
+#: Refusals of the accelerometer, with the norm gate passed, that outlast its acceptances by
+#: this long, s, mean the tilt is lost: it starts again from the accelerometer.
 RELOCK_S = 20.0
 #: A body turning at least this fast (deg/s, bias removed) about its tilt's vertical, within
-#: TURN_AXIS_DEG, is in a turn: its disagreement does not count towards RELOCK_S.
+#: TURN_AXIS_DEG, is in a turn: its refusals do not count towards RELOCK_S.
 TURN_MIN_DPS = 1.0
 TURN_AXIS_DEG = 10.0
-#: A time step longer than this restarts the filter from the accelerometer, s.
+#: A time step longer than this restarts the tilt from the accelerometer, s.
 MAX_GAP_S = 1.0
-#: The learned gyro bias is kept within ± this per axis, deg/s.
+#: The learned gyro offsets are kept within ± this per axis, deg/s.
 MAX_BIAS_DPS = 5.0
 
 #: Floor of cos² of the pitch in the heading rate's denominator: beyond 60° of pitch the
 #: heading (an Euler angle) is near its singularity, and the rate is taken as at 60°.
 MIN_COS2_PITCH = 0.25
 
-#: Time with the accelerometer accepted after which the bias across gravity counts as learned
-#: (the integral term's settling time, 4/ω_n = 8·TAU_S), s: before it, the tilt of a body
-#: whose x/y gyros have an unknown offset is not good enough for the heading rate, which
-#: takes it in by the share of this time passed (:func:`_heading_rate`).
-LEARNED_S = 8.0 * TAU_S
+#: Time with the accelerometer taken after which the x/y offsets count as learned, s: before
+#: it, the heading rate of a tilted body takes the tilt in by the share of this time passed
+#: (:func:`_heading_rate`).
+LEARNED_S = 16.0
+
+#: The accelerometer's white noise before it is measured, deg (one axis across gravity), and the
+#: time constant of its measurement, s.
+ACC_NOISE0_DEG = 0.5
+NOISE_TAU_S = 2.0
+#: The platform's acceleration the model does not name, as a tilt, deg, and its correlation
+#: time, s: the accelerometer tells as much as one independent sample every 2·MOTION_TAU_S.
+MOTION_SD_DEG = 0.5
+MOTION_TAU_S = 1.0
+#: The gyro's angle random walk, deg/√s, and its error with the angle turned (scale factor,
+#: cross-axis sensitivity and misalignment), sd per √rad turned.
+ARW_DEG = 0.05
+ROTATION_SD = 0.01
+#: The x/y/z offsets: sd at the start, deg/s, and their random walk, deg/s/√s.
+BIAS_SD0_DPS = 1.0
+BIAS_RW_DPS = 0.01
+#: The forward speed whose turns make the centripetal acceleration: sd at the start, m/s
+#: (mean 0), and its random walk, m/s/√s.
+SPEED_SD0_MPS = 20.0
+SPEED_RW_MPS = 0.5
+#: The tilt's sd, deg, when it starts from the accelerometer (with the noise measured so far).
+TILT_SD0_DEG = 2.0
+#: The accelerometer is taken when its normalised innovation squared is at most this
+#: (chi-squared with 2 degrees of freedom at 99.73 %: three sigma).
+GATE_NIS = 11.83
+
+_GRAVITY_MPS2 = 9.80665
 
 # State array layout.
 _D = 0  # 0..2: down unit vector, body FRD
-_B = 3  # 3..5: gyro bias, rad/s
+_B = 3  # 3..5: gyro offsets, rad/s
 _T = 6  # previous row's time, s
 _STARTED = 7  # 1 once the first accelerometer row was taken
 _G = 8  # 1 g in the log's accelerometer unit
-_LOST = 9  # disagreeing time less agreeing time, at least 0, s
+_LOST = 9  # refused time less accepted time, at least 0, s
 _W = 10  # 10..12: the last finite gyro rate, deg/s (NaN cells hold it)
-_T0 = 13  # time of the first row taken, s
-_ACCEPTED = 14  # time with the accelerometer accepted, s
-_RELOCKED = 15  # time of the last restart from a lost tilt, s (NaN: none)
-_N_STATE = 16
+_ACCEPTED = 13  # time with the accelerometer taken, s
+_NOISE = 14  # the accelerometer's white noise, per axis across gravity, rad² (measured)
+_M = 15  # 15..17: the last accelerometer down, carried with the gyro (NaN: none yet)
+_V = 18  # forward speed, m/s
+_NX = 7  # the filter's states: down (3), offsets (3), forward speed
+_P = 19  # 19..67: their covariance, 7 x 7 row-major (down dimensionless, offsets rad/s, speed m/s)
+_N_STATE = _P + _NX * _NX
 
 
 def new_state() -> np.ndarray:
@@ -78,8 +103,17 @@ def new_state() -> np.ndarray:
     s = np.zeros(_N_STATE)
     s[_D:_D + 3] = math.nan
     s[_T] = math.nan
-    s[_RELOCKED] = math.nan
+    s[_M:_M + 3] = math.nan
     return s
+
+
+def tilt_sd_deg(state: np.ndarray) -> float:
+    """The tilt's standard deviation in ``state``, deg, per axis across gravity (NaN before
+    the filter started)."""
+    if not state[_STARTED]:
+        return math.nan
+    p = state[_P:_P + _NX * _NX].reshape(_NX, _NX)
+    return math.degrees(math.sqrt(max(float(np.trace(p[:3, :3])) / 2.0, 0.0)))
 
 
 @jit
@@ -113,12 +147,11 @@ def _about_the_vertical(w0, w1, w2, d0, d1, d2):
 def _heading_rate(i, gz, state, out, rate_out):
     """Row ``i``'s heading rate into ``rate_out[i]``: the rate of the heading (the Euler yaw
     of a ZYX body), deg/s, from the row's z rate ``gz``, the held pitch-axis rate less the y
-    part of the bias across gravity the filter learned, and the row's down vector
-    ``d = (−sin θ, sin φ cos θ, cos φ cos θ)``:
+    offset the filter learned, and the row's down vector ``d = (−sin θ, sin φ cos θ, cos φ cos θ)``:
 
         ψ̇ = (q sin φ + r cos φ) / cos θ = (q d₁ + r d₂) / (d₁² + d₂²)
 
-    (cos² θ floored at :data:`MIN_COS2_PITCH`). While the bias is learned it is blended from
+    (cos² θ floored at :data:`MIN_COS2_PITCH`). While the offsets are learned it is blended from
     ``gz`` with the weight ``w`` = accepted time / :data:`LEARNED_S` (at most 1), so that the
     drift the model follows changes smoothly as the tilt becomes known. ``gz`` where the tilt
     is not known; NaN where ``gz`` is."""
@@ -132,6 +165,136 @@ def _heading_rate(i, gz, state, out, rate_out):
 
 
 @jit
+def _start(state, m0, m1, m2, all_states):
+    """The tilt (re)started at the accelerometer's down ``m``, its covariance across ``m``;
+    with ``all_states`` the offsets' and the speed's covariance too, and the speed at 0."""
+    state[_D], state[_D + 1], state[_D + 2] = m0, m1, m2
+    p = state[_P:_P + _NX * _NX].reshape((_NX, _NX))
+    m = (m0, m1, m2)
+    var = math.radians(TILT_SD0_DEG) ** 2 + state[_NOISE]
+    for r in range(_NX):
+        for c in range(_NX):
+            if r < 3 and c < 3:
+                p[r, c] = var * ((1.0 if r == c else 0.0) - m[r] * m[c])
+            elif r < 3 or c < 3:
+                p[r, c] = 0.0
+            elif all_states:
+                p[r, c] = 0.0 if r != c else (math.radians(BIAS_SD0_DPS) ** 2 if r < 6 else SPEED_SD0_MPS ** 2)
+    if all_states:
+        state[_V] = 0.0
+
+
+@jit
+def _inverse3(a, r, out):
+    """``out`` = the inverse of ``a[:3, :3] + r·I`` (``a`` symmetric)."""
+    a00, a01, a02 = a[0, 0] + r, a[0, 1], a[0, 2]
+    a11, a12, a22 = a[1, 1] + r, a[1, 2], a[2, 2] + r
+    det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02)
+    out[0, 0] = (a11 * a22 - a12 * a12) / det
+    out[0, 1] = out[1, 0] = (a02 * a12 - a01 * a22) / det
+    out[0, 2] = out[2, 0] = (a01 * a12 - a02 * a11) / det
+    out[1, 1] = (a00 * a22 - a02 * a02) / det
+    out[1, 2] = out[2, 1] = (a02 * a01 - a00 * a12) / det
+    out[2, 2] = (a00 * a11 - a01 * a01) / det
+
+
+@jit
+def _predict(state, p, rot, f, tmp, w0, w1, w2, dt):
+    """Eq. (1)-(2): ``d`` turned by the body rates ``w`` (rad/s, offsets removed) over ``dt``,
+    the covariance ``p`` by ``F = [[R, −dt·[d]×, 0], [0, I, 0], [0, 0, 1]]`` and the process
+    noise; the carried accelerometer down turned with ``d``. ``rot`` receives ``R``."""
+    for c in range(3):
+        x0, x1, x2 = _rotate(1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
+                             -w0 * dt, -w1 * dt, -w2 * dt)
+        rot[0, c], rot[1, c], rot[2, c] = x0, x1, x2
+    d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
+    for r in range(_NX):
+        for c in range(_NX):
+            f[r, c] = 1.0 if r == c else 0.0
+    for r in range(3):
+        for c in range(3):
+            f[r, c] = rot[r, c]
+    f[0, 4], f[0, 5] = dt * d2, -dt * d1
+    f[1, 3], f[1, 5] = -dt * d2, dt * d0
+    f[2, 3], f[2, 4] = dt * d1, -dt * d0
+    for r in range(_NX):
+        for c in range(_NX):
+            s = 0.0
+            for k in range(_NX):
+                s += f[r, k] * p[k, c]
+            tmp[r, c] = s
+    for r in range(_NX):
+        for c in range(_NX):
+            s = 0.0
+            for k in range(_NX):
+                s += tmp[r, k] * f[c, k]
+            p[r, c] = s
+    for k in (_D, _M):
+        v0, v1, v2 = state[k], state[k + 1], state[k + 2]
+        for r in range(3):
+            state[k + r] = rot[r, 0] * v0 + rot[r, 1] * v1 + rot[r, 2] * v2
+    n = math.sqrt(state[_D] ** 2 + state[_D + 1] ** 2 + state[_D + 2] ** 2)
+    for r in range(3):
+        state[_D + r] /= n
+    qd = math.radians(ARW_DEG) ** 2 * dt + ROTATION_SD * ROTATION_SD * math.sqrt(w0 * w0 + w1 * w1 + w2 * w2) * dt
+    for r in range(3):
+        for c in range(3):
+            p[r, c] += qd * ((1.0 if r == c else 0.0) - state[_D + r] * state[_D + c])
+        p[r + 3, r + 3] += math.radians(BIAS_RW_DPS) ** 2 * dt
+    p[6, 6] += SPEED_RW_MPS ** 2 * dt
+
+
+@jit
+def _update(state, p, h, y, s_inv, ph, gain, tmp, r_var):
+    """Eq. (4)-(5): the state and covariance ``p`` updated with the innovation ``y`` of a
+    measurement ``H = [I, 0, h]`` whose noise is ``r_var·I``."""
+    for r in range(_NX):
+        for c in range(3):
+            ph[r, c] = p[r, c] + p[r, 6] * h[c]
+    for r in range(3):
+        for c in range(3):
+            tmp[r, c] = ph[r, c] + h[r] * ph[6, c]
+    _inverse3(tmp, r_var, s_inv)
+    for r in range(_NX):
+        for c in range(3):
+            gain[r, c] = ph[r, 0] * s_inv[0, c] + ph[r, 1] * s_inv[1, c] + ph[r, 2] * s_inv[2, c]
+    max_b = math.radians(MAX_BIAS_DPS)
+    for r in range(_NX):
+        dx = gain[r, 0] * y[0] + gain[r, 1] * y[1] + gain[r, 2] * y[2]
+        if r < 3:
+            state[_D + r] += dx
+        elif r < 6:
+            state[_B + r - 3] = min(max(state[_B + r - 3] + dx, -max_b), max_b)
+        else:
+            state[_V] += dx
+    for r in range(_NX):
+        for c in range(_NX):
+            tmp[r, c] = p[r, c] - (gain[r, 0] * ph[c, 0] + gain[r, 1] * ph[c, 1] + gain[r, 2] * ph[c, 2])
+    for r in range(_NX):
+        for c in range(_NX):
+            p[r, c] = 0.5 * (tmp[r, c] + tmp[c, r])
+
+
+@jit
+def _renormalise(state, p):
+    """``d`` back on the unit sphere and its covariance kept across it: ``J P J'`` with
+    ``J = I − d d'`` on the down rows and columns."""
+    n = math.sqrt(state[_D] ** 2 + state[_D + 1] ** 2 + state[_D + 2] ** 2)
+    d0, d1, d2 = state[_D] / n, state[_D + 1] / n, state[_D + 2] / n
+    state[_D], state[_D + 1], state[_D + 2] = d0, d1, d2
+    for c in range(_NX):
+        s = d0 * p[0, c] + d1 * p[1, c] + d2 * p[2, c]
+        p[0, c] -= d0 * s
+        p[1, c] -= d1 * s
+        p[2, c] -= d2 * s
+    for r in range(_NX):
+        s = p[r, 0] * d0 + p[r, 1] * d1 + p[r, 2] * d2
+        p[r, 0] -= s * d0
+        p[r, 1] -= s * d1
+        p[r, 2] -= s * d2
+
+
+@jit
 def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     """Run the filter over rows; write each row's down unit vector (body FRD) to ``out`` (n, 3)
     and its heading rate (deg/s) to ``rate_out`` (n,).
@@ -140,12 +303,19 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     holds the previous value); specific force ``acc`` (n, 3; g or m/s², FRD; NaN: not used);
     ``state`` from :func:`new_state`, updated in place. ``out`` is NaN before the first
     finite accelerometer row. The heading rate (:func:`_heading_rate`) takes the row's
-    ``gz`` (NaN stays NaN: the engine holds it), the held ``gy`` less the learned y bias and
-    the row's down vector, blended in from ``gz`` as the bias is learned (:data:`LEARNED_S`).
+    ``gz`` (NaN stays NaN: the engine holds it), the held ``gy`` less the learned y offset and
+    the row's down vector, blended in from ``gz`` as the offsets are learned (:data:`LEARNED_S`).
     """
-    kp = 1.0 / TAU_S
-    cos_gate = math.cos(math.radians(ANGLE_GATE_DEG))
-    max_b = math.radians(MAX_BIAS_DPS)
+    rot = np.empty((3, 3))
+    f = np.empty((_NX, _NX))
+    tmp = np.empty((_NX, _NX))
+    ph = np.empty((_NX, 3))
+    gain = np.empty((_NX, 3))
+    s_inv = np.empty((3, 3))
+    h = np.empty(3)
+    y = np.empty(3)
+    p = state[_P:_P + _NX * _NX].reshape((_NX, _NX))
+    motion_var = math.radians(MOTION_SD_DEG) ** 2
     for i in range(t.size):
         if math.isfinite(gx[i]):
             state[_W] = gx[i]
@@ -157,13 +327,14 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
         fn = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
         have_acc = math.isfinite(fn) and fn > 0.0
         dt = t[i] - state[_T]
-        restart = state[_STARTED] == 0.0 or not dt <= MAX_GAP_S
-        if restart:
+        if state[_STARTED] == 0.0 or not dt <= MAX_GAP_S:
             if have_acc:
-                if state[_STARTED] == 0.0:
+                first = state[_STARTED] == 0.0
+                if first:
                     state[_G] = 9.80665 if fn > 3.0 else 1.0
-                    state[_T0] = t[i]
-                state[_D], state[_D + 1], state[_D + 2] = -f0 / fn, -f1 / fn, -f2 / fn
+                    state[_NOISE] = math.radians(ACC_NOISE0_DEG) ** 2
+                _start(state, -f0 / fn, -f1 / fn, -f2 / fn, first)
+                state[_M], state[_M + 1], state[_M + 2] = -f0 / fn, -f1 / fn, -f2 / fn
                 state[_STARTED] = 1.0
                 state[_LOST] = 0.0
             state[_T] = t[i]
@@ -172,37 +343,49 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             _heading_rate(i, gz[i], state, out, rate_out)
             continue
         state[_T] = t[i]
-        d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
         w0 = math.radians(state[_W]) - state[_B]
         w1 = math.radians(state[_W + 1]) - state[_B + 1]
         w2 = math.radians(state[_W + 2]) - state[_B + 2]
+        _predict(state, p, rot, f, tmp, w0, w1, w2, dt)
         if have_acc:
             m0, m1, m2 = -f0 / fn, -f1 / fn, -f2 / fn
+            if state[_M] == state[_M]:  # eq. (6): the accelerometer's noise from its change the gyro does not explain
+                change = ((m0 - state[_M]) ** 2 + (m1 - state[_M + 1]) ** 2 + (m2 - state[_M + 2]) ** 2) / 4.0
+                state[_NOISE] += dt / (dt + NOISE_TAU_S) * (change - state[_NOISE])
+            state[_M], state[_M + 1], state[_M + 2] = m0, m1, m2
+            d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
             norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
             quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
-            within = d0 * m0 + d1 * m1 + d2 * m2 >= cos_gate
             turning = _about_the_vertical(w0, w1, w2, d0, d1, d2)
-            agree = within or t[i] - state[_T0] < STARTUP_S or (not turning and t[i] - state[_RELOCKED] < STARTUP_S)
-            use = (quiet and agree) or (norm_ok and within)  # or turning fast, yet about 1 g and within: no centripetal part
+            # eq. (3): m = d − (r_d V / g)(d × e_x), r_d the rate about down
+            rd = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2
+            h[0], h[1], h[2] = 0.0, -rd * d2, rd * d1
+            y[0], y[1], y[2] = m0 - d0 - h[0] * state[_V], m1 - d1 - h[1] * state[_V], m2 - d2 - h[2] * state[_V]
+            for r in range(_NX):  # eq. (5): the gate, on one sample's own spread
+                for c in range(3):
+                    ph[r, c] = p[r, c] + p[r, 6] * h[c]
+            for r in range(3):
+                for c in range(3):
+                    tmp[r, c] = ph[r, c] + h[r] * ph[6, c]
+            _inverse3(tmp, state[_NOISE] + motion_var, s_inv)
+            nis = 0.0
+            for r in range(3):
+                for c in range(3):
+                    nis += y[r] * s_inv[r, c] * y[c]
+            within = nis <= GATE_NIS
             if within:
                 state[_LOST] = max(state[_LOST] - dt, 0.0)
-            elif quiet and not agree and not turning:
+            elif quiet and not turning:
                 state[_LOST] += dt
-                if state[_LOST] >= RELOCK_S:  # the tilt is lost: it starts again from the accelerometer
-                    d0, d1, d2 = m0, m1, m2
-                    w0, w1, w2 = 0.0, 0.0, 0.0
-                    state[_LOST] = 0.0
-                    state[_RELOCKED] = t[i]  # and the bias is learned again, as at the start
-            if use:
+            if state[_LOST] >= RELOCK_S:  # the tilt is lost: it starts again from the accelerometer
+                state[_LOST] = 0.0
+                _start(state, m0, m1, m2, True)
+            elif norm_ok and within:
                 state[_ACCEPTED] += dt
-                e0, e1, e2 = d1 * m2 - d2 * m1, d2 * m0 - d0 * m2, d0 * m1 - d1 * m0  # eq. (1)
-                w0, w1, w2 = w0 - kp * e0, w1 - kp * e1, w2 - kp * e2  # eq. (2)
-                state[_B] = min(max(state[_B] + K_I * e0 * dt, -max_b), max_b)  # eq. (4)
-                state[_B + 1] = min(max(state[_B + 1] + K_I * e1 * dt, -max_b), max_b)
-                state[_B + 2] = min(max(state[_B + 2] + K_I * e2 * dt, -max_b), max_b)
-        d0, d1, d2 = _rotate(d0, d1, d2, -w0 * dt, -w1 * dt, -w2 * dt)  # eq. (3)
-        norm = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        state[_D], state[_D + 1], state[_D + 2] = d0 / norm, d1 / norm, d2 / norm
+                # eq. (4): the motion's share of the noise as one sample every 2·MOTION_TAU_S
+                r_var = state[_NOISE] + motion_var * max(1.0, 2.0 * MOTION_TAU_S / max(dt, 1e-3))
+                _update(state, p, h, y, s_inv, ph, gain, tmp, r_var)
+        _renormalise(state, p)
         for k in range(3):
             out[i, k] = state[_D + k]
         _heading_rate(i, gz[i], state, out, rate_out)
