@@ -402,6 +402,16 @@ class GravityFilter:
         """How long the accelerometer has been accepted so far, s (:data:`LEARNED_S`)."""
         return float(self.state[_ACCEPTED])
 
+    @property
+    def tilt_sd_deg(self) -> float:
+        """The tilt's standard deviation now, deg per axis across gravity (:func:`tilt_sd_deg`)."""
+        return tilt_sd_deg(self.state)
+
+    @property
+    def speed_mps(self) -> float:
+        """The forward speed whose turns make the accelerometer lean, learned so far, m/s (eq. 3)."""
+        return float(self.state[_V])
+
     def feed(self, t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc) -> np.ndarray:
         """Down unit vectors (n, 3), body FRD, of these rows (see :func:`propagate`)."""
         return self.run(t, gyro_x_dps, gyro_y_dps, gyro_z_dps, acc)[0]
