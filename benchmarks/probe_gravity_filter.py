@@ -1,0 +1,74 @@
+"""The gyro-aided gravity's tilt against the generator's truth (docs/results.md, "The gravity
+filter a Kalman filter"), before any estimator runs.
+
+For the generated classes with x/y gyros (their true roll and pitch rebuilt from the recipe:
+``imu-drive`` a constant mount, ``handheld-imu`` the hand's wobbling roll, ``banked-flight`` the
+coordinated turn's bank), the RMS angle between :class:`gyrodrift.attitude.GravityFilter`'s down
+vector and the true one over each log, and the median, mean and worst over the seeds::
+
+    python benchmarks/probe_gravity_filter.py                   # tuning seeds 0-11
+    python benchmarks/probe_gravity_filter.py held-out 20
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import warnings
+import zlib
+
+import numpy as np
+
+CLASSES = ("handheld-imu", "imu-drive", "banked-flight")
+
+
+def true_down(cls: str, seed: int) -> np.ndarray:
+    """The true down unit vectors (n, 3), body FRD, of the logged rows of a generated case."""
+    import gyrodrift.simulate.generator as G
+
+    rng = G.seeded_streams([zlib.crc32(cls.encode()), int(seed)], G._STREAMS)
+    rec = G._BUILDERS[cls](rng["recipe"], 1.0)
+    fs = rec.fs_sim_hz
+    t = np.arange(int(math.floor(rec.duration_s * fs)) + 1) / fs
+    rows = G._logged_rows(rec, t, rng["log"])
+    if rec.airspeed is not None:
+        roll = np.arctan2(rec.airspeed(t) * np.radians(rec.rate(t)), G.GRAVITY_MPS2)[rows]
+    elif rec.wobble is not None:
+        roll = np.radians(rec.wobble(t)[rows])
+    else:
+        roll = np.full(rows.size, math.radians(rec.roll_deg))
+    pitch = math.radians(rec.pitch_deg)
+    return np.column_stack([np.full(rows.size, -math.sin(pitch)), np.sin(roll) * math.cos(pitch),
+                            np.cos(roll) * math.cos(pitch)])
+
+
+def tilt_rms_deg(cls: str, seed: int) -> float:
+    """RMS tilt error of the gravity filter on one generated case, deg."""
+    from gyrodrift.attitude import GravityFilter
+    from gyrodrift.simulate.generator import generate
+
+    log = generate(cls, seed).log
+    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy(float)
+    down = GravityFilter().feed(log["t"].to_numpy(float), *(log[c].to_numpy(float) for c in
+                                                          ("gyro_x", "gyro_y", "gyro_z")), acc)
+    cos = np.clip(np.sum(down * true_down(cls, seed), axis=1), -1.0, 1.0)
+    return float(np.sqrt(np.mean(np.degrees(np.arccos(cos)) ** 2)))
+
+
+def main(argv: list[str]) -> int:
+    from gyrodrift.simulate.generator import seeds
+
+    split = argv[0] if argv else "tuning"
+    n = int(argv[1]) if len(argv) > 1 else 12
+    print("| class | median | mean | worst (deg RMS) |")
+    print("| :--- | ---: | ---: | ---: |")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for cls in CLASSES:
+            rms = [tilt_rms_deg(cls, s) for s in seeds(split, n)]
+            print(f"| {cls} | {np.median(rms):.3f} | {np.mean(rms):.3f} | {np.max(rms):.2f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
