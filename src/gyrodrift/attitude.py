@@ -245,16 +245,27 @@ def _predict(state, p, rot, f, tmp, w0, w1, w2, dt):
 
 
 @jit
-def _update(state, p, h, y, s_inv, ph, gain, tmp, r_var):
-    """Eq. (4)-(5): the state and covariance ``p`` updated with the innovation ``y`` of a
-    measurement ``H = [I, 0, h]`` whose noise is ``r_var·I``."""
+def _project(p, hm, ph, s):
+    """``ph`` = P Hᵀ (7 × 3) and ``s`` = H P Hᵀ (3 × 3) of the measurement matrix ``hm``."""
     for r in range(_NX):
         for c in range(3):
-            ph[r, c] = p[r, c] + p[r, 6] * h[c]
+            acc = 0.0
+            for k in range(_NX):
+                acc += p[r, k] * hm[c, k]
+            ph[r, c] = acc
     for r in range(3):
         for c in range(3):
-            tmp[r, c] = ph[r, c] + h[r] * ph[6, c]
-    _inverse3(tmp, r_var, s_inv)
+            acc = 0.0
+            for k in range(_NX):
+                acc += hm[r, k] * ph[k, c]
+            s[r, c] = acc
+
+
+@jit
+def _update(state, p, y, s, s_inv, ph, gain, tmp, r_var):
+    """Eq. (4): the state and covariance ``p`` updated with the innovation ``y``, given
+    ``ph`` = P Hᵀ and ``s`` = H P Hᵀ (:func:`_project`) and the noise ``r_var·I``."""
+    _inverse3(s, r_var, s_inv)
     for r in range(_NX):
         for c in range(3):
             gain[r, c] = ph[r, 0] * s_inv[0, c] + ph[r, 1] * s_inv[1, c] + ph[r, 2] * s_inv[2, c]
@@ -312,7 +323,8 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     ph = np.empty((_NX, 3))
     gain = np.empty((_NX, 3))
     s_inv = np.empty((3, 3))
-    h = np.empty(3)
+    hm = np.empty((3, _NX))
+    s = np.empty((3, 3))
     y = np.empty(3)
     p = state[_P:_P + _NX * _NX].reshape((_NX, _NX))
     motion_var = math.radians(MOTION_SD_DEG) ** 2
@@ -357,17 +369,21 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
             quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
             turning = _about_the_vertical(w0, w1, w2, d0, d1, d2)
-            # eq. (3): m = d − (r_d V / g)(d × e_x), r_d the rate about down
+            # eq. (3): m = d − (r_d V / g)(d × e_x), r_d = (ω − b)·d the rate about down, made a
+            # unit vector; H its derivative in d and V to first order (the lean's own change with
+            # d is second order; its change with b is left to the offsets' own measurement)
             rd = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2
-            h[0], h[1], h[2] = 0.0, -rd * d2, rd * d1
-            y[0], y[1], y[2] = m0 - d0 - h[0] * state[_V], m1 - d1 - h[1] * state[_V], m2 - d2 - h[2] * state[_V]
-            for r in range(_NX):  # eq. (5): the gate, on one sample's own spread
-                for c in range(3):
-                    ph[r, c] = p[r, c] + p[r, 6] * h[c]
+            u = (0.0, d2, -d1)  # d × e_x
+            dv = (d0, d1, d2)
+            lean = rd * state[_V]
+            scale = 1.0 / math.sqrt(1.0 + lean * lean * (d1 * d1 + d2 * d2))
             for r in range(3):
-                for c in range(3):
-                    tmp[r, c] = ph[r, c] + h[r] * ph[6, c]
-            _inverse3(tmp, state[_NOISE] + motion_var, s_inv)
+                for c in range(_NX):
+                    hm[r, c] = 1.0 if r == c else 0.0
+                hm[r, 6] = -rd * u[r]
+                y[r] = (m0, m1, m2)[r] - (dv[r] - lean * u[r]) * scale
+            _project(p, hm, ph, s)  # eq. (5): the gate, on one sample's own spread
+            _inverse3(s, state[_NOISE] + motion_var, s_inv)
             nis = 0.0
             for r in range(3):
                 for c in range(3):
@@ -384,7 +400,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
                 state[_ACCEPTED] += dt
                 # eq. (4): the motion's share of the noise as one sample every 2·MOTION_TAU_S
                 r_var = state[_NOISE] + motion_var * max(1.0, 2.0 * MOTION_TAU_S / max(dt, 1e-3))
-                _update(state, p, h, y, s_inv, ph, gain, tmp, r_var)
+                _update(state, p, y, s, s_inv, ph, gain, tmp, r_var)
         _renormalise(state, p)
         for k in range(3):
             out[i, k] = state[_D + k]
