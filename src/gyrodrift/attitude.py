@@ -199,36 +199,46 @@ def _inverse3(a, r, out):
 
 
 @jit
-def _predict(state, p, rot, f, tmp, w0, w1, w2, dt):
+def _rotation(rot, r0, r1, r2):
+    """``rot`` = the rotation matrix of the rotation vector ``r`` (rad; Rodrigues' formula, as
+    :func:`_rotate`)."""
+    ang = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    if ang < 1e-12:
+        rot[0, 0], rot[0, 1], rot[0, 2] = 1.0, -r2, r1
+        rot[1, 0], rot[1, 1], rot[1, 2] = r2, 1.0, -r0
+        rot[2, 0], rot[2, 1], rot[2, 2] = -r1, r0, 1.0
+        return
+    k0, k1, k2 = r0 / ang, r1 / ang, r2 / ang
+    c, s = math.cos(ang), math.sin(ang)
+    v = 1.0 - c
+    rot[0, 0], rot[0, 1], rot[0, 2] = c + k0 * k0 * v, -k2 * s + k0 * k1 * v, k1 * s + k0 * k2 * v
+    rot[1, 0], rot[1, 1], rot[1, 2] = k2 * s + k1 * k0 * v, c + k1 * k1 * v, -k0 * s + k1 * k2 * v
+    rot[2, 0], rot[2, 1], rot[2, 2] = -k1 * s + k2 * k0 * v, k0 * s + k2 * k1 * v, c + k2 * k2 * v
+
+
+@jit
+def _predict(state, p, rot, top, w0, w1, w2, dt):
     """Eq. (1)-(2): ``d`` turned by the body rates ``w`` (rad/s, offsets removed) over ``dt``,
-    the covariance ``p`` by ``F = [[R, −dt·[d]×, 0], [0, I, 0], [0, 0, 1]]`` and the process
-    noise; the carried accelerometer down turned with ``d``. ``rot`` receives ``R``."""
-    for c in range(3):
-        x0, x1, x2 = _rotate(1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
-                             -w0 * dt, -w1 * dt, -w2 * dt)
-        rot[0, c], rot[1, c], rot[2, c] = x0, x1, x2
+    the covariance ``p`` by ``F = [[R, G, 0], [0, I, 0], [0, 0, 1]]``, ``G = −dt·[d]×``, and
+    the process noise; the carried accelerometer down turned with ``d``. Only the down rows
+    and columns change: ``top`` = [R G] P[:6] (3 × 7), then ``P_dd = top[:, :6] [R G]ᵀ``.
+    ``rot`` receives ``R``."""
+    _rotation(rot, -w0 * dt, -w1 * dt, -w2 * dt)
     d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
-    for r in range(_NX):
+    g0, g1, g2 = (0.0, dt * d2, -dt * d1), (-dt * d2, 0.0, dt * d0), (dt * d1, -dt * d0, 0.0)
+    for r in range(3):
+        gr = g0 if r == 0 else (g1 if r == 1 else g2)
         for c in range(_NX):
-            f[r, c] = 1.0 if r == c else 0.0
+            top[r, c] = (rot[r, 0] * p[0, c] + rot[r, 1] * p[1, c] + rot[r, 2] * p[2, c]
+                         + gr[0] * p[3, c] + gr[1] * p[4, c] + gr[2] * p[5, c])
     for r in range(3):
         for c in range(3):
-            f[r, c] = rot[r, c]
-    f[0, 4], f[0, 5] = dt * d2, -dt * d1
-    f[1, 3], f[1, 5] = -dt * d2, dt * d0
-    f[2, 3], f[2, 4] = dt * d1, -dt * d0
-    for r in range(_NX):
-        for c in range(_NX):
-            s = 0.0
-            for k in range(_NX):
-                s += f[r, k] * p[k, c]
-            tmp[r, c] = s
-    for r in range(_NX):
-        for c in range(_NX):
-            s = 0.0
-            for k in range(_NX):
-                s += tmp[r, k] * f[c, k]
-            p[r, c] = s
+            gc = g0 if c == 0 else (g1 if c == 1 else g2)
+            p[r, c] = (top[r, 0] * rot[c, 0] + top[r, 1] * rot[c, 1] + top[r, 2] * rot[c, 2]
+                       + top[r, 3] * gc[0] + top[r, 4] * gc[1] + top[r, 5] * gc[2])
+        for c in range(3, _NX):
+            p[r, c] = top[r, c]
+            p[c, r] = top[r, c]
     for k in (_D, _M):
         v0, v1, v2 = state[k], state[k + 1], state[k + 2]
         for r in range(3):
@@ -245,26 +255,22 @@ def _predict(state, p, rot, f, tmp, w0, w1, w2, dt):
 
 
 @jit
-def _project(p, hm, ph, s):
-    """``ph`` = P Hᵀ (7 × 3) and ``s`` = H P Hᵀ (3 × 3) of the measurement matrix ``hm``."""
+def _project(p, h, ph, s):
+    """``ph`` = P Hᵀ (7 × 3) and ``s`` = H P Hᵀ (3 × 3) of the measurement matrix
+    ``H = [I, 0, h]`` (eq. 4; ``h`` the speed's column)."""
     for r in range(_NX):
         for c in range(3):
-            acc = 0.0
-            for k in range(_NX):
-                acc += p[r, k] * hm[c, k]
-            ph[r, c] = acc
+            ph[r, c] = p[r, c] + p[r, 6] * h[c]
     for r in range(3):
         for c in range(3):
-            acc = 0.0
-            for k in range(_NX):
-                acc += hm[r, k] * ph[k, c]
-            s[r, c] = acc
+            s[r, c] = ph[r, c] + h[r] * ph[6, c]
 
 
 @jit
-def _update(state, p, y, s, s_inv, ph, gain, tmp, r_var):
+def _update(state, p, y, s, s_inv, ph, gain, r_var):
     """Eq. (4): the state and covariance ``p`` updated with the innovation ``y``, given
-    ``ph`` = P Hᵀ and ``s`` = H P Hᵀ (:func:`_project`) and the noise ``r_var·I``."""
+    ``ph`` = P Hᵀ and ``s`` = H P Hᵀ (:func:`_project`) and the noise ``r_var·I``; ``p`` kept
+    symmetric (the mean of its two triangles)."""
     _inverse3(s, r_var, s_inv)
     for r in range(_NX):
         for c in range(3):
@@ -279,11 +285,10 @@ def _update(state, p, y, s, s_inv, ph, gain, tmp, r_var):
         else:
             state[_V] += dx
     for r in range(_NX):
-        for c in range(_NX):
-            tmp[r, c] = p[r, c] - (gain[r, 0] * ph[c, 0] + gain[r, 1] * ph[c, 1] + gain[r, 2] * ph[c, 2])
-    for r in range(_NX):
-        for c in range(_NX):
-            p[r, c] = 0.5 * (tmp[r, c] + tmp[c, r])
+        for c in range(r, _NX):
+            upper = p[r, c] - (gain[r, 0] * ph[c, 0] + gain[r, 1] * ph[c, 1] + gain[r, 2] * ph[c, 2])
+            lower = p[c, r] - (gain[c, 0] * ph[r, 0] + gain[c, 1] * ph[r, 1] + gain[c, 2] * ph[r, 2])
+            p[r, c] = p[c, r] = 0.5 * (upper + lower)
 
 
 @jit
@@ -318,12 +323,11 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     the row's down vector, blended in from ``gz`` as the offsets are learned (:data:`LEARNED_S`).
     """
     rot = np.empty((3, 3))
-    f = np.empty((_NX, _NX))
-    tmp = np.empty((_NX, _NX))
+    top = np.empty((3, _NX))
     ph = np.empty((_NX, 3))
     gain = np.empty((_NX, 3))
     s_inv = np.empty((3, 3))
-    hm = np.empty((3, _NX))
+    h = np.empty(3)
     s = np.empty((3, 3))
     y = np.empty(3)
     p = state[_P:_P + _NX * _NX].reshape((_NX, _NX))
@@ -358,7 +362,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
         w0 = math.radians(state[_W]) - state[_B]
         w1 = math.radians(state[_W + 1]) - state[_B + 1]
         w2 = math.radians(state[_W + 2]) - state[_B + 2]
-        _predict(state, p, rot, f, tmp, w0, w1, w2, dt)
+        _predict(state, p, rot, top, w0, w1, w2, dt)
         if have_acc:
             m0, m1, m2 = -f0 / fn, -f1 / fn, -f2 / fn
             if state[_M] == state[_M]:  # eq. (6): the accelerometer's noise from its change the gyro does not explain
@@ -368,7 +372,6 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
             norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
             quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
-            turning = _about_the_vertical(w0, w1, w2, d0, d1, d2)
             # eq. (3): m = d − (r_d V / g)(d × e_x), r_d = (ω − b)·d the rate about down, made a
             # unit vector; H its derivative in d and V to first order (the lean's own change with
             # d is second order; its change with b is left to the offsets' own measurement)
@@ -378,11 +381,9 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             lean = rd * state[_V]
             scale = 1.0 / math.sqrt(1.0 + lean * lean * (d1 * d1 + d2 * d2))
             for r in range(3):
-                for c in range(_NX):
-                    hm[r, c] = 1.0 if r == c else 0.0
-                hm[r, 6] = -rd * u[r]
+                h[r] = -rd * u[r]
                 y[r] = (m0, m1, m2)[r] - (dv[r] - lean * u[r]) * scale
-            _project(p, hm, ph, s)  # eq. (5): the gate, on one sample's own spread
+            _project(p, h, ph, s)  # eq. (5): the gate, on one sample's own spread
             _inverse3(s, state[_NOISE] + motion_var, s_inv)
             nis = 0.0
             for r in range(3):
@@ -391,7 +392,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             within = nis <= GATE_NIS
             if within:
                 state[_LOST] = max(state[_LOST] - dt, 0.0)
-            elif quiet and not turning:
+            elif quiet and not _about_the_vertical(w0, w1, w2, d0, d1, d2):
                 state[_LOST] += dt
             if state[_LOST] >= RELOCK_S:  # the tilt is lost: it starts again from the accelerometer
                 state[_LOST] = 0.0
@@ -400,7 +401,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
                 state[_ACCEPTED] += dt
                 # eq. (4): the motion's share of the noise as one sample every 2·MOTION_TAU_S
                 r_var = state[_NOISE] + motion_var * max(1.0, 2.0 * MOTION_TAU_S / max(dt, 1e-3))
-                _update(state, p, y, s, s_inv, ph, gain, tmp, r_var)
+                _update(state, p, y, s, s_inv, ph, gain, r_var)
         _renormalise(state, p)
         for k in range(3):
             out[i, k] = state[_D + k]

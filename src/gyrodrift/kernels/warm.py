@@ -90,9 +90,10 @@ SIGNATURES: dict[str, list[str]] = {
     "attitude._rotate": ["f f f f f f"],
     "attitude._start": ["F1 f f f b"],
     "attitude._inverse3": ["F2 f F2"],
-    "attitude._predict": ["F1 F2 F2 F2 F2 f f f f"],
-    "attitude._project": ["F2 F2 F2 F2"],
-    "attitude._update": ["F1 F2 F1 F2 F2 F2 F2 F2 f"],
+    "attitude._rotation": ["F2 f f f"],
+    "attitude._predict": ["F1 F2 F2 F2 f f f f"],
+    "attitude._project": ["F2 F1 F2 F2"],
+    "attitude._update": ["F1 F2 F1 F2 F2 F2 F2 f"],
     "attitude._renormalise": ["F1 F2"],
     # the gyro-unit check (gyrodrift.gyro_units)
     "gyro_units._turns": ["F1r F1r F1r F1"],
