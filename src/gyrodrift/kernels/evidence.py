@@ -825,7 +825,7 @@ def epoch(mf, mc, t_end, temp_end):
                         - LL_ANY_NORM - LL_ANY_DIP)
         # the noise, correlated; the epoch-level error; the tilt's error as the samples' two tilts
         # disagree, as one error over the epoch that persists from epoch to epoch
-        Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX] + mf[MF_TILT_K] * mf[MF_E_TV] / n_c
+        Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX] + mf[MF_TILT_K] * mf[MF_E_TV] / max(mf[MF_E_NT], 1.0)
     p_jump = _switch(dt, mc[MC_TAU_JUMP])
     p_step = _switch(dt, mc[MC_TAU_DIST])  # a disturbance steps again about as often as it ends
     jump_var = mc[MC_SIG_JUMP] ** 2
