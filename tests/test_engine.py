@@ -274,18 +274,20 @@ def test_the_source_without_the_compiler_gives_the_same_numbers(tmp_path, estima
 
 def test_a_time_step_beyond_any_log_is_refused_in_every_path():
     """A step of 7.7e76 s (hypothesis found it: the drift's variance overflowed and bias_sd was
-    NaN) is no sample spacing: the batch call refuses it naming the row, and the stream refuses
-    such a time; a step of 1e9 s, the most there is, is compensated with finite numbers."""
+    NaN) is no sample spacing: the batch call refuses a step beyond 1e9 s naming the row, and
+    both paths refuse a first time so far from 0 that the init window cannot be told from it;
+    a step of 1e9 s, the most there is, is compensated with finite numbers."""
     import gyrodrift
     from gyrodrift import compensate_arrays
 
     zeros = np.zeros(2)
     with pytest.raises(LogFormatError, match=r"arrays: row 1: time must be finite and strictly increasing, by at most"):
+        compensate_arrays(t_s=np.array([0.0, 2e9]), gyro_z_dps=zeros, temp_c=zeros, heading_deg=zeros)
+    with pytest.raises(LogFormatError, match=r"arrays: row 0: time -7.74348e\+76 s is too far from 0"):
         compensate_arrays(t_s=np.array([-7.74348371e76, 0.0]), gyro_z_dps=zeros, temp_c=zeros, heading_deg=zeros)
     comp = gyrodrift.Compensator(provisional=False)
-    with pytest.raises(LogFormatError, match=r"^stream: "):  # at -7.7e76 s its 30-s init window ends at once
-        comp.push(-7.74348371e76, 0.0, 0.0, 0.0)
-        comp.push(0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(LogFormatError, match=r"^stream: row 0: time -7.74348e\+76 s is too far from 0 for the 30-s init"):
+        comp.push(-7.74348371e76, 0.0, 0.0, 0.0)  # its 30-s init window would end at once
     out = compensate_arrays(t_s=np.array([-1e9, 0.0]), gyro_z_dps=zeros, temp_c=zeros, heading_deg=zeros)
     assert np.isfinite(out[["rate_z", "bias_z", "heading", "bias_sd"]].to_numpy()).all()
 

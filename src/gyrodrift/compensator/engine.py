@@ -281,6 +281,10 @@ class ChunkEngine:
         ``init_s`` after it."""
         if not (math.isfinite(g) and math.isfinite(T)):
             raise LogFormatError(f"{self.source}: the first sample needs gyro_z and temp values")
+        if self.cfg.init_s > 0 and not t + self.cfg.init_s > t:  # a window float64 cannot tell from t
+            raise LogFormatError(f"{self.source}: row 0: time {t:g} s is too far from 0 for the {self.cfg.init_s:g}-s "
+                                 "init window to be told from it; give times in seconds (from the log's start, or "
+                                 "the Unix epoch)")
         self._t0 = t
         self._fs[L.F_TSTART] = t + self.cfg.init_s
 
