@@ -213,18 +213,19 @@ def fit(mag, down) -> MagCalibration:
     return MagCalibration(True, **result)
 
 
-def inconsistency(samples: "MagSamples") -> float:
+def inconsistency(samples: "MagSamples", cal: "MagCalibration | None" = None) -> float:
     """How far the field of ``samples``, calibrated by its :func:`fit`, is from constant in
     the world: the relative RMS of both parts the fit makes constant, its strength and its
     vertical part along the samples' down vectors (``sqrt(norm² + vertical²)``, fractions of the
     strength; NaN without a fit). A down vector that is the platform's true tilt leaves the
     vertical part constant; one that leans with the platform's accelerations does not, however
     the fit moves the offsets (a car's fit with the accelerometer's down takes a z offset of most
-    of the vertical field, which no rotation about the vertical can show, to hide its leaning)."""
+    of the vertical field, which no rotation about the vertical can show, to hide its leaning).
+    ``cal``: that fit, when the caller has it."""
     mag, down = samples.arrays()
     if mag.shape[0] < 100:
         return math.nan
-    cal = fit(mag, down)
+    cal = fit(mag, down) if cal is None else cal
     if not np.all(np.isfinite(cal.offset)):
         return math.nan
     mc = (mag - np.asarray(cal.offset)) * np.asarray(cal.scale)
@@ -366,13 +367,14 @@ def uncalibrated_note(samples: MagSamples, source: str, mode=False) -> str | Non
             f"{ADVICE[mode]}")
 
 
-def auto_calibration(samples: MagSamples) -> MagCalibration:
+def auto_calibration(samples: MagSamples, cal: MagCalibration | None = None) -> MagCalibration:
     """The calibration ``mag_calibration = "auto"`` applies: the fit from the log when the
     magnetometer looks uncalibrated (:func:`looks_uncalibrated`), or when the fit makes its
     heading agree with the gyro's turns (:func:`agrees_better`: a deviation with the heading shows
     there even where the field's strength hardly scatters), its note saying why; else none (not
-    ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note)."""
-    cal = fit(*samples.arrays())
+    ``ok``, ``why`` :data:`LOOKS_CALIBRATED`, which needs no note). ``cal``: the samples'
+    :func:`fit`, when the caller has it."""
+    cal = fit(*samples.arrays()) if cal is None else cal
     found = looks_uncalibrated(*samples.arrays(), cal)
     if found is None:
         agree = agrees_better(samples, cal)

@@ -126,9 +126,12 @@ class MagFit:
         if self.tilt is None:
             return None
         samples, tilt = self.samples, None
-        if self.by_gravity is not None and magcal.inconsistency(self.by_gravity) < magcal.inconsistency(self.samples):
-            samples, tilt = self.by_gravity, "the gyro-aided gravity's tilt"
-        cal = magcal.auto_calibration(samples) if self.config.mag_calibration == "auto" else magcal.fit(*samples.arrays())
+        fitted = magcal.fit(*samples.arrays())  # each sample set fitted once
+        if self.by_gravity is not None:
+            by_gravity = magcal.fit(*self.by_gravity.arrays())
+            if magcal.inconsistency(self.by_gravity, by_gravity) < magcal.inconsistency(samples, fitted):
+                samples, fitted, tilt = self.by_gravity, by_gravity, "the gyro-aided gravity's tilt"
+        cal = magcal.auto_calibration(samples, fitted) if self.config.mag_calibration == "auto" else fitted
         return cal if tilt is None or not cal.ok else dataclasses.replace(cal, tilt=tilt)
 
 
