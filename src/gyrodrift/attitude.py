@@ -375,13 +375,13 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             # eq. (3): m = d − (r_d V / g)(d × e_x), r_d = (ω − b)·d the rate about down, made a
             # unit vector; H its derivative in d and V to first order (the lean's own change with
             # d is second order; its change with b is left to the offsets' own measurement)
-            rd = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2
+            rd_g = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2  # r_d / g
             u = (0.0, d2, -d1)  # d × e_x
             dv = (d0, d1, d2)
-            lean = rd * state[_V]
+            lean = rd_g * state[_V]
             scale = 1.0 / math.sqrt(1.0 + lean * lean * (d1 * d1 + d2 * d2))
             for r in range(3):
-                h[r] = -rd * u[r]
+                h[r] = -rd_g * u[r]
                 y[r] = (m0, m1, m2)[r] - (dv[r] - lean * u[r]) * scale
             _project(p, h, ph, s)  # eq. (5): the gate, on one sample's own spread
             _inverse3(s, state[_NOISE] + motion_var, s_inv)
