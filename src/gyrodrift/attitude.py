@@ -23,6 +23,7 @@ __all__ = [
     "NORM_TOL", "MAX_RATE_DPS", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "MAX_GAP_S", "MAX_BIAS_DPS",
     "MIN_COS2_PITCH", "LEARNED_S", "ACC_NOISE0_DEG", "NOISE_TAU_S", "MOTION_SD_DEG", "MOTION_TAU_S", "ARW_DEG",
     "ROTATION_SD", "BIAS_SD0_DPS", "BIAS_RW_DPS", "SPEED_SD0_MPS", "SPEED_RW_MPS", "TILT_SD0_DEG", "GATE_NIS",
+    "LEAN_SIGMAS",
     "new_state", "propagate", "tilt_sd_deg", "gravity_down", "GravityFilter", "RawTilt", "accel_down",
     "TILT_SOURCES",
 ]
@@ -78,6 +79,10 @@ TILT_SD0_DEG = 2.0
 #: The accelerometer is taken when its normalised innovation squared is at most this
 #: (chi-squared with 2 degrees of freedom at 99.73 %: three sigma).
 GATE_NIS = 11.83
+#: The centripetal part (eq. 3) is predicted only where the rate about down is beyond this many
+#: standard deviations of the offsets' own uncertainty about down: a rate an unlearned offset
+#: could make is no turn (on a straight, a z offset times the speed would lean the prediction).
+LEAN_SIGMAS = 3.0
 
 _GRAVITY_MPS2 = 9.80665
 
@@ -374,8 +379,15 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
             # eq. (3): m = d − (r_d V / g)(d × e_x), r_d = (ω − b)·d the rate about down, made a
             # unit vector; H its derivative in d and V to first order (the lean's own change with
-            # d is second order; its change with b is left to the offsets' own measurement)
+            # d is second order; its change with b is left to the offsets' own measurement); no
+            # lean where r_d is within LEAN_SIGMAS of what the offsets' uncertainty could make
             rd_g = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2  # r_d / g
+            var_bd = 0.0  # the offsets' variance about down: a rate within LEAN_SIGMAS of it is no turn
+            for r in range(3):
+                for c in range(3):
+                    var_bd += (d0, d1, d2)[r] * p[3 + r, 3 + c] * (d0, d1, d2)[c]
+            if (rd_g * _GRAVITY_MPS2) ** 2 <= LEAN_SIGMAS * LEAN_SIGMAS * var_bd:
+                rd_g = 0.0
             u = (0.0, d2, -d1)  # d × e_x
             dv = (d0, d1, d2)
             lean = rd_g * state[_V]
