@@ -122,21 +122,6 @@ def tilt_sd_deg(state: np.ndarray) -> float:
 
 
 @jit
-def _rotate(v0, v1, v2, r0, r1, r2):
-    """``v`` rotated by the rotation vector ``r`` (rad; Rodrigues' formula)."""
-    ang = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-    if ang < 1e-12:
-        return v0 + (r1 * v2 - r2 * v1), v1 + (r2 * v0 - r0 * v2), v2 + (r0 * v1 - r1 * v0)
-    k0, k1, k2 = r0 / ang, r1 / ang, r2 / ang
-    c, s = math.cos(ang), math.sin(ang)
-    kv = k0 * v0 + k1 * v1 + k2 * v2
-    x0 = v0 * c + (k1 * v2 - k2 * v1) * s + k0 * kv * (1.0 - c)
-    x1 = v1 * c + (k2 * v0 - k0 * v2) * s + k1 * kv * (1.0 - c)
-    x2 = v2 * c + (k0 * v1 - k1 * v0) * s + k2 * kv * (1.0 - c)
-    return x0, x1, x2
-
-
-@jit
 def _about_the_vertical(w0, w1, w2, d0, d1, d2):
     """Whether the body turns (at least ``TURN_MIN_DPS``, bias removed; rad/s in) about the axis
     its tilt ``d`` calls vertical, within ``TURN_AXIS_DEG``: a turn, in which the accelerometer
@@ -205,8 +190,7 @@ def _inverse3(a, r, out):
 
 @jit
 def _rotation(rot, r0, r1, r2):
-    """``rot`` = the rotation matrix of the rotation vector ``r`` (rad; Rodrigues' formula, as
-    :func:`_rotate`)."""
+    """``rot`` = the rotation matrix of the rotation vector ``r`` (rad; Rodrigues' formula)."""
     ang = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
     if ang < 1e-12:
         rot[0, 0], rot[0, 1], rot[0, 2] = 1.0, -r2, r1
@@ -352,7 +336,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             if have_acc:
                 first = state[_STARTED] == 0.0
                 if first:
-                    state[_G] = 9.80665 if fn > 3.0 else 1.0
+                    state[_G] = _GRAVITY_MPS2 if fn > 3.0 else 1.0
                     state[_NOISE] = math.radians(ACC_NOISE0_DEG) ** 2
                 _start(state, -f0 / fn, -f1 / fn, -f2 / fn, first)
                 state[_M], state[_M + 1], state[_M + 2] = -f0 / fn, -f1 / fn, -f2 / fn
@@ -381,15 +365,14 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             # unit vector; H its derivative in d and V to first order (the lean's own change with
             # d is second order; its change with b is left to the offsets' own measurement); no
             # lean where r_d is within LEAN_SIGMAS of what the offsets' uncertainty could make
-            rd_g = (w0 * d0 + w1 * d1 + w2 * d2) / _GRAVITY_MPS2  # r_d / g
+            dv = (d0, d1, d2)
+            rate_d = w0 * d0 + w1 * d1 + w2 * d2
             var_bd = 0.0  # the offsets' variance about down: a rate within LEAN_SIGMAS of it is no turn
             for r in range(3):
                 for c in range(3):
-                    var_bd += (d0, d1, d2)[r] * p[3 + r, 3 + c] * (d0, d1, d2)[c]
-            if (rd_g * _GRAVITY_MPS2) ** 2 <= LEAN_SIGMAS * LEAN_SIGMAS * var_bd:
-                rd_g = 0.0
+                    var_bd += dv[r] * p[3 + r, 3 + c] * dv[c]
+            rd_g = 0.0 if rate_d * rate_d <= LEAN_SIGMAS * LEAN_SIGMAS * var_bd else rate_d / _GRAVITY_MPS2
             u = (0.0, d2, -d1)  # d × e_x
-            dv = (d0, d1, d2)
             lean = rd_g * state[_V]
             scale = 1.0 / math.sqrt(1.0 + lean * lean * (d1 * d1 + d2 * d2))
             for r in range(3):

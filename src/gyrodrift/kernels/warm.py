@@ -87,7 +87,6 @@ SIGNATURES: dict[str, list[str]] = {
     "attitude.propagate": ["F1r F1r F1r F1r F2r F1 F2 F1", "F1 F1 F1 F1 F2 F1 F2 F1"],  # chunks; a stream's rows
     "attitude._heading_rate": ["i f F1 F2 F1"],
     "attitude._about_the_vertical": ["f f f f f f"],
-    "attitude._rotate": ["f f f f f f"],
     "attitude._start": ["F1 f f f b"],
     "attitude._inverse3": ["F2 f F2"],
     "attitude._rotation": ["F2 f f f"],
