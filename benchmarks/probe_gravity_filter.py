@@ -9,6 +9,13 @@ vector and the true one over each log, and the median, mean and worst over the s
     python benchmarks/probe_gravity_filter.py                   # tuning seeds 0-11
     python benchmarks/probe_gravity_filter.py held-out 20
     python benchmarks/probe_gravity_filter.py tuning 6 coverage # the filter's own sd against its error
+    python benchmarks/probe_gravity_filter.py flight            # the real telemetry flight (needs pymavlink)
+    python benchmarks/probe_gravity_filter.py speed             # rows per second, one core
+
+``flight``: roll and pitch of ``tests/data/ardupilot_vtol.tlog`` against its autopilot's
+ATTITUDE messages (interpolated to the log's rows, both clocks from their first message), RMS,
+by the filter and by the accelerometer alone. ``speed``: :meth:`GravityFilter.feed` on 1 M rows
+of a synthetic 100-Hz IMU in one call, with the accelerometer on every row and on its first only.
 
 ``coverage``: the tilt error over the filter's sd (:attr:`GravityFilter.tilt_sd_deg`) at the end
 of every second after the first 30 s; two axes across gravity, so an honest sd puts the ratio
@@ -47,29 +54,30 @@ def true_down(cls: str, seed: int) -> np.ndarray:
                             np.cos(roll) * math.cos(pitch)])
 
 
-def tilt_rms_deg(cls: str, seed: int) -> float:
-    """RMS tilt error of the gravity filter on one generated case, deg."""
-    from gyrodrift.attitude import GravityFilter
+def _case(cls: str, seed: int):
+    """A generated case's times, x/y/z gyro columns, accelerometer and true down vectors."""
     from gyrodrift.simulate.generator import generate
 
     log = generate(cls, seed).log
-    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy(float)
-    down = GravityFilter().feed(log["t"].to_numpy(float), *(log[c].to_numpy(float) for c in
-                                                          ("gyro_x", "gyro_y", "gyro_z")), acc)
-    cos = np.clip(np.sum(down * true_down(cls, seed), axis=1), -1.0, 1.0)
+    gyro = [log[c].to_numpy(float) for c in ("gyro_x", "gyro_y", "gyro_z")]
+    return log["t"].to_numpy(float), gyro, log[["acc_x", "acc_y", "acc_z"]].to_numpy(float), true_down(cls, seed)
+
+
+def tilt_rms_deg(cls: str, seed: int) -> float:
+    """RMS tilt error of the gravity filter on one generated case, deg."""
+    from gyrodrift.attitude import GravityFilter
+
+    t, gyro, acc, truth = _case(cls, seed)
+    down = GravityFilter().feed(t, *gyro, acc)
+    cos = np.clip(np.sum(down * truth, axis=1), -1.0, 1.0)
     return float(np.sqrt(np.mean(np.degrees(np.arccos(cos)) ** 2)))
 
 
 def coverage(cls: str, seed: int) -> np.ndarray:
     """The tilt error over the filter's sd at the end of each second after the first 30 s."""
     from gyrodrift.attitude import GravityFilter
-    from gyrodrift.simulate.generator import generate
 
-    log = generate(cls, seed).log
-    truth = true_down(cls, seed)
-    t = log["t"].to_numpy(float)
-    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy(float)
-    gyro = [log[c].to_numpy(float) for c in ("gyro_x", "gyro_y", "gyro_z")]
+    t, gyro, acc, truth = _case(cls, seed)
     filt, ratios = GravityFilter(), []
     edges = np.searchsorted(t, np.arange(t[0], t[-1], 1.0))
     for a, b in zip(edges[:-1], edges[1:]):
@@ -82,9 +90,64 @@ def coverage(cls: str, seed: int) -> np.ndarray:
     return np.asarray(ratios)
 
 
+def flight() -> str:
+    """Roll and pitch RMS (deg) of the real telemetry flight, by the filter and the accelerometer."""
+    from pathlib import Path
+
+    from pymavlink import mavutil
+
+    from gyrodrift.attitude import GravityFilter, accel_down
+    from gyrodrift.compass import roll_pitch_deg
+    from gyrodrift.io import read_log
+
+    path = Path(__file__).resolve().parents[1] / "tests" / "data" / "ardupilot_vtol.tlog"
+    link = mavutil.mavlink_connection(str(path))
+    stamps, attitude = [], []
+    while (msg := link.recv_match(type="ATTITUDE")) is not None:
+        stamps.append(msg._timestamp)
+        attitude.append((math.degrees(msg.roll), math.degrees(msg.pitch)))
+    stamps, attitude = np.asarray(stamps) - stamps[0], np.asarray(attitude)
+    log = read_log(path)
+    t = log["t"].to_numpy(float)
+    acc = log[["acc_x", "acc_y", "acc_z"]].to_numpy(float)
+    down = GravityFilter().feed(t, *(log[c].to_numpy(float) for c in ("gyro_x", "gyro_y", "gyro_z")), acc)
+    truth = [np.interp(t - t[0], stamps, attitude[:, k]) for k in range(2)]
+    cells = []
+    for d in (down, accel_down(acc)):
+        est = roll_pitch_deg(*(-d).T)
+        cells += [f"{np.sqrt(np.nanmean((est[k] - truth[k]) ** 2)):.1f}" for k in range(2)]
+    return ("| tilt | roll | pitch (deg RMS against ATTITUDE) |\n| :--- | ---: | ---: |\n"
+            f"| gyro-aided gravity | {cells[0]} | {cells[1]} |\n| accelerometer alone | {cells[2]} | {cells[3]} |")
+
+
+def speed() -> str:
+    """Rows per second of the filter on 1 M rows, the accelerometer on every row and on the first only."""
+    import time
+
+    from gyrodrift.attitude import GravityFilter
+
+    n = 1_000_000
+    rng = np.random.default_rng(0)
+    t = np.arange(n) / 100.0
+    gyro = rng.normal(0.0, 5.0, (3, n))
+    acc = np.column_stack([rng.normal(0.0, 0.02, n), rng.normal(0.0, 0.02, n), rng.normal(-1.0, 0.02, n)])
+    GravityFilter().feed(t[:10], *gyro[:, :10], acc[:10])  # compiled
+    lines = []
+    first_only = np.full_like(acc, np.nan)
+    first_only[0] = acc[0]
+    for name, a in (("every row", acc), ("its first row only", first_only)):
+        start = time.perf_counter()
+        GravityFilter().feed(t, *gyro, a)
+        lines.append(f"accelerometer on {name}: {n / (time.perf_counter() - start) / 1e6:.2f} M rows/s")
+    return "\n".join(lines)
+
+
 def main(argv: list[str]) -> int:
     from gyrodrift.simulate.generator import seeds
 
+    if argv and argv[0] in ("flight", "speed"):
+        print(flight() if argv[0] == "flight" else speed())
+        return 0
     split = argv[0] if argv else "tuning"
     n = int(argv[1]) if len(argv) > 1 else 12
     if len(argv) > 2 and argv[2] == "coverage":
