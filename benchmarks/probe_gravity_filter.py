@@ -3,7 +3,7 @@ filter a Kalman filter"), before any estimator runs.
 
 For the generated classes with x/y gyros (their true roll and pitch rebuilt from the recipe:
 ``imu-drive`` a constant mount, ``handheld-imu`` the hand's wobbling roll, ``banked-flight`` the
-coordinated turn's bank), the RMS angle between :class:`gyrodrift.attitude.GravityFilter`'s down
+coordinated turn's bank, ``quadplane`` its whole attitude), the RMS angle between :class:`gyrodrift.attitude.GravityFilter`'s down
 vector and the true one over each log, and the median, mean and worst over the seeds::
 
     python benchmarks/probe_gravity_filter.py                   # tuning seeds 0-11
@@ -31,7 +31,7 @@ import zlib
 
 import numpy as np
 
-CLASSES = ("handheld-imu", "imu-drive", "banked-flight")
+CLASSES = ("handheld-imu", "imu-drive", "banked-flight", "quadplane")
 
 
 def true_down(cls: str, seed: int) -> np.ndarray:
@@ -43,15 +43,17 @@ def true_down(cls: str, seed: int) -> np.ndarray:
     fs = rec.fs_sim_hz
     t = np.arange(int(math.floor(rec.duration_s * fs)) + 1) / fs
     rows = G._logged_rows(rec, t, rng["log"])
-    if rec.airspeed is not None:
+    pitch = np.full(rows.size, math.radians(rec.pitch_deg))
+    if rec.attitude is not None:
+        att = rec.attitude(t, rec.rate(t))
+        roll, pitch = np.radians(att.roll_deg[rows]), np.radians(att.pitch_deg[rows])
+    elif rec.airspeed is not None:
         roll = np.arctan2(rec.airspeed(t) * np.radians(rec.rate(t)), G.GRAVITY_MPS2)[rows]
     elif rec.wobble is not None:
         roll = np.radians(rec.wobble(t)[rows])
     else:
         roll = np.full(rows.size, math.radians(rec.roll_deg))
-    pitch = math.radians(rec.pitch_deg)
-    return np.column_stack([np.full(rows.size, -math.sin(pitch)), np.sin(roll) * math.cos(pitch),
-                            np.cos(roll) * math.cos(pitch)])
+    return np.column_stack([-np.sin(pitch), np.sin(roll) * np.cos(pitch), np.cos(roll) * np.cos(pitch)])
 
 
 def _case(cls: str, seed: int):

@@ -19,7 +19,7 @@ import math
 import zlib
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Callable, Mapping
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -105,7 +105,7 @@ class _Recipe:
     accel_fwd: Callable[[np.ndarray], np.ndarray] | None = None
     accel_lat: Callable[[np.ndarray], np.ndarray] | None = None
     offset: Callable[[np.ndarray], np.ndarray] | None = None
-    vibration: Callable[[np.ndarray], np.ndarray] | None = None  # gyro noise multiplier (>= 1)
+    vibration: Callable[[np.ndarray], np.ndarray] | None = None  # every logged gyro's noise multiplier (>= 1)
     dropouts: tuple[tuple[float, float], ...] = ()
     heading0_deg: float = 0.0
     roll_deg: float = 0.0
@@ -126,6 +126,20 @@ class _Recipe:
     # a hand-held body's roll, deg, as a function of time (its tilt wobbles as it is turned;
     # no centripetal part: turned about itself)
     wobble: Callable[[np.ndarray], np.ndarray] | None = None
+    # a body whose whole attitude and acceleration change: a function of the grid's times and
+    # heading rate giving its :class:`_Attitude` on the grid (None: the constant or wobbling tilt)
+    attitude: Callable[[np.ndarray, np.ndarray], "_Attitude"] | None = None
+
+
+class _Attitude(NamedTuple):
+    """A body's roll and pitch (deg, ZYX Euler angles) and its acceleration in the heading-aligned
+    level frame (forward, right, down; m/s²), on the simulation grid."""
+
+    roll_deg: np.ndarray
+    pitch_deg: np.ndarray
+    accel_fwd_mps2: np.ndarray
+    accel_lat_mps2: np.ndarray
+    accel_down_mps2: np.ndarray
 
 
 def _u(rng, lo, hi) -> float:
@@ -556,6 +570,83 @@ def _banked_flight(rng, scale):
                    log_fs_hz=float(rng.choice([4.0, 10.0, 25.0, 50.0])), triad=_child(rng))
 
 
+def _sines(waves, t):
+    """The sum of sinusoids ``(amplitude, period s, phase rad)`` at the times ``t``."""
+    out = np.zeros(t.size)
+    for amp, period, phase in waves:
+        out += amp * np.sin(2.0 * np.pi * t / period + phase)
+    return out
+
+
+def _quadplane(rng, scale):
+    """A quadplane (VTOL) flight: a warm-up on the ground; a hover with yaw turns, its lift
+    motors' vibration on the gyros, a wobble in roll and pitch as it holds its position and (on
+    half) a compass error that follows the lift throttle; a transition to forward flight with the
+    nose down as it speeds up; coordinated turns, climbs, descents, speed changes and gusts in
+    roll and pitch; a back transition with the nose up, a hover, a landing. The x/y gyros, the
+    raw magnetometer and the accelerometer, logged at 4–50 Hz (point samples of a 100-Hz run)."""
+    ground, t_land, duration, warm = _flight_times(rng, scale, (60.0, 240.0))
+    flight = t_land - ground
+    t_fwd = ground + _u(rng, 0.05, 0.15) * flight  # the transition to forward flight begins
+    trans, back = _u(rng, 8.0, 20.0), _u(rng, 10.0, 25.0)
+    t_back = t_land - _u(rng, 0.03, 0.10) * flight - back  # the back transition begins
+    cruise = _u(rng, 14.0, 25.0)
+    speed_steps, level, t0 = [(t_fwd, trans, cruise)], cruise, t_fwd + trans
+    for _ in range(int(rng.integers(0, 4))):
+        t0 += _u(rng, 20.0, 120.0)
+        ramp = _u(rng, 5.0, 15.0)
+        if t0 + ramp > t_back - 10.0:
+            break
+        new = float(np.clip(level + _sign(rng) * _u(rng, 2.0, 6.0), 12.0, 28.0))
+        speed_steps.append((t0, ramp, new - level))
+        level, t0 = new, t0 + ramp
+    speed_steps.append((t_back, back, -level))
+    climbs, t0 = [], t_fwd + trans + _u(rng, 10.0, 60.0)
+    while True:
+        ramp, hold, gamma = _u(rng, 3.0, 6.0), _u(rng, 10.0, 40.0), _sign(rng) * _u(rng, 3.0, 10.0)
+        if t0 + 2.0 * ramp + hold > t_back - 10.0:
+            break
+        climbs += [(t0, ramp, gamma), (t0 + ramp + hold, ramp, -gamma)]
+        t0 += 2.0 * ramp + hold + _u(rng, 20.0, 150.0)
+    turns = (_turn_plan(rng, ground + _u(rng, 3.0, 8.0), t_fwd - 10.0, (45.0, 180.0), (5.0, 20.0), (5.0, 30.0),
+                        after=lambda a, p: abs(a) / p + 2.0)
+             + _turn_plan(rng, t_fwd + trans + _u(rng, 5.0, 30.0), t_back - 20.0, (45.0, 720.0), (5.0, 20.0),
+                          (10.0, 60.0), after=lambda a, p: abs(a) / p + 2.0))
+    pitch0, dip, flare = _u(rng, -3.0, 5.0), _u(rng, 0.0, 8.0), _u(rng, 5.0, 20.0)
+    pitch_gust = [(_u(rng, 0.3, 2.0), _u(rng, 1.5, 8.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(2)]
+    roll_gust = [(_u(rng, 0.3, 3.0), _u(rng, 1.5, 8.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(2)]
+    k_lift = _sign(rng) * _u(rng, 3.0, 12.0) if rng.random() < 0.5 else 0.0
+    vib, cool, cool_tau = _u(rng, 1.0, 5.0), _u(rng, 3.0, 12.0), _u(rng, 60.0, 300.0)
+
+    def lift(t):  # the lift motors' share: airborne below 12 m/s
+        return _pulse(t, ground, t_land, 3.0) * np.clip(1.0 - sum_of_steps(t, speed_steps) / 12.0, 0.0, 1.0)
+
+    def attitude(t, rate):
+        vh, air, hover = sum_of_steps(t, speed_steps), _pulse(t, ground, t_land, 3.0), lift(t)
+        gust_p, gust_r = air * _sines(pitch_gust, t), air * _sines(roll_gust, t)
+        gamma = sum_of_steps(t, climbs)
+        pitch = (pitch0 + gamma - dip * _pulse(t, t_fwd, t_fwd + trans, trans / 3.0)
+                 + flare * _pulse(t, t_back, t_back + back, back / 3.0) + gust_p)
+        turn = vh * np.radians(rate)
+        roll = np.degrees(np.arctan2(turn, GRAVITY_MPS2)) + gust_r
+        # hovering, a tilt is what moves the body (the thrust leans with it); wing-borne, a gust
+        # in pitch bends the path and one in roll slips
+        fwd = sum_of_step_slopes(t, speed_steps) - hover * GRAVITY_MPS2 * np.tan(np.radians(gust_p))
+        lat = turn + hover * GRAVITY_MPS2 * np.tan(np.radians(gust_r))
+        down = (-np.gradient(vh * np.tan(np.radians(gamma)), t)
+                - (1.0 - hover) * vh * np.radians(np.gradient(gust_p, t)))
+        return _Attitude(roll, pitch, fwd, lat, down)
+
+    def temp(t):
+        return warm(t) - cool * np.clip(1.0 - np.exp(-(t - t_fwd) / cool_tau), 0.0, None) * (t > t_fwd)
+
+    return _Recipe(duration, 100.0, _device(rng), _compass(rng, rate_hz=float(rng.choice([10.0, 25.0, 50.0]))), temp,
+                   rate=_turns_rate(turns, ramp=2.0), offset=lambda t: k_lift * lift(t),
+                   vibration=lambda t: 1.0 + vib * lift(t), heading0_deg=_u(rng, 0, 360), pitch_deg=pitch0,
+                   compass_form="raw", log_fs_hz=float(rng.choice([4.0, 10.0, 25.0, 50.0])), triad=_child(rng),
+                   attitude=attitude)
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -585,6 +676,7 @@ _BUILDERS: dict[str, Callable] = {
     "banked-flight": _banked_flight,
     "imu-drive": _imu_drive,
     "handheld-imu": _handheld_imu,
+    "quadplane": _quadplane,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
@@ -717,6 +809,18 @@ def _wobbling(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> tuple[np.nda
     return roll[rows], _rolling(rec, t, rows, rate, roll, temp_true, temp_rate)
 
 
+def _attitude_rates(t, rows, rate, att: _Attitude) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The body rates (deg/s) of the logged ``rows`` of a body turning at the heading rate ``rate``
+    whose roll and pitch change (``att``, every grid row): ZYX Euler kinematics,
+    ``p = φ̇ − ψ̇ sin θ``, ``q = θ̇ cos φ + ψ̇ sin φ cos θ``, ``r = −θ̇ sin φ + ψ̇ cos φ cos θ``."""
+    phi, theta = np.radians(att.roll_deg[rows]), np.radians(att.pitch_deg[rows])
+    roll_rate, pitch_rate = np.gradient(att.roll_deg, t)[rows], np.gradient(att.pitch_deg, t)[rows]
+    psi = rate[rows]
+    return (roll_rate - psi * np.sin(theta),
+            pitch_rate * np.cos(phi) + psi * np.sin(phi) * np.cos(theta),
+            -pitch_rate * np.sin(phi) + psi * np.cos(phi) * np.cos(theta))
+
+
 def _mounted(rec: _Recipe, t, rows, rate, temp_true, temp_rate) -> dict:
     """The x/y gyro columns of the logged ``rows`` of a ground vehicle whose unit is mounted at the
     constant roll and pitch of ``rec``, turning about the vertical: ``p = −ψ̇ sin θ``,
@@ -733,17 +837,18 @@ CROSS_AXIS_SD, CROSS_AXIS_MAX = 0.01, 0.03
 
 def _xy_gyros(rec: _Recipe, t, rows, body: dict, temp_true, temp_rate, rate_z) -> dict:
     """The x/y gyros' readings of the body rates ``body`` (deg/s, the logged rows): each its own
-    random device and noise (``rec.triad``), a scale-factor error as the z gyro's
+    random device and noise (``rec.triad``; times ``rec.vibration``), a scale-factor error as the z gyro's
     (:func:`_scale_factor_error`) and a share of the z rate ``rate_z`` (deg/s, the logged rows:
     cross-axis sensitivity and misalignment, :data:`CROSS_AXIS_SD`)."""
     trng = rec.triad()
     fs = rec.fs_sim_hz
+    vib = rec.vibration(t[rows]) if rec.vibration is not None else 1.0
     error = {}
     for name in (GYRO_X, GYRO_Y):
         dev = _device(trng)
         bias_rng, rrw_rng, white_rng = (np.random.default_rng(int(trng.integers(2**63))) for _ in range(3))
         bias = true_bias(dev, t, 1.0 / fs, temp_true, temp_rate, bias_rng, rrw_rng)
-        error[name] = bias[rows] + dev.white_sigma_dps(fs) * white_rng.standard_normal(rows.size)
+        error[name] = bias[rows] + dev.white_sigma_dps(fs) * vib * white_rng.standard_normal(rows.size)
     for name in (GYRO_X, GYRO_Y):  # drawn after the devices, which keep their draws
         sf = _scale_factor_error(temp_true[rows], trng)
         cross = float(np.clip(CROSS_AXIS_SD * trng.standard_normal(), -CROSS_AXIS_MAX, CROSS_AXIS_MAX))
@@ -785,25 +890,35 @@ def generate(cls: str, seed: int, *, duration_scale: float = 1.0) -> GeneratedCa
     tl = t[rows]
     sigma = dev.white_sigma_dps(fs) * (rec.vibration(tl) if rec.vibration is not None else 1.0)
     roll, accel_lat, xy = rec.roll_deg, rec.accel_lat(tl) if rec.accel_lat is not None else None, {}
-    if rec.airspeed is not None:
+    pitch, accel_fwd, accel_down = rec.pitch_deg, rec.accel_fwd(tl) if rec.accel_fwd is not None else None, None
+    if rec.attitude is not None:
+        att = rec.attitude(t, rate)
+        roll, pitch, accel_fwd, accel_lat, accel_down = (a[rows] for a in att)
+        rate_x, rate_y, rate_z = _attitude_rates(t, rows, rate, att)
+        xy = _xy_gyros(rec, t, rows, {GYRO_X: rate_x, GYRO_Y: rate_y}, temp_true, temp_rate, rate_z)
+    elif rec.airspeed is not None:
         roll, accel_lat, xy = _coordinated(rec, t, rows, rate, temp_true, temp_rate)
     elif rec.wobble is not None:
         roll, xy = _wobbling(rec, t, rows, rate, temp_true, temp_rate)
     elif rec.triad is not None:
         xy = _mounted(rec, t, rows, rate, temp_true, temp_rate)
-    body = (np.cos(np.radians(roll)) if np.ndim(roll) else math.cos(math.radians(roll))) \
-        * math.cos(math.radians(rec.pitch_deg))
     sf = _scale_factor_error(temp_true[rows], rng["scale"])
-    gyro = body * (1.0 + sf) * rate[rows] + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
+    if rec.attitude is None:  # a constant pitch: the z rate is the heading rate's share along z
+        body = (np.cos(np.radians(roll)) if np.ndim(roll) else math.cos(math.radians(roll))) \
+            * math.cos(math.radians(rec.pitch_deg))
+        gyro = body * (1.0 + sf) * rate[rows]
+    else:
+        gyro = (1.0 + sf) * rate_z
+    gyro = gyro + bias[rows] + sigma * rng["white"].standard_normal(rows.size)
     temp = temperature_reading(temp_true, dev, rng["temp"])[rows]
     if rec.temp_channel_c is not None:
         temp = np.full(rows.size, float(rec.temp_channel_c))
     offset = rec.offset(tl) if rec.offset is not None else np.zeros(rows.size)
     zero = np.zeros(rows.size)
     motion = Motion(temp_c=temp_true[rows], temp_rate_cps=temp_rate[rows], heading_rate_dps=rate[rows],
-                    heading0_deg=rec.heading0_deg, roll_deg=roll, pitch_deg=rec.pitch_deg,
-                    accel_fwd_mps2=rec.accel_fwd(tl) if rec.accel_fwd is not None else zero,
-                    accel_lat_mps2=accel_lat if accel_lat is not None else zero,
+                    heading0_deg=rec.heading0_deg, roll_deg=roll, pitch_deg=pitch,
+                    accel_fwd_mps2=accel_fwd if accel_fwd is not None else zero,
+                    accel_lat_mps2=accel_lat if accel_lat is not None else zero, accel_down_mps2=accel_down,
                     interference_offset_deg=offset, compass_dropouts=rec.dropouts)
     mask = np.ones(rows.size, dtype=bool) if rec.telemetry else compass_rows(tl, rec.compass.rate_hz)
     heading, mag, acc = compass_columns(tl, heading_true[rows], motion, rec.compass, mask, rng["compass"])

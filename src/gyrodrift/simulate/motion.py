@@ -118,6 +118,7 @@ class Motion:
     pitch_deg: float = 0.0
     accel_fwd_mps2: np.ndarray | None = None
     accel_lat_mps2: np.ndarray | None = None
+    accel_down_mps2: np.ndarray | None = None
     interference: tuple[tuple[float, float, float], ...] = field(default=())
     interference_offset_deg: np.ndarray | None = None
     compass_dropouts: tuple[tuple[float, float], ...] = field(default=())

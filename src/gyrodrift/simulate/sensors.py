@@ -130,9 +130,15 @@ def random_compass(rng: np.random.Generator) -> CompassModel:
     )
 
 
-def _body_from_level(vec_level: np.ndarray, roll_deg, pitch_deg: float) -> np.ndarray:
+def _body_from_level(vec_level: np.ndarray, roll_deg, pitch_deg) -> np.ndarray:
     """Rotate (N, 3) vectors from the heading-aligned level frame into FRD body axes
-    (``roll_deg`` a number, or one per vector)."""
+    (``roll_deg`` and ``pitch_deg`` each a number, or one per vector)."""
+    if np.ndim(pitch_deg):
+        phi, theta = np.radians(np.asarray(roll_deg, dtype=float)), np.radians(np.asarray(pitch_deg, dtype=float))
+        cp, sp, ct, st = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)
+        x, y, z = vec_level[:, 0], vec_level[:, 1], vec_level[:, 2]
+        xp, zp = ct * x - st * z, st * x + ct * z
+        return np.column_stack([xp, cp * y + sp * zp, -sp * y + cp * zp])
     if np.ndim(roll_deg):
         phi, theta = np.radians(np.asarray(roll_deg, dtype=float)), math.radians(pitch_deg)
         cp, sp, ct, st = np.cos(phi), np.sin(phi), math.cos(theta), math.sin(theta)
@@ -190,7 +196,10 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
     zero = np.zeros(n)
     fwd = motion.accel_fwd_mps2 if (compass.kinematic_tilt and motion.accel_fwd_mps2 is not None) else zero
     lat = motion.accel_lat_mps2 if (compass.kinematic_tilt and motion.accel_lat_mps2 is not None) else zero
-    force_level = np.column_stack([fwd / GRAVITY_MPS2, lat / GRAVITY_MPS2, -np.ones(n)])
+    down = -np.ones(n)
+    if compass.kinematic_tilt and motion.accel_down_mps2 is not None:
+        down = down + np.asarray(motion.accel_down_mps2, dtype=float) / GRAVITY_MPS2
+    force_level = np.column_stack([fwd / GRAVITY_MPS2, lat / GRAVITY_MPS2, down])
     acc = _body_from_level(force_level, motion.roll_deg, motion.pitch_deg)
 
     idx = np.flatnonzero(mask)
@@ -202,7 +211,8 @@ def compass_columns(t, heading_true, motion: Motion, compass: CompassModel, mask
     apparent = psi + compass.deviation(psi) + offset + noise
     mag = np.full((n, 3), np.nan)
     roll = np.asarray(motion.roll_deg)[idx] if np.ndim(motion.roll_deg) else motion.roll_deg
-    mag[idx] = _body_from_level(_apparent_field_level(apparent, offset, compass), roll, motion.pitch_deg)
+    pitch = np.asarray(motion.pitch_deg)[idx] if np.ndim(motion.pitch_deg) else motion.pitch_deg
+    mag[idx] = _body_from_level(_apparent_field_level(apparent, offset, compass), roll, pitch)
     if compass.hard_iron_ut != (0.0, 0.0, 0.0) or compass.soft_iron_gain != (1.0, 1.0, 1.0):  # not calibrated
         mag[idx] = mag[idx] * np.array(compass.soft_iron_gain) + np.array(compass.hard_iron_ut)
 
