@@ -20,7 +20,7 @@ from gyrodrift._columns import read_only_floats
 from gyrodrift.kernels import jit
 
 __all__ = [
-    "NORM_TOL", "MAX_RATE_DPS", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "MAX_GAP_S", "MAX_BIAS_DPS",
+    "MAX_RATE_DPS", "RELOCK_S", "TURN_MIN_DPS", "TURN_AXIS_DEG", "MAX_GAP_S", "MAX_BIAS_DPS",
     "MIN_COS2_PITCH", "LEARNED_S", "ACC_NOISE0_DEG", "NOISE_TAU_S", "MOTION_SD_DEG", "MOTION_TAU_S", "ARW_DEG",
     "ROTATION_SD", "BIAS_SD0_DPS", "BIAS_RW_DPS", "SPEED_SD0_MPS", "SPEED_RW_MPS", "TILT_SD0_DEG", "GATE_NIS",
     "LEAN_SIGMAS",
@@ -28,14 +28,11 @@ __all__ = [
     "TILT_SOURCES",
 ]
 
-#: Tolerance of the specific force's norm about 1 g (fraction of g): beyond it the body
-#: accelerates and the accelerometer is not taken.
-NORM_TOL = 0.05
 #: Largest gyro rate (norm of the three axes) at which a refused accelerometer counts towards
 #: RELOCK_S, deg/s.
 MAX_RATE_DPS = 10.0
-#: Refusals of the accelerometer, with the norm gate passed, that outlast its acceptances by
-#: this long, s, mean the tilt is lost: it starts again from the accelerometer.
+#: Refusals of the accelerometer that outlast its acceptances by this long, s, mean the tilt is
+#: lost: it starts again from the accelerometer.
 RELOCK_S = 20.0
 #: A body turning at least this fast (deg/s, bias removed) about its tilt's vertical, within
 #: TURN_AXIS_DEG, is in a turn: its refusals do not count towards RELOCK_S.
@@ -359,8 +356,7 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
                 state[_NOISE] += dt / (dt + NOISE_TAU_S) * (change - state[_NOISE])
             state[_M], state[_M + 1], state[_M + 2] = m0, m1, m2
             d0, d1, d2 = state[_D], state[_D + 1], state[_D + 2]
-            norm_ok = abs(fn / state[_G] - 1.0) <= NORM_TOL
-            quiet = norm_ok and math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
+            quiet = math.sqrt(state[_W] ** 2 + state[_W + 1] ** 2 + state[_W + 2] ** 2) <= MAX_RATE_DPS
             # eq. (3): m = d − (r_d V / g)(d × e_x), r_d = (ω − b)·d the rate about down, made a
             # unit vector; H its derivative in d and V to first order (the lean's own change with
             # d is second order; its change with b is left to the offsets' own measurement); no
@@ -378,8 +374,12 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             for r in range(3):
                 h[r] = -rd_g * u[r]
                 y[r] = (m0, m1, m2)[r] - (dv[r] - lean * u[r]) * scale
+            # the norm's departure from 1 g: an acceleration at least that large, of unknown
+            # direction, as a tilt of as many radians (eq. 4's noise, not a gate)
+            excess = fn / state[_G] - math.sqrt(1.0 + lean * lean)
+            accel_var = motion_var + excess * excess
             _project(p, h, ph, s)  # eq. (5): the gate, on one sample's own spread
-            _inverse3(s, state[_NOISE] + motion_var, s_inv)
+            _inverse3(s, state[_NOISE] + accel_var, s_inv)
             nis = 0.0
             for r in range(3):
                 for c in range(3):
@@ -392,10 +392,10 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             if state[_LOST] >= RELOCK_S:  # the tilt is lost: it starts again from the accelerometer
                 state[_LOST] = 0.0
                 _start(state, m0, m1, m2, True)
-            elif norm_ok and within:
+            elif within:
                 state[_ACCEPTED] += dt
                 # eq. (4): the motion's share of the noise as one sample every 2·MOTION_TAU_S
-                r_var = state[_NOISE] + motion_var * max(1.0, 2.0 * MOTION_TAU_S / max(dt, 1e-3))
+                r_var = state[_NOISE] + accel_var * max(1.0, 2.0 * MOTION_TAU_S / max(dt, 1e-3))
                 _update(state, p, y, s, s_inv, ph, gain, r_var)
         _renormalise(state, p)
         for k in range(3):
@@ -473,7 +473,7 @@ class RawTilt:
         """One line for ``attrs["notes"]``: which tilt the raw compass was compensated with."""
         if self.uses_gyro:
             return (f"{self.source}: compass tilt from the gyro-aided gravity (gyro_x, gyro_y, gyro_z "
-                    "corrected by the accelerometer near 1 g; gyrodrift.attitude)")
+                    "corrected by the accelerometer where it is believable; gyrodrift.attitude)")
         why = "tilt = 'accel'" if self.gyro_xy else "no gyro_x, gyro_y"
         return (f"{self.source}: compass tilt from the accelerometer alone ({why}): braking and cornering "
                 "tilt the heading")

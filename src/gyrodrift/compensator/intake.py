@@ -264,7 +264,7 @@ class Intake:
                     "the gyro-aided tilt), taken in as the x/y gyros' offsets were learned; heading_rate = 'gyro_z' "
                     "integrates gyro_z alone")
         return (f"{self.source}: the heading integrates gyro_z alone: the x/y gyros' offsets were never learned (the "
-                "accelerometer was never near 1 g and along the tilt), so the tilt is not known well enough")
+                "accelerometer was never taken along the tilt), so the tilt is not known well enough")
 
     # ------------------------------------------------------------------ chunks
     def compass(self, t, heading=None, mag=None, acc=None, down=None):
