@@ -1,11 +1,12 @@
 """Run the default (adaptive) model on generator seeds and compare with stored baselines (a tuning aid).
 
     python benchmarks/tune_adaptive.py --baseline runs.csv --split tuning --seeds 10 [--set name=value ...]
-        [--temp-rate-window-s S] [--temp-rate-short-s S]
+        [--temp-rate-window-s S] [--temp-rate-short-s S] [--tilt accel|gyro]
 
 ``runs.csv`` is a ``gyrodrift montecarlo --tuning/--held-out -o`` output with the baselines;
 only ``default`` is recomputed here (with the settings given; ``--temp-rate-window-s`` and
-``--temp-rate-short-s`` set the front end's T', which the file's baselines keep as they were run),
+``--temp-rate-short-s`` set the front end's T', and ``--tilt`` the raw compass's tilt, which the
+file's baselines keep as they were run),
 so a setting can be tried in a minute. Prints per class the default's median heading, bias and
 fused RMS beside the best causal baseline's and Fusion's AHRS, and the honesty columns.
 """
@@ -33,12 +34,15 @@ def main(argv=None) -> int:
     p.add_argument("--set", nargs="*", default=[], help="AdaptiveConfig field=value")
     p.add_argument("--temp-rate-window-s", type=float, help="the T' window (TempRateConfig.window_s), s")
     p.add_argument("--temp-rate-short-s", type=float, help="the T' short window (TempRateConfig.short_s), s")
+    p.add_argument("--tilt", choices=("accel", "gyro"), help="the raw compass's tilt (CompensatorConfig.tilt)")
     p.add_argument("-o", "--output")
     args = p.parse_args(argv)
     warnings.simplefilter("ignore")
     import ast
     ev = AdaptiveConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=") for s in args.set)})
     cfg = CompensatorConfig(adaptive=ev)
+    if args.tilt is not None:
+        cfg = replace(cfg, tilt=args.tilt)
     if args.temp_rate_window_s is not None:
         cfg = replace(cfg, temp_rate=replace(cfg.temp_rate, window_s=args.temp_rate_window_s))
     if args.temp_rate_short_s is not None:
