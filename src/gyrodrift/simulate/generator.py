@@ -647,6 +647,27 @@ def _quadplane(rng, scale):
                    attitude=attitude)
 
 
+def _vessel_imu(rng, scale):
+    """:func:`_vessel` logged by a whole IMU on a boat that rolls and pitches in a seaway: a roll of
+    two swells (2–12 deg and 0.5–4 deg, 5–14 s) about a list of −3–3 deg, a pitch of two of 1–4 deg
+    and 4–9 s, the unit 1–6 m above the roll's centre (so it sways sideways as it rolls) and
+    heaving by 0.02–0.15 g; at 3–10 m/s. The x/y gyros, the raw magnetometer and the accelerometer."""
+    rec = _vessel(rng, scale)
+    roll0, pitch0 = _u(rng, -3.0, 3.0), _u(rng, -3.0, 3.0)
+    roll_waves = [(_u(rng, *amp), _u(rng, 5.0, 14.0), _u(rng, 0.0, 2.0 * math.pi)) for amp in ((2.0, 12.0), (0.5, 4.0))]
+    pitch_waves = [(_u(rng, 1.0, 4.0), _u(rng, 4.0, 9.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(2)]
+    heave = [(_u(rng, 0.02, 0.15) * GRAVITY_MPS2, _u(rng, 4.0, 10.0), _u(rng, 0.0, 2.0 * math.pi))]
+    height, speed = _u(rng, 1.0, 6.0), _u(rng, 3.0, 10.0)
+
+    def attitude(t, rate):
+        roll = roll0 + _sines(roll_waves, t)
+        roll_accel = np.radians(np.gradient(np.gradient(roll, t), t))
+        lat = speed * np.radians(rate) + height * roll_accel  # a unit above the roll's centre sways with it
+        return _Attitude(roll, pitch0 + _sines(pitch_waves, t), np.zeros(t.size), lat, _sines(heave, t))
+
+    return replace(rec, compass_form="raw", triad=_child(rng), attitude=attitude, roll_deg=roll0, pitch_deg=pitch0)
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -677,6 +698,7 @@ _BUILDERS: dict[str, Callable] = {
     "imu-drive": _imu_drive,
     "handheld-imu": _handheld_imu,
     "quadplane": _quadplane,
+    "vessel-imu": _vessel_imu,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
