@@ -17,7 +17,8 @@ swing of 3–12 deg/s from the steps, a noisy compass (1–3 deg) disturbed 4–
 cycle of 10–40 min, half of them with thermal lag and backlash; ``spin``, a platform turning
 one way at 5–60 deg/s, its speed changing between random knots, for 20–60 min. A class
 ending in ``-sf`` is an existing one whose gyro reads a further 0.3–2 % scale-factor error (a
-seeded sign and size). N held-out seeds each, every method by default (``heldout.METHODS``);
+seeded sign and size); ``vessel-rawmag`` is ``vessel-imu`` without its x/y gyros (a boat's
+tilt-compensated compass from the magnetometer and accelerometer, and a yaw-rate gyro). N held-out seeds each, every method by default (``heldout.METHODS``);
 prints the acceptance table of ``gyrodrift.evaluate.heldout``. About a minute for 7 classes ×
 10 seeds on the 2-core machine.
 """
@@ -148,6 +149,7 @@ def _spin(rng, scale):
 NEW = {"loiter": _loiter, "mower": _mower, "cooling-still": _cooling, "pedestrian": _pedestrian,
        "garage": _garage, "cycling": _cycling, "spin": _spin}
 WITH_SF = {"turntable-sf": "turntable", "handheld-sf": "handheld-stalls", "drive-sf": "drive", "loiter-sf": "loiter"}
+WITHOUT_XY = {"vessel-rawmag": "vessel-imu"}
 _generate = G.generate
 
 
@@ -160,6 +162,11 @@ def generate(cls, seed, duration_scale=1.0):
         log = case.log.copy()
         log.attrs = dict(case.log.attrs)
         log["gyro_z"] = log["gyro_z"] + sf * log[G.TRUE_RATE_Z]
+        return replace(case, log=log)
+    if cls in WITHOUT_XY:
+        case = generate(WITHOUT_XY[cls], seed, duration_scale)
+        log = case.log.drop(columns=["gyro_x", "gyro_y"])
+        log.attrs = dict(case.log.attrs)
         return replace(case, log=log)
     return _generate(cls, seed, duration_scale=duration_scale)
 
