@@ -90,6 +90,78 @@ def _board_to_body_scipy(params) -> Rotation:
 
 
 # ---------------------------------------------------------------------------
+# PX4 ULog: an older logger's layout (sensor_combined alone)
+# ---------------------------------------------------------------------------
+
+OLD_COMBINED = [("uint64_t", "timestamp"), ("float[3]", "gyro_rad"), ("float", "gyro_integral_dt"),
+                ("int32_t", "accelerometer_timestamp_relative"), ("float[3]", "accelerometer_m_s2"),
+                ("float", "accelerometer_integral_dt"), ("int32_t", "magnetometer_timestamp_relative"),
+                ("float[3]", "magnetometer_ga"), ("int32_t", "baro_timestamp_relative"), ("float", "baro_alt_meter"),
+                ("float", "baro_temp_celcius")]
+
+
+def _old_layout_ulog(path: Path, with_gyro: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A ULog as PX4 logged before ``sensor_gyro``: ``sensor_combined`` at 250 Hz with the gyro,
+    the accelerometer and the magnetometer (a new sample every 5th row, held on the rows between,
+    its own time ``magnetometer_timestamp_relative`` before the row's), no ``sensor_gyro``;
+    returns the rows' times (µs), the magnetometer samples' times (µs) and their values."""
+    from ulog_writer import records, write_ulog
+
+    n = 2500
+    ts = 2_000_000 + 4000 * np.arange(n, dtype=np.int64)
+    gyro = np.column_stack([np.full(n, 0.01), np.full(n, -0.02), np.radians(5.0) * np.ones(n)])
+    new = np.arange(n) % 5 == 0
+    last = np.maximum.accumulate(np.where(new, np.arange(n), 0))
+    rel = (ts[last] - 1500) - ts  # each row holds the last sample, timed 1.5 ms before its own row
+    heading = np.radians(30.0 + 5.0 * (ts[last] - ts[0]) * 1e-6)
+    mag = np.column_stack([0.2 * np.cos(heading), -0.2 * np.sin(heading), np.full(n, 0.4)])
+    cols = dict(timestamp=ts, gyro_rad=gyro if with_gyro else np.zeros((n, 3)), gyro_integral_dt=np.full(n, 0.004),
+                accelerometer_timestamp_relative=np.zeros(n, dtype=np.int64),
+                accelerometer_m_s2=np.tile([0.0, 0.0, -9.81], (n, 1)), accelerometer_integral_dt=np.full(n, 0.004),
+                magnetometer_timestamp_relative=rel, magnetometer_ga=mag, baro_timestamp_relative=np.zeros(n),
+                baro_alt_meter=np.zeros(n), baro_temp_celcius=np.full(n, 31.0))
+    fields = OLD_COMBINED if with_gyro else [f for f in OLD_COMBINED if f[1] != "gyro_rad"]
+    if not with_gyro:
+        cols.pop("gyro_rad")
+    write_ulog(path, {("sensor_combined", 0): (fields, records(fields, **cols))})
+    return ts, ts[new] - 1500, mag[new]
+
+
+def test_an_older_ulog_with_sensor_combined_alone_is_read_with_its_compass(tmp_path):
+    """A ULog of an older PX4 logger (no ``sensor_gyro``; ``sensor_combined`` carries the gyro,
+    the accelerometer and the magnetometer, which it holds between its samples): the rates from
+    ``sensor_combined`` in deg/s, each magnetometer sample once (none older than the first row);
+    no temperature, and a note that says why; and ``compensate`` takes it."""
+    from gyrodrift import compensate
+
+    path = tmp_path / "old.ulg"
+    ts, mag_t, mag = _old_layout_ulog(path)
+    df = read_ulog(path)
+    np.testing.assert_allclose(df["t"], ts * 1e-6)
+    np.testing.assert_allclose(df["gyro_z"], 5.0, rtol=1e-6)
+    np.testing.assert_allclose(df["gyro_x"], np.degrees(0.01), rtol=1e-6)
+    assert (df["temp"] == 0.0).all()
+    assert any("no sensor_gyro topic: the gyro is sensor_combined's" in n for n in df.attrs["notes"])
+    rows = df["mag_x"].notna().to_numpy()
+    inside = mag_t >= ts[0]  # the first sample is older than the first row
+    assert rows.sum() == inside.sum() == mag_t.size - 1  # each sample once, not the 4 rows that hold it
+    np.testing.assert_allclose(df.loc[rows, "mag_x"], mag[inside, 0], rtol=1e-6)
+    assert "mag from sensor_combined" in df.attrs["summary"]
+    out = compensate(df)
+    heading = out["compass_heading"].to_numpy()[rows]  # the field turns 5 deg/s (by the rows' clock) from 30 deg
+    np.testing.assert_allclose(heading, (30.0 + 5.0 * (mag_t[inside] + 1500 - ts[0]) * 1e-6) % 360.0, atol=1e-3)
+    assert np.isfinite(out["heading_fused"].to_numpy()[(df["t"] - df["t"].iloc[0] >= 1.0).to_numpy()]).all()
+
+
+def test_a_ulog_without_any_gyro_is_refused_naming_the_topic(tmp_path):
+    """Neither ``sensor_gyro`` nor a gyro in ``sensor_combined``: refused, naming sensor_gyro."""
+    path = tmp_path / "nogyro.ulg"
+    _old_layout_ulog(path, with_gyro=False)
+    with pytest.raises(LogFormatError, match="no 'sensor_gyro' topic"):
+        read_ulog(path)
+
+
+# ---------------------------------------------------------------------------
 # PX4 ULog: real files
 # ---------------------------------------------------------------------------
 
@@ -302,10 +374,15 @@ def test_ulog_implausible_temperature(tmp_path):
 
 
 def test_ulog_missing_topic(tmp_path):
+    """Without ``sensor_gyro`` the gyro is ``sensor_combined``'s, without a temperature (a note
+    says why); without ``sensor_combined``'s gyro either, the log is refused naming sensor_gyro."""
     keep = ["sensor_combined", "sensor_accel", "sensor_mag", "vehicle_attitude"]
     path = _edited(tmp_path, _need(SMALL), topics=keep)
-    msg = _raises(LogFormatError, read_ulog, path)
-    assert "no 'sensor_gyro' topic" in msg
+    df = read_ulog(path)
+    assert (df["temp"] == 0.0).all() and "sensor_combined" in df.attrs["summary"]
+    assert any("no sensor_gyro topic" in n for n in df.attrs["notes"])
+    path = _edited(tmp_path, _need(SMALL), topics=["sensor_accel", "sensor_mag", "vehicle_attitude"])
+    assert "no 'sensor_gyro' topic" in _raises(LogFormatError, read_ulog, path)
 
 
 def test_ulog_too_few_gyro_samples(tmp_path):

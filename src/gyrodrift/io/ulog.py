@@ -200,8 +200,20 @@ def _combined_is_instance(ulog, device: int | None, instance: int) -> bool:
     return ids == {device}
 
 
+def _combined_only(ulog, instance: int) -> bool:
+    """True for a log whose IMU is in ``sensor_combined`` alone (no ``sensor_gyro``: an older PX4
+    logger, whose ``sensor_combined`` also carries the magnetometer, or a profile that left it out)."""
+    combined = _instances(ulog, "sensor_combined").get(0)
+    return (instance == 0 and not _instances(ulog, "sensor_gyro") and combined is not None
+            and all(f in combined.data for f in _GYRO_COMBINED))
+
+
 def _gyro_stream(ulog, instance: int, name: str) -> Stream:
     """Rates (rad/s, body FRD) from sensor_combined or sensor_gyro."""
+    if _combined_only(ulog, instance):
+        combined = _instances(ulog, "sensor_combined")[0]
+        return Stream("sensor_combined", np.asarray(combined.data["timestamp"], dtype=np.float64) * 1e-6,
+                      _fields(combined, _GYRO_COMBINED, name, "sensor_combined"))
     gyro = _pick_instance(ulog, "sensor_gyro", instance, name, "instance")
     device = _device_id(gyro)
     t_gyro = _time_s(gyro)
@@ -223,6 +235,8 @@ def _gyro_stream(ulog, instance: int, name: str) -> Stream:
 
 def _temperature_stream(ulog, instance: int) -> tuple[Stream | None, str]:
     """Gyro temperature (degC) from sensor_gyro, else sensor_accel of the same chip; or None and why."""
+    if _combined_only(ulog, instance):
+        return None, "no sensor_gyro topic: the gyro is sensor_combined's, which carries no gyro temperature"
     gyro = _instances(ulog, "sensor_gyro")[instance]
     device = _device_id(gyro)
     candidates = [(_label("sensor_gyro", instance), gyro)]
@@ -254,6 +268,8 @@ def _acc_stream(ulog, instance: int, name: str) -> Stream | None:
             t = np.where(rel == _RELATIVE_TIMESTAMP_INVALID, np.nan, t + rel)
         values = _fields(combined, _ACC_COMBINED, name, "sensor_combined")
         return Stream("sensor_combined", t * 1e-6, values)
+    if _combined_only(ulog, instance):
+        return None
     device = _device_id(_instances(ulog, "sensor_gyro")[instance])
     acc_id, acc = _same_chip(ulog, "sensor_accel", device, instance)
     if acc is None:
@@ -289,8 +305,24 @@ def _mag_stream(ulog, mag_instance: int | None, name: str) -> Stream | None:
             label = _label("vehicle_magnetometer", vm_id)
             return Stream(label, t_vehicle, _fields(vehicle, _MAG_VEHICLE, name, label))
     if chosen is None:
-        return None
+        return _combined_mag_stream(ulog, name)
     return _sensor_mag_stream(ulog, mags[chosen], chosen, name)
+
+
+def _combined_mag_stream(ulog, name: str) -> Stream | None:
+    """An older PX4 log's magnetometer (gauss, body FRD, calibrated) from sensor_combined: each
+    sample once, at its own time (the row's time plus ``magnetometer_timestamp_relative``; the
+    rows between samples hold the last one). None without those fields."""
+    combined = _instances(ulog, "sensor_combined").get(0)
+    if combined is None or not all(f in combined.data for f in _MAG_VEHICLE + ("magnetometer_timestamp_relative",)):
+        return None
+    rel = np.asarray(combined.data["magnetometer_timestamp_relative"], dtype=np.float64)
+    t = np.asarray(combined.data["timestamp"], dtype=np.float64) + rel
+    fresh = (rel != _RELATIVE_TIMESTAMP_INVALID) & np.isfinite(t)
+    fresh[1:] &= t[1:] != t[:-1]
+    if not fresh.any():
+        return None
+    return Stream("sensor_combined", t[fresh] * 1e-6, _fields(combined, _MAG_VEHICLE, name, "sensor_combined")[fresh])
 
 
 def _reference_stream(ulog, name: str) -> Stream | None:
@@ -368,7 +400,8 @@ def _changed_parameters(ulog) -> set[str]:
 def _onboard(ulog, instance: int, gyro: Stream, temp, name: str):
     """:class:`gyrodrift.onboard.Onboard` of the gyro ``instance`` whose rates ``gyro`` holds."""
     params = ulog.initial_parameters
-    device = _device_id(_instances(ulog, "sensor_gyro")[instance])
+    gyros = _instances(ulog, "sensor_gyro")
+    device = _device_id(gyros[instance]) if instance in gyros else None
     try:
         rotation, how, problem = *_board_to_body(params, "GYRO", device, name), ""
     except LogFormatError as exc:  # the rates came from sensor_combined: only a calibration needs it
