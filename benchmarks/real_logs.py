@@ -11,6 +11,9 @@ quotes for the real logs come from here::
 
     python benchmarks/real_logs.py
     python benchmarks/real_logs.py heading_rate=gyro_z tilt=gyro   # CompensatorConfig settings
+    python benchmarks/real_logs.py path/to/sample.ulg              # and more logs (any readable path)
+
+An argument that names an existing file is a further log; any other is a ``name=value`` setting.
 """
 
 from __future__ import annotations
@@ -59,7 +62,9 @@ def main(argv: list[str], logs=LOGS) -> int:
     from gyrodrift.conventions import wrap_180
     from gyrodrift.io import read_log
 
-    config = CompensatorConfig(**dict(_setting(a) for a in argv))
+    extra = [Path(a) for a in argv if Path(a).is_file()]
+    config = CompensatorConfig(**dict(_setting(a) for a in argv if not Path(a).is_file()))
+    logs = list(logs) + extra
     print("| log | rows | x/y gyros, raw mag | turned (deg) | mean drift (deg/s) | compass | heading | fused |")
     print("| :--- | ---: | :---: | ---: | ---: | ---: | ---: | ---: |")
     for path in logs:
