@@ -187,9 +187,9 @@ def test_the_notes_say_what_the_heading_integrates():
     assert any("rate of the tilted body's heading" in n for n in compensate(log).attrs["notes"])
     assert not any("heading integrates" in n for n in
                    compensate(log, CompensatorConfig(heading_rate="gyro_z")).attrs["notes"])
-    heavy = log.copy()
-    heavy.loc[heavy.index[1:], ["acc_x", "acc_y", "acc_z"]] = np.nan  # never taken after the start
-    out = compensate(heavy)
+    blind = log.copy()
+    blind.loc[blind.index[1:], ["acc_x", "acc_y", "acc_z"]] = np.nan  # never taken after the start
+    out = compensate(blind)
     assert any("integrates gyro_z alone: the x/y gyros' offsets were never learned" in n for n in out.attrs["notes"])
-    level = compensate(heavy, CompensatorConfig(heading_rate="gyro_z"))
+    level = compensate(blind, CompensatorConfig(heading_rate="gyro_z"))
     assert np.array_equal(out["heading"], level["heading"], equal_nan=True)

@@ -374,8 +374,9 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
             for r in range(3):
                 h[r] = -rd_g * u[r]
                 y[r] = (m0, m1, m2)[r] - (dv[r] - lean * u[r]) * scale
-            # the norm's departure from 1 g: an acceleration at least that large, of unknown
-            # direction, as a tilt of as many radians (eq. 4's noise, not a gate)
+            # the norm's departure from what eq. (3) names (1 g, and the turn's lean): an
+            # acceleration at least that large, of unknown direction, as a tilt of as many
+            # radians (eq. 4's noise, not a gate)
             excess = fn / state[_G] - math.sqrt(1.0 + lean * lean)
             accel_var = motion_var + excess * excess
             _project(p, h, ph, s)  # eq. (5): the gate, on one sample's own spread
