@@ -140,15 +140,31 @@ def _heading_rate(i, gz, state, out, rate_out):
 
     (cos² θ floored at :data:`MIN_COS2_PITCH`). While the offsets are learned it is blended from
     ``gz`` with the weight ``w`` = accepted time / :data:`LEARNED_S` (at most 1), so that the
-    drift the model follows changes smoothly as the tilt becomes known. ``gz`` where the tilt
-    is not known; NaN where ``gz`` is."""
+    drift the model follows changes smoothly as the tilt becomes known; or, where larger, the
+    weight of least expected square error, ``1 − var / Δ²`` (``Δ`` = ψ̇ − gz, ``var`` the Euler
+    rate's variance from the tilt's and the y offset's covariance): where the filter's own
+    uncertainty says the Euler rate is far the better (a body shaken before the time is up).
+    ``gz`` where the tilt is not known; NaN where ``gz`` is."""
     d1, d2 = out[i, 1], out[i, 2]
     w = min(state[_ACCEPTED] / LEARNED_S, 1.0)
-    if w == 0.0 or not (d1 == d1 and d2 == d2):
+    if state[_ACCEPTED] == 0.0 or not (d1 == d1 and d2 == d2):
         rate_out[i] = gz
         return
     q = state[_W + 1] - math.degrees(state[_B + 1])
-    rate_out[i] = gz + w * ((q * d1 + gz * d2) / max(d1 * d1 + d2 * d2, MIN_COS2_PITCH) - gz)
+    s2 = d1 * d1 + d2 * d2
+    floored = s2 < MIN_COS2_PITCH
+    s2 = max(s2, MIN_COS2_PITCH)
+    euler = (q * d1 + gz * d2) / s2
+    diff = euler - gz
+    if w < 1.0 and diff != 0.0:  # the Euler rate's variance, (deg/s)², by its gradient in d₁, d₂ and b_y
+        g1 = q / s2 - (0.0 if floored else 2.0 * d1 * euler / s2)
+        g2 = gz / s2 - (0.0 if floored else 2.0 * d2 * euler / s2)
+        gb = -math.degrees(1.0) * d1 / s2
+        p = state[_P:_P + _NX * _NX].reshape((_NX, _NX))
+        var = (g1 * g1 * p[1, 1] + 2.0 * g1 * g2 * p[1, 2] + g2 * g2 * p[2, 2]
+               + 2.0 * gb * (g1 * p[1, 4] + g2 * p[2, 4]) + gb * gb * p[4, 4])
+        w = max(w, 1.0 - max(var, 0.0) / (diff * diff))
+    rate_out[i] = gz + w * diff
 
 
 @jit
