@@ -3,7 +3,7 @@ filter a Kalman filter"), before any estimator runs.
 
 For the generated classes with x/y gyros (their true roll and pitch rebuilt from the recipe:
 ``imu-drive`` a constant mount, ``handheld-imu`` the hand's wobbling roll, ``banked-flight`` the
-coordinated turn's bank, ``quadplane`` and ``vessel-imu`` their whole attitude), the RMS angle between :class:`gyrodrift.attitude.GravityFilter`'s down
+coordinated turn's bank, ``quadplane``, ``vessel-imu`` and ``multicopter-imu`` their whole attitude), the RMS angle between :class:`gyrodrift.attitude.GravityFilter`'s down
 vector and the true one over each log, and the median, mean and worst over the seeds::
 
     python benchmarks/probe_gravity_filter.py                   # tuning seeds 0-11
@@ -31,7 +31,7 @@ import zlib
 
 import numpy as np
 
-CLASSES = ("handheld-imu", "imu-drive", "banked-flight", "quadplane", "vessel-imu")
+CLASSES = ("handheld-imu", "imu-drive", "banked-flight", "quadplane", "vessel-imu", "multicopter-imu")
 
 
 def true_down(cls: str, seed: int) -> np.ndarray:

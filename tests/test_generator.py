@@ -228,7 +228,8 @@ def _attitude_truth(seed: int, scale: float, cls: str = "quadplane"):
     return rec, t, rate, rec.attitude(t, rate)
 
 
-@pytest.mark.parametrize("cls, min_pitch, min_roll", [("quadplane", 10.0, 20.0), ("vessel-imu", 2.0, 4.0)])
+@pytest.mark.parametrize("cls, min_pitch, min_roll", [("quadplane", 10.0, 20.0), ("vessel-imu", 2.0, 4.0),
+                                                      ("multicopter-imu", 5.0, 5.0)])
 def test_body_rates_turn_gravity_as_the_attitude_does(cls, min_pitch, min_roll):
     """``quadplane``, ``vessel-imu``: roll and pitch both change (a hover's wobble, a transition,
     climbs, a flare of the nose up; a seaway's swells); the body rates of ZYX Euler kinematics (with the pitch's rate:
@@ -237,7 +238,7 @@ def test_body_rates_turn_gravity_as_the_attitude_does(cls, min_pitch, min_roll):
     without the pitch's rate in q and r it drifts by degrees."""
     from gyrodrift.simulate.generator import _attitude_rates
 
-    rec, t, rate, att = _attitude_truth(seeds("tuning", 1)[0], 0.4 if cls == "quadplane" else 0.1, cls)
+    rec, t, rate, att = _attitude_truth(seeds("tuning", 1)[0], {"quadplane": 0.4, "vessel-imu": 0.1}.get(cls, 0.3), cls)
     assert np.ptp(att.pitch_deg) > min_pitch and np.ptp(att.roll_deg) > min_roll
     phi, theta = np.radians(att.roll_deg), np.radians(att.pitch_deg)
     truth = np.column_stack([-np.sin(theta), np.sin(phi) * np.cos(theta), np.cos(phi) * np.cos(theta)])
@@ -306,3 +307,22 @@ def test_a_vessel_imu_sways_as_it_rolls_so_its_accelerometer_sees_more_roll():
     roll_filter = np.degrees(np.arctan2(down[:, 1], down[:, 2]))
     late = log["t"].to_numpy() > 60.0
     assert np.sqrt(np.mean((roll_filter - roll_true)[late] ** 2)) < 1.0
+
+
+def test_a_multicopter_imu_tilts_to_move_so_its_accelerometer_misreads_the_tilt():
+    """``multicopter-imu``: it tilts its thrust to accelerate and brake, so where it accelerates
+    hardest the accelerometer's tilt (the direction of ``a − g``) is degrees from the true one
+    (by about ``atan(a/g)``), while hovering still the two agree within the wobble."""
+    seed = seeds("tuning", 1)[0]
+    rec, t, rate, att = _attitude_truth(seed, 0.5, "multicopter-imu")
+    log = generate("multicopter-imu", seed, duration_scale=0.5).log
+    grid = np.searchsorted(t, log["t"].to_numpy() - 1e-9)
+    acc = log[["acc_x", "acc_y", "acc_z"]].rolling(5, center=True, min_periods=1).mean().to_numpy()
+    down = -acc / np.linalg.norm(acc, axis=1)[:, None]
+    phi, theta = np.radians(att.roll_deg[grid]), np.radians(att.pitch_deg[grid])
+    truth = np.column_stack([-np.sin(theta), np.sin(phi) * np.cos(theta), np.cos(phi) * np.cos(theta)])
+    error = np.degrees(np.arccos(np.clip(np.sum(down * truth, axis=1), -1.0, 1.0)))
+    accel = np.hypot(att.accel_fwd_mps2[grid], att.accel_lat_mps2[grid])
+    hard = accel > 2.0
+    assert hard.sum() > 20 and np.median(error[hard]) > 8.0
+    assert np.median(error[accel < 0.05]) < 1.0

@@ -668,6 +668,58 @@ def _vessel_imu(rng, scale):
     return replace(rec, compass_form="raw", triad=_child(rng), attitude=attitude, roll_deg=roll0, pitch_deg=pitch0)
 
 
+def _multicopter_imu(rng, scale):
+    """:func:`_multicopter` logged by its whole IMU and raw magnetometer: between hovers it flies
+    legs of 3–15 m/s in any direction of the body (accelerating and braking at 1–4 m/s² on
+    average, raised-cosine ramps), tilted by its thrust against the acceleration and a linear drag of 0.2–0.5 /s (so that
+    braking pitches it up by up to 25 deg while its accelerometer reads nearly along body z), and
+    wobbles by 0.3–2 deg as it holds its position (the tilt is what moves it). The x/y gyros,
+    the raw magnetometer and the accelerometer."""
+    rec = _multicopter(rng, scale)
+    drag = _u(rng, 0.2, 0.5)
+    steps_n, steps_e, t0 = [], [], 0.0
+    v_n = v_e = 0.0
+    while t0 < rec.duration_s:
+        t0 += _u(rng, 5.0, 30.0)  # a hover, then a leg
+        speed, way = _u(rng, 3.0, 15.0), _u(rng, 0.0, 2.0 * math.pi)
+        ramp_in = speed / _u(rng, 1.0, 4.0)
+        ramp_out = speed / _u(rng, 1.0, 4.0)
+        cruise = _u(rng, 5.0, 40.0)
+        steps_n.append((t0, ramp_in, speed * math.cos(way) - v_n))
+        steps_e.append((t0, ramp_in, speed * math.sin(way) - v_e))
+        t0 += ramp_in + cruise
+        steps_n.append((t0, ramp_out, -speed * math.cos(way)))
+        steps_e.append((t0, ramp_out, -speed * math.sin(way)))
+        v_n = v_e = 0.0
+        t0 += ramp_out
+    wobble = [(_u(rng, 0.3, 2.0), _u(rng, 1.5, 6.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(4)]
+    roll0, pitch0 = rec.roll_deg, rec.pitch_deg
+
+    def attitude(t, rate):
+        air = (rec.vibration(t) - 1.0) / max(float(np.max(rec.vibration(t))) - 1.0, 1e-12)  # airborne: 0..1
+        psi = np.radians(np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))]))
+        v_world = np.column_stack([sum_of_steps(t, steps_n), sum_of_steps(t, steps_e)]) * air[:, None]
+        a_world = np.column_stack([np.gradient(v_world[:, 0], t), np.gradient(v_world[:, 1], t)])
+        c, s_ = np.cos(psi), np.sin(psi)
+
+        def level(v):  # world (north, east) to the heading-aligned level frame (forward, right)
+            return c * v[:, 0] + s_ * v[:, 1], -s_ * v[:, 0] + c * v[:, 1]
+
+        fwd, lat = level(a_world)
+        thrust_f, thrust_l = level(a_world + drag * v_world)  # the thrust leans against acceleration and drag
+        wob_r, wob_p = air * _sines(wobble[:2], t), air * _sines(wobble[2:], t)
+        thrust_f = thrust_f - GRAVITY_MPS2 * np.tan(np.radians(wob_p))
+        thrust_l = thrust_l + GRAVITY_MPS2 * np.tan(np.radians(wob_r))
+        fwd = fwd - GRAVITY_MPS2 * np.tan(np.radians(wob_p))
+        lat = lat + GRAVITY_MPS2 * np.tan(np.radians(wob_r))
+        norm = np.sqrt(thrust_f ** 2 + thrust_l ** 2 + GRAVITY_MPS2 ** 2)
+        roll = roll0 + np.degrees(np.arcsin(thrust_l / norm))
+        pitch = pitch0 + np.degrees(np.arctan2(-thrust_f, GRAVITY_MPS2))
+        return _Attitude(roll, pitch, fwd, lat, np.zeros(t.size))
+
+    return replace(rec, compass_form="raw", triad=_child(rng), attitude=attitude)
+
+
 def _day_parked(rng, scale):
     """A parked vehicle or a mast for hours: still, a day-cycle temperature, long compass
     outages and interference; logged at 1–2 Hz."""
@@ -699,6 +751,7 @@ _BUILDERS: dict[str, Callable] = {
     "handheld-imu": _handheld_imu,
     "quadplane": _quadplane,
     "vessel-imu": _vessel_imu,
+    "multicopter-imu": _multicopter_imu,
 }
 
 #: The classes, by name, with one line each (the builders' docstrings).
