@@ -322,7 +322,8 @@ def propagate(t, gx, gy, gz, acc, state, out, rate_out):
     ``state`` from :func:`new_state`, updated in place. ``out`` is NaN before the first
     finite accelerometer row. The heading rate (:func:`_heading_rate`) takes the row's
     ``gz`` (NaN stays NaN: the engine holds it), the held ``gy`` less the learned y offset and
-    the row's down vector, blended in from ``gz`` as the offsets are learned (:data:`LEARNED_S`).
+    the row's down vector, blended in from ``gz`` as the offsets are learned (:data:`LEARNED_S`),
+    or sooner where the filter's covariance says the Euler rate is far the better.
     """
     rot = np.empty((3, 3))
     top = np.empty((3, _NX))
