@@ -541,7 +541,7 @@ def _handheld_imu(rng, scale):
     swings = [(_u(rng, 1.0, 8.0), _u(rng, 1.5, 12.0), _u(rng, 0.0, 2.0 * math.pi)) for _ in range(2)]
 
     def wobble(t):
-        return roll0 + sum(a * np.sin(2.0 * np.pi * t / p + ph) for a, p, ph in swings)
+        return roll0 + _sines(swings, t)
 
     fs = float(rng.choice([100.0, 200.0, 400.0]))
     return _Recipe(duration, fs, _device(rng),
