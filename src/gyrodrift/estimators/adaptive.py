@@ -99,7 +99,8 @@ class AdaptiveConfig:
         A time step longer than this many mean steps (the log's own spacing over about the
         last minute: ``kernels.evloop.SPACING_MEMORY_S``) is a time gap.
     field_norm_sd, field_dip_deg : float
-        Scatter of a clean raw field's strength (fraction of the reference) and dip (deg).
+        Prior scatter of a clean raw field's strength (fraction of the reference) and dip (deg),
+        worth a few epochs; the log's own is then measured (docs/model.md, "Field").
     noise_memory_s : float
         Memory of the measured gyro and compass white noise, s.
     p_clean0, p_still0 : float

@@ -119,7 +119,10 @@ N_FIRST_STEPS = 20
 # forgotten sums of successive epochs' products and mean squares, and the inflation they give
 MF_E_TD, MF_E_TV, MF_E_NT = MF_H_FIRST + N_FIRST_STEPS, MF_H_FIRST + N_FIRST_STEPS + 1, MF_H_FIRST + N_FIRST_STEPS + 2
 MF_TD_LAST, MF_TK_S, MF_TK_W, MF_TILT_K = MF_E_NT + 1, MF_E_NT + 2, MF_E_NT + 3, MF_E_NT + 4
-N_MF = MF_TILT_K + 1
+#: The clean field's scatter about the reference, measured: forgotten sums of the epochs' squared
+#: strength ratio and dip departure (deg²) while the compass is clean, and their weight.
+MF_FS_N, MF_FS_D, MF_FS_W = MF_TILT_K + 1, MF_TILT_K + 2, MF_TILT_K + 3
+N_MF = MF_FS_W + 1
 #: The tilt error's correlation from one epoch to the next before it is measured, and its weight
 #: (deg², the sums' units: that of TILT_PRIOR_EPOCHS epochs of a 2-deg difference): a tilt error
 #: lasts as long as the acceleration or the attitude that causes it, seconds to tens of seconds.
@@ -181,6 +184,9 @@ _LOG_2PI = math.log(2.0 * math.pi)
 #: Log-likelihood ratio (clean against disturbed) of the field below which a disturbance is
 #: labelled ``field``: the field strength and dip alone make it 20 times likelier.
 FIELD_SAYS_DISTURBED = -3.0
+#: The smallest scatter of a clean field taken, as a share of the settings' (``field_norm_sd``,
+#: ``field_dip_deg``): a log whose field has held still is not thereby exact.
+FIELD_SD_FLOOR = 0.1
 
 
 @jit(inline=True)
@@ -803,7 +809,8 @@ def epoch(mf, mc, t_end, temp_end):
     # the compass: the mean of D = compass - ∫gyro over the epoch's samples
     n_c = mf[MF_E_NC]
     D = Rc = h_still = 0.0
-    field_ll = 0.0
+    field_ll = ratio = ddip = 0.0
+    has_f = False
     Hs[:] = 0.0
     Hm[:] = 0.0
     if n_c > 0.0:
@@ -819,10 +826,12 @@ def epoch(mf, mc, t_end, temp_end):
         Hm[X_C] = dt - mf[MF_E_ST] / n_c
         Hm[X_S] = h_still  # the scale factor's share of the turn from the mean sample to the end
         if mf[MF_E_NF] > 0.0 and math.isfinite(mf[MF_NORM_REF]):
+            has_f = True
             ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
-            field_ll = (_loggauss(ratio, mc[MC_SIG_NORM] ** 2) + _loggauss(ddip, mc[MC_SIG_DIP] ** 2)
-                        - LL_ANY_NORM - LL_ANY_DIP)
+            var_n = max(mf[MF_FS_N] / mf[MF_FS_W], (FIELD_SD_FLOOR * mc[MC_SIG_NORM]) ** 2)
+            var_d = max(mf[MF_FS_D] / mf[MF_FS_W], (FIELD_SD_FLOOR * mc[MC_SIG_DIP]) ** 2)
+            field_ll = _loggauss(ratio, var_n) + _loggauss(ddip, var_d) - LL_ANY_NORM - LL_ANY_DIP
         # the noise, correlated; the epoch-level error; the tilt's error as the samples' two tilts
         # disagree, as one error over the epoch that persists from epoch to epoch
         Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX] + mf[MF_TILT_K] * mf[MF_E_TV] / max(mf[MF_E_NT], 1.0)
@@ -909,6 +918,11 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX_S] = keep * mf[MF_RX_S] + ex
         mf[MF_RX_W] = keep * mf[MF_RX_W] + 1.0
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
+    if has_f and p_clean > 0.9:  # the clean field's scatter
+        keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
+        mf[MF_FS_N] = keep * mf[MF_FS_N] + ratio * ratio
+        mf[MF_FS_D] = keep * mf[MF_FS_D] + ddip * ddip
+        mf[MF_FS_W] = keep * mf[MF_FS_W] + 1.0
     _set_labels(mf)
     mf[MF_JUMP] = _dot(mu, jumped[:NM])
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
@@ -1028,5 +1042,8 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_RX] = 0.0
     mf[MF_RX_S] = 0.0
     mf[MF_RX_W] = NOISE_PRIOR_STEPS
+    mf[MF_FS_N] = NOISE_PRIOR_STEPS * mc[MC_SIG_NORM] ** 2
+    mf[MF_FS_D] = NOISE_PRIOR_STEPS * mc[MC_SIG_DIP] ** 2
+    mf[MF_FS_W] = NOISE_PRIOR_STEPS
     mf[MF_COLOUR] = 1.0
     mf[MF_COLOUR_V] = COLOUR_SD0**2
