@@ -143,7 +143,8 @@ def write_simulated(
         ``t`` (s), ``gyro_x..z`` (deg/s, FRD), ``acc_x..z`` (g), ``temp`` (degC),
         ``mag_x..z`` (µT, NaN off compass rows), ``ref_heading`` (deg).
     legacy : bool
-        Older form: ``IMU``/``IMU2``, ``MAG``/``MAG2`` types without the ``I`` field.
+        Older form: ``IMU``/``IMU2``, ``MAG``/``MAG2`` types without the ``I`` field, and
+        the temperature named ``Temp`` (ArduPilot before about 2016).
     instances : int
         IMUs (and magnetometers) written, 1 or 2.
     t0_us : int
@@ -161,7 +162,8 @@ def write_simulated(
     stamps = time_us(log, t0_us)
     field = mag_mgauss(log)
     heading = log["ref_heading"].to_numpy(np.float64)
-    imu_fmt, imu_cols = (IMU_FORMAT.replace("QB", "Q", 1), IMU_COLUMNS.replace(",I,", ",", 1)) if legacy \
+    imu_fmt, imu_cols = (IMU_FORMAT.replace("QB", "Q", 1),
+                         IMU_COLUMNS.replace(",I,", ",", 1).replace(",T,", ",Temp,")) if legacy \
         else (IMU_FORMAT, IMU_COLUMNS)
     mag_fmt, mag_cols = (MAG_FORMAT.replace("QB", "Q", 1), MAG_COLUMNS.replace(",I,", ",", 1)) if legacy \
         else (MAG_FORMAT, MAG_COLUMNS)

@@ -129,6 +129,9 @@ def test_older_logs_imu2_and_mag2_without_instance_field(sim, tmp_path):
     first = read_ardupilot(path)
     _check_values(first, logged_values(sim))
     assert first.attrs["topics"]["gyro"] == "IMU" and first.attrs["topics"]["mag"] == "MAG"
+    # their IMU's temperature is named Temp: read, not taken for a log without one
+    np.testing.assert_allclose(first["temp"].to_numpy(), logged_values(sim)["temp"], atol=1e-3)
+    assert not any("temperature" in note for note in first.attrs.get("notes", []))
 
 
 def test_instances(sim, flight, tmp_path):

@@ -209,11 +209,16 @@ def _stack(source: _Source, fields, name: str = "") -> np.ndarray | None:
 # ---------------------------------------------------------------------------
 
 
+#: The IMU's temperature field (degC): ``T``, or ``Temp`` in ArduPilot's logs before about 2016.
+_TEMP_FIELDS = ("T", "Temp")
+
+
 def _temperature(imu: _Source) -> tuple[Stream | None, str]:
-    """``IMU.T`` (degC), or None and why it is not usable (for the note)."""
-    if "T" not in imu.fields:
-        return None, f"{imu.label} has no temperature field T"
-    return measured_temperature(imu.label, imu.t, imu.fields["T"])
+    """``IMU.T`` or ``IMU.Temp`` (degC), or None and why it is not usable (for the note)."""
+    for field in _TEMP_FIELDS:
+        if field in imu.fields:
+            return measured_temperature(imu.label, imu.t, imu.fields[field])
+    return None, f"{imu.label} has no temperature field ({' or '.join(_TEMP_FIELDS)})"
 
 
 def _mag_stream(reader, params: dict, mag_instance: int | None, name: str) -> tuple[Stream | None, int]:
@@ -327,7 +332,7 @@ def _read(reader, name: str, instance: int, mag_instance: int | None, reference:
           gyro_max_dps: float) -> pd.DataFrame:
     """The body of :func:`read_ardupilot` on an open pymavlink reader."""
     skipped, partial = _damage(reader)
-    imus = _sources(reader, name, _IMU_TYPES, (*_GYRO_FIELDS, *_ACC_FIELDS, "T"))
+    imus = _sources(reader, name, _IMU_TYPES, (*_GYRO_FIELDS, *_ACC_FIELDS, *_TEMP_FIELDS))
     if not imus and partial:
         raise log_error(name, f"the file is truncated: it ends inside a message at byte {reader.data_len}, before"
                         " any IMU sample", "copy the complete .bin from the vehicle again")
