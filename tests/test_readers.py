@@ -302,6 +302,22 @@ def test_ulog_temperature_as_nan_without_an_accel_of_the_chip(tmp_path):
     ]
 
 
+def test_ulog_without_a_gyro_temperature_names_an_instance_that_has_one(tmp_path):
+    """A gyro that logs no temperature (a BMI088's, whose die has none) beside one that does: the
+    note says which instance to read for a measured temperature."""
+    def edit(ulog):
+        _set_temperature("sensor_gyro", lambda n: np.full(n, np.nan))(ulog)
+        _set_temperature("sensor_accel", lambda n: np.full(n, np.nan))(ulog)
+
+    path = _edited(tmp_path, _need(SMALL), edit)
+    df = read_ulog(path)
+    assert (df["temp"] == 0.0).all()
+    (note,) = df.attrs["notes"]
+    assert "sensor_gyro instance 0 logs NaN" in note
+    assert "sensor_gyro instance 1 logs one: instance=1 (--instance 1) reads that gyro" in note
+    assert read_ulog(path, instance=1)["temp"].between(20.0, 40.0).all()
+
+
 def test_ulog_without_magnetometer_reads_without_compass(tmp_path):
     path = _edited(tmp_path, _need(SMALL), topics=["sensor_combined", "sensor_gyro", "sensor_accel"])
     df = read_ulog(path)

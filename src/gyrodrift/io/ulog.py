@@ -254,6 +254,12 @@ def _temperature_stream(ulog, instance: int) -> tuple[Stream | None, str]:
         reasons.append(why)
     if len(candidates) == 1:
         reasons.append("no sensor_accel of the same chip")
+    for other, ds in sorted(_instances(ulog, "sensor_gyro").items()):
+        temp = np.asarray(ds.data.get("temperature", []), dtype=np.float64)
+        if other != instance and np.isfinite(temp).any() and np.nanmax(np.abs(temp)) > 0.0:
+            reasons.append(f"{_label('sensor_gyro', other)} logs one: instance={other} (--instance {other}) reads"
+                           " that gyro")
+            break
     return None, ", ".join(reasons)
 
 
