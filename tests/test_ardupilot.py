@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dataflash_writer import logged_values, write_simulated
+from dataflash_writer import DataFlashWriter, logged_values, write_simulated
 from gyrodrift import cli
 from gyrodrift.errors import ConfigError, LogFormatError
 from gyrodrift.io import log_format, read_ardupilot, read_log
@@ -227,6 +227,20 @@ def test_garbage_inside_is_skipped_and_counted(flight, tmp_path):
     df = read_ardupilot(dirty)
     assert len(df) == len(read_ardupilot(flight))
     assert "100 bytes that are no message skipped" in df.attrs["summary"]
+
+
+def test_a_px4log_is_named_and_refused(tmp_path):
+    """PX4's log before ULog has the DataFlash framing but times its messages by TIME.StartTime."""
+    path = tmp_path / "old.px4log"
+    with open(path, "wb") as fh:
+        w = DataFlashWriter(fh)
+        w.define("TIME", "Q", "StartTime")
+        w.define("IMU", "ffffff", "AccX,AccY,AccZ,GyroX,GyroY,GyroZ")
+        for k in range(50):
+            w.write("TIME", 1_000_000 + 10_000 * k)
+            w.write("IMU", 0.0, 0.0, -9.8, 0.0, 0.0, 0.01)
+    message = _raises(LogFormatError, read_log, path)
+    assert str(path) in message and "PX4 .px4log" in message and "convert it to CSV" in message
 
 
 def test_random_bytes_missing_empty_and_directory(tmp_path):

@@ -170,6 +170,11 @@ def _sources(reader, name: str, types, wanted) -> dict[int, _Source]:
         if fields is None or not fields:
             continue
         t = _time_s(fields)
+        if t is None and _px4log(reader):
+            raise log_error(name, "is a PX4 .px4log (PX4's log format before ULog): its messages are timed by"
+                            " TIME.StartTime, not by a field of their own, and gyrodrift does not read it",
+                            "convert it to CSV in the input contract (gyro_z, temp, t; e.g. with px4tools or"
+                            " sdlog2_dump.py)")
         if t is None:
             raise log_error(name, "has no TimeUS nor TimeMS field", "convert the log to CSV in the input contract",
                             where=f"message {type_name}")
@@ -182,6 +187,12 @@ def _sources(reader, name: str, types, wanted) -> dict[int, _Source]:
             picked = {k: v[keep] for k, v in fields.items()}
             found.setdefault(int(instance), _Source(f"{type_name} instance {instance}", picked, t[keep]))
     return found
+
+
+def _px4log(reader) -> bool:
+    """True for a PX4 .px4log: the DataFlash framing, its time in ``TIME.StartTime`` messages."""
+    type_id = getattr(reader, "name_to_id", {}).get("TIME")
+    return type_id is not None and type_id in reader.formats and "StartTime" in reader.formats[type_id].columns
 
 
 def _pick(found: dict[int, _Source], kind: str, instance: int, name: str, option: str) -> _Source:
