@@ -121,8 +121,8 @@ MF_E_TD, MF_E_TV, MF_E_NT = MF_H_FIRST + N_FIRST_STEPS, MF_H_FIRST + N_FIRST_STE
 MF_TD_LAST, MF_TK_S, MF_TK_W, MF_TILT_K = MF_E_NT + 1, MF_E_NT + 2, MF_E_NT + 3, MF_E_NT + 4
 #: The clean field's scatter about the reference, measured: forgotten sums of the epochs' squared
 #: strength ratio and dip departure (deg²) while the compass is clean, and their weight.
-MF_FS_N, MF_FS_D, MF_FS_W = MF_TILT_K + 1, MF_TILT_K + 2, MF_TILT_K + 3
-N_MF = MF_FS_W + 1
+MF_FS_N, MF_FS_D, MF_FS_WN, MF_FS_WD = MF_TILT_K + 1, MF_TILT_K + 2, MF_TILT_K + 3, MF_TILT_K + 4
+N_MF = MF_FS_WD + 1
 #: The tilt error's correlation from one epoch to the next before it is measured, and its weight
 #: (deg², the sums' units: that of TILT_PRIOR_EPOCHS epochs of a 2-deg difference): a tilt error
 #: lasts as long as the acceleration or the attitude that causes it, seconds to tens of seconds.
@@ -187,6 +187,9 @@ FIELD_SAYS_DISTURBED = -3.0
 #: The smallest scatter of a clean field taken, as a share of the settings' (``field_norm_sd``,
 #: ``field_dip_deg``): a log whose field has held still is not thereby exact.
 FIELD_SD_FLOOR = 0.1
+#: Share of a clean field's epochs whose strength or dip departs as a disturbed field's would (the
+#: accelerometer's tilt error in the dip while the platform speeds up or brakes; a glitch).
+FIELD_OUTLIER = 0.05
 
 
 @jit(inline=True)
@@ -231,6 +234,19 @@ def _no_rate(x, P):
     for k in range(NX):
         P[X_W, k] = 0.0
         P[k, X_W] = 0.0
+
+
+@jit(inline=True)
+def _robust(ll_clean, ll_any):
+    """A clean field's log-likelihood of one part (strength or dip) over a disturbed one's
+    (``ll_any``), its scatter's outliers (a tilt's error in the dip, a glitch) anywhere as a
+    disturbed field's are, with probability ``FIELD_OUTLIER``; and the probability that the
+    epoch is no outlier (the weight it gets in the learned scatter)."""
+    a = math.log(1.0 - FIELD_OUTLIER) + ll_clean
+    b = math.log(FIELD_OUTLIER) + ll_any
+    top = max(a, b)
+    tot = math.exp(a - top) + math.exp(b - top)
+    return top + math.log(tot) - ll_any, math.exp(a - top) / tot
 
 
 @jit(inline=True)
@@ -810,6 +826,7 @@ def epoch(mf, mc, t_end, temp_end):
     n_c = mf[MF_E_NC]
     D = Rc = h_still = 0.0
     field_ll = ratio = ddip = 0.0
+    w_n = w_d = 1.0
     has_f = False
     Hs[:] = 0.0
     Hm[:] = 0.0
@@ -829,9 +846,11 @@ def epoch(mf, mc, t_end, temp_end):
             has_f = True
             ratio = mf[MF_E_NORM] / mf[MF_E_NF] / mf[MF_NORM_REF] - 1.0
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
-            var_n = max(mf[MF_FS_N] / mf[MF_FS_W], (FIELD_SD_FLOOR * mc[MC_SIG_NORM]) ** 2)
-            var_d = max(mf[MF_FS_D] / mf[MF_FS_W], (FIELD_SD_FLOOR * mc[MC_SIG_DIP]) ** 2)
-            field_ll = _loggauss(ratio, var_n) + _loggauss(ddip, var_d) - LL_ANY_NORM - LL_ANY_DIP
+            var_n = max(mf[MF_FS_N] / mf[MF_FS_WN], (FIELD_SD_FLOOR * mc[MC_SIG_NORM]) ** 2)
+            var_d = max(mf[MF_FS_D] / mf[MF_FS_WD], (FIELD_SD_FLOOR * mc[MC_SIG_DIP]) ** 2)
+            ll_n, w_n = _robust(_loggauss(ratio, var_n), LL_ANY_NORM)
+            ll_d, w_d = _robust(_loggauss(ddip, var_d), LL_ANY_DIP)
+            field_ll = ll_n + ll_d
         # the noise, correlated; the epoch-level error; the tilt's error as the samples' two tilts
         # disagree, as one error over the epoch that persists from epoch to epoch
         Rc = mf[MF_KAPPA] * mf[MF_SIG_W2] / n_c + mf[MF_RX] + mf[MF_TILT_K] * mf[MF_E_TV] / max(mf[MF_E_NT], 1.0)
@@ -920,9 +939,10 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_RX] = max(mf[MF_RX_S] / mf[MF_RX_W], 0.0)
     if has_f and p_clean > 0.9:  # the clean field's scatter
         keep = math.exp(-dt / mc[MC_NOISE_MEMORY])
-        mf[MF_FS_N] = keep * mf[MF_FS_N] + ratio * ratio
-        mf[MF_FS_D] = keep * mf[MF_FS_D] + ddip * ddip
-        mf[MF_FS_W] = keep * mf[MF_FS_W] + 1.0
+        mf[MF_FS_N] = keep * mf[MF_FS_N] + w_n * ratio * ratio
+        mf[MF_FS_D] = keep * mf[MF_FS_D] + w_d * ddip * ddip
+        mf[MF_FS_WN] = keep * mf[MF_FS_WN] + w_n
+        mf[MF_FS_WD] = keep * mf[MF_FS_WD] + w_d
     _set_labels(mf)
     mf[MF_JUMP] = _dot(mu, jumped[:NM])
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
@@ -1044,6 +1064,7 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_RX_W] = NOISE_PRIOR_STEPS
     mf[MF_FS_N] = NOISE_PRIOR_STEPS * mc[MC_SIG_NORM] ** 2
     mf[MF_FS_D] = NOISE_PRIOR_STEPS * mc[MC_SIG_DIP] ** 2
-    mf[MF_FS_W] = NOISE_PRIOR_STEPS
+    mf[MF_FS_WN] = NOISE_PRIOR_STEPS
+    mf[MF_FS_WD] = NOISE_PRIOR_STEPS
     mf[MF_COLOUR] = 1.0
     mf[MF_COLOUR_V] = COLOUR_SD0**2
