@@ -120,7 +120,8 @@ N_FIRST_STEPS = 20
 MF_E_TD, MF_E_TV, MF_E_NT = MF_H_FIRST + N_FIRST_STEPS, MF_H_FIRST + N_FIRST_STEPS + 1, MF_H_FIRST + N_FIRST_STEPS + 2
 MF_TD_LAST, MF_TK_S, MF_TK_W, MF_TILT_K = MF_E_NT + 1, MF_E_NT + 2, MF_E_NT + 3, MF_E_NT + 4
 #: The clean field's scatter about the reference, measured: forgotten sums of the epochs' squared
-#: strength ratio and dip departure (deg²) while the compass is clean, and their weight.
+#: strength ratio and dip departure (deg²) while the compass is clean, each epoch weighted by its
+#: chance of being no outlier (:func:`_robust`), and the sums of those weights.
 MF_FS_N, MF_FS_D, MF_FS_WN, MF_FS_WD = MF_TILT_K + 1, MF_TILT_K + 2, MF_TILT_K + 3, MF_TILT_K + 4
 N_MF = MF_FS_WD + 1
 #: The tilt error's correlation from one epoch to the next before it is measured, and its weight
