@@ -123,7 +123,10 @@ MF_TD_LAST, MF_TK_S, MF_TK_W, MF_TILT_K = MF_E_NT + 1, MF_E_NT + 2, MF_E_NT + 3,
 #: strength ratio and dip departure (deg²) while the compass is clean, each epoch weighted by its
 #: chance of being no outlier (:func:`_robust`), and the sums of those weights.
 MF_FS_N, MF_FS_D, MF_FS_WN, MF_FS_WD = MF_TILT_K + 1, MF_TILT_K + 2, MF_TILT_K + 3, MF_TILT_K + 4
-N_MF = MF_FS_WD + 1
+#: The share of the clean field's epochs that are outliers, measured: forgotten sums of their
+#: chances of being one and of the epochs (:func:`_robust`).
+MF_FO_S, MF_FO_W = MF_FS_WD + 1, MF_FS_WD + 2
+N_MF = MF_FO_W + 1
 #: The tilt error's correlation from one epoch to the next before it is measured, and its weight
 #: (deg², the sums' units: that of TILT_PRIOR_EPOCHS epochs of a 2-deg difference): a tilt error
 #: lasts as long as the acceleration or the attitude that causes it, seconds to tens of seconds.
@@ -189,8 +192,11 @@ FIELD_SAYS_DISTURBED = -3.0
 #: ``field_dip_deg``): a log whose field has held still is not thereby exact.
 FIELD_SD_FLOOR = 0.1
 #: Share of a clean field's epochs whose strength or dip departs as a disturbed field's would (the
-#: accelerometer's tilt error in the dip while the platform speeds up or brakes; a glitch).
+#: accelerometer's tilt error in the dip while the platform speeds up or brakes; a glitch): the
+#: prior, worth ``NOISE_PRIOR_STEPS`` epochs, of the share measured, which is taken within
+#: ``FIELD_OUTLIER_RANGE``.
 FIELD_OUTLIER = 0.05
+FIELD_OUTLIER_RANGE = (0.005, 0.5)
 
 
 @jit(inline=True)
@@ -238,13 +244,13 @@ def _no_rate(x, P):
 
 
 @jit(inline=True)
-def _robust(ll_clean, ll_any):
+def _robust(ll_clean, ll_any, eps):
     """A clean field's log-likelihood of one part (strength or dip) over a disturbed one's
     (``ll_any``), its scatter's outliers (a tilt's error in the dip, a glitch) anywhere as a
-    disturbed field's are, with probability ``FIELD_OUTLIER``; and the probability that the
-    epoch is no outlier (the weight it gets in the learned scatter)."""
-    a = math.log(1.0 - FIELD_OUTLIER) + ll_clean
-    b = math.log(FIELD_OUTLIER) + ll_any
+    disturbed field's are, with probability ``eps``; and the probability that the epoch is no
+    outlier (the weight it gets in the learned scatter and, less, in the outliers' share)."""
+    a = math.log(1.0 - eps) + ll_clean
+    b = math.log(eps) + ll_any
     top = max(a, b)
     tot = math.exp(a - top) + math.exp(b - top)
     return top + math.log(tot) - ll_any, math.exp(a - top) / tot
@@ -849,8 +855,9 @@ def epoch(mf, mc, t_end, temp_end):
             ddip = mf[MF_E_DIP] / mf[MF_E_NF] - mf[MF_DIP_REF]
             var_n = max(mf[MF_FS_N] / mf[MF_FS_WN], (FIELD_SD_FLOOR * mc[MC_SIG_NORM]) ** 2)
             var_d = max(mf[MF_FS_D] / mf[MF_FS_WD], (FIELD_SD_FLOOR * mc[MC_SIG_DIP]) ** 2)
-            ll_n, w_n = _robust(_loggauss(ratio, var_n), LL_ANY_NORM)
-            ll_d, w_d = _robust(_loggauss(ddip, var_d), LL_ANY_DIP)
+            eps = min(max(mf[MF_FO_S] / mf[MF_FO_W], FIELD_OUTLIER_RANGE[0]), FIELD_OUTLIER_RANGE[1])
+            ll_n, w_n = _robust(_loggauss(ratio, var_n), LL_ANY_NORM, eps)
+            ll_d, w_d = _robust(_loggauss(ddip, var_d), LL_ANY_DIP, eps)
             field_ll = ll_n + ll_d
         # the noise, correlated; the epoch-level error; the tilt's error as the samples' two tilts
         # disagree, as one error over the epoch that persists from epoch to epoch
@@ -944,6 +951,8 @@ def epoch(mf, mc, t_end, temp_end):
         mf[MF_FS_D] = keep * mf[MF_FS_D] + w_d * ddip * ddip
         mf[MF_FS_WN] = keep * mf[MF_FS_WN] + w_n
         mf[MF_FS_WD] = keep * mf[MF_FS_WD] + w_d
+        mf[MF_FO_S] = keep * mf[MF_FO_S] + 1.0 - 0.5 * (w_n + w_d)
+        mf[MF_FO_W] = keep * mf[MF_FO_W] + 1.0
     _set_labels(mf)
     mf[MF_JUMP] = _dot(mu, jumped[:NM])
     mf[MF_COLOUR_V] += COLOUR_WALK**2 * dt
@@ -1067,5 +1076,7 @@ def seed_noise(mf, mc, sig_s2):
     mf[MF_FS_D] = NOISE_PRIOR_STEPS * mc[MC_SIG_DIP] ** 2
     mf[MF_FS_WN] = NOISE_PRIOR_STEPS
     mf[MF_FS_WD] = NOISE_PRIOR_STEPS
+    mf[MF_FO_S] = NOISE_PRIOR_STEPS * FIELD_OUTLIER
+    mf[MF_FO_W] = NOISE_PRIOR_STEPS
     mf[MF_COLOUR] = 1.0
     mf[MF_COLOUR_V] = COLOUR_SD0**2
