@@ -546,10 +546,9 @@ def test_a_car_speeding_up_and_braking_is_no_field_disturbance():
     """A car logged by its whole IMU and raw magnetometer (the generator's imu-drive, tuning seed
     2), whose compass is clean: speeding up and braking tilt the accelerometer's level, and with
     it the field's dip, by several degrees for a few seconds. A clean field's outliers are
-    anywhere a disturbed field may be (with a share measured from the log, ``FIELD_OUTLIER`` at first),
-    so such seconds do not make the field
-    disturbed; with every clean epoch Gaussian about the reference, 3.3 % of the rows were
-    labelled ``field`` or ``interference``."""
+    anywhere a disturbed field may be (their share measured from the log, ``FIELD_OUTLIER`` at
+    first), so such seconds do not make the field disturbed; with every clean epoch Gaussian
+    about the reference, 3.3 % of the rows were labelled ``field`` or ``interference``."""
     from gyrodrift.simulate import generator
 
     log = generator.generate("imu-drive", 2).log
