@@ -696,7 +696,8 @@ def _multicopter_imu(rng, scale):
     roll0, pitch0 = rec.roll_deg, rec.pitch_deg
 
     def attitude(t, rate):
-        air = (rec.vibration(t) - 1.0) / max(float(np.max(rec.vibration(t))) - 1.0, 1e-12)  # airborne: 0..1
+        vib = rec.vibration(t) - 1.0
+        air = vib / max(float(np.max(vib)), 1e-12)  # airborne: 0..1
         psi = np.radians(np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))]))
         v_world = np.column_stack([sum_of_steps(t, steps_n), sum_of_steps(t, steps_e)]) * air[:, None]
         a_world = np.column_stack([np.gradient(v_world[:, 0], t), np.gradient(v_world[:, 1], t)])
